@@ -1,0 +1,220 @@
+"""Free-floating multibody dynamics on Pinocchio: model building, base conventions, momentum,
+and the classic RK4 step.
+
+Model (description) and data (work space) are kept apart as in Pinocchio: :class:`PlantModel`
+is built once from a :class:`~spacerobot.robots.Robot` plus the base and target truth, and the
+algorithms are free functions taking it.
+
+Generalised coordinates (Pinocchio's):
+
+* spatial: free-flyer root, ``q = [r_S (3), quat xyzw (4), q_arm]``,
+  ``v = [v_S in base frame (3), omega_B (3), qd]``;
+* planar: planar root, ``q = [x, y, cos(th), sin(th), q_arm]``, ``v = [v_S in base frame (2),
+  omega_z, qd]``.
+
+The ODE is written in these coordinates as an ordinary vector ODE (``dq/dt`` from ``v``
+including the quaternion / (cos, sin) kinematics), so classic RK4 applies unchanged and is
+fourth-order; the unit-norm constraint is restored after each step.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..robots import RigidBody, Robot
+
+
+@dataclass(frozen=True)
+class PlantModel:
+    """Pinocchio model of robot + base truth + rigidly attached target.
+
+    Attributes
+    ----------
+    model : pin.Model        gravity-free model; root joint 1 is the base, joints 2.. the arm
+    planar : bool
+    nb : int                 base velocity dimension (6 spatial, 3 planar)
+    n : int                  number of arm joints
+    rot_rows : slice         rows of the base velocity that are the angular velocity
+    ee_frame : int           Pinocchio frame id of the end-effector frame E
+    """
+
+    model: pin.Model
+    robot: Robot
+    base: RigidBody
+    target: RigidBody
+    planar: bool
+    nb: int
+    n: int
+    rot_rows: slice
+    ee_frame: int
+
+
+def _inertia(body: RigidBody) -> pin.Inertia:
+    return pin.Inertia(float(body.mass), np.array(body.com, float), body.inertia_matrix())
+
+
+def build_model(robot: Robot, base: RigidBody | None = None, target: RigidBody | None = None
+                ) -> PlantModel:
+    """Build the Pinocchio model; ``base``/``target`` override the robot's base and add the target.
+
+    Parameters
+    ----------
+    robot : Robot
+    base : RigidBody, optional   base truth (defaults to ``robot.base``)
+    target : RigidBody, optional target truth in the E frame (no target if None)
+    """
+    base = base or robot.base
+    model = pin.Model()
+    model.name = robot.name
+    model.gravity = pin.Motion.Zero()  # free-floating in space; orbital dynamics not modelled
+    root = pin.JointModelPlanar() if robot.planar else pin.JointModelFreeFlyer()
+    parent = model.addJoint(0, root, pin.SE3.Identity(), "base")
+    model.appendBodyToJoint(parent, _inertia(base), pin.SE3.Identity())
+    model.addBodyFrame("base", parent, pin.SE3.Identity(), 0)
+    for link in robot.links:
+        placement = pin.SE3(link.R(), np.array(link.xyz, float))
+        jm = pin.JointModelRevoluteUnaligned(np.array(link.axis, float))
+        parent = model.addJoint(parent, jm, placement, link.name)
+        model.appendBodyToJoint(parent, _inertia(link.body), pin.SE3.Identity())
+    ee = pin.SE3(robot.ee_R(), np.array(robot.ee_xyz, float))
+    ee_frame = model.addFrame(pin.Frame("E", parent, 0, ee, pin.FrameType.OP_FRAME))
+    if target is not None:
+        model.appendBodyToJoint(parent, _inertia(target), ee)
+    nb = 3 if robot.planar else 6
+    return PlantModel(model=model, robot=robot, base=base, target=target, planar=robot.planar,
+                      nb=nb, n=robot.n_joints, rot_rows=slice(2, 3) if robot.planar else slice(3, 6),
+                      ee_frame=ee_frame)
+
+
+# -- base conventions ---------------------------------------------------------------------------
+
+
+def quat_to_R(qx, qy, qz, qw) -> np.ndarray:
+    """DCM of a (not necessarily unit) quaternion, normalised on the fly."""
+    n = qx * qx + qy * qy + qz * qz + qw * qw
+    s = 2.0 / n
+    return np.array([
+        [1 - s * (qy * qy + qz * qz), s * (qx * qy - qz * qw), s * (qx * qz + qy * qw)],
+        [s * (qx * qy + qz * qw), 1 - s * (qx * qx + qz * qz), s * (qy * qz - qx * qw)],
+        [s * (qx * qz - qy * qw), s * (qy * qz + qx * qw), 1 - s * (qx * qx + qy * qy)],
+    ])
+
+
+def base_rotation(pm: PlantModel, q: np.ndarray) -> np.ndarray:
+    """DCM ``A`` (base -> inertial) from the configuration."""
+    if pm.planar:
+        c, s = q[2], q[3]
+        k = 1.0 / np.hypot(c, s)
+        c, s = c * k, s * k
+        return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return quat_to_R(*q[3:7])
+
+
+def base_position(pm: PlantModel, q: np.ndarray) -> np.ndarray:
+    return np.array([q[0], q[1], 0.0]) if pm.planar else q[0:3].copy()
+
+
+def base_velocity(pm: PlantModel, q, v):
+    """``(v_S inertial (3,), omega_B base frame (3,))`` from generalised velocities."""
+    A = base_rotation(pm, q)
+    if pm.planar:
+        return A @ np.array([v[0], v[1], 0.0]), np.array([0.0, 0.0, v[2]])
+    return A @ v[0:3], v[3:6].copy()
+
+
+def base_generalised_velocity(pm: PlantModel, q, v_S, omega_B) -> np.ndarray:
+    """Inverse of :func:`base_velocity`: the base part of ``v`` (length ``nb``)."""
+    A = base_rotation(pm, q)
+    vl = A.T @ np.asarray(v_S, float)
+    if pm.planar:
+        return np.array([vl[0], vl[1], omega_B[2]])
+    return np.concatenate([vl, omega_B])
+
+
+def base_acceleration(pm: PlantModel, q, v, a):
+    """``(a_S inertial, alpha_B base frame)`` from Pinocchio's ``a = dv/dt`` (local frame).
+
+    a_S = A (dv_l/dt + omega_B x v_l), the classical acceleration of the sensor point S.
+    """
+    A = base_rotation(pm, q)
+    if pm.planar:
+        vl = np.array([v[0], v[1], 0.0])
+        w = np.array([0.0, 0.0, v[2]])
+        return A @ (np.array([a[0], a[1], 0.0]) + np.cross(w, vl)), np.array([0.0, 0.0, a[2]])
+    return A @ (a[0:3] + np.cross(v[3:6], v[0:3])), a[3:6].copy()
+
+
+def thruster_generalised_force(pm: PlantModel, A: np.ndarray, F: np.ndarray, M: np.ndarray
+                               ) -> np.ndarray:
+    """Generalised force of a force ``F`` at S and a couple ``M`` (both inertial) on the base.
+
+    The root joint's motion subspace is the identity in the base frame (free-flyer) or its
+    (x, y, rot z) columns (planar), so the generalised force is the base-frame wrench.
+    """
+    f = A.T @ F
+    m = A.T @ M
+    if pm.planar:
+        return np.array([f[0], f[1], m[2]])
+    return np.concatenate([f, m])
+
+
+def configuration_derivative(pm: PlantModel, q: np.ndarray, v: np.ndarray, A: np.ndarray
+                             ) -> np.ndarray:
+    """``dq/dt`` as a plain vector (quaternion / cos-sin kinematics included)."""
+    dq = np.empty_like(q)
+    if pm.planar:
+        dq[0:2] = A[0:2, 0:2] @ v[0:2]
+        w = v[2]
+        dq[2], dq[3] = -q[3] * w, q[2] * w
+        dq[4:] = v[3:]
+    else:
+        dq[0:3] = A @ v[0:3]
+        x, y, z, qw = q[3:7]
+        wx, wy, wz = v[3:6]
+        # dq/dt = 1/2 q (x) (0, w)  (body-frame angular velocity)
+        dq[3] = 0.5 * (qw * wx + y * wz - z * wy)
+        dq[4] = 0.5 * (qw * wy + z * wx - x * wz)
+        dq[5] = 0.5 * (qw * wz + x * wy - y * wx)
+        dq[6] = -0.5 * (x * wx + y * wy + z * wz)
+        dq[7:] = v[6:]
+    return dq
+
+
+def normalise(pm: PlantModel, q: np.ndarray) -> np.ndarray:
+    """Restore the unit norm of the quaternion / (cos, sin) pair (in place, returns q)."""
+    sl = slice(2, 4) if pm.planar else slice(3, 7)
+    q[sl] /= np.linalg.norm(q[sl])
+    return q
+
+
+def initial_configuration(pm: PlantModel, q_arm=None) -> np.ndarray:
+    """Base at the inertial origin with identity attitude; arm at ``q_arm`` (default robot.q0)."""
+    q_arm = np.asarray(pm.robot.q0 if q_arm is None else q_arm, float)
+    head = np.array([0.0, 0.0, 1.0, 0.0]) if pm.planar else np.array([0, 0, 0, 0, 0, 0, 1.0])
+    return np.concatenate([head, q_arm])
+
+
+def attitude_error(pm: PlantModel, q: np.ndarray) -> np.ndarray:
+    """Base attitude ``q`` of eq. 39 as a 3-vector: the rotation vector of A (theta_z planar)."""
+    if pm.planar:
+        return np.array([0.0, 0.0, np.arctan2(q[3], q[2])])
+    return pin.log3(base_rotation(pm, q))
+
+
+# -- momentum -------------------------------------------------------------------------------------
+
+
+def momentum(pm: PlantModel, data: pin.Data, q, v):
+    """Total linear momentum P, angular momentum about the CoM L_c and about the inertial origin.
+
+    Returns
+    -------
+    P, L_c, L_O : (3,) arrays (inertial frame);  com : (3,) system centre of mass
+    """
+    pin.computeCentroidalMomentum(pm.model, data, q, v)
+    P = data.hg.linear.copy()
+    L_c = data.hg.angular.copy()
+    com = data.com[0].copy()
+    return P, L_c, L_c + np.cross(com, P), com

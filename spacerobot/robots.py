@@ -1,0 +1,378 @@
+"""Robot and scenario definitions: the one description used by plant, estimator, SSP and tests.
+
+Pure data and numpy only (no Pinocchio, no FMI), so that both FMUs can bundle it.
+
+Conventions (see README "Conventions"):
+
+* Base frame ``B`` has its origin at the base sensor point ``S``; target frame ``T`` is the
+  end-effector frame with origin at the grasp point ``E``.
+* A :class:`RigidBody` holds the mass, the centre-of-mass offset ``b`` from the frame origin
+  (in body coordinates) and the inertia tensor about the centre of mass, in body coordinates,
+  as ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` where ``Ixy`` is the tensor element (minus the
+  product of inertia).
+* Joint placements are given relative to the parent link frame; each arm joint is revolute
+  about a unit ``axis`` expressed in its own (child) frame.
+
+Choices the paper leaves open are documented next to the numbers (``docs/models.md`` too).
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field, replace
+from typing import Dict, Sequence, Tuple
+
+import numpy as np
+
+Vec3 = Tuple[float, float, float]
+Inertia6 = Tuple[float, float, float, float, float, float]
+
+#: Order of the 6 inertia components everywhere in this project.
+INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+
+
+def inertia_matrix(I6: Sequence[float]) -> np.ndarray:
+    """3x3 symmetric tensor from ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``."""
+    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = (float(x) for x in I6)
+    return np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
+
+
+def inertia_vector(I: np.ndarray) -> np.ndarray:
+    """``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` from a 3x3 tensor."""
+    return np.array([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])
+
+
+def check_body(name: str, mass: float, com: Sequence[float], I6: Sequence[float]) -> None:
+    """Raise ``ValueError`` with a readable message if the body is not physical.
+
+    Checks: finite numbers, ``mass > 0``, inertia positive definite and principal moments
+    satisfying the triangle inequality ``I1 <= I2 + I3`` (a real mass distribution).
+    """
+    vals = [mass, *com, *I6]
+    if not all(math.isfinite(float(x)) for x in vals):
+        raise ValueError(f"{name}: parameters must be finite numbers, got mass={mass}, "
+                         f"b={list(com)}, inertia={list(I6)}")
+    if mass <= 0.0:
+        raise ValueError(f"{name}.m must be > 0 kg, got {mass}")
+    lam = np.linalg.eigvalsh(inertia_matrix(I6))
+    if lam[0] <= 0.0:
+        raise ValueError(f"{name} inertia must be positive definite; principal moments "
+                         f"{np.array2string(lam, precision=6)} kg.m2")
+    tol = 1e-12 * lam[-1]
+    if lam[2] > lam[0] + lam[1] + tol:
+        raise ValueError(f"{name} inertia violates the triangle inequality: principal moments "
+                         f"{np.array2string(lam, precision=6)} kg.m2 (largest must not exceed "
+                         f"the sum of the other two)")
+
+
+@dataclass(frozen=True)
+class RigidBody:
+    """Inertial parameters of one rigid body.
+
+    Attributes
+    ----------
+    mass : float
+        Mass [kg].
+    com : (3,) tuple
+        Centre-of-mass offset ``b`` from the body frame origin, body coordinates [m].
+    inertia : (6,) tuple
+        Inertia about the centre of mass, body coordinates, ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``
+        [kg.m2].
+    """
+
+    mass: float
+    com: Vec3
+    inertia: Inertia6
+
+    def inertia_matrix(self) -> np.ndarray:
+        return inertia_matrix(self.inertia)
+
+    def check(self, name: str) -> None:
+        check_body(name, self.mass, self.com, self.inertia)
+
+
+def cuboid(mass: float, sx: float, sy: float, sz: float, com: Vec3 = (0.0, 0.0, 0.0)) -> RigidBody:
+    """Uniform cuboid with edge lengths ``sx, sy, sz`` [m]."""
+    k = mass / 12.0
+    return RigidBody(mass, tuple(com), (k * (sy**2 + sz**2), k * (sx**2 + sz**2),
+                                         k * (sx**2 + sy**2), 0.0, 0.0, 0.0))
+
+
+def rot(axis: str, angle: float) -> np.ndarray:
+    """Elementary rotation matrix about ``'x'``, ``'y'`` or ``'z'``."""
+    c, s = math.cos(angle), math.sin(angle)
+    if axis == "x":
+        return np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    if axis == "y":
+        return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+@dataclass(frozen=True)
+class ArmLink:
+    """One revolute joint and the link it moves.
+
+    Attributes
+    ----------
+    name : str
+    xyz : (3,) tuple
+        Joint frame origin in the parent frame [m] (parent = base frame for the first joint).
+    rotation : (9,) tuple
+        Row-major rotation parent -> joint frame at q = 0.
+    axis : (3,) tuple
+        Unit joint axis in the joint (child) frame.
+    body : RigidBody
+        Link inertial parameters in the joint frame.
+    """
+
+    name: str
+    xyz: Vec3
+    rotation: Tuple[float, ...]
+    axis: Vec3
+    body: RigidBody
+
+    def R(self) -> np.ndarray:
+        return np.array(self.rotation, dtype=float).reshape(3, 3)
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A free-floating space robot: base + serial revolute arm + end-effector frame.
+
+    The captured target is not part of the robot; see :class:`Scenario`.
+    """
+
+    name: str
+    planar: bool
+    base: RigidBody
+    links: Tuple[ArmLink, ...]
+    ee_xyz: Vec3
+    ee_rotation: Tuple[float, ...]
+    q0: Tuple[float, ...]
+    description: str = ""
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.links)
+
+    def ee_R(self) -> np.ndarray:
+        return np.array(self.ee_rotation, dtype=float).reshape(3, 3)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @staticmethod
+    def from_dict(d: dict) -> "Robot":
+        links = tuple(ArmLink(name=l["name"], xyz=tuple(l["xyz"]), rotation=tuple(l["rotation"]),
+                              axis=tuple(l["axis"]), body=_body(l["body"])) for l in d["links"])
+        return Robot(name=d["name"], planar=bool(d["planar"]), base=_body(d["base"]), links=links,
+                     ee_xyz=tuple(d["ee_xyz"]), ee_rotation=tuple(d["ee_rotation"]),
+                     q0=tuple(d["q0"]), description=d.get("description", ""))
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=1)
+
+    @staticmethod
+    def from_json(text: str) -> "Robot":
+        return Robot.from_dict(json.loads(text))
+
+
+def _body(d: dict) -> RigidBody:
+    return RigidBody(float(d["mass"]), tuple(d["com"]), tuple(d["inertia"]))
+
+
+def _R(M: np.ndarray) -> Tuple[float, ...]:
+    return tuple(float(x) for x in np.asarray(M).reshape(9))
+
+
+_I3 = _R(np.eye(3))
+
+# --------------------------------------------------------------------------------------------
+# Planar robot. The paper's Table 2 was lost; the base is as the paper's results fix it
+# (m = 500 kg, b = (0.10, -0.10) m, Izz = 83.61 kg.m2). The arm is ours: three revolute joints
+# about z, links as slender rods (I = m l^2 / 12), mounted on the +x face of a 1 m base.
+# Masses and lengths are typical of a 2-3 m manipulator on a 500 kg servicer; the masses are
+# large enough (80 kg in total) for the arm to stabilise the base attitude (eq. 39).
+# --------------------------------------------------------------------------------------------
+
+
+def _rod_z(mass: float, length: float) -> RigidBody:
+    """Link along its local x axis, rotating about z (slender rod, small thickness)."""
+    i_t = mass * length**2 / 12.0
+    return RigidBody(mass, (length / 2.0, 0.0, 0.0), (0.01 * i_t, i_t, 1.01 * i_t, 0.0, 0.0, 0.0))
+
+
+PLANAR_BASE = RigidBody(500.0, (0.10, -0.10, 0.0), (83.61, 83.61, 83.61, 0.0, 0.0, 0.0))
+
+PLANAR = Robot(
+    name="planar",
+    planar=True,
+    base=PLANAR_BASE,
+    links=(
+        ArmLink("joint1", (0.5, 0.0, 0.0), _I3, (0.0, 0.0, 1.0), _rod_z(40.0, 1.0)),
+        ArmLink("joint2", (1.0, 0.0, 0.0), _I3, (0.0, 0.0, 1.0), _rod_z(30.0, 1.0)),
+        ArmLink("joint3", (1.0, 0.0, 0.0), _I3, (0.0, 0.0, 1.0), _rod_z(10.0, 0.5)),
+    ),
+    ee_xyz=(0.5, 0.0, 0.0),
+    ee_rotation=_I3,
+    q0=(math.radians(30.0), math.radians(-60.0), math.radians(45.0)),
+    description="Planar free-floating robot: 500 kg base, 3-joint arm (1.0/1.0/0.5 m, "
+                "40/30/10 kg), motion in x-y, rotation about z.",
+)
+
+# --------------------------------------------------------------------------------------------
+# Spatial robot: the paper's Table 3 masses and principal inertias; geometry PUMA-like and
+# consistent with those inertias (slender links of 0.5, 0.72, 0.2, 0.2, 0.16 m along the axis
+# of smallest inertia). The arm is mounted on the +y face of the 1 m base cube; at q = 0 it
+# extends along +y. Base centre-of-mass offset b1 (fuel use) is our choice.
+# --------------------------------------------------------------------------------------------
+
+SPATIAL_BASE = RigidBody(500.0, (0.10, -0.10, 0.05), (83.33, 83.33, 83.33, 0.0, 0.0, 0.0))
+
+_RZ90 = _R(rot("z", math.pi / 2))
+_RZm90 = _R(rot("z", -math.pi / 2))
+
+SPATIAL = Robot(
+    name="spatial",
+    planar=False,
+    base=SPATIAL_BASE,
+    links=(
+        # shoulder yaw about the mount normal
+        ArmLink("joint1", (0.0, 0.5, 0.0), _I3, (0.0, 1.0, 0.0),
+                RigidBody(22.7, (0.0, 0.10, 0.0), (3.14e-2, 8.13e-2, 5.70e-2, 0.0, 0.0, 0.0))),
+        # shoulder pitch, upper arm 0.5 m along y
+        ArmLink("joint2", (0.0, 0.2, 0.0), _I3, (0.0, 0.0, 1.0),
+                RigidBody(45.3, (0.0, 0.25, 0.0), (0.99, 5.10e-2, 1.03, 0.0, 0.0, 0.0))),
+        # elbow pitch, forearm 0.72 m along y
+        ArmLink("joint3", (0.0, 0.5, 0.0), _I3, (0.0, 0.0, 1.0),
+                RigidBody(61.1, (0.0, 0.36, 0.0), (2.67, 5.77e-2, 2.71, 0.0, 0.0, 0.0))),
+        # wrist roll about the forearm axis
+        ArmLink("joint4", (0.0, 0.72, 0.0), _I3, (0.0, 1.0, 0.0),
+                RigidBody(14.0, (0.0, 0.10, 0.0), (5.00e-2, 4.40e-3, 4.96e-2, 0.0, 0.0, 0.0))),
+        # wrist pitch; link 5 frame turned so that its long (x) axis continues the arm
+        ArmLink("joint5", (0.0, 0.2, 0.0), _RZm90, (0.0, 0.0, 1.0),
+                RigidBody(14.0, (0.10, 0.0, 0.0), (4.40e-3, 5.00e-2, 4.96e-2, 0.0, 0.0, 0.0))),
+        # tool roll about the arm axis (y of link 6)
+        ArmLink("joint6", (0.2, 0.0, 0.0), _RZ90, (0.0, 1.0, 0.0),
+                RigidBody(10.1, (0.0, 0.08, 0.0), (2.22e-2, 3.16e-3, 2.21e-2, 0.0, 0.0, 0.0))),
+    ),
+    # tool plate 0.2 m along link 6; E frame z axis = approach direction (= link 6 y axis)
+    ee_xyz=(0.0, 0.2, 0.0),
+    ee_rotation=_R(rot("x", -math.pi / 2)),
+    q0=(0.0, math.radians(-30.0), math.radians(60.0), 0.0, math.radians(-30.0), 0.0),
+    description="Spatial free-floating robot: 500 kg base (1 m cube), PUMA-like 6-joint arm "
+                "with the paper's Table 3 masses and inertias.",
+)
+
+ROBOTS: Dict[str, Robot] = {"planar": PLANAR, "spatial": SPATIAL}
+
+# --------------------------------------------------------------------------------------------
+# Targets (rigidly grasped at E; parameters in the E frame).
+# planar medium: fixed by the paper's results (250 kg, b = (0.25, 0.10) m, Izz = 10.41 kg.m2,
+#   i.e. a 0.5 m cube of 250 kg). small/large are ours: 100 kg and 500 kg cubes of 0.4 m and
+#   0.6 m held at their face centre (b_x = half the edge) with a lateral offset.
+# spatial default: Table 3 (503.76 kg, diag 20.83 kg.m2, a 0.5 m cube); b_y = 0 as in the paper,
+#   centre 0.25 m along the approach axis z of E plus a 0.1 m lateral x offset (our choice).
+# --------------------------------------------------------------------------------------------
+
+TARGETS: Dict[str, Dict[str, RigidBody]] = {
+    "planar": {
+        "small": replace(cuboid(100.0, 0.4, 0.4, 0.4), com=(0.20, 0.05, 0.0)),
+        "medium": RigidBody(250.0, (0.25, 0.10, 0.0), (10.41, 10.41, 10.41, 0.0, 0.0, 0.0)),
+        "large": replace(cuboid(500.0, 0.6, 0.6, 0.6), com=(0.30, 0.15, 0.0)),
+    },
+    "spatial": {
+        "default": RigidBody(503.76, (0.10, 0.0, 0.25), (20.83, 20.83, 20.83, 0.0, 0.0, 0.0)),
+    },
+}
+
+DEFAULT_TARGET = {"planar": "medium", "spatial": "default"}
+
+
+@dataclass(frozen=True)
+class Controller:
+    """Bounded momentum controller (paper eqs. 40-41) and attitude law (eq. 39) gains.
+
+    ``K_D``, ``K_P``: eq. 39 gains (diagonal). ``K_Dn``, ``K_Pn``: null-space posture gains that
+    pull the arm back towards ``q0`` without disturbing the base attitude, and ``qdd_max``: bound
+    on commanded joint accelerations [rad/s2] (our choices).
+    """
+
+    F_max: float = 10.0
+    K_F: float = -1.0
+    P_max: float = 10.0
+    M_max: float = 10.0
+    K_M: float = -1.0
+    L_max: float = 10.0
+    K_D: float = math.sqrt(2.0) / 2.0
+    K_P: float = 0.25
+    K_Dn: float = 1.0
+    K_Pn: float = 0.25
+    qdd_max: float = 1.0
+
+
+@dataclass(frozen=True)
+class Guess:
+    """Initial guesses and initial covariances of the estimator (paper §V defaults)."""
+
+    base: RigidBody
+    target: RigidBody
+    P0_mu: float = 1e6
+    P0_theta: float = 1e6
+
+
+PAPER_GUESS = {
+    "planar": Guess(RigidBody(600.0, (0.0, 0.0, 0.0), (100.0, 100.0, 100.0, 0.0, 0.0, 0.0)),
+                    RigidBody(100.0, (0.1, 0.1, 0.0), (10.0, 10.0, 10.0, 0.0, 0.0, 0.0))),
+    "spatial": Guess(RigidBody(600.0, (0.0, 0.0, 0.0), (100.0, 100.0, 100.0, 0.0, 0.0, 0.0)),
+                     RigidBody(100.0, (0.1, 0.1, 0.1), (10.0, 10.0, 10.0, 0.0, 0.0, 0.0))),
+}
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """Everything a run needs: robot, target truth, initial state, controller, estimator set-up."""
+
+    name: str
+    robot: Robot
+    target: RigidBody
+    v0: Vec3
+    omega0: Vec3
+    controller: Controller = field(default_factory=Controller)
+    guess: Guess = None  # type: ignore[assignment]
+    h: float = 1e-3
+    sample_time: float = 0.1
+    stop_time: float = 30.0
+
+
+def scenario(robot: str = "planar", target: str | None = None, **overrides) -> Scenario:
+    """The paper's scenario for ``robot`` with the named target; keyword overrides replace fields.
+
+    Examples
+    --------
+    >>> scenario("planar", "medium").target.mass
+    250.0
+    """
+    if robot not in ROBOTS:
+        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(ROBOTS)}")
+    target = target or DEFAULT_TARGET[robot]
+    if target not in TARGETS[robot]:
+        raise ValueError(f"unknown target {target!r} for robot {robot!r}; "
+                         f"choose from {sorted(TARGETS[robot])}")
+    if robot == "planar":
+        base = dict(v0=(1.0, 2.0, 0.0), omega0=(0.0, 0.0, 0.1), stop_time=30.0)
+    else:
+        base = dict(v0=(10.0, 20.0, 30.0), omega0=(0.1, 0.2, 0.3), stop_time=60.0)
+    base.update(name=f"{robot}-{target}", robot=ROBOTS[robot], target=TARGETS[robot][target],
+                guess=PAPER_GUESS[robot])
+    base.update(overrides)
+    return Scenario(**base)
+
+
+#: The values the paper prints for the planar medium target (Section V.A.1), CoM inertia Izz.
+PAPER_PLANAR_MEDIUM = {
+    "momentum": {"base.m": 500.00, "base.b[1]": 0.10, "base.b[2]": -0.10, "base.Izz": 83.61,
+                 "target.m": 250.00, "target.b[1]": 0.25, "target.b[2]": 0.10, "target.Izz": 10.41},
+    "force": {"base.m": 500.01, "base.b[1]": 0.10, "base.b[2]": -0.10, "base.Izz": 83.62,
+              "target.m": 249.99, "target.b[1]": 0.25, "target.b[2]": 0.10, "target.Izz": 10.34},
+}
