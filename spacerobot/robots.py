@@ -345,6 +345,21 @@ class Scenario:
     stop_time: float = 30.0
 
 
+def scenario_to_dict(sc: Scenario) -> dict:
+    """JSON-able dict of a scenario (what the FMUs carry as their defaults)."""
+    return asdict(sc)
+
+
+def scenario_from_dict(d: dict) -> Scenario:
+    """Inverse of :func:`scenario_to_dict`."""
+    g = d["guess"]
+    return Scenario(name=d["name"], robot=Robot.from_dict(d["robot"]), target=_body(d["target"]),
+                    v0=tuple(d["v0"]), omega0=tuple(d["omega0"]),
+                    controller=Controller(**d["controller"]),
+                    guess=Guess(_body(g["base"]), _body(g["target"]), g["P0_mu"], g["P0_theta"]),
+                    h=d["h"], sample_time=d["sample_time"], stop_time=d["stop_time"])
+
+
 def scenario(robot: str = "planar", target: str | None = None, **overrides) -> Scenario:
     """The paper's scenario for ``robot`` with the named target; keyword overrides replace fields.
 

@@ -1,0 +1,408 @@
+"""The identifier: measurements in, estimates of base and target out, one sample at a time.
+
+Uses only the robot description (the known arm) and the measured signals of the interface
+contract; never the plant.
+"""
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics import ArmKinematics
+from ..robots import Guess, Robot
+from . import regressors as rg
+from .rls import RLS, ModifiedRLS
+
+METHODS = ("momentum", "force")
+SOLVERS = ("paper", "joint")
+ACCEL_SOURCES = ("measured", "differenced")
+
+#: measurement keys and their shapes (n = number of arm joints)
+KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
+
+# status codes (see spacerobot.interface.STATUS)
+NO_SAMPLE, REFERENCE, ESTIMATING, REJECT_NONFINITE, REJECT_INCONSISTENT = 0, 1, 2, 3, 4
+
+
+@dataclass
+class BodyEstimate:
+    """Mass [kg], CoM offset b (3,) [m] and CoM inertia (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) [kg.m2]."""
+
+    m: float
+    b: np.ndarray
+    I: np.ndarray
+
+
+class Identifier:
+    """Online one-step identification of base and target inertial parameters.
+
+    Parameters
+    ----------
+    robot : Robot
+        Robot description; only the arm links (known) and ``planar`` are used.
+    guess : Guess
+        Initial guesses of both bodies and the initial covariances ``P0_mu``, ``P0_theta``.
+    method : {'momentum', 'force'}
+        Momentum-based (eqs. 11/16, uses the impulses J, H) or force-based (eqs. 28/31, uses
+        F, M and accelerations).
+    solver : {'paper', 'joint'}
+        The paper's modified RLS over (mu, theta), or one RLS over the 20 standard parameters.
+    accel_source : {'measured', 'differenced'}
+        Force method only: measured accelerations, or central differences of the velocities
+        (the estimate then lags by one sample).
+    lam : float
+        Forgetting factor, 0 < lam <= 1.
+
+    Examples
+    --------
+    >>> ident = Identifier(robot, guess)              # doctest: +SKIP
+    >>> status = ident.update(t, measurement_dict)    # doctest: +SKIP
+    >>> ident.estimates()["target"].m                 # doctest: +SKIP
+    """
+
+    def __init__(self, robot: Robot, guess: Guess, method: str = "momentum", solver: str = "paper",
+                 accel_source: str = "measured", lam: float = 1.0):
+        if method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        if solver not in SOLVERS:
+            raise ValueError(f"solver must be one of {SOLVERS}, got {solver!r}")
+        if accel_source not in ACCEL_SOURCES:
+            raise ValueError(f"accel_source must be one of {ACCEL_SOURCES}, got {accel_source!r}")
+        if not (0.0 < lam <= 1.0):
+            raise ValueError(f"forgetting factor lambda must satisfy 0 < lambda <= 1, got {lam}")
+        for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
+            body.check(name)
+        for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
+            if not (val > 0.0 and math.isfinite(val)):
+                raise ValueError(f"{name} must be a finite covariance > 0, got {val}")
+        self.robot, self.guess = robot, guess
+        self.method, self.solver, self.accel_source, self.lam = method, solver, accel_source, lam
+        self.kin = ArmKinematics(robot)
+        self.n = robot.n_joints
+        planar = robot.planar
+        # active rows / parameters (planar: x, y translation and z rotation only)
+        self.rows_lin = np.array([0, 1]) if planar else np.arange(3)
+        self.rows_ang = np.array([2]) if planar else np.arange(3)
+        self.mu_idx = np.array([0, 1, 2, 4, 5, 6]) if planar else np.arange(8)
+        self.th_idx = np.array([5, 11]) if planar else np.arange(12)
+        mu0, th0 = self._paper_vector(guess)
+        self.mu_full, self.th_full = mu0, th0
+        if solver == "paper":
+            p, r = len(self.mu_idx), len(self.th_idx)
+            self.rls = ModifiedRLS(mu0[self.mu_idx], th0[self.th_idx], guess.P0_mu * np.eye(p),
+                                   guess.P0_theta * np.eye(r), self._D_active, lam)
+        else:
+            pi0 = self._standard_vector(guess)
+            self.pi_full = pi0
+            self.pi_idx = np.concatenate([self._std_idx(0), self._std_idx(1)])
+            P0 = np.array([guess.P0_mu if (i % 10) < 4 else guess.P0_theta for i in self.pi_idx])
+            self.rls = RLS(pi0[self.pi_idx], np.diag(P0), lam)
+        self.info_lin = np.zeros((len(self.mu_idx),) * 2)
+        self.info_ang = np.zeros((len(self.th_idx),) * 2)
+        self.samples = 0
+        self.rejected = 0
+        self.status = NO_SAMPLE
+        self.residual_lin = 0.0
+        self.residual_ang = 0.0
+        self.reference = None       # momentum method: terms at t0
+        self.history = []           # differenced accelerations: last samples (t, meas)
+
+    # -- parameter vectors -------------------------------------------------------------------
+    @staticmethod
+    def _paper_vector(g: Guess):
+        mu = np.concatenate([[g.base.mass], g.base.mass * np.array(g.base.com),
+                             [g.target.mass], g.target.mass * np.array(g.target.com)])
+        th = np.concatenate([np.asarray(g.base.inertia)[rg.PROJECT_TO_SHARP],
+                             np.asarray(g.target.inertia)[rg.PROJECT_TO_SHARP]])
+        return mu, th
+
+    @staticmethod
+    def _standard_vector(g: Guess):
+        return np.concatenate([rg.standard_from_physical(b.mass, b.com, b.inertia_matrix())
+                               for b in (g.base, g.target)])
+
+    def _std_idx(self, k: int) -> np.ndarray:
+        loc = np.array([0, 1, 2, 9]) if self.robot.planar else np.arange(10)
+        return 10 * k + loc
+
+    def _D_active(self, mu_active: np.ndarray) -> np.ndarray:
+        mu = self.mu_full.copy()
+        mu[self.mu_idx] = mu_active
+        return rg.D_of_mu(mu)
+
+    # -- equations -----------------------------------------------------------------------------
+    def _bodies(self, s: dict):
+        """Frame-origin motion of base (at S) and target (at E), and the arm links' motion."""
+        A_B = s["A"]
+        links, ee = self.kin.compute(s["r_S"], A_B, s["v_S"], s["omega_B"], s["a_S"], s["alpha_B"],
+                                     s["q"], s["qd"], s["qdd"])
+        base = (s["r_S"], A_B, s["v_S"], A_B @ s["omega_B"], s["a_S"], A_B @ s["alpha_B"])
+        target = (ee.r, ee.A, ee.v, ee.w, ee.a, ee.beta)
+        return base, target, links
+
+    def _momentum_terms(self, s: dict):
+        """Absolute (not yet differenced) momentum-form terms at one sample.
+
+        P = Bm mu + P_arm = J + P(t0)-J(t0)  ->  Bm mu = J - P_arm + const
+        L = Phi theta + Psi D + L_arm = H + const
+        """
+        base, target, links = self._bodies(s)
+        B1, D1, Psi1 = rg.momentum_terms(base[0], base[1], base[2], base[3])
+        Bn, Dn, Psin = rg.momentum_terms(target[0], target[1], target[2], target[3])
+        P_arm, L_arm = self.kin.momentum(links)
+        return (np.hstack([B1, Bn]), s["J"] - P_arm, np.hstack([D1, Dn]), s["H"] - L_arm,
+                np.hstack([Psi1, Psin]))
+
+    def _force_terms(self, s: dict):
+        """Force-form terms: G mu = F - F_arm ;  Q theta = M - M_arm,S - S D(mu)  (eqs. 28/31)."""
+        base, target, links = self._bodies(s)
+        r_S = s["r_S"]
+        G1, Q1, S1 = rg.force_terms(np.zeros(3), base[1], base[4], base[3], base[5])
+        Gn, Qn, Sn = rg.force_terms(target[0] - r_S, target[1], target[4], target[3], target[5])
+        F_arm, M_arm = self.kin.rate_of_momentum(links, r_S)
+        # thruster force acts at S, so its moment about S is zero: the external moment is M
+        return (np.hstack([G1, Gn]), s["F"] - F_arm, np.hstack([Q1, Qn]), s["M"] - M_arm,
+                -np.hstack([S1, Sn]))
+
+    def equations(self, s: dict):
+        """``(A, b, phi, y, psi)`` for one sample, full 3D rows (before planar selection).
+
+        Momentum: differences against the reference sample t0 (eqs. 11, 16). Returns None for
+        the reference sample itself.
+        """
+        if self.method == "force":
+            return self._force_terms(s)
+        terms = self._momentum_terms(s)
+        if self.reference is None:
+            self.reference = terms
+            return None
+        B, c, Phi, d, Psi = (x - x0 for x, x0 in zip(terms, self.reference))
+        return B, c, Phi, d, -Psi
+
+    # -- the update ------------------------------------------------------------------------------
+    def validate(self, s: dict):
+        """Return ``(status, message)``: ESTIMATING if the sample is usable."""
+        for k in KEYS:
+            x = np.asarray(s[k], float)
+            if not np.all(np.isfinite(x)):
+                return REJECT_NONFINITE, f"non-finite input {k} = {np.array2string(x, precision=4)}"
+        A = np.asarray(s["A"], float)
+        err = np.abs(A.T @ A - np.eye(3)).max()
+        if err > 1e-6 or np.linalg.det(A) <= 0.0:
+            return REJECT_INCONSISTENT, (f"base.A is not a rotation matrix (|A^T A - I| = {err:.3g}, "
+                                         f"det = {np.linalg.det(A):.6g})")
+        return ESTIMATING, ""
+
+    def update(self, t: float, meas: dict) -> int:
+        """Process one sample taken at time ``t``. Never raises on bad data.
+
+        Parameters
+        ----------
+        t : float
+            Sample time [s].
+        meas : dict
+            Keys :data:`KEYS`; vectors (3,), ``A`` (3, 3), joint arrays (n,).
+
+        Returns
+        -------
+        status : int
+            See :data:`spacerobot.interface.STATUS`. A rejected sample leaves every estimate,
+            covariance and internal state untouched; ``self.message`` says why.
+        """
+        s = {k: np.array(meas[k], float) for k in KEYS}
+        status, self.message = self.validate(s)
+        if status != ESTIMATING or not math.isfinite(t):
+            self.status = status if status != ESTIMATING else REJECT_NONFINITE
+            if not math.isfinite(t):
+                self.message = f"non-finite sample time {t}"
+            self.rejected += 1
+            return self.status
+        if self.method == "force" and self.accel_source == "differenced":
+            s = self._differenced(t, s)
+            if s is None:
+                self.status = REFERENCE
+                return self.status
+        eq = self.equations(s)
+        if eq is None:
+            self.status = REFERENCE
+            return self.status
+        self._solve(*eq)
+        self.samples += 1
+        self.status = ESTIMATING
+        return self.status
+
+    def _differenced(self, t: float, s: dict):
+        """Replace the accelerations of the previous sample by 3-point central differences.
+
+        Returns the completed previous sample, or None while the history is too short.
+        """
+        self.history.append((t, s))
+        if len(self.history) < 3:
+            return None
+        (t0, s0), (t1, s1), (t2, s2) = self.history[-3:]
+        self.history = self.history[-2:]
+        h1, h2 = t1 - t0, t2 - t1
+        c0, c1, c2 = -h2 / (h1 * (h1 + h2)), (h2 - h1) / (h1 * h2), h1 / (h2 * (h1 + h2))
+        out = dict(s1)
+        for acc, vel in (("a_S", "v_S"), ("alpha_B", "omega_B"), ("qdd", "qd")):
+            out[acc] = c0 * s0[vel] + c1 * s1[vel] + c2 * s2[vel]
+        return out
+
+    def _solve(self, A, b, phi, y, psi):
+        rl, ra = self.rows_lin, self.rows_ang
+        A, b, phi, y, psi = A[rl], b[rl], phi[ra], y[ra], psi[ra]
+        if self.solver == "paper":
+            # inactive (planar out-of-plane) parameters stay at their guesses: move them right
+            mu_in = np.setdiff1d(np.arange(8), self.mu_idx)
+            th_in = np.setdiff1d(np.arange(12), self.th_idx)
+            b = b - A[:, mu_in] @ self.mu_full[mu_in]
+            y = y - phi[:, th_in] @ self.th_full[th_in]
+            A, phi = A[:, self.mu_idx], phi[:, self.th_idx]
+            e_lin, e_ang = self.rls.update(A, b, phi, y, psi, self._D_active)
+            self.mu_full[self.mu_idx] = self.rls.mu
+            self.th_full[self.th_idx] = self.rls.theta
+            rhs_ang = y + psi @ self.rls.D_mu
+        else:
+            H_rows, rhs = [], []
+            # standard rows: linear [B, 0]; angular [Psi[:, :4], D] per body (sign: psi = -Psi)
+            Y = np.zeros((len(rl) + len(ra), 20))
+            for k in range(2):
+                Y[:len(rl), 10 * k:10 * k + 4] = A[:, 4 * k:4 * k + 4]
+                Y[len(rl):, 10 * k:10 * k + 4] = -psi[:, 10 * k:10 * k + 4]
+                Y[len(rl):, 10 * k + 4:10 * k + 10] = phi[:, 6 * k:6 * k + 6]
+            yy = np.concatenate([b, y])
+            idx = self.pi_idx
+            out = np.setdiff1d(np.arange(20), idx)
+            yy = yy - Y[:, out] @ self.pi_full[out]
+            e, _ = self.rls.update(Y[:, idx], yy)
+            self.pi_full[idx] = self.rls.x
+            e_lin, e_ang = e[:len(rl)], e[len(rl):]
+            phi, A = Y[len(rl):, idx], Y[:len(rl), idx]
+            rhs_ang = yy[len(rl):]
+        self.residual_lin = float(np.linalg.norm(e_lin) / max(np.linalg.norm(b), 1e-300))
+        self.residual_ang = float(np.linalg.norm(e_ang) / max(np.linalg.norm(rhs_ang), 1e-300))
+        if self.solver == "paper":
+            self.info_lin = self.lam * self.info_lin + A.T @ A
+            self.info_ang = self.lam * self.info_ang + phi.T @ phi
+        else:
+            self.info_lin = self.lam * self.info_lin + _sub(A, phi, self.pi_idx, lin=True)
+            self.info_ang = self.lam * self.info_ang + _sub(A, phi, self.pi_idx, lin=False)
+
+    # -- results --------------------------------------------------------------------------------
+    def parameters(self):
+        """Current estimate as ``(mu (8,), theta (12,))`` in the paper's parameterisation."""
+        if self.solver == "paper":
+            return self.mu_full.copy(), self.th_full.copy()
+        mu, th = np.empty(8), np.empty(12)
+        for k in range(2):
+            m, b, I_c = rg.physical_from_standard(self.pi_full[10 * k:10 * k + 10])
+            mu[4 * k], mu[4 * k + 1:4 * k + 4] = m, m * b
+            th[6 * k:6 * k + 6] = rg.sharp_vector(I_c)
+        return mu, th
+
+    def estimates(self) -> dict:
+        """``{'base': BodyEstimate, 'target': BodyEstimate}``."""
+        mu, th = self.parameters()
+        out = {}
+        for k, who in enumerate(("base", "target")):
+            m = mu[4 * k]
+            out[who] = BodyEstimate(m, mu[4 * k + 1:4 * k + 4] / m,
+                                    th[6 * k:6 * k + 6][rg.SHARP_TO_PROJECT])
+        return out
+
+    def vector(self) -> np.ndarray:
+        """Estimates as one (20,) vector: per body m, b (3), I (6, project order)."""
+        e = self.estimates()
+        return np.concatenate([np.concatenate([[x.m], x.b, x.I]) for x in (e["base"], e["target"])])
+
+    def std(self) -> np.ndarray:
+        """Standard deviations of :meth:`vector` (20,), residual-variance scaled.
+
+        Parameters that are not identified (planar out-of-plane ones) report the square root of
+        their prior covariance. Propagated with first-order (delta-method) Jacobians.
+        """
+        cov, z, g = self._covariance()
+        Jg = np.empty((20, len(z)))
+        f0 = g(z)
+        for i in range(len(z)):
+            dz = 1e-7 * max(abs(z[i]), 1e-3)
+            zp = z.copy(); zp[i] += dz
+            Jg[:, i] = (g(zp) - f0) / dz
+        return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", Jg, cov, Jg), 0.0, None))
+
+    def _covariance(self):
+        """Covariance of the internal parameter vector z, z itself, and z -> :meth:`vector`."""
+        g0 = self.guess
+        if self.solver == "paper":
+            p = len(self.mu_idx)
+            cov = np.zeros((20, 20))
+            Cmu_full = g0.P0_mu * np.eye(8)
+            Cmu = self.rls.lin.P * self.rls.lin.sigma2(p)
+            Cmu_full[np.ix_(self.mu_idx, self.mu_idx)] = Cmu
+            # theta depends on mu through M: d theta / d mu = M dD/dmu
+            Tm = np.zeros((12, 8))
+            Tm[np.ix_(self.th_idx, np.arange(8))] = self.rls.M @ rg.D_jacobian(self.mu_full)
+            Cth = g0.P0_theta * np.eye(12)
+            Cth[np.ix_(self.th_idx, self.th_idx)] = self.rls.ang.P * self.rls.ang.sigma2(
+                len(self.th_idx))
+            cov[:8, :8] = Cmu_full
+            cov[8:, :8] = Tm @ Cmu_full
+            cov[:8, 8:] = cov[8:, :8].T
+            cov[8:, 8:] = Cth + Tm @ Cmu_full @ Tm.T
+            z = np.concatenate([self.mu_full, self.th_full])
+
+            def g(z):
+                out = []
+                for k in range(2):
+                    m = z[4 * k]
+                    out += [[m], z[4 * k + 1:4 * k + 4] / m,
+                            z[8 + 6 * k:8 + 6 * k + 6][rg.SHARP_TO_PROJECT]]
+                return np.concatenate(out)
+            return cov, z, g
+        cov = np.diag([g0.P0_mu if i % 10 < 4 else g0.P0_theta for i in range(20)]).astype(float)
+        cov[np.ix_(self.pi_idx, self.pi_idx)] = self.rls.P * self.rls.sigma2(len(self.pi_idx))
+
+        def g(z):
+            out = []
+            for k in range(2):
+                m, b, I_c = rg.physical_from_standard(z[10 * k:10 * k + 10])
+                out += [[m], b, rg.sharp_vector(I_c)[rg.SHARP_TO_PROJECT]]
+            return np.concatenate(out)
+        return cov, self.pi_full.copy(), g
+
+    def excitation(self):
+        """Reciprocal condition numbers (scale-free) of the mass and inertia information."""
+        return _rcond(self.info_lin), _rcond(self.info_ang)
+
+    # -- state ------------------------------------------------------------------------------------
+    def get_state(self) -> dict:
+        """Deep copy of everything that evolves (estimates, covariances, M, references, history)."""
+        keep = ("rls", "mu_full", "th_full", "info_lin", "info_ang", "samples", "rejected",
+                "status", "residual_lin", "residual_ang", "reference", "history")
+        st = {k: copy.deepcopy(getattr(self, k)) for k in keep}
+        if self.solver == "joint":
+            st["pi_full"] = self.pi_full.copy()
+        return st
+
+    def set_state(self, st: dict) -> None:
+        for k, v in st.items():
+            setattr(self, k, copy.deepcopy(v))
+
+
+def _rcond(info: np.ndarray) -> float:
+    d = np.sqrt(np.clip(np.diag(info), 0.0, None))
+    if np.any(d == 0.0):
+        return 0.0
+    lam = np.linalg.eigvalsh(info / np.outer(d, d))
+    return float(max(lam[0], 0.0) / lam[-1])
+
+
+def _sub(A_lin, phi_ang, idx, lin: bool):
+    """Information of the mass-type (lin) or inertia-type standard parameters."""
+    cols = np.array([i for i, p in enumerate(idx) if (p % 10 < 4) == lin])
+    M = A_lin if lin else phi_ang
+    sub = M[:, cols]
+    return sub.T @ sub

@@ -1,0 +1,91 @@
+"""Recursive least squares: the standard filter and the paper's modified one-step RLS.
+
+Both minimise, with forgetting factor ``lam`` (1 = none), the weighted cost
+
+    sum_k lam^(N-k) |y_k - H_k x|^2 + lam^N (x - x0)^T P0^-1 (x - x0)
+
+one sample at a time, with cost independent of the number of samples.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+
+class RLS:
+    """Standard RLS for ``H x = y`` (unit measurement weight).
+
+    Parameters
+    ----------
+    x0 : (p,) initial estimate;  P0 : (p, p) initial covariance;  lam : forgetting factor
+    """
+
+    def __init__(self, x0: np.ndarray, P0: np.ndarray, lam: float = 1.0):
+        self.x = np.array(x0, float)
+        self.P = np.array(P0, float)
+        self.lam = float(lam)
+        self.ssr = 0.0      # weighted sum of squared normalised a-priori residuals
+        self.rows = 0
+
+    def update(self, H: np.ndarray, y: np.ndarray):
+        """One sample. Returns the a-priori residual ``y - H x`` and the gain ``K``."""
+        e = y - H @ self.x
+        PHt = self.P @ H.T
+        S = self.lam * np.eye(H.shape[0]) + H @ PHt
+        Sinv_e, KT = np.split(np.linalg.solve(S, np.column_stack([e, PHt.T])), [1], axis=1)
+        K = KT.T                                              # K = P H^T (lam I + H P H^T)^-1
+        self.ssr = self.lam * self.ssr + float(e @ Sinv_e[:, 0])
+        self.rows += H.shape[0]
+        self.x = self.x + K @ e                               # x += K (y - H x)
+        self.P = (self.P - K @ (H @ self.P)) / self.lam       # P = (I - K H) P / lam
+        self.P = 0.5 * (self.P + self.P.T)
+        return e, K
+
+    def sigma2(self, p: int) -> float:
+        """Residual variance estimate ``ssr / (rows - p)`` (1 before there is redundancy)."""
+        dof = self.rows - p
+        return self.ssr / dof if dof > 0 and self.ssr > 0 else 1.0
+
+
+class ModifiedRLS:
+    """The paper's one-step solver (eqs. 34-38) for
+
+        A mu = b                        (masses and first moments, eq. 34)
+        phi theta = y + psi D(mu)       (inertias, eq. 35)
+
+    ``M = d theta / d D`` re-references the inertia estimate to the newest ``mu`` so that
+    ``theta`` always equals the batch least-squares answer over all samples at the latest ``mu``.
+
+    Parameters
+    ----------
+    mu0 : (p,)  theta0 : (r,)  P_mu0 : (p, p)  P_th0 : (r, r)
+    D : callable, ``D(mu) -> (d,)`` (only evaluated here and in :meth:`update`, not stored, so
+        that the solver state is plain arrays)
+    lam : forgetting factor
+    """
+
+    def __init__(self, mu0, theta0, P_mu0, P_th0, D: Callable[[np.ndarray], np.ndarray],
+                 lam: float = 1.0):
+        self.lin = RLS(mu0, P_mu0, lam)
+        self.ang = RLS(theta0, P_th0, lam)
+        self.D_mu = D(self.lin.x)
+        self.M = np.zeros((len(theta0), len(self.D_mu)))   # M(0) = 0
+
+    @property
+    def mu(self) -> np.ndarray:
+        return self.lin.x
+
+    @property
+    def theta(self) -> np.ndarray:
+        return self.ang.x
+
+    def update(self, A, b, phi, y, psi, D: Callable[[np.ndarray], np.ndarray]):
+        """One sample of both equations. Returns the two a-priori residuals."""
+        e_lin, _ = self.lin.update(A, b)                      # step 1: mu_N
+        D_new = D(self.lin.x)
+        self.ang.x = self.ang.x + self.M @ (D_new - self.D_mu)  # step 2 (eqs. 36-37)
+        self.D_mu = D_new
+        e_ang, K = self.ang.update(phi, y + psi @ D_new)      # step 3
+        self.M = self.M - K @ (phi @ self.M) + K @ psi        # step 4: M = (I - K phi) M + K psi
+        return e_lin, e_ang
