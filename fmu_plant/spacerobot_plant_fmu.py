@@ -1,0 +1,108 @@
+"""pythonfmu slave of the plant: a thin wrapper mapping FMI variables to spacerobot.plant.
+
+Built by ``spacerobot build``; inside the FMU the library is bundled as ``_spacerobot_plant``
+(a unique name, so that it can share a process with the estimator FMU).
+"""
+import math
+
+import numpy as np
+
+from _spacerobot_plant.fmi.slave import InterfaceSlave, _escape
+from _spacerobot_plant.interface import plant_vars
+from _spacerobot_plant.plant import Plant
+from _spacerobot_plant.robots import Controller, RigidBody, check_body, scenario_from_dict
+from pythonfmu import DefaultExperiment
+from pythonfmu.enums import Fmi2Status
+
+#: longest accepted communication step [s] (1e5 internal steps at the default h)
+MAX_COMM_STEP = 100.0
+
+
+class SpaceRobotPlant(InterfaceSlave):
+    """Free-floating space robot (base + arm + grasped target) after capture."""
+
+    author = "spacerobot developers"
+    description = ("Free-floating space robot after capture: base, arm and target on Pinocchio, "
+                   "RK4, bounded momentum controller on the base thrusters, arm motion that "
+                   "stabilises the base attitude (Zhang, Yue, Yuan 2020).")
+    version = "0.1.0"
+    license = "MIT"
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        cfg = self._load_config()
+        self.scenario = scenario_from_dict(cfg["scenario"])
+        self.robot = self.scenario.robot
+        self.default_experiment = DefaultExperiment(0.0, self.scenario.stop_time,
+                                                    self.scenario.sample_time)
+        self._register_interface(plant_vars(self.robot, self.scenario))
+        self.plant = None
+
+    # -- parameters -> core ---------------------------------------------------------------------
+    def _body(self, prefix: str) -> RigidBody:
+        v = self.values
+        b = (v[f"{prefix}.b[1]"], v[f"{prefix}.b[2]"], v[f"{prefix}.b[3]"])
+        I6 = tuple(v[f"{prefix}.{n}"] for n in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"))
+        check_body(prefix, v[f"{prefix}.m"], b, I6)
+        return RigidBody(float(v[f"{prefix}.m"]), tuple(map(float, b)), tuple(map(float, I6)))
+
+    def _initialise(self) -> None:
+        v = self.values
+        try:
+            base, target = self._body("base"), self._body("target")
+            ctrl = Controller(**{k: float(v[k]) for k in Controller.__dataclass_fields__})
+            for k in ("F_max", "P_max", "M_max", "L_max", "qdd_max"):
+                if getattr(ctrl, k) < 0.0:
+                    raise ValueError(f"{k} must be >= 0, got {getattr(ctrl, k)}")
+            h = float(v["h"])
+            if not (0.0 < h <= 1.0):
+                raise ValueError(f"h must be in (0, 1] s, got {h}")
+            v0 = [float(v[f"base.v0[{i}]"]) for i in (1, 2, 3)]
+            w0 = [float(v[f"base.omega0[{i}]"]) for i in (1, 2, 3)]
+            self.plant = Plant(self.robot, base, target, ctrl, v0, w0, h)
+        except ValueError as e:
+            self._fail(f"invalid plant parameters: {e}")
+        self._refresh()
+
+    def _refresh(self) -> None:
+        out = self.plant.outputs()
+        o = {}
+        for name, var in self.interface.items():
+            if var.causality != "output":
+                continue
+            group, idx = var.key
+            o[name] = float(out[group][idx])
+        self._outputs = o
+
+    # -- stepping --------------------------------------------------------------------------------
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        if not self._check_step(current_time, step_size, MAX_COMM_STEP):
+            return False
+        if abs(current_time - self.plant.t) > 1e-9 * max(1.0, abs(current_time)):
+            self.log(_escape(f"communication point {current_time!r} s differs from the plant "
+                             f"time {self.plant.t!r} s; continuing from the plant state"),
+                     Fmi2Status.warning)
+        before = self.plant.get_state()
+        try:
+            self.plant.advance(step_size)
+            self._refresh()
+        except (FloatingPointError, ValueError, np.linalg.LinAlgError) as e:
+            self.plant.set_state(before)
+            self._refresh()
+            self.log(_escape(f"step from t = {current_time:.6g} s by {step_size:.6g} s failed: "
+                             f"{e}; state kept at t = {self.plant.t:.6g} s"), Fmi2Status.discard)
+            return False
+        return True
+
+    # -- state -----------------------------------------------------------------------------------
+    def _core_state(self):
+        return None if self.plant is None else self.plant.get_state()
+
+    def _restore_core_state(self, core) -> None:
+        if core is None:
+            self.plant = None
+            return
+        if self.plant is None:
+            self._initialise()
+        self.plant.set_state(core)
+        self._refresh()

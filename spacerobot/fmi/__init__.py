@@ -1,0 +1,1 @@
+"""FMI layer: the shared pythonfmu slave base class and the FMU/SSP build."""

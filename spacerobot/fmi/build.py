@@ -1,0 +1,76 @@
+"""Build the plant and estimator FMUs for a scenario.
+
+Each FMU bundles the script from ``fmu_plant/`` or ``fmu_estimator/`` plus a copy of the parts
+of this library it needs, renamed to a package unique to that FMU (``_spacerobot_plant``,
+``_spacerobot_estimator``) so that both can run in one Python process. The estimator bundle
+has no plant code and no Pinocchio. The scenario (robot description and defaults) goes into
+``resources/spacerobot_config.json``.
+"""
+from __future__ import annotations
+
+import importlib.util
+import json
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+from ..robots import Scenario, scenario_to_dict
+
+LIB = Path(__file__).resolve().parents[1]          # the spacerobot package
+ROOT = LIB.parent                                   # repository / install root
+
+#: what each FMU bundles from the library (modules and sub-packages)
+BUNDLES = {
+    "plant": ("robots.py", "interface.py", "kinematics.py", "fmi", "plant"),
+    "estimator": ("robots.py", "interface.py", "kinematics.py", "fmi", "estimator"),
+}
+
+
+def _script(kind: str) -> Path:
+    spec = importlib.util.find_spec(f"fmu_{kind}")
+    folder = Path(spec.submodule_search_locations[0]) if spec else ROOT / f"fmu_{kind}"
+    return folder / f"spacerobot_{kind}_fmu.py"
+
+
+def build_fmu(kind: str, sc: Scenario, out_dir: str | Path) -> Path:
+    """Build one FMU (``kind`` = 'plant' or 'estimator') into ``out_dir``; returns its path."""
+    from pythonfmu.builder import FmuBuilder
+
+    if kind not in BUNDLES:
+        raise ValueError(f"kind must be 'plant' or 'estimator', got {kind!r}")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    script = _script(kind)
+    with tempfile.TemporaryDirectory(prefix=f"spacerobot_{kind}_") as tmp:
+        stage = Path(tmp)
+        pkg = stage / f"_spacerobot_{kind}"
+        pkg.mkdir()
+        (pkg / "__init__.py").write_text(f'"""spacerobot library bundled in the {kind} FMU."""\n')
+        for item in BUNDLES[kind]:
+            src = LIB / item
+            if src.is_dir():
+                shutil.copytree(src, pkg / item, ignore=shutil.ignore_patterns("__pycache__",
+                                                                              "build.py"))
+            else:
+                shutil.copy2(src, pkg / item)
+        config = stage / "spacerobot_config.json"
+        config.write_text(json.dumps({"kind": kind, "scenario": scenario_to_dict(sc)}, indent=1))
+        shutil.copy2(script, stage / script.name)
+        readme_dir = stage / "doc"
+        readme_dir.mkdir()
+        shutil.copy2(script.parent / "README.md", readme_dir / "index.md") if (
+            script.parent / "README.md").exists() else None
+        sys.path.insert(0, str(stage))
+        try:
+            fmu = FmuBuilder.build_FMU(stage / script.name, dest=out_dir,
+                                       project_files=[pkg, config],
+                                       documentation_folder=readme_dir,
+                                       canGetAndSetFMUstate=True, canSerializeFMUstate=True,
+                                       needsExecutionTool=True)
+        finally:
+            sys.path.remove(str(stage))
+            for mod in [m for m in sys.modules if m.startswith(f"_spacerobot_{kind}")
+                        or m == script.stem]:
+                del sys.modules[mod]
+    return Path(fmu)

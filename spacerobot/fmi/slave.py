@@ -1,0 +1,172 @@
+"""Shared machinery of the two pythonfmu slaves: variables from the interface table, units and
+InitialUnknowns in the model description, lifecycle checks, full state get/set/serialise.
+
+pythonfmu 0.7.0 maps any Python exception to ``fmi2Fatal`` and ``do_step() -> False`` to
+``fmi2Discard``; it has no way to return ``fmi2Error``. So: invalid parameters and calls out of
+lifecycle order raise (``fmi2Fatal``, message logged first); a step that cannot be completed
+returns Discard with the state as before the step.
+"""
+from __future__ import annotations
+
+import copy
+import json
+import math
+import os
+import pickle
+from typing import Dict, List
+
+from pythonfmu import Fmi2Slave, Integer, Real
+from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
+from xml.etree.ElementTree import Element, SubElement
+
+from ..interface import UNITS, Var
+
+CONFIG_FILE = "spacerobot_config.json"
+
+
+def _escape(msg: str) -> str:
+    """FMI loggers treat the message as a printf format: escape '%'."""
+    return msg.replace("%", "%%")
+
+
+class InterfaceSlave(Fmi2Slave):
+    """Base class: registers :class:`~spacerobot.interface.Var` rows as FMI variables.
+
+    Subclasses provide ``_outputs`` (name -> value, refreshed by the subclass) and implement
+    ``_core_state``/``_restore_core_state`` and ``do_step``.
+    """
+
+    def _load_config(self) -> dict:
+        path = os.path.join(self.resources or ".", CONFIG_FILE)
+        with open(path) as f:
+            return json.load(f)
+
+    def _register_interface(self, variables: List[Var]) -> None:
+        self.interface: Dict[str, Var] = {v.name: v for v in variables}
+        self.values: Dict[str, float] = {}
+        self._outputs: Dict[str, float] = {}
+        self.phase = "instantiated"
+        for var in variables:
+            cls = Real if var.type == "Real" else Integer
+            kw = dict(causality=getattr(Fmi2Causality, var.causality),
+                      variability=getattr(Fmi2Variability, var.variability),
+                      description=var.description)
+            if var.causality in ("parameter", "input"):
+                self.values[var.name] = var.start
+                kw["setter"] = (lambda x, n=var.name: self._set(n, x))
+                kw["getter"] = (lambda n=var.name: self.values[n])
+            else:
+                kw["getter"] = (lambda n=var.name: self._get_output(n))
+            self.register_variable(cls(var.name, **kw), nested=False)
+
+    # -- values -------------------------------------------------------------------------------
+    def _set(self, name: str, value) -> None:
+        var = self.interface[name]
+        if var.causality == "parameter" and var.variability == "fixed" and self.phase in (
+                "stepping", "terminated"):
+            msg = (f"{name} is a fixed parameter and cannot be changed after initialisation "
+                   f"(tried to set {value!r}); the value stays {self.values[name]!r}")
+            self.log(_escape(msg), Fmi2Status.error)
+            raise RuntimeError(msg)
+        self.values[name] = value
+        self._on_set(name)
+
+    def _on_set(self, name: str) -> None:
+        """Hook: a parameter or input changed."""
+
+    def _get_output(self, name: str):
+        return self._outputs.get(name, 0)
+
+    def _fail(self, msg: str) -> None:
+        """Log an error and raise (pythonfmu turns it into fmi2Fatal)."""
+        self.log(_escape(msg), Fmi2Status.error)
+        raise ValueError(msg)
+
+    def _check_finite_params(self) -> None:
+        bad = [f"{n} = {v!r}" for n, v in self.values.items()
+               if self.interface[n].causality == "parameter" and self.interface[n].type == "Real"
+               and not math.isfinite(float(v))]
+        if bad:
+            self._fail("non-finite parameter value(s): " + ", ".join(bad))
+
+    def _check_step(self, current_time: float, step_size: float, max_step: float) -> bool:
+        """Validate a doStep call; log and return False (Discard) if it cannot be taken."""
+        if self.phase != "stepping":
+            self.log(_escape(f"doStep called in phase '{self.phase}'; call "
+                             "fmi2ExitInitializationMode first"), Fmi2Status.error)
+            return False
+        if not (math.isfinite(step_size) and 0.0 < step_size <= max_step):
+            self.log(_escape(f"communication step {step_size!r} s at t = {current_time!r} s "
+                             f"rejected: it must be finite and in (0, {max_step:g}] s"),
+                     Fmi2Status.discard)
+            return False
+        if not math.isfinite(current_time):
+            self.log(_escape(f"non-finite communication point {current_time!r}"), Fmi2Status.discard)
+            return False
+        return True
+
+    # -- lifecycle ------------------------------------------------------------------------------
+    def enter_initialization_mode(self):
+        self.phase = "initialization"
+
+    def exit_initialization_mode(self):
+        self._check_finite_params()
+        self._initialise()        # may raise with a logged message
+        self.phase = "stepping"
+
+    def terminate(self):
+        self.phase = "terminated"
+
+    def _initialise(self) -> None:
+        raise NotImplementedError
+
+    # -- model description --------------------------------------------------------------------
+    def to_xml(self, model_options: Dict[str, str] = dict()) -> Element:
+        root = super().to_xml(model_options)
+        # UnitDefinitions go right after the CoSimulation element (FMI 2.0 schema order)
+        units = Element("UnitDefinitions")
+        used = sorted({v.unit for v in self.interface.values() if v.unit})
+        for u in used:
+            unit = SubElement(units, "Unit", name=u)
+            exps = UNITS[u]
+            if exps:
+                SubElement(unit, "BaseUnit", {k: str(e) for k, e in exps.items()})
+        cs_pos = list(root).index(root.find("CoSimulation"))
+        root.insert(cs_pos + 1, units)
+        sv_by_name = {sv.get("name"): sv for sv in root.find("ModelVariables")}
+        for name, var in self.interface.items():
+            if var.unit and var.type == "Real":
+                sv_by_name[name].find("Real").set("unit", var.unit)
+        # InitialUnknowns: every output (initial = calculated by default)
+        structure = root.find("ModelStructure")
+        init = SubElement(structure, "InitialUnknowns")
+        for i, sv in enumerate(root.find("ModelVariables")):
+            if sv.get("causality") == "output":
+                SubElement(init, "Unknown", index=str(i + 1))
+        return root
+
+    # -- FMU state ------------------------------------------------------------------------------
+    def _get_fmu_state(self):
+        return copy.deepcopy({"values": self.values, "outputs": self._outputs, "phase": self.phase,
+                              "core": self._core_state()})
+
+    def _set_fmu_state(self, state) -> None:
+        state = copy.deepcopy(state)
+        self.values = state["values"]
+        self._outputs = state["outputs"]
+        self.phase = state["phase"]
+        self._restore_core_state(state["core"])
+
+    @staticmethod
+    def _fmu_state_to_bytes(state) -> bytes:
+        return pickle.dumps(state, protocol=4)
+
+    @staticmethod
+    def _fmu_state_from_bytes(data: bytes):
+        return pickle.loads(data)
+
+    def _core_state(self):
+        raise NotImplementedError
+
+    def _restore_core_state(self, core) -> None:
+        raise NotImplementedError

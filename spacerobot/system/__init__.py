@@ -1,0 +1,1 @@
+"""The system: SSP generation, co-simulation runner, command line, plots, sweeps."""
