@@ -96,6 +96,7 @@ class SpaceRobotEstimator(InterfaceSlave):
         return exc[0] if group == "excitation_mu" else exc[1]
 
     def _get_output(self, name: str):
+        self._ensure_current()
         var = self.interface[name]
         if var.key[0] in ("sd_base", "sd_target"):
             if self.ident is None:

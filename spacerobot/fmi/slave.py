@@ -46,6 +46,7 @@ class InterfaceSlave(Fmi2Slave):
         self.values: Dict[str, float] = {}
         self._outputs: Dict[str, float] = {}
         self.phase = "instantiated"
+        self._dirty = True          # parameters changed since the outputs were computed
         for var in variables:
             cls = Real if var.type == "Real" else Integer
             kw = dict(causality=getattr(Fmi2Causality, var.causality),
@@ -69,12 +70,17 @@ class InterfaceSlave(Fmi2Slave):
             self.log(_escape(msg), Fmi2Status.error)
             raise RuntimeError(msg)
         self.values[name] = value
-        self._on_set(name)
+        if var.causality == "parameter":
+            self._dirty = True
 
-    def _on_set(self, name: str) -> None:
-        """Hook: a parameter or input changed."""
+    def _ensure_current(self) -> None:
+        """In initialisation mode, outputs (InitialUnknowns) follow the parameters set so far."""
+        if self.phase == "initialization" and self._dirty:
+            self._initialise()
+            self._dirty = False
 
     def _get_output(self, name: str):
+        self._ensure_current()
         return self._outputs.get(name, 0)
 
     def _fail(self, msg: str) -> None:
@@ -112,6 +118,7 @@ class InterfaceSlave(Fmi2Slave):
     def exit_initialization_mode(self):
         self._check_finite_params()
         self._initialise()        # may raise with a logged message
+        self._dirty = False
         self.phase = "stepping"
 
     def terminate(self):
