@@ -10,11 +10,8 @@ from _spacerobot_estimator.estimator import Identifier
 from _spacerobot_estimator.fmi.slave import InterfaceSlave, _escape
 from _spacerobot_estimator.interface import (ACCEL_SOURCES, METHODS, SOLVERS, STATUS,
                                              estimator_vars)
-from _spacerobot_estimator.robots import Guess, RigidBody, check_body, scenario_from_dict
-from pythonfmu import DefaultExperiment
+from _spacerobot_estimator.robots import Guess
 from pythonfmu.enums import Fmi2Status
-
-INERTIA = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 
 class SpaceRobotEstimator(InterfaceSlave):
@@ -29,23 +26,10 @@ class SpaceRobotEstimator(InterfaceSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        cfg = self._load_config()
-        self.scenario = scenario_from_dict(cfg["scenario"])
-        self.robot = self.scenario.robot
-        self.default_experiment = DefaultExperiment(0.0, self.scenario.stop_time,
-                                                    self.scenario.sample_time)
-        self._register_interface(estimator_vars(self.robot, self.scenario))
+        self._setup(estimator_vars)
         self.ident = None
         self._inputs = [(n, v.key) for n, v in self.interface.items() if v.causality == "input"]
         self._sd = None
-
-    def _guess_body(self, who: str) -> RigidBody:
-        v = self.values
-        p = f"guess.{who}"
-        b = tuple(float(v[f"{p}.b[{i}]"]) for i in (1, 2, 3))
-        I6 = tuple(float(v[f"{p}.{n}"]) for n in INERTIA)
-        check_body(p, float(v[f"{p}.m"]), b, I6)
-        return RigidBody(float(v[f"{p}.m"]), b, I6)
 
     def _initialise(self) -> None:
         v = self.values
@@ -55,7 +39,7 @@ class SpaceRobotEstimator(InterfaceSlave):
                 if int(v[name]) not in table:
                     raise ValueError(f"{name} = {v[name]!r} is not one of "
                                      + ", ".join(f"{k} ({s})" for k, s in table.items()))
-            guess = Guess(self._guess_body("base"), self._guess_body("target"),
+            guess = Guess(self._body("guess.base"), self._body("guess.target"),
                           float(v["P0_mu"]), float(v["P0_theta"]))
             self.ident = Identifier(self.robot, guess, METHODS[int(v["method"])],
                                     SOLVERS[int(v["solver"])], ACCEL_SOURCES[int(v["accel_source"])],

@@ -3,15 +3,12 @@
 Built by ``spacerobot build``; inside the FMU the library is bundled as ``_spacerobot_plant``
 (a unique name, so that it can share a process with the estimator FMU).
 """
-import math
-
 import numpy as np
 
 from _spacerobot_plant.fmi.slave import InterfaceSlave, _escape
 from _spacerobot_plant.interface import plant_vars
 from _spacerobot_plant.plant import Plant
-from _spacerobot_plant.robots import Controller, RigidBody, check_body, scenario_from_dict
-from pythonfmu import DefaultExperiment
+from _spacerobot_plant.robots import Controller
 from pythonfmu.enums import Fmi2Status
 
 #: longest accepted communication step [s] (1e5 internal steps at the default h)
@@ -30,22 +27,10 @@ class SpaceRobotPlant(InterfaceSlave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        cfg = self._load_config()
-        self.scenario = scenario_from_dict(cfg["scenario"])
-        self.robot = self.scenario.robot
-        self.default_experiment = DefaultExperiment(0.0, self.scenario.stop_time,
-                                                    self.scenario.sample_time)
-        self._register_interface(plant_vars(self.robot, self.scenario))
+        self._setup(plant_vars)
         self.plant = None
 
     # -- parameters -> core ---------------------------------------------------------------------
-    def _body(self, prefix: str) -> RigidBody:
-        v = self.values
-        b = (v[f"{prefix}.b[1]"], v[f"{prefix}.b[2]"], v[f"{prefix}.b[3]"])
-        I6 = tuple(v[f"{prefix}.{n}"] for n in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"))
-        check_body(prefix, v[f"{prefix}.m"], b, I6)
-        return RigidBody(float(v[f"{prefix}.m"]), tuple(map(float, b)), tuple(map(float, I6)))
-
     def _initialise(self) -> None:
         v = self.values
         try:

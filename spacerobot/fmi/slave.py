@@ -20,6 +20,7 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from xml.etree.ElementTree import Element, SubElement
 
 from ..interface import UNITS, Var
+from ..robots import INERTIA_NAMES, RigidBody, check_body, scenario_from_dict
 
 CONFIG_FILE = "spacerobot_config.json"
 
@@ -36,10 +37,25 @@ class InterfaceSlave(Fmi2Slave):
     ``_core_state``/``_restore_core_state`` and ``do_step``.
     """
 
-    def _load_config(self) -> dict:
-        path = os.path.join(self.resources or ".", CONFIG_FILE)
-        with open(path) as f:
-            return json.load(f)
+    def _setup(self, variables_of) -> None:
+        """Load the bundled scenario and register ``variables_of(robot, scenario)``."""
+        from pythonfmu import DefaultExperiment
+
+        with open(os.path.join(self.resources or ".", CONFIG_FILE)) as f:
+            self.scenario = scenario_from_dict(json.load(f)["scenario"])
+        self.robot = self.scenario.robot
+        self.default_experiment = DefaultExperiment(0.0, self.scenario.stop_time,
+                                                    self.scenario.sample_time)
+        self._register_interface(variables_of(self.robot, self.scenario))
+
+    def _body(self, prefix: str) -> RigidBody:
+        """The rigid body held in parameters ``<prefix>.m``, ``.b[1..3]``, ``.Ixx`` ... (checked)."""
+        v = self.values
+        m = float(v[f"{prefix}.m"])
+        b = tuple(float(v[f"{prefix}.b[{i}]"]) for i in (1, 2, 3))
+        I6 = tuple(float(v[f"{prefix}.{n}"]) for n in INERTIA_NAMES)
+        check_body(prefix, m, b, I6)
+        return RigidBody(m, b, I6)
 
     def _register_interface(self, variables: List[Var]) -> None:
         self.interface: Dict[str, Var] = {v.name: v for v in variables}
