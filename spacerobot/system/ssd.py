@@ -1,0 +1,311 @@
+"""SSP 1.0 system structure of the plant + estimator pair, generated from one source.
+
+Everything here is derived from :mod:`spacerobot.interface` (variables, units, connections) and
+:mod:`spacerobot.robots` (robots, targets, scenarios); the files in the repository folder
+``ssp/`` are the output of :func:`write_ssp_sources` and are never edited by hand (a test checks
+that they equal the generator output).
+
+Layout of a generated system (the same inside ``<robot>.ssp`` and under ``ssp/<robot>/``)::
+
+    SystemStructure.ssd
+    resources/SpaceRobotPlant.fmu          (only in the .ssp)
+    resources/SpaceRobotEstimator.fmu      (only in the .ssp)
+    resources/<set>.ssv                    one parameter set per scenario (planar: small,
+                                           medium, large; spatial: default)
+
+Tool compatibility (see docs/DESIGN §5): ``version="1.0"``; namespace prefixes exactly ``ssd:``,
+``ssc:``, ``ssv:``; one flat root System holding the two components; every connector typed
+(``<ssc:Real unit="..."/>`` or ``<ssc:Integer/>``) with its unit declared in ``ssd:Units``; the
+parameter set bound at component level (a ParameterBinding on the plant component); the
+communication step in the root System's ``oms:FixedStepMaster`` annotation (OMSimulator) and in
+DefaultExperiment's ``osp:FixedStepAlgorithm`` annotation (libcosim / OSP).
+"""
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+from typing import Dict, List, Optional, Tuple
+from xml.sax.saxutils import quoteattr
+
+from ..interface import UNITS, Var, connections, estimator_vars, plant_vars
+from ..robots import DEFAULT_TARGET, ROBOTS, TARGETS, Scenario, scenario
+
+#: XML namespaces (prefixes are part of the contract: some tools match on them)
+NS = {
+    "ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
+    "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
+    "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd",
+    "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations",
+}
+
+#: component names in the root System, and the FMU files they reference
+PLANT = "plant"
+ESTIMATOR = "estimator"
+SOURCES = {PLANT: "resources/SpaceRobotPlant.fmu", ESTIMATOR: "resources/SpaceRobotEstimator.fmu"}
+SSD_NAME = "SystemStructure.ssd"
+GENERATOR = "spacerobot.system.ssd"
+
+#: the plant parameters a parameter set binds (the scenario's truth and initial velocities)
+_BODY_PARAMS = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+SET_PARAMETERS: Tuple[str, ...] = (
+    tuple(f"base.{p}" for p in _BODY_PARAMS) + tuple(f"target.{p}" for p in _BODY_PARAMS)
+    + tuple(f"base.v0[{i}]" for i in (1, 2, 3)) + tuple(f"base.omega0[{i}]" for i in (1, 2, 3)))
+
+
+def _check_robot(robot: str) -> None:
+    if robot not in ROBOTS:
+        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(ROBOTS)}")
+
+
+def parameter_set_names(robot: str) -> List[str]:
+    """Names of the parameter sets (.ssv) generated for ``robot`` (one per target scenario)."""
+    _check_robot(robot)
+    return list(TARGETS[robot])
+
+
+def default_parameter_set(robot: str) -> str:
+    """The parameter set bound in the SSD (the robot's default target, e.g. planar: medium)."""
+    _check_robot(robot)
+    return DEFAULT_TARGET[robot]
+
+
+def _num(x: float) -> str:
+    """Shortest exact text of a float (round-trips, deterministic)."""
+    return repr(float(x))
+
+
+def _scenario_values(sc: Scenario) -> Dict[str, float]:
+    """Value of every :data:`SET_PARAMETERS` entry for scenario ``sc``."""
+    vals: Dict[str, float] = {}
+    for who, body in (("base", sc.robot.base), ("target", sc.target)):
+        vals[f"{who}.m"] = body.mass
+        for i in range(3):
+            vals[f"{who}.b[{i + 1}]"] = body.com[i]
+        for k, nm in enumerate(("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")):
+            vals[f"{who}.{nm}"] = body.inertia[k]
+    for i in range(3):
+        vals[f"base.v0[{i + 1}]"] = sc.v0[i]
+        vals[f"base.omega0[{i + 1}]"] = sc.omega0[i]
+    return vals
+
+
+def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
+    """``[(plant variable name, value, unit), ...]`` of parameter set ``name`` of ``robot``."""
+    if name not in parameter_set_names(robot):
+        raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
+                         f"choose from {parameter_set_names(robot)}")
+    sc = scenario(robot, name)
+    units = {v.name: v.unit for v in plant_vars(sc.robot, sc)}
+    vals = _scenario_values(sc)
+    return [(n, float(vals[n]), units[n]) for n in SET_PARAMETERS]
+
+
+def _units_xml(units, indent: str, prefix: str) -> List[str]:
+    out = [f"{indent}<{prefix}:Units>"]
+    for u in sorted(units):
+        exps = UNITS[u]
+        attrs = "".join(f" {k}={quoteattr(str(e))}" for k, e in exps.items())
+        out.append(f"{indent}  <ssc:Unit name={quoteattr(u)}>")
+        out.append(f"{indent}    <ssc:BaseUnit{attrs}/>")
+        out.append(f"{indent}  </ssc:Unit>")
+    out.append(f"{indent}</{prefix}:Units>")
+    return out
+
+
+def ssv_xml(robot: str, name: str) -> str:
+    """Text of the SSP 1.0 parameter values file ``resources/<name>.ssv``."""
+    params = parameter_set(robot, name)
+    sc = scenario(robot, name)
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             f'<ssv:ParameterSet xmlns:ssv="{NS["ssv"]}" xmlns:ssc="{NS["ssc"]}"',
+             f'    version="1.0" name={quoteattr(name)} generationTool="{GENERATOR}"',
+             f'    description={quoteattr(f"{sc.name}: plant truth (base, target) and initial velocities")}>',
+             "  <ssv:Parameters>"]
+    for pname, value, unit in params:
+        lines.append(f"    <ssv:Parameter name={quoteattr(pname)}>")
+        lines.append(f"      <ssv:Real value=\"{_num(value)}\" unit={quoteattr(unit)}/>")
+        lines.append("    </ssv:Parameter>")
+    lines.append("  </ssv:Parameters>")
+    lines += _units_xml({u for _, _, u in params}, "  ", "ssv")
+    lines.append("</ssv:ParameterSet>")
+    return "\n".join(lines) + "\n"
+
+
+def _connector(var: Var, kind: str, indent: str) -> List[str]:
+    if var.type == "Real":
+        typ = f"<ssc:Real unit={quoteattr(var.unit)}/>" if var.unit else "<ssc:Real/>"
+    else:
+        typ = f"<ssc:{var.type}/>"
+    return [f"{indent}<ssd:Connector name={quoteattr(var.name)} kind=\"{kind}\">",
+            f"{indent}  {typ}",
+            f"{indent}</ssd:Connector>"]
+
+
+def component_connectors(robot: str) -> Dict[str, List[Tuple[str, str, Var]]]:
+    """``{component: [(connector name, kind, Var), ...]}`` as declared in the SSD.
+
+    The plant exposes every output and the parameters that the parameter sets bind; the
+    estimator exposes every input (all connected) and every output.
+    """
+    _check_robot(robot)
+    sc = scenario(robot)
+    pv = plant_vars(sc.robot, sc)
+    ev = estimator_vars(sc.robot, sc)
+    plant = [(v.name, "output", v) for v in pv if v.causality == "output"]
+    by_name = {v.name: v for v in pv}
+    plant += [(n, "parameter", by_name[n]) for n in SET_PARAMETERS]
+    est = [(v.name, v.causality, v) for v in ev if v.causality in ("input", "output")]
+    return {PLANT: plant, ESTIMATOR: est}
+
+
+def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
+    """Text of ``SystemStructure.ssd`` for ``robot`` with parameter set ``bound_set`` bound.
+
+    Parameters
+    ----------
+    robot : {'planar', 'spatial'}
+    bound_set : str, optional
+        Parameter set bound to the plant component (default: :func:`default_parameter_set`).
+    """
+    _check_robot(robot)
+    bound_set = bound_set or default_parameter_set(robot)
+    if bound_set not in parameter_set_names(robot):
+        raise ValueError(f"unknown parameter set {bound_set!r} for robot {robot!r}; "
+                         f"choose from {parameter_set_names(robot)}")
+    sc = scenario(robot, bound_set)
+    step = _num(sc.sample_time)
+    conns = component_connectors(robot)
+    units = {v.unit for c in conns.values() for _, _, v in c if v.type == "Real" and v.unit}
+    robot_desc = ROBOTS[robot].description
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             "<ssd:SystemStructureDescription"
+             + "".join(f'\n    xmlns:{p}="{u}"' for p, u in NS.items()),
+             f'    version="1.0" name="SpaceRobot_{robot}" generationTool="{GENERATOR}"',
+             f"    description={quoteattr('Space robot after capture: plant and inertial-parameter estimator. ' + robot_desc)}>",
+             f'  <ssd:System name="root" description="Plant outputs wired to the estimator inputs of the same name">',
+             "    <ssd:Elements>"]
+    for comp in (PLANT, ESTIMATOR):
+        lines.append(f'      <ssd:Component name="{comp}" type="application/x-fmu-sharedlibrary" '
+                     f'source="{SOURCES[comp]}">')
+        lines.append("        <ssd:Connectors>")
+        for _, kind, var in conns[comp]:
+            lines += _connector(var, kind, "          ")
+        lines.append("        </ssd:Connectors>")
+        if comp == PLANT:
+            lines += ["        <ssd:ParameterBindings>",
+                      f'          <ssd:ParameterBinding type="application/x-ssp-parameter-set" '
+                      f'source="resources/{bound_set}.ssv"/>',
+                      "        </ssd:ParameterBindings>"]
+        lines.append("      </ssd:Component>")
+    lines.append("    </ssd:Elements>")
+    lines.append("    <ssd:Connections>")
+    for name in connections(ROBOTS[robot]):
+        lines.append(f'      <ssd:Connection startElement="{PLANT}" startConnector={quoteattr(name)} '
+                     f'endElement="{ESTIMATOR}" endConnector={quoteattr(name)}/>')
+    lines.append("    </ssd:Connections>")
+    lines += ["    <ssd:Annotations>",
+              '      <ssc:Annotation type="org.openmodelica">',
+              "        <oms:Annotations>",
+              "          <oms:SimulationInformation>",
+              f'            <oms:FixedStepMaster description="oms-ma" stepSize="{step}"/>',
+              "          </oms:SimulationInformation>",
+              "        </oms:Annotations>",
+              "      </ssc:Annotation>",
+              "    </ssd:Annotations>",
+              "  </ssd:System>"]
+    lines += _units_xml(units, "  ", "ssd")
+    lines += [f'  <ssd:DefaultExperiment startTime="0.0" stopTime="{_num(sc.stop_time)}">',
+              "    <ssd:Annotations>",
+              '      <ssc:Annotation type="com.opensimulationplatform">',
+              "        <osp:Algorithm>",
+              f'          <osp:FixedStepAlgorithm baseStepSize="{step}"/>',
+              "        </osp:Algorithm>",
+              "      </ssc:Annotation>",
+              "    </ssd:Annotations>",
+              "  </ssd:DefaultExperiment>",
+              "</ssd:SystemStructureDescription>"]
+    return "\n".join(lines) + "\n"
+
+
+def generate(robot: str) -> Dict[str, str]:
+    """``{relative path: text}`` of every generated file of ``robot``'s system (SSD + SSVs)."""
+    files = {SSD_NAME: ssd_xml(robot)}
+    for name in parameter_set_names(robot):
+        files[f"resources/{name}.ssv"] = ssv_xml(robot, name)
+    return files
+
+
+#: the repository folder holding the committed, generated files
+SSP_SOURCE_DIR = Path(__file__).resolve().parents[2] / "ssp"
+
+
+def write_ssp_sources(dest: str | Path = SSP_SOURCE_DIR) -> List[Path]:
+    """Write the generated .ssd/.ssv of every robot to ``dest/<robot>/`` (default: repo ``ssp/``).
+
+    Returns the written paths. Run ``python -m spacerobot.system.ssd`` after changing
+    :mod:`spacerobot.interface` or :mod:`spacerobot.robots`, and commit the result.
+    """
+    dest = Path(dest)
+    written = []
+    for robot in ROBOTS:
+        for rel, text in generate(robot).items():
+            p = dest / robot / rel
+            p.parent.mkdir(parents=True, exist_ok=True)
+            p.write_text(text, encoding="utf-8")
+            written.append(p)
+    return written
+
+
+def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]] = None
+                 ) -> Dict[str, Path]:
+    """Build both FMUs, the SSD, the SSVs and the packaged ``<robot>.ssp`` into ``out_dir``.
+
+    Parameters
+    ----------
+    robot : {'planar', 'spatial'}
+    out_dir : path
+        Output folder (created).
+    fmus : dict, optional
+        Already built ``{'plant': path, 'estimator': path}`` for this robot, to package instead
+        of building them again.
+
+    Returns
+    -------
+    dict
+        ``{'plant': .fmu, 'estimator': .fmu, 'ssd': SystemStructure.ssd, 'ssv:<set>': .ssv ...,
+        'ssp': <robot>.ssp}``.
+    """
+    from ..fmi.build import build_fmu
+
+    _check_robot(robot)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    if fmus is None:
+        sc = scenario(robot)
+        fmus = {"plant": build_fmu("plant", sc, out), "estimator": build_fmu("estimator", sc, out)}
+    paths: Dict[str, Path] = {"plant": Path(fmus["plant"]), "estimator": Path(fmus["estimator"])}
+    files = generate(robot)
+    for rel, text in files.items():
+        p = out / rel
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(text, encoding="utf-8")
+        key = "ssd" if rel == SSD_NAME else "ssv:" + Path(rel).stem
+        paths[key] = p
+    ssp = out / f"{robot}.ssp"
+    tmp = ssp.with_suffix(".ssp.part")
+    with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr(SSD_NAME, files[SSD_NAME])
+        zf.write(paths["plant"], SOURCES[PLANT])
+        zf.write(paths["estimator"], SOURCES[ESTIMATOR])
+        for rel, text in files.items():
+            if rel != SSD_NAME:
+                zf.writestr(rel, text)
+    tmp.replace(ssp)
+    paths["ssp"] = ssp
+    return paths
+
+
+if __name__ == "__main__":  # regenerate the committed files
+    for path in write_ssp_sources():
+        print(path)
