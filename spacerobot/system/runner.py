@@ -642,3 +642,41 @@ def run_ssp(ssp_path: str | Path, parameter_set: Optional[str] = None,
         for inst in insts.values():
             inst.free()
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def format_results(result: RunResult, paper: Optional[Mapping[str, float]] = None,
+                   identified_only: Optional[Sequence[str]] = None) -> str:
+    """Text table of every estimate: final value, truth, relative error, and the paper's value.
+
+    Parameters
+    ----------
+    result : RunResult
+    paper : mapping, optional
+        Estimate name -> the value the paper reports (e.g.
+        ``spacerobot.robots.PAPER_PLANAR_MEDIUM['momentum']``).
+    identified_only : sequence of str, optional
+        The parameters the model identifies; the others are marked ``not identified``
+        (e.g. the planar model identifies only m, b[1], b[2], Izz of each body).
+
+    For a zero truth the absolute error is shown instead of the relative one.
+    """
+    paper = paper or {}
+    head = f"{'parameter':<12} {'estimate':>14} {'truth':>12} {'error':>16} {'paper':>9}  note"
+    lines = [head, "-" * len(head)]
+    for n in estimate_names():
+        if n not in result.final:
+            continue
+        est = result.final[n]
+        tru = result.truth.get(n, math.nan)
+        if math.isnan(tru):
+            err = "n/a"
+        elif tru == 0.0:
+            err = f"abs {abs(est - tru):.2e}"
+        else:
+            err = f"{100.0 * abs(est - tru) / abs(tru):.5f} %"
+        pv = f"{paper[n]:.2f}" if n in paper else ""
+        note = ""
+        if identified_only is not None and n not in identified_only:
+            note = "not identified (initial guess)"
+        lines.append(f"{n:<12} {est:>14.6f} {tru:>12.6g} {err:>16} {pv:>9}  {note}".rstrip())
+    return "\n".join(lines)

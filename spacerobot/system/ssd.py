@@ -306,6 +306,41 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     return paths
 
 
+def _newest_source_mtime() -> float:
+    """Newest modification time of the files the FMUs and the SSD are built from."""
+    from ..fmi.build import BUNDLES, LIB, _script
+
+    paths = [Path(__file__)]
+    for kind, items in BUNDLES.items():
+        script = _script(kind)
+        paths += [script, script.parent / "README.md"]
+        for item in items:
+            src = LIB / item
+            paths += list(src.rglob("*.py")) if src.is_dir() else [src]
+    return max(p.stat().st_mtime for p in paths if p.exists())
+
+
+def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None) -> Path:
+    """Path of ``<out_dir>/<robot>.ssp``, (re)built with :func:`build_system` if it is missing,
+    older than any library source it is built from, or its SSD differs from the generator's.
+
+    ``out_dir`` defaults to ``build/<robot>/`` in the current directory.
+    """
+    _check_robot(robot)
+    out = Path(out_dir) if out_dir is not None else Path("build") / robot
+    ssp = out / f"{robot}.ssp"
+    fresh = False
+    if ssp.exists() and ssp.stat().st_mtime >= _newest_source_mtime():
+        try:
+            with zipfile.ZipFile(ssp) as zf:
+                fresh = zf.read(SSD_NAME).decode("utf-8") == ssd_xml(robot)
+        except (zipfile.BadZipFile, KeyError):
+            fresh = False
+    if not fresh:
+        build_system(robot, out)
+    return ssp
+
+
 if __name__ == "__main__":  # regenerate the committed files
     for path in write_ssp_sources():
         print(path)

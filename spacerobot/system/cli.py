@@ -1,0 +1,202 @@
+"""The ``spacerobot`` command line. Every branch only calls the library.
+
+::
+
+    spacerobot build --robot planar|spatial [--out DIR]
+    spacerobot run [--robot planar|spatial | SSP_FILE] [--target small|medium|large]
+                   [--method momentum|force] [--accel measured|differenced]
+                   [--solver paper|joint] [--stop-time T] [--out CSV] [--set NAME=VALUE ...]
+    spacerobot plot CSV [--out PNG]
+    spacerobot sweep ...        (spacerobot.system.sweep, if installed)
+    spacerobot crosscheck ...   (spacerobot.system.crosscheck, if installed)
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import importlib.util
+import sys
+import zipfile
+from pathlib import Path
+from typing import List, Optional, Sequence
+
+from lxml import etree
+
+from ..interface import ACCEL_SOURCES, METHODS, SOLVERS
+from ..robots import PAPER_PLANAR_MEDIUM, ROBOTS
+
+_CODE = {"method": {v: k for k, v in METHODS.items()},
+         "solver": {v: k for k, v in SOLVERS.items()},
+         "accel": {v: k for k, v in ACCEL_SOURCES.items()}}
+
+
+def _robot_of(ssp: Path) -> Optional[str]:
+    """Robot name of a system built by :func:`spacerobot.system.ssd.build_system`, from the
+    SSD name ``SpaceRobot_<robot>`` (None if it is not one of ours)."""
+    from .ssd import SSD_NAME
+    try:
+        if ssp.is_dir():
+            text = (ssp / SSD_NAME).read_bytes()
+        else:
+            with zipfile.ZipFile(ssp) as zf:
+                text = zf.read(SSD_NAME)
+        name = etree.fromstring(text).get("name") or ""
+    except (OSError, KeyError, zipfile.BadZipFile, etree.XMLSyntaxError):
+        return None
+    robot = name.removeprefix("SpaceRobot_")
+    return robot if robot in ROBOTS else None
+
+
+def identified_parameters(robot: str) -> List[str]:
+    """Estimate names the robot's model identifies (planar: m, b[1], b[2], Izz per body)."""
+    from .runner import estimate_names
+    names = estimate_names()
+    if ROBOTS[robot].planar:
+        return [n for n in names if n.split(".", 1)[1] in ("m", "b[1]", "b[2]", "Izz")]
+    return names
+
+
+def _parse_set(items: Sequence[str]) -> dict:
+    out = {}
+    for item in items or ():
+        name, sep, val = item.partition("=")
+        if not sep or not name.strip():
+            raise SystemExit(f"spacerobot run: --set expects NAME=VALUE, got {item!r}")
+        try:
+            out[name.strip()] = float(val)
+        except ValueError:
+            raise SystemExit(f"spacerobot run: --set {name}: {val!r} is not a number")
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# sub-commands
+# ----------------------------------------------------------------------------------------------
+
+def cmd_build(args) -> int:
+    from .ssd import build_system
+    out = Path(args.out) if args.out else Path("build") / args.robot
+    for key, path in build_system(args.robot, out).items():
+        print(f"{key:<12} {path}")
+    return 0
+
+
+def cmd_run(args) -> int:
+    from .runner import SimulationError, format_results, run_ssp
+    from .ssd import default_parameter_set, ensure_ssp
+
+    if args.ssp and args.robot:
+        raise SystemExit("spacerobot run: give either --robot or SSP_FILE, not both")
+    if args.ssp:
+        ssp = Path(args.ssp)
+        if not ssp.exists():
+            raise SystemExit(f"spacerobot run: {ssp} does not exist")
+        robot = _robot_of(ssp)
+    else:
+        robot = args.robot or "planar"
+        ssp = ensure_ssp(robot, args.build_dir)
+    target = args.target or (default_parameter_set(robot) if robot else None)
+    overrides = {"estimator.method": _CODE["method"][args.method],
+                 "estimator.solver": _CODE["solver"][args.solver],
+                 "estimator.accel_source": _CODE["accel"][args.accel]}
+    overrides.update(_parse_set(args.set))
+    label = f"{robot or ssp.stem}-{target or 'bound'}-{args.method}"
+    csv_path = Path(args.out) if args.out else Path("results") / f"{label}.csv"
+    try:
+        res = run_ssp(ssp, parameter_set=args.target, stop_time=args.stop_time,
+                      overrides=overrides, csv_path=csv_path,
+                      progress=False if args.no_progress else None)
+    except (SimulationError, KeyError, ValueError) as e:
+        msg = e.args[0] if isinstance(e, KeyError) and e.args else e
+        print(f"spacerobot run: error: {msg}", file=sys.stderr)
+        return 1
+    paper = (PAPER_PLANAR_MEDIUM.get(args.method) if robot == "planar" and target == "medium"
+             else None)
+    print(f"{ssp}: robot {robot or '?'}, parameter set {target or '(as bound)'}, method "
+          f"{args.method}, solver {args.solver}, accelerations {args.accel}; "
+          f"t = {res.start_time:g} .. {res.stop_time:g} s, step {res.step_size:g} s")
+    print(format_results(res, paper, identified_parameters(robot) if robot else None))
+    if paper:
+        print("paper: Zhang, Yue, Yuan (2020), planar medium target, final estimates "
+              f"({args.method}-based)")
+    print(f"CSV: {res.csv_path}")
+    return 0
+
+
+def cmd_plot(args) -> int:
+    from .plot import plot_csv
+    try:
+        print(plot_csv(args.csv, args.out))
+    except (OSError, ValueError) as e:
+        print(f"spacerobot plot: error: {e}", file=sys.stderr)
+        return 1
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------
+# parser
+# ----------------------------------------------------------------------------------------------
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (with ``sweep``/``crosscheck`` if those modules are installed)."""
+    parser = argparse.ArgumentParser(
+        prog="spacerobot",
+        description="Online identification of base and target inertial parameters of a space "
+                    "robot after capture: FMUs, SSP system, co-simulation, plots.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+
+    p = sub.add_parser("build", help="build the plant and estimator FMUs and the .ssp",
+                       description="Build SpaceRobotPlant.fmu, SpaceRobotEstimator.fmu, "
+                                   "SystemStructure.ssd, the parameter sets and <robot>.ssp.")
+    p.add_argument("--robot", choices=sorted(ROBOTS), required=True)
+    p.add_argument("--out", metavar="DIR", help="output folder (default build/<robot>/)")
+    p.set_defaults(func=cmd_build)
+
+    p = sub.add_parser("run", help="run the co-simulation and print the final estimates",
+                       description="Run the SSP system (built into build/<robot>/ if needed) "
+                                   "and print every estimate against the truth and, for the "
+                                   "planar medium target, the paper's values.")
+    p.add_argument("ssp", nargs="?", metavar="SSP_FILE", help="a .ssp archive (or folder) to "
+                   "run instead of --robot")
+    p.add_argument("--robot", choices=sorted(ROBOTS), help="robot (default planar)")
+    p.add_argument("--target", help="parameter set: small|medium|large (planar), default "
+                                    "(spatial); default: the one bound in the SSD")
+    p.add_argument("--method", choices=list(_CODE["method"]), default="momentum")
+    p.add_argument("--accel", choices=list(_CODE["accel"]), default="measured",
+                   help="force method: measured accelerations or differenced velocities")
+    p.add_argument("--solver", choices=list(_CODE["solver"]), default="paper")
+    p.add_argument("--stop-time", type=float, metavar="T",
+                   help="stop time [s] (default: the SSD's DefaultExperiment)")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="FMU parameter override, e.g. plant.base.v0[1]=5 (repeatable)")
+    p.add_argument("--out", metavar="CSV",
+                   help="results CSV (default results/<robot>-<target>-<method>.csv)")
+    p.add_argument("--build-dir", metavar="DIR", help="where to build the .ssp for --robot "
+                                                      "(default build/<robot>/)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("plot", help="plot a run CSV (paper Fig. 4/5 view) or a sweep table",
+                       description="Estimate / truth against time for the identified "
+                                   "parameters with the +-0.1 %% band; a CSV with a sweep_id "
+                                   "column is plotted by spacerobot.system.sweep.plot_sweep.")
+    p.add_argument("csv", metavar="CSV")
+    p.add_argument("--out", metavar="PNG", help="output PNG (default: CSV with .png suffix)")
+    p.set_defaults(func=cmd_plot)
+
+    for mod in ("sweep", "crosscheck"):
+        name = f"{__package__}.{mod}"
+        if importlib.util.find_spec(name) is not None:
+            importlib.import_module(name).register(sub)
+    return parser
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    """Entry point of the ``spacerobot`` console script; returns the exit status."""
+    args = build_parser().parse_args(argv)
+    return int(args.func(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

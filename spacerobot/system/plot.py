@@ -1,0 +1,142 @@
+"""Plots of run results: the paper's Fig. 4/5 view (estimate / truth against time).
+
+Reads the CSV written by :func:`spacerobot.system.runner.run_ssp` (columns ``time``,
+``plant.<name>``, ``estimator.<name>``). The truth of each parameter is the plant's parameter
+connector of the same name (``plant.target.m`` ...), recorded by the runner.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Dict, List, Optional, Tuple
+
+import numpy as np
+
+from .runner import estimate_names, read_csv
+
+#: the paper's accuracy band (relative)
+BAND = 1e-3
+
+
+def identified(data: Dict[str, np.ndarray], prefix: str = "estimator.") -> List[str]:
+    """Estimate names whose estimate changes during the run (the identified parameters).
+
+    The planar model identifies only ``m``, ``b[1]``, ``b[2]``, ``Izz`` of each body; the other
+    estimates keep their initial guess and are left out.
+    """
+    out = []
+    for n in estimate_names():
+        col = data.get(prefix + n)
+        if col is not None and col.dtype.kind == "f" and len(col) and np.ptp(col) > 0.0:
+            out.append(n)
+    return out
+
+
+def _truth(data: Dict[str, np.ndarray], name: str) -> Optional[float]:
+    col = data.get("plant." + name)
+    if col is None or col.dtype.kind != "f" or not len(col):
+        return None
+    return float(col[-1])
+
+
+def _grid(n: int) -> Tuple[int, int]:
+    cols = min(4, max(1, n))
+    return int(math.ceil(n / cols)), cols
+
+
+def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
+             title: Optional[str] = None) -> Path:
+    """Plot estimate / truth against time for every identified parameter, with the +-0.1 % band.
+
+    Parameters whose truth is zero (a centre-of-mass component, a product of inertia) are
+    plotted as the absolute error ``estimate - truth`` instead; their panel title says so.
+
+    Parameters
+    ----------
+    csv_path : path
+        CSV of a run (:func:`spacerobot.system.runner.run_ssp`).
+    out : path, optional
+        PNG to write (default: the CSV path with suffix ``.png``).
+    title : str, optional
+        Figure title (default: the CSV file name).
+
+    Returns
+    -------
+    Path of the PNG.
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    csv_path = Path(csv_path)
+    data = read_csv(csv_path)
+    if "time" not in data:
+        raise ValueError(f"{csv_path}: no 'time' column; not a run CSV")
+    names = identified(data)
+    if not names:
+        raise ValueError(f"{csv_path}: no estimator.<parameter> column changes over time; "
+                         f"nothing to plot (is this a run CSV with at least two samples?)")
+    t = data["time"]
+    rows, cols = _grid(len(names))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 2.7 * rows), squeeze=False,
+                             sharex=True)
+    for ax in axes.flat[len(names):]:
+        ax.set_visible(False)
+    half = slice(len(t) // 2, None)
+    for ax, n in zip(axes.flat, names):
+        est = data["estimator." + n]
+        truth = _truth(data, n)
+        if truth is None:
+            ax.plot(t, est, lw=1.2)
+            ax.set_title(f"{n} (no truth in CSV)", fontsize=9)
+            ax.set_ylabel("estimate")
+        elif truth == 0.0:
+            err = est - truth
+            ax.plot(t, err, lw=1.2)
+            ax.axhline(0.0, color="k", lw=0.6)
+            ax.set_title(f"{n}: absolute error (truth = 0)", fontsize=9)
+            ax.set_ylabel("estimate - truth")
+            d = float(np.max(np.abs(err[half]))) if len(err[half]) else 1.0
+            d = d if d > 0 else 1e-6
+            ax.set_ylim(-1.5 * d, 1.5 * d)
+        else:
+            ratio = est / truth
+            ax.plot(t, ratio, lw=1.2)
+            ax.axhspan(1 - BAND, 1 + BAND, color="tab:green", alpha=0.25, lw=0,
+                       label="±0.1 %")
+            ax.axhline(1.0, color="k", lw=0.6)
+            d = float(np.max(np.abs(ratio[half] - 1.0))) if len(ratio[half]) else 0.5
+            d = min(0.5, max(5 * BAND, 1.3 * d))
+            ax.set_ylim(1 - d, 1 + d)
+            ax.set_title(f"{n} / truth ({truth:g})", fontsize=9)
+            ax.set_ylabel("estimate / truth")
+        ax.grid(alpha=0.3)
+        ax.tick_params(labelsize=8)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    for ax in axes.flat[:len(names)]:
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="upper right")
+            break
+    fig.suptitle(title or f"{csv_path.name}: estimates against the truth "
+                          f"(band: ±0.1 %)", fontsize=11)
+    fig.tight_layout()
+    out = Path(out) if out is not None else csv_path.with_suffix(".png")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def plot_csv(csv_path: str | Path, out: Optional[str | Path] = None) -> Path:
+    """Plot a run CSV, or a sweep table (a CSV with a ``sweep_id`` column) through
+    :func:`spacerobot.system.sweep.plot_sweep`."""
+    import csv as _csv
+
+    with open(csv_path, newline="") as f:
+        header = next(_csv.reader(f), [])
+    if "sweep_id" in header:
+        from . import sweep
+        out = out if out is not None else Path(csv_path).with_suffix(".png")
+        return Path(sweep.plot_sweep(csv_path, out))
+    return plot_run(csv_path, out)
