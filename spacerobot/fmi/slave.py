@@ -9,6 +9,8 @@ returns Discard with the state as before the step.
 from __future__ import annotations
 
 import copy
+import ctypes
+import functools
 import json
 import math
 import os
@@ -28,6 +30,37 @@ CONFIG_FILE = "spacerobot_config.json"
 def _escape(msg: str) -> str:
     """FMI loggers treat the message as a printf format: escape '%'."""
     return msg.replace("%", "%%")
+
+
+#: methods the pythonfmu C++ layer calls on the slave instance
+_ENTRY_POINTS = ("setup_experiment", "enter_initialization_mode", "exit_initialization_mode",
+                 "do_step", "terminate", "set_real", "set_integer", "set_boolean", "set_string",
+                 "get_real", "get_integer", "get_boolean", "get_string", "_get_fmu_state",
+                 "_set_fmu_state")
+_Py_IncRef = ctypes.pythonapi.Py_IncRef
+_Py_IncRef.argtypes = [ctypes.py_object]
+_Py_IncRef.restype = None
+
+
+def _survive_fatal(slave, method):
+    """Wrap an entry point so that an exception (reported as fmi2Fatal) leaves the instance usable.
+
+    pythonfmu 0.7.0's C++ ``handle_py_exception`` calls ``cleanPyObject()``, which Py_DECREFs
+    the slave class, the slave instance and its log queue once per exception although it does
+    not give up its references to them: after one fatal the instance is garbage the next
+    ``gc`` pass may free, and a second fatal (or fatal + fmi2FreeInstance a few times in one
+    process) crashes the host. Taking one extra reference of each before the exception leaves
+    C++ balances that decrement exactly.
+    """
+    @functools.wraps(method)
+    def guarded(*args, **kwargs):
+        try:
+            return method(*args, **kwargs)
+        except BaseException:
+            for obj in (type(slave), slave, slave.log_queue):
+                _Py_IncRef(obj)
+            raise
+    return guarded
 
 
 class InterfaceSlave(Fmi2Slave):
@@ -63,6 +96,8 @@ class InterfaceSlave(Fmi2Slave):
         self._outputs: Dict[str, float] = {}
         self.phase = "instantiated"
         self._dirty = True          # parameters changed since the outputs were computed
+        for name in _ENTRY_POINTS:
+            setattr(self, name, _survive_fatal(self, getattr(self, name)))
         for var in variables:
             cls = Real if var.type == "Real" else Integer
             kw = dict(causality=getattr(Fmi2Causality, var.causality),
@@ -129,9 +164,15 @@ class InterfaceSlave(Fmi2Slave):
 
     # -- lifecycle ------------------------------------------------------------------------------
     def enter_initialization_mode(self):
+        if self.phase != "instantiated":
+            self._fail(f"fmi2EnterInitializationMode called in phase '{self.phase}'; it is only "
+                       "allowed once, after fmi2Instantiate or fmi2Reset (state unchanged)")
         self.phase = "initialization"
 
     def exit_initialization_mode(self):
+        if self.phase != "initialization":
+            self._fail(f"fmi2ExitInitializationMode called in phase '{self.phase}'; call "
+                       "fmi2EnterInitializationMode first (state unchanged)")
         self._check_finite_params()
         self._initialise()        # may raise with a logged message
         self._dirty = False
