@@ -1,0 +1,173 @@
+"""The ``spacerobot`` command line, run as a subprocess (build, run, plot) and in-process."""
+from __future__ import annotations
+
+import csv
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from spacerobot.robots import PAPER_PLANAR_MEDIUM, TARGETS
+from spacerobot.system import cli
+from spacerobot.system.runner import estimate_names, read_csv
+
+CLI = [sys.executable, "-m", "spacerobot.system.cli"]
+
+
+def _run(args, cwd, check=True):
+    env = dict(os.environ, PYTHONWARNINGS="ignore")
+    p = subprocess.run(CLI + [str(a) for a in args], cwd=cwd, capture_output=True, text=True,
+                       env=env, timeout=300)
+    if check:
+        assert p.returncode == 0, f"spacerobot {' '.join(map(str, args))} failed:\n{p.stderr}"
+    return p
+
+
+def _table(stdout: str) -> dict:
+    """``{parameter: (estimate, truth, paper or None)}`` parsed from the printed table."""
+    rows = {}
+    for line in stdout.splitlines():
+        parts = line.split()
+        if parts and parts[0] in estimate_names():
+            est, truth = float(parts[1]), float(parts[2])
+            rest = parts[3:]
+            err_len = 2      # "0.00012 %" or "abs 1.2e-05"
+            paper = None
+            if len(rest) > err_len:
+                try:
+                    paper = float(rest[err_len])
+                except ValueError:
+                    paper = None
+            rows[parts[0]] = (est, truth, paper)
+    return rows
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("cli")
+
+
+@pytest.fixture(scope="module")
+def built(workdir) -> dict:
+    p = _run(["build", "--robot", "planar", "--out", "b"], cwd=workdir)
+    paths = dict(line.split(None, 1) for line in p.stdout.splitlines() if line.strip())
+    return {k: workdir / v.strip() for k, v in paths.items()}
+
+
+def test_build_prints_existing_paths(built):
+    assert {"plant", "estimator", "ssd", "ssp"} <= set(built)
+    for key, path in built.items():
+        assert path.is_file(), f"{key}: {path}"
+    assert built["ssp"].name == "planar.ssp"
+    assert {f"ssv:{n}" for n in TARGETS["planar"]} <= set(built)
+
+
+@pytest.fixture(scope="module")
+def planar_run(built, workdir):
+    """``spacerobot run <planar.ssp> --stop-time 2``: (completed process, CSV path)."""
+    out = workdir / "r" / "medium.csv"
+    p = _run(["run", built["ssp"], "--stop-time", "2", "--out", out, "--no-progress"],
+             cwd=workdir)
+    return p, out
+
+
+def test_run_prints_table_with_paper_values_and_writes_csv(planar_run):
+    p, out = planar_run
+    table = _table(p.stdout)
+    assert set(table) == set(estimate_names())
+    data = read_csv(out)
+    assert data["time"][-1] == pytest.approx(2.0)
+    assert len(data["time"]) == 21
+    paper = PAPER_PLANAR_MEDIUM["momentum"]
+    target = TARGETS["planar"]["medium"]
+    for name, (est, truth, pv) in table.items():
+        assert est == pytest.approx(data["estimator." + name][-1], abs=1e-6)
+        assert truth == pytest.approx(data["plant." + name][-1], rel=1e-5, abs=1e-9)
+        assert (pv is not None) == (name in paper), name
+        if pv is not None:
+            assert pv == pytest.approx(paper[name], abs=0.006)
+    assert table["target.m"][1] == target.mass
+    assert "not identified" in p.stdout          # planar: Ixx etc. keep their guesses
+    assert str(out) in p.stdout
+
+
+def test_run_robot_builds_if_needed_and_uses_default_csv_name(workdir):
+    d = workdir / "auto"
+    d.mkdir()
+    p = _run(["run", "--robot", "planar", "--build-dir", "bd", "--target", "small",
+              "--method", "force", "--accel", "differenced", "--stop-time", "1"], cwd=d)
+    assert (d / "bd" / "planar.ssp").is_file()
+    csv_path = d / "results" / "planar-small-force.csv"
+    assert csv_path.is_file()
+    table = _table(p.stdout)
+    assert table["target.m"][1] == TARGETS["planar"]["small"].mass
+    assert all(pv is None for _, _, pv in table.values())       # no paper values for small
+
+
+def test_run_reports_fmu_errors(built, workdir):
+    p = _run(["run", built["ssp"], "--stop-time", "1", "--out", workdir / "bad.csv",
+              "--set", "plant.base.m=-1"], cwd=workdir, check=False)
+    assert p.returncode == 1
+    assert "plant" in p.stderr and "base.m must be > 0" in p.stderr
+    assert "Traceback" not in p.stderr
+
+
+def test_plot_writes_png(planar_run, workdir):
+    csv_path = planar_run[1]
+    png = workdir / "fig" / "run.png"
+    p = _run(["plot", csv_path, "--out", png], cwd=workdir)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert str(png) in p.stdout
+    p = _run(["plot", csv_path], cwd=workdir)                    # default: next to the CSV
+    assert csv_path.with_suffix(".png").is_file()
+
+
+def test_plot_titles_zero_truth_panels_as_absolute_error(tmp_path, monkeypatch):
+    """In-process: a zero-truth parameter is plotted as absolute error, and the title says so."""
+    import matplotlib.figure
+
+    t = np.linspace(0, 2, 21)
+    data = {"time": t,
+            "plant.base.m": np.full_like(t, 500.0), "estimator.base.m": 500 + np.exp(-t),
+            "plant.target.b[2]": np.zeros_like(t), "estimator.target.b[2]": 0.01 * np.exp(-t),
+            "plant.base.Ixx": np.full_like(t, 83.0), "estimator.base.Ixx": np.full_like(t, 100.0)}
+    from spacerobot.system.runner import write_csv
+    path = write_csv(tmp_path / "x.csv", data)
+    titles = []
+    orig = matplotlib.figure.Figure.savefig
+
+    def spy(fig, *a, **k):
+        titles.extend(ax.get_title() for ax in fig.axes if ax.get_visible())
+        return orig(fig, *a, **k)
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", spy)
+    assert cli.main(["plot", str(path), "--out", str(tmp_path / "x.png")]) == 0
+    assert (tmp_path / "x.png").is_file()
+    assert any("target.b[2]" in s and "absolute error" in s for s in titles)
+    assert any(s.startswith("base.m / truth") for s in titles)
+    assert not any("Ixx" in s for s in titles)                  # constant: not identified
+
+
+def test_plot_dispatches_sweep_tables(tmp_path, monkeypatch):
+    sweep = pytest.importorskip("spacerobot.system.sweep")
+    calls = []
+    monkeypatch.setattr(sweep, "plot_sweep", lambda c, o, **k: calls.append((c, o)) or o)
+    path = tmp_path / "sweep.csv"
+    with open(path, "w", newline="") as f:
+        csv.writer(f).writerows([["sweep_id", "status"], ["abc", "ok"]])
+    assert cli.main(["plot", str(path), "--out", str(tmp_path / "s.png")]) == 0
+    assert calls == [(str(path), str(tmp_path / "s.png"))]
+
+
+def test_help_lists_commands():
+    p = subprocess.run(CLI + ["--help"], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0
+    for cmd in ("build", "run", "plot"):
+        assert cmd in p.stdout
+    exe = shutil.which("spacerobot")
+    if exe:                                   # the installed console script is the same CLI
+        q = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=120)
+        assert q.returncode == 0 and q.stdout == p.stdout
