@@ -1,0 +1,240 @@
+"""The plant FMU through fmpy (issue #2): variables map to the core, partial steps, bad
+parameters and bad steps.
+
+* Every output of the FMU equals the core ``Plant`` run with the same (non-default)
+  parameters; names are parsed here, independently of ``spacerobot.interface``.
+* A communication step that is not a multiple of h ends with one shorter internal step.
+* Each invalid parameter makes fmi2ExitInitializationMode fail (fmi2Fatal) with a readable
+  message naming the parameter; the instance can be freed and a fresh one runs.
+* A bad communication step is discarded with the state unchanged.
+"""
+from __future__ import annotations
+
+import math
+import re
+from ctypes import byref
+
+import numpy as np
+import pytest
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.logging import addLoggerProxy
+
+from conftest import Slave
+from spacerobot.plant import Plant
+from spacerobot.robots import RigidBody, inertia_matrix, scenario
+
+FMI_FATAL, FMI_DISCARD, FMI_ERROR, FMI_WARNING = 4, 2, 3, 1
+
+_EXTRACTED: dict = {}
+_KEEP_ALIVE: list = []   # logger callbacks must outlive the instances that may call them
+
+
+def logged_slave(path, name: str) -> Slave:
+    """A conftest ``Slave`` instantiated with a logger that records (status, category, message)
+    in ``slave.messages`` (fmpy's proxy formats the printf-style message first)."""
+    s = Slave.__new__(Slave)
+    key = str(path)
+    if key not in _EXTRACTED:
+        _EXTRACTED[key] = (read_model_description(key), extract(key))
+    s.md, s.dir = _EXTRACTED[key]
+    s.vars = {v.name: v for v in s.md.modelVariables}
+    s.messages = []
+
+    def logger(env, instance, status, category, message):
+        s.messages.append((int(status), (category or b"").decode(), (message or b"").decode()))
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(logger)
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    addLoggerProxy(byref(cb))
+    _KEEP_ALIVE.append((cb, logger))
+    s.fmu = FMU2Slave(guid=s.md.guid, unzipDirectory=s.dir,
+                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=name)
+    s.fmu.instantiate(callbacks=cb, loggingOn=True)
+    return s
+
+
+# ------------------------------------------------------------------------------------------------
+# FMU outputs == core outputs, with non-default parameters
+# ------------------------------------------------------------------------------------------------
+
+#: FMI name prefix -> core output key (interface contract §3, written out independently)
+OUTPUT_KEYS = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "omega_B",
+               "base.a": "a_S", "base.alpha": "alpha_B", "arm.q": "q", "arm.qd": "qd",
+               "arm.qdd": "qdd", "thrust.F": "F", "thrust.M": "M", "thrust.J": "J",
+               "thrust.H": "H", "system.P": "P", "system.L": "L", "arm.tau": "tau"}
+
+
+def core_value(out: dict, name: str) -> float:
+    m = re.fullmatch(r"([a-z]+\.[A-Za-z]+)\[(\d+)(?:,(\d+))?\]", name)
+    assert m, name
+    arr = out[OUTPUT_KEYS[m.group(1)]]
+    if m.group(3):
+        return float(arr[int(m.group(2)) - 1, int(m.group(3)) - 1])
+    return float(arr[int(m.group(2)) - 1])
+
+
+def _spatial_case():
+    """Non-default truth: target with products of inertia and a full CoM offset, other v0."""
+    I = inertia_matrix((30.0, 25.0, 20.0, 1.5, -2.0, 0.8))
+    assert np.all(np.linalg.eigvalsh(I) > 0)
+    target = RigidBody(320.0, (0.12, -0.07, 0.31), (30.0, 25.0, 20.0, 1.5, -2.0, 0.8))
+    base = RigidBody(480.0, (0.05, 0.02, -0.04), (80.0, 90.0, 85.0, -1.0, 0.5, 2.0))
+    return dict(base=base, target=target, v0=(1.0, -2.0, 0.5), omega0=(0.05, -0.1, 0.2),
+                F_max=7.0, M_max=6.0, K_D=0.8, K_P=0.3)
+
+
+def _params(case) -> dict:
+    p = {}
+    for who in ("base", "target"):
+        body = case[who]
+        p[f"{who}.m"] = body.mass
+        for i in range(3):
+            p[f"{who}.b[{i + 1}]"] = body.com[i]
+        for k, n in enumerate(("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")):
+            p[f"{who}.{n}"] = body.inertia[k]
+    for i in range(3):
+        p[f"base.v0[{i + 1}]"] = case["v0"][i]
+        p[f"base.omega0[{i + 1}]"] = case["omega0"][i]
+    for k in ("F_max", "M_max", "K_D", "K_P"):
+        p[k] = case[k]
+    return p
+
+
+def _start(path, params: dict, name="plant") -> Slave:
+    s = logged_slave(path, name)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    for k, v in params.items():
+        s.set(k, v)
+    s.fmu.exitInitializationMode()
+    return s
+
+
+def test_fmu_outputs_equal_core(spatial_fmus):
+    import dataclasses
+
+    case = _spatial_case()
+    sc = scenario("spatial")
+    ctrl = dataclasses.replace(sc.controller, F_max=case["F_max"], M_max=case["M_max"],
+                               K_D=case["K_D"], K_P=case["K_P"])
+    core = Plant(sc.robot, case["base"], case["target"], ctrl, case["v0"], case["omega0"], sc.h)
+    s = _start(spatial_fmus["plant"], _params(case))
+    outs = s.names("output")
+    # 11 three-vectors (r v omega a alpha F M J H P L), the DCM, q qd qdd tau
+    assert len(outs) == 11 * 3 + 9 + 4 * sc.robot.n_joints
+    t = 0.0
+    try:
+        for dt in (None, 0.1005, 0.2995, 0.1):
+            if dt is not None:
+                s.fmu.doStep(t, dt)
+                core.advance(dt)
+                t += dt
+            o = core.outputs()
+            got = np.array(s.fmu.getReal([s.vars[n].valueReference for n in outs]))
+            want = np.array([core_value(o, n) for n in outs])
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12,
+                                       err_msg=f"t = {t}: " + ", ".join(
+                                           n for n, a, b in zip(outs, got, want)
+                                           if not np.isclose(a, b, rtol=1e-12, atol=1e-12)))
+        assert abs(core.t - 0.5) < 1e-12
+        # the non-default parameters did reach the core: the default run differs
+        default = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)
+        assert np.abs(default.outputs()["P"] - o["P"]).max() > 1.0
+        assert not [m for m in s.messages if m[0] >= FMI_WARNING], s.messages
+    finally:
+        s.free()
+
+
+def test_partial_step_through_fmu(planar_fmus):
+    """doStep(0.1005) = 100 steps of h + one of 0.0005: the same as the core's manual RK4 steps."""
+    sc = scenario("planar")
+    s = _start(planar_fmus["plant"], {})
+    try:
+        s.fmu.doStep(0.0, 0.1005)
+        core = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)
+        for _ in range(100):
+            core.rk4_step(1e-3)
+        core.rk4_step(0.0005)
+        o = core.outputs()
+        for n in s.names("output"):
+            assert s.get(n) == pytest.approx(core_value(o, n), rel=1e-13, abs=1e-13), n
+        # and a following step from the right communication point raises no warning
+        s.fmu.doStep(0.1005, 0.1)
+        assert not [m for m in s.messages if m[0] >= FMI_WARNING], s.messages
+    finally:
+        s.free()
+
+
+# ------------------------------------------------------------------------------------------------
+# invalid parameters -> fmi2Fatal at exitInitializationMode with a readable message
+# ------------------------------------------------------------------------------------------------
+
+BAD_PARAMETERS = [
+    # (parameters, words the logged message must contain)
+    ({"base.m": 0.0}, ["base.m", "> 0"]),
+    ({"target.m": -250.0}, ["target.m", "> 0"]),
+    ({"base.Ixx": -1.0}, ["base", "inertia", "positive definite"]),
+    ({"target.Ixy": 20.0}, ["target", "inertia", "positive definite"]),      # |Ixy| > Ixx, Iyy
+    ({"target.Izz": 30.0}, ["target", "inertia", "triangle"]),                # 30 > 10.41 + 10.41
+    ({"h": 0.0}, ["h must be", "got 0.0"]),
+    ({"h": -1e-3}, ["h must be", "-0.001"]),
+    ({"base.b[1]": math.nan}, ["base.b[1]", "nan"]),
+    ({"target.Iyy": math.inf}, ["target.Iyy", "inf"]),
+    ({"base.v0[2]": math.nan}, ["base.v0[2]", "nan"]),
+]
+
+
+@pytest.mark.parametrize("params,words", BAD_PARAMETERS,
+                         ids=[",".join(f"{k}={v}" for k, v in p.items()) for p, _ in BAD_PARAMETERS])
+def test_bad_parameter_fails_initialisation_with_message(planar_fmus, params, words):
+    path = planar_fmus["plant"]
+    s = logged_slave(path, "bad")
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    for k, v in params.items():
+        s.set(k, v)
+    with pytest.raises(FMICallException) as exc:
+        s.fmu.exitInitializationMode()
+    assert exc.value.status == FMI_FATAL
+    errors = [m for st, _, m in s.messages if st >= FMI_ERROR]
+    assert any(all(w in m for w in words) for m in errors), (words, s.messages)
+    s.fmu.freeInstance()
+    # a fresh instance with good parameters runs
+    good = _start(path, {}, "good")
+    try:
+        good.fmu.doStep(0.0, 0.1)
+        assert math.isfinite(good.get("base.v[1]"))
+        assert good.get("thrust.J[1]") == pytest.approx(-10.0 * 0.1, rel=1e-12)  # F saturated
+    finally:
+        good.free()
+
+
+def test_bad_communication_step_is_discarded(planar_fmus):
+    """step <= 0 or non-finite: Discard, message logged, state unchanged; stepping goes on."""
+    sc = scenario("planar")
+    s = _start(planar_fmus["plant"], {})
+    try:
+        s.fmu.doStep(0.0, 0.1)
+        outs = s.names("output")
+        before = [s.get(n) for n in outs]
+        for bad in (0.0, -0.1, math.nan, math.inf):
+            n_msgs = len(s.messages)
+            with pytest.raises(FMICallException) as exc:
+                s.fmu.doStep(0.1, bad)
+            assert exc.value.status == FMI_DISCARD
+            assert len(s.messages) > n_msgs
+            assert [s.get(n) for n in outs] == before
+        s.fmu.doStep(0.1, 0.1)
+        core = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)
+        core.advance(0.1)
+        core.advance(0.1)
+        o = core.outputs()
+        for n in outs:
+            assert s.get(n) == pytest.approx(core_value(o, n), rel=1e-12, abs=1e-12), n
+    finally:
+        s.free()
