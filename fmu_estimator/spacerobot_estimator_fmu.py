@@ -103,7 +103,10 @@ class SpaceRobotEstimator(InterfaceSlave):
             arr[idx] = float(self.values[name])
         status = self.ident.update(current_time, meas)
         if status in (3, 4):
-            self.log(_escape(f"t = {current_time:.6g} s: sample skipped ({STATUS[status]}): "
+            # name the FMI inputs at fault, not only the core's signal name
+            bad = [n for n, _ in self._inputs if not math.isfinite(float(self.values[n]))]
+            where = f" [input {', '.join(bad)}]" if bad else ""
+            self.log(_escape(f"t = {current_time:.6g} s: sample skipped ({STATUS[status]}){where}: "
                              f"{self.ident.message}; estimates unchanged"), Fmi2Status.warning)
         self._refresh()
         return True

@@ -10,6 +10,7 @@ parameters and bad steps.
 """
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from ctypes import byref
@@ -29,31 +30,46 @@ from spacerobot.robots import RigidBody, inertia_matrix, scenario
 FMI_FATAL, FMI_DISCARD, FMI_ERROR, FMI_WARNING = 4, 2, 3, 1
 
 _EXTRACTED: dict = {}
-_KEEP_ALIVE: list = []   # logger callbacks must outlive the instances that may call them
+_COUNT = itertools.count()
+
+
+def _log_registry():
+    """One process-wide logger: fmpy's native logger proxy (which formats the printf-style
+    message) holds a single Python logger for all instances, the last one registered, so
+    messages are dispatched by instance name into a registry shared by all test modules."""
+    import fmpy.logging as fl
+
+    if getattr(fl, "_spacerobot_test_registry", None) is None:
+        registry: dict = {}
+
+        def logger(env, instance, status, category, message):
+            registry.setdefault((instance or b"").decode(), []).append(
+                (int(status), (category or b"").decode(), (message or b"").decode()))
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(cb))
+        fl._spacerobot_test_registry = registry
+        fl._spacerobot_test_callbacks = (cb, logger)      # kept alive for the process
+    return fl._spacerobot_test_registry, fl._spacerobot_test_callbacks[0]
 
 
 def logged_slave(path, name: str) -> Slave:
-    """A conftest ``Slave`` instantiated with a logger that records (status, category, message)
-    in ``slave.messages`` (fmpy's proxy formats the printf-style message first)."""
+    """A conftest ``Slave`` instantiated with a logger; ``slave.messages`` collects its
+    (status, category, message) tuples."""
     s = Slave.__new__(Slave)
     key = str(path)
     if key not in _EXTRACTED:
         _EXTRACTED[key] = (read_model_description(key), extract(key))
     s.md, s.dir = _EXTRACTED[key]
     s.vars = {v.name: v for v in s.md.modelVariables}
-    s.messages = []
-
-    def logger(env, instance, status, category, message):
-        s.messages.append((int(status), (category or b"").decode(), (message or b"").decode()))
-
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(logger)
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    addLoggerProxy(byref(cb))
-    _KEEP_ALIVE.append((cb, logger))
+    registry, cb = _log_registry()
+    unique = f"plant-{name}-{next(_COUNT)}"
+    s.messages = registry.setdefault(unique, [])
     s.fmu = FMU2Slave(guid=s.md.guid, unzipDirectory=s.dir,
-                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=name)
+                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=unique)
     s.fmu.instantiate(callbacks=cb, loggingOn=True)
     return s
 

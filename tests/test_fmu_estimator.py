@@ -1,0 +1,335 @@
+"""The estimator FMU through fmpy, wired to the plant FMU (issue #3).
+
+* Spatial default scenario, noise-free, measured accelerations: every one of the 20 estimates
+  within 0.1 % of truth by 60 s, momentum- and force-based, paper and joint solvers, through
+  the two FMUs.
+* A non-finite input mid-run: warning logged, diag.status = 3, diag.rejected = 1, and the
+  estimates equal those of an estimator that never saw that sample.
+* FMU state round trip (get/set and serialise/deserialise, also into fresh instances):
+  identical outputs after restoring.
+* Invalid estimator parameters: fmi2ExitInitializationMode fails with a message naming them.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+from ctypes import byref
+
+import numpy as np
+import pytest
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy.logging import addLoggerProxy
+
+from conftest import ESTIMATE_NAMES, Pair, Slave, relative_errors, truth_vector
+from spacerobot.robots import scenario
+
+FMI_FATAL, FMI_ERROR, FMI_WARNING = 4, 3, 1
+DT = 0.1
+
+_EXTRACTED: dict = {}
+_COUNT = itertools.count()
+
+
+def _log_registry():
+    """One process-wide logger: fmpy's native logger proxy (which formats the printf-style
+    message) holds a single Python logger for all instances, the last one registered, so
+    messages are dispatched by instance name into a registry shared by all test modules."""
+    import fmpy.logging as fl
+
+    if getattr(fl, "_spacerobot_test_registry", None) is None:
+        registry: dict = {}
+
+        def logger(env, instance, status, category, message):
+            registry.setdefault((instance or b"").decode(), []).append(
+                (int(status), (category or b"").decode(), (message or b"").decode()))
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(cb))
+        fl._spacerobot_test_registry = registry
+        fl._spacerobot_test_callbacks = (cb, logger)      # kept alive for the process
+    return fl._spacerobot_test_registry, fl._spacerobot_test_callbacks[0]
+
+
+def logged_slave(path, name: str) -> Slave:
+    """A conftest ``Slave`` instantiated with a logger; ``slave.messages`` collects its
+    (status, category, message) tuples."""
+    s = Slave.__new__(Slave)
+    key = str(path)
+    if key not in _EXTRACTED:
+        _EXTRACTED[key] = (read_model_description(key), extract(key))
+    s.md, s.dir = _EXTRACTED[key]
+    s.vars = {v.name: v for v in s.md.modelVariables}
+    registry, cb = _log_registry()
+    unique = f"est-{name}-{next(_COUNT)}"
+    s.messages = registry.setdefault(unique, [])
+    s.fmu = FMU2Slave(guid=s.md.guid, unzipDirectory=s.dir,
+                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=unique)
+    s.fmu.instantiate(callbacks=cb, loggingOn=True)
+    return s
+
+
+def start_estimator(path, params: dict, name: str) -> Slave:
+    s = logged_slave(path, name)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    for k, v in params.items():
+        s.set(k, v)
+    s.fmu.exitInitializationMode()
+    return s
+
+
+def estimates(s: Slave) -> np.ndarray:
+    return np.array(s.fmu.getReal([s.vars[n].valueReference for n in ESTIMATE_NAMES]))
+
+
+# ------------------------------------------------------------------------------------------------
+# spatial accuracy through the FMUs
+# ------------------------------------------------------------------------------------------------
+
+SPATIAL_ESTIMATORS = {   # name -> estimator parameters (the Pair's own one is momentum/paper)
+    "force/paper": {"method": 2},
+    "momentum/joint": {"solver": 2},
+    "force/joint": {"method": 2, "solver": 2},
+}
+
+
+@pytest.fixture(scope="module")
+def spatial_run(spatial_fmus):
+    """One plant FMU feeding four estimator FMUs for 60 s; estimates recorded every sample."""
+    pair = Pair(spatial_fmus)
+    ests = {"momentum/paper": pair.est}
+    for name, params in SPATIAL_ESTIMATORS.items():
+        ests[name] = start_estimator(spatial_fmus["estimator"], params, name)
+    evr = [pair.est.vars[n].valueReference for n in pair.inputs]
+    hist = {name: [] for name in ests}
+    times = []
+    try:
+        for _ in range(int(round(60.0 / DT))):
+            x = pair.sample()
+            for name, s in ests.items():
+                if s is not pair.est:
+                    s.fmu.setReal(evr, list(x))
+            t = pair.t
+            pair.step(DT, sample=x)
+            for name, s in ests.items():
+                if s is not pair.est:
+                    s.fmu.doStep(t, DT)
+                hist[name].append(estimates(s))
+            times.append(pair.t)
+        diag = {name: {k: s.get(k) for k in ("diag.samples", "diag.rejected", "diag.status")}
+                for name, s in ests.items()}
+        msgs = {name: list(getattr(s, "messages", [])) for name, s in ests.items()}
+    finally:
+        for name, s in ests.items():
+            if s is not pair.est:
+                s.free()
+        pair.free()
+    return np.array(times), {k: np.array(v) for k, v in hist.items()}, diag, msgs
+
+
+@pytest.mark.parametrize("name", ["momentum/paper", "force/paper", "momentum/joint", "force/joint"])
+def test_spatial_all_20_within_0p1_percent_by_60s(spatial_run, name):
+    times, hist, diag, msgs = spatial_run
+    sc = scenario("spatial")
+    truth = truth_vector(sc)
+    errs = np.array([relative_errors(e, truth) for e in hist[name]])
+    final = errs[-1]
+    # time after which each estimate stays within 0.1 %
+    reach = []
+    for j in range(20):
+        bad = np.nonzero(errs[:, j] > 1e-3)[0]
+        reach.append(0.0 if len(bad) == 0 else (times[bad[-1] + 1] if bad[-1] + 1 < len(times)
+                                                else math.inf))
+    print(f"\nspatial {name} via FMUs: max error at 60 s {final.max():.1e} "
+          f"({ESTIMATE_NAMES[int(final.argmax())]}); all within 0.1 % from {max(reach):.1f} s")
+    print("  within 0.1 % from [s]: " + ", ".join(f"{n} {r:.1f}" for n, r in
+                                                 zip(ESTIMATE_NAMES, reach)))
+    assert times[-1] == pytest.approx(60.0)
+    assert np.all(final < 1e-3), {n: f"{e:.2e}" for n, e in zip(ESTIMATE_NAMES, final) if e >= 1e-3}
+    assert errs[0].max() > 0.1                       # started from the paper's far-off guesses
+    n = len(times)
+    assert diag[name]["diag.samples"] == (n - 1 if name.startswith("momentum") else n)
+    assert diag[name]["diag.rejected"] == 0 and diag[name]["diag.status"] == 2
+    assert not [m for m in msgs[name] if m[0] >= FMI_WARNING], msgs[name]
+
+
+# ------------------------------------------------------------------------------------------------
+# non-finite input mid-run
+# ------------------------------------------------------------------------------------------------
+
+
+def test_nonfinite_input_is_skipped_with_warning(planar_fmus):
+    """Force method, differenced accelerations (the mode with the most history): a NaN input at
+    sample k is logged, counted, and leaves the estimator as if sample k had not existed.
+    The reference estimator never sees sample k: it takes the step before it as one of 2 DT."""
+    params = {"method": 2, "accel_source": 2}
+    plant = Slave(planar_fmus["plant"], "plant")
+    plant.fmu.setupExperiment(startTime=0.0)
+    plant.fmu.enterInitializationMode()
+    plant.fmu.exitInitializationMode()
+    bad = start_estimator(planar_fmus["estimator"], params, "with_nan")
+    ref = start_estimator(planar_fmus["estimator"], params, "without")
+    inputs = bad.names("input")
+    pvr = [plant.vars[n].valueReference for n in inputs]
+    evr = [bad.vars[n].valueReference for n in inputs]
+    K, N = 12, 30
+    j_bad = inputs.index("base.omega[3]")
+    try:
+        for k in range(N):
+            t = k * DT
+            x = list(plant.fmu.getReal(pvr))
+            if k == K:
+                x[j_bad] = math.nan
+                n_before = len(bad.messages)
+            bad.fmu.setReal(evr, x)
+            bad.fmu.doStep(t, DT)
+            if k == K:
+                assert bad.get("diag.status") == 3
+                assert bad.get("diag.rejected") == 1
+                new = bad.messages[n_before:]
+                warn = [m for st, _, m in new if st == FMI_WARNING]
+                assert warn and "non-finite" in warn[0] and "base.omega[3]" in warn[0], new
+                print("logged:", warn[0])
+            if k != K:
+                ref.fmu.setReal(evr, x)
+                ref.fmu.doStep(t, 2 * DT if k == K - 1 else DT)
+            plant.fmu.doStep(t, DT)
+        assert bad.get("diag.rejected") == 1 and ref.get("diag.rejected") == 0
+        assert bad.get("diag.status") == ref.get("diag.status") == 2
+        assert bad.get("diag.samples") == ref.get("diag.samples") == N - 1 - 2
+        np.testing.assert_array_equal(estimates(bad), estimates(ref))
+        assert not [m for m in ref.messages if m[0] >= FMI_WARNING]
+    finally:
+        bad.free()
+        ref.free()
+        plant.free()
+
+
+# ------------------------------------------------------------------------------------------------
+# FMU state round trip
+# ------------------------------------------------------------------------------------------------
+
+
+def _snapshot(slaves) -> np.ndarray:
+    vals = []
+    for s in slaves:
+        outs = s.names("output")
+        reals = [s.vars[n].valueReference for n in outs if s.vars[n].type == "Real"]
+        ints = [s.vars[n].valueReference for n in outs if s.vars[n].type == "Integer"]
+        vals += list(s.fmu.getReal(reals)) + [float(i) for i in s.fmu.getInteger(ints)]
+    return np.array(vals)
+
+
+def _run_on(pair, extra, evr, t0, n):
+    pair.t = t0
+    out = [_snapshot([pair.plant, pair.est, extra])]
+    for _ in range(n):
+        x = pair.sample()
+        extra.fmu.setReal(evr, list(x))
+        t = pair.t
+        pair.step(DT, sample=x)
+        extra.fmu.doStep(t, DT)
+        out.append(_snapshot([pair.plant, pair.est, extra]))
+    return np.array(out)
+
+
+def test_fmu_state_round_trip(planar_fmus):
+    """Save at 10 s, run 3 s, restore (get/set and via bytes, also into fresh instances),
+    run 3 s again: bit-identical outputs of the plant, a momentum and a force/differenced
+    estimator (the latter keeps a differencing history in its state)."""
+    pair = Pair(planar_fmus)
+    extra = start_estimator(planar_fmus["estimator"], {"method": 2, "accel_source": 2}, "extra")
+    evr = [pair.est.vars[n].valueReference for n in pair.inputs]
+    fresh = fresh_extra = None
+    try:
+        _run_on(pair, extra, evr, 0.0, 100)
+        t_save = pair.t
+        slaves = (pair.plant, pair.est, extra)
+        states = [s.fmu.getFMUstate() for s in slaves]
+        blobs = [s.fmu.serializeFMUstate(st) for s, st in zip(slaves, states)]
+        first = _run_on(pair, extra, evr, t_save, 30)
+        # the run on changed everything that matters (else equality would prove nothing)
+        assert not np.array_equal(first[0], first[-1])
+
+        for s, st in zip(slaves, states):
+            s.fmu.setFMUstate(st)
+        again = _run_on(pair, extra, evr, t_save, 30)
+        np.testing.assert_array_equal(again, first)
+
+        for s, blob in zip(slaves, blobs):
+            st = s.fmu.deSerializeFMUstate(blob)
+            s.fmu.setFMUstate(st)
+            s.fmu.freeFMUstate(st)
+        from_bytes = _run_on(pair, extra, evr, t_save, 30)
+        np.testing.assert_array_equal(from_bytes, first)
+
+        # fresh instances (initialised with defaults) take the serialised state
+        fresh = Pair(planar_fmus)
+        fresh_extra = start_estimator(planar_fmus["estimator"], {"method": 2, "accel_source": 2},
+                                      "fresh_extra")
+        for s, blob in zip((fresh.plant, fresh.est, fresh_extra), blobs):
+            st = s.fmu.deSerializeFMUstate(blob)
+            s.fmu.setFMUstate(st)
+            s.fmu.freeFMUstate(st)
+        in_fresh = _run_on(fresh, fresh_extra, evr, t_save, 30)
+        np.testing.assert_array_equal(in_fresh, first)
+        assert fresh.est.get("diag.samples") == 129 and fresh_extra.get("diag.samples") == 128
+        for s, st in zip(slaves, states):
+            s.fmu.freeFMUstate(st)
+    finally:
+        extra.free()
+        pair.free()
+        if fresh is not None:
+            fresh.free()
+        if fresh_extra is not None:
+            fresh_extra.free()
+
+
+# ------------------------------------------------------------------------------------------------
+# invalid estimator parameters
+# ------------------------------------------------------------------------------------------------
+
+BAD_PARAMETERS = [
+    ({"method": 3}, ["method", "3"]),
+    ({"method": 0}, ["method", "0"]),
+    ({"solver": 0}, ["solver", "0"]),
+    ({"accel_source": 5}, ["accel_source", "5"]),
+    ({"lambda": 0.0}, ["lambda", "0.0"]),
+    ({"lambda": 1.5}, ["lambda", "1.5"]),
+    ({"lambda": math.nan}, ["lambda", "nan"]),
+    ({"P0_mu": 0.0}, ["P0_mu", "> 0"]),
+    ({"P0_theta": -1.0}, ["P0_theta", "> 0"]),
+    ({"guess.base.m": 0.0}, ["guess.base.m", "> 0"]),
+    ({"guess.target.m": -100.0}, ["guess.target.m", "> 0"]),
+    ({"guess.target.Ixx": -10.0}, ["guess.target", "inertia"]),
+]
+
+
+@pytest.mark.parametrize("params,words", BAD_PARAMETERS,
+                         ids=[",".join(f"{k}={v}" for k, v in p.items()) for p, _ in BAD_PARAMETERS])
+def test_bad_parameter_fails_initialisation_with_message(planar_fmus, params, words):
+    path = planar_fmus["estimator"]
+    s = logged_slave(path, "bad")
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    for k, v in params.items():
+        s.set(k, v)
+    with pytest.raises(FMICallException) as exc:
+        s.fmu.exitInitializationMode()
+    assert exc.value.status == FMI_FATAL
+    errors = [m for st, _, m in s.messages if st >= FMI_ERROR]
+    assert any(all(w in m for w in words) for m in errors), (words, s.messages)
+    s.fmu.freeInstance()
+    good = start_estimator(path, {}, "good")
+    try:
+        good.fmu.doStep(0.0, DT)
+        assert good.get("diag.status") == 1          # momentum reference stored
+        assert good.get("base.m") == 600.0
+    finally:
+        good.free()
