@@ -216,7 +216,14 @@ class InterfaceSlave(Fmi2Slave):
 
     def _set_fmu_state(self, state) -> None:
         state = copy.deepcopy(state)
+        rebuild = state["core"] is not None and any(
+            self.values.get(n) != v for n, v in state["values"].items()
+            if self.interface[n].causality == "parameter")
         self.values = state["values"]
+        if rebuild:
+            # the state was taken with other parameters (e.g. deserialised into an instance
+            # initialised differently): rebuild the core from them before restoring its state
+            self._initialise()
         self._outputs = state["outputs"]
         self.phase = state["phase"]
         self._restore_core_state(state["core"])

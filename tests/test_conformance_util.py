@@ -1,0 +1,194 @@
+"""Helpers of the interface conformance suite (tests/test_conformance_*.py); no tests here.
+
+``Inst`` drives one FMU instance through fmpy's low-level FMI 2.0 API (``FMU2Slave``) with its
+own logger callback, so that every test can see both the status an FMI call returned and the
+messages the FMU logged during that call.
+"""
+from __future__ import annotations
+
+import shutil
+from ctypes import byref
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+import pytest
+
+OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
+STATUS_NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
+
+ROBOTS = ("planar", "spatial")
+KINDS = ("plant", "estimator")
+DT = 0.1
+
+
+def fmus_for(request, robot: str) -> dict:
+    """The session-built FMUs of ``robot`` (conftest fixtures planar_fmus / spatial_fmus)."""
+    return request.getfixturevalue(f"{robot}_fmus")
+
+
+class Inst:
+    """One FMU instance (fmpy FMU2Slave) with name-based access and captured log messages."""
+
+    _extracted: Dict[str, str] = {}
+
+    def __init__(self, path: Path, name: str = "instance", logging_on: bool = True):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy.fmi1 import calloc, free
+        from fmpy.logging import addLoggerProxy
+
+        path = str(path)
+        self.md = read_model_description(path)
+        if path not in Inst._extracted:             # one extraction per FMU file and session
+            Inst._extracted[path] = extract(path)
+        self.dir = Inst._extracted[path]
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self.messages: List[tuple] = []
+
+        def logger(env, instance, status, category, message):
+            self.messages.append((int(status), (category or b"").decode(),
+                                  (message or b"").decode()))
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(cb))
+        self._callbacks = (cb, logger)              # keep the ctypes objects alive
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier,
+                             instanceName=name)
+        self.fmu.instantiate(callbacks=cb, loggingOn=logging_on)
+        self.freed = False
+
+    # -- variables ----------------------------------------------------------------------------
+    def names(self, causality: str) -> List[str]:
+        return [v.name for v in self.md.modelVariables if v.causality == causality]
+
+    def set(self, name: str, value) -> int:
+        """fmi2SetReal / fmi2SetInteger of one variable; returns the status (fmpy raises
+        FMICallException above Warning)."""
+        from fmpy.fmi2 import fmi2Integer, fmi2Real, fmi2ValueReference
+
+        v = self.vars[name]
+        vr = (fmi2ValueReference * 1)(v.valueReference)
+        if v.type == "Integer":
+            return self.fmu.fmi2SetInteger(self.fmu.component, vr, 1, (fmi2Integer * 1)(int(value)))
+        return self.fmu.fmi2SetReal(self.fmu.component, vr, 1, (fmi2Real * 1)(float(value)))
+
+    def set_many(self, names: Sequence[str], values: Sequence[float]) -> None:
+        self.fmu.setReal([self.vars[n].valueReference for n in names], [float(x) for x in values])
+
+    def get(self, name: str):
+        v = self.vars[name]
+        if v.type == "Integer":
+            return self.fmu.getInteger([v.valueReference])[0]
+        return self.fmu.getReal([v.valueReference])[0]
+
+    def values(self, names: Optional[Sequence[str]] = None) -> Dict[str, float]:
+        """Current values of ``names`` (default: every variable), Reals and Integers."""
+        names = list(self.vars) if names is None else list(names)
+        reals = [n for n in names if self.vars[n].type == "Real"]
+        ints = [n for n in names if self.vars[n].type == "Integer"]
+        out = {}
+        if reals:
+            out.update(zip(reals, self.fmu.getReal([self.vars[n].valueReference for n in reals])))
+        if ints:
+            out.update(zip(ints, self.fmu.getInteger([self.vars[n].valueReference for n in ints])))
+        return {n: out[n] for n in names}
+
+    def outputs(self) -> Dict[str, float]:
+        return self.values(self.names("output"))
+
+    # -- lifecycle ----------------------------------------------------------------------------
+    def init(self, params: Optional[dict] = None, start: float = 0.0) -> "Inst":
+        self.fmu.setupExperiment(startTime=start)
+        self.fmu.enterInitializationMode()
+        for k, v in (params or {}).items():
+            self.set(k, v)
+        self.fmu.exitInitializationMode()
+        return self
+
+    def step(self, t: float, dt: float) -> int:
+        """fmi2DoStep; returns the status (fmpy raises FMICallException above Warning)."""
+        return self.fmu.fmi2DoStep(self.fmu.component, t, dt, 1)
+
+    def call(self, fn, *args):
+        """Run ``fn(*args)``; return (FMI status, messages logged during the call)."""
+        from fmpy.fmi1 import FMICallException
+
+        n = len(self.messages)
+        try:
+            res = fn(*args)
+            status = res if isinstance(res, int) else OK
+        except FMICallException as e:
+            status = e.status
+        return status, self.messages[n:]
+
+    def free(self) -> None:
+        if not self.freed:
+            self.fmu.freeInstance()
+            self.freed = True
+
+
+def plant_samples(fmus: dict, n: int, dt: float = DT, params: Optional[dict] = None):
+    """Run the plant alone for ``n`` steps; returns (input names of the estimator, samples),
+    samples[k] = plant outputs at t = k dt in the estimator's input order (k = 0..n)."""
+    key = (str(fmus["plant"]), n, dt, tuple(sorted((params or {}).items())))
+    if key not in _SAMPLES:
+        est = Inst(fmus["estimator"], "probe")
+        names = est.names("input")
+        est.free()
+        plant = Inst(fmus["plant"], "sampler").init(params)
+        rows = [list(plant.values(names).values())]
+        for k in range(n):
+            plant.step(k * dt, dt)
+            rows.append(list(plant.values(names).values()))
+        plant.fmu.terminate()
+        plant.free()
+        _SAMPLES[key] = (names, np.array(rows))
+    names, rows = _SAMPLES[key]
+    return names, rows.copy()
+
+
+_SAMPLES: dict = {}
+
+
+def feed(est: Inst, names, samples, k0: int = 0, dt: float = DT, record: bool = False):
+    """Feed samples[k0:] to the estimator, one doStep(k dt, dt) each; returns the outputs after
+    each step if ``record``."""
+    hist = []
+    for k in range(k0, len(samples)):
+        est.set_many(names, samples[k])
+        assert est.step(k * dt, dt) == OK
+        if record:
+            hist.append(est.outputs())
+    return hist
+
+
+def as_array(d: Dict[str, float]) -> np.ndarray:
+    return np.array(list(d.values()), dtype=float)
+
+
+def assert_same(a: Dict[str, float], b: Dict[str, float], what: str = "") -> None:
+    """Bitwise equality of two name -> value dicts (NaN equal to NaN)."""
+    assert list(a) == list(b)
+    x, y = as_array(a), as_array(b)
+    same = (x == y) | (np.isnan(x) & np.isnan(y))
+    bad = [n for n, s in zip(a, same) if not s]
+    assert not bad, f"{what}: differ in {bad[:8]}: " + ", ".join(
+        f"{n}: {a[n]!r} vs {b[n]!r}" for n in bad[:4])
+
+
+def c_compiler() -> Optional[str]:
+    for cc in ("cc", "gcc", "clang"):
+        if shutil.which(cc):
+            return shutil.which(cc)
+    return None
+
+
+def skip_unless(cond: bool, reason: str) -> None:
+    if not cond:
+        pytest.skip(reason)
