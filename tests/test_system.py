@@ -239,6 +239,15 @@ def test_run_honours_default_experiment_and_step_size_of_an_extracted_dir(system
     assert res.step_size == 0.25 and res.stop_time == 0.75
 
 
+def test_stop_time_off_the_grid_gets_a_shorter_last_step(systems):
+    res = run_ssp(systems["planar"]["ssp"], stop_time=0.25, progress=False)
+    np.testing.assert_allclose(res.time, [0.0, 0.1, 0.2, 0.25], atol=1e-12)
+    assert res.stop_time == 0.25
+    assert np.all(np.diff(res.data["plant.base.r[1]"]) > 0)      # the plant moved on each step
+    with pytest.raises(ValueError, match="stop_time"):
+        run_ssp(systems["planar"]["ssp"], stop_time=-1.0)
+
+
 def test_editing_an_ssv_changes_the_plant_truth(systems, planar_baseline, tmp_path):
     d = _extract(systems["planar"]["ssp"], tmp_path / "sys")
     ssv = d / "resources" / f"{ssd.default_parameter_set('planar')}.ssv"

@@ -175,36 +175,41 @@ def read_system(root_dir: str | Path) -> SystemInfo:
 # ----------------------------------------------------------------------------------------------
 
 class _Log:
-    """Collects FMU log messages (fmpy logger callback), the last ``maxlen`` per instance."""
+    """Collects FMU log messages, the last ``maxlen`` per instance.
+
+    fmpy's C logger proxy (``fmpy.logging.addLoggerProxy``) keeps ONE process-global target,
+    so registering a Python logger through it would redirect every other FMU's messages in the
+    process (and leave a dangling pointer once this object is gone). This logger is therefore
+    called directly: the message arrives as the printf format string, which for our pythonfmu
+    FMUs is the whole message with ``%`` escaped as ``%%`` (undone here).
+    """
 
     def __init__(self, maxlen: int = 200):
         self.messages: Dict[str, collections.deque] = collections.defaultdict(
             lambda: collections.deque(maxlen=maxlen))
         self.all: List[Tuple[str, str, str, str]] = []
-        from ctypes import byref
+        from fmpy import calloc, free
         from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                                fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy import calloc, free
 
         def logger(component, instance_name, status, category, message):
-            inst = instance_name.decode("utf-8", "replace") if instance_name else "?"
-            label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
-            rec = (inst, label, category.decode("utf-8", "replace") if category else "",
-                   message.decode("utf-8", "replace") if message else "")
-            self.messages[inst].append(rec)
-            if status >= 1 and len(self.all) < 10000:   # keep warnings and worse for the result
-                self.all.append(rec)
+            try:
+                inst = instance_name.decode("utf-8", "replace") if instance_name else "?"
+                label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
+                text = message.decode("utf-8", "replace").replace("%%", "%") if message else ""
+                rec = (inst, label, category.decode("utf-8", "replace") if category else "",
+                       text)
+                self.messages[inst].append(rec)
+                if status >= 1 and len(self.all) < 10000:   # warnings and worse
+                    self.all.append(rec)
+            except Exception:  # never let an exception cross the C boundary
+                pass
 
         cb = fmi2CallbackFunctions()
         cb.logger = fmi2CallbackLoggerTYPE(logger)
         cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        try:  # formats the variadic message in C before calling back into Python
-            from fmpy.logging import addLoggerProxy
-            addLoggerProxy(byref(cb))
-        except Exception:  # pragma: no cover - fmpy without the proxy library
-            pass
-        self._logger = logger           # keep the Python callables alive
+        self._logger = logger           # keep the Python callables alive with this object
         self.callbacks = cb
 
     def recent(self, instance: str, n: int = 10) -> str:
@@ -217,7 +222,7 @@ class _Log:
 class _Instance:
     """One instantiated FMU component with name-based access."""
 
-    def __init__(self, comp: ComponentInfo, root_dir: Path, log: _Log, tmp: Path):
+    def __init__(self, comp: ComponentInfo, root_dir: Path, tmp: Path):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
@@ -279,22 +284,22 @@ class _Instance:
             self.instantiated = False
 
 
-def _column_groups(inst: _Instance) -> Tuple[List[str], List[int], List[str], List[int]]:
-    """Names and value references of the recorded variables: every connector of the component
-    and every output of its FMU, split into Real and Integer/Boolean."""
+def _column_groups(inst: _Instance) -> Dict[str, Tuple[List[str], List[int]]]:
+    """Names and value references of the recorded variables, per FMI type (Real, Integer,
+    Boolean): every connector of the component and every output of its FMU."""
     names = [n for n, _ in inst.comp.connectors]
+    seen = set(names)
     names += [v.name for v in inst.md.modelVariables if v.causality == "output"
-              and v.name not in set(names)]
-    real, rvr, other, ovr = [], [], [], []
+              and v.name not in seen]
+    groups: Dict[str, Tuple[List[str], List[int]]] = {"Real": ([], []), "Integer": ([], []),
+                                                      "Boolean": ([], [])}
     for n in names:
         v = inst.var(n)
-        if v.type == "Real":
-            real.append(n)
-            rvr.append(v.valueReference)
-        elif v.type in ("Integer", "Enumeration", "Boolean"):
-            other.append(n)
-            ovr.append(v.valueReference)
-    return real, rvr, other, ovr
+        typ = "Integer" if v.type == "Enumeration" else v.type
+        if typ in groups:                 # String variables are not recorded
+            groups[typ][0].append(n)
+            groups[typ][1].append(v.valueReference)
+    return groups
 
 
 # ----------------------------------------------------------------------------------------------
@@ -486,9 +491,10 @@ def run_ssp(ssp_path: str | Path, parameter_set: Optional[str] = None,
                              f"stop_time")
         if not (math.isfinite(t_end) and t_end > t0):
             raise ValueError(f"stop_time must be finite and > start time {t0}, got {t_end}")
-        n_steps = int(round((t_end - t0) / h))
-        if n_steps < 1:
-            raise ValueError(f"stop_time {t_end} s is shorter than one step of {h} s")
+        # communication points t0 + k h; a stop time that is not on that grid gets a shorter
+        # last step, so that the run ends exactly at the stop time
+        n_steps = max(1, int(math.ceil((t_end - t0) / h - 1e-9)))
+        points = [min(t0 + k * h, t_end) for k in range(n_steps)] + [t_end]
 
         chosen: Dict[str, List] = {}
         set_name = None
@@ -514,7 +520,7 @@ def run_ssp(ssp_path: str | Path, parameter_set: Optional[str] = None,
 
         # instantiate, parameterise (before initialisation, as SSP 1.0 prescribes), initialise
         for name, comp in info.components.items():
-            inst = _Instance(comp, root_dir, log, tmp)
+            inst = _Instance(comp, root_dir, tmp)
             insts[name] = inst
             current = (name, "fmi2Instantiate")
             inst.fmu.instantiate(callbacks=log.callbacks, loggingOn=True)
@@ -553,37 +559,35 @@ def run_ssp(ssp_path: str | Path, parameter_set: Optional[str] = None,
             if va.type != vb.type:
                 raise SimulationError(f"connection {a}.{ac} ({va.type}) -> {b}.{bc} ({vb.type}): "
                                       f"types differ")
-            key = (a, b, "Real" if va.type == "Real" else "Int")
+            kind = {"Real": "Real", "Boolean": "Boolean"}.get(va.type, "Integer")
+            key = (a, b, kind)
             wires[key][0].append(va.valueReference)
             wires[key][1].append(vb.valueReference)
 
         def exchange():
             nonlocal current
             for (a, b, typ), (svr, dvr, _) in wires.items():
-                current = (a, "fmi2GetReal" if typ == "Real" else "fmi2GetInteger")
-                if typ == "Real":
-                    vals = insts[a].fmu.getReal(svr)
-                    current = (b, "fmi2SetReal")
-                    insts[b].fmu.setReal(dvr, vals)
-                else:
-                    vals = insts[a].fmu.getInteger(svr)
-                    current = (b, "fmi2SetInteger")
-                    insts[b].fmu.setInteger(dvr, vals)
+                current = (a, f"fmi2Get{typ}")
+                vals = getattr(insts[a].fmu, f"get{typ}")(svr)
+                current = (b, f"fmi2Set{typ}")
+                getattr(insts[b].fmu, f"set{typ}")(dvr, list(vals))
 
         groups = {n: _column_groups(i) for n, i in insts.items()}
         columns = ["time"]
-        for n, (real, _, other, _) in groups.items():
-            columns += [f"{n}.{v}" for v in real] + [f"{n}.{v}" for v in other]
+        for n, g in groups.items():
+            for typ in ("Real", "Integer", "Boolean"):
+                columns += [f"{n}.{v}" for v in g[typ][0]]
         buf = np.empty((n_steps + 1, len(columns)))
 
         def record(k: int, tk: float):
             nonlocal current
             row = [tk]
-            for n, (_, rvr, _, ovr) in groups.items():
-                current = (n, "fmi2GetReal")
-                row += list(insts[n].fmu.getReal(rvr)) if rvr else []
-                current = (n, "fmi2GetInteger")
-                row += [float(x) for x in insts[n].fmu.getInteger(ovr)] if ovr else []
+            for n, g in groups.items():
+                for typ in ("Real", "Integer", "Boolean"):
+                    vrs = g[typ][1]
+                    if vrs:
+                        current = (n, f"fmi2Get{typ}")
+                        row += [float(x) for x in getattr(insts[n].fmu, f"get{typ}")(vrs)]
             buf[k] = row
 
         from tqdm import tqdm
@@ -593,15 +597,15 @@ def run_ssp(ssp_path: str | Path, parameter_set: Optional[str] = None,
                    desc=f"{info.name} {t0:g}-{t_end:g} s", delay=0.0 if progress else 2.0,
                    leave=False)
         try:
-            for k in range(n_steps + 1):
-                t = t0 + k * h
+            for k, t in enumerate(points):
                 exchange()
                 record(k, t)
                 if k == n_steps:
                     break
+                dt = points[k + 1] - t
                 for name, inst in insts.items():
                     current = (name, "fmi2DoStep")
-                    inst.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+                    inst.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
                 bar.update(1)
         finally:
             bar.close()
@@ -619,11 +623,13 @@ def run_ssp(ssp_path: str | Path, parameter_set: Optional[str] = None,
                 elif v.causality == "output" and n not in final:
                     final[n] = float(buf[-1, columns.index(f"{name}.{n}")])
         data = {c: buf[:, j].copy() for j, c in enumerate(columns)}
-        for n, (_, _, other, _) in groups.items():   # integer columns back to int
-            for v in other:
+        for n, g in groups.items():   # integer and boolean columns back to their type
+            for v in g["Integer"][0]:
                 data[f"{n}.{v}"] = data[f"{n}.{v}"].astype(np.int64)
+            for v in g["Boolean"][0]:
+                data[f"{n}.{v}"] = data[f"{n}.{v}"].astype(bool)
         result = RunResult(time=data["time"], data=data, truth=truth, final=final,
-                           parameter_set=set_name, start_time=t0, stop_time=t0 + n_steps * h,
+                           parameter_set=set_name, start_time=t0, stop_time=t_end,
                            step_size=h, log=list(log.all))
         if csv_path is not None:
             result.csv_path = result.to_csv(csv_path)
