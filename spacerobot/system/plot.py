@@ -39,6 +39,18 @@ def _truth(data: Dict[str, np.ndarray], name: str) -> Optional[float]:
     return float(col[-1])
 
 
+def _zero_truth_scale(data: Dict[str, np.ndarray], name: str) -> Tuple[float, str]:
+    """Scale for the band of a zero-truth parameter: 1 m for a centre-of-mass component, the
+    body's largest principal moment (diagonal truth) for an inertia element."""
+    body, par = name.split(".", 1)
+    if par.startswith("b["):
+        return 1.0, "1 m"
+    diag = [_truth(data, f"{body}.{d}") for d in ("Ixx", "Iyy", "Izz")]
+    diag = [abs(x) for x in diag if x is not None]
+    scale = max(diag) if diag else 1.0
+    return scale, f"{scale:g} kg.m2"
+
+
 def _grid(n: int) -> Tuple[int, int]:
     cols = min(4, max(1, n))
     return int(math.ceil(n / cols)), cols
@@ -94,11 +106,14 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
             err = est - truth
             ax.plot(t, err, lw=1.2)
             ax.axhline(0.0, color="k", lw=0.6)
-            ax.set_title(f"{n}: absolute error (truth = 0)", fontsize=9)
+            scale, scale_txt = _zero_truth_scale(data, n)
+            ax.axhspan(-BAND * scale, BAND * scale, color="tab:green", alpha=0.25, lw=0)
+            ax.set_title(f"{n}: absolute error (truth = 0)\nband ±0.1 % of {scale_txt}",
+                         fontsize=8)
             ax.set_ylabel("estimate - truth")
             d = float(np.max(np.abs(err[half]))) if len(err[half]) else 1.0
-            d = d if d > 0 else 1e-6
-            ax.set_ylim(-1.5 * d, 1.5 * d)
+            d = max(d, 5 * BAND * scale)
+            ax.set_ylim(-1.3 * d, 1.3 * d)
         else:
             ratio = est / truth
             ax.plot(t, ratio, lw=1.2)
