@@ -1,4 +1,16 @@
-"""The plant simulator: state, zero-order-hold controls, classic RK4, measured outputs."""
+"""The plant simulator: state, zero-order-hold controls, classic RK4, measured outputs.
+
+Implementation notes (performance; the equations are those of :mod:`.dynamics`):
+
+* The state lives in one vector ``x = [J (3), H (3), q (nq), v (nv)]``; the public attributes
+  ``q``, ``v``, ``J``, ``H`` are views of it. Every step makes a new ``x`` (the arrays a caller
+  kept are never changed behind its back); a caller that assigns e.g. ``plant.q = ...`` is
+  noticed at the next step.
+* One RK4 step evaluates the controls once (zero-order hold) and ABA three more times; the four
+  stage derivatives are rows of one preallocated matrix, combined by one product at the end.
+  Everything about the base (DCM, thruster force in the base frame, ``dq/dt`` of the root joint,
+  ``dH/dt = M + r_S x F``) is computed on Python floats with explicit formulas.
+"""
 from __future__ import annotations
 
 import math
@@ -10,8 +22,10 @@ import pinocchio as pin
 from ..robots import Controller, RigidBody, Robot
 from . import control
 from .dynamics import (PlantModel, base_acceleration, base_generalised_velocity, base_position,
-                       base_rotation, base_velocity, build_model, configuration_derivative,
-                       initial_configuration, momentum, normalise, thruster_generalised_force)
+                       base_rotation, base_velocity, build_model, initial_configuration, momentum)
+
+#: weights of the four RK4 stages (times dt / 6)
+_RK4_W = np.array([1.0, 2.0, 2.0, 1.0])
 
 
 @dataclass
@@ -52,67 +66,201 @@ class Plant:
             omega0 = (0.0, 0.0, omega0[2])
         vb = base_generalised_velocity(self.pm, q, np.asarray(v0, float), np.asarray(omega0, float))
         v = np.concatenate([vb, np.zeros(self.pm.n)])
+        # layout of the state vector and work space
+        pm = self.pm
+        self._nq, self._nv = pm.model.nq, pm.model.nv
+        self._oq, self._ov = 6, 6 + self._nq                 # offsets of q and v in x
+        self._nqb = 4 if pm.planar else 7                    # root-joint configuration size
+        self._nsc = 6 + self._nqb                            # scalar part of a stage row
+        nx = self._ov + self._nv
+        self._K = np.empty((4, nx))
+        self._xs = np.empty(nx)
+        self._tmp = np.empty(nx)
+        self._qn = np.empty(self._nq)                        # normalised stage configuration
+        self._vs = np.empty(self._nv)                        # stage velocity (owned, aligned)
+        self._gen = np.zeros(self._nv)                       # generalised force
+        self._ctrl = control.ArmController(pm, controller, self.q_home)
+        self._stage = self._stage_planar if pm.planar else self._stage_spatial
         self.t = 0.0
-        self.q, self.v = q, v
-        self.J = np.zeros(3)
-        self.H = np.zeros(3)
+        self._x = np.concatenate([np.zeros(6), q, v])
+        self._publish()
         self._u: Controls | None = None
+        self._held = None          # (F and M as 6 floats, tau, a) of the held controls
+        self._FM = None
 
     # -- state -----------------------------------------------------------------------------
+    def _publish(self) -> None:
+        """Make the public state attributes views of the current state vector."""
+        x, oq, ov = self._x, self._oq, self._ov
+        self.J, self.H, self.q, self.v = x[0:3], x[3:6], x[oq:ov], x[ov:]
+        self._pub = (self.J, self.H, self.q, self.v)
+
+    def _collect(self) -> np.ndarray:
+        """The state vector, rebuilt if a caller replaced one of the public attributes."""
+        pub = self._pub
+        if (self.J is not pub[0] or self.H is not pub[1] or self.q is not pub[2]
+                or self.v is not pub[3]):
+            self._x = np.concatenate([np.asarray(self.J, float), np.asarray(self.H, float),
+                                      np.asarray(self.q, float), np.asarray(self.v, float)])
+            self._publish()
+        return self._x
+
     def get_state(self) -> dict:
         """A deep copy of everything that determines the future (controls are derived)."""
+        self._collect()
         return {"t": self.t, "q": self.q.copy(), "v": self.v.copy(), "J": self.J.copy(),
                 "H": self.H.copy()}
 
     def set_state(self, s: dict) -> None:
         self.t = float(s["t"])
-        self.q = np.array(s["q"], float)
-        self.v = np.array(s["v"], float)
-        self.J = np.array(s["J"], float)
-        self.H = np.array(s["H"], float)
+        q = np.array(s["q"], float)
+        v = np.array(s["v"], float)
+        J = np.array(s["J"], float)
+        H = np.array(s["H"], float)
+        if q.shape != (self._nq,) or v.shape != (self._nv,) or J.shape != (3,) or H.shape != (3,):
+            raise ValueError(f"state shapes q {q.shape}, v {v.shape}, J {J.shape}, H {H.shape} "
+                             f"do not fit this plant (nq = {self._nq}, nv = {self._nv})")
+        self._x = np.concatenate([J, H, q, v])
+        self._publish()
         self._u = None
+        self._held = None
 
     # -- controls ----------------------------------------------------------------------------
     def controls(self) -> Controls:
         """Commands for the step starting at the current state (cached until the state moves)."""
         if self._u is None:
-            pm, q, v = self.pm, self.q, self.v
-            A = base_rotation(pm, q)
-            P, L_c, _, _ = momentum(pm, self.data, q, v)
-            F, M = control.thruster_command(P, L_c, self.controller)
-            f_b = thruster_generalised_force(pm, A, F, M)
-            tau, _, _ = control.arm_command(pm, self.data, q, v, f_b, self.controller, self.q_home)
-            a = pin.aba(pm.model, self.data, q, v, np.concatenate([f_b, tau])).copy()
-            self._u = Controls(F, M, tau, a)
+            x = self._collect()
+            held = self._held
+            if held is None or held[3] is not x:
+                held = self._held = self._controls(x)
+            FM, tau, a = held[0], held[1], held[2]
+            self._u = Controls(np.array(FM[0:3]), np.array(FM[3:6]), tau, a)
         return self._u
 
+    def _controls(self, x: np.ndarray):
+        """Controls at the state ``x``: ``(F and M as 6 floats, tau, a, x)``.
+
+        The accelerations ``a = [dv_b, qdd]`` come from the inverse dynamics of the attitude
+        law (``M a + c = [f_b, tau]`` by construction), so no forward-dynamics call is needed.
+        """
+        pm, c, data, model = self.pm, self.controller, self.data, self.pm.model
+        q, v = self._qn, self._vs           # owned copies (Pinocchio is faster on them)
+        q[:] = x[self._oq:self._ov]
+        v[:] = x[self._ov:]
+        hg = pin.computeCentroidalMomentum(model, data, q, v).vector.tolist()
+        Pb = c.P_max
+        F0 = control.bounded_scalar(hg[0], c.K_F, Pb, c.F_max)      # eq. 41
+        F1 = control.bounded_scalar(hg[1], c.K_F, Pb, c.F_max)
+        F2 = control.bounded_scalar(hg[2], c.K_F, Pb, c.F_max)
+        Lb = c.L_max
+        M0 = control.bounded_scalar(hg[3], c.K_M, Lb, c.M_max)      # eq. 40
+        M1 = control.bounded_scalar(hg[4], c.K_M, Lb, c.M_max)
+        M2 = control.bounded_scalar(hg[5], c.K_M, Lb, c.M_max)
+        gen = self._gen
+        nb = pm.nb
+        if pm.planar:
+            cs, sn = q[2:4].tolist()
+            k = 1.0 / math.hypot(cs, sn)
+            cs, sn = cs * k, sn * k
+            f_b = (cs * F0 + sn * F1, -sn * F0 + cs * F1, M2)
+        else:
+            a00, a01, a02, a10, a11, a12, a20, a21, a22 = _quat_dcm(*q[3:7].tolist())
+            f_b = (a00 * F0 + a10 * F1 + a20 * F2, a01 * F0 + a11 * F1 + a21 * F2,
+                   a02 * F0 + a12 * F1 + a22 * F2, a00 * M0 + a10 * M1 + a20 * M2,
+                   a01 * M0 + a11 * M1 + a21 * M2, a02 * M0 + a12 * M1 + a22 * M2)
+        gen[:nb] = f_b
+        tau, _, _, acc = self._ctrl.command(data, q, v, gen[:nb])
+        return (F0, F1, F2, M0, M1, M2), tau, acc.copy(), x
+
     # -- integration -------------------------------------------------------------------------
-    def _deriv(self, q, v, u: Controls):
-        pm = self.pm
-        A = base_rotation(pm, q)
-        qn = normalise(pm, q.copy())
-        gen = np.concatenate([thruster_generalised_force(pm, A, u.F, u.M), u.tau])
-        a = pin.aba(pm.model, self.data, qn, v, gen).copy()
-        dq = configuration_derivative(pm, q, v, A)
-        dH = u.M + np.cross(base_position(pm, q), u.F)
-        return dq, a, dH
+    def _stage_planar(self, xs: np.ndarray, row: np.ndarray, a) -> None:
+        """Fill ``row`` with the derivative of ``x`` at the stage state ``xs``.
+
+        ``a`` is the generalised acceleration if already known (stage 1), else None.
+        """
+        oq, ov = self._oq, self._ov
+        px, py, c, s = xs[oq:oq + 4].tolist()
+        vx, vy, wz = xs[ov:ov + 3].tolist()
+        F0, F1, F2, M0, M1, M2 = self._FM
+        k = 1.0 / math.hypot(c, s)
+        cn, sn = c * k, s * k
+        if a is None:
+            qn, vs, gen = self._qn, self._vs, self._gen
+            qn[:] = xs[oq:ov]
+            nrm = math.sqrt(c * c + s * s)
+            qn[2] = c / nrm
+            qn[3] = s / nrm
+            vs[:] = xs[ov:]
+            gen[0] = cn * F0 + sn * F1
+            gen[1] = -sn * F0 + cn * F1
+            gen[2] = M2
+            a = pin.aba(self.pm.model, self.data, qn, vs, gen)
+        row[0:self._nsc] = (F0, F1, F2, M0 + (py * F2 - 0.0 * F1), M1 + (0.0 * F0 - px * F2),
+                            M2 + (px * F1 - py * F0), cn * vx - sn * vy, sn * vx + cn * vy,
+                            -s * wz, c * wz)
+        row[self._nsc:ov] = xs[ov + 3:]
+        row[ov:] = a
+
+    def _stage_spatial(self, xs: np.ndarray, row: np.ndarray, a) -> None:
+        oq, ov = self._oq, self._ov
+        rx, ry, rz, x, y, z, w = xs[oq:oq + 7].tolist()
+        vx, vy, vz, wx, wy, wz = xs[ov:ov + 6].tolist()
+        F0, F1, F2, M0, M1, M2 = self._FM
+        a00, a01, a02, a10, a11, a12, a20, a21, a22 = _quat_dcm(x, y, z, w)
+        if a is None:
+            qn, vs, gen = self._qn, self._vs, self._gen
+            qn[:] = xs[oq:ov]
+            nrm = math.sqrt(x * x + y * y + z * z + w * w)
+            qn[3:7] = (x / nrm, y / nrm, z / nrm, w / nrm)
+            vs[:] = xs[ov:]
+            gen[0:6] = (a00 * F0 + a10 * F1 + a20 * F2, a01 * F0 + a11 * F1 + a21 * F2,
+                        a02 * F0 + a12 * F1 + a22 * F2, a00 * M0 + a10 * M1 + a20 * M2,
+                        a01 * M0 + a11 * M1 + a21 * M2, a02 * M0 + a12 * M1 + a22 * M2)
+            a = pin.aba(self.pm.model, self.data, qn, vs, gen)
+        # dq/dt: A v_l for the position; 1/2 q (x) (0, w) for the quaternion (body-frame w)
+        row[0:self._nsc] = (F0, F1, F2, M0 + (ry * F2 - rz * F1), M1 + (rz * F0 - rx * F2),
+                            M2 + (rx * F1 - ry * F0),
+                            a00 * vx + a01 * vy + a02 * vz, a10 * vx + a11 * vy + a12 * vz,
+                            a20 * vx + a21 * vy + a22 * vz,
+                            0.5 * (w * wx + y * wz - z * wy), 0.5 * (w * wy + z * wx - x * wz),
+                            0.5 * (w * wz + x * wy - y * wx), -0.5 * (x * wx + y * wy + z * wz))
+        row[self._nsc:ov] = xs[ov + 6:]
+        row[ov:] = a
+
+    def _step(self, x: np.ndarray, dt: float) -> np.ndarray:
+        """One RK4 step of ``x`` (not modified); returns the new state vector."""
+        held = self._held
+        if held is None or held[3] is not x:
+            held = self._controls(x)
+        self._FM = held[0]
+        self._gen[self.pm.nb:] = held[1]  # joint torques, held over the step
+        K, xs, tmp, stage = self._K, self._xs, self._tmp, self._stage
+        stage(x, K[0], held[2])           # stage 1: the accelerations are in the controls
+        hdt = 0.5 * dt
+        np.add(x, np.multiply(K[0], hdt, out=tmp), out=xs)
+        stage(xs, K[1], None)
+        np.add(x, np.multiply(K[1], hdt, out=tmp), out=xs)
+        stage(xs, K[2], None)
+        np.add(x, np.multiply(K[2], dt, out=tmp), out=xs)
+        stage(xs, K[3], None)
+        xn = _RK4_W.dot(K)
+        xn *= dt / 6.0
+        xn += x
+        # restore the unit norm of the quaternion / (cos, sin) pair
+        oq = self._oq
+        sl = slice(oq + 2, oq + 4) if self.pm.planar else slice(oq + 3, oq + 7)
+        r = xn[sl]
+        r /= math.sqrt(r.dot(r))
+        self._u = None
+        self._held = None
+        return xn
 
     def rk4_step(self, dt: float) -> None:
         """One classic RK4 step of length ``dt`` with the controls held (zero-order hold)."""
-        u = self.controls()
-        q, v = self.q, self.v
-        # stage 1: the accelerations at the step start are already in the controls
-        k1q = configuration_derivative(self.pm, q, v, base_rotation(self.pm, q))
-        k1v, k1h = u.a, u.M + np.cross(base_position(self.pm, q), u.F)
-        k2q, k2v, k2h = self._deriv(q + 0.5 * dt * k1q, v + 0.5 * dt * k1v, u)
-        k3q, k3v, k3h = self._deriv(q + 0.5 * dt * k2q, v + 0.5 * dt * k2v, u)
-        k4q, k4v, k4h = self._deriv(q + dt * k3q, v + dt * k3v, u)
-        self.q = normalise(self.pm, q + dt / 6.0 * (k1q + 2 * k2q + 2 * k3q + k4q))
-        self.v = v + dt / 6.0 * (k1v + 2 * k2v + 2 * k3v + k4v)
-        self.H = self.H + dt / 6.0 * (k1h + 2 * k2h + 2 * k3h + k4h)
-        self.J = self.J + dt * u.F  # F is constant over the step: exact impulse
+        x = self._collect()
+        self._x = self._step(x, dt)
         self.t += dt
-        self._u = None
+        self._publish()
 
     def advance(self, dt: float) -> None:
         """Integrate over ``dt``: whole internal steps ``h``, then one shorter step if needed."""
@@ -122,11 +270,19 @@ class Plant:
         rest = dt - n * self.h
         if rest < 1e-9 * self.h:
             rest = 0.0
-        for _ in range(n):
-            self.rk4_step(self.h)
-        if rest > 0.0:
-            self.rk4_step(rest)
-        if not (np.all(np.isfinite(self.q)) and np.all(np.isfinite(self.v))):
+        x = self._collect()
+        h, step = self.h, self._step
+        try:
+            for _ in range(n):
+                x = step(x, h)
+                self.t += h
+            if rest > 0.0:
+                x = step(x, rest)
+                self.t += rest
+        finally:
+            self._x = x
+            self._publish()
+        if not np.all(np.isfinite(x)):
             raise FloatingPointError(f"state became non-finite at t = {self.t:.6g} s")
 
     # -- measurements ------------------------------------------------------------------------
@@ -136,8 +292,8 @@ class Plant:
         Keys follow the interface contract: ``r_S, v_S, A, omega_B, a_S, alpha_B, q, qd, qdd,
         F, M, J, H, P, L, tau``.
         """
-        pm, q, v = self.pm, self.q, self.v
         u = self.controls()
+        pm, q, v = self.pm, self.q, self.v
         v_S, omega_B = base_velocity(pm, q, v)
         a_S, alpha_B = base_acceleration(pm, q, v, u.a)
         P, _, L_O, _ = momentum(pm, self.data, q, v)
@@ -149,3 +305,14 @@ class Plant:
             "F": u.F.copy(), "M": u.M.copy(), "J": self.J.copy(), "H": self.H.copy(),
             "P": P, "L": L_O, "tau": u.tau.copy(),
         }
+
+
+def _quat_dcm(qx, qy, qz, qw):
+    """DCM entries (row-major) of a not necessarily unit quaternion (as ``quat_to_R``)."""
+    s = 2.0 / (qx * qx + qy * qy + qz * qz + qw * qw)
+    xx, yy, zz = qx * qx, qy * qy, qz * qz
+    xy, xz, yz = qx * qy, qx * qz, qy * qz
+    xw, yw, zw = qx * qw, qy * qw, qz * qw
+    return (1 - s * (yy + zz), s * (xy - zw), s * (xz + yw),
+            s * (xy + zw), 1 - s * (xx + zz), s * (yz - xw),
+            s * (xz - yw), s * (yz + xw), 1 - s * (xx + yy))
