@@ -1,8 +1,6 @@
 """The system layer: generated SSD/SSV, .ssp packaging, the SSD-honouring runner, fmpy interop."""
 from __future__ import annotations
 
-import os
-import shutil
 import zipfile
 from pathlib import Path
 

@@ -31,7 +31,6 @@ import math
 import shutil
 import sys
 import tempfile
-import time as _time
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
