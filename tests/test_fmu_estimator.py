@@ -11,9 +11,7 @@
 """
 from __future__ import annotations
 
-import itertools
 import math
-from ctypes import byref
 
 import numpy as np
 import pytest
@@ -21,7 +19,6 @@ from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-from fmpy.logging import addLoggerProxy
 
 from conftest import ESTIMATE_NAMES, Pair, Slave, relative_errors, truth_vector
 from spacerobot.robots import scenario
@@ -30,46 +27,39 @@ FMI_FATAL, FMI_ERROR, FMI_WARNING = 4, 3, 1
 DT = 0.1
 
 _EXTRACTED: dict = {}
-_COUNT = itertools.count()
-
-
-def _log_registry():
-    """One process-wide logger: fmpy's native logger proxy (which formats the printf-style
-    message) holds a single Python logger for all instances, the last one registered, so
-    messages are dispatched by instance name into a registry shared by all test modules."""
-    import fmpy.logging as fl
-
-    if getattr(fl, "_spacerobot_test_registry", None) is None:
-        registry: dict = {}
-
-        def logger(env, instance, status, category, message):
-            registry.setdefault((instance or b"").decode(), []).append(
-                (int(status), (category or b"").decode(), (message or b"").decode()))
-
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(logger)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(cb))
-        fl._spacerobot_test_registry = registry
-        fl._spacerobot_test_callbacks = (cb, logger)      # kept alive for the process
-    return fl._spacerobot_test_registry, fl._spacerobot_test_callbacks[0]
 
 
 def logged_slave(path, name: str) -> Slave:
-    """A conftest ``Slave`` instantiated with a logger; ``slave.messages`` collects its
-    (status, category, message) tuples."""
+    """A conftest ``Slave`` instantiated with its own logger; ``slave.messages`` collects
+    (status, category, message) tuples.
+
+    The logger is called directly, not through fmpy's ``addLoggerProxy``: that proxy holds ONE
+    process-wide Python target (the last registered), which would redirect the messages of
+    every other instance in the test session. Our FMUs pass the whole message as the printf
+    format string with ``%`` escaped, so ``%%`` is undone here.
+    """
     s = Slave.__new__(Slave)
     key = str(path)
     if key not in _EXTRACTED:
         _EXTRACTED[key] = (read_model_description(key), extract(key))
     s.md, s.dir = _EXTRACTED[key]
     s.vars = {v.name: v for v in s.md.modelVariables}
-    registry, cb = _log_registry()
-    unique = f"est-{name}-{next(_COUNT)}"
-    s.messages = registry.setdefault(unique, [])
+    s.messages = []
+
+    def logger(env, instance, status, category, message):
+        try:
+            s.messages.append((int(status), (category or b"").decode("utf-8", "replace"),
+                               (message or b"").decode("utf-8", "replace").replace("%%", "%")))
+        except Exception:       # never let an exception cross the C boundary
+            pass
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(logger)
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    s._callbacks = (cb, logger)      # alive as long as the slave object
     s.fmu = FMU2Slave(guid=s.md.guid, unzipDirectory=s.dir,
-                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=unique)
+                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=name)
     s.fmu.instantiate(callbacks=cb, loggingOn=True)
     return s
 
