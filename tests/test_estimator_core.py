@@ -302,3 +302,24 @@ def test_inconsistent_attitude_is_rejected(planar_record):
         a.update(t, o)
         b.update(t, o)
     np.testing.assert_array_equal(a.vector(), b.vector())
+
+
+@pytest.mark.parametrize("method,unused", [("momentum", ("a_S", "alpha_B", "qdd", "F", "M")),
+                                           ("force", ("J", "H"))])
+def test_each_method_reads_only_its_signals(planar_record, method, unused):
+    """Momentum form: impulses, no accelerations or instantaneous thrust; force form: thrust and
+    accelerations, no impulses. Random (finite) values in the unused signals change nothing;
+    random values in a used one do."""
+    sc, rec = planar_record
+    rng = np.random.default_rng(7)
+    a, b, c = (Identifier(sc.robot, sc.guess, method=method) for _ in range(3))
+    used = "H" if method == "momentum" else "qdd"
+    for t, o in rec[:40]:
+        junk = {k: (rng.normal(size=np.shape(v)) if k in unused else v) for k, v in o.items()}
+        wrong = dict(o)
+        wrong[used] = o[used] + rng.normal(size=np.shape(o[used]))
+        a.update(t, o)
+        b.update(t, junk)
+        c.update(t, wrong)
+    np.testing.assert_array_equal(a.vector(), b.vector())
+    assert np.abs(a.vector() - c.vector()).max() > 1e-3
