@@ -101,7 +101,22 @@ class SpaceRobotEstimator(InterfaceSlave):
                                              (self.robot.n_joints if group in ("q", "qd", "qdd")
                                               else 3))
             arr[idx] = float(self.values[name])
-        status = self.ident.update(current_time, meas)
+        before = self.ident.get_state()
+        try:
+            with np.errstate(all="ignore"):
+                status = self.ident.update(current_time, meas)
+                self._refresh()
+            finite = _all_finite(self.ident.get_state())
+            error = "" if finite else "the update produced non-finite numbers"
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as e:
+            finite, error = False, f"the update failed ({type(e).__name__}: {e})"
+        if not finite:
+            # finite but huge inputs can overflow inside the RLS: undo the update entirely
+            rejected = self.ident.rejected + 1
+            self.ident.set_state(before)
+            self.ident.rejected, self.ident.status = rejected, 3
+            self.ident.message = f"{error}; are the inputs in SI units and of physical size?"
+            status = 3
         if status in (3, 4):
             # name the FMI inputs at fault, not only the core's signal name
             bad = [n for n, _ in self._inputs if not math.isfinite(float(self.values[n]))]
@@ -122,6 +137,21 @@ class SpaceRobotEstimator(InterfaceSlave):
             self._initialise()
         self.ident.set_state(core)
         self._refresh()
+
+
+def _all_finite(obj) -> bool:
+    """True if every float in a (nested) core state is finite."""
+    if isinstance(obj, np.ndarray):
+        return obj.dtype.kind not in "fc" or bool(np.all(np.isfinite(obj)))
+    if isinstance(obj, float):
+        return math.isfinite(obj)
+    if isinstance(obj, dict):
+        return all(_all_finite(v) for v in obj.values())
+    if isinstance(obj, (list, tuple)):
+        return all(_all_finite(v) for v in obj)
+    if hasattr(obj, "__dict__"):
+        return _all_finite(vars(obj))
+    return True
 
 
 def _flat(key, offset: int) -> int:

@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
 from test_conformance_util import (DT, FATAL, OK, ROBOTS, Inst, as_array, assert_same, feed,
                                    fmus_for, plant_samples)
 

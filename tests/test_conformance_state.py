@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
 from test_conformance_util import (DT, KINDS, ROBOTS, Inst, as_array, assert_same, fmus_for,
                                    plant_samples)
 

@@ -27,6 +27,41 @@ def fmus_for(request, robot: str) -> dict:
     return request.getfixturevalue(f"{robot}_fmus")
 
 
+_ROUTES: Dict[str, List[tuple]] = {}     # instance name -> messages logged by that instance
+_CALLBACKS = None
+_COUNTER = [0]
+
+
+def _logger(env, instance, status, category, message):
+    name = (instance or b"").decode()
+    if name in _ROUTES:
+        _ROUTES[name].append((int(status), (category or b"").decode(), (message or b"").decode()))
+    else:                                 # an instance of someone else: fmpy's default printer
+        from fmpy.fmi1 import printLogMessage
+        printLogMessage(env, instance, status, category, message)
+
+
+def _callbacks():
+    """ONE callback structure for the whole process. fmpy's addLoggerProxy keeps a single global
+    pointer to the Python logger (the proxy formats the printf arguments, then calls it): giving
+    every instance its own ctypes logger leaves that pointer dangling once the last one is
+    garbage collected (heap corruption at exit), and routes all messages to the newest one."""
+    global _CALLBACKS
+    if _CALLBACKS is None:
+        from fmpy.fmi1 import calloc, free
+        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy.logging import addLoggerProxy
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(_logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(cb))
+        _CALLBACKS = cb
+    return _CALLBACKS
+
+
 class Inst:
     """One FMU instance (fmpy FMU2Slave) with name-based access and captured log messages."""
 
@@ -34,10 +69,7 @@ class Inst:
 
     def __init__(self, path: Path, name: str = "instance", logging_on: bool = True):
         from fmpy import extract, read_model_description
-        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy.fmi1 import calloc, free
-        from fmpy.logging import addLoggerProxy
+        from fmpy.fmi2 import FMU2Slave
 
         path = str(path)
         self.md = read_model_description(path)
@@ -45,23 +77,15 @@ class Inst:
             Inst._extracted[path] = extract(path)
         self.dir = Inst._extracted[path]
         self.vars = {v.name: v for v in self.md.modelVariables}
-        self.messages: List[tuple] = []
-
-        def logger(env, instance, status, category, message):
-            self.messages.append((int(status), (category or b"").decode(),
-                                  (message or b"").decode()))
-
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(logger)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(cb))
-        self._callbacks = (cb, logger)              # keep the ctypes objects alive
+        _COUNTER[0] += 1
+        self.name = f"conformance-{name}-{_COUNTER[0]}"   # unique: messages are routed by it
+        self.messages: List[tuple] = _ROUTES.setdefault(self.name, [])
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName=name)
-        self.fmu.instantiate(callbacks=cb, loggingOn=logging_on)
+                             instanceName=self.name)
+        self.fmu.instantiate(callbacks=_callbacks(), loggingOn=logging_on)
         self.freed = False
+        _LIVE.append(self)
 
     # -- variables ----------------------------------------------------------------------------
     def names(self, causality: str) -> List[str]:
@@ -131,6 +155,19 @@ class Inst:
         if not self.freed:
             self.fmu.freeInstance()
             self.freed = True
+        if self in _LIVE:
+            _LIVE.remove(self)
+
+
+_LIVE: List[Inst] = []
+
+
+@pytest.fixture(autouse=True)
+def free_instances():
+    """Free the instances a test left behind (e.g. when an assertion failed half way)."""
+    yield
+    while _LIVE:
+        _LIVE[-1].free()
 
 
 def plant_samples(fmus: dict, n: int, dt: float = DT, params: Optional[dict] = None):

@@ -15,6 +15,7 @@ import json
 import math
 import os
 import pickle
+import sys
 from typing import Dict, List
 
 from pythonfmu import Fmi2Slave, Integer, Real
@@ -63,6 +64,42 @@ def _survive_fatal(slave, method):
     return guarded
 
 
+_EXIT_FIX_DONE: set = set()
+
+
+def _avoid_double_free_at_exit(resources: str, model_identifier: str) -> None:
+    """Work around a pythonfmu 0.7.0 crash at process exit in Python hosts (Linux).
+
+    The FMU binary keeps its interpreter guard in a static ``std::shared_ptr`` and also resets it
+    from an ``__attribute__((destructor))`` (``finalizePythonInterpreter``). At ``exit()`` the C++
+    static destructor runs first, then the destructor function assigns to the destroyed
+    shared_ptr and frees its control block a second time (valgrind: invalid read in
+    finalizePythonInterpreter of a block freed by __run_exit_handlers); glibc then sometimes
+    aborts ("corrupted double-linked list") after the host's work is done. Calling the exported
+    ``finalizePythonInterpreter`` from a Python ``atexit`` handler, which runs before the C exit
+    handlers, releases the guard once, while it is still alive; the later calls see an empty
+    pointer. Only when the host is a Python process (``sys.orig_argv`` non-empty): when
+    pythonfmu started the interpreter itself (C hosts), Python's atexit runs inside that very
+    destructor, so nothing is done there.
+    """
+    if not sys.platform.startswith("linux") or not getattr(sys, "orig_argv", None):
+        return
+    so = os.path.normpath(os.path.join(resources or ".", os.pardir, "binaries", "linux64",
+                                       model_identifier + ".so"))
+    if so in _EXIT_FIX_DONE or not os.path.isfile(so):
+        return
+    try:
+        lib = ctypes.CDLL(so, mode=getattr(os, "RTLD_NOLOAD", 4) | os.RTLD_NOW)
+        fn = lib.finalizePythonInterpreter
+    except (OSError, AttributeError):
+        return              # not loaded under this path, or another pythonfmu version
+    import atexit
+
+    fn.restype, fn.argtypes = None, []
+    atexit.register(fn)
+    _EXIT_FIX_DONE.add(so)
+
+
 class InterfaceSlave(Fmi2Slave):
     """Base class: registers :class:`~spacerobot.interface.Var` rows as FMI variables.
 
@@ -80,6 +117,7 @@ class InterfaceSlave(Fmi2Slave):
         self.default_experiment = DefaultExperiment(0.0, self.scenario.stop_time,
                                                     self.scenario.sample_time)
         self._register_interface(variables_of(self.robot, self.scenario))
+        _avoid_double_free_at_exit(self.resources, type(self).__name__)
 
     def _body(self, prefix: str) -> RigidBody:
         """The rigid body held in parameters ``<prefix>.m``, ``.b[1..3]``, ``.Ixx`` ... (checked)."""
@@ -109,6 +147,8 @@ class InterfaceSlave(Fmi2Slave):
                 kw["getter"] = (lambda n=var.name: self.values[n])
             else:
                 kw["getter"] = (lambda n=var.name: self._get_output(n))
+                kw["setter"] = (lambda x, n=var.name: self._fail(
+                    f"{n} is an output and cannot be set (tried to set {x!r})"))
             self.register_variable(cls(var.name, **kw), nested=False)
 
     # -- values -------------------------------------------------------------------------------
