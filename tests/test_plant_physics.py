@@ -15,6 +15,7 @@ Runs are shared between assertions (module-scoped fixtures) and last only as lon
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -64,14 +65,19 @@ def rel_dev(series, ref, scale):
 SPATIAL_L_TOL = 1e-8
 
 
-@pytest.fixture(scope="module", params=["planar", "spatial"])
-def free_run(request):
-    robot = request.param
+@functools.lru_cache(maxsize=None)
+def _free_run(robot):
+    """Thrusters off, 20 s, outputs every 0.5 s (computed once per session and robot)."""
     sc = scenario(robot)
     off = dataclasses.replace(sc.controller, F_max=0.0, M_max=0.0)
     sc, p = make_plant(robot, off)
     out, _ = record(p, 20.0, 0.5)
     return robot, sc, out
+
+
+@pytest.fixture(scope="module", params=["planar", "spatial"])
+def free_run(request):
+    return _free_run(request.param)
 
 
 def test_free_run_is_really_free_and_moving(free_run):
@@ -97,15 +103,14 @@ def test_momentum_conserved_thrusters_off(free_run):
     assert eL <= (1e-9 if robot == "planar" else SPATIAL_L_TOL)
 
 
-@pytest.mark.parametrize("free_run", ["spatial"], indirect=True)
-def test_free_run_spatial_drift_is_truncation_error(free_run):
+def test_free_run_spatial_drift_is_truncation_error():
     """The spatial angular-momentum drift converges with h (RK4 order) -> it is no leak.
 
     A physical error (a spurious external force or torque, a wrong inertia in the momentum)
     would not shrink when h is halved. Compared at 10 s: the h = 1 ms run of the fixture and
     a run at h = 0.5 ms.
     """
-    robot, sc, out = free_run
+    robot, sc, out = _free_run("spatial")
     t10 = [o for t, o in out if abs(t - 10.0) < 1e-9]
     assert len(t10) == 1
     L0 = out[0][1]["L"]
@@ -127,13 +132,18 @@ def test_free_run_spatial_drift_is_truncation_error(free_run):
 STATE_TIMES = (1.0, 5.0, 9.0)
 
 
-@pytest.fixture(scope="module", params=["planar", "spatial"])
-def thrust_run(request):
-    robot = request.param
+@functools.lru_cache(maxsize=None)
+def _thrust_run(robot):
+    """Controller on (paper scenario), outputs every 0.1 s, states kept at STATE_TIMES."""
     sc, p = make_plant(robot)
     T = 20.0 if robot == "planar" else 10.0
     out, states = record(p, T, 0.1, keep_states=STATE_TIMES)
     return robot, sc, p, out, states
+
+
+@pytest.fixture(scope="module", params=["planar", "spatial"])
+def thrust_run(request):
+    return _thrust_run(request.param)
 
 
 def test_impulse_equals_momentum_change(thrust_run):
@@ -189,8 +199,7 @@ def _attitude_reference(c, h, T):
     return cont, float(np.abs(zoh - cont(t)).max())
 
 
-@pytest.mark.parametrize("thrust_run", ["planar"], indirect=True)
-def test_base_attitude_follows_eq39(thrust_run):
+def test_base_attitude_follows_eq39():
     """theta(t) from base.A against the analytic solution of eq. 39.
 
     Tolerance: the controller is a 1 kHz digital one (commands held over h = 1 ms), which is
@@ -198,7 +207,7 @@ def test_base_attitude_follows_eq39(thrust_run):
     analytic solution by dev_zoh (2.7e-5 rad, 3e-4 of the 0.09 rad peak). We allow 2 dev_zoh.
     A 1 % error in either gain moves theta by > 1e-4 rad, so the test detects it.
     """
-    robot, sc, p, out, _ = thrust_run
+    robot, sc, p, out, _ = _thrust_run("planar")
     assert sc.omega0[2] == 0.1 and sc.v0[:2] == (1.0, 2.0)
     c = sc.controller
     cont, dev_zoh = _attitude_reference(c, sc.h, out[-1][0])
