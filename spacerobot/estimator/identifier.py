@@ -88,6 +88,10 @@ class Identifier:
         self.rows_ang = np.array([2]) if planar else np.arange(3)
         self.mu_idx = np.array([0, 1, 2, 4, 5, 6]) if planar else np.arange(8)
         self.th_idx = np.array([5, 11]) if planar else np.arange(12)
+        # inactive parameters (fixed at their guesses) and whether there are any
+        self._mu_in = np.setdiff1d(np.arange(8), self.mu_idx)
+        self._th_in = np.setdiff1d(np.arange(12), self.th_idx)
+        self._all_rows = len(self.rows_lin) == 3 and len(self.rows_ang) == 3
         mu0, th0 = self._paper_vector(guess)
         self.mu_full, self.th_full = mu0, th0
         if solver == "paper":
@@ -100,6 +104,9 @@ class Identifier:
             self.pi_idx = np.concatenate([self._std_idx(0), self._std_idx(1)])
             P0 = np.array([guess.P0_mu if (i % 10) < 4 else guess.P0_theta for i in self.pi_idx])
             self.rls = RLS(pi0[self.pi_idx], np.diag(P0), lam)
+            self._pi_out = np.setdiff1d(np.arange(20), self.pi_idx)
+            self._lin_cols = np.array([i for i, p in enumerate(self.pi_idx) if p % 10 < 4])
+            self._ang_cols = np.array([i for i, p in enumerate(self.pi_idx) if p % 10 >= 4])
         self.info_lin = np.zeros((len(self.mu_idx),) * 2)
         self.info_ang = np.zeros((len(self.th_idx),) * 2)
         self.samples = 0
@@ -109,6 +116,7 @@ class Identifier:
         self.residual_ang = 0.0
         self.reference = None       # momentum method: terms at t0
         self.history = []           # differenced accelerations: last samples (t, meas)
+        self._exc = None            # cached excitation() (cleared by update / set_state)
 
     # -- parameter vectors -------------------------------------------------------------------
     @staticmethod
@@ -129,6 +137,8 @@ class Identifier:
         return 10 * k + loc
 
     def _D_active(self, mu_active: np.ndarray) -> np.ndarray:
+        if len(mu_active) == 8:
+            return rg.D_of_mu(mu_active)
         mu = self.mu_full.copy()
         mu[self.mu_idx] = mu_active
         return rg.D_of_mu(mu)
@@ -139,7 +149,7 @@ class Identifier:
         A_B = s["A"]
         links, ee = self.kin.compute(s["r_S"], A_B, s["v_S"], s["omega_B"], s["a_S"], s["alpha_B"],
                                      s["q"], s["qd"], s["qdd"])
-        base = (s["r_S"], A_B, s["v_S"], A_B @ s["omega_B"], s["a_S"], A_B @ s["alpha_B"])
+        base = (s["r_S"], A_B, s["v_S"], A_B.dot(s["omega_B"]), s["a_S"], A_B.dot(s["alpha_B"]))
         target = (ee.r, ee.A, ee.v, ee.w, ee.a, ee.beta)
         return base, target, links
 
@@ -150,22 +160,21 @@ class Identifier:
         L = Phi theta + Psi D + L_arm = H + const
         """
         base, target, links = self._bodies(s)
-        B1, D1, Psi1 = rg.momentum_terms(base[0], base[1], base[2], base[3])
-        Bn, Dn, Psin = rg.momentum_terms(target[0], target[1], target[2], target[3])
+        B, D, Psi = rg.momentum_terms2(np.array([base[0], target[0]]), np.array([base[1], target[1]]),
+                                       np.array([base[2], target[2]]), np.array([base[3], target[3]]))
         P_arm, L_arm = self.kin.momentum(links)
-        return (np.hstack([B1, Bn]), s["J"] - P_arm, np.hstack([D1, Dn]), s["H"] - L_arm,
-                np.hstack([Psi1, Psin]))
+        return B, s["J"] - P_arm, D, s["H"] - L_arm, Psi
 
     def _force_terms(self, s: dict):
         """Force-form terms: G mu = F - F_arm ;  Q theta = M - M_arm,S - S D(mu)  (eqs. 28/31)."""
         base, target, links = self._bodies(s)
         r_S = s["r_S"]
-        G1, Q1, S1 = rg.force_terms(np.zeros(3), base[1], base[4], base[3], base[5])
-        Gn, Qn, Sn = rg.force_terms(target[0] - r_S, target[1], target[4], target[3], target[5])
+        G, Q, S = rg.force_terms2(np.array([np.zeros(3), target[0] - r_S]),
+                                  np.array([base[1], target[1]]), np.array([base[4], target[4]]),
+                                  np.array([base[3], target[3]]), np.array([base[5], target[5]]))
         F_arm, M_arm = self.kin.rate_of_momentum(links, r_S)
         # thruster force acts at S, so its moment about S is zero: the external moment is M
-        return (np.hstack([G1, Gn]), s["F"] - F_arm, np.hstack([Q1, Qn]), s["M"] - M_arm,
-                -np.hstack([S1, Sn]))
+        return G, s["F"] - F_arm, Q, s["M"] - M_arm, -S
 
     def equations(self, s: dict):
         """``(A, b, phi, y, psi)`` for one sample, full 3D rows (before planar selection).
@@ -185,6 +194,24 @@ class Identifier:
     # -- the update ------------------------------------------------------------------------------
     def validate(self, s: dict):
         """Return ``(status, message)``: ESTIMATING if the sample is usable."""
+        try:
+            # fast path: one finiteness test over all inputs, explicit 3x3 rotation test
+            flat = np.concatenate([s[k].ravel() for k in KEYS])
+            if math.isfinite(flat.dot(flat)):
+                a00, a01, a02, a10, a11, a12, a20, a21, a22 = s["A"].ravel().tolist()
+                err = max(abs(a00 * a00 + a10 * a10 + a20 * a20 - 1.0),
+                          abs(a01 * a01 + a11 * a11 + a21 * a21 - 1.0),
+                          abs(a02 * a02 + a12 * a12 + a22 * a22 - 1.0),
+                          abs(a00 * a01 + a10 * a11 + a20 * a21),
+                          abs(a00 * a02 + a10 * a12 + a20 * a22),
+                          abs(a01 * a02 + a11 * a12 + a21 * a22))
+                det = (a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20)
+                       + a02 * (a10 * a21 - a11 * a20))
+                if err <= 1e-6 * 0.5 and det > 0.5:
+                    return ESTIMATING, ""
+        except (ValueError, AttributeError):
+            pass
+        # careful path (and the messages)
         for k in KEYS:
             x = np.asarray(s[k], float)
             if not np.all(np.isfinite(x)):
@@ -230,6 +257,7 @@ class Identifier:
             self.status = REFERENCE
             return self.status
         self._solve(*eq)
+        self._exc = None
         self.samples += 1
         self.status = ESTIMATING
         return self.status
@@ -253,18 +281,21 @@ class Identifier:
 
     def _solve(self, A, b, phi, y, psi):
         rl, ra = self.rows_lin, self.rows_ang
-        A, b, phi, y, psi = A[rl], b[rl], phi[ra], y[ra], psi[ra]
+        if not self._all_rows:
+            A, b, phi, y, psi = A[rl], b[rl], phi[ra], y[ra], psi[ra]
         if self.solver == "paper":
             # inactive (planar out-of-plane) parameters stay at their guesses: move them right
-            mu_in = np.setdiff1d(np.arange(8), self.mu_idx)
-            th_in = np.setdiff1d(np.arange(12), self.th_idx)
-            b = b - A[:, mu_in] @ self.mu_full[mu_in]
-            y = y - phi[:, th_in] @ self.th_full[th_in]
-            A, phi = A[:, self.mu_idx], phi[:, self.th_idx]
+            mu_in, th_in = self._mu_in, self._th_in
+            if len(mu_in):
+                b = b - A[:, mu_in].dot(self.mu_full[mu_in])
+                A = A[:, self.mu_idx]
+            if len(th_in):
+                y = y - phi[:, th_in].dot(self.th_full[th_in])
+                phi = phi[:, self.th_idx]
             e_lin, e_ang = self.rls.update(A, b, phi, y, psi, self._D_active)
             self.mu_full[self.mu_idx] = self.rls.mu
             self.th_full[self.th_idx] = self.rls.theta
-            rhs_ang = y + psi @ self.rls.D_mu
+            rhs_ang = y + psi.dot(self.rls.D_mu)
         else:
             H_rows, rhs = [], []
             # standard rows: linear [B, 0]; angular [Psi[:, :4], D] per body (sign: psi = -Psi)
@@ -275,21 +306,25 @@ class Identifier:
                 Y[len(rl):, 10 * k + 4:10 * k + 10] = phi[:, 6 * k:6 * k + 6]
             yy = np.concatenate([b, y])
             idx = self.pi_idx
-            out = np.setdiff1d(np.arange(20), idx)
-            yy = yy - Y[:, out] @ self.pi_full[out]
+            out = self._pi_out
+            if len(out):
+                yy = yy - Y[:, out].dot(self.pi_full[out])
             e, _ = self.rls.update(Y[:, idx], yy)
             self.pi_full[idx] = self.rls.x
             e_lin, e_ang = e[:len(rl)], e[len(rl):]
             phi, A = Y[len(rl):, idx], Y[:len(rl), idx]
             rhs_ang = yy[len(rl):]
-        self.residual_lin = float(np.linalg.norm(e_lin) / max(np.linalg.norm(b), 1e-300))
-        self.residual_ang = float(np.linalg.norm(e_ang) / max(np.linalg.norm(rhs_ang), 1e-300))
-        if self.solver == "paper":
-            self.info_lin = self.lam * self.info_lin + A.T @ A
-            self.info_ang = self.lam * self.info_ang + phi.T @ phi
+        self.residual_lin = math.sqrt(e_lin.dot(e_lin)) / max(math.sqrt(b.dot(b)), 1e-300)
+        self.residual_ang = math.sqrt(e_ang.dot(e_ang)) / max(math.sqrt(rhs_ang.dot(rhs_ang)),
+                                                              1e-300)
+        if self.solver == "joint":
+            A, phi = A[:, self._lin_cols], phi[:, self._ang_cols]
+        if self.lam == 1.0:
+            self.info_lin = self.info_lin + A.T.dot(A)
+            self.info_ang = self.info_ang + phi.T.dot(phi)
         else:
-            self.info_lin = self.lam * self.info_lin + _sub(A, phi, self.pi_idx, lin=True)
-            self.info_ang = self.lam * self.info_ang + _sub(A, phi, self.pi_idx, lin=False)
+            self.info_lin = self.lam * self.info_lin + A.T.dot(A)
+            self.info_ang = self.lam * self.info_ang + phi.T.dot(phi)
 
     # -- results --------------------------------------------------------------------------------
     def parameters(self):
@@ -315,6 +350,15 @@ class Identifier:
 
     def vector(self) -> np.ndarray:
         """Estimates as one (20,) vector: per body m, b (3), I (6, project order)."""
+        if self.solver == "paper":
+            mu, th = self.mu_full, self.th_full
+            out = np.empty(20)
+            for k in range(2):
+                m = mu[4 * k]
+                out[10 * k] = m
+                out[10 * k + 1:10 * k + 4] = mu[4 * k + 1:4 * k + 4] / m
+                out[10 * k + 4:10 * k + 10] = th[6 * k:6 * k + 6][rg.SHARP_TO_PROJECT]
+            return out
         e = self.estimates()
         return np.concatenate([np.concatenate([[x.m], x.b, x.I]) for x in (e["base"], e["target"])])
 
@@ -374,8 +418,13 @@ class Identifier:
         return cov, self.pi_full.copy(), g
 
     def excitation(self):
-        """Reciprocal condition numbers (scale-free) of the mass and inertia information."""
-        return _rcond(self.info_lin), _rcond(self.info_ang)
+        """Reciprocal condition numbers (scale-free) of the mass and inertia information.
+
+        Computed when asked for (eigenvalues), then cached until the next accepted sample.
+        """
+        if self._exc is None:
+            self._exc = (_rcond(self.info_lin), _rcond(self.info_ang))
+        return self._exc
 
     # -- state ------------------------------------------------------------------------------------
     def get_state(self) -> dict:
@@ -390,6 +439,7 @@ class Identifier:
     def set_state(self, st: dict) -> None:
         for k, v in st.items():
             setattr(self, k, copy.deepcopy(v))
+        self._exc = None
 
 
 def _rcond(info: np.ndarray) -> float:

@@ -30,16 +30,28 @@ class RLS:
 
     def update(self, H: np.ndarray, y: np.ndarray):
         """One sample. Returns the a-priori residual ``y - H x`` and the gain ``K``."""
-        e = y - H @ self.x
-        PHt = self.P @ H.T
-        S = self.lam * np.eye(H.shape[0]) + H @ PHt
-        Sinv_e, KT = np.split(np.linalg.solve(S, np.column_stack([e, PHt.T])), [1], axis=1)
-        K = KT.T                                              # K = P H^T (lam I + H P H^T)^-1
-        self.ssr = self.lam * self.ssr + float(e @ Sinv_e[:, 0])
-        self.rows += H.shape[0]
-        self.x = self.x + K @ e                               # x += K (y - H x)
-        self.P = (self.P - K @ (H @ self.P)) / self.lam       # P = (I - K H) P / lam
-        self.P = 0.5 * (self.P + self.P.T)
+        lam = self.lam
+        e = y - H.dot(self.x)
+        PHt = self.P.dot(H.T)
+        S = H.dot(PHt)
+        k = S.shape[0]
+        S.flat[::k + 1] += lam                                # lam I + H P H^T
+        Si = _spd_inverse(S)                                  # small: explicit formulas
+        if Si is None:
+            Sinv_e, KT = np.split(np.linalg.solve(S, np.column_stack([e, PHt.T])), [1], axis=1)
+            K, Sinv_e = KT.T, Sinv_e[:, 0]
+        else:
+            K = PHt.dot(Si)                                   # K = P H^T (lam I + H P H^T)^-1
+            Sinv_e = Si.dot(e)
+        self.ssr = lam * self.ssr + float(e.dot(Sinv_e))
+        self.rows += k
+        self.x = self.x + K.dot(e)                            # x += K (y - H x)
+        P = self.P - K.dot(PHt.T)                             # P = (I - K H) P / lam
+        if lam != 1.0:
+            P /= lam
+        P += P.T
+        P *= 0.5
+        self.P = P
         return e, K
 
     def sigma2(self, p: int) -> float:
@@ -84,8 +96,32 @@ class ModifiedRLS:
         """One sample of both equations. Returns the two a-priori residuals."""
         e_lin, _ = self.lin.update(A, b)                      # step 1: mu_N
         D_new = D(self.lin.x)
-        self.ang.x = self.ang.x + self.M @ (D_new - self.D_mu)  # step 2 (eqs. 36-37)
+        self.ang.x = self.ang.x + self.M.dot(D_new - self.D_mu)  # step 2 (eqs. 36-37)
         self.D_mu = D_new
-        e_ang, K = self.ang.update(phi, y + psi @ D_new)      # step 3
-        self.M = self.M - K @ (phi @ self.M) + K @ psi        # step 4: M = (I - K phi) M + K psi
+        e_ang, K = self.ang.update(phi, y + psi.dot(D_new))  # step 3
+        self.M = self.M + K.dot(psi - phi.dot(self.M))        # step 4: M = (I - K phi) M + K psi
         return e_lin, e_ang
+
+
+def _spd_inverse(S: np.ndarray):
+    """Inverse of a small symmetric positive definite matrix (1x1 to 3x3) by explicit
+    formulas, or None (larger, or not safely invertible): then the caller solves with LAPACK."""
+    k = S.shape[0]
+    if k == 1:
+        s = S[0, 0]
+        return np.array([[1.0 / s]]) if s > 0.0 else None
+    if k == 2:
+        a, b, _, d = S.ravel().tolist()
+        det = a * d - b * b
+        if not det > 1e-12 * (a * d):
+            return None
+        return np.array([[d, -b], [-b, a]]) / det
+    if k == 3:
+        a, b, c, _, d, e, _, _, f = S.ravel().tolist()
+        A0, B0, C0 = d * f - e * e, c * e - b * f, b * e - c * d
+        det = a * A0 + b * B0 + c * C0
+        if not det > 1e-12 * (a * d * f):
+            return None
+        D0, E0, F0 = a * f - c * c, b * c - a * e, a * d - b * b
+        return np.array([[A0, B0, C0], [B0, D0, E0], [C0, E0, F0]]) / det
+    return None
