@@ -68,7 +68,7 @@ import time
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 from ..robots import INERTIA_NAMES, ROBOTS, TARGETS, DEFAULT_TARGET
 
@@ -465,7 +465,7 @@ def run_sweep(points: Sequence[Point], out_csv, *, workers: int = 2,
                 client = own_client = Client(scheduler)
             else:
                 cluster = LocalCluster(n_workers=int(workers), processes=True,
-                                       threads_per_worker=1, dashboard_address=None)
+                                       threads_per_worker=1, dashboard_address=":0")
                 client = own_client = Client(cluster)
         stamp = f"{time.time_ns():x}"
         futures = {}
