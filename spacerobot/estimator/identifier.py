@@ -368,14 +368,44 @@ class Identifier:
         Parameters that are not identified (planar out-of-plane ones) report the square root of
         their prior covariance. Propagated with first-order (delta-method) Jacobians.
         """
-        cov, z, g = self._covariance()
-        Jg = np.empty((20, len(z)))
-        f0 = g(z)
-        for i in range(len(z)):
-            dz = 1e-7 * max(abs(z[i]), 1e-3)
-            zp = z.copy(); zp[i] += dz
-            Jg[:, i] = (g(zp) - f0) / dz
+        cov, z, _ = self._covariance()
+        # forward differences, all perturbed copies of z at once (row 0: z itself)
+        nz = len(z)
+        dz = 1e-7 * np.maximum(np.abs(z), 1e-3)
+        Z = np.repeat(z[None, :], nz + 1, axis=0)
+        Z[np.arange(1, nz + 1), np.arange(nz)] += dz
+        Fz = self._g_rows(Z)
+        Jg = ((Fz[1:] - Fz[0]) / dz[:, None]).T
         return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", Jg, cov, Jg), 0.0, None))
+
+    def _g_rows(self, Z: np.ndarray) -> np.ndarray:
+        """The map z -> :meth:`vector` of :meth:`_covariance`, applied to every row of ``Z``."""
+        out = np.empty((len(Z), 20))
+        perm = rg.SHARP_TO_PROJECT
+        for k in range(2):
+            o = 10 * k
+            if self.solver == "paper":
+                m = Z[:, 4 * k]
+                out[:, o] = m
+                out[:, o + 1:o + 4] = Z[:, 4 * k + 1:4 * k + 4] / m[:, None]
+                out[:, o + 4:o + 10] = Z[:, 8 + 6 * k:8 + 6 * k + 6][:, perm]
+            else:
+                m = Z[:, o]
+                b = Z[:, o + 1:o + 4] / m[:, None]
+                b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+                bb = b0 * b0 + b1 * b1 + b2 * b2
+                s = Z[:, o + 4:o + 10]                           # I_O# (paper order)
+                Ic = np.empty((len(Z), 6))
+                Ic[:, 0] = s[:, 0] - m * (bb - b0 * b0)
+                Ic[:, 1] = s[:, 1] - m * (0.0 - b0 * b1)
+                Ic[:, 2] = s[:, 2] - m * (0.0 - b0 * b2)
+                Ic[:, 3] = s[:, 3] - m * (bb - b1 * b1)
+                Ic[:, 4] = s[:, 4] - m * (0.0 - b1 * b2)
+                Ic[:, 5] = s[:, 5] - m * (bb - b2 * b2)
+                out[:, o] = m
+                out[:, o + 1:o + 4] = b
+                out[:, o + 4:o + 10] = Ic[:, perm]
+        return out
 
     def _covariance(self):
         """Covariance of the internal parameter vector z, z itself, and z -> :meth:`vector`."""

@@ -75,21 +75,27 @@ def D_of_mu(mu: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
+_PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+
+
 def D_jacobian(mu: np.ndarray) -> np.ndarray:
     """``dD/dmu`` (20, 8), used to propagate the covariance of mu into theta."""
-    Jac = np.zeros((20, 8))
+    Jac = [[0.0] * 8 for _ in range(20)]
+    mu = np.asarray(mu, float).tolist()
     for k in range(2):
         m, c = mu[4 * k], mu[4 * k + 1:4 * k + 4]
         r, cc = 10 * k, 4 * k
-        Jac[r, cc] = 1.0
-        Jac[r + 1:r + 4, cc + 1:cc + 4] = np.eye(3)
-        pairs = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-        for p, (i, j) in enumerate(pairs):
+        Jac[r][cc] = 1.0
+        for i in range(3):
+            Jac[r + 1 + i][cc + 1 + i] = 1.0
+        m2 = m**2
+        for p, (i, j) in enumerate(_PAIRS):
             # d(c_i c_j / m)
-            Jac[r + 4 + p, cc] = -c[i] * c[j] / m**2
-            Jac[r + 4 + p, cc + 1 + i] += c[j] / m
-            Jac[r + 4 + p, cc + 1 + j] += c[i] / m
-    return Jac
+            row = Jac[r + 4 + p]
+            row[cc] = -c[i] * c[j] / m2
+            row[cc + 1 + i] += c[j] / m
+            row[cc + 1 + j] += c[i] / m
+    return np.array(Jac)
 
 
 def momentum_terms(r_O, A, v_O, w):
