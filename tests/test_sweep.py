@@ -82,6 +82,11 @@ def test_grid_expansion_and_overrides():
     assert [ov[f"plant.base.v0[{i}]"] for i in (1, 2, 3)] in ([0, 10, 0], [200, 200, 0])
     with pytest.raises(ValueError, match="method"):
         Point(method="energy")
+    # unspecified values are the robot's paper scenario
+    sp = make_points("spatial", method="force")
+    assert len(sp) == 1 and sp[0].target == "default" and sp[0].v0 == (10.0, 20.0, 30.0)
+    assert (sp[0].F_max, sp[0].stop_time) == (10.0, 60.0)
+    assert Point(robot="spatial").target == "default"
     assert sw.parse_v0("0,10;50,50;1,2,3") == [(0, 10), (50, 50), (1, 2, 3)]
     with pytest.raises(argparse.ArgumentTypeError):
         sw.parse_v0("0,10;5")
@@ -166,7 +171,13 @@ def test_rerun_skips_finished_points(sweep_2x2, ssp, tmp_path):
     lost = lines[-1].split(",", 1)[0]
     out.write_text("".join(lines[:-1]) + lines[-1][:25])
     kept = {k: v for k, v in _by_id(src).items() if k != lost}
-    summary = run_sweep(points, out, workers=2, ssp=ssp, progress=False, runner=RUNNER)
+    # this time on an existing cluster, given by its scheduler address (--scheduler)
+    from distributed import LocalCluster
+    with LocalCluster(n_workers=1, processes=True, threads_per_worker=1,
+                      dashboard_address=":0") as cluster:
+        summary = run_sweep(points, out, scheduler=cluster.scheduler_address, ssp=ssp,
+                            progress=False, runner=RUNNER)
+        assert len(cluster.scheduler.workers) == 1      # left running for its owner
     assert (summary.skipped, summary.submitted, summary.ok) == (3, 1, 1), summary
     rows = _by_id(out)
     assert set(rows) == {p.id for p in points} and len(read_table(out)) == 4

@@ -70,7 +70,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
-from ..robots import INERTIA_NAMES, ROBOTS, TARGETS, DEFAULT_TARGET
+from ..robots import DEFAULT_TARGET, INERTIA_NAMES, ROBOTS, TARGETS, scenario
 
 #: where a point's co-simulation and the .ssp build come from ("module:function")
 DEFAULT_RUNNER = "spacerobot.system.runner:run_ssp"
@@ -109,7 +109,7 @@ class Point:
     """One co-simulation of the sweep. ``v0`` is always stored as a 3-vector."""
 
     robot: str = "planar"
-    target: str = "medium"
+    target: Optional[str] = None        #: None: the robot's default target
     method: str = "momentum"
     accel_source: str = "measured"
     v0: Tuple[float, float, float] = (1.0, 2.0, 0.0)
@@ -118,6 +118,8 @@ class Point:
     overrides: Tuple[Tuple[str, float], ...] = field(default_factory=tuple)
 
     def __post_init__(self):
+        if self.target is None and self.robot in DEFAULT_TARGET:
+            object.__setattr__(self, "target", DEFAULT_TARGET[self.robot])
         v = tuple(float(x) for x in self.v0)
         if len(v) == 2:
             v = v + (0.0,)
@@ -193,24 +195,29 @@ def _as_list(x) -> list:
 
 
 def make_points(robot="planar", target=None, method=("momentum", "force"),
-                accel=("measured",), v0=((1.0, 2.0),), F_max=(10.0,), stop_time=(30.0,),
+                accel=("measured",), v0=None, F_max=None, stop_time=None,
                 overrides: Optional[Mapping[str, float]] = None) -> List[Point]:
     """The Cartesian product of the given values, in a stable order, without duplicates.
 
-    Every argument takes a single value or a list. The momentum method does not use
+    Every argument takes a single value or a list. ``None`` (target, v0, F_max, stop_time)
+    means the robot's paper scenario value (:func:`spacerobot.robots.scenario`), e.g. planar:
+    medium target, v0 = [1, 2] m/s, F_max = 10 N, 30 s. The momentum method does not use
     accelerations, so it is run once per grid point, with the first acceleration source.
     """
     robots = _as_list(robot)
     out: List[Point] = []
     seen = set()
-    v0s = list(v0)
-    if v0s and not isinstance(v0s[0], (list, tuple)):
-        v0s = [v0s]
     accels = _as_list(accel) or ["measured"]
     for rb in robots:
+        sc = scenario(rb)
+        v0s = list(v0) if v0 is not None else [sc.v0]
+        if v0s and not isinstance(v0s[0], (list, tuple)):
+            v0s = [v0s]
         targets = _as_list(target) or [DEFAULT_TARGET[rb]]
+        fms = _as_list(F_max) or [sc.controller.F_max]
+        sts = _as_list(stop_time) or [sc.stop_time]
         for tg, me, ac, v, fm, st in itertools.product(
-                targets, _as_list(method), accels, v0s, _as_list(F_max), _as_list(stop_time)):
+                targets, _as_list(method), accels, v0s, fms, sts):
             if me == "momentum" and ac != accels[0]:
                 continue
             p = Point(rb, tg, me, ac, tuple(v), fm, st, tuple((overrides or {}).items()))
@@ -655,7 +662,7 @@ def _csv_list(conv=str):
 
 #: config/CLI key -> default
 DEFAULTS = {"robot": ["planar"], "target": None, "method": ["momentum", "force"],
-            "accel": ["measured"], "v0": [(1.0, 2.0)], "F_max": [10.0], "stop_time": [30.0],
+            "accel": ["measured"], "v0": None, "F_max": None, "stop_time": None,
             "workers": 2, "scheduler": None, "out": None, "overrides": {}, "build_dir": None,
             "plot": None}
 
@@ -711,11 +718,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="acceleration source(s) of the force method: measured,differenced "
                         "(default measured)")
     p.add_argument("--v0", type=parse_v0, default=S,
-                   help="initial base velocities 'vx,vy[,vz];...' [m/s] (default '1,2')")
+                   help="initial base velocities 'vx,vy[,vz];...' [m/s] (default: the robot's scenario, planar '1,2')")
     p.add_argument("--F-max", dest="F_max", type=_csv_list(float), default=S,
-                   help="thruster force bound(s) [N] (default 10)")
+                   help="thruster force bound(s) [N] (default: the scenario's, 10)")
     p.add_argument("--stop-time", dest="stop_time", type=_csv_list(float), default=S,
-                   help="stop time(s) [s] (default 30)")
+                   help="stop time(s) [s] (default: the scenario's, planar 30, spatial 60)")
     p.add_argument("--set", dest="overrides", action="append", default=S, metavar="NAME=VALUE",
                    help="extra FMI override for every point, e.g. plant.base.omega0[3]=0.2 "
                         "(repeatable)")
