@@ -123,7 +123,8 @@ class SpaceRobotEstimator(InterfaceSlave):
             where = f" [input {', '.join(bad)}]" if bad else ""
             self.log(_escape(f"t = {current_time:.6g} s: sample skipped ({STATUS[status]}){where}: "
                              f"{self.ident.message}; estimates unchanged"), Fmi2Status.warning)
-        self._refresh()
+        if not finite:
+            self._refresh()         # outputs of the restored state
         return True
 
     def _core_state(self):
