@@ -461,15 +461,32 @@ class Identifier:
         """Deep copy of everything that evolves (estimates, covariances, M, references, history)."""
         keep = ("rls", "mu_full", "th_full", "info_lin", "info_ang", "samples", "rejected",
                 "status", "residual_lin", "residual_ang", "reference", "history")
-        st = {k: copy.deepcopy(getattr(self, k)) for k in keep}
+        st = {k: _copy(getattr(self, k)) for k in keep}
         if self.solver == "joint":
             st["pi_full"] = self.pi_full.copy()
         return st
 
     def set_state(self, st: dict) -> None:
         for k, v in st.items():
-            setattr(self, k, copy.deepcopy(v))
+            setattr(self, k, _copy(v))
         self._exc = None
+
+
+def _copy(v):
+    """Deep copy of a state entry; arrays, and containers of arrays, without deepcopy's memo
+    bookkeeping (the state holds no shared or self-referencing objects)."""
+    t = type(v)
+    if t is np.ndarray:
+        return v.copy()
+    if t in (float, int, bool, str, type(None)):
+        return v
+    if t is tuple:
+        return tuple(_copy(x) for x in v)
+    if t is list:
+        return [_copy(x) for x in v]
+    if t is dict:
+        return {k: _copy(x) for k, x in v.items()}
+    return copy.deepcopy(v)
 
 
 def _rcond(info: np.ndarray) -> float:

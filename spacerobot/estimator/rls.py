@@ -8,9 +8,20 @@ one sample at a time, with cost independent of the number of samples.
 """
 from __future__ import annotations
 
+import copy
 from typing import Callable
 
 import numpy as np
+
+
+def _copy_attrs(obj, memo):
+    """Deep copy of a solver object: arrays by ``ndarray.copy``, the rest by ``deepcopy``
+    (much cheaper than the generic deepcopy of the object; same result)."""
+    new = obj.__class__.__new__(obj.__class__)
+    memo[id(obj)] = new
+    for k, v in obj.__dict__.items():
+        new.__dict__[k] = v.copy() if type(v) is np.ndarray else copy.deepcopy(v, memo)
+    return new
 
 
 class RLS:
@@ -27,6 +38,9 @@ class RLS:
         self.lam = float(lam)
         self.ssr = 0.0      # weighted sum of squared normalised a-priori residuals
         self.rows = 0
+
+    def __deepcopy__(self, memo):
+        return _copy_attrs(self, memo)
 
     def update(self, H: np.ndarray, y: np.ndarray):
         """One sample. Returns the a-priori residual ``y - H x`` and the gain ``K``."""
@@ -83,6 +97,9 @@ class ModifiedRLS:
         self.ang = RLS(theta0, P_th0, lam)
         self.D_mu = D(self.lin.x)
         self.M = np.zeros((len(theta0), len(self.D_mu)))   # M(0) = 0
+
+    def __deepcopy__(self, memo):
+        return _copy_attrs(self, memo)
 
     @property
     def mu(self) -> np.ndarray:
