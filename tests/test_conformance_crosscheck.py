@@ -169,3 +169,14 @@ def test_register_adds_the_crosscheck_subcommand(tmp_path, monkeypatch):
     folder = out / "fmus" / "2.0" / "cs"
     assert len(list(folder.rglob("*_ref.csv"))) == 2
     assert not (out / "_build").exists()
+
+
+def test_spacerobot_cli_runs_crosscheck(tmp_path, capsys):
+    cli = pytest.importorskip("spacerobot.system.cli")
+    out = tmp_path / "cli"
+    assert cli.main(["crosscheck", "--robot", "spatial", "--out", str(out),
+                     "--stop-time", "0.3"]) == 0
+    printed = capsys.readouterr().out.split()
+    est = next(p for p in printed if p.endswith("SpaceRobotEstimator_in.csv"))
+    data = xc.read_crosscheck_csv(Path(est))
+    assert len(data) == 4 and "arm.q[6]" in data.dtype.names      # the spatial robot
