@@ -165,6 +165,10 @@ def test_rerun_skips_finished_points(sweep_2x2, ssp, tmp_path):
     summary = run_sweep(points, out, workers=2, ssp=ssp, progress=False, runner=RUNNER)
     assert (summary.skipped, summary.submitted) == (4, 0), summary
     assert out.read_bytes() == before
+    # a second sweep cannot write to a table that one is writing to
+    with sw._exclusive(out):
+        with pytest.raises(sw.SweepLocked, match="another sweep"):
+            run_sweep(points, out, workers=2, ssp=ssp, progress=False, runner=RUNNER)
 
     # an interrupted sweep: the last point's row never made it, and a partial line was left
     lines = before.decode().splitlines(keepends=True)

@@ -54,6 +54,7 @@ Example TOML (``docs/velocity_study.toml``)::
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import hashlib
 import importlib
@@ -432,8 +433,45 @@ def run_sweep(points: Sequence[Point], out_csv, *, workers: int = 2,
     ssp : ``{robot: path}`` of already built .ssp files (skips the build for those robots).
     progress : show a tqdm progress bar.
     runner, builder : ``"module:function"`` of the co-simulation runner and of the SSP build.
+
+    Only one sweep at a time may write a table: a second one on the same ``out_csv`` raises
+    :class:`SweepLocked` (an advisory lock on ``<out_csv>.lock``, held while the sweep runs).
     """
     out = Path(out_csv)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with _exclusive(out):
+        return _run_sweep(points, out, workers=workers, scheduler=scheduler, client=client,
+                          build_dir=build_dir, ssp=ssp, progress=progress, runner=runner,
+                          builder=builder)
+
+
+class SweepLocked(RuntimeError):
+    """Another sweep is writing to the same table."""
+
+
+@contextlib.contextmanager
+def _exclusive(out: Path):
+    """Advisory exclusive lock on ``<out>.lock`` (POSIX; elsewhere no lock)."""
+    try:
+        import fcntl
+    except ImportError:              # pragma: no cover - Windows
+        yield
+        return
+    lock = out.with_name(out.name + ".lock")
+    with lock.open("a") as f:
+        try:
+            fcntl.flock(f.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise SweepLocked(f"another sweep is writing to {out} (lock {lock} is held); "
+                               f"wait for it or choose another output file") from None
+        try:
+            yield
+        finally:
+            fcntl.flock(f.fileno(), fcntl.LOCK_UN)
+
+
+def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp, progress,
+               runner, builder) -> SweepSummary:
     summary = SweepSummary(csv=str(out))
     uniq: Dict[str, Point] = {}
     for p in points:
@@ -769,9 +807,18 @@ def cli_sweep(args: argparse.Namespace) -> int:
         for p in points:
             print(p.id, json.dumps(p.canonical(), sort_keys=True))
         return 0
-    summary = run_sweep(points, cfg["out"], workers=cfg["workers"], scheduler=cfg["scheduler"],
-                        build_dir=cfg["build_dir"], progress=not getattr(args, "no_progress",
-                                                                         False))
+    try:
+        summary = run_sweep(points, cfg["out"], workers=cfg["workers"],
+                            scheduler=cfg["scheduler"], build_dir=cfg["build_dir"],
+                            progress=not getattr(args, "no_progress", False))
+    except SweepLocked as e:
+        print(f"spacerobot sweep: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        done = sum(r["status"] == "ok" for r in read_table(cfg["out"]))
+        print(f"spacerobot sweep: interrupted; {cfg['out']} holds {done} finished point(s); "
+              f"run the same command again to resume", file=sys.stderr)
+        return 130
     print(summary)
     if cfg.get("plot"):
         print("plot:", plot_sweep(cfg["out"], cfg["plot"]))
