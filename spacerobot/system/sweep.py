@@ -17,7 +17,10 @@ Results table (CSV, one row per point, appended and flushed as each point finish
 ``sweep_id``
     stable hash of the point's parameters (:func:`point_id`); a re-run skips every point whose
     id is already in the table with ``status == "ok"`` and re-runs failed ones (their old row is
-    dropped first, so that the table keeps one row per point).
+    dropped first, so that the table keeps one row per point). Rows are written by the
+    process that runs the sweep, one flushed line per finished point, so an interrupted sweep
+    (Ctrl-C, a crash) loses only the points in flight; ``<table>.lock`` keeps a second sweep
+    from writing to the same table at the same time.
 ``robot, target, method, accel_source, v0_x, v0_y, v0_z, v0_norm, F_max, stop_time, overrides``
     the point's parameters (``overrides``: JSON of any extra FMI overrides, ``{}`` if none).
 ``status, error, wall_time, t_end, worker``
