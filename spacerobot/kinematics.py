@@ -128,7 +128,7 @@ class ArmKinematics:
         self._m3 = self.mass[:, None]
         self._tri = np.tril(np.ones((n + 2, n + 2)))
 
-    def compute(self, r_S, A_B, v_S, omega_B, a_S, alpha_B, q, qd, qdd):
+    def compute(self, r_S, A_B, v_S, omega_B, a_S, alpha_B, q, qd, qdd, accelerations=True):
         """Link centre-of-mass motion and end-effector frame motion.
 
         Parameters
@@ -137,6 +137,8 @@ class ArmKinematics:
         A_B : (3, 3)           base DCM body -> inertial
         omega_B, alpha_B : (3,) base angular velocity and acceleration, base frame
         q, qd, qdd : (n,)      joint angles, rates, accelerations
+        accelerations : bool   False: skip the accelerations (``a``, ``beta`` are then None;
+                               ``a_S``, ``alpha_B``, ``qdd`` are not used)
 
         Returns
         -------
@@ -147,9 +149,7 @@ class ArmKinematics:
         A_B = np.asarray(A_B, float)
         q = np.asarray(q, float)
         qd = np.asarray(qd, float)[:, None]
-        qdd = np.asarray(qdd, float)[:, None]
         w0 = A_B.dot(np.asarray(omega_B, float))
-        b0 = A_B.dot(np.asarray(alpha_B, float))  # d/dt(A w_B) = A dw_B/dt since w x w = 0
         # joint rotations and the DCM chain
         coef = self._coef
         coef[:, 0, 1] = np.sin(q)
@@ -163,37 +163,46 @@ class ArmKinematics:
         D = Wl[:, :, 0]                          # offset of frame j+1 (E for j = n) from frame j
         Z = Wl[1:, :, 1]
         C = Wl[1:, :, 2]
-        # angular velocity and acceleration of frames 0..n (running sums as products with a
-        # lower-triangular matrix of ones; row 0 of the summands is the base's value)
+        # angular velocity (and acceleration) of frames 0..n: running sums as products with a
+        # lower-triangular matrix of ones; row 0 of the summands is the base's value
         T = self._tri
         Zs = np.empty((n + 1, 3))
         Zs[0] = w0
         Zqd = np.multiply(Z, qd, out=Zs[1:])
         Wall = T[1:, 1:].dot(Zs)
         Sw = skew_stack(Wall)                                   # [w_j]x, j = 0..n
-        Bs = np.empty((n + 1, 3))
-        Bs[0] = b0
-        np.multiply(Z, qdd, out=Bs[1:])
-        Bs[1:] += np.matmul(Sw[:n], Zqd[:, :, None])[:, :, 0]   # + w_p x z qd
-        Ball = T[1:, 1:].dot(Bs)
         # frame j carries d_j (to the next frame) and c_j (its link's centre of mass)
         DC = Wl[:, :, 0::2]
         X1 = np.matmul(Sw, DC)                                  # w x d, w x c
-        X2 = np.matmul(skew_stack(Ball), DC)                    # b x d, b x c
-        X2 += np.matmul(Sw, X1)                                 # + w x (w x d), w x (w x c)
-        # frame origins: r_j, v_j, a_j (j = 0..n), then E
-        inc = np.empty((3, n + 2, 3))
-        inc[0, 0], inc[1, 0], inc[2, 0] = r_S, v_S, a_S
-        inc[0, 1:], inc[1, 1:], inc[2, 1:] = D, X1[:, :, 0], X2[:, :, 0]
-        O = np.matmul(T, inc)
+        A = Aall[1:]
+        w = Wall[1:]
+        nrow = 3 if accelerations else 2
+        inc = np.empty((nrow, n + 2, 3))                        # r_j, v_j (a_j) increments
+        inc[0, 0], inc[1, 0] = r_S, v_S
+        inc[0, 1:], inc[1, 1:] = D, X1[:, :, 0]
+        if accelerations:
+            b0 = A_B.dot(np.asarray(alpha_B, float))  # d/dt(A w_B) = A dw_B/dt: w x w = 0
+            Bs = np.empty((n + 1, 3))
+            Bs[0] = b0
+            np.multiply(Z, np.asarray(qdd, float)[:, None], out=Bs[1:])
+            Bs[1:] += np.matmul(Sw[:n], Zqd[:, :, None])[:, :, 0]   # + w_p x z qd
+            Ball = T[1:, 1:].dot(Bs)
+            X2 = np.matmul(skew_stack(Ball), DC)                # b x d, b x c
+            X2 += np.matmul(Sw, X1)                             # + w x (w x d), w x (w x c)
+            inc[2, 0] = a_S
+            inc[2, 1:] = X2[:, :, 0]
+        O = np.matmul(T, inc)                  # frame origins 0..n and E
         # centres of mass of the links
         r = O[0, 1:n + 1] + C
         v = O[1, 1:n + 1] + X1[1:, :, 1]
-        a = O[2, 1:n + 1] + X2[1:, :, 1]
-        w, beta = Wall[1:], Ball[1:]
-        A = Aall[1:]
+        if accelerations:
+            a = O[2, 1:n + 1] + X2[1:, :, 1]
+            beta = Ball[1:]
+            ee_a, ee_beta = O[2, n + 1], beta[n - 1]
+        else:
+            a = beta = ee_a = ee_beta = None
         ee = FrameMotion(r=O[0, n + 1], A=A[n - 1].dot(self.ee_R), v=O[1, n + 1], w=w[n - 1],
-                         a=O[2, n + 1], beta=beta[n - 1])
+                         a=ee_a, beta=ee_beta)
         return BodyMotion(r, v, a, A, w, beta), ee
 
     # -- sums over the known arm links ---------------------------------------------------

@@ -92,6 +92,8 @@ class Identifier:
         self._mu_in = np.setdiff1d(np.arange(8), self.mu_idx)
         self._th_in = np.setdiff1d(np.arange(12), self.th_idx)
         self._all_rows = len(self.rows_lin) == 3 and len(self.rows_ang) == 3
+        self._cov_ix = (np.ix_(self.mu_idx, self.mu_idx), np.ix_(self.th_idx, np.arange(8)),
+                        np.ix_(self.th_idx, self.th_idx))
         mu0, th0 = self._paper_vector(guess)
         self.mu_full, self.th_full = mu0, th0
         if solver == "paper":
@@ -147,9 +149,11 @@ class Identifier:
     def _bodies(self, s: dict):
         """Frame-origin motion of base (at S) and target (at E), and the arm links' motion."""
         A_B = s["A"]
+        acc = self.method == "force"          # the momentum form needs no accelerations
         links, ee = self.kin.compute(s["r_S"], A_B, s["v_S"], s["omega_B"], s["a_S"], s["alpha_B"],
-                                     s["q"], s["qd"], s["qdd"])
-        base = (s["r_S"], A_B, s["v_S"], A_B.dot(s["omega_B"]), s["a_S"], A_B.dot(s["alpha_B"]))
+                                     s["q"], s["qd"], s["qdd"], accelerations=acc)
+        base = (s["r_S"], A_B, s["v_S"], A_B.dot(s["omega_B"]), s["a_S"],
+                A_B.dot(s["alpha_B"]) if acc else None)
         target = (ee.r, ee.A, ee.v, ee.w, ee.a, ee.beta)
         return base, target, links
 
@@ -412,20 +416,28 @@ class Identifier:
         g0 = self.guess
         if self.solver == "paper":
             p = len(self.mu_idx)
-            cov = np.zeros((20, 20))
-            Cmu_full = g0.P0_mu * np.eye(8)
+            full = p == 8 and len(self.th_idx) == 12
+            cov = np.empty((20, 20))
             Cmu = self.rls.lin.P * self.rls.lin.sigma2(p)
-            Cmu_full[np.ix_(self.mu_idx, self.mu_idx)] = Cmu
-            # theta depends on mu through M: d theta / d mu = M dD/dmu
-            Tm = np.zeros((12, 8))
-            Tm[np.ix_(self.th_idx, np.arange(8))] = self.rls.M @ rg.D_jacobian(self.mu_full)
-            Cth = g0.P0_theta * np.eye(12)
-            Cth[np.ix_(self.th_idx, self.th_idx)] = self.rls.ang.P * self.rls.ang.sigma2(
-                len(self.th_idx))
+            TmA = self.rls.M.dot(rg.D_jacobian(self.mu_full))
+            Cth = self.rls.ang.P * self.rls.ang.sigma2(len(self.th_idx))
+            if full:
+                Cmu_full, Tm = Cmu, TmA
+            else:
+                ix = self._cov_ix
+                Cmu_full = g0.P0_mu * np.eye(8)
+                Cmu_full[ix[0]] = Cmu
+                # theta depends on mu through M: d theta / d mu = M dD/dmu
+                Tm = np.zeros((12, 8))
+                Tm[ix[1]] = TmA
+                Cth_full = g0.P0_theta * np.eye(12)
+                Cth_full[ix[2]] = Cth
+                Cth = Cth_full
             cov[:8, :8] = Cmu_full
-            cov[8:, :8] = Tm @ Cmu_full
-            cov[:8, 8:] = cov[8:, :8].T
-            cov[8:, 8:] = Cth + Tm @ Cmu_full @ Tm.T
+            TC = Tm.dot(Cmu_full)
+            cov[8:, :8] = TC
+            cov[:8, 8:] = TC.T
+            cov[8:, 8:] = Cth + TC.dot(Tm.T)
             z = np.concatenate([self.mu_full, self.th_full])
 
             def g(z):

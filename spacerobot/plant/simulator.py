@@ -55,6 +55,7 @@ class Plant:
                  v0, omega0, h: float = 1e-3):
         if not (h > 0.0 and math.isfinite(h)):
             raise ValueError(f"h must be a finite step > 0 s, got {h}")
+        self._init_args = (robot, base, target, controller, tuple(v0), tuple(omega0), h)
         self.pm: PlantModel = build_model(robot, base, target)
         self.data = self.pm.model.createData()
         self.controller = controller
@@ -80,13 +81,22 @@ class Plant:
         self._vs = np.empty(self._nv)                        # stage velocity (owned, aligned)
         self._gen = np.zeros(self._nv)                       # generalised force
         self._ctrl = control.ArmController(pm, controller, self.q_home)
-        self._stage = self._stage_planar if pm.planar else self._stage_spatial
         self.t = 0.0
         self._x = np.concatenate([np.zeros(6), q, v])
         self._publish()
         self._u: Controls | None = None
         self._held = None          # (F and M as 6 floats, tau, a) of the held controls
-        self._FM = None
+        self._step = self._make_step()
+
+    # -- copies (the integrator's closures refer to this instance's buffers) -------------------
+    def __deepcopy__(self, memo):
+        new = Plant(*self._init_args)
+        new.set_state(self.get_state())
+        memo[id(self)] = new
+        return new
+
+    def __reduce__(self):
+        return _restore_plant, (self._init_args, self.get_state())
 
     # -- state -----------------------------------------------------------------------------
     def _publish(self) -> None:
@@ -173,87 +183,107 @@ class Plant:
         return (F0, F1, F2, M0, M1, M2), tau, acc.copy(), x
 
     # -- integration -------------------------------------------------------------------------
-    def _stage_planar(self, xs: np.ndarray, row: np.ndarray, a) -> None:
-        """Fill ``row`` with the derivative of ``x`` at the stage state ``xs``.
-
-        ``a`` is the generalised acceleration if already known (stage 1), else None.
+    def _make_stage(self):
+        """The stage function ``stage(xs, row, FM, a)``: fills ``row`` with the derivative of the
+        state vector at the stage state ``xs`` under the held thrust ``FM`` (6 floats) and the
+        held joint torques (in ``self._gen``); ``a`` is the generalised acceleration if already
+        known (stage 1), else None. A closure, so that the hot loop does no attribute lookups.
         """
-        oq, ov = self._oq, self._ov
-        px, py, c, s = xs[oq:oq + 4].tolist()
-        vx, vy, wz = xs[ov:ov + 3].tolist()
-        F0, F1, F2, M0, M1, M2 = self._FM
-        k = 1.0 / math.hypot(c, s)
-        cn, sn = c * k, s * k
-        if a is None:
-            qn, vs, gen = self._qn, self._vs, self._gen
-            qn[:] = xs[oq:ov]
-            nrm = math.sqrt(c * c + s * s)
-            qn[2] = c / nrm
-            qn[3] = s / nrm
-            vs[:] = xs[ov:]
-            gen[0] = cn * F0 + sn * F1
-            gen[1] = -sn * F0 + cn * F1
-            gen[2] = M2
-            a = pin.aba(self.pm.model, self.data, qn, vs, gen)
-        row[0:self._nsc] = (F0, F1, F2, M0 + (py * F2 - 0.0 * F1), M1 + (0.0 * F0 - px * F2),
-                            M2 + (px * F1 - py * F0), cn * vx - sn * vy, sn * vx + cn * vy,
-                            -s * wz, c * wz)
-        row[self._nsc:ov] = xs[ov + 3:]
-        row[ov:] = a
+        model, data, aba = self.pm.model, self.data, pin.aba
+        qn, vs, gen = self._qn, self._vs, self._gen
+        oq, ov, nsc = self._oq, self._ov, self._nsc
+        sqrt, hypot = math.sqrt, math.hypot
 
-    def _stage_spatial(self, xs: np.ndarray, row: np.ndarray, a) -> None:
-        oq, ov = self._oq, self._ov
-        rx, ry, rz, x, y, z, w = xs[oq:oq + 7].tolist()
-        vx, vy, vz, wx, wy, wz = xs[ov:ov + 6].tolist()
-        F0, F1, F2, M0, M1, M2 = self._FM
-        a00, a01, a02, a10, a11, a12, a20, a21, a22 = _quat_dcm(x, y, z, w)
-        if a is None:
-            qn, vs, gen = self._qn, self._vs, self._gen
-            qn[:] = xs[oq:ov]
-            nrm = math.sqrt(x * x + y * y + z * z + w * w)
-            qn[3:7] = (x / nrm, y / nrm, z / nrm, w / nrm)
-            vs[:] = xs[ov:]
-            gen[0:6] = (a00 * F0 + a10 * F1 + a20 * F2, a01 * F0 + a11 * F1 + a21 * F2,
-                        a02 * F0 + a12 * F1 + a22 * F2, a00 * M0 + a10 * M1 + a20 * M2,
-                        a01 * M0 + a11 * M1 + a21 * M2, a02 * M0 + a12 * M1 + a22 * M2)
-            a = pin.aba(self.pm.model, self.data, qn, vs, gen)
-        # dq/dt: A v_l for the position; 1/2 q (x) (0, w) for the quaternion (body-frame w)
-        row[0:self._nsc] = (F0, F1, F2, M0 + (ry * F2 - rz * F1), M1 + (rz * F0 - rx * F2),
-                            M2 + (rx * F1 - ry * F0),
-                            a00 * vx + a01 * vy + a02 * vz, a10 * vx + a11 * vy + a12 * vz,
-                            a20 * vx + a21 * vy + a22 * vz,
-                            0.5 * (w * wx + y * wz - z * wy), 0.5 * (w * wy + z * wx - x * wz),
-                            0.5 * (w * wz + x * wy - y * wx), -0.5 * (x * wx + y * wy + z * wz))
-        row[self._nsc:ov] = xs[ov + 6:]
-        row[ov:] = a
+        def stage_planar(xs, row, FM, a):
+            px, py, c, s = xs[oq:oq + 4].tolist()
+            vx, vy, wz = xs[ov:ov + 3].tolist()
+            F0, F1, F2, M0, M1, M2 = FM
+            k = 1.0 / hypot(c, s)
+            cn, sn = c * k, s * k
+            if a is None:
+                qn[:] = xs[oq:ov]
+                nrm = sqrt(c * c + s * s)
+                qn[2] = c / nrm
+                qn[3] = s / nrm
+                vs[:] = xs[ov:]
+                gen[0] = cn * F0 + sn * F1
+                gen[1] = -sn * F0 + cn * F1
+                gen[2] = M2
+                a = aba(model, data, qn, vs, gen)
+            # [dJ = F, dH = M + r_S x F, dq/dt of the planar root joint]
+            row[0:nsc] = (F0, F1, F2, M0 + (py * F2 - 0.0 * F1), M1 + (0.0 * F0 - px * F2),
+                          M2 + (px * F1 - py * F0), cn * vx - sn * vy, sn * vx + cn * vy,
+                          -s * wz, c * wz)
+            row[nsc:ov] = xs[ov + 3:]
+            row[ov:] = a
 
-    def _step(self, x: np.ndarray, dt: float) -> np.ndarray:
-        """One RK4 step of ``x`` (not modified); returns the new state vector."""
-        held = self._held
-        if held is None or held[3] is not x:
-            held = self._controls(x)
-        self._FM = held[0]
-        self._gen[self.pm.nb:] = held[1]  # joint torques, held over the step
-        K, xs, tmp, stage = self._K, self._xs, self._tmp, self._stage
-        stage(x, K[0], held[2])           # stage 1: the accelerations are in the controls
-        hdt = 0.5 * dt
-        np.add(x, np.multiply(K[0], hdt, out=tmp), out=xs)
-        stage(xs, K[1], None)
-        np.add(x, np.multiply(K[1], hdt, out=tmp), out=xs)
-        stage(xs, K[2], None)
-        np.add(x, np.multiply(K[2], dt, out=tmp), out=xs)
-        stage(xs, K[3], None)
-        xn = _RK4_W.dot(K)
-        xn *= dt / 6.0
-        xn += x
-        # restore the unit norm of the quaternion / (cos, sin) pair
-        oq = self._oq
-        sl = slice(oq + 2, oq + 4) if self.pm.planar else slice(oq + 3, oq + 7)
-        r = xn[sl]
-        r /= math.sqrt(r.dot(r))
-        self._u = None
-        self._held = None
-        return xn
+        def stage_spatial(xs, row, FM, a):
+            rx, ry, rz, x, y, z, w = xs[oq:oq + 7].tolist()
+            vx, vy, vz, wx, wy, wz = xs[ov:ov + 6].tolist()
+            F0, F1, F2, M0, M1, M2 = FM
+            a00, a01, a02, a10, a11, a12, a20, a21, a22 = _quat_dcm(x, y, z, w)
+            if a is None:
+                qn[:] = xs[oq:ov]
+                nrm = sqrt(x * x + y * y + z * z + w * w)
+                qn[3:7] = (x / nrm, y / nrm, z / nrm, w / nrm)
+                vs[:] = xs[ov:]
+                gen[0:6] = (a00 * F0 + a10 * F1 + a20 * F2, a01 * F0 + a11 * F1 + a21 * F2,
+                            a02 * F0 + a12 * F1 + a22 * F2, a00 * M0 + a10 * M1 + a20 * M2,
+                            a01 * M0 + a11 * M1 + a21 * M2, a02 * M0 + a12 * M1 + a22 * M2)
+                a = aba(model, data, qn, vs, gen)
+            # [dJ, dH, A v_l for the position, 1/2 q (x) (0, w) for the quaternion]
+            row[0:nsc] = (F0, F1, F2, M0 + (ry * F2 - rz * F1), M1 + (rz * F0 - rx * F2),
+                          M2 + (rx * F1 - ry * F0),
+                          a00 * vx + a01 * vy + a02 * vz, a10 * vx + a11 * vy + a12 * vz,
+                          a20 * vx + a21 * vy + a22 * vz,
+                          0.5 * (w * wx + y * wz - z * wy), 0.5 * (w * wy + z * wx - x * wz),
+                          0.5 * (w * wz + x * wy - y * wx), -0.5 * (x * wx + y * wy + z * wz))
+            row[nsc:ov] = xs[ov + 6:]
+            row[ov:] = a
+
+        return stage_planar if self.pm.planar else stage_spatial
+
+    def _make_step(self):
+        """The RK4 step ``step(x, dt) -> x_new`` as a closure (see :meth:`_make_stage`)."""
+        K, xs, tmp, gen = self._K, self._xs, self._tmp, self._gen
+        row0, row1, row2, row3 = K[0], K[1], K[2], K[3]
+        stage = self._make_stage()
+        nb, oq = self.pm.nb, self._oq
+        planar = self.pm.planar
+        add, mul, sqrt = np.add, np.multiply, math.sqrt
+        W = _RK4_W
+
+        def step(x, dt):
+            held = self._held
+            if held is None or held[3] is not x:
+                held = self._controls(x)
+            FM = held[0]
+            gen[nb:] = held[1]                 # joint torques, held over the step
+            stage(x, row0, FM, held[2])        # stage 1: the accelerations are in the controls
+            hdt = 0.5 * dt
+            add(x, mul(row0, hdt, out=tmp), out=xs)
+            stage(xs, row1, FM, None)
+            add(x, mul(row1, hdt, out=tmp), out=xs)
+            stage(xs, row2, FM, None)
+            add(x, mul(row2, dt, out=tmp), out=xs)
+            stage(xs, row3, FM, None)
+            xn = W.dot(K)
+            xn *= dt / 6.0
+            xn += x
+            # restore the unit norm of the quaternion / (cos, sin) pair
+            if planar:
+                c, s = xn[oq + 2:oq + 4].tolist()
+                nrm = sqrt(c * c + s * s)
+                xn[oq + 2] = c / nrm
+                xn[oq + 3] = s / nrm
+            else:
+                r = xn[oq + 3:oq + 7]
+                r /= sqrt(r.dot(r))
+            self._u = None
+            self._held = None
+            return xn
+
+        return step
 
     def rk4_step(self, dt: float) -> None:
         """One classic RK4 step of length ``dt`` with the controls held (zero-order hold)."""
@@ -305,6 +335,12 @@ class Plant:
             "F": u.F.copy(), "M": u.M.copy(), "J": self.J.copy(), "H": self.H.copy(),
             "P": P, "L": L_O, "tau": u.tau.copy(),
         }
+
+
+def _restore_plant(args, state) -> Plant:
+    p = Plant(*args)
+    p.set_state(state)
+    return p
 
 
 def _quat_dcm(qx, qy, qz, qw):
