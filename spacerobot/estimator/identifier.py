@@ -502,10 +502,14 @@ def _copy(v):
 
 
 def _rcond(info: np.ndarray) -> float:
-    d = np.sqrt(np.clip(np.diag(info), 0.0, None))
-    if np.any(d == 0.0):
-        return 0.0
-    lam = np.linalg.eigvalsh(info / np.outer(d, d))
+    dg = info.diagonal()
+    if not min(dg.tolist()) > 0.0:              # a zero (or negative/NaN) diagonal entry
+        d = np.sqrt(np.clip(dg, 0.0, None))
+        if np.any(d == 0.0):
+            return 0.0
+    else:
+        d = np.sqrt(dg)
+    lam = np.linalg.eigvalsh(info / (d[:, None] * d))
     return float(max(lam[0], 0.0) / lam[-1])
 
 
