@@ -619,6 +619,29 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
                    rows))
     L.append("\nRatio = co-simulation CPU time / bare RK4 CPU time for the same simulated time "
              "(both in this process). Real-time factor = simulated seconds per second.\n")
+    base_file = HERE / "baseline_before.json"
+    if base_file.exists():
+        base = json.loads(base_file.read_text())
+        meta = base.get("_meta", {})
+        L.append(f"Before the performance work ({meta.get('what', '')}; {meta.get('date', '')}), "
+                 "against this run:\n")
+        rows = []
+        for r in speed:
+            if r not in base:
+                continue
+            b, v = base[r], speed[r]
+            bb, vb = b["breakdown"], v["breakdown"]
+            rows.append((r, f"{b['ratio']:.2f} -> **{v['ratio']:.2f}**",
+                         f"{b['cosim_us_per_step']:.0f} -> {v['cosim_us_per_step']:.0f}",
+                         f"{b['rtf_cpu']:.1f} -> {v['rtf_cpu']:.1f}",
+                         f"{bb['plant_core'] / 100:.0f} -> {vb['plant_core'] / 100:.1f}",
+                         f"{bb['estimator_core']:.0f} -> {vb['estimator_core']:.0f}",
+                         f"{bb['estimator_doStep']:.0f} -> {vb['estimator_doStep']:.0f}",
+                         f"{bb['record_sd']:.0f} -> {vb['record_sd']:.0f}"))
+        L.append(table(["robot", "ratio to bare RK4", "co-simulation [CPU us / 1 ms step]",
+                        "real-time factor (CPU)", "plant core [us / RK4 step]",
+                        "estimator core [us / sample]", "estimator FMU doStep [us]",
+                        "standard deviations read [us / 0.1 s]"], rows) + "\n")
     L.append("### Where the time goes (per 0.1 s communication step, CPU microseconds)\n")
     rows = []
     keys = [("plant_core", "plant core alone: `Plant.advance(0.1)` (100 RK4 steps)"),
