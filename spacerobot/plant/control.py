@@ -54,6 +54,24 @@ def bounded_scalar(x: float, K: float, x_max: float, u_max: float) -> float:
     return kx
 
 
+def thruster_scalars(hg, c: Controller):
+    """:func:`thruster_command` on floats: ``hg = [P, L_c]`` (6 floats) -> ``(F, M)`` (6 floats)."""
+    out = []
+    for i, x in enumerate(hg):
+        K, x_max, u_max = (c.K_F, c.P_max, c.F_max) if i < 3 else (c.K_M, c.L_max, c.M_max)
+        kx = K * x
+        if abs(x) >= x_max:
+            u = u_max if kx > 0.0 else (-u_max if kx < 0.0 else 0.0 * u_max)
+        elif kx < -u_max:
+            u = -u_max
+        elif kx > u_max:
+            u = u_max
+        else:
+            u = kx
+        out.append(u)
+    return out
+
+
 def thruster_command(P: np.ndarray, L_c: np.ndarray, c: Controller):
     """Thruster force at S and torque, inertial frame, from the system momentum.
 

@@ -158,14 +158,8 @@ class Plant:
         q[:] = x[self._oq:self._ov]
         v[:] = x[self._ov:]
         hg = pin.computeCentroidalMomentum(model, data, q, v).vector.tolist()
-        Pb = c.P_max
-        F0 = control.bounded_scalar(hg[0], c.K_F, Pb, c.F_max)      # eq. 41
-        F1 = control.bounded_scalar(hg[1], c.K_F, Pb, c.F_max)
-        F2 = control.bounded_scalar(hg[2], c.K_F, Pb, c.F_max)
-        Lb = c.L_max
-        M0 = control.bounded_scalar(hg[3], c.K_M, Lb, c.M_max)      # eq. 40
-        M1 = control.bounded_scalar(hg[4], c.K_M, Lb, c.M_max)
-        M2 = control.bounded_scalar(hg[5], c.K_M, Lb, c.M_max)
+        # eq. 41 on the linear momentum, eq. 40 on the angular momentum about the CoM
+        F0, F1, F2, M0, M1, M2 = control.thruster_scalars(hg, c)
         gen = self._gen
         nb = pm.nb
         if pm.planar:
@@ -194,9 +188,12 @@ class Plant:
         oq, ov, nsc = self._oq, self._ov, self._nsc
         sqrt, hypot = math.sqrt, math.hypot
 
+        nq = ov - oq
+
         def stage_planar(xs, row, FM, a):
-            px, py, c, s = xs[oq:oq + 4].tolist()
-            vx, vy, wz = xs[ov:ov + 3].tolist()
+            st = xs[oq:ov + 3].tolist()            # q, then the base part of v
+            px, py, c, s = st[0:4]
+            vx, vy, wz = st[nq:nq + 3]
             F0, F1, F2, M0, M1, M2 = FM
             k = 1.0 / hypot(c, s)
             cn, sn = c * k, s * k
@@ -218,8 +215,9 @@ class Plant:
             row[ov:] = a
 
         def stage_spatial(xs, row, FM, a):
-            rx, ry, rz, x, y, z, w = xs[oq:oq + 7].tolist()
-            vx, vy, vz, wx, wy, wz = xs[ov:ov + 6].tolist()
+            st = xs[oq:ov + 6].tolist()            # q, then the base part of v
+            rx, ry, rz, x, y, z, w = st[0:7]
+            vx, vy, vz, wx, wy, wz = st[nq:nq + 6]
             F0, F1, F2, M0, M1, M2 = FM
             a00, a01, a02, a10, a11, a12, a20, a21, a22 = _quat_dcm(x, y, z, w)
             if a is None:
