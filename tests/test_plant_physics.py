@@ -58,11 +58,13 @@ def rel_dev(series, ref, scale):
 # thrusters off: conservation
 # ------------------------------------------------------------------------------------------------
 
-#: Angular-momentum drift allowed for the spatial free run over 20 s at h = 1 ms. It is RK4
-#: truncation error, not physics: the drift is 3.3e-9 at 20 s, and halving h divides it by ~50
-#: (checked by test_free_run_spatial_drift_is_truncation_error). The planar run and the linear
-#: momentum stay at round-off (1e-13).
-SPATIAL_L_TOL = 1e-8
+#: Internal step of the free runs. With the thrusters off the spatial system keeps its
+#: ~480 N m s about the CoM, which the arm cannot hold: the arm law then drives the base to
+#: ~2 rad/s and the joints to ~5 rad/s, and at the paper's h = 1 ms RK4 truncation makes L drift
+#: 3.3e-9 in 20 s. At h = 0.5 ms it stays below 1e-9 (the bound of issue #2); that the drift is
+#: truncation and not a leak is checked by test_free_run_spatial_drift_is_truncation_error.
+#: The planar run stays at round-off (1e-13) at h = 1 ms.
+FREE_RUN_H = {"planar": 1e-3, "spatial": 5e-4}
 
 
 @functools.lru_cache(maxsize=None)
@@ -70,7 +72,7 @@ def _free_run(robot):
     """Thrusters off, 20 s, outputs every 0.5 s (computed once per session and robot)."""
     sc = scenario(robot)
     off = dataclasses.replace(sc.controller, F_max=0.0, M_max=0.0)
-    sc, p = make_plant(robot, off)
+    sc, p = make_plant(robot, off, h=FREE_RUN_H[robot])
     out, _ = record(p, 20.0, 0.5)
     return robot, sc, out
 
@@ -100,26 +102,27 @@ def test_momentum_conserved_thrusters_off(free_run):
     eL = rel_dev([o["L"] for _, o in out], L0, np.linalg.norm(L0))
     print(f"{robot}: thrusters off 20 s, max |P - P0|/|P0| = {eP:.2e}, |L - L0|/|L0| = {eL:.2e}")
     assert eP <= 1e-9
-    assert eL <= (1e-9 if robot == "planar" else SPATIAL_L_TOL)
+    assert eL <= 1e-9
 
 
 def test_free_run_spatial_drift_is_truncation_error():
     """The spatial angular-momentum drift converges with h (RK4 order) -> it is no leak.
 
     A physical error (a spurious external force or torque, a wrong inertia in the momentum)
-    would not shrink when h is halved. Compared at 10 s: the h = 1 ms run of the fixture and
-    a run at h = 0.5 ms.
+    would not shrink when h is halved. Compared at 10 s: the h = 0.5 ms run of the fixture and
+    a run at the paper's h = 1 ms.
     """
     robot, sc, out = _free_run("spatial")
+    assert FREE_RUN_H["spatial"] == 5e-4
     t10 = [o for t, o in out if abs(t - 10.0) < 1e-9]
     assert len(t10) == 1
     L0 = out[0][1]["L"]
-    drift = {1e-3: np.linalg.norm(t10[0]["L"] - L0) / np.linalg.norm(L0)}
+    drift = {5e-4: np.linalg.norm(t10[0]["L"] - L0) / np.linalg.norm(L0)}
     off = dataclasses.replace(sc.controller, F_max=0.0, M_max=0.0)
-    _, p = make_plant("spatial", off, h=5e-4)
+    _, p = make_plant("spatial", off, h=1e-3)
     np.testing.assert_array_equal(p.outputs()["L"], L0)
     p.advance(10.0)
-    drift[5e-4] = np.linalg.norm(p.outputs()["L"] - L0) / np.linalg.norm(L0)
+    drift[1e-3] = np.linalg.norm(p.outputs()["L"] - L0) / np.linalg.norm(L0)
     print(f"spatial free run 10 s: L drift {drift[1e-3]:.2e} (h = 1 ms), {drift[5e-4]:.2e} (0.5 ms)")
     assert drift[1e-3] < 1e-8
     assert drift[5e-4] < drift[1e-3] / 8.0      # at least third order (RK4: 16)
