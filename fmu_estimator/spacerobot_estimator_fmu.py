@@ -29,6 +29,8 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._setup(estimator_vars)
         self.ident = None
         self._inputs = [(n, v.key) for n, v in self.interface.items() if v.causality == "input"]
+        self._input_names = [n for n, _ in self._inputs]
+        self._groups = _input_groups(self._inputs, self.robot.n_joints)
         self._sd = None
 
     def _initialise(self) -> None:
@@ -76,8 +78,7 @@ class SpaceRobotEstimator(InterfaceSlave):
             return ident.residual_lin
         if group == "residual_ang":
             return ident.residual_ang
-        exc = ident.excitation()
-        return exc[0] if group == "excitation_mu" else exc[1]
+        return None  # excitation: computed when read (see _get_output)
 
     def _get_output(self, name: str):
         self._ensure_current()
@@ -88,43 +89,27 @@ class SpaceRobotEstimator(InterfaceSlave):
             if self._sd is None:
                 self._sd = self.ident.std()
             return float(self._sd[_flat(var.key, 0 if var.key[0] == "sd_base" else 10)])
+        if var.key[0] in ("excitation_mu", "excitation_theta"):
+            if self.ident is None:
+                return 0.0
+            return self.ident.excitation()[0 if var.key[0] == "excitation_mu" else 1]
         return self._outputs.get(name, 0)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
         if not self._check_step(current_time, step_size, math.inf):
             return False
+        x = np.array([self.values[n] for n in self._input_names], dtype=float)
         meas = {}
-        for name, (group, idx) in self._inputs:
-            arr = meas.get(group)
-            if arr is None:
-                arr = meas[group] = np.zeros((3, 3) if group == "A" else
-                                             (self.robot.n_joints if group in ("q", "qd", "qdd")
-                                              else 3))
-            arr[idx] = float(self.values[name])
-        before = self.ident.get_state()
-        try:
-            with np.errstate(all="ignore"):
-                status = self.ident.update(current_time, meas)
-                self._refresh()
-            finite = _all_finite(self.ident.get_state())
-            error = "" if finite else "the update produced non-finite numbers"
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as e:
-            finite, error = False, f"the update failed ({type(e).__name__}: {e})"
-        if not finite:
-            # finite but huge inputs can overflow inside the RLS: undo the update entirely
-            rejected = self.ident.rejected + 1
-            self.ident.set_state(before)
-            self.ident.rejected, self.ident.status = rejected, 3
-            self.ident.message = f"{error}; are the inputs in SI units and of physical size?"
-            status = 3
+        for group, shape, pos in self._groups:
+            meas[group] = x[pos].reshape(shape)
+        status = self.ident.update(current_time, meas)    # never raises; undoes a bad update
+        self._refresh()
         if status in (3, 4):
             # name the FMI inputs at fault, not only the core's signal name
             bad = [n for n, _ in self._inputs if not math.isfinite(float(self.values[n]))]
             where = f" [input {', '.join(bad)}]" if bad else ""
             self.log(_escape(f"t = {current_time:.6g} s: sample skipped ({STATUS[status]}){where}: "
                              f"{self.ident.message}; estimates unchanged"), Fmi2Status.warning)
-        if not finite:
-            self._refresh()         # outputs of the restored state
         return True
 
     def _core_state(self):
@@ -140,19 +125,16 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._refresh()
 
 
-def _all_finite(obj) -> bool:
-    """True if every float in a (nested) core state is finite."""
-    if isinstance(obj, np.ndarray):
-        return obj.dtype.kind not in "fc" or bool(np.all(np.isfinite(obj)))
-    if isinstance(obj, float):
-        return math.isfinite(obj)
-    if isinstance(obj, dict):
-        return all(_all_finite(v) for v in obj.values())
-    if isinstance(obj, (list, tuple)):
-        return all(_all_finite(v) for v in obj)
-    if hasattr(obj, "__dict__"):
-        return _all_finite(vars(obj))
-    return True
+def _input_groups(inputs, n: int):
+    """``[(group, shape, positions)]``: where each measurement array's elements (row-major)
+    sit in the list of FMI inputs, so that a sample is gathered with one fancy index per group."""
+    shapes = {"A": (3, 3), "q": (n,), "qd": (n,), "qdd": (n,)}
+    out = {}
+    for pos, (_, (group, idx)) in enumerate(inputs):
+        shape = shapes.get(group, (3,))
+        flat = idx[0] * shape[1] + idx[1] if group == "A" else idx
+        out.setdefault(group, (shape, {}))[1][flat] = pos
+    return [(g, shape, np.array([p[k] for k in sorted(p)])) for g, (shape, p) in out.items()]
 
 
 def _flat(key, offset: int) -> int:

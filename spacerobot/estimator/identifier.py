@@ -251,6 +251,26 @@ class Identifier:
                 self.message = f"non-finite sample time {t}"
             self.rejected += 1
             return self.status
+        # finite but huge inputs can still overflow inside the equations or the RLS: the update
+        # is a transaction, undone entirely if anything non-finite comes out of it
+        before = self.get_state()
+        try:
+            with np.errstate(all="ignore"):
+                status = self._accept(t, s)
+            ok = self._finite()
+            why = "the update failed: it produced non-finite numbers"
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as e:
+            ok, why = False, f"the update failed ({type(e).__name__}: {e})"
+        if not ok:
+            rejected = self.rejected + 1
+            self.set_state(before)
+            self.rejected, self.status = rejected, REJECT_NONFINITE
+            self.message = f"{why}; are the inputs in SI units and of physical size?"
+            return self.status
+        return status
+
+    def _accept(self, t: float, s: dict) -> int:
+        """The update proper, for a validated sample (see :meth:`update`)."""
         if self.method == "force" and self.accel_source == "differenced":
             s = self._differenced(t, s)
             if s is None:
@@ -265,6 +285,17 @@ class Identifier:
         self.samples += 1
         self.status = ESTIMATING
         return self.status
+
+    def _finite(self) -> bool:
+        """True if the estimates, covariances, M and the momentum reference are all finite."""
+        r = self.rls
+        arrays = ([r.lin.x, r.lin.P, r.ang.x, r.ang.P, r.M, r.D_mu] if self.solver == "paper"
+                  else [r.x, r.P, self.pi_full])
+        arrays += [self.mu_full, self.th_full, self.info_lin, self.info_ang]
+        if self.reference is not None:
+            arrays += list(self.reference)
+        return all(np.isfinite(a).all() for a in arrays) and math.isfinite(
+            self.residual_lin + self.residual_ang)
 
     def _differenced(self, t: float, s: dict):
         """Replace the accelerations of the previous sample by 3-point central differences.
