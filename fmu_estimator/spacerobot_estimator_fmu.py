@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from _spacerobot_estimator.estimator import Identifier
+from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT
 from _spacerobot_estimator.fmi.slave import InterfaceSlave, _escape
 from _spacerobot_estimator.interface import (ACCEL_SOURCES, METHODS, SOLVERS, STATUS,
                                              estimator_vars)
@@ -106,7 +107,7 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._refresh()
         if status in (3, 4):
             # name the FMI inputs at fault, not only the core's signal name
-            bad = [n for n, _ in self._inputs if not math.isfinite(float(self.values[n]))]
+            bad = [n for n in self._input_names if not abs(float(self.values[n])) <= INPUT_LIMIT]
             where = f" [input {', '.join(bad)}]" if bad else ""
             self.log(_escape(f"t = {current_time:.6g} s: sample skipped ({STATUS[status]}){where}: "
                              f"{self.ident.message}; estimates unchanged"), Fmi2Status.warning)

@@ -163,7 +163,7 @@ STATUS = {
     0: "no sample yet",
     1: "reference sample stored (momentum method) or waiting for differencing history",
     2: "estimating: last sample used",
-    3: "last sample rejected: non-finite input",
+    3: "last sample rejected: non-finite or out-of-range input, or an update that overflowed",
     4: "last sample rejected: inconsistent input (base.A not a rotation matrix)",
 }
 

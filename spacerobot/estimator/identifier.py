@@ -23,6 +23,10 @@ ACCEL_SOURCES = ("measured", "differenced")
 #: measurement keys and their shapes (n = number of arm joints)
 KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
 
+#: largest accepted input magnitude (SI units): far beyond any spacecraft state, far below
+#: the magnitudes at which the equations' products would overflow
+INPUT_LIMIT = 1e15
+
 # status codes (see spacerobot.interface.STATUS)
 NO_SAMPLE, REFERENCE, ESTIMATING, REJECT_NONFINITE, REJECT_INCONSISTENT = 0, 1, 2, 3, 4
 
@@ -201,7 +205,7 @@ class Identifier:
         try:
             # fast path: one finiteness test over all inputs, explicit 3x3 rotation test
             flat = np.concatenate([s[k].ravel() for k in KEYS])
-            if math.isfinite(flat.dot(flat)):
+            if np.abs(flat).max() <= INPUT_LIMIT:    # also False for NaN / inf
                 a00, a01, a02, a10, a11, a12, a20, a21, a22 = s["A"].ravel().tolist()
                 err = max(abs(a00 * a00 + a10 * a10 + a20 * a20 - 1.0),
                           abs(a01 * a01 + a11 * a11 + a21 * a21 - 1.0),
@@ -220,6 +224,9 @@ class Identifier:
             x = np.asarray(s[k], float)
             if not np.all(np.isfinite(x)):
                 return REJECT_NONFINITE, f"non-finite input {k} = {np.array2string(x, precision=4)}"
+            if np.abs(x).max() > INPUT_LIMIT:
+                return REJECT_NONFINITE, (f"input {k} = {np.array2string(x, precision=4)} is beyond "
+                                          f"the physical range |x| <= {INPUT_LIMIT:g} (SI units?)")
         A = np.asarray(s["A"], float)
         err = np.abs(A.T @ A - np.eye(3)).max()
         if err > 1e-6 or np.linalg.det(A) <= 0.0:
@@ -257,7 +264,7 @@ class Identifier:
         try:
             with np.errstate(all="ignore"):
                 status = self._accept(t, s)
-            ok = self._finite()
+            ok = self._finite(status)
             why = "the update failed: it produced non-finite numbers"
         except (ArithmeticError, ValueError, np.linalg.LinAlgError) as e:
             ok, why = False, f"the update failed ({type(e).__name__}: {e})"
@@ -286,16 +293,26 @@ class Identifier:
         self.status = ESTIMATING
         return self.status
 
-    def _finite(self) -> bool:
-        """True if the estimates, covariances, M and the momentum reference are all finite."""
+    def _finite(self, status: int) -> bool:
+        """True if the update left only finite numbers behind.
+
+        After a solve: the estimates, covariances and M (everything else that evolves feeds
+        them within the same update). After a sample that was only stored (the momentum
+        reference, the differencing history): what was stored. One sum per array: a sum is
+        non-finite if any element is.
+        """
         r = self.rls
-        arrays = ([r.lin.x, r.lin.P, r.ang.x, r.ang.P, r.M, r.D_mu] if self.solver == "paper"
-                  else [r.x, r.P, self.pi_full])
-        arrays += [self.mu_full, self.th_full, self.info_lin, self.info_ang]
-        if self.reference is not None:
-            arrays += list(self.reference)
-        return all(np.isfinite(a).all() for a in arrays) and math.isfinite(
-            self.residual_lin + self.residual_ang)
+        total = self.residual_lin + self.residual_ang
+        if status == REFERENCE:
+            arrays = list(self.reference or ())
+            if self.history:
+                arrays += list(self.history[-1][1].values())
+        else:
+            arrays = (r.lin.x, r.lin.P, r.ang.x, r.ang.P, r.M) if self.solver == "paper" \
+                else (r.x, r.P)
+        for a in arrays:
+            total += a.sum()
+        return math.isfinite(total)
 
     def _differenced(self, t: float, s: dict):
         """Replace the accelerations of the previous sample by 3-point central differences.
