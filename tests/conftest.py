@@ -9,6 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
 from spacerobot.fmi.build import build_fmu
 from spacerobot.robots import scenario
@@ -45,9 +48,6 @@ class Slave:
     """An instantiated FMU with name-based get/set (fmpy low-level API)."""
 
     def __init__(self, path: Path, name: str):
-        from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
-
         self.md = read_model_description(str(path))
         self.dir = extract(str(path))
         self.vars = {v.name: v for v in self.md.modelVariables}
@@ -75,6 +75,44 @@ class Slave:
     def free(self) -> None:
         self.fmu.terminate()
         self.fmu.freeInstance()
+
+
+_EXTRACTED: dict = {}
+
+
+def logged_slave(path, name: str) -> Slave:
+    """A conftest ``Slave`` instantiated with its own logger; ``slave.messages`` collects
+    (status, category, message) tuples.
+
+    The logger is called directly, not through fmpy's ``addLoggerProxy``: that proxy holds ONE
+    process-wide Python target (the last registered), which would redirect the messages of
+    every other instance in the test session. Our FMUs pass the whole message as the printf
+    format string with ``%`` escaped, so ``%%`` is undone here.
+    """
+    s = Slave.__new__(Slave)
+    key = str(path)
+    if key not in _EXTRACTED:
+        _EXTRACTED[key] = (read_model_description(key), extract(key))
+    s.md, s.dir = _EXTRACTED[key]
+    s.vars = {v.name: v for v in s.md.modelVariables}
+    s.messages = []
+
+    def logger(env, instance, status, category, message):
+        try:
+            s.messages.append((int(status), (category or b"").decode("utf-8", "replace"),
+                               (message or b"").decode("utf-8", "replace").replace("%%", "%")))
+        except Exception:       # never let an exception cross the C boundary
+            pass
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(logger)
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    s._callbacks = (cb, logger)      # alive as long as the slave object
+    s.fmu = FMU2Slave(guid=s.md.guid, unzipDirectory=s.dir,
+                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=name)
+    s.fmu.instantiate(callbacks=cb, loggingOn=True)
+    return s
 
 
 class Pair:

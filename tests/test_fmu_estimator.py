@@ -15,53 +15,13 @@ import math
 
 import numpy as np
 import pytest
-from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-
-from conftest import ESTIMATE_NAMES, Pair, Slave, relative_errors, truth_vector
+from conftest import ESTIMATE_NAMES, Pair, Slave, logged_slave, relative_errors, truth_vector
 from spacerobot.robots import scenario
 
 FMI_FATAL, FMI_ERROR, FMI_WARNING = 4, 3, 1
 DT = 0.1
 
-_EXTRACTED: dict = {}
-
-
-def logged_slave(path, name: str) -> Slave:
-    """A conftest ``Slave`` instantiated with its own logger; ``slave.messages`` collects
-    (status, category, message) tuples.
-
-    The logger is called directly, not through fmpy's ``addLoggerProxy``: that proxy holds ONE
-    process-wide Python target (the last registered), which would redirect the messages of
-    every other instance in the test session. Our FMUs pass the whole message as the printf
-    format string with ``%`` escaped, so ``%%`` is undone here.
-    """
-    s = Slave.__new__(Slave)
-    key = str(path)
-    if key not in _EXTRACTED:
-        _EXTRACTED[key] = (read_model_description(key), extract(key))
-    s.md, s.dir = _EXTRACTED[key]
-    s.vars = {v.name: v for v in s.md.modelVariables}
-    s.messages = []
-
-    def logger(env, instance, status, category, message):
-        try:
-            s.messages.append((int(status), (category or b"").decode("utf-8", "replace"),
-                               (message or b"").decode("utf-8", "replace").replace("%%", "%")))
-        except Exception:       # never let an exception cross the C boundary
-            pass
-
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(logger)
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    s._callbacks = (cb, logger)      # alive as long as the slave object
-    s.fmu = FMU2Slave(guid=s.md.guid, unzipDirectory=s.dir,
-                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=name)
-    s.fmu.instantiate(callbacks=cb, loggingOn=True)
-    return s
 
 
 def start_estimator(path, params: dict, name: str) -> Slave:
