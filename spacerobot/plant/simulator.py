@@ -301,12 +301,14 @@ class Plant:
         x = self._collect()
         h, step = self.h, self._step
         try:
-            for _ in range(n):
-                x = step(x, h)
-                self.t += h
-            if rest > 0.0:
-                x = step(x, rest)
-                self.t += rest
+            # a diverging state is detected below and reported; numpy need not warn as well
+            with np.errstate(over="ignore", invalid="ignore"):
+                for _ in range(n):
+                    x = step(x, h)
+                    self.t += h
+                if rest > 0.0:
+                    x = step(x, rest)
+                    self.t += rest
         finally:
             self._x = x
             self._publish()
