@@ -42,12 +42,12 @@ if str(ROOT) not in sys.path:
 
 from spacerobot.estimator import Identifier  # noqa: E402
 from spacerobot.plant import Plant  # noqa: E402
-from spacerobot.robots import PAPER_PLANAR_MEDIUM, scenario  # noqa: E402
+from spacerobot.interface import ESTIMATE_NAMES, identified_estimates  # noqa: E402
+from spacerobot.robots import PAPER_PLANAR_MEDIUM, PLANAR, scenario  # noqa: E402
 
-NAMES = [f"{who}.{p}" for who in ("base", "target")
-         for p in ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")]
+NAMES = list(ESTIMATE_NAMES)
 #: parameters the planar model identifies (x, y translation, z rotation)
-PLANAR_IDENTIFIED = [0, 1, 2, 6, 10, 11, 12, 16]
+PLANAR_IDENTIFIED = [NAMES.index(n) for n in identified_estimates(PLANAR)]
 #: estimator variants of the accuracy study: (label, method, solver, accel_source)
 VARIANTS = [("momentum", "momentum", "paper", "measured"),
             ("force, measured acc.", "force", "paper", "measured"),

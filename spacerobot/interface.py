@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Tuple
 
-from .robots import INERTIA_NAMES, Controller, Robot, Scenario
+from .robots import INERTIA_NAMES, Robot, Scenario
 
 #: unit -> SI base-unit exponents, for the FMI UnitDefinitions
 UNITS: Dict[str, Dict[str, int]] = {
@@ -222,6 +222,20 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
             "matrix (0 = not identifiable yet)", None, ("excitation_theta",)),
     ]
     return v
+
+
+#: The 20 estimates (and truth parameters), in the order of ``Identifier.vector()``.
+ESTIMATE_NAMES: Tuple[str, ...] = tuple(
+    f"{who}.{p}" for who in ("base", "target") for p in ("m", "b[1]", "b[2]", "b[3]", *INERTIA_NAMES))
+
+
+def identified_estimates(robot: Robot) -> List[str]:
+    """The estimates the robot's model identifies: all 20 for a spatial robot; for a planar one
+    (x, y translation and z rotation) m, b[1], b[2] and Izz of each body. The others keep their
+    initial guess."""
+    if not robot.planar:
+        return list(ESTIMATE_NAMES)
+    return [n for n in ESTIMATE_NAMES if n.split(".", 1)[1] in ("m", "b[1]", "b[2]", "Izz")]
 
 
 def connections(robot: Robot) -> List[str]:

@@ -13,8 +13,9 @@ from fmpy import calloc, extract, free, read_model_description
 from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
+from spacerobot import interface
 from spacerobot.fmi.build import build_fmu
-from spacerobot.robots import scenario
+from spacerobot.robots import PLANAR, scenario
 
 
 @pytest.fixture(scope="session")
@@ -157,11 +158,10 @@ def truth_vector(sc) -> np.ndarray:
                            [sc.target.mass], sc.target.com, sc.target.inertia])
 
 
-ESTIMATE_NAMES = [f"{who}.{p}" for who in ("base", "target")
-                  for p in ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")]
+ESTIMATE_NAMES = list(interface.ESTIMATE_NAMES)
 
 #: indices of the parameters identified by the planar model (x, y translation, z rotation)
-PLANAR_IDENTIFIED = [0, 1, 2, 6, 10, 11, 12, 16]
+PLANAR_IDENTIFIED = [ESTIMATE_NAMES.index(n) for n in interface.identified_estimates(PLANAR)]
 
 
 def relative_errors(est: np.ndarray, truth: np.ndarray) -> np.ndarray:

@@ -20,10 +20,9 @@ False) and Fatal (any Python exception), so (docs/fmus.md, "Status mapping"):
 """
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
-from typing import Callable, Optional
+from typing import Optional
 
 import numpy as np
 import pytest

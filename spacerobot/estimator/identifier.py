@@ -349,7 +349,6 @@ class Identifier:
             self.th_full[self.th_idx] = self.rls.theta
             rhs_ang = y + psi.dot(self.rls.D_mu)
         else:
-            H_rows, rhs = [], []
             # standard rows: linear [B, 0]; angular [Psi[:, :4], D] per body (sign: psi = -Psi)
             Y = np.zeros((len(rl) + len(ra), 20))
             for k in range(2):

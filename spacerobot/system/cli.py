@@ -16,44 +16,15 @@ import argparse
 import importlib
 import importlib.util
 import sys
-import zipfile
 from pathlib import Path
-from typing import List, Optional, Sequence
+from typing import Optional, Sequence
 
-from lxml import etree
-
-from ..interface import ACCEL_SOURCES, METHODS, SOLVERS
+from ..interface import ACCEL_SOURCES, METHODS, SOLVERS, identified_estimates
 from ..robots import PAPER_PLANAR_MEDIUM, ROBOTS
 
 _CODE = {"method": {v: k for k, v in METHODS.items()},
          "solver": {v: k for k, v in SOLVERS.items()},
          "accel": {v: k for k, v in ACCEL_SOURCES.items()}}
-
-
-def _robot_of(ssp: Path) -> Optional[str]:
-    """Robot name of a system built by :func:`spacerobot.system.ssd.build_system`, from the
-    SSD name ``SpaceRobot_<robot>`` (None if it is not one of ours)."""
-    from .ssd import SSD_NAME
-    try:
-        if ssp.is_dir():
-            text = (ssp / SSD_NAME).read_bytes()
-        else:
-            with zipfile.ZipFile(ssp) as zf:
-                text = zf.read(SSD_NAME)
-        name = etree.fromstring(text).get("name") or ""
-    except (OSError, KeyError, zipfile.BadZipFile, etree.XMLSyntaxError):
-        return None
-    robot = name.removeprefix("SpaceRobot_")
-    return robot if robot in ROBOTS else None
-
-
-def identified_parameters(robot: str) -> List[str]:
-    """Estimate names the robot's model identifies (planar: m, b[1], b[2], Izz per body)."""
-    from .runner import estimate_names
-    names = estimate_names()
-    if ROBOTS[robot].planar:
-        return [n for n in names if n.split(".", 1)[1] in ("m", "b[1]", "b[2]", "Izz")]
-    return names
 
 
 def _parse_set(items: Sequence[str]) -> dict:
@@ -83,7 +54,7 @@ def cmd_build(args) -> int:
 
 def cmd_run(args) -> int:
     from .runner import SimulationError, format_results, run_ssp
-    from .ssd import default_parameter_set, ensure_ssp
+    from .ssd import default_parameter_set, ensure_ssp, robot_of
 
     if args.ssp and args.robot:
         raise SystemExit("spacerobot run: give either --robot or SSP_FILE, not both")
@@ -91,7 +62,7 @@ def cmd_run(args) -> int:
         ssp = Path(args.ssp)
         if not ssp.exists():
             raise SystemExit(f"spacerobot run: {ssp} does not exist")
-        robot = _robot_of(ssp)
+        robot = robot_of(ssp)
     else:
         robot = args.robot or "planar"
         ssp = ensure_ssp(robot, args.build_dir)
@@ -115,7 +86,7 @@ def cmd_run(args) -> int:
     print(f"{ssp}: robot {robot or '?'}, parameter set {target or '(as bound)'}, method "
           f"{args.method}, solver {args.solver}, accelerations {args.accel}; "
           f"t = {res.start_time:g} .. {res.stop_time:g} s, step {res.step_size:g} s")
-    print(format_results(res, paper, identified_parameters(robot) if robot else None))
+    print(format_results(res, paper, identified_estimates(ROBOTS[robot]) if robot else None))
     if paper:
         print("paper: Zhang, Yue, Yuan (2020), planar medium target, final estimates "
               f"({args.method}-based)")

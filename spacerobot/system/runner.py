@@ -39,18 +39,16 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 from lxml import etree
 
+from ..interface import ESTIMATE_NAMES
 from .ssd import NS, SSD_NAME
-
-#: the estimated parameters (estimator outputs = plant truth parameters, interface §3)
-_BODY_PARAMS = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 _STATUS = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
 
 
 def estimate_names() -> List[str]:
     """The 20 estimate names, ``base.m``, ``base.b[1]`` ... ``base.Iyz``, ``target.m`` ...
-    ``target.Iyz`` (the order of ``Identifier.vector()``)."""
-    return [f"{who}.{p}" for who in ("base", "target") for p in _BODY_PARAMS]
+    ``target.Iyz`` (the order of ``Identifier.vector()``; :data:`interface.ESTIMATE_NAMES`)."""
+    return list(ESTIMATE_NAMES)
 
 
 class SimulationError(RuntimeError):

@@ -183,7 +183,7 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
              + "".join(f'\n    xmlns:{p}="{u}"' for p, u in NS.items()),
              f'    version="1.0" name="SpaceRobot_{robot}" generationTool="{GENERATOR}"',
              f"    description={quoteattr('Space robot after capture: plant and inertial-parameter estimator. ' + robot_desc)}>",
-             f'  <ssd:System name="root" description="Plant outputs wired to the estimator inputs of the same name">',
+             '  <ssd:System name="root" description="Plant outputs wired to the estimator inputs of the same name">',
              "    <ssd:Elements>"]
     for comp in (PLANT, ESTIMATOR):
         lines.append(f'      <ssd:Component name="{comp}" type="application/x-fmu-sharedlibrary" '
@@ -304,6 +304,25 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     tmp.replace(ssp)
     paths["ssp"] = ssp
     return paths
+
+
+def robot_of(ssp: str | Path) -> Optional[str]:
+    """Robot name of a system built by :func:`build_system` (a .ssp archive or its extracted
+    folder), from the SSD name ``SpaceRobot_<robot>``; None if it is not one of ours."""
+    from lxml import etree
+
+    ssp = Path(ssp)
+    try:
+        if ssp.is_dir():
+            text = (ssp / SSD_NAME).read_bytes()
+        else:
+            with zipfile.ZipFile(ssp) as zf:
+                text = zf.read(SSD_NAME)
+        name = etree.fromstring(text).get("name") or ""
+    except (OSError, KeyError, zipfile.BadZipFile, etree.XMLSyntaxError):
+        return None
+    robot = name.removeprefix("SpaceRobot_")
+    return robot if robot in ROBOTS else None
 
 
 def _newest_source_mtime() -> float:
