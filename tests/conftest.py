@@ -116,6 +116,28 @@ def logged_slave(path, name: str) -> Slave:
     return s
 
 
+FMI_ERROR, FMI_FATAL = 3, 4
+
+
+def assert_initialisation_fails(path, params: dict, words) -> None:
+    """Setting ``params`` makes fmi2ExitInitializationMode fail with fmi2Fatal (pythonfmu's
+    status for a Python exception) and a logged error containing every one of ``words``; the
+    instance is freed afterwards."""
+    from fmpy.fmi1 import FMICallException
+
+    s = logged_slave(path, "bad")
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    for k, v in params.items():
+        s.set(k, v)
+    with pytest.raises(FMICallException) as exc:
+        s.fmu.exitInitializationMode()
+    assert exc.value.status == FMI_FATAL
+    errors = [m for st, _, m in s.messages if st >= FMI_ERROR]
+    assert any(all(w in m for w in words) for m in errors), (words, s.messages)
+    s.fmu.freeInstance()
+
+
 class Pair:
     """Plant and estimator FMUs wired name-to-name, stepped at ``dt``."""
 
