@@ -27,8 +27,8 @@ from pathlib import Path
 from typing import Dict, List, Optional, Tuple
 from xml.sax.saxutils import quoteattr
 
-from ..interface import UNITS, Var, connections, estimator_vars, plant_vars
-from ..robots import DEFAULT_TARGET, ROBOTS, TARGETS, Scenario, scenario
+from ..interface import ESTIMATE_NAMES, UNITS, Var, connections, estimator_vars, plant_vars
+from ..robots import DEFAULT_TARGET, ROBOTS, TARGETS, scenario
 
 #: XML namespaces (prefixes are part of the contract: some tools match on them)
 NS = {
@@ -47,10 +47,9 @@ SSD_NAME = "SystemStructure.ssd"
 GENERATOR = "spacerobot.system.ssd"
 
 #: the plant parameters a parameter set binds (the scenario's truth and initial velocities)
-_BODY_PARAMS = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 SET_PARAMETERS: Tuple[str, ...] = (
-    tuple(f"base.{p}" for p in _BODY_PARAMS) + tuple(f"target.{p}" for p in _BODY_PARAMS)
-    + tuple(f"base.v0[{i}]" for i in (1, 2, 3)) + tuple(f"base.omega0[{i}]" for i in (1, 2, 3)))
+    ESTIMATE_NAMES + tuple(f"base.v0[{i}]" for i in (1, 2, 3))
+    + tuple(f"base.omega0[{i}]" for i in (1, 2, 3)))
 
 
 def _check_robot(robot: str) -> None:
@@ -75,30 +74,14 @@ def _num(x: float) -> str:
     return repr(float(x))
 
 
-def _scenario_values(sc: Scenario) -> Dict[str, float]:
-    """Value of every :data:`SET_PARAMETERS` entry for scenario ``sc``."""
-    vals: Dict[str, float] = {}
-    for who, body in (("base", sc.robot.base), ("target", sc.target)):
-        vals[f"{who}.m"] = body.mass
-        for i in range(3):
-            vals[f"{who}.b[{i + 1}]"] = body.com[i]
-        for k, nm in enumerate(("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")):
-            vals[f"{who}.{nm}"] = body.inertia[k]
-    for i in range(3):
-        vals[f"base.v0[{i + 1}]"] = sc.v0[i]
-        vals[f"base.omega0[{i + 1}]"] = sc.omega0[i]
-    return vals
-
-
 def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
     """``[(plant variable name, value, unit), ...]`` of parameter set ``name`` of ``robot``."""
     if name not in parameter_set_names(robot):
         raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
                          f"choose from {parameter_set_names(robot)}")
     sc = scenario(robot, name)
-    units = {v.name: v.unit for v in plant_vars(sc.robot, sc)}
-    vals = _scenario_values(sc)
-    return [(n, float(vals[n]), units[n]) for n in SET_PARAMETERS]
+    var = {v.name: v for v in plant_vars(sc.robot, sc)}   # starts = the scenario's values
+    return [(n, float(var[n].start), var[n].unit) for n in SET_PARAMETERS]
 
 
 def _units_xml(units, indent: str, prefix: str) -> List[str]:
