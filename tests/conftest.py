@@ -116,6 +116,17 @@ def logged_slave(path, name: str) -> Slave:
     return s
 
 
+def started_slave(path, params: dict, name: str) -> Slave:
+    """A :func:`logged_slave` set up at t = 0, with ``params`` set, and initialised."""
+    s = logged_slave(path, name)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    for k, v in params.items():
+        s.set(k, v)
+    s.fmu.exitInitializationMode()
+    return s
+
+
 FMI_ERROR, FMI_FATAL = 3, 4
 
 

@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 import pytest
-from conftest import (ESTIMATE_NAMES, Pair, Slave, assert_initialisation_fails, logged_slave,
-                      relative_errors, truth_vector)
+from conftest import (ESTIMATE_NAMES, Pair, Slave, assert_initialisation_fails,
+                      relative_errors, started_slave, truth_vector)
 from spacerobot.robots import scenario
 
 FMI_WARNING = 1
@@ -24,14 +24,6 @@ DT = 0.1
 
 
 
-def start_estimator(path, params: dict, name: str) -> Slave:
-    s = logged_slave(path, name)
-    s.fmu.setupExperiment(startTime=0.0)
-    s.fmu.enterInitializationMode()
-    for k, v in params.items():
-        s.set(k, v)
-    s.fmu.exitInitializationMode()
-    return s
 
 
 def estimates(s: Slave) -> np.ndarray:
@@ -55,7 +47,7 @@ def spatial_run(spatial_fmus):
     pair = Pair(spatial_fmus)
     ests = {"momentum/paper": pair.est}
     for name, params in SPATIAL_ESTIMATORS.items():
-        ests[name] = start_estimator(spatial_fmus["estimator"], params, name)
+        ests[name] = started_slave(spatial_fmus["estimator"], params, name)
     evr = [pair.est.vars[n].valueReference for n in pair.inputs]
     hist = {name: [] for name in ests}
     times = []
@@ -123,8 +115,8 @@ def test_nonfinite_input_is_skipped_with_warning(planar_fmus):
     plant.fmu.setupExperiment(startTime=0.0)
     plant.fmu.enterInitializationMode()
     plant.fmu.exitInitializationMode()
-    bad = start_estimator(planar_fmus["estimator"], params, "with_nan")
-    ref = start_estimator(planar_fmus["estimator"], params, "without")
+    bad = started_slave(planar_fmus["estimator"], params, "with_nan")
+    ref = started_slave(planar_fmus["estimator"], params, "without")
     inputs = bad.names("input")
     pvr = [plant.vars[n].valueReference for n in inputs]
     evr = [bad.vars[n].valueReference for n in inputs]
@@ -194,7 +186,7 @@ def test_fmu_state_round_trip(planar_fmus):
     run 3 s again: bit-identical outputs of the plant, a momentum and a force/differenced
     estimator (the latter keeps a differencing history in its state)."""
     pair = Pair(planar_fmus)
-    extra = start_estimator(planar_fmus["estimator"], {"method": 2, "accel_source": 2}, "extra")
+    extra = started_slave(planar_fmus["estimator"], {"method": 2, "accel_source": 2}, "extra")
     evr = [pair.est.vars[n].valueReference for n in pair.inputs]
     fresh = fresh_extra = None
     try:
@@ -221,7 +213,7 @@ def test_fmu_state_round_trip(planar_fmus):
 
         # fresh instances (initialised with defaults) take the serialised state
         fresh = Pair(planar_fmus)
-        fresh_extra = start_estimator(planar_fmus["estimator"], {"method": 2, "accel_source": 2},
+        fresh_extra = started_slave(planar_fmus["estimator"], {"method": 2, "accel_source": 2},
                                       "fresh_extra")
         for s, blob in zip((fresh.plant, fresh.est, fresh_extra), blobs):
             st = s.fmu.deSerializeFMUstate(blob)
@@ -266,7 +258,7 @@ BAD_PARAMETERS = [
 def test_bad_parameter_fails_initialisation_with_message(planar_fmus, params, words):
     path = planar_fmus["estimator"]
     assert_initialisation_fails(path, params, words)
-    good = start_estimator(path, {}, "good")
+    good = started_slave(path, {}, "good")
     try:
         good.fmu.doStep(0.0, DT)
         assert good.get("diag.status") == 1          # momentum reference stored

@@ -16,7 +16,7 @@ import re
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
-from conftest import Slave, assert_initialisation_fails, logged_slave
+from conftest import assert_initialisation_fails, started_slave
 from spacerobot.plant import Plant
 from spacerobot.robots import RigidBody, inertia_matrix, scenario
 
@@ -71,14 +71,6 @@ def _params(case) -> dict:
     return p
 
 
-def _start(path, params: dict, name="plant") -> Slave:
-    s = logged_slave(path, name)
-    s.fmu.setupExperiment(startTime=0.0)
-    s.fmu.enterInitializationMode()
-    for k, v in params.items():
-        s.set(k, v)
-    s.fmu.exitInitializationMode()
-    return s
 
 
 def test_fmu_outputs_equal_core(spatial_fmus):
@@ -89,7 +81,7 @@ def test_fmu_outputs_equal_core(spatial_fmus):
     ctrl = dataclasses.replace(sc.controller, F_max=case["F_max"], M_max=case["M_max"],
                                K_D=case["K_D"], K_P=case["K_P"])
     core = Plant(sc.robot, case["base"], case["target"], ctrl, case["v0"], case["omega0"], sc.h)
-    s = _start(spatial_fmus["plant"], _params(case))
+    s = started_slave(spatial_fmus["plant"], _params(case), "plant")
     outs = s.names("output")
     # 11 three-vectors (r v omega a alpha F M J H P L), the DCM, q qd qdd tau
     assert len(outs) == 11 * 3 + 9 + 4 * sc.robot.n_joints
@@ -119,7 +111,7 @@ def test_fmu_outputs_equal_core(spatial_fmus):
 def test_partial_step_through_fmu(planar_fmus):
     """doStep(0.1005) = 100 steps of h + one of 0.0005: the same as the core's manual RK4 steps."""
     sc = scenario("planar")
-    s = _start(planar_fmus["plant"], {})
+    s = started_slave(planar_fmus["plant"], {}, "plant")
     try:
         s.fmu.doStep(0.0, 0.1005)
         core = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)
@@ -161,7 +153,7 @@ def test_bad_parameter_fails_initialisation_with_message(planar_fmus, params, wo
     path = planar_fmus["plant"]
     assert_initialisation_fails(path, params, words)
     # a fresh instance with good parameters runs
-    good = _start(path, {}, "good")
+    good = started_slave(path, {}, "good")
     try:
         good.fmu.doStep(0.0, 0.1)
         assert math.isfinite(good.get("base.v[1]"))
@@ -173,7 +165,7 @@ def test_bad_parameter_fails_initialisation_with_message(planar_fmus, params, wo
 def test_bad_communication_step_is_discarded(planar_fmus):
     """step <= 0 or non-finite: Discard, message logged, state unchanged; stepping goes on."""
     sc = scenario("planar")
-    s = _start(planar_fmus["plant"], {})
+    s = started_slave(planar_fmus["plant"], {}, "plant")
     try:
         s.fmu.doStep(0.0, 0.1)
         outs = s.names("output")
