@@ -31,19 +31,14 @@ DLS_RATIO = 1e-2
 _dgesv = lapack.dgesv
 
 
-def bounded_law(x: np.ndarray, K: float, x_max: float, u_max: float) -> np.ndarray:
-    """Paper eqs. 40/41 per axis.
+def bounded_law(x: float, K: float, x_max: float, u_max: float) -> float:
+    """Paper eqs. 40/41 for one axis.
 
     ``u = K x`` inside the band ``|x| < x_max`` (saturated at ``u_max``), and
     ``u = sign(K x) u_max`` outside it. With the paper's gains (|K| x_max = u_max) this is
     exactly the printed law; with a lowered ``u_max`` (e.g. F_max = 0.1 N) it keeps |u| <= u_max.
+    Plain floats (it runs once per axis and internal step); NaN passes through.
     """
-    inside = np.clip(K * x, -u_max, u_max)
-    return np.where(np.abs(x) >= x_max, np.sign(K * x) * u_max, inside)
-
-
-def bounded_scalar(x: float, K: float, x_max: float, u_max: float) -> float:
-    """:func:`bounded_law` for one axis, on Python floats (same result, NaN passes through)."""
     kx = K * x
     if abs(x) >= x_max:
         return u_max if kx > 0.0 else (-u_max if kx < 0.0 else 0.0 * u_max)
@@ -55,36 +50,26 @@ def bounded_scalar(x: float, K: float, x_max: float, u_max: float) -> float:
 
 
 def thruster_scalars(hg, c: Controller):
-    """:func:`thruster_command` on floats: ``hg = [P, L_c]`` (6 floats) -> ``(F, M)`` (6 floats)."""
-    out = []
-    for i, x in enumerate(hg):
-        K, x_max, u_max = (c.K_F, c.P_max, c.F_max) if i < 3 else (c.K_M, c.L_max, c.M_max)
-        kx = K * x
-        if abs(x) >= x_max:
-            u = u_max if kx > 0.0 else (-u_max if kx < 0.0 else 0.0 * u_max)
-        elif kx < -u_max:
-            u = -u_max
-        elif kx > u_max:
-            u = u_max
-        else:
-            u = kx
-        out.append(u)
-    return out
-
-
-def thruster_command(P: np.ndarray, L_c: np.ndarray, c: Controller):
     """Thruster force at S and torque, inertial frame, from the system momentum.
 
     Parameters
     ----------
-    P : (3,)    total linear momentum [kg.m/s]
-    L_c : (3,)  total angular momentum about the system centre of mass [kg.m2/s]. The centre of
-                mass is used (not the inertial origin) so that the torque damps the spin of the
-                system and does not react to its translation (r_c x P).
+    hg : 6 floats ``[P, L_c]``: total linear momentum [kg.m/s] and total angular momentum
+         about the system centre of mass [kg.m2/s]. The centre of mass is used (not the
+         inertial origin) so that the torque damps the spin of the system and does not react
+         to its translation (r_c x P).
+
+    Returns
+    -------
+    ``[F (3), M (3)]`` as 6 floats [N, N.m]
     """
-    F = bounded_law(P, c.K_F, c.P_max, c.F_max)   # eq. 41
-    M = bounded_law(L_c, c.K_M, c.L_max, c.M_max)  # eq. 40
-    return F, M
+    P0, P1, P2, L0, L1, L2 = hg
+    return [bounded_law(P0, c.K_F, c.P_max, c.F_max),   # eq. 41
+            bounded_law(P1, c.K_F, c.P_max, c.F_max),
+            bounded_law(P2, c.K_F, c.P_max, c.F_max),
+            bounded_law(L0, c.K_M, c.L_max, c.M_max),   # eq. 40
+            bounded_law(L1, c.K_M, c.L_max, c.M_max),
+            bounded_law(L2, c.K_M, c.L_max, c.M_max)]
 
 
 def _sym3_eigenvalues(a00, a01, a02, a11, a12, a22):
@@ -231,16 +216,3 @@ class ArmController:
         tau += h[nb:]
         return tau, qdd, dv_b, acc
 
-
-def arm_command(pm: PlantModel, data: pin.Data, q: np.ndarray, v: np.ndarray, f_base: np.ndarray,
-                c: Controller, q_home: np.ndarray):
-    """Joint torques for the attitude law (eq. 39), by inverse dynamics (see
-    :class:`ArmController`, which the plant keeps between steps).
-
-    Returns
-    -------
-    tau : (n,) joint torques [N.m];  qdd : (n,) joint accelerations;  dv_b : (nb,) base accel.
-    """
-    tau, qdd, dv_b, _ = ArmController(pm, c, q_home).command(data, q, v,
-                                                             np.asarray(f_base, float))
-    return tau, qdd, dv_b

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..kinematics import cross3
 from ..robots import RigidBody, Robot
 
 
@@ -91,22 +92,20 @@ def build_model(robot: Robot, base: RigidBody | None = None, target: RigidBody |
 # -- base conventions ---------------------------------------------------------------------------
 
 
-def cross3(a, b) -> np.ndarray:
-    """``a x b`` for 3-vectors (explicit formula; ``np.cross`` costs ~10 us per call)."""
-    a0, a1, a2 = a[0], a[1], a[2]
-    b0, b1, b2 = b[0], b[1], b[2]
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+def quat_dcm(qx, qy, qz, qw):
+    """DCM entries (row-major, 9 floats) of a not necessarily unit quaternion."""
+    s = 2.0 / (qx * qx + qy * qy + qz * qz + qw * qw)
+    xx, yy, zz = qx * qx, qy * qy, qz * qz
+    xy, xz, yz = qx * qy, qx * qz, qy * qz
+    xw, yw, zw = qx * qw, qy * qw, qz * qw
+    return (1 - s * (yy + zz), s * (xy - zw), s * (xz + yw),
+            s * (xy + zw), 1 - s * (xx + zz), s * (yz - xw),
+            s * (xz - yw), s * (yz + xw), 1 - s * (xx + yy))
 
 
 def quat_to_R(qx, qy, qz, qw) -> np.ndarray:
     """DCM of a (not necessarily unit) quaternion, normalised on the fly."""
-    n = qx * qx + qy * qy + qz * qz + qw * qw
-    s = 2.0 / n
-    return np.array([
-        [1 - s * (qy * qy + qz * qz), s * (qx * qy - qz * qw), s * (qx * qz + qy * qw)],
-        [s * (qx * qy + qz * qw), 1 - s * (qx * qx + qz * qz), s * (qy * qz - qx * qw)],
-        [s * (qx * qz - qy * qw), s * (qy * qz + qx * qw), 1 - s * (qx * qx + qy * qy)],
-    ])
+    return np.array(quat_dcm(qx, qy, qz, qw)).reshape(3, 3)
 
 
 def base_rotation(pm: PlantModel, q: np.ndarray) -> np.ndarray:
@@ -153,61 +152,11 @@ def base_acceleration(pm: PlantModel, q, v, a):
     return A @ (a[0:3] + cross3(v[3:6], v[0:3])), a[3:6].copy()
 
 
-def thruster_generalised_force(pm: PlantModel, A: np.ndarray, F: np.ndarray, M: np.ndarray
-                               ) -> np.ndarray:
-    """Generalised force of a force ``F`` at S and a couple ``M`` (both inertial) on the base.
-
-    The root joint's motion subspace is the identity in the base frame (free-flyer) or its
-    (x, y, rot z) columns (planar), so the generalised force is the base-frame wrench.
-    """
-    f = A.T @ F
-    m = A.T @ M
-    if pm.planar:
-        return np.array([f[0], f[1], m[2]])
-    return np.concatenate([f, m])
-
-
-def configuration_derivative(pm: PlantModel, q: np.ndarray, v: np.ndarray, A: np.ndarray
-                             ) -> np.ndarray:
-    """``dq/dt`` as a plain vector (quaternion / cos-sin kinematics included)."""
-    dq = np.empty_like(q)
-    if pm.planar:
-        dq[0:2] = A[0:2, 0:2] @ v[0:2]
-        w = v[2]
-        dq[2], dq[3] = -q[3] * w, q[2] * w
-        dq[4:] = v[3:]
-    else:
-        dq[0:3] = A @ v[0:3]
-        x, y, z, qw = q[3:7]
-        wx, wy, wz = v[3:6]
-        # dq/dt = 1/2 q (x) (0, w)  (body-frame angular velocity)
-        dq[3] = 0.5 * (qw * wx + y * wz - z * wy)
-        dq[4] = 0.5 * (qw * wy + z * wx - x * wz)
-        dq[5] = 0.5 * (qw * wz + x * wy - y * wx)
-        dq[6] = -0.5 * (x * wx + y * wy + z * wz)
-        dq[7:] = v[6:]
-    return dq
-
-
-def normalise(pm: PlantModel, q: np.ndarray) -> np.ndarray:
-    """Restore the unit norm of the quaternion / (cos, sin) pair (in place, returns q)."""
-    sl = slice(2, 4) if pm.planar else slice(3, 7)
-    q[sl] /= np.linalg.norm(q[sl])
-    return q
-
-
 def initial_configuration(pm: PlantModel, q_arm=None) -> np.ndarray:
     """Base at the inertial origin with identity attitude; arm at ``q_arm`` (default robot.q0)."""
     q_arm = np.asarray(pm.robot.q0 if q_arm is None else q_arm, float)
     head = np.array([0.0, 0.0, 1.0, 0.0]) if pm.planar else np.array([0, 0, 0, 0, 0, 0, 1.0])
     return np.concatenate([head, q_arm])
-
-
-def attitude_error(pm: PlantModel, q: np.ndarray) -> np.ndarray:
-    """Base attitude ``q`` of eq. 39 as a 3-vector: the rotation vector of A (theta_z planar)."""
-    if pm.planar:
-        return np.array([0.0, 0.0, np.arctan2(q[3], q[2])])
-    return pin.log3(base_rotation(pm, q))
 
 
 # -- momentum -------------------------------------------------------------------------------------

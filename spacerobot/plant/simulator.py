@@ -22,7 +22,8 @@ import pinocchio as pin
 from ..robots import Controller, RigidBody, Robot
 from . import control
 from .dynamics import (PlantModel, base_acceleration, base_generalised_velocity, base_position,
-                       base_rotation, base_velocity, build_model, initial_configuration, momentum)
+                       base_rotation, base_velocity, build_model, initial_configuration, momentum,
+                       quat_dcm)
 
 #: weights of the four RK4 stages (times dt / 6)
 _RK4_W = np.array([1.0, 2.0, 2.0, 1.0])
@@ -168,7 +169,7 @@ class Plant:
             cs, sn = cs * k, sn * k
             f_b = (cs * F0 + sn * F1, -sn * F0 + cs * F1, M2)
         else:
-            a00, a01, a02, a10, a11, a12, a20, a21, a22 = _quat_dcm(*q[3:7].tolist())
+            a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(*q[3:7].tolist())
             f_b = (a00 * F0 + a10 * F1 + a20 * F2, a01 * F0 + a11 * F1 + a21 * F2,
                    a02 * F0 + a12 * F1 + a22 * F2, a00 * M0 + a10 * M1 + a20 * M2,
                    a01 * M0 + a11 * M1 + a21 * M2, a02 * M0 + a12 * M1 + a22 * M2)
@@ -219,7 +220,7 @@ class Plant:
             rx, ry, rz, x, y, z, w = st[0:7]
             vx, vy, vz, wx, wy, wz = st[nq:nq + 6]
             F0, F1, F2, M0, M1, M2 = FM
-            a00, a01, a02, a10, a11, a12, a20, a21, a22 = _quat_dcm(x, y, z, w)
+            a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(x, y, z, w)
             if a is None:
                 qn[:] = xs[oq:ov]
                 nrm = sqrt(x * x + y * y + z * z + w * w)
@@ -341,14 +342,3 @@ def _restore_plant(args, state) -> Plant:
     p = Plant(*args)
     p.set_state(state)
     return p
-
-
-def _quat_dcm(qx, qy, qz, qw):
-    """DCM entries (row-major) of a not necessarily unit quaternion (as ``quat_to_R``)."""
-    s = 2.0 / (qx * qx + qy * qy + qz * qz + qw * qw)
-    xx, yy, zz = qx * qx, qy * qy, qz * qz
-    xy, xz, yz = qx * qy, qx * qz, qy * qz
-    xw, yw, zw = qx * qw, qy * qw, qz * qw
-    return (1 - s * (yy + zz), s * (xy - zw), s * (xz + yw),
-            s * (xy + zw), 1 - s * (xx + zz), s * (yz - xw),
-            s * (xz - yw), s * (yz + xw), 1 - s * (xx + yy))
