@@ -26,12 +26,6 @@ def skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-def axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation by ``angle`` about the unit vector ``axis`` (Rodrigues)."""
-    K = skew(axis)
-    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
-
-
 @dataclass
 class BodyMotion:
     """Motion of a set of bodies (arrays stacked over bodies, first axis = body).
@@ -72,11 +66,6 @@ _SKEW9[1, 2] = _SKEW9[2, 3] = _SKEW9[0, 7] = 1.0
 def skew_stack(V: np.ndarray) -> np.ndarray:
     """Cross-product matrices of the rows of ``V`` (k, 3): (k, 3, 3)."""
     return V.dot(_SKEW9).reshape(-1, 3, 3)
-
-
-def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise cross products of two (k, 3) arrays (``np.cross`` is ~10x slower)."""
-    return np.matmul(skew_stack(a), b[:, :, None])[:, :, 0]
 
 
 def cross3(a, b) -> np.ndarray:

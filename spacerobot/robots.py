@@ -17,7 +17,6 @@ Choices the paper leaves open are documented next to the numbers (``docs/models.
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Dict, Sequence, Tuple
@@ -35,11 +34,6 @@ def inertia_matrix(I6: Sequence[float]) -> np.ndarray:
     """3x3 symmetric tensor from ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``."""
     Ixx, Iyy, Izz, Ixy, Ixz, Iyz = (float(x) for x in I6)
     return np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
-
-
-def inertia_vector(I: np.ndarray) -> np.ndarray:
-    """``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` from a 3x3 tensor."""
-    return np.array([I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]])
 
 
 def check_body(name: str, mass: float, com: Sequence[float], I6: Sequence[float]) -> None:
@@ -168,13 +162,6 @@ class Robot:
         return Robot(name=d["name"], planar=bool(d["planar"]), base=_body(d["base"]), links=links,
                      ee_xyz=tuple(d["ee_xyz"]), ee_rotation=tuple(d["ee_rotation"]),
                      q0=tuple(d["q0"]), description=d.get("description", ""))
-
-    def to_json(self) -> str:
-        return json.dumps(self.to_dict(), indent=1)
-
-    @staticmethod
-    def from_json(text: str) -> "Robot":
-        return Robot.from_dict(json.loads(text))
 
 
 def _body(d: dict) -> RigidBody:

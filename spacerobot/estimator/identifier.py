@@ -558,11 +558,3 @@ def _rcond(info: np.ndarray) -> float:
         d = np.sqrt(dg)
     lam = np.linalg.eigvalsh(info / (d[:, None] * d))
     return float(max(lam[0], 0.0) / lam[-1])
-
-
-def _sub(A_lin, phi_ang, idx, lin: bool):
-    """Information of the mass-type (lin) or inertia-type standard parameters."""
-    cols = np.array([i for i, p in enumerate(idx) if (p % 10 < 4) == lin])
-    M = A_lin if lin else phi_ang
-    sub = M[:, cols]
-    return sub.T @ sub

@@ -58,12 +58,6 @@ def sharp_vector(I: np.ndarray) -> np.ndarray:
     return np.array([I[0, 0], I[0, 1], I[0, 2], I[1, 1], I[1, 2], I[2, 2]])
 
 
-def J_of_b(b: np.ndarray) -> np.ndarray:
-    """``J(b)`` of eq. 23, shape (10,)."""
-    bx, by, bz = b
-    return np.array([1.0, bx, by, bz, bx * bx, bx * by, bx * bz, by * by, by * bz, bz * bz])
-
-
 def D_of_mu(mu: np.ndarray) -> np.ndarray:
     """``D(mu) = [m1 J(b1); mn J(bn)]`` (20,) from ``mu = [m1, m1 b1, mn, mn bn]`` (8,)."""
     m1, c1x, c1y, c1z, m2, c2x, c2y, c2z = np.asarray(mu, float).tolist()
@@ -137,15 +131,6 @@ def force_terms(rho, A, a_O, w, beta):
     S[:, 1:4] = (skew(rho) @ K - skew(a_O)) @ A
     S[:, 4:] = Q @ T_SHIFT
     return G, Q, S
-
-
-def standard_row(lin: np.ndarray, inertia: np.ndarray, rest: np.ndarray) -> np.ndarray:
-    """Rows for the 10 standard parameters ``[m, m b, I_O#]`` of one body, shape (6, 10)."""
-    Y = np.zeros((6, 10))
-    Y[:3, :4] = lin
-    Y[3:, :4] = rest[:, :4]
-    Y[3:, 4:] = inertia
-    return Y
 
 
 def standard_from_physical(m: float, b: np.ndarray, I_c: np.ndarray) -> np.ndarray:
