@@ -43,6 +43,7 @@ if str(ROOT) not in sys.path:
 from spacerobot.estimator import Identifier  # noqa: E402
 from spacerobot.plant import Plant  # noqa: E402
 from spacerobot.interface import ESTIMATE_NAMES, identified_estimates  # noqa: E402
+from spacerobot.system.instance import FMUInstance  # noqa: E402
 from spacerobot.robots import PAPER_PLANAR_MEDIUM, PLANAR, scenario  # noqa: E402
 
 NAMES = list(ESTIMATE_NAMES)
@@ -140,32 +141,14 @@ def bare_rk4(sc, seconds: float) -> float:
     return time.process_time() - t0
 
 
-class Slave:
-    """An fmpy FMU2Slave with name-based access (as tests/conftest.py)."""
+class Slave(FMUInstance):
+    """An :class:`FMUInstance` initialised with its default parameters."""
 
     def __init__(self, path: Path, name: str):
-        from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
-        self.md = read_model_description(str(path))
-        self.dir = extract(str(path))
-        self.vars = {v.name: v for v in self.md.modelVariables}
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName=name)
-        self.fmu.instantiate()
+        super().__init__(path, name)
         self.fmu.setupExperiment(startTime=0.0)
         self.fmu.enterInitializationMode()
         self.fmu.exitInitializationMode()
-
-    def names(self, causality: str):
-        return [n for n, v in self.vars.items() if v.causality == causality]
-
-    def vrs(self, names):
-        return [self.vars[n].valueReference for n in names]
-
-    def free(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
 
 
 def build_systems(robots, out: Path) -> dict:

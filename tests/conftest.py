@@ -10,12 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from fmpy import calloc, extract, free, read_model_description
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
 from spacerobot import interface
 from spacerobot.fmi.build import build_fmu
 from spacerobot.robots import PLANAR, scenario
+from spacerobot.system.instance import FMUInstance
 
 
 @pytest.fixture(scope="session")
@@ -45,37 +46,8 @@ def spatial_fmus(fmu_dir) -> dict:
     return built_fmus("spatial", fmu_dir)
 
 
-class Slave:
-    """An instantiated FMU with name-based get/set (fmpy low-level API)."""
-
-    def __init__(self, path: Path, name: str):
-        self.md = read_model_description(str(path))
-        self.dir = extract(str(path))
-        self.vars = {v.name: v for v in self.md.modelVariables}
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName=name)
-        self.fmu.instantiate()
-
-    def set(self, name: str, value) -> None:
-        v = self.vars[name]
-        if v.type == "Integer":
-            self.fmu.setInteger([v.valueReference], [int(value)])
-        else:
-            self.fmu.setReal([v.valueReference], [float(value)])
-
-    def get(self, name: str):
-        v = self.vars[name]
-        if v.type == "Integer":
-            return self.fmu.getInteger([v.valueReference])[0]
-        return self.fmu.getReal([v.valueReference])[0]
-
-    def names(self, causality: str):
-        return [n for n, v in self.vars.items() if v.causality == causality]
-
-    def free(self) -> None:
-        self.fmu.terminate()
-        self.fmu.freeInstance()
+#: an instantiated FMU with name-based get/set (fmpy low-level API)
+Slave = FMUInstance
 
 
 _EXTRACTED: dict = {}
@@ -90,18 +62,15 @@ def logged_slave(path, name: str) -> Slave:
     every other instance in the test session. Our FMUs pass the whole message as the printf
     format string with ``%`` escaped, so ``%%`` is undone here.
     """
-    s = Slave.__new__(Slave)
     key = str(path)
     if key not in _EXTRACTED:
         _EXTRACTED[key] = (read_model_description(key), extract(key))
-    s.md, s.dir = _EXTRACTED[key]
-    s.vars = {v.name: v for v in s.md.modelVariables}
-    s.messages = []
+    messages = []
 
     def logger(env, instance, status, category, message):
         try:
-            s.messages.append((int(status), (category or b"").decode("utf-8", "replace"),
-                               (message or b"").decode("utf-8", "replace").replace("%%", "%")))
+            messages.append((int(status), (category or b"").decode("utf-8", "replace"),
+                             (message or b"").decode("utf-8", "replace").replace("%%", "%")))
         except Exception:       # never let an exception cross the C boundary
             pass
 
@@ -109,10 +78,9 @@ def logged_slave(path, name: str) -> Slave:
     cb.logger = fmi2CallbackLoggerTYPE(logger)
     cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
     cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-    s._callbacks = (cb, logger)      # alive as long as the slave object
-    s.fmu = FMU2Slave(guid=s.md.guid, unzipDirectory=s.dir,
-                      modelIdentifier=s.md.coSimulation.modelIdentifier, instanceName=name)
-    s.fmu.instantiate(callbacks=cb, loggingOn=True)
+    s = Slave(path, name, callbacks=cb, logging_on=True, extracted=_EXTRACTED[key])
+    s.messages = messages
+    s._logger = logger               # alive as long as the slave object
     return s
 
 
