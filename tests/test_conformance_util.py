@@ -14,6 +14,8 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 import pytest
 
+from spacerobot.system.instance import FMUInstance
+
 OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
 STATUS_NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
 
@@ -62,35 +64,26 @@ def _callbacks():
     return _CALLBACKS
 
 
-class Inst:
-    """One FMU instance (fmpy FMU2Slave) with name-based access and captured log messages."""
+class Inst(FMUInstance):
+    """One FMU instance with name-based access and captured log messages."""
 
-    _extracted: Dict[str, str] = {}
+    _extracted: Dict[str, tuple] = {}
 
     def __init__(self, path: Path, name: str = "instance", logging_on: bool = True):
         from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
 
         path = str(path)
-        self.md = read_model_description(path)
         if path not in Inst._extracted:             # one extraction per FMU file and session
-            Inst._extracted[path] = extract(path)
-        self.dir = Inst._extracted[path]
-        self.vars = {v.name: v for v in self.md.modelVariables}
+            Inst._extracted[path] = (read_model_description(path), extract(path))
         _COUNTER[0] += 1
         self.name = f"conformance-{name}-{_COUNTER[0]}"   # unique: messages are routed by it
         self.messages: List[tuple] = _ROUTES.setdefault(self.name, [])
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName=self.name)
-        self.fmu.instantiate(callbacks=_callbacks(), loggingOn=logging_on)
+        super().__init__(path, self.name, callbacks=_callbacks(), logging_on=logging_on,
+                         extracted=Inst._extracted[path])
         self.freed = False
         _LIVE.append(self)
 
     # -- variables ----------------------------------------------------------------------------
-    def names(self, causality: str) -> List[str]:
-        return [v.name for v in self.md.modelVariables if v.causality == causality]
-
     def set(self, name: str, value) -> int:
         """fmi2SetReal / fmi2SetInteger of one variable; returns the status (fmpy raises
         FMICallException above Warning)."""
@@ -104,12 +97,6 @@ class Inst:
 
     def set_many(self, names: Sequence[str], values: Sequence[float]) -> None:
         self.fmu.setReal([self.vars[n].valueReference for n in names], [float(x) for x in values])
-
-    def get(self, name: str):
-        v = self.vars[name]
-        if v.type == "Integer":
-            return self.fmu.getInteger([v.valueReference])[0]
-        return self.fmu.getReal([v.valueReference])[0]
 
     def values(self, names: Optional[Sequence[str]] = None) -> Dict[str, float]:
         """Current values of ``names`` (default: every variable), Reals and Integers."""
