@@ -36,15 +36,10 @@ class SpaceRobotPlant(InterfaceSlave):
         try:
             base, target = self._body("base"), self._body("target")
             ctrl = Controller(**{k: float(v[k]) for k in Controller.__dataclass_fields__})
-            for k in ("F_max", "P_max", "M_max", "L_max", "qdd_max"):
-                if getattr(ctrl, k) < 0.0:
-                    raise ValueError(f"{k} must be >= 0, got {getattr(ctrl, k)}")
-            h = float(v["h"])
-            if not (0.0 < h <= 1.0):
-                raise ValueError(f"h must be in (0, 1] s, got {h}")
             v0 = [float(v[f"base.v0[{i}]"]) for i in (1, 2, 3)]
             w0 = [float(v[f"base.omega0[{i}]"]) for i in (1, 2, 3)]
-            self.plant = Plant(self.robot, base, target, ctrl, v0, w0, h)
+            # the core checks the bodies, the controller bounds and h
+            self.plant = Plant(self.robot, base, target, ctrl, v0, w0, float(v["h"]))
         except ValueError as e:
             self._fail(f"invalid plant parameters: {e}")
         self._refresh()

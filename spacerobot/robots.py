@@ -297,6 +297,12 @@ class Controller:
     K_Pn: float = 0.25
     qdd_max: float = 1.0
 
+    def check(self) -> None:
+        """Raise ``ValueError`` naming the first bound that is negative or not a number."""
+        for k in ("F_max", "P_max", "M_max", "L_max", "qdd_max"):
+            if not getattr(self, k) >= 0.0:
+                raise ValueError(f"{k} must be >= 0, got {getattr(self, k)}")
+
 
 @dataclass(frozen=True)
 class Guess:

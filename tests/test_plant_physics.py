@@ -402,3 +402,26 @@ def test_partial_last_step():
     assert abs(c.t - 0.3) < 1e-12
     for x, y in ((c.q, d.q), (c.v, d.v), (c.H, d.H), (c.J, d.J)):
         np.testing.assert_allclose(x, y, rtol=1e-14, atol=1e-15)
+
+
+@pytest.mark.parametrize("change,words", [
+    (dict(h=0.0), "h must be in (0, 1] s, got 0.0"),
+    (dict(h=2.0), "h must be in (0, 1] s, got 2.0"),
+    (dict(F_max=-1.0), "F_max must be >= 0, got -1.0"),
+    (dict(qdd_max=math.nan), "qdd_max must be >= 0, got nan"),
+    (dict(target_mass=0.0), "target.m must be > 0 kg, got 0.0"),
+    (dict(base_Izz=1e4), "base inertia violates the triangle inequality"),
+])
+def test_plant_core_rejects_invalid_parameters(change, words):
+    """The core itself checks its parameters (the FMU only maps the message to its status)."""
+    sc = scenario("planar")
+    ctrl = dataclasses.replace(sc.controller, **{k: v for k, v in change.items()
+                                                 if k in ("F_max", "qdd_max")})
+    target = dataclasses.replace(sc.target, mass=change.get("target_mass", sc.target.mass))
+    base = sc.robot.base
+    if "base_Izz" in change:
+        base = dataclasses.replace(base, inertia=base.inertia[:2] + (change["base_Izz"],)
+                                   + base.inertia[3:])
+    with pytest.raises(ValueError) as exc:
+        Plant(sc.robot, base, target, ctrl, sc.v0, sc.omega0, change.get("h", sc.h))
+    assert words in str(exc.value)

@@ -23,7 +23,7 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from xml.etree.ElementTree import Element, SubElement
 
 from ..interface import UNITS, Var
-from ..robots import INERTIA_NAMES, RigidBody, check_body, scenario_from_dict
+from ..robots import INERTIA_NAMES, RigidBody, scenario_from_dict
 
 CONFIG_FILE = "spacerobot_config.json"
 
@@ -120,12 +120,15 @@ class InterfaceSlave(Fmi2Slave):
         _avoid_double_free_at_exit(self.resources, type(self).__name__)
 
     def _body(self, prefix: str) -> RigidBody:
-        """The rigid body held in parameters ``<prefix>.m``, ``.b[1..3]``, ``.Ixx`` ... (checked)."""
+        """The rigid body held in parameters ``<prefix>.m``, ``.b[1..3]``, ``.Ixx`` ...
+
+        Not checked here: the cores check their bodies (``Plant``, ``Identifier``) with the
+        same names.
+        """
         v = self.values
         m = float(v[f"{prefix}.m"])
         b = tuple(float(v[f"{prefix}.b[{i}]"]) for i in (1, 2, 3))
         I6 = tuple(float(v[f"{prefix}.{n}"]) for n in INERTIA_NAMES)
-        check_body(prefix, m, b, I6)
         return RigidBody(m, b, I6)
 
     def _register_interface(self, variables: List[Var]) -> None:

@@ -54,8 +54,11 @@ class Plant:
 
     def __init__(self, robot: Robot, base: RigidBody, target: RigidBody, controller: Controller,
                  v0, omega0, h: float = 1e-3):
-        if not (h > 0.0 and math.isfinite(h)):
-            raise ValueError(f"h must be a finite step > 0 s, got {h}")
+        if not (0.0 < h <= 1.0):
+            raise ValueError(f"h must be in (0, 1] s, got {h}")
+        base.check("base")
+        target.check("target")
+        controller.check()
         self._init_args = (robot, base, target, controller, tuple(v0), tuple(omega0), h)
         self.pm: PlantModel = build_model(robot, base, target)
         self.data = self.pm.model.createData()
