@@ -22,7 +22,7 @@ ROOT = LIB.parent                                   # repository / install root
 
 #: what each FMU bundles from the library (modules and sub-packages)
 BUNDLES = {
-    "plant": ("robots.py", "interface.py", "kinematics.py", "fmi", "plant"),
+    "plant": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "plant"),
     "estimator": ("robots.py", "interface.py", "kinematics.py", "fmi", "estimator"),
 }
 

@@ -25,6 +25,7 @@ import pinocchio as pin
 
 from ..kinematics import cross3
 from ..robots import RigidBody, Robot
+from .kernels import quat_dcm
 
 
 @dataclass(frozen=True)
@@ -90,17 +91,6 @@ def build_model(robot: Robot, base: RigidBody | None = None, target: RigidBody |
 
 
 # -- base conventions ---------------------------------------------------------------------------
-
-
-def quat_dcm(qx, qy, qz, qw):
-    """DCM entries (row-major, 9 floats) of a not necessarily unit quaternion."""
-    s = 2.0 / (qx * qx + qy * qy + qz * qz + qw * qw)
-    xx, yy, zz = qx * qx, qy * qy, qz * qz
-    xy, xz, yz = qx * qy, qx * qz, qy * qz
-    xw, yw, zw = qx * qw, qy * qw, qz * qw
-    return (1 - s * (yy + zz), s * (xy - zw), s * (xz + yw),
-            s * (xy + zw), 1 - s * (xx + zz), s * (yz - xw),
-            s * (xz - yw), s * (yz + xw), 1 - s * (xx + yy))
 
 
 def quat_to_R(qx, qy, qz, qw) -> np.ndarray:

@@ -1,15 +1,17 @@
 """The plant simulator: state, zero-order-hold controls, classic RK4, measured outputs.
 
-Implementation notes (performance; the equations are those of :mod:`.dynamics`):
+Implementation notes (performance; the equations are those of :mod:`.dynamics` and
+:mod:`.kernels`):
 
 * The state lives in one vector ``x = [J (3), H (3), q (nq), v (nv)]``; the public attributes
   ``q``, ``v``, ``J``, ``H`` are views of it. Every step makes a new ``x`` (the arrays a caller
   kept are never changed behind its back); a caller that assigns e.g. ``plant.q = ...`` is
   noticed at the next step.
-* One RK4 step evaluates the controls once (zero-order hold) and ABA three more times; the four
-  stage derivatives are rows of one preallocated matrix, combined by one product at the end.
-  Everything about the base (DCM, thruster force in the base frame, ``dq/dt`` of the root joint,
-  ``dH/dt = M + r_S x F``) is computed on Python floats with explicit formulas.
+* One RK4 step is a handful of Python-level calls: Pinocchio's ``computeAllTerms`` (M,
+  non-linear effects, centroidal momentum) and the compiled control kernel at the start of the
+  step (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
+  times ``pin.aba`` followed by the compiled stage kernel, which also forms the next stage state
+  and the combination of the four stages.
 """
 from __future__ import annotations
 
@@ -20,13 +22,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..robots import Controller, RigidBody, Robot
-from . import control
+from . import kernels
 from .dynamics import (PlantModel, base_acceleration, base_generalised_velocity, base_position,
-                       base_rotation, base_velocity, build_model, initial_configuration, momentum,
-                       quat_dcm)
-
-#: weights of the four RK4 stages (times dt / 6)
-_RK4_W = np.array([1.0, 2.0, 2.0, 1.0])
+                       base_rotation, base_velocity, build_model, initial_configuration, momentum)
 
 
 @dataclass
@@ -75,21 +73,21 @@ class Plant:
         pm = self.pm
         self._nq, self._nv = pm.model.nq, pm.model.nv
         self._oq, self._ov = 6, 6 + self._nq                 # offsets of q and v in x
-        self._nqb = 4 if pm.planar else 7                    # root-joint configuration size
-        self._nsc = 6 + self._nqb                            # scalar part of a stage row
         nx = self._ov + self._nv
-        self._K = np.empty((4, nx))
-        self._xs = np.empty(nx)
-        self._tmp = np.empty(nx)
-        self._qn = np.empty(self._nq)                        # normalised stage configuration
-        self._vs = np.empty(self._nv)                        # stage velocity (owned, aligned)
-        self._gen = np.zeros(self._nv)                       # generalised force
-        self._ctrl = control.ArmController(pm, controller, self.q_home)
+        self._K = np.empty((4, nx))                          # the four stage derivatives
+        self._xs = np.empty(nx)                              # stage state
+        self._qn = np.empty(self._nq)                        # stage configuration (unit quat.)
+        self._vs = np.empty(self._nv)                        # stage velocity
+        self._gen = np.zeros(self._nv)                       # generalised force [f_b, tau]
+        self._acc = np.zeros(self._nv)                       # dv/dt under the held controls
+        self._FM = np.zeros(6)                               # thrust [F, M], inertial
+        self._par = np.array([getattr(controller, k) for k in kernels.PARAMS], float)
         self.t = 0.0
         self._x = np.concatenate([np.zeros(6), q, v])
         self._publish()
         self._u: Controls | None = None
-        self._held = None          # (F and M as 6 floats, tau, a) of the held controls
+        self._loaded = None        # the state vector whose configuration is in _qn, _vs
+        self._ctrl_x = None        # the state vector the control buffers were computed for
         self._step = self._make_step()
 
     # -- copies (the integrator's closures refer to this instance's buffers) -------------------
@@ -137,152 +135,62 @@ class Plant:
         self._x = np.concatenate([J, H, q, v])
         self._publish()
         self._u = None
-        self._held = None
+        self._loaded = self._ctrl_x = None
 
     # -- controls ----------------------------------------------------------------------------
     def controls(self) -> Controls:
         """Commands for the step starting at the current state (cached until the state moves)."""
         if self._u is None:
             x = self._collect()
-            held = self._held
-            if held is None or held[3] is not x:
-                held = self._held = self._controls(x)
-            FM, tau, a = held[0], held[1], held[2]
-            self._u = Controls(np.array(FM[0:3]), np.array(FM[3:6]), tau, a)
+            if self._ctrl_x is not x:
+                self._control_at(x)
+            nb, FM = self.pm.nb, self._FM
+            self._u = Controls(FM[0:3].copy(), FM[3:6].copy(), self._gen[nb:].copy(),
+                               self._acc.copy())
         return self._u
 
-    def _controls(self, x: np.ndarray):
-        """Controls at the state ``x``: ``(F and M as 6 floats, tau, a, x)``.
+    def _control_at(self, x: np.ndarray) -> None:
+        """Fill the control buffers (``_FM``, ``_gen``, ``_acc``) for the state ``x``.
 
-        The accelerations ``a = [dv_b, qdd]`` come from the inverse dynamics of the attitude
-        law (``M a + c = [f_b, tau]`` by construction), so no forward-dynamics call is needed.
+        The accelerations come from the inverse dynamics of the attitude law
+        (``M a + c = [f_b, tau]`` by construction), so no forward-dynamics call is needed.
         """
-        pm, c, data, model = self.pm, self.controller, self.data, self.pm.model
-        q, v = self._qn, self._vs           # owned copies (Pinocchio is faster on them)
-        q[:] = x[self._oq:self._ov]
-        v[:] = x[self._ov:]
-        hg = pin.computeCentroidalMomentum(model, data, q, v).vector.tolist()
-        # eq. 41 on the linear momentum, eq. 40 on the angular momentum about the CoM
-        F0, F1, F2, M0, M1, M2 = control.thruster_scalars(hg, c)
-        gen = self._gen
-        nb = pm.nb
-        if pm.planar:
-            cs, sn = q[2:4].tolist()
-            k = 1.0 / math.hypot(cs, sn)
-            cs, sn = cs * k, sn * k
-            f_b = (cs * F0 + sn * F1, -sn * F0 + cs * F1, M2)
-        else:
-            a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(*q[3:7].tolist())
-            f_b = (a00 * F0 + a10 * F1 + a20 * F2, a01 * F0 + a11 * F1 + a21 * F2,
-                   a02 * F0 + a12 * F1 + a22 * F2, a00 * M0 + a10 * M1 + a20 * M2,
-                   a01 * M0 + a11 * M1 + a21 * M2, a02 * M0 + a12 * M1 + a22 * M2)
-        gen[:nb] = f_b
-        tau, _, _, acc = self._ctrl.command(data, q, v, gen[:nb])
-        return (F0, F1, F2, M0, M1, M2), tau, acc.copy(), x
+        model, data, qn, vs = self.pm.model, self.data, self._qn, self._vs
+        if self._loaded is not x:
+            kernels.load(self.pm.planar, x, qn, vs)
+            self._loaded = x
+        pin.computeAllTerms(model, data, qn, vs)
+        err = kernels.control(self.pm.planar, qn, vs, data.M, data.nle, data.hg.vector,
+                              self._par, self.q_home, self._gen, self._acc, self._FM)
+        if err:
+            raise np.linalg.LinAlgError(kernels.ERRORS[err])
+        self._ctrl_x = x
 
     # -- integration -------------------------------------------------------------------------
-    def _make_stage(self):
-        """The stage function ``stage(xs, row, FM, a)``: fills ``row`` with the derivative of the
-        state vector at the stage state ``xs`` under the held thrust ``FM`` (6 floats) and the
-        held joint torques (in ``self._gen``); ``a`` is the generalised acceleration if already
-        known (stage 1), else None. A closure, so that the hot loop does no attribute lookups.
-        """
-        model, data, aba = self.pm.model, self.data, pin.aba
-        qn, vs, gen = self._qn, self._vs, self._gen
-        oq, ov, nsc = self._oq, self._ov, self._nsc
-        sqrt, hypot = math.sqrt, math.hypot
-
-        nq = ov - oq
-
-        def stage_planar(xs, row, FM, a):
-            st = xs[oq:ov + 3].tolist()            # q, then the base part of v
-            px, py, c, s = st[0:4]
-            vx, vy, wz = st[nq:nq + 3]
-            F0, F1, F2, M0, M1, M2 = FM
-            k = 1.0 / hypot(c, s)
-            cn, sn = c * k, s * k
-            if a is None:
-                qn[:] = xs[oq:ov]
-                nrm = sqrt(c * c + s * s)
-                qn[2] = c / nrm
-                qn[3] = s / nrm
-                vs[:] = xs[ov:]
-                gen[0] = cn * F0 + sn * F1
-                gen[1] = -sn * F0 + cn * F1
-                gen[2] = M2
-                a = aba(model, data, qn, vs, gen)
-            # [dJ = F, dH = M + r_S x F, dq/dt of the planar root joint]
-            row[0:nsc] = (F0, F1, F2, M0 + (py * F2 - 0.0 * F1), M1 + (0.0 * F0 - px * F2),
-                          M2 + (px * F1 - py * F0), cn * vx - sn * vy, sn * vx + cn * vy,
-                          -s * wz, c * wz)
-            row[nsc:ov] = xs[ov + 3:]
-            row[ov:] = a
-
-        def stage_spatial(xs, row, FM, a):
-            st = xs[oq:ov + 6].tolist()            # q, then the base part of v
-            rx, ry, rz, x, y, z, w = st[0:7]
-            vx, vy, vz, wx, wy, wz = st[nq:nq + 6]
-            F0, F1, F2, M0, M1, M2 = FM
-            a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(x, y, z, w)
-            if a is None:
-                qn[:] = xs[oq:ov]
-                nrm = sqrt(x * x + y * y + z * z + w * w)
-                qn[3:7] = (x / nrm, y / nrm, z / nrm, w / nrm)
-                vs[:] = xs[ov:]
-                gen[0:6] = (a00 * F0 + a10 * F1 + a20 * F2, a01 * F0 + a11 * F1 + a21 * F2,
-                            a02 * F0 + a12 * F1 + a22 * F2, a00 * M0 + a10 * M1 + a20 * M2,
-                            a01 * M0 + a11 * M1 + a21 * M2, a02 * M0 + a12 * M1 + a22 * M2)
-                a = aba(model, data, qn, vs, gen)
-            # [dJ, dH, A v_l for the position, 1/2 q (x) (0, w) for the quaternion]
-            row[0:nsc] = (F0, F1, F2, M0 + (ry * F2 - rz * F1), M1 + (rz * F0 - rx * F2),
-                          M2 + (rx * F1 - ry * F0),
-                          a00 * vx + a01 * vy + a02 * vz, a10 * vx + a11 * vy + a12 * vz,
-                          a20 * vx + a21 * vy + a22 * vz,
-                          0.5 * (w * wx + y * wz - z * wy), 0.5 * (w * wy + z * wx - x * wz),
-                          0.5 * (w * wz + x * wy - y * wx), -0.5 * (x * wx + y * wy + z * wz))
-            row[nsc:ov] = xs[ov + 6:]
-            row[ov:] = a
-
-        return stage_planar if self.pm.planar else stage_spatial
-
     def _make_step(self):
-        """The RK4 step ``step(x, dt) -> x_new`` as a closure (see :meth:`_make_stage`)."""
-        K, xs, tmp, gen = self._K, self._xs, self._tmp, self._gen
-        row0, row1, row2, row3 = K[0], K[1], K[2], K[3]
-        stage = self._make_stage()
-        nb, oq = self.pm.nb, self._oq
+        """The RK4 step ``step(x, dt) -> x_new`` as a closure (no attribute lookups in the loop).
+
+        Stage 1 uses the accelerations of the controls; stages 2-4 call ``pin.aba`` on the stage
+        state that the stage kernel prepared (thrust rotated into that stage's base frame, joint
+        torques held).
+        """
+        model, data, aba, stage, empty = self.pm.model, self.data, pin.aba, kernels.stage, np.empty
+        K, xs, qn, vs, gen, acc, FM = (self._K, self._xs, self._qn, self._vs, self._gen,
+                                       self._acc, self._FM)
         planar = self.pm.planar
-        add, mul, sqrt = np.add, np.multiply, math.sqrt
-        W = _RK4_W
+        nx = len(xs)
 
         def step(x, dt):
-            held = self._held
-            if held is None or held[3] is not x:
-                held = self._controls(x)
-            FM = held[0]
-            gen[nb:] = held[1]                 # joint torques, held over the step
-            stage(x, row0, FM, held[2])        # stage 1: the accelerations are in the controls
-            hdt = 0.5 * dt
-            add(x, mul(row0, hdt, out=tmp), out=xs)
-            stage(xs, row1, FM, None)
-            add(x, mul(row1, hdt, out=tmp), out=xs)
-            stage(xs, row2, FM, None)
-            add(x, mul(row2, dt, out=tmp), out=xs)
-            stage(xs, row3, FM, None)
-            xn = W.dot(K)
-            xn *= dt / 6.0
-            xn += x
-            # restore the unit norm of the quaternion / (cos, sin) pair
-            if planar:
-                c, s = xn[oq + 2:oq + 4].tolist()
-                nrm = sqrt(c * c + s * s)
-                xn[oq + 2] = c / nrm
-                xn[oq + 3] = s / nrm
-            else:
-                r = xn[oq + 3:oq + 7]
-                r /= sqrt(r.dot(r))
+            if self._ctrl_x is not x:
+                self._control_at(x)
+            xn = empty(nx)
+            stage(planar, 0, x, x, acc, K, FM, dt, xs, qn, vs, gen, xn)
+            stage(planar, 1, x, xs, aba(model, data, qn, vs, gen), K, FM, dt, xs, qn, vs, gen, xn)
+            stage(planar, 2, x, xs, aba(model, data, qn, vs, gen), K, FM, dt, xs, qn, vs, gen, xn)
+            stage(planar, 3, x, xs, aba(model, data, qn, vs, gen), K, FM, dt, xs, qn, vs, gen, xn)
+            self._loaded = xn             # the stage kernel left xn's configuration in qn, vs
+            self._ctrl_x = None
             self._u = None
-            self._held = None
             return xn
 
         return step

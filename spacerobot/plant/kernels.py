@@ -1,0 +1,446 @@
+"""Compiled (Numba) kernels of the plant's hot path: the controllers and the RK4 bookkeeping.
+
+The plant runs its controllers once per 1 ms internal step and evaluates the RK4 stages in
+between Pinocchio calls; in NumPy that is some sixty small-array operations per step, whose
+call overhead (not arithmetic) was twice the cost of the dynamics itself. Here the same
+equations run as plain loops compiled by Numba, so that one step is a handful of Python-level
+calls: Pinocchio's ``computeAllTerms`` (M, non-linear effects, centroidal momentum), the
+control kernel, and three times ``aba`` + the stage kernel (the first stage's accelerations
+come from the controller's inverse dynamics).
+
+The equations are those of :mod:`.control` (documented there) and :mod:`.dynamics`:
+
+* thrusters, eqs. 40-41, per inertial axis on the system momentum ``[P, L_c]``;
+* arm attitude law, eq. 39, by an inertia-weighted, selectively damped right pseudo-inverse
+  with a null-space posture term and a bound on the joint accelerations;
+* state derivative ``[dJ = F, dH = M + r_S x F, dq/dt, dv/dt]`` with ``dq/dt`` of the root
+  joint written out (quaternion / (cos, sin) kinematics), so classic RK4 applies unchanged.
+
+Parameters that are arrays are written in place (the plant's preallocated buffers); every
+kernel returns 0, or a positive code for a singular matrix (see :data:`ERRORS`). A non-finite
+state propagates as NaN (the plant reports it after the step) and is not mistaken for a
+singular matrix.
+
+Compiled on first use in a process and cached on disk next to this file where it is writable.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: eigenvalue ratio below which the attitude solve is damped (singularity robustness)
+DLS_RATIO = 1e-2
+
+#: kernel return codes
+ERRORS = {1: "singular base inertia", 2: "singular arm inertia",
+          3: "singular attitude coupling"}
+
+#: order of the controller parameters in the ``par`` array of :func:`control`
+PARAMS = ("K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn", "K_Dn",
+          "qdd_max")
+
+_NB = dict(cache=True, nogil=True)
+
+
+@njit(**_NB)
+def bounded_law(x, K, x_max, u_max):
+    """Paper eqs. 40/41 for one axis: ``u = K x`` inside ``|x| < x_max`` (saturated at
+    ``u_max``), ``u = sign(K x) u_max`` outside it. NaN passes through."""
+    kx = K * x
+    if abs(x) >= x_max:
+        if kx > 0.0:
+            return u_max
+        if kx < 0.0:
+            return -u_max
+        return 0.0 * u_max
+    if kx < -u_max:
+        return -u_max
+    if kx > u_max:
+        return u_max
+    return kx
+
+
+@njit(**_NB)
+def quat_dcm(x, y, z, w):
+    """DCM entries (body -> inertial, row-major, 9 floats) of a not necessarily unit
+    quaternion ``(x, y, z, w)``. Callable from Python too."""
+    s = 2.0 / (x * x + y * y + z * z + w * w)
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz = x * y, x * z, y * z
+    xw, yw, zw = x * w, y * w, z * w
+    return (1.0 - s * (yy + zz), s * (xy - zw), s * (xz + yw),
+            s * (xy + zw), 1.0 - s * (xx + zz), s * (yz - xw),
+            s * (xz - yw), s * (yz + xw), 1.0 - s * (xx + yy))
+
+
+@njit(**_NB)
+def _cholesky(S, L):
+    """Lower Cholesky factor of the SPD matrix ``S`` into ``L``; False if a pivot is <= 0
+    (a NaN pivot passes, so that NaN propagates)."""
+    k = S.shape[0]
+    for j in range(k):
+        d = S[j, j]
+        for p in range(j):
+            d -= L[j, p] * L[j, p]
+        if d <= 0.0:
+            return False
+        d = math.sqrt(d)
+        L[j, j] = d
+        for i in range(j + 1, k):
+            s = S[i, j]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / d
+        for i in range(j):
+            L[i, j] = 0.0
+    return True
+
+
+@njit(**_NB)
+def _cho_solve(L, B):
+    """Solve ``L L^T X = B`` in place of ``B`` (k, c)."""
+    k, c = B.shape
+    for col in range(c):
+        for i in range(k):
+            s = B[i, col]
+            for p in range(i):
+                s -= L[i, p] * B[p, col]
+            B[i, col] = s / L[i, i]
+        for i in range(k - 1, -1, -1):
+            s = B[i, col]
+            for p in range(i + 1, k):
+                s -= L[p, i] * B[p, col]
+            B[i, col] = s / L[i, i]
+
+
+@njit(**_NB)
+def _jacobi_eigh(S, lam, U):
+    """Eigen-decomposition of a small symmetric matrix (cyclic Jacobi): ``S = U diag(lam) U^T``,
+    eigenvalues ascending."""
+    k = S.shape[0]
+    a = S.copy()
+    for i in range(k):
+        for j in range(k):
+            U[i, j] = 1.0 if i == j else 0.0
+    for _ in range(50):
+        off = 0.0
+        for i in range(k):
+            for j in range(i + 1, k):
+                off += a[i, j] * a[i, j]
+        if off <= 1e-30 * (a[0, 0] * a[0, 0] + a[k - 1, k - 1] * a[k - 1, k - 1]) or off == 0.0:
+            break
+        for p in range(k):
+            for r in range(p + 1, k):
+                if a[p, r] == 0.0:
+                    continue
+                th = (a[r, r] - a[p, p]) / (2.0 * a[p, r])
+                t = (1.0 if th >= 0.0 else -1.0) / (abs(th) + math.sqrt(th * th + 1.0))
+                c = 1.0 / math.sqrt(t * t + 1.0)
+                s = t * c
+                for i in range(k):           # a <- a G (columns p, r)
+                    aip, air = a[i, p], a[i, r]
+                    a[i, p] = c * aip - s * air
+                    a[i, r] = s * aip + c * air
+                for i in range(k):           # a <- G^T a (rows p, r)
+                    api, ari = a[p, i], a[r, i]
+                    a[p, i] = c * api - s * ari
+                    a[r, i] = s * api + c * ari
+                for i in range(k):
+                    uip, uir = U[i, p], U[i, r]
+                    U[i, p] = c * uip - s * uir
+                    U[i, r] = s * uip + c * uir
+    for i in range(k):
+        lam[i] = a[i, i]
+    for i in range(1, k):                    # insertion sort, ascending, columns of U along
+        j = i
+        while j > 0 and lam[j - 1] > lam[j]:
+            lam[j - 1], lam[j] = lam[j], lam[j - 1]
+            for r in range(k):
+                U[r, j - 1], U[r, j] = U[r, j], U[r, j - 1]
+            j -= 1
+
+
+@njit(**_NB)
+def _sym3_eigenvalues(a00, a01, a02, a11, a12, a22):
+    """Smallest and largest eigenvalue of a symmetric 3x3 matrix, closed form."""
+    p1 = a01 * a01 + a02 * a02 + a12 * a12
+    qm = (a00 + a11 + a22) / 3.0
+    if p1 == 0.0:
+        return min(a00, min(a11, a22)), max(a00, max(a11, a22))
+    b00, b11, b22 = a00 - qm, a11 - qm, a22 - qm
+    p = math.sqrt((b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1) / 6.0)
+    det = (b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02)
+           + a02 * (a01 * a12 - b11 * a02))
+    r = det / (2.0 * p * p * p)
+    phi = math.pi / 3.0 if r <= -1.0 else (0.0 if r >= 1.0 else math.acos(r) / 3.0)
+    return qm + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0), qm + 2.0 * p * math.cos(phi)
+
+
+@njit(**_NB)
+def control(planar, q, v, M, nle, hg, par, q_home, gen, acc, FM):
+    """Thruster and arm commands at the state ``(q, v)``, held over the next internal step.
+
+    Parameters
+    ----------
+    planar : bool
+    q : (nq,), v : (nv,)     generalised state (Pinocchio convention)
+    M : (nv, nv)             joint-space inertia (symmetric), ``nle`` : (nv,) non-linear effects
+    hg : (6,)                system momentum ``[P, L_c]`` (inertial; L about the system CoM)
+    par : (11,)              controller parameters in the order :data:`PARAMS`
+    q_home : (n,)            null-space posture
+
+    Writes ``FM`` (6,) = thruster ``[F, M]`` (inertial), ``gen`` (nv,) = ``[f_b, tau]`` (the
+    base part is the thrust in base coordinates, the arm part the joint torques) and ``acc``
+    (nv,) = the resulting ``dv/dt`` (``M acc + nle = gen`` by construction).
+    """
+    nv = v.shape[0]
+    nb = 3 if planar else 6
+    n = nv - nb
+    r = 1 if planar else 3               # rotational rows of the base velocity
+    r0 = nb - r
+    KD, KP, KPn, KDn, qdd_max = par[6], par[7], par[8], par[9], par[10]
+    # eq. 41 on the linear momentum, eq. 40 on the angular momentum about the CoM
+    for i in range(3):
+        FM[i] = bounded_law(hg[i], par[0], par[1], par[2])
+        FM[3 + i] = bounded_law(hg[3 + i], par[3], par[4], par[5])
+    # thrust in base coordinates, and the attitude error e (rotation vector; theta_z planar)
+    e = np.zeros(3)
+    if planar:
+        c, s = q[2], q[3]
+        k = 1.0 / math.hypot(c, s)
+        cs, sn = c * k, s * k
+        gen[0] = cs * FM[0] + sn * FM[1]
+        gen[1] = -sn * FM[0] + cs * FM[1]
+        gen[2] = FM[5]
+        e[2] = math.atan2(s, c)
+    else:
+        a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(q[3], q[4], q[5], q[6])
+        F0, F1, F2, M0, M1, M2 = FM[0], FM[1], FM[2], FM[3], FM[4], FM[5]
+        gen[0] = a00 * F0 + a10 * F1 + a20 * F2                   # A^T F
+        gen[1] = a01 * F0 + a11 * F1 + a21 * F2
+        gen[2] = a02 * F0 + a12 * F1 + a22 * F2
+        gen[3] = a00 * M0 + a10 * M1 + a20 * M2                   # A^T M
+        gen[4] = a01 * M0 + a11 * M1 + a21 * M2
+        gen[5] = a02 * M0 + a12 * M1 + a22 * M2
+        x, y, z, w = q[3], q[4], q[5], q[6]
+        if w < 0.0:                      # hemisphere w >= 0
+            x, y, z, w = -x, -y, -z, -w
+        nvec = math.sqrt(x * x + y * y + z * z)
+        kk = 2.0 * math.atan2(nvec, w) / nvec if nvec > 1e-8 * w else 2.0 / w
+        e[0], e[1], e[2] = kk * x, kk * y, kk * z
+    # base rows: M_bb dv_b + M_bm qdd = f_b - c_b  ->  dv_b = y0 - X qdd
+    Lb = np.empty((nb, nb))
+    if not _cholesky(M[:nb, :nb], Lb):
+        return 1
+    sol = np.empty((nb, n + 1))
+    for i in range(nb):
+        for j in range(n):
+            sol[i, j] = M[i, nb + j]
+        sol[i, n] = gen[i] - nle[i]
+    _cho_solve(Lb, sol)                  # [X, y0]
+    # attitude rows: G qdd = y0_rot - alpha_des with G = X_rot; W = M_mm weights the solve
+    Lm = np.empty((n, n))
+    if not _cholesky(M[nb:, nb:], Lm):
+        return 2
+    WiGt = np.empty((n, r))
+    for i in range(n):
+        for j in range(r):
+            WiGt[i, j] = sol[r0 + j, i]
+    _cho_solve(Lm, WiGt)                 # W^-1 G^T
+    GWG = np.zeros((r, r))
+    for i in range(r):
+        for j in range(r):
+            s = 0.0
+            for p in range(n):
+                s += sol[r0 + i, p] * WiGt[p, j]
+            GWG[i, j] = s
+    # posture: -K_Pn (q - q_home) - K_Dn qd
+    post = np.empty(n)
+    nq = q.shape[0]
+    for i in range(n):
+        post[i] = -KPn * (q[nq - n + i] - q_home[i]) - KDn * v[nb + i]
+    # rhs_att = y0_rot - alpha_des - G post, alpha_des = -K_D omega - K_P e
+    rhs = np.empty(r)
+    for j in range(r):
+        s = sol[r0 + j, n] + KD * v[r0 + j] + KP * e[3 - r + j]
+        for p in range(n):
+            s -= sol[r0 + j, p] * post[p]
+        rhs[j] = s
+    # selectively damped inverse of GWG (damped only near a singular coupling)
+    lo, hi = GWG[0, 0], GWG[0, 0]
+    if r == 3:
+        lo, hi = _sym3_eigenvalues(GWG[0, 0], GWG[0, 1], GWG[0, 2], GWG[1, 1], GWG[1, 2],
+                                   GWG[2, 2])
+    lmax = max(hi, 1e-300)
+    z = np.empty(r)                      # z = (GWG)^+ rhs
+    if lo / lmax >= 1.01 * DLS_RATIO:
+        Lg = np.empty((r, r))
+        if not _cholesky(GWG, Lg):
+            return 3
+        zz = rhs.reshape(r, 1).copy()
+        _cho_solve(Lg, zz)
+        for j in range(r):
+            z[j] = zz[j, 0]
+    else:
+        lam = np.empty(r)
+        U = np.empty((r, r))
+        _jacobi_eigh(GWG, lam, U)
+        lmax = max(lam[r - 1], 1e-300)
+        for j in range(r):
+            z[j] = 0.0
+        for k in range(r):
+            rr = max(lam[k] / lmax, 0.0)
+            damp = DLS_RATIO * lmax * (1.0 - rr / DLS_RATIO) ** 2 if rr < DLS_RATIO else 0.0
+            uk = 0.0
+            for j in range(r):
+                uk += U[j, k] * rhs[j]
+            uk /= lam[k] + damp
+            for j in range(r):
+                z[j] += U[j, k] * uk
+    # qdd = W^-1 G^T z + post, scaled down (direction kept) to |qdd| <= qdd_max
+    peak = 0.0
+    for i in range(n):
+        s = post[i]
+        for j in range(r):
+            s += WiGt[i, j] * z[j]
+        acc[nb + i] = s
+        if abs(s) > peak:
+            peak = abs(s)
+    if peak > qdd_max:
+        f = qdd_max / peak
+        for i in range(n):
+            acc[nb + i] *= f
+    for i in range(nb):                  # dv_b = y0 - X qdd
+        s = sol[i, n]
+        for p in range(n):
+            s -= sol[i, p] * acc[nb + p]
+        acc[i] = s
+    for i in range(n):                   # tau = M_m. acc + c_m (arm rows)
+        s = nle[nb + i]
+        for p in range(nv):
+            s += M[nb + i, p] * acc[p]
+        gen[nb + i] = s
+    return 0
+
+
+@njit(**_NB)
+def stage(planar, i, x, xa, a, K, FM, dt, xs, qn, vs, gen, xn):
+    """RK4 stage ``i`` (0..3) of a step of length ``dt`` from ``x``.
+
+    ``xa`` is the stage state at which ``a`` (= dv/dt) was evaluated (``x`` itself for stage
+    0; it may be ``xs``). Writes row ``i`` of ``K`` (the state derivative there). For ``i < 3`` it then
+    forms the next stage state in ``xs`` and, for Pinocchio, its normalised configuration
+    ``qn``, velocity ``vs`` and the held thrust in the base coordinates of that stage in
+    ``gen[:nb]`` (the joint torques in ``gen[nb:]`` are held). For ``i = 3`` it writes the new
+    state into ``xn`` (unit quaternion / (cos, sin) restored) and ``qn``, ``vs`` of it.
+
+    State layout: ``x = [J (3), H (3), q (nq), v (nv)]``.
+    """
+    nq = qn.shape[0]
+    nv = vs.shape[0]
+    oq, ov = 6, 6 + nq
+    nb = 3 if planar else 6
+    row = K[i]
+    F0, F1, F2, M0, M1, M2 = FM[0], FM[1], FM[2], FM[3], FM[4], FM[5]
+    # [dJ = F, dH = M + r_S x F, dq/dt of the root joint]
+    row[0], row[1], row[2] = F0, F1, F2
+    if planar:
+        px, py, c, s = xa[oq], xa[oq + 1], xa[oq + 2], xa[oq + 3]
+        vx, vy, wz = xa[ov], xa[ov + 1], xa[ov + 2]
+        k = 1.0 / math.hypot(c, s)
+        cn, sn = c * k, s * k
+        row[3] = M0 + py * F2
+        row[4] = M1 - px * F2
+        row[5] = M2 + (px * F1 - py * F0)
+        row[6] = cn * vx - sn * vy
+        row[7] = sn * vx + cn * vy
+        row[8] = -s * wz
+        row[9] = c * wz
+        nsc = 10
+    else:
+        rx, ry, rz = xa[oq], xa[oq + 1], xa[oq + 2]
+        x_, y_, z_, w_ = xa[oq + 3], xa[oq + 4], xa[oq + 5], xa[oq + 6]
+        vx, vy, vz, wx, wy, wz = (xa[ov], xa[ov + 1], xa[ov + 2], xa[ov + 3], xa[ov + 4],
+                                  xa[ov + 5])
+        a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(x_, y_, z_, w_)
+        row[3] = M0 + (ry * F2 - rz * F1)
+        row[4] = M1 + (rz * F0 - rx * F2)
+        row[5] = M2 + (rx * F1 - ry * F0)
+        row[6] = a00 * vx + a01 * vy + a02 * vz                    # dr_S/dt = A v_l
+        row[7] = a10 * vx + a11 * vy + a12 * vz
+        row[8] = a20 * vx + a21 * vy + a22 * vz
+        row[9] = 0.5 * (w_ * wx + y_ * wz - z_ * wy)
+        row[10] = 0.5 * (w_ * wy + z_ * wx - x_ * wz)
+        row[11] = 0.5 * (w_ * wz + x_ * wy - y_ * wx)
+        row[12] = -0.5 * (x_ * wx + y_ * wy + z_ * wz)
+        nsc = 13
+    for j in range(nsc, ov):             # dq_arm/dt = qd
+        row[j] = xa[ov + nb + j - nsc]
+    for j in range(nv):                  # dv/dt
+        row[ov + j] = a[j]
+    nx = x.shape[0]
+    if i < 3:
+        f = dt if i == 2 else 0.5 * dt
+        for j in range(nx):
+            xs[j] = x[j] + f * row[j]
+        target = xs
+    else:
+        f = dt / 6.0
+        for j in range(nx):
+            xn[j] = x[j] + f * (K[0, j] + 2.0 * K[1, j] + 2.0 * K[2, j] + K[3, j])
+        target = xn
+    # normalised configuration of the new state (and the unit constraint for x_{n+1})
+    for j in range(nq):
+        qn[j] = target[oq + j]
+    for j in range(nv):
+        vs[j] = target[ov + j]
+    if planar:
+        c, s = target[oq + 2], target[oq + 3]
+        nrm = math.sqrt(c * c + s * s)
+        qn[2], qn[3] = c / nrm, s / nrm
+        if i == 3:
+            xn[oq + 2], xn[oq + 3] = qn[2], qn[3]
+        else:
+            k = 1.0 / math.hypot(c, s)
+            cn, sn = c * k, s * k
+            gen[0] = cn * F0 + sn * F1
+            gen[1] = -sn * F0 + cn * F1
+            gen[2] = M2
+    else:
+        x_, y_, z_, w_ = target[oq + 3], target[oq + 4], target[oq + 5], target[oq + 6]
+        nrm = math.sqrt(x_ * x_ + y_ * y_ + z_ * z_ + w_ * w_)
+        qn[3], qn[4], qn[5], qn[6] = x_ / nrm, y_ / nrm, z_ / nrm, w_ / nrm
+        if i == 3:
+            for j in range(4):
+                xn[oq + 3 + j] = qn[3 + j]
+        else:
+            a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(x_, y_, z_, w_)
+            gen[0] = a00 * F0 + a10 * F1 + a20 * F2
+            gen[1] = a01 * F0 + a11 * F1 + a21 * F2
+            gen[2] = a02 * F0 + a12 * F1 + a22 * F2
+            gen[3] = a00 * M0 + a10 * M1 + a20 * M2
+            gen[4] = a01 * M0 + a11 * M1 + a21 * M2
+            gen[5] = a02 * M0 + a12 * M1 + a22 * M2
+    return 0
+
+
+@njit(**_NB)
+def load(planar, x, qn, vs):
+    """Configuration (unit quaternion / (cos, sin) pair) and velocity of the state ``x`` into
+    the Pinocchio buffers ``qn``, ``vs``."""
+    nq = qn.shape[0]
+    for j in range(nq):
+        qn[j] = x[6 + j]
+    for j in range(vs.shape[0]):
+        vs[j] = x[6 + nq + j]
+    if planar:
+        nrm = math.sqrt(qn[2] * qn[2] + qn[3] * qn[3])
+        qn[2] /= nrm
+        qn[3] /= nrm
+    else:
+        nrm = math.sqrt(qn[3] * qn[3] + qn[4] * qn[4] + qn[5] * qn[5] + qn[6] * qn[6])
+        for j in range(3, 7):
+            qn[j] /= nrm
+    return 0
