@@ -33,6 +33,16 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._input_names = [n for n, _ in self._inputs]
         self._groups = _input_groups(self._inputs, self.robot.n_joints)
         self._sd = None
+        # outputs: estimates (an index into Identifier.vector()), scalars (an attribute of the
+        # Identifier), and the standard deviations and excitation, computed when read (None)
+        outs = [(n, v.key) for n, v in self.interface.items() if v.causality == "output"]
+        est = [(n, _flat(k, 0 if k[0] == "est_base" else 10)) for n, k in outs
+               if k[0] in ("est_base", "est_target")]
+        self._est_names = [n for n, _ in est]
+        self._est_pos = np.array([i for _, i in est], dtype=int)
+        self._scalar_outputs = [(n, k[0]) for n, k in outs if k[0] in _SCALAR_OUTPUTS]
+        self._lazy_outputs = {n: None for n, k in outs
+                              if k[0] not in _SCALAR_OUTPUTS + ("est_base", "est_target")}
 
     def _initialise(self) -> None:
         v = self.values
@@ -53,33 +63,13 @@ class SpaceRobotEstimator(InterfaceSlave):
 
     def _refresh(self) -> None:
         est = self.ident.vector()
-        o = {}
-        for name, var in self.interface.items():
-            if var.causality != "output":
-                continue
-            o[name] = self._value(var, est)
+        o = dict(zip(self._est_names, est[self._est_pos].tolist()))
+        ident = self.ident
+        for name, attr in self._scalar_outputs:
+            o[name] = getattr(ident, attr)
+        o.update(self._lazy_outputs)
         self._outputs = o
         self._sd = None
-
-    def _value(self, var, est):
-        key = var.key
-        group = key[0]
-        if group in ("est_base", "est_target"):
-            return float(est[_flat(key, 0 if group == "est_base" else 10)])
-        if group in ("sd_base", "sd_target"):
-            return None  # computed lazily (see _get_output)
-        ident = self.ident
-        if group == "samples":
-            return ident.samples
-        if group == "rejected":
-            return ident.rejected
-        if group == "status":
-            return ident.status
-        if group == "residual_lin":
-            return ident.residual_lin
-        if group == "residual_ang":
-            return ident.residual_ang
-        return None  # excitation: computed when read (see _get_output)
 
     def _get_output(self, name: str):
         self._ensure_current()
@@ -124,6 +114,10 @@ class SpaceRobotEstimator(InterfaceSlave):
             self._initialise()
         self.ident.set_state(core)
         self._refresh()
+
+
+#: outputs that are attributes of the Identifier of the same name
+_SCALAR_OUTPUTS = ("samples", "rejected", "status", "residual_lin", "residual_ang")
 
 
 def _input_groups(inputs, n: int):

@@ -29,6 +29,7 @@ class SpaceRobotPlant(InterfaceSlave):
         super().__init__(**kwargs)
         self._setup(plant_vars)
         self.plant = None
+        self._out_pos = None       # where each output sits in the core's outputs (first refresh)
 
     # -- parameters -> core ---------------------------------------------------------------------
     def _initialise(self) -> None:
@@ -46,13 +47,11 @@ class SpaceRobotPlant(InterfaceSlave):
 
     def _refresh(self) -> None:
         out = self.plant.outputs()
-        o = {}
-        for name, var in self.interface.items():
-            if var.causality != "output":
-                continue
-            group, idx = var.key
-            o[name] = float(out[group][idx])
-        self._outputs = o
+        if self._out_pos is None:
+            self._out_pos = _output_positions(self.interface, out)
+        names, groups, pos = self._out_pos
+        flat = np.concatenate([np.ravel(out[g]) for g in groups])
+        self._outputs = dict(zip(names, flat[pos].tolist()))
 
     # -- stepping --------------------------------------------------------------------------------
     def do_step(self, current_time: float, step_size: float) -> bool:
@@ -86,3 +85,19 @@ class SpaceRobotPlant(InterfaceSlave):
             self._initialise()
         self.plant.set_state(core)
         self._refresh()
+
+
+def _output_positions(interface, out: dict):
+    """``(names, groups, positions)``: the output variables, the core output arrays in the
+    order they are concatenated (flattened row-major), and each variable's index in that
+    concatenation, so that a refresh is one concatenation and one fancy index."""
+    outputs = [(n, v.key) for n, v in interface.items() if v.causality == "output"]
+    groups = list(dict.fromkeys(key[0] for _, key in outputs))
+    offset, start = 0, {}
+    for g in groups:
+        start[g] = offset
+        offset += np.size(out[g])
+    pos = [start[g] + int(np.ravel_multi_index(idx if isinstance(idx, tuple) else (idx,),
+                                               np.shape(out[g])))
+           for _, (g, idx) in outputs]
+    return [n for n, _ in outputs], groups, np.array(pos)

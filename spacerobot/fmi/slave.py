@@ -153,6 +153,37 @@ class InterfaceSlave(Fmi2Slave):
                 kw["setter"] = (lambda x, n=var.name: self._fail(
                     f"{n} is an output and cannot be set (tried to set {x!r})"))
             self.register_variable(cls(var.name, **kw), nested=False)
+        # fast paths of get_real / set_real (see there): value reference -> name
+        self._real_vr = {v.value_reference: v.name for v in self.vars.values()
+                         if isinstance(v, Real)}
+        self._input_vr = {vr: n for vr, n in self._real_vr.items()
+                          if self.interface[n].causality == "input"}
+
+    # -- fast paths: pythonfmu calls a getter/setter closure per variable; a master reads and
+    # writes every connector and output at every step, so the common cases are served from the
+    # dictionaries directly (same values, same checks for parameters and outputs) -------------
+    def get_real(self, vrs):
+        self._ensure_current()
+        names, outs, values = self._real_vr, self._outputs, self.values
+        res = []
+        for vr in vrs:
+            name = names.get(vr)
+            if name is None:                      # not a Real: pythonfmu's error
+                return super().get_real(vrs)
+            x = outs.get(name)
+            if x is None:                         # input/parameter, or computed when read
+                x = values[name] if name in values else self._get_output(name)
+            res.append(float(x))
+        return res
+
+    def set_real(self, vrs, values):
+        inputs, store = self._input_vr, self.values
+        for vr, x in zip(vrs, values):
+            name = inputs.get(vr)
+            if name is None:                      # parameters (checked), outputs, other types
+                super().set_real([vr], [x])
+            else:
+                store[name] = x
 
     # -- values -------------------------------------------------------------------------------
     def _set(self, name: str, value) -> None:
