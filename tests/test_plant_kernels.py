@@ -1,0 +1,234 @@
+"""The plant's compiled kernels against independent NumPy / Pinocchio computations, and the
+persistent kernel cache (spacerobot.jit)."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from spacerobot import jit
+from spacerobot.plant import Plant, kernels
+from spacerobot.robots import scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# -- small linear algebra ------------------------------------------------------------------------
+
+@pytest.mark.parametrize("k", [1, 2, 3, 6])
+def test_jacobi_eigh_matches_lapack(k):
+    rng = np.random.default_rng(k)
+    cases = []
+    for _ in range(20):
+        B = rng.normal(size=(k, k))
+        cases.append(B + B.T)                                   # indefinite
+        cases.append(B @ B.T)                                   # semi-definite
+    u = rng.normal(size=k)
+    cases.append(np.outer(u, u) + 1e-9 * np.eye(k))             # nearly rank one
+    cases.append(np.diag(np.arange(k, 0, -1.0)))                # already diagonal, unsorted
+    for S in cases:
+        lam, U = np.empty(k), np.empty((k, k))
+        kernels._jacobi_eigh(S, lam, U)
+        scale = np.abs(S).max()
+        assert np.all(np.diff(lam) >= 0.0)
+        np.testing.assert_allclose(lam, np.linalg.eigvalsh(S), atol=1e-12 * scale)
+        np.testing.assert_allclose(U @ np.diag(lam) @ U.T, S, atol=1e-12 * scale)
+        np.testing.assert_allclose(U.T @ U, np.eye(k), atol=1e-12)
+
+
+def test_sym3_extreme_eigenvalues():
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        B = rng.normal(size=(3, 3))
+        S = B + B.T
+        lo, hi = kernels._sym3_eigenvalues(S[0, 0], S[0, 1], S[0, 2], S[1, 1], S[1, 2], S[2, 2])
+        ref = np.linalg.eigvalsh(S)
+        assert lo == pytest.approx(ref[0], abs=1e-12) and hi == pytest.approx(ref[2], abs=1e-12)
+
+
+def test_cholesky_solve_and_failure():
+    rng = np.random.default_rng(4)
+    B = rng.normal(size=(6, 6))
+    S = B @ B.T + 6 * np.eye(6)
+    L = np.empty((6, 6))
+    assert kernels._cholesky(S, L)
+    X = rng.normal(size=(6, 3))
+    Y = X.copy()
+    kernels._cho_solve(L, Y)
+    np.testing.assert_allclose(Y, np.linalg.solve(S, X), rtol=1e-12, atol=1e-12)
+    assert not kernels._cholesky(-S, L)                          # not positive definite
+
+
+# -- the controllers, against the law written out with NumPy and Pinocchio -----------------------
+
+def _bounded(x, K, x_max, u_max):
+    x = np.asarray(x, float)
+    inside = np.clip(K * x, -u_max, u_max)
+    return np.where(np.abs(x) >= x_max, np.sign(K * x) * u_max, inside)
+
+
+def reference_control(planar, q, v, M, nle, hg, c, q_home):
+    """Eqs. 39-41 as documented in spacerobot/plant/kernels.py, by LAPACK and Pinocchio."""
+    nv = len(v)
+    nb = 3 if planar else 6
+    rot = slice(2, 3) if planar else slice(3, 6)
+    F = _bounded(hg[:3], c.K_F, c.P_max, c.F_max)
+    Mt = _bounded(hg[3:], c.K_M, c.L_max, c.M_max)
+    if planar:
+        th = np.arctan2(q[3], q[2])
+        R = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+        f_b = np.concatenate([R.T @ F[:2], [Mt[2]]])
+        e = np.array([th])
+    else:
+        A = pin.Quaternion(q[3:7] / np.linalg.norm(q[3:7])).matrix()
+        f_b = np.concatenate([A.T @ F, A.T @ Mt])
+        e = pin.log3(A)
+    Mbb, Mbm, Mmm = M[:nb, :nb], M[:nb, nb:], M[nb:, nb:]
+    X = np.linalg.solve(Mbb, Mbm)
+    y0 = np.linalg.solve(Mbb, f_b - nle[:nb])
+    G = X[rot]
+    WiGt = np.linalg.solve(Mmm, G.T)
+    lam, U = np.linalg.eigh(G @ WiGt)
+    lmax = max(lam[-1], 1e-300)
+    r = np.clip(lam / lmax, 0.0, None)
+    damp = np.where(r < kernels.DLS_RATIO, kernels.DLS_RATIO * lmax * (1 - r / kernels.DLS_RATIO) ** 2,
+                    0.0)
+    Gp = WiGt @ U @ np.diag(1.0 / (lam + damp)) @ U.T
+    post = -c.K_Pn * (q[-(nv - nb):] - q_home) - c.K_Dn * v[nb:]
+    alpha_des = -c.K_D * v[rot] - c.K_P * e
+    qdd = Gp @ (y0[rot] - alpha_des - G @ post) + post
+    peak = np.abs(qdd).max()
+    if peak > c.qdd_max:
+        qdd *= c.qdd_max / peak
+    acc = np.concatenate([y0 - X @ qdd, qdd])
+    tau = M[nb:] @ acc + nle[nb:]
+    return np.concatenate([F, Mt]), np.concatenate([f_b, tau]), acc
+
+
+def _run_kernel(planar, q, v, M, nle, hg, c, q_home):
+    par = np.array([getattr(c, k) for k in kernels.PARAMS], float)
+    nv = len(v)
+    gen, acc, FM = np.zeros(nv), np.zeros(nv), np.zeros(6)
+    err = kernels.control(planar, q, v, M, nle, hg, par, np.asarray(q_home, float), gen, acc, FM)
+    assert err == 0
+    return FM, gen, acc
+
+
+@pytest.mark.parametrize("robot", ["planar", "spatial"])
+def test_control_kernel_matches_reference_along_a_run(robot):
+    sc = scenario(robot)
+    plant = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)
+    model, data = plant.pm.model, plant.pm.model.createData()
+    saturated = 0
+    for _ in range(40):
+        plant.advance(0.25)
+        q, v = plant.q.copy(), plant.v.copy()
+        M = pin.crba(model, data, q).copy()
+        nle = pin.nonLinearEffects(model, data, q, v).copy()
+        hg = pin.computeCentroidalMomentum(model, data, q, v).vector.copy()
+        FM, gen, acc = _run_kernel(plant.pm.planar, q, v, M, nle, hg, sc.controller, plant.q_home)
+        FM_r, gen_r, acc_r = reference_control(plant.pm.planar, q, v, M, nle, hg, sc.controller,
+                                               plant.q_home)
+        np.testing.assert_allclose(FM, FM_r, rtol=0, atol=1e-12 * max(1.0, np.abs(FM_r).max()))
+        np.testing.assert_allclose(gen, gen_r, rtol=0, atol=1e-8 * np.abs(gen_r).max())
+        np.testing.assert_allclose(acc, acc_r, rtol=0, atol=1e-8 * np.abs(acc_r).max())
+        np.testing.assert_allclose(M @ acc + nle, gen, atol=1e-9 * np.abs(gen).max())
+        saturated += np.abs(acc[plant.pm.nb:]).max() >= sc.controller.qdd_max * (1 - 1e-12)
+    if robot == "spatial":
+        assert saturated > 0          # the bounded branch is exercised too
+
+
+def test_control_kernel_damped_branch():
+    """A nearly singular attitude coupling (two rotational rows of M_bm almost parallel): the
+    selectively damped inverse is used, and matches the reference."""
+    rng = np.random.default_rng(7)
+    sc = scenario("spatial")
+    c = sc.controller
+    nb, n = 6, 6
+    Mbb = np.diag([500.0, 500.0, 500.0, 80.0, 90.0, 100.0])
+    Mbm = rng.normal(size=(nb, n))
+    Mbm[5] = Mbm[4] * (1.0 + 1e-4)
+    Mmm = 5.0 * np.eye(n) + Mbm.T @ np.linalg.solve(Mbb, Mbm)
+    M = np.block([[Mbb, Mbm], [Mbm.T, Mmm]])
+    G = np.linalg.solve(Mbb, Mbm)[3:6]
+    lam = np.linalg.eigvalsh(G @ np.linalg.solve(Mmm, G.T))
+    assert lam[0] / lam[-1] < kernels.DLS_RATIO                  # the damped branch
+    q = np.concatenate([[0.1, 0.2, 0.3], [0.1, -0.2, 0.05, 0.97], rng.normal(size=n)])
+    q[3:7] /= np.linalg.norm(q[3:7])
+    v = rng.normal(size=nb + n) * 0.05
+    nle = rng.normal(size=nb + n)
+    hg = np.array([3.0, -20.0, 0.5, 4.0, -0.2, 30.0])
+    out = _run_kernel(False, q, v, M, nle, hg, c, np.zeros(n))
+    ref = reference_control(False, q, v, M, nle, hg, c, np.zeros(n))
+    for x, r in zip(out, ref):
+        np.testing.assert_allclose(x, r, rtol=0, atol=1e-9 * np.abs(r).max())
+
+
+def test_control_kernel_reports_singular_inertia():
+    sc = scenario("planar")
+    nv = 6
+    par = np.array([getattr(sc.controller, k) for k in kernels.PARAMS], float)
+    q = np.array([0.0, 0.0, 1.0, 0.0, 0.1, 0.2, 0.3])
+    args = (q, np.zeros(nv))
+    bufs = (np.zeros(nv), np.zeros(nv), np.zeros(6))
+    M = np.zeros((nv, nv))
+    assert kernels.control(True, *args, M, np.zeros(nv), np.zeros(6), par, np.zeros(3), *bufs) == 1
+    M = np.diag([1.0, 1.0, 1.0, 0.0, 1.0, 1.0])
+    assert kernels.control(True, *args, M, np.zeros(nv), np.zeros(6), par, np.zeros(3), *bufs) == 2
+
+
+# -- the persistent kernel cache -------------------------------------------------------------------
+
+def test_load_uses_a_content_addressed_copy(tmp_path, monkeypatch):
+    pkg = tmp_path / "src" / "srjit_demo"
+    pkg.mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "kern.py").write_text("VALUE = 42\n")
+    monkeypatch.syspath_prepend(str(tmp_path / "src"))
+    import srjit_demo  # noqa: F401
+    try:
+        cache = tmp_path / "cache"
+        monkeypatch.setenv("SPACEROBOT_CACHE_DIR", str(cache))
+        mod = jit.load("srjit_demo", "kern")
+        assert mod.VALUE == 42 and sys.modules["srjit_demo.kern"] is mod
+        assert Path(mod.__file__).parent.parent == cache
+        assert jit.load("srjit_demo", "kern") is mod                # idempotent
+        # an unwritable cache location: imported from where it is
+        del sys.modules["srjit_demo.kern"]
+        blocker = tmp_path / "a_file"
+        blocker.write_text("")
+        monkeypatch.setenv("SPACEROBOT_CACHE_DIR", str(blocker))
+        mod = jit.load("srjit_demo", "kern")
+        assert Path(mod.__file__) == pkg / "kern.py"
+    finally:
+        for m in [m for m in sys.modules if m.startswith("srjit_demo")]:
+            del sys.modules[m]
+
+
+def test_compiled_kernels_are_reused_by_a_new_process(tmp_path):
+    """First process: compiles into the cache. Second process: loads from it (no compilation)."""
+    code = (
+        "import json, numpy as np\n"
+        "from spacerobot.plant import Plant, kernels\n"
+        "from spacerobot.robots import scenario\n"
+        "sc = scenario('planar')\n"
+        "p = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)\n"
+        "p.advance(0.01)\n"
+        "st = {k: [sum(getattr(f.stats, 'cache_' + w).values()) for w in ('hits', 'misses')]\n"
+        "      for k, f in (('control', kernels.control), ('stage', kernels.stage))}\n"
+        "print(json.dumps({'file': kernels.__file__, 'stats': st, 'x': p.q.tolist()}))\n")
+    env = dict(os.environ, SPACEROBOT_CACHE_DIR=str(tmp_path))
+    runs = [json.loads(subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, check=True,
+                                      capture_output=True, text=True).stdout.splitlines()[-1])
+            for _ in range(2)]
+    assert all(Path(r["file"]).is_relative_to(tmp_path) for r in runs)
+    assert runs[0]["stats"]["control"][1] >= 1                 # compiled (cache miss)
+    for name in ("control", "stage"):
+        hits, misses = runs[1]["stats"][name]
+        assert hits >= 1 and misses == 0
+    assert list((tmp_path).glob("kernels-*/__pycache__/*.nbi"))
+    assert runs[0]["x"] == runs[1]["x"]                        # same machine code, same result
