@@ -77,8 +77,8 @@ def test_modified_rls_equals_batch_at_latest_mu(lam):
     mu0 = np.array([600.0, 0, 0, 0, 100.0, 10.0, 10.0, 10.0])
     th0 = rng.uniform(0, 100, 12)
     P_mu0, P_th0 = _spd(rng, 8, 1, 4), _spd(rng, 12, 1, 4)   # full, not a multiple of I
-    rls = ModifiedRLS(mu0, th0, P_mu0, P_th0, rg.D_of_mu, lam)
-    naive = ModifiedRLS(mu0, th0, P_mu0, P_th0, rg.D_of_mu, lam)   # without re-referencing
+    rls = ModifiedRLS(mu0, th0, P_mu0, P_th0, lam)
+    naive = ModifiedRLS(mu0, th0, P_mu0, P_th0, lam)   # without re-referencing
     As, bs, phis, ys, psis = [], [], [], [], []
     worst_mu = worst_th = 0.0
     naive_err = []
@@ -91,7 +91,7 @@ def test_modified_rls_equals_batch_at_latest_mu(lam):
         y = phi @ th_true - psi @ rg.D_of_mu(mu_true) + rng.normal(scale=2.0, size=3)
         for lst, x in ((As, A), (bs, b), (phis, phi), (ys, y), (psis, psi)):
             lst.append(x)
-        rls.update(A, b, phi, y, psi, rg.D_of_mu)
+        rls.update(A, b, phi, y, psi)
         # naive: theta's equation evaluated at each sample's own mu, never re-referenced
         naive.lin.update(A, b)
         naive.ang.update(phi, y + psi @ rg.D_of_mu(naive.lin.x))

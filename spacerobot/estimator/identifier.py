@@ -13,6 +13,7 @@ import numpy as np
 
 from ..kinematics import ArmKinematics
 from ..robots import Guess, Robot
+from . import kernels
 from . import regressors as rg
 from .rls import RLS, ModifiedRLS
 
@@ -86,6 +87,16 @@ class Identifier:
         self.method, self.solver, self.accel_source, self.lam = method, solver, accel_source, lam
         self.kin = ArmKinematics(robot)
         self.n = robot.n_joints
+        kin = self.kin
+        self._geom = tuple(np.ascontiguousarray(a, dtype=float) for a in (
+            kin.xyz, kin.R, kin.axis, kin.mass, kin.com, kin.I, kin.ee_xyz, kin.ee_R))
+        self._sizes = [3, 3, 9, 3, 3, 3, self.n, self.n, self.n, 3, 3, 3, 3]   # per KEYS entry
+        n, q0 = self.n, kernels.Q0
+        # (acceleration, velocity) slices of a flattened sample: a_S, alpha_B, qdd
+        self._diff_slices = ((slice(kernels.A_S, kernels.A_S + 3), slice(kernels.V_S, kernels.V_S + 3)),
+                             (slice(kernels.ALPHA_B, kernels.ALPHA_B + 3),
+                              slice(kernels.OMEGA_B, kernels.OMEGA_B + 3)),
+                             (slice(q0 + 2 * n, q0 + 3 * n), slice(q0 + n, q0 + 2 * n)))
         planar = robot.planar
         # active rows / parameters (planar: x, y translation and z rotation only)
         self.rows_lin = np.array([0, 1]) if planar else np.arange(3)
@@ -103,7 +114,8 @@ class Identifier:
         if solver == "paper":
             p, r = len(self.mu_idx), len(self.th_idx)
             self.rls = ModifiedRLS(mu0[self.mu_idx], th0[self.th_idx], guess.P0_mu * np.eye(p),
-                                   guess.P0_theta * np.eye(r), self._D_active, lam)
+                                   guess.P0_theta * np.eye(r), lam, mu_fixed=mu0,
+                                   active=self.mu_idx)
         else:
             pi0 = self._standard_vector(guess)
             self.pi_full = pi0
@@ -121,7 +133,7 @@ class Identifier:
         self.residual_lin = 0.0
         self.residual_ang = 0.0
         self.reference = None       # momentum method: terms at t0
-        self.history = []           # differenced accelerations: last samples (t, meas)
+        self.history = []           # differenced accelerations: last samples (t, flat sample)
         self._exc = None            # cached excitation() (cleared by update / set_state)
 
     # -- parameter vectors -------------------------------------------------------------------
@@ -142,97 +154,68 @@ class Identifier:
         loc = np.array([0, 1, 2, 9]) if self.robot.planar else np.arange(10)
         return 10 * k + loc
 
-    def _D_active(self, mu_active: np.ndarray) -> np.ndarray:
-        if len(mu_active) == 8:
-            return rg.D_of_mu(mu_active)
-        mu = self.mu_full.copy()
-        mu[self.mu_idx] = mu_active
-        return rg.D_of_mu(mu)
-
     # -- equations -----------------------------------------------------------------------------
-    def _bodies(self, s: dict):
-        """Frame-origin motion of base (at S) and target (at E), and the arm links' motion."""
-        A_B = s["A"]
-        acc = self.method == "force"          # the momentum form needs no accelerations
-        links, ee = self.kin.compute(s["r_S"], A_B, s["v_S"], s["omega_B"], s["a_S"], s["alpha_B"],
-                                     s["q"], s["qd"], s["qdd"], accelerations=acc)
-        base = (s["r_S"], A_B, s["v_S"], A_B.dot(s["omega_B"]), s["a_S"],
-                A_B.dot(s["alpha_B"]) if acc else None)
-        target = (ee.r, ee.A, ee.v, ee.w, ee.a, ee.beta)
-        return base, target, links
-
-    def _momentum_terms(self, s: dict):
-        """Absolute (not yet differenced) momentum-form terms at one sample.
-
-        P = Bm mu + P_arm = J + P(t0)-J(t0)  ->  Bm mu = J - P_arm + const
-        L = Phi theta + Psi D + L_arm = H + const
-        """
-        base, target, links = self._bodies(s)
-        B, D, Psi = rg.momentum_terms2(np.array([base[0], target[0]]), np.array([base[1], target[1]]),
-                                       np.array([base[2], target[2]]), np.array([base[3], target[3]]))
-        P_arm, L_arm = self.kin.momentum(links)
-        return B, s["J"] - P_arm, D, s["H"] - L_arm, Psi
-
-    def _force_terms(self, s: dict):
-        """Force-form terms: G mu = F - F_arm ;  Q theta = M - M_arm,S - S D(mu)  (eqs. 28/31)."""
-        base, target, links = self._bodies(s)
-        r_S = s["r_S"]
-        G, Q, S = rg.force_terms2(np.array([np.zeros(3), target[0] - r_S]),
-                                  np.array([base[1], target[1]]), np.array([base[4], target[4]]),
-                                  np.array([base[3], target[3]]), np.array([base[5], target[5]]))
-        F_arm, M_arm = self.kin.rate_of_momentum(links, r_S)
-        # thruster force acts at S, so its moment about S is zero: the external moment is M
-        return G, s["F"] - F_arm, Q, s["M"] - M_arm, -S
+    def _equations(self, flat: np.ndarray):
+        """The (3, 42) equation array ``[A | b | phi | y | psi]`` of one sample (full 3D rows;
+        see :mod:`.kernels`), from the flattened measurements; momentum form: differenced
+        against the reference sample t0 (eqs. 11, 16), None for the reference itself."""
+        E = np.empty((3, kernels.N_COLS))
+        force = self.method == "force"
+        kernels.equations(force, flat, self.n, *self._geom, E)
+        if force:
+            return E
+        if self.reference is None:
+            self.reference = E
+            return None
+        return E - self.reference
 
     def equations(self, s: dict):
-        """``(A, b, phi, y, psi)`` for one sample, full 3D rows (before planar selection).
+        """``(A, b, phi, y, psi)`` for one sample, full 3D rows (before planar selection):
+        ``A mu = b`` and ``phi theta = y + psi D(mu)``.
 
         Momentum: differences against the reference sample t0 (eqs. 11, 16). Returns None for
         the reference sample itself.
         """
-        if self.method == "force":
-            return self._force_terms(s)
-        terms = self._momentum_terms(s)
-        if self.reference is None:
-            self.reference = terms
-            return None
-        B, c, Phi, d, Psi = (x - x0 for x, x0 in zip(terms, self.reference))
-        return B, c, Phi, d, -Psi
+        E = self._equations(np.concatenate([np.asarray(s[k], float).ravel() for k in KEYS]))
+        return None if E is None else _split(E)
 
     # -- the update ------------------------------------------------------------------------------
     def validate(self, s: dict):
         """Return ``(status, message)``: ESTIMATING if the sample is usable."""
+        return self._validate(s)[:2]
+
+    def _validate(self, meas: dict):
+        """``(status, message, flat)``; ``flat`` is the sample flattened in KEYS order (a new
+        float array; ``A`` row-major), or None if the sample is rejected."""
         try:
-            # fast path: one finiteness test over all inputs, explicit 3x3 rotation test
-            flat = np.concatenate([s[k].ravel() for k in KEYS])
-            if np.abs(flat).max() <= INPUT_LIMIT:    # also False for NaN / inf
-                a00, a01, a02, a10, a11, a12, a20, a21, a22 = s["A"].ravel().tolist()
-                err = max(abs(a00 * a00 + a10 * a10 + a20 * a20 - 1.0),
-                          abs(a01 * a01 + a11 * a11 + a21 * a21 - 1.0),
-                          abs(a02 * a02 + a12 * a12 + a22 * a22 - 1.0),
-                          abs(a00 * a01 + a10 * a11 + a20 * a21),
-                          abs(a00 * a02 + a10 * a12 + a20 * a22),
-                          abs(a01 * a02 + a11 * a12 + a21 * a22))
-                det = (a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20)
-                       + a02 * (a10 * a21 - a11 * a20))
-                if err <= 1e-6 * 0.5 and det > 0.5:
-                    return ESTIMATING, ""
-        except (ValueError, AttributeError):
+            # fast path: one concatenation, shapes by length, one compiled range/rotation test
+            vals = [meas[k] for k in KEYS]
+            vals[2] = np.ravel(vals[2])
+            if [len(v) for v in vals] == self._sizes and np.shape(meas["A"]) == (3, 3):
+                flat = np.concatenate(vals).astype(float, copy=False)
+                if flat.ndim == 1 and kernels.sample_check(flat, INPUT_LIMIT) == 0:
+                    return ESTIMATING, "", flat
+        except (ValueError, TypeError, AttributeError):
             pass
         # careful path (and the messages)
-        for k in KEYS:
-            x = np.asarray(s[k], float)
+        for k, size in zip(KEYS, self._sizes):
+            try:
+                x = np.array(meas[k], float)
+            except (ValueError, TypeError) as e:
+                return REJECT_INCONSISTENT, f"input {k} is not numeric ({e})", None
+            shape = (3, 3) if k == "A" else (size,)
+            if x.shape != shape:
+                return REJECT_INCONSISTENT, f"input {k} has shape {x.shape}, expected {shape}", None
             if not np.all(np.isfinite(x)):
-                return REJECT_NONFINITE, f"non-finite input {k} = {np.array2string(x, precision=4)}"
+                return (REJECT_NONFINITE, f"non-finite input {k} = "
+                        f"{np.array2string(x, precision=4)}", None)
             if np.abs(x).max() > INPUT_LIMIT:
                 return REJECT_NONFINITE, (f"input {k} = {np.array2string(x, precision=4)} is beyond "
-                                          f"the physical range |x| <= {INPUT_LIMIT:g} (SI units?)")
-        A = np.asarray(s["A"], float)
+                                          f"the physical range |x| <= {INPUT_LIMIT:g} (SI units?)"), None
+        A = np.asarray(meas["A"], float)
         err = np.abs(A.T @ A - np.eye(3)).max()
-        if err > 1e-6 or np.linalg.det(A) <= 0.0:
-            return REJECT_INCONSISTENT, (f"base.A is not a rotation matrix (|A^T A - I| = {err:.3g}, "
-                                         f"det = {np.linalg.det(A):.6g})")
-        return ESTIMATING, ""
+        return REJECT_INCONSISTENT, (f"base.A is not a rotation matrix (|A^T A - I| = {err:.3g}, "
+                                     f"det = {np.linalg.det(A):.6g})"), None
 
     def update(self, t: float, meas: dict) -> int:
         """Process one sample taken at time ``t``. Never raises on bad data.
@@ -242,7 +225,7 @@ class Identifier:
         t : float
             Sample time [s].
         meas : dict
-            Keys :data:`KEYS`; vectors (3,), ``A`` (3, 3), joint arrays (n,).
+            Keys :data:`KEYS`; vectors (3,), ``A`` (3, 3), joint arrays (n,). Copied.
 
         Returns
         -------
@@ -250,8 +233,7 @@ class Identifier:
             See :data:`spacerobot.interface.STATUS`. A rejected sample leaves every estimate,
             covariance and internal state untouched; ``self.message`` says why.
         """
-        s = {k: np.array(meas[k], float) for k in KEYS}
-        status, self.message = self.validate(s)
+        status, self.message, flat = self._validate(meas)
         if status != ESTIMATING or not math.isfinite(t):
             self.status = status if status != ESTIMATING else REJECT_NONFINITE
             if not math.isfinite(t):
@@ -260,34 +242,54 @@ class Identifier:
             return self.status
         # finite but huge inputs can still overflow inside the equations or the RLS: the update
         # is a transaction, undone entirely if anything non-finite comes out of it
-        before = self.get_state()
+        before = self._snapshot()
         try:
             with np.errstate(all="ignore"):
-                status = self._accept(t, s)
+                status = self._accept(t, flat)
             ok = self._finite(status)
             why = "the update failed: it produced non-finite numbers"
         except (ArithmeticError, ValueError, np.linalg.LinAlgError) as e:
             ok, why = False, f"the update failed ({type(e).__name__}: {e})"
         if not ok:
             rejected = self.rejected + 1
-            self.set_state(before)
+            self._restore(before)
             self.rejected, self.status = rejected, REJECT_NONFINITE
             self.message = f"{why}; are the inputs in SI units and of physical size?"
             return self.status
         return status
 
-    def _accept(self, t: float, s: dict) -> int:
+    def _snapshot(self):
+        """What an update may change, for :meth:`_restore`. Cheap: the solvers and the
+        identifier replace their arrays rather than writing into them, except the full
+        parameter vectors (copied here)."""
+        r = self.rls
+        solvers = [r] + ([r.lin, r.ang] if self.solver == "paper" else [])
+        attrs = {k: getattr(self, k) for k in _UPDATED}
+        arrays = {k: getattr(self, k).copy() for k in _WRITTEN if hasattr(self, k)}
+        return [(o, o.__dict__.copy()) for o in solvers], attrs, arrays, list(self.history)
+
+    def _restore(self, snap) -> None:
+        solvers, attrs, arrays, history = snap
+        for o, d in solvers:
+            o.__dict__.clear()
+            o.__dict__.update(d)
+        for k, v in {**attrs, **arrays}.items():
+            setattr(self, k, v)
+        self.history = history
+        self._exc = None
+
+    def _accept(self, t: float, flat: np.ndarray) -> int:
         """The update proper, for a validated sample (see :meth:`update`)."""
         if self.method == "force" and self.accel_source == "differenced":
-            s = self._differenced(t, s)
-            if s is None:
+            flat = self._differenced(t, flat)
+            if flat is None:
                 self.status = REFERENCE
                 return self.status
-        eq = self.equations(s)
-        if eq is None:
+        E = self._equations(flat)
+        if E is None:
             self.status = REFERENCE
             return self.status
-        self._solve(*eq)
+        self._solve(*_split(E))
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING
@@ -296,39 +298,35 @@ class Identifier:
     def _finite(self, status: int) -> bool:
         """True if the update left only finite numbers behind.
 
-        After a solve: the estimates, covariances and M (everything else that evolves feeds
-        them within the same update). After a sample that was only stored (the momentum
-        reference, the differencing history): what was stored. One sum per array: a sum is
-        non-finite if any element is.
+        After a solve: the residuals (the solvers refuse non-finite results themselves, see
+        :meth:`.RLS.update`). After a sample that was only stored (the momentum reference, the
+        differencing history): what was stored. One sum per array: a sum is non-finite if any
+        element is.
         """
-        r = self.rls
         total = self.residual_lin + self.residual_ang
         if status == REFERENCE:
-            arrays = list(self.reference or ())
+            if self.reference is not None:
+                total += self.reference.sum()
             if self.history:
-                arrays += list(self.history[-1][1].values())
-        else:
-            arrays = (r.lin.x, r.lin.P, r.ang.x, r.ang.P, r.M) if self.solver == "paper" \
-                else (r.x, r.P)
-        for a in arrays:
-            total += a.sum()
+                total += self.history[-1][1].sum()
         return math.isfinite(total)
 
-    def _differenced(self, t: float, s: dict):
-        """Replace the accelerations of the previous sample by 3-point central differences.
+    def _differenced(self, t: float, flat: np.ndarray):
+        """Replace the accelerations of the previous sample by 3-point central differences of
+        the velocities (flattened samples, see :meth:`_validate`).
 
         Returns the completed previous sample, or None while the history is too short.
         """
-        self.history.append((t, s))
+        self.history.append((t, flat))
         if len(self.history) < 3:
             return None
-        (t0, s0), (t1, s1), (t2, s2) = self.history[-3:]
+        (t0, x0), (t1, x1), (t2, x2) = self.history[-3:]
         self.history = self.history[-2:]
         h1, h2 = t1 - t0, t2 - t1
         c0, c1, c2 = -h2 / (h1 * (h1 + h2)), (h2 - h1) / (h1 * h2), h1 / (h2 * (h1 + h2))
-        out = dict(s1)
-        for acc, vel in (("a_S", "v_S"), ("alpha_B", "omega_B"), ("qdd", "qd")):
-            out[acc] = c0 * s0[vel] + c1 * s1[vel] + c2 * s2[vel]
+        out = x1.copy()
+        for acc, vel in self._diff_slices:
+            out[acc] = c0 * x0[vel] + c1 * x1[vel] + c2 * x2[vel]
         return out
 
     def _solve(self, A, b, phi, y, psi):
@@ -344,10 +342,9 @@ class Identifier:
             if len(th_in):
                 y = y - phi[:, th_in].dot(self.th_full[th_in])
                 phi = phi[:, self.th_idx]
-            e_lin, e_ang = self.rls.update(A, b, phi, y, psi, self._D_active)
+            e_lin, e_ang, rhs_ang = self.rls.update(A, b, phi, y, psi)
             self.mu_full[self.mu_idx] = self.rls.mu
             self.th_full[self.th_idx] = self.rls.theta
-            rhs_ang = y + psi.dot(self.rls.D_mu)
         else:
             # standard rows: linear [B, 0]; angular [Psi[:, :4], D] per body (sign: psi = -Psi)
             Y = np.zeros((len(rl) + len(ra), 20))
@@ -529,6 +526,19 @@ class Identifier:
         for k, v in st.items():
             setattr(self, k, _copy(v))
         self._exc = None
+
+
+#: attributes an update rebinds (restored by reference) and arrays it writes into (copied)
+_UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",
+            "reference")
+_WRITTEN = ("mu_full", "th_full", "pi_full")
+
+
+def _split(E: np.ndarray):
+    """``(A, b, phi, y, psi)`` views of the equation array (see :mod:`.kernels`)."""
+    k = kernels
+    return (E[:, k.COL_A:k.COL_B], E[:, k.COL_B], E[:, k.COL_PHI:k.COL_Y], E[:, k.COL_Y],
+            E[:, k.COL_PSI:k.N_COLS])
 
 
 def _copy(v):

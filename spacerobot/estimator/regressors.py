@@ -21,6 +21,9 @@ where ``T`` maps the quadratic monomials ``m bb = m [bx^2, bx by, bx bz, by^2, b
     M_i,S = (A [#(A^T beta)] + [w]x A [#(A^T w)]) I_c#                 -> Q_i theta_i
           + m rho x a_O + ([rho]x K - [a_O]x) A (m b) + Q_i T (m bb)   -> S_i m J(b)
 
+The identifier evaluates these rows for both bodies at once in compiled code
+(:func:`.kernels.equations`); the NumPy functions here are the reference it is tested against.
+
 With the 10 standard parameters ``[m, m b, I_O#]`` (``I_O = I_c + m(|b|^2 I - b b^T)``) the same
 rows are linear: ``Y_i = [[B_i, 0], [Psi_i[:, :4], D_i]]`` (momentum) and
 ``[[G_i, 0], [S_i[:, :4], Q_i]]`` (force).
@@ -29,7 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kinematics import cross3, skew, skew_stack
+from ..kinematics import cross3, skew
+from . import kernels
 
 #: paper order [I11, I12, I13, I22, I23, I33] -> project order (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)
 SHARP_TO_PROJECT = np.array([0, 3, 5, 1, 2, 4])
@@ -59,14 +63,9 @@ def sharp_vector(I: np.ndarray) -> np.ndarray:
 
 
 def D_of_mu(mu: np.ndarray) -> np.ndarray:
-    """``D(mu) = [m1 J(b1); mn J(bn)]`` (20,) from ``mu = [m1, m1 b1, mn, mn bn]`` (8,)."""
-    m1, c1x, c1y, c1z, m2, c2x, c2y, c2z = np.asarray(mu, float).tolist()
-    out = []
-    for m, cx, cy, cz in ((m1, c1x, c1y, c1z), (m2, c2x, c2y, c2z)):
-        bx, by, bz = cx / m, cy / m, cz / m
-        out += (m * 1.0, m * bx, m * by, m * bz, m * (bx * bx), m * (bx * by), m * (bx * bz),
-                m * (by * by), m * (by * bz), m * (bz * bz))
-    return np.array(out)
+    """``D(mu) = [m1 J(b1); mn J(bn)]`` (20,) from ``mu = [m1, m1 b1, mn, mn bn]`` (8,)
+    (compiled: :func:`.kernels.D_of_mu`)."""
+    return kernels.D_of_mu(np.ascontiguousarray(mu, dtype=float))
 
 
 _PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
@@ -151,59 +150,3 @@ def physical_from_standard(pi: np.ndarray):
 def sharp_to_matrix(s: np.ndarray) -> np.ndarray:
     """3x3 tensor from ``I#``."""
     return np.array([[s[0], s[1], s[2]], [s[1], s[3], s[4]], [s[2], s[4], s[5]]])
-
-
-# -- both bodies at once (the identifier's hot path) ---------------------------------------------
-
-#: ``sharp_matrix(u).ravel() == u @ _SHARP18`` (row-major 3x6)
-_SHARP18 = np.zeros((3, 18))
-for _r, _cols in enumerate(((0, 1, 2), (1, 3, 4), (2, 4, 5))):
-    for _i, _c in enumerate(_cols):
-        _SHARP18[_i, 6 * _r + _c] = 1.0
-
-
-def sharp_stack(U: np.ndarray) -> np.ndarray:
-    """``[#u]`` of the rows of ``U`` (k, 3): (k, 3, 6)."""
-    return U.dot(_SHARP18).reshape(-1, 3, 6)
-
-
-def _side_by_side(X: np.ndarray) -> np.ndarray:
-    """(2, 3, p) blocks of the two bodies -> (3, 2p) matrix ``[X_1, X_n]``."""
-    return X.transpose(1, 0, 2).reshape(3, -1)
-
-
-def momentum_terms2(r_O, A, v_O, w):
-    """:func:`momentum_terms` of base and target at once, side by side.
-
-    Parameters: stacks over the two bodies, ``r_O, v_O, w`` (2, 3), ``A`` (2, 3, 3).
-    Returns ``B`` (3, 8), ``D`` (3, 12), ``Psi`` (3, 20) = ``[X_1, X_n]``.
-    """
-    Sw = skew_stack(w)
-    Sr = skew_stack(r_O)
-    u = np.matmul(w[:, None, :], A)                              # (A^T w)^T, (2, 1, 3)
-    D = np.matmul(A, sharp_stack(u[:, 0, :]))                    # A [#(A^T w)]
-    SwA = np.matmul(Sw, A)
-    Pm = np.matmul(Sr, SwA)                                      # r x (w x A mb)
-    Pm -= np.matmul(skew_stack(v_O), A)                          # + A mb x v
-    B = np.concatenate([v_O[:, :, None], SwA], axis=2)
-    Psi = np.concatenate([np.matmul(Sr, v_O[:, :, None]), Pm, np.matmul(D, T_SHIFT)], axis=2)
-    return _side_by_side(B), _side_by_side(D), _side_by_side(Psi)
-
-
-def force_terms2(rho, A, a_O, w, beta):
-    """:func:`force_terms` of base and target at once, side by side (stacks over the bodies).
-
-    Returns ``G`` (3, 8), ``Q`` (3, 12), ``S`` (3, 20).
-    """
-    Sw = skew_stack(w)
-    K = skew_stack(beta) + np.matmul(Sw, Sw)
-    KA = np.matmul(K, A)
-    U = np.matmul(np.stack([beta, w], axis=1), A)                # rows (A^T beta)^T, (A^T w)^T
-    sh = sharp_stack(U.reshape(-1, 3)).reshape(2, 2, 3, 6)
-    Q = np.matmul(A, sh[:, 0]) + np.matmul(np.matmul(Sw, A), sh[:, 1])
-    Sr = skew_stack(rho)
-    Sm = np.matmul(Sr, KA)
-    Sm -= np.matmul(skew_stack(a_O), A)
-    G = np.concatenate([a_O[:, :, None], KA], axis=2)
-    S = np.concatenate([np.matmul(Sr, a_O[:, :, None]), Sm, np.matmul(Q, T_SHIFT)], axis=2)
-    return _side_by_side(G), _side_by_side(Q), _side_by_side(S)

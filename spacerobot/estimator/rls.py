@@ -9,9 +9,19 @@ one sample at a time, with cost independent of the number of samples.
 from __future__ import annotations
 
 import copy
-from typing import Callable
 
 import numpy as np
+
+from . import kernels
+
+
+def _raise_for(status: int) -> None:
+    """Map a kernel status to an exception (the solver's state is then left unchanged)."""
+    if status == 1:
+        raise np.linalg.LinAlgError("lam I + H P H^T is not positive definite "
+                                    "(covariance no longer positive semi-definite)")
+    if status == 2:
+        raise FloatingPointError("the update produced non-finite numbers")
 
 
 def _copy_attrs(obj, memo):
@@ -43,29 +53,20 @@ class RLS:
         return _copy_attrs(self, memo)
 
     def update(self, H: np.ndarray, y: np.ndarray):
-        """One sample. Returns the a-priori residual ``y - H x`` and the gain ``K``."""
-        lam = self.lam
-        e = y - H.dot(self.x)
-        PHt = self.P.dot(H.T)
-        S = H.dot(PHt)
-        k = S.shape[0]
-        S.flat[::k + 1] += lam                                # lam I + H P H^T
-        Si = _spd_inverse(S)                                  # small: explicit formulas
-        if Si is None:
-            Sinv_e, KT = np.split(np.linalg.solve(S, np.column_stack([e, PHt.T])), [1], axis=1)
-            K, Sinv_e = KT.T, Sinv_e[:, 0]
-        else:
-            K = PHt.dot(Si)                                   # K = P H^T (lam I + H P H^T)^-1
-            Sinv_e = Si.dot(e)
-        self.ssr = lam * self.ssr + float(e.dot(Sinv_e))
-        self.rows += k
-        self.x = self.x + K.dot(e)                            # x += K (y - H x)
-        P = self.P - K.dot(PHt.T)                             # P = (I - K H) P / lam
-        if lam != 1.0:
-            P /= lam
-        P += P.T
-        P *= 0.5
-        self.P = P
+        """One sample, ``H`` (k, p), ``y`` (k,). Returns the a-priori residual ``y - H x`` and
+        the gain ``K`` (p, k). Raises ``LinAlgError`` / ``FloatingPointError`` (state unchanged)
+        if the covariance lost definiteness or the result is not finite.
+
+        ``K = P H^T (lam I + H P H^T)^-1``, ``x += K (y - H x)``, ``P = (I - K H) P / lam``
+        (compiled: :func:`.kernels.rls_update`).
+        """
+        H = np.ascontiguousarray(H, dtype=float)
+        y = np.ascontiguousarray(y, dtype=float)
+        x, P, e, K, q, status = kernels.rls_update(self.x, self.P, H, y, self.lam)
+        _raise_for(status)
+        self.ssr = self.lam * self.ssr + q     # sum of e^T (lam I + H P H^T)^-1 e
+        self.rows += len(y)
+        self.x, self.P = x, P
         return e, K
 
     def sigma2(self, p: int) -> float:
@@ -80,22 +81,31 @@ class ModifiedRLS:
         A mu = b                        (masses and first moments, eq. 34)
         phi theta = y + psi D(mu)       (inertias, eq. 35)
 
+    with ``D(mu) = [m1 J(b1); mn J(bn)]`` (:func:`.regressors.D_of_mu`, 20 entries).
     ``M = d theta / d D`` re-references the inertia estimate to the newest ``mu`` so that
     ``theta`` always equals the batch least-squares answer over all samples at the latest ``mu``.
+    One update is one compiled call (:func:`.kernels.modified_rls_update`).
 
     Parameters
     ----------
     mu0 : (p,)  theta0 : (r,)  P_mu0 : (p, p)  P_th0 : (r, r)
-    D : callable, ``D(mu) -> (d,)`` (only evaluated here and in :meth:`update`, not stored, so
-        that the solver state is plain arrays)
     lam : forgetting factor
+    mu_fixed : (8,), optional  a full mass vector ``[m1, m1 b1, mn, mn bn]``: ``mu`` holds its
+                               entries ``active``, the others stay at these values (e.g. the
+                               out-of-plane ones of a planar robot); default: ``mu0`` (8,)
+    active : (p,) int, optional
     """
 
-    def __init__(self, mu0, theta0, P_mu0, P_th0, D: Callable[[np.ndarray], np.ndarray],
-                 lam: float = 1.0):
+    def __init__(self, mu0, theta0, P_mu0, P_th0, lam: float = 1.0, mu_fixed=None, active=None):
         self.lin = RLS(mu0, P_mu0, lam)
         self.ang = RLS(theta0, P_th0, lam)
-        self.D_mu = D(self.lin.x)
+        self.mu_fixed = np.array(self.lin.x if mu_fixed is None else mu_fixed, float)
+        self.active = (np.arange(len(self.lin.x)) if active is None
+                       else np.array(active, dtype=np.int64))
+        if self.mu_fixed.shape != (8,) or len(self.active) != len(self.lin.x):
+            raise ValueError("mu_fixed must have 8 entries and active one index per entry of mu0")
+        self.mu_fixed[self.active] = self.lin.x
+        self.D_mu = kernels.D_of_mu(self.mu_fixed)
         self.M = np.zeros((len(theta0), len(self.D_mu)))   # M(0) = 0
 
     def __deepcopy__(self, memo):
@@ -109,36 +119,18 @@ class ModifiedRLS:
     def theta(self) -> np.ndarray:
         return self.ang.x
 
-    def update(self, A, b, phi, y, psi, D: Callable[[np.ndarray], np.ndarray]):
-        """One sample of both equations. Returns the two a-priori residuals."""
-        e_lin, _ = self.lin.update(A, b)                      # step 1: mu_N
-        D_new = D(self.lin.x)
-        self.ang.x = self.ang.x + self.M.dot(D_new - self.D_mu)  # step 2 (eqs. 36-37)
-        self.D_mu = D_new
-        e_ang, K = self.ang.update(phi, y + psi.dot(D_new))  # step 3
-        self.M = self.M + K.dot(psi - phi.dot(self.M))        # step 4: M = (I - K phi) M + K psi
-        return e_lin, e_ang
-
-
-def _spd_inverse(S: np.ndarray):
-    """Inverse of a small symmetric positive definite matrix (1x1 to 3x3) by explicit
-    formulas, or None (larger, or not safely invertible): then the caller solves with LAPACK."""
-    k = S.shape[0]
-    if k == 1:
-        s = S[0, 0]
-        return np.array([[1.0 / s]]) if s > 0.0 else None
-    if k == 2:
-        a, b, _, d = S.ravel().tolist()
-        det = a * d - b * b
-        if not det > 1e-12 * (a * d):
-            return None
-        return np.array([[d, -b], [-b, a]]) / det
-    if k == 3:
-        a, b, c, _, d, e, _, _, f = S.ravel().tolist()
-        A0, B0, C0 = d * f - e * e, c * e - b * f, b * e - c * d
-        det = a * A0 + b * B0 + c * C0
-        if not det > 1e-12 * (a * d * f):
-            return None
-        D0, E0, F0 = a * f - c * c, b * c - a * e, a * d - b * b
-        return np.array([[A0, B0, C0], [B0, D0, E0], [C0, E0, F0]]) / det
-    return None
+    def update(self, A, b, phi, y, psi):
+        """One sample of both equations: ``A`` (k1, p), ``b`` (k1,), ``phi`` (k2, r), ``y`` (k2,),
+        ``psi`` (k2, 20). Returns the two a-priori residuals and ``y + psi D(mu)`` at the new
+        ``mu``."""
+        c = np.ascontiguousarray
+        lin, ang = self.lin, self.ang
+        (x1, P1, x2, P2, M, D, e1, e2, q1, q2, rhs, status) = kernels.modified_rls_update(
+            lin.x, lin.P, ang.x, ang.P, self.M, self.D_mu, c(A, dtype=float), c(b, dtype=float),
+            c(phi, dtype=float), c(y, dtype=float), c(psi, dtype=float), lin.lam, self.mu_fixed,
+            self.active)
+        _raise_for(status)
+        lin.x, lin.P, lin.ssr, lin.rows = x1, P1, lin.lam * lin.ssr + q1, lin.rows + len(e1)
+        ang.x, ang.P, ang.ssr, ang.rows = x2, P2, ang.lam * ang.ssr + q2, ang.rows + len(e2)
+        self.M, self.D_mu = M, D
+        return e1, e2, rhs

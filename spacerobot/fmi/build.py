@@ -23,7 +23,7 @@ ROOT = LIB.parent                                   # repository / install root
 #: what each FMU bundles from the library (modules and sub-packages)
 BUNDLES = {
     "plant": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "plant"),
-    "estimator": ("robots.py", "interface.py", "kinematics.py", "fmi", "estimator"),
+    "estimator": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "estimator"),
 }
 
 

@@ -1,0 +1,100 @@
+"""The identifier's compiled kernels (spacerobot/estimator/kernels.py) against the NumPy
+reference of the same equations (spacerobot.kinematics, spacerobot.estimator.regressors), at
+random, non-physical inputs where no term vanishes; and the RLS step's refusals."""
+import numpy as np
+import pytest
+
+from spacerobot.estimator import RLS, Identifier
+from spacerobot.estimator import regressors as rg
+from spacerobot.estimator.identifier import KEYS
+from spacerobot.kinematics import ArmKinematics
+from spacerobot.robots import scenario
+
+
+def random_sample(rng, n):
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    A = Q * np.sign(np.linalg.det(Q))
+    s = {k: rng.normal(size=3) for k in ("r_S", "v_S", "omega_B", "a_S", "alpha_B", "F", "M",
+                                          "J", "H")}
+    s["A"] = A
+    for k in ("q", "qd", "qdd"):
+        s[k] = rng.normal(size=n)
+    return s
+
+
+def reference_equations(robot, s, method):
+    """(A, b, phi, y, psi) of one sample, absolute (not differenced), from the NumPy code."""
+    kin = ArmKinematics(robot)
+    links, ee = kin.compute(s["r_S"], s["A"], s["v_S"], s["omega_B"], s["a_S"], s["alpha_B"],
+                            s["q"], s["qd"], s["qdd"])
+    A, w, beta = s["A"], s["A"] @ s["omega_B"], s["A"] @ s["alpha_B"]
+    if method == "momentum":
+        B1, D1, Psi1 = rg.momentum_terms(s["r_S"], A, s["v_S"], w)
+        Bn, Dn, Psin = rg.momentum_terms(ee.r, ee.A, ee.v, ee.w)
+        P_arm, L_arm = kin.momentum(links)
+        return (np.hstack([B1, Bn]), s["J"] - P_arm, np.hstack([D1, Dn]), s["H"] - L_arm,
+                -np.hstack([Psi1, Psin]))
+    G1, Q1, S1 = rg.force_terms(np.zeros(3), A, s["a_S"], w, beta)
+    Gn, Qn, Sn = rg.force_terms(ee.r - s["r_S"], ee.A, ee.a, ee.w, ee.beta)
+    F_arm, M_arm = kin.rate_of_momentum(links, s["r_S"])
+    return (np.hstack([G1, Gn]), s["F"] - F_arm, np.hstack([Q1, Qn]), s["M"] - M_arm,
+            -np.hstack([S1, Sn]))
+
+
+@pytest.mark.parametrize("robot", ["planar", "spatial"])
+@pytest.mark.parametrize("method", ["momentum", "force"])
+def test_compiled_equations_match_numpy_reference(robot, method):
+    sc = scenario(robot)
+    rng = np.random.default_rng(11)
+    ident = Identifier(sc.robot, sc.guess, method)
+    for _ in range(20):
+        s0, s1 = random_sample(rng, sc.robot.n_joints), random_sample(rng, sc.robot.n_joints)
+        if method == "momentum":
+            ident.reference = None
+            assert ident.equations(s0) is None                  # the reference sample
+            got = ident.equations(s1)
+            ref = [x1 - x0 for x1, x0 in zip(reference_equations(sc.robot, s1, method),
+                                              reference_equations(sc.robot, s0, method))]
+        else:
+            got = ident.equations(s1)
+            ref = reference_equations(sc.robot, s1, method)
+        for name, g, r in zip(("A", "b", "phi", "y", "psi"), got, ref):
+            np.testing.assert_allclose(g, r, rtol=0, atol=1e-12 * max(1.0, np.abs(r).max()),
+                                       err_msg=name)
+
+
+def test_D_of_mu_is_the_paper_map():
+    mu = np.array([500.0, 50.0, -50.0, 25.0, 250.0, 62.5, 25.0, -12.5])
+    D = rg.D_of_mu(mu)
+    for k in range(2):
+        m, b = mu[4 * k], mu[4 * k + 1:4 * k + 4] / mu[4 * k]
+        J = [1.0, *b, b[0] ** 2, b[0] * b[1], b[0] * b[2], b[1] ** 2, b[1] * b[2], b[2] ** 2]
+        np.testing.assert_allclose(D[10 * k:10 * k + 10], m * np.array(J), rtol=1e-15)
+
+
+def test_rls_refuses_an_indefinite_covariance_and_keeps_its_state():
+    rls = RLS(np.zeros(3), -np.eye(3))                          # H P H^T + I < 0
+    x, P = rls.x.copy(), rls.P.copy()
+    with pytest.raises(np.linalg.LinAlgError):
+        rls.update(np.eye(3) * 2.0, np.ones(3))
+    assert np.array_equal(rls.x, x) and np.array_equal(rls.P, P) and rls.rows == 0
+
+
+def test_rls_refuses_a_non_finite_result_and_keeps_its_state():
+    rls = RLS(np.zeros(2), 1e300 * np.eye(2))
+    x, P = rls.x.copy(), rls.P.copy()
+    with pytest.raises(FloatingPointError):
+        rls.update(np.array([[1e10, 0.0]]), np.array([1e300]))
+    assert np.array_equal(rls.x, x) and np.array_equal(rls.P, P) and rls.rows == 0
+
+
+def test_sample_of_wrong_shape_is_rejected_with_its_name():
+    sc = scenario("spatial")
+    ident = Identifier(sc.robot, sc.guess)
+    s = random_sample(np.random.default_rng(2), sc.robot.n_joints)
+    s["qd"] = np.zeros(sc.robot.n_joints + 1)
+    s["q"] = np.zeros(sc.robot.n_joints - 1)                    # same total length
+    assert ident.update(0.0, s) == 4
+    assert "input q has shape" in ident.message
+    assert ident.samples == 0 and ident.reference is None and ident.rejected == 1
+    assert list(KEYS)[6] == "q"
