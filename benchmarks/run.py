@@ -180,6 +180,7 @@ def cosim_speed(systems: dict, seconds: dict, repeats: int) -> dict:
     """run_ssp at two stop times (the difference removes instantiation and set-up) and the bare
     RK4 loop, interleaved, best of ``repeats``; plus a per-component breakdown."""
     from spacerobot.system.runner import run_ssp
+    gc.collect()               # start every round with no garbage of earlier sections
     res = {}
     for robot, ssp_paths in systems.items():
         sc = scenario(robot)
@@ -709,11 +710,15 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     L.append(table(["robot", "core, momentum [us]", "core, force [us]",
                     "core, momentum, joint RLS [us]", "FMU setReal [us]", "FMU doStep [us]",
                     "FMU getReal estimates [us]"], rows))
-    L.append("\nThe core update includes its safety net (a snapshot of the state and a finiteness "
-             "check, to undo an update that overflows; ~15 us). The FMU's `doStep` adds the "
-             "gathering of the 45 scalar inputs into arrays and the refresh of the outputs; the "
-             "excitation diagnostics and the standard deviations are computed only when read "
-             "(section 1 shows that cost when `run_ssp` records every output).\n")
+    L.append("\nThe core update is the validation of the sample, the compiled equations "
+             "(`spacerobot/estimator/kernels.py`: arm kinematics, arm momentum or rate of "
+             "momentum, regressors of both bodies) and the compiled modified RLS step, plus its "
+             "safety net (a snapshot of what the update changes, to undo an update that "
+             "overflows; a few us). The FMU's `doStep` adds the gathering of the 45 scalar "
+             "inputs into arrays and the refresh of the outputs; the excitation diagnostics and "
+             "the standard deviations are computed only when read (section 1 shows that cost "
+             "when `run_ssp` records every output). Targets of issue #6: core <= 50 us "
+             "(spatial), FMU `doStep` <= 150 us.\n")
     L.append("\n### One-step RLS against a batch re-solve\n")
     L.append("The batch alternative re-solves over all N samples at every new sample: stack the "
              "rows, `lstsq` for mu, then `lstsq` for theta with the right-hand side "
