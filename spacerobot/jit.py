@@ -9,6 +9,11 @@ content-addressed directory of the user's cache (``$SPACEROBOT_CACHE_DIR``, else
 extraction of every FMU built from the same source share one compiled cache, so only the very
 first run on a machine compiles. If that directory cannot be written, the module is imported
 from where it is (and compiled in each new process).
+
+A kernel module must be self-contained (only NumPy, Numba and its own functions): Numba keys a
+cached function by its own source file and does not notice a change in a compiled callee that
+lives in another file, and here the content hash of the one file names the cache. That is why
+the plant's and the estimator's kernel modules each carry their own small Cholesky solve.
 """
 from __future__ import annotations
 

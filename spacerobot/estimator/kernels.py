@@ -21,7 +21,9 @@ arm recursion, written there in NumPy and used by the tests as the reference) an
 ``A mu = b`` and ``phi theta = y + psi D(mu)``; for the momentum form the identifier
 subtracts the reference sample's ``E``.
 
-Compiled on first use and cached on disk (see :mod:`spacerobot.jit`).
+Compiled on first use and cached on disk (see :mod:`spacerobot.jit`; self-contained for that
+reason, so the Cholesky solve of :func:`rls_update` is written out here as in the plant's
+kernels).
 """
 from __future__ import annotations
 

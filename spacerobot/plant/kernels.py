@@ -21,7 +21,8 @@ kernel returns 0, or a positive code for a singular matrix (see :data:`ERRORS`).
 state propagates as NaN (the plant reports it after the step) and is not mistaken for a
 singular matrix.
 
-Compiled on first use in a process and cached on disk next to this file where it is writable.
+Compiled on first use and cached on disk (see :mod:`spacerobot.jit`, which is also why this
+module is self-contained).
 """
 from __future__ import annotations
 
