@@ -347,3 +347,32 @@ def test_each_method_reads_only_its_signals(planar_record, method, unused):
         c.update(t, wrong)
     np.testing.assert_array_equal(a.vector(), b.vector())
     assert np.abs(a.vector() - c.vector()).max() > 1e-3
+
+
+# ------------------------------------------------------------------------------------------------
+# standard deviations: the analytic delta method against finite differences of the same map
+# ------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("solver", ["paper", "joint"])
+@pytest.mark.parametrize("which", ["planar", "spatial"])
+def test_std_delta_method_matches_finite_differences(which, solver, planar_record,
+                                                     spatial_record):
+    sc, rec = planar_record if which == "planar" else spatial_record
+    ident = Identifier(sc.robot, sc.guess, "momentum", solver)
+    for t, o in rec[:40]:
+        ident.update(t, o)
+    cov, z, g = ident._covariance()
+    # central differences of the map z -> vector(), independent of Identifier._jacobian
+    J = np.empty((20, len(z)))
+    for j in range(len(z)):
+        dz = 1e-6 * max(abs(z[j]), 1e-2)
+        zp, zm = z.copy(), z.copy()
+        zp[j] += dz
+        zm[j] -= dz
+        J[:, j] = (g(zp) - g(zm)) / (2 * dz)
+    np.testing.assert_allclose(ident._jacobian(z), J, rtol=1e-6, atol=1e-7)
+    ref = np.sqrt(np.einsum("ij,jk,ik->i", J, cov, J))
+    np.testing.assert_allclose(ident.std(), ref, rtol=1e-6)
+    np.testing.assert_array_equal(ident.vector(), g(z))     # the map is the reported vector
+    assert np.all(ident.std() > 0)

@@ -414,46 +414,46 @@ class Identifier:
         """Standard deviations of :meth:`vector` (20,), residual-variance scaled.
 
         Parameters that are not identified (planar out-of-plane ones) report the square root of
-        their prior covariance. Propagated with first-order (delta-method) Jacobians.
+        their prior covariance. Propagated with the first-order (delta-method) Jacobian of the
+        map from the internal parameters to :meth:`vector`, written out in :meth:`_jacobian`.
         """
         cov, z, _ = self._covariance()
-        # forward differences, all perturbed copies of z at once (row 0: z itself)
-        nz = len(z)
-        dz = 1e-7 * np.maximum(np.abs(z), 1e-3)
-        Z = np.repeat(z[None, :], nz + 1, axis=0)
-        Z[np.arange(1, nz + 1), np.arange(nz)] += dz
-        Fz = self._g_rows(Z)
-        Jg = ((Fz[1:] - Fz[0]) / dz[:, None]).T
-        return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", Jg, cov, Jg), 0.0, None))
+        J = self._jacobian(z)
+        return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", J, cov, J), 0.0, None))
 
-    def _g_rows(self, Z: np.ndarray) -> np.ndarray:
-        """The map z -> :meth:`vector` of :meth:`_covariance`, applied to every row of ``Z``."""
-        out = np.empty((len(Z), 20))
+    def _jacobian(self, z: np.ndarray) -> np.ndarray:
+        """d vector / d z (20, 20) for the internal parameters ``z`` of :meth:`_covariance`.
+
+        Per body (m, c = m b): ``b = c / m`` gives ``db/dc = I / m``, ``db/dm = -c / m^2``.
+        Paper solver: the CoM inertia is a parameter (permuted). Joint solver:
+        ``I_c = I_O - S(c) / m`` with ``S(c) = |c|^2 I - c c^T``, so ``dI_c/dI_O = I``,
+        ``dI_c/dm = S / m^2`` and ``dI_c,ij/dc_k = -(2 c_k d_ij - d_ik c_j - c_i d_jk) / m``.
+        """
+        J = np.zeros((20, 20))
         perm = rg.SHARP_TO_PROJECT
+        paper = self.solver == "paper"
         for k in range(2):
             o = 10 * k
-            if self.solver == "paper":
-                m = Z[:, 4 * k]
-                out[:, o] = m
-                out[:, o + 1:o + 4] = Z[:, 4 * k + 1:4 * k + 4] / m[:, None]
-                out[:, o + 4:o + 10] = Z[:, 8 + 6 * k:8 + 6 * k + 6][:, perm]
-            else:
-                m = Z[:, o]
-                b = Z[:, o + 1:o + 4] / m[:, None]
-                b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
-                bb = b0 * b0 + b1 * b1 + b2 * b2
-                s = Z[:, o + 4:o + 10]                           # I_O# (paper order)
-                Ic = np.empty((len(Z), 6))
-                Ic[:, 0] = s[:, 0] - m * (bb - b0 * b0)
-                Ic[:, 1] = s[:, 1] - m * (0.0 - b0 * b1)
-                Ic[:, 2] = s[:, 2] - m * (0.0 - b0 * b2)
-                Ic[:, 3] = s[:, 3] - m * (bb - b1 * b1)
-                Ic[:, 4] = s[:, 4] - m * (0.0 - b1 * b2)
-                Ic[:, 5] = s[:, 5] - m * (bb - b2 * b2)
-                out[:, o] = m
-                out[:, o + 1:o + 4] = b
-                out[:, o + 4:o + 10] = Ic[:, perm]
-        return out
+            zm = 4 * k if paper else o                   # index of m (then c) in z
+            m = z[zm]
+            c = z[zm + 1:zm + 4]
+            J[o, zm] = 1.0
+            for i in range(3):
+                J[o + 1 + i, zm + 1 + i] = 1.0 / m
+                J[o + 1 + i, zm] = -c[i] / m**2
+            zs = 8 + 6 * k if paper else o + 4           # the six inertia entries (paper order)
+            for jp, p in enumerate(perm):                 # output jp <- paper-order entry p
+                J[o + 4 + jp, zs + p] = 1.0
+                if paper:
+                    continue
+                i, j = rg.SHARP_PAIRS[p]
+                S_ij = (c @ c if i == j else 0.0) - c[i] * c[j]
+                J[o + 4 + jp, zm] = S_ij / m**2
+                for kk in range(3):
+                    dS = (2.0 * c[kk] if i == j else 0.0) - (c[j] if kk == i else 0.0) \
+                        - (c[i] if kk == j else 0.0)
+                    J[o + 4 + jp, zm + 1 + kk] = -dS / m
+        return J
 
     def _covariance(self):
         """Covariance of the internal parameter vector z, z itself, and z -> :meth:`vector`."""

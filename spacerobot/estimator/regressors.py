@@ -68,7 +68,8 @@ def D_of_mu(mu: np.ndarray) -> np.ndarray:
     return kernels.D_of_mu(np.ascontiguousarray(mu, dtype=float))
 
 
-_PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+#: index pairs (i, j) of the entries of I# (eq. 21)
+SHARP_PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
 
 
 def D_jacobian(mu: np.ndarray) -> np.ndarray:
@@ -82,7 +83,7 @@ def D_jacobian(mu: np.ndarray) -> np.ndarray:
         for i in range(3):
             Jac[r + 1 + i][cc + 1 + i] = 1.0
         m2 = m**2
-        for p, (i, j) in enumerate(_PAIRS):
+        for p, (i, j) in enumerate(SHARP_PAIRS):
             # d(c_i c_j / m)
             row = Jac[r + 4 + p]
             row[cc] = -c[i] * c[j] / m2
