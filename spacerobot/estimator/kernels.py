@@ -108,57 +108,45 @@ def _shift(E, src, dst, sign):
 
 @njit(**_NB)
 def _body_rows(force, k, r_O, A, v_O, w, a_O, beta, rho, E):
-    """Columns of body ``k`` (0 base, 1 target) in ``E`` (see the module docstring)."""
+    """Columns of body ``k`` (0 base, 1 target) in ``E`` (see the module docstring).
+
+    Momentum: ``B = [v_O, [w]x A]``, ``D = A [#(A^T w)]``,
+    ``-Psi = -[r_O x v_O, ([r_O]x [w]x - [v_O]x) A, D T]``.
+    Force: ``G = [a_O, K A]`` with ``K = [beta]x + [w]x[w]x``,
+    ``Q = A [#(A^T beta)] + [w]x A [#(A^T w)]``, ``-S = -[rho x a_O, ([rho]x K - [a_O]x) A, Q T]``.
+    The two share their shape: a vector ``l`` (v_O / a_O), a lever ``r`` (r_O / rho) and a map
+    ``X`` ([w]x / K): ``[l, X A]`` and ``[r x l, ([r]x X - [l]x) A, ...]``.
+    """
     cA, cP, cS = COL_A + 4 * k, COL_PHI + 6 * k, COL_PSI + 10 * k
+    lvec = a_O if force else v_O
+    lever = rho if force else r_O
     u = np.empty(3)
     t1 = np.empty(3)
     t2 = np.empty(3)
     col = np.empty(3)
-    if not force:
-        # B = [v_O, [w]x A];  D = A [#(A^T w)];  -Psi = -[r_O x v_O, ([r_O]x[w]x - [v_O]x) A, D T]
-        _cross(r_O, v_O, t1)
-        for i in range(3):
-            E[i, cA] = v_O[i]
-            E[i, cS] = -t1[i]
-        for j in range(3):
-            col[0], col[1], col[2] = A[0, j], A[1, j], A[2, j]
-            _cross(w, col, t1)                        # w x A_j
-            _cross(r_O, t1, t2)                       # r_O x (w x A_j)
-            _cross(v_O, col, u)                       # v_O x A_j
-            for i in range(3):
-                E[i, cA + 1 + j] = t1[i]
-                E[i, cS + 1 + j] = -(t2[i] - u[i])
-        for i in range(3):
-            for c in range(6):
-                E[i, cP + c] = 0.0
-        _matTvec(A, w, u)
-        _a_sharp(A, u, E, 0, cP, 1.0)
-        _shift(E, cP, cS + 4, -1.0)
-    else:
-        # K = [beta]x + [w]x[w]x;  G = [a_O, K A];  Q = A [#(A^T beta)] + [w]x A [#(A^T w)]
-        # -S = -[rho x a_O, ([rho]x K - [a_O]x) A, Q T]
-        _cross(rho, a_O, t1)
-        for i in range(3):
-            E[i, cA] = a_O[i]
-            E[i, cS] = -t1[i]
-        for j in range(3):
-            col[0], col[1], col[2] = A[0, j], A[1, j], A[2, j]
-            _cross(w, col, t1)
+    _cross(lever, lvec, t1)
+    for i in range(3):
+        E[i, cA] = lvec[i]
+        E[i, cS] = -t1[i]
+    for j in range(3):
+        col[0], col[1], col[2] = A[0, j], A[1, j], A[2, j]
+        _cross(w, col, t1)                            # [w]x A_j
+        if force:
             _cross(w, t1, t2)                         # w x (w x A_j)
             _cross(beta, col, t1)                     # beta x A_j
             for i in range(3):
                 t1[i] += t2[i]                        # K A_j
-                E[i, cA + 1 + j] = t1[i]
-            _cross(rho, t1, t2)                       # rho x K A_j
-            _cross(a_O, col, u)                       # a_O x A_j
-            for i in range(3):
-                E[i, cS + 1 + j] = -(t2[i] - u[i])
+        _cross(lever, t1, t2)                         # r x X A_j
+        _cross(lvec, col, u)                          # l x A_j
         for i in range(3):
-            for c in range(6):
-                E[i, cP + c] = 0.0
-        _matTvec(A, beta, u)
-        _a_sharp(A, u, E, 0, cP, 1.0)                 # A [#(A^T beta)]
-        # [w]x A [#(A^T w)]: the columns of A [#u] crossed with w
+            E[i, cA + 1 + j] = t1[i]
+            E[i, cS + 1 + j] = -(t2[i] - u[i])
+    for i in range(3):
+        for c in range(6):
+            E[i, cP + c] = 0.0
+    _matTvec(A, beta if force else w, u)
+    _a_sharp(A, u, E, 0, cP, 1.0)                     # A [#(A^T w)] or A [#(A^T beta)]
+    if force:                                         # + [w]x A [#(A^T w)]
         _matTvec(A, w, u)
         tmpE = np.zeros((3, 6))
         _a_sharp(A, u, tmpE, 0, 0, 1.0)
@@ -167,7 +155,7 @@ def _body_rows(force, k, r_O, A, v_O, w, a_O, beta, rho, E):
             _cross(w, col, t1)
             for i in range(3):
                 E[i, cP + c] += t1[i]
-        _shift(E, cP, cS + 4, -1.0)
+    _shift(E, cP, cS + 4, -1.0)                       # -(D or Q) T
 
 
 @njit(**_NB)
