@@ -59,7 +59,7 @@ def load(package: str, name: str) -> ModuleType:
     src = Path(sys.modules[package].__file__).with_name(f"{name}.py")
     try:
         path = _stable_copy(src)
-    except OSError:
+    except (OSError, RuntimeError):     # unwritable cache, or no home directory to put it in
         path = src
     spec = importlib.util.spec_from_file_location(full, path)
     module = importlib.util.module_from_spec(spec)
