@@ -98,3 +98,19 @@ def test_sample_of_wrong_shape_is_rejected_with_its_name():
     assert "input q has shape" in ident.message
     assert ident.samples == 0 and ident.reference is None and ident.rejected == 1
     assert list(KEYS)[6] == "q"
+
+
+def test_rotation_tolerance_band_and_list_inputs_are_accepted():
+    """The fast path's rotation test (5e-7) is tighter than the rule (|A^T A - I| <= 1e-6):
+    a sample in between takes the careful path and is used; so are samples given as lists."""
+    sc = scenario("spatial")
+    rng = np.random.default_rng(5)
+    s = random_sample(rng, sc.robot.n_joints)
+    ident = Identifier(sc.robot, sc.guess)
+    A = np.eye(3)
+    A[0, 0] = 1.0 + 3.5e-7                       # |A^T A - I| = 7e-7
+    assert 5e-7 < np.abs(A.T @ A - np.eye(3)).max() <= 1e-6
+    s["A"] = A
+    assert ident.update(0.0, s) == 1 and ident.reference is not None, ident.message
+    s2 = {k: np.asarray(v).tolist() for k, v in random_sample(rng, sc.robot.n_joints).items()}
+    assert ident.update(0.1, s2) == 2 and ident.samples == 1, ident.message

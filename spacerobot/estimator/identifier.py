@@ -197,7 +197,9 @@ class Identifier:
                     return ESTIMATING, "", flat
         except (ValueError, TypeError, AttributeError):
             pass
-        # careful path (and the messages)
+        # careful path (and the messages; it also accepts what the fast path's tighter
+        # rotation test or its type handling left to it)
+        arrays = []
         for k, size in zip(KEYS, self._sizes):
             try:
                 x = np.array(meas[k], float)
@@ -212,10 +214,13 @@ class Identifier:
             if np.abs(x).max() > INPUT_LIMIT:
                 return REJECT_NONFINITE, (f"input {k} = {np.array2string(x, precision=4)} is beyond "
                                           f"the physical range |x| <= {INPUT_LIMIT:g} (SI units?)"), None
+            arrays.append(x.ravel())
         A = np.asarray(meas["A"], float)
         err = np.abs(A.T @ A - np.eye(3)).max()
-        return REJECT_INCONSISTENT, (f"base.A is not a rotation matrix (|A^T A - I| = {err:.3g}, "
-                                     f"det = {np.linalg.det(A):.6g})"), None
+        if err > 1e-6 or np.linalg.det(A) <= 0.0:
+            return REJECT_INCONSISTENT, (f"base.A is not a rotation matrix (|A^T A - I| = "
+                                         f"{err:.3g}, det = {np.linalg.det(A):.6g})"), None
+        return ESTIMATING, "", np.concatenate(arrays)
 
     def update(self, t: float, meas: dict) -> int:
         """Process one sample taken at time ``t``. Never raises on bad data.
