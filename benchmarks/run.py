@@ -43,7 +43,8 @@ if str(ROOT) not in sys.path:
 
 from spacerobot.estimator import Identifier  # noqa: E402
 from spacerobot.plant import Plant  # noqa: E402
-from spacerobot.interface import ESTIMATE_NAMES, identified_estimates  # noqa: E402
+from spacerobot.interface import (ESTIMATE_NAMES, estimate_vector,  # noqa: E402
+                                  identified_estimates, relative_errors)
 from spacerobot.system.instance import FMUInstance  # noqa: E402
 from spacerobot.robots import PAPER_PLANAR_MEDIUM, PLANAR, scenario  # noqa: E402
 
@@ -86,24 +87,6 @@ def machine() -> dict:
             "fmpy": fmpy.__version__, "pythonfmu": pfmu, "platform": platform.platform(),
             "date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
             "load": os.getloadavg()}
-
-
-def truth_vector(sc) -> np.ndarray:
-    return np.concatenate([[sc.robot.base.mass], sc.robot.base.com, sc.robot.base.inertia,
-                           [sc.target.mass], sc.target.com, sc.target.inertia])
-
-
-def error_scale(truth: np.ndarray) -> np.ndarray:
-    """Scale of the relative error: |truth|, or 1 m (CoM) / largest principal moment (inertia)
-    where the truth is zero (the tests' convention)."""
-    scale = np.abs(truth).copy()
-    for k in range(2):
-        o = 10 * k
-        imax = np.max(np.abs(truth[o + 4:o + 7]))
-        for i in range(o, o + 10):
-            if scale[i] == 0.0:
-                scale[i] = 1.0 if i - o < 4 else imax
-    return scale
 
 
 def new_plant(sc) -> Plant:
@@ -412,8 +395,7 @@ def batch_cost(outs: list, sc, Ns, repeats: int = 5) -> dict:
 
 def accuracy(robot: str, seconds: float = 60.0) -> dict:
     sc = scenario(robot)
-    truth = truth_vector(sc)
-    scale = error_scale(truth)
+    truth = estimate_vector(sc.robot.base, sc.target)
     idx = PLANAR_IDENTIFIED if sc.robot.planar else list(range(20))
     p = new_plant(sc)
     ids = {lab: Identifier(sc.robot, sc.guess, method=m, solver=s, accel_source=a)
@@ -430,7 +412,7 @@ def accuracy(robot: str, seconds: float = 60.0) -> dict:
             p.advance(0.1)
     out = {"truth": truth, "idx": idx, "variants": {}}
     for lab, H in hist.items():
-        err = np.abs(H - truth) / scale
+        err = relative_errors(H, truth)
         k20 = int(round(20.0 / 0.1))
         transit = []
         for i in range(20):

@@ -9,7 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Tuple
 
-from .robots import INERTIA_NAMES, Robot, Scenario
+import numpy as np
+
+from .robots import INERTIA_NAMES, RigidBody, Robot, Scenario
 
 #: unit -> SI base-unit exponents, for the FMI UnitDefinitions
 UNITS: Dict[str, Dict[str, int]] = {
@@ -227,6 +229,34 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
 #: The 20 estimates (and truth parameters), in the order of ``Identifier.vector()``.
 ESTIMATE_NAMES: Tuple[str, ...] = tuple(
     f"{who}.{p}" for who in ("base", "target") for p in ("m", "b[1]", "b[2]", "b[3]", *INERTIA_NAMES))
+
+
+def estimate_vector(base: RigidBody, target: RigidBody) -> np.ndarray:
+    """Two bodies as one (20,) vector in the order of :data:`ESTIMATE_NAMES` (the truth that
+    ``Identifier.vector()`` estimates)."""
+    return np.concatenate([[base.mass], base.com, base.inertia,
+                           [target.mass], target.com, target.inertia]).astype(float)
+
+
+def error_scale(truth: np.ndarray) -> np.ndarray:
+    """Scale of the relative error of each entry of a (20,) truth vector: ``|truth|``, or where
+    the truth is zero (a CoM component, a product of inertia) 1 m for ``b`` and the body's
+    largest principal moment for the inertia elements."""
+    truth = np.asarray(truth, float)
+    scale = np.abs(truth)
+    for o in (0, 10):
+        imax = np.abs(truth[o + 4:o + 7]).max()
+        for i in range(o, o + 10):
+            if scale[i] == 0.0:
+                scale[i] = 1.0 if i - o < 4 else (imax if imax > 0.0 else 1.0)
+    return scale
+
+
+def relative_errors(est: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """``|est - truth| / error_scale(truth)``; ``est`` (..., 20) in the order of
+    :data:`ESTIMATE_NAMES`."""
+    truth = np.asarray(truth, float)
+    return np.abs(np.asarray(est, float) - truth) / error_scale(truth)
 
 
 def identified_estimates(robot: Robot) -> List[str]:

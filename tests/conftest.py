@@ -9,14 +9,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import calloc, extract, free, read_model_description
-from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy import extract, read_model_description
 
 from spacerobot import interface
 from spacerobot.fmi.build import build_fmu
 from spacerobot.robots import PLANAR, scenario
-from spacerobot.system.instance import FMUInstance
+from spacerobot.system.instance import FMUInstance, logger_callbacks
 
 
 @pytest.fixture(scope="session")
@@ -54,33 +52,17 @@ _EXTRACTED: dict = {}
 
 
 def logged_slave(path, name: str) -> Slave:
-    """A conftest ``Slave`` instantiated with its own logger; ``slave.messages`` collects
-    (status, category, message) tuples.
-
-    The logger is called directly, not through fmpy's ``addLoggerProxy``: that proxy holds ONE
-    process-wide Python target (the last registered), which would redirect the messages of
-    every other instance in the test session. Our FMUs pass the whole message as the printf
-    format string with ``%`` escaped, so ``%%`` is undone here.
-    """
+    """A conftest ``Slave`` instantiated with its own logger
+    (:func:`spacerobot.system.instance.logger_callbacks`); ``slave.messages`` collects
+    (status, category, message) tuples."""
     key = str(path)
     if key not in _EXTRACTED:
         _EXTRACTED[key] = (read_model_description(key), extract(key))
     messages = []
-
-    def logger(env, instance, status, category, message):
-        try:
-            messages.append((int(status), (category or b"").decode("utf-8", "replace"),
-                             (message or b"").decode("utf-8", "replace").replace("%%", "%")))
-        except Exception:       # never let an exception cross the C boundary
-            pass
-
-    cb = fmi2CallbackFunctions()
-    cb.logger = fmi2CallbackLoggerTYPE(logger)
-    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    cb = logger_callbacks(lambda _inst, status, category, text:
+                          messages.append((status, category, text)))
     s = Slave(path, name, callbacks=cb, logging_on=True, extracted=_EXTRACTED[key])
     s.messages = messages
-    s._logger = logger               # alive as long as the slave object
     return s
 
 
@@ -155,8 +137,7 @@ class Pair:
 
 def truth_vector(sc) -> np.ndarray:
     """Truth in the order of Identifier.vector(): base m, b, I6, target m, b, I6."""
-    return np.concatenate([[sc.robot.base.mass], sc.robot.base.com, sc.robot.base.inertia,
-                           [sc.target.mass], sc.target.com, sc.target.inertia])
+    return interface.estimate_vector(sc.robot.base, sc.target)
 
 
 ESTIMATE_NAMES = list(interface.ESTIMATE_NAMES)
@@ -165,15 +146,5 @@ ESTIMATE_NAMES = list(interface.ESTIMATE_NAMES)
 PLANAR_IDENTIFIED = [ESTIMATE_NAMES.index(n) for n in interface.identified_estimates(PLANAR)]
 
 
-def relative_errors(est: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    """|est - truth| / |truth|; for a zero truth (CoM component, product of inertia) the error
-    is taken relative to the body's scale: 1 m for b, the largest principal moment for I."""
-    est, truth = np.asarray(est, float), np.asarray(truth, float)
-    scale = np.abs(truth).copy()
-    for k in range(2):
-        o = 10 * k
-        Imax = np.max(np.abs(truth[o + 4:o + 7]))
-        for i in range(o, o + 10):
-            if scale[i] == 0.0:
-                scale[i] = 1.0 if i - o < 4 else Imax
-    return np.abs(est - truth) / scale
+#: |est - truth| / |truth|, relative to the body's scale where the truth is zero
+relative_errors = interface.relative_errors

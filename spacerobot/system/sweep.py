@@ -74,6 +74,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
+from ..interface import ESTIMATE_NAMES, error_scale, estimate_vector, identified_estimates
 from ..robots import DEFAULT_TARGET, INERTIA_NAMES, ROBOTS, TARGETS, scenario
 
 #: where a point's co-simulation and the .ssp build come from ("module:function")
@@ -84,16 +85,10 @@ METHOD_CODES = {"momentum": 1, "force": 2}
 ACCEL_CODES = {"measured": 1, "differenced": 2}
 
 #: every estimated parameter, in the order of ``Identifier.vector()``
-PARAMS: Tuple[str, ...] = tuple(
-    f"{who}.{p}" for who in ("base", "target")
-    for p in ("m", "b[1]", "b[2]", "b[3]", *INERTIA_NAMES))
+PARAMS: Tuple[str, ...] = ESTIMATE_NAMES
 
 #: the parameters each robot identifies (the planar model: x, y translation, z rotation)
-IDENTIFIED = {
-    "planar": tuple(f"{who}.{p}" for who in ("base", "target")
-                    for p in ("m", "b[1]", "b[2]", "Izz")),
-    "spatial": PARAMS,
-}
+IDENTIFIED = {name: tuple(identified_estimates(robot)) for name, robot in ROBOTS.items()}
 
 DIAG = ("diag.samples", "diag.rejected", "diag.status")
 
@@ -253,11 +248,8 @@ def _lookup(mapping, name: str, prefix: str):
 def expected_truth(point: Point) -> Dict[str, float]:
     """Truth of the point from the robot, the target and the point's overrides."""
     robot = ROBOTS[point.robot]
-    truth: Dict[str, float] = {}
-    for who, body in (("base", robot.base), ("target", TARGETS[point.robot][point.target])):
-        truth[f"{who}.m"] = float(body.mass)
-        truth.update({f"{who}.b[{i + 1}]": float(body.com[i]) for i in range(3)})
-        truth.update({f"{who}.{n}": float(body.inertia[k]) for k, n in enumerate(INERTIA_NAMES)})
+    truth = dict(zip(PARAMS, estimate_vector(robot.base,
+                                             TARGETS[point.robot][point.target]).tolist()))
     for k, x in point.overrides:
         if k.startswith("plant.") and k[6:] in truth:
             truth[k[6:]] = float(x)
@@ -265,21 +257,11 @@ def expected_truth(point: Point) -> Dict[str, float]:
 
 
 def relative_errors(est: Mapping[str, float], truth: Mapping[str, float]) -> Dict[str, float]:
-    """``|est - true| / scale`` per parameter (see the module docstring for ``scale``)."""
-    out = {}
-    for who in ("base", "target"):
-        imax = max(abs(truth.get(f"{who}.{n}", 0.0)) for n in ("Ixx", "Iyy", "Izz"))
-        for p in PARAMS:
-            if not p.startswith(who + "."):
-                continue
-            e, t = est.get(p), truth.get(p)
-            if e is None or t is None:
-                continue
-            scale = abs(t)
-            if scale == 0.0:
-                scale = 1.0 if ".b[" in p else (imax or 1.0)
-            out[p] = abs(e - t) / scale
-    return out
+    """``|est - true| / scale`` per parameter (see the module docstring for ``scale``), for the
+    parameters that have both an estimate and a truth."""
+    scale = error_scale([truth.get(p, 0.0) for p in PARAMS])
+    return {p: abs(est[p] - truth[p]) / s for p, s in zip(PARAMS, scale.tolist())
+            if est.get(p) is not None and truth.get(p) is not None}
 
 
 def run_point(point: Point, ssp_path: str, runner: str = DEFAULT_RUNNER) -> Dict[str, object]:
