@@ -7,7 +7,39 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
-from typing import List, Optional, Sequence
+from typing import Callable, List, Optional, Sequence
+
+
+def logger_callbacks(sink: Callable[[str, int, str, str], None]):
+    """fmpy ``fmi2CallbackFunctions`` whose logger calls ``sink(instance, status, category,
+    message)`` with decoded strings.
+
+    The logger is called directly by the FMU, not through fmpy's ``addLoggerProxy``: that proxy
+    keeps ONE process-global Python target, so registering through it would redirect every other
+    FMU's messages in the process (and leave a dangling pointer once the target is gone). The
+    message then arrives as the printf format string, which for our pythonfmu FMUs is the whole
+    message with ``%`` escaped as ``%%`` (undone here). Keep the returned structure alive as long
+    as an instance uses it (it holds the ctypes callables).
+    """
+    from fmpy import calloc, free
+    from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+    def text(b) -> str:
+        return b.decode("utf-8", "replace") if b else ""
+
+    def logger(component, instance_name, status, category, message):
+        try:
+            sink(text(instance_name) or "?", int(status), text(category),
+                 text(message).replace("%%", "%"))
+        except Exception:  # never let an exception cross the C boundary
+            pass
+
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(logger)
+    cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    return cb
 
 
 class FMUInstance:

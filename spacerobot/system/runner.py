@@ -172,42 +172,25 @@ def read_system(root_dir: str | Path) -> SystemInfo:
 # ----------------------------------------------------------------------------------------------
 
 class _Log:
-    """Collects FMU log messages, the last ``maxlen`` per instance.
-
-    fmpy's C logger proxy (``fmpy.logging.addLoggerProxy``) keeps ONE process-global target,
-    so registering a Python logger through it would redirect every other FMU's messages in the
-    process (and leave a dangling pointer once this object is gone). This logger is therefore
-    called directly: the message arrives as the printf format string, which for our pythonfmu
-    FMUs is the whole message with ``%`` escaped as ``%%`` (undone here).
-    """
+    """Collects FMU log messages, the last ``maxlen`` per instance (through
+    :func:`~spacerobot.system.instance.logger_callbacks`, which explains why the logger is
+    called directly rather than through fmpy's logger proxy)."""
 
     def __init__(self, maxlen: int = 200):
+        from .instance import logger_callbacks
+
         self.messages: Dict[str, collections.deque] = collections.defaultdict(
             lambda: collections.deque(maxlen=maxlen))
         self.all: List[Tuple[str, str, str, str]] = []
-        from fmpy import calloc, free
-        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
-        def logger(component, instance_name, status, category, message):
-            try:
-                inst = instance_name.decode("utf-8", "replace") if instance_name else "?"
-                label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
-                text = message.decode("utf-8", "replace").replace("%%", "%") if message else ""
-                rec = (inst, label, category.decode("utf-8", "replace") if category else "",
-                       text)
-                self.messages[inst].append(rec)
-                if status >= 1 and len(self.all) < 10000:   # warnings and worse
-                    self.all.append(rec)
-            except Exception:  # never let an exception cross the C boundary
-                pass
+        def sink(inst: str, status: int, category: str, text: str) -> None:
+            label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
+            rec = (inst, label, category, text)
+            self.messages[inst].append(rec)
+            if status >= 1 and len(self.all) < 10000:   # warnings and worse
+                self.all.append(rec)
 
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(logger)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        self._logger = logger           # keep the Python callables alive with this object
-        self.callbacks = cb
+        self.callbacks = logger_callbacks(sink)
 
     def recent(self, instance: str, n: int = 10) -> str:
         msgs = list(self.messages.get(instance, []))[-n:]
