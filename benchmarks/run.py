@@ -357,7 +357,7 @@ def fmu_dostep_cost(est_fmu: Path, outs: list, names: list, repeats: int = 3) ->
 def batch_cost(outs: list, sc, Ns, repeats: int = 5) -> dict:
     """The two-step batch alternative (momentum form): stack the rows of all N samples,
     lstsq for mu, then lstsq for theta with y + psi D(mu): seconds per re-solve at N."""
-    from spacerobot.estimator import regressors as rg
+    from spacerobot.estimator import parameters as rg
     ident = Identifier(sc.robot, sc.guess, method="momentum")
     rows = []
     for k, o in enumerate(outs):
@@ -365,8 +365,8 @@ def batch_cost(outs: list, sc, Ns, repeats: int = 5) -> dict:
         eq = ident.equations(s)
         if eq is not None:
             rows.append(eq)
-    rl, ra = ident.rows_lin, ident.rows_ang
-    mi, ti = ident.mu_idx, ident.th_idx
+    rl, ra = ident.layout.rows_lin, ident.layout.rows_ang
+    mi, ti = ident.layout.mu_active, ident.layout.theta_active
     res = {}
     for N in Ns:
         if N > len(rows):
@@ -378,7 +378,7 @@ def batch_cost(outs: list, sc, Ns, repeats: int = 5) -> dict:
             A = np.concatenate([r[0][rl][:, mi] for r in sub])
             b = np.concatenate([r[1][rl] for r in sub])
             mu_a = np.linalg.lstsq(A, b, rcond=None)[0]
-            mu = ident.mu_full.copy()
+            mu = ident.solver.mu.copy()
             mu[mi] = mu_a
             D = rg.D_of_mu(mu)
             phi = np.concatenate([r[2][ra][:, ti] for r in sub])

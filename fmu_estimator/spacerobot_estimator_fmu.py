@@ -9,7 +9,7 @@ import numpy as np
 from _spacerobot_estimator.estimator import Identifier
 from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT
 from _spacerobot_estimator.fmi.slave import InterfaceSlave, _escape
-from _spacerobot_estimator.interface import (ACCEL_SOURCES, METHODS, SOLVERS, STATUS,
+from _spacerobot_estimator.interface import (LAYOUT, STATUS, AccelSource, Method, Solver,
                                              estimator_vars)
 from _spacerobot_estimator.robots import Guess
 from pythonfmu.enums import Fmi2Status
@@ -33,30 +33,25 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._input_names = [n for n, _ in self._inputs]
         self._groups = _input_groups(self._inputs, self.robot.n_joints)
         self._sd = None
-        # outputs: estimates (an index into Identifier.vector()), scalars (an attribute of the
-        # Identifier), and the standard deviations and excitation, computed when read (None)
+        # outputs: estimates (named as in Identifier.vector()), scalars (an attribute of the
+        # Identifier), and the standard deviations ("sd." + an estimate name) and excitation,
+        # computed when read (None)
         outs = [(n, v.key) for n, v in self.interface.items() if v.causality == "output"]
-        est = [(n, _flat(k, 0 if k[0] == "est_base" else 10)) for n, k in outs
-               if k[0] in ("est_base", "est_target")]
-        self._est_names = [n for n, _ in est]
-        self._est_pos = np.array([i for _, i in est], dtype=int)
+        self._est_names = [n for n, k in outs if k[0] in _ESTIMATES]
+        self._est_pos = np.array([LAYOUT.index(n) for n in self._est_names], dtype=int)
+        self._sd_pos = {n: LAYOUT.index(n[len(_SD):]) for n, k in outs if k[0] in _SDS}
         self._scalar_outputs = [(n, k[0]) for n, k in outs if k[0] in _SCALAR_OUTPUTS]
         self._lazy_outputs = {n: None for n, k in outs
-                              if k[0] not in _SCALAR_OUTPUTS + ("est_base", "est_target")}
+                              if k[0] not in _SCALAR_OUTPUTS + _ESTIMATES}
 
     def _initialise(self) -> None:
         v = self.values
         try:
-            for name, table in (("method", METHODS), ("solver", SOLVERS),
-                                ("accel_source", ACCEL_SOURCES)):
-                if int(v[name]) not in table:
-                    raise ValueError(f"{name} = {v[name]!r} is not one of "
-                                     + ", ".join(f"{k} ({s})" for k, s in table.items()))
+            codes = [code.parse(int(v[name]), name) for name, code in (
+                ("method", Method), ("solver", Solver), ("accel_source", AccelSource))]
             guess = Guess(self._body("guess.base"), self._body("guess.target"),
                           float(v["P0_mu"]), float(v["P0_theta"]))
-            self.ident = Identifier(self.robot, guess, METHODS[int(v["method"])],
-                                    SOLVERS[int(v["solver"])], ACCEL_SOURCES[int(v["accel_source"])],
-                                    float(v["lambda"]))
+            self.ident = Identifier(self.robot, guess, *codes, float(v["lambda"]))
         except ValueError as e:
             self._fail(f"invalid estimator parameters: {e}")
         self._refresh()
@@ -74,12 +69,12 @@ class SpaceRobotEstimator(InterfaceSlave):
     def _get_output(self, name: str):
         self._ensure_current()
         var = self.interface[name]
-        if var.key[0] in ("sd_base", "sd_target"):
+        if var.key[0] in _SDS:
             if self.ident is None:
                 return 0.0
             if self._sd is None:
                 self._sd = self.ident.std()
-            return float(self._sd[_flat(var.key, 0 if var.key[0] == "sd_base" else 10)])
+            return float(self._sd[self._sd_pos[name]])
         if var.key[0] in ("excitation_mu", "excitation_theta"):
             if self.ident is None:
                 return 0.0
@@ -118,6 +113,10 @@ class SpaceRobotEstimator(InterfaceSlave):
 
 #: outputs that are attributes of the Identifier of the same name
 _SCALAR_OUTPUTS = ("samples", "rejected", "status", "residual_lin", "residual_ang")
+#: key groups of the estimate outputs and of their standard deviations (``sd.<estimate>``)
+_ESTIMATES = ("est_base", "est_target")
+_SDS = ("sd_base", "sd_target")
+_SD = "sd."
 
 
 def _input_groups(inputs, n: int):
@@ -131,11 +130,3 @@ def _input_groups(inputs, n: int):
         out.setdefault(group, (shape, {}))[1][flat] = pos
     return [(g, shape, np.array([p[k] for k in sorted(p)])) for g, (shape, p) in out.items()]
 
-
-def _flat(key, offset: int) -> int:
-    """Index in Identifier.vector() of a (group, 'm' | 'b', i | 'I', k) key."""
-    if key[1] == "m":
-        return offset
-    if key[1] == "b":
-        return offset + 1 + key[2]
-    return offset + 4 + key[2]

@@ -7,7 +7,8 @@ connectors, and the tests check both against this table. Names are 1-based struc
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Tuple
+from enum import IntEnum
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -101,20 +102,30 @@ def measurement_vars(n: int, causality: str) -> List[Var]:
     return out
 
 
+#: The estimated bodies, in the order of the estimate vector.
+BODIES: Tuple[str, ...] = ("base", "target")
+#: The 10 parameters of one body (``<body>.<name>``): mass, CoM offset, CoM inertia.
+BODY_PARAMETERS: Tuple[str, ...] = ("m", "b[1]", "b[2]", "b[3]", *INERTIA_NAMES)
+#: The paper's order of the six inertia entries, ``I# = [I11, I12, I13, I22, I23, I33]`` (eq. 21).
+SHARP_NAMES: Tuple[str, ...] = ("Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz")
+
+
 def body_param_vars(prefix: str, body, causality: str, what: str, key_group: str,
                     variability: str = "fixed") -> List[Var]:
-    """``<prefix>.m``, ``<prefix>.b[1..3]``, ``<prefix>.Ixx`` ... ``<prefix>.Iyz``."""
+    """``<prefix>.m``, ``<prefix>.b[1..3]``, ``<prefix>.Ixx`` ... ``<prefix>.Iyz``
+    (:data:`BODY_PARAMETERS`)."""
     frame = "target frame T (origin at the grasp point E)" if "target" in prefix else \
         "base frame B (origin at the sensor point S)"
-    out = [Var(f"{prefix}.m", causality, variability, "Real", "kg", f"{what} mass", body.mass,
-               (key_group, "m"))]
-    out += [Var(f"{prefix}.b[{i + 1}]", causality, variability, "Real", "m",
+    m_name, b_names, i_names = BODY_PARAMETERS[0], BODY_PARAMETERS[1:4], BODY_PARAMETERS[4:]
+    out = [Var(f"{prefix}.{m_name}", causality, variability, "Real", "kg", f"{what} mass",
+               body.mass, (key_group, "m"))]
+    out += [Var(f"{prefix}.{nm}", causality, variability, "Real", "m",
                 f"{what} centre-of-mass offset from the frame origin, {frame}, {'xyz'[i]} component",
-                float(body.com[i]), (key_group, "b", i)) for i in range(3)]
+                float(body.com[i]), (key_group, "b", i)) for i, nm in enumerate(b_names)]
     out += [Var(f"{prefix}.{nm}", causality, variability, "Real", "kg.m2",
                 f"{what} inertia tensor element {nm} about the centre of mass, {frame}"
                 + (" (tensor element = minus the product of inertia)" if nm[1] != nm[2] else ""),
-                float(body.inertia[k]), (key_group, "I", k)) for k, nm in enumerate(INERTIA_NAMES)]
+                float(body.inertia[k]), (key_group, "I", k)) for k, nm in enumerate(i_names)]
     return out
 
 
@@ -155,10 +166,61 @@ def plant_vars(robot: Robot, sc: Scenario) -> List[Var]:
     return v
 
 
-#: Estimator enumerations (Integer parameters)
-METHODS = {1: "momentum", 2: "force"}
-SOLVERS = {1: "paper", 2: "joint"}
-ACCEL_SOURCES = {1: "measured", 2: "differenced"}
+class Code(IntEnum):
+    """An estimator enumeration: the FMI Integer code is the value, the label the lower-case
+    member name (``Method.FORCE == 2``, ``Method.FORCE.label == "force"``)."""
+
+    @property
+    def label(self) -> str:
+        return self.name.lower()
+
+    @classmethod
+    def table(cls) -> Dict[int, str]:
+        """``{code: label}``."""
+        return {int(c): c.label for c in cls}
+
+    @classmethod
+    def parse(cls, value, what: Optional[str] = None) -> "Code":
+        """The member for a member, an FMI code or a label; ``ValueError`` naming ``what``
+        (default: the class name in lower case) and the choices otherwise."""
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, str):
+            for c in cls:
+                if c.label == value:
+                    return c
+        elif isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+            if int(value) in cls._value2member_map_:
+                return cls(int(value))
+        choices = ", ".join(f"{int(c)} ({c.label})" for c in cls)
+        raise ValueError(f"{what or cls.__name__.lower()} = {value!r} is not one of {choices}")
+
+
+class Method(Code):
+    """Identification equations: momentum-based (eqs. 11/16) or force-based (eqs. 28/31)."""
+
+    MOMENTUM = 1
+    FORCE = 2
+
+
+class Solver(Code):
+    """The paper's modified RLS (eqs. 34-38), or one RLS over the 20 standard parameters."""
+
+    PAPER = 1
+    JOINT = 2
+
+
+class AccelSource(Code):
+    """Force method accelerations: the measured inputs, or central differences of velocities."""
+
+    MEASURED = 1
+    DIFFERENCED = 2
+
+
+#: Estimator enumerations (Integer parameters): code -> label
+METHODS: Dict[int, str] = Method.table()
+SOLVERS: Dict[int, str] = Solver.table()
+ACCEL_SOURCES: Dict[int, str] = AccelSource.table()
 
 #: Estimator status codes (``diag.status``)
 STATUS = {
@@ -190,14 +252,15 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
             v.append(x)
     v += [
         Var("method", "parameter", "fixed", "Integer", None,
-            "Identification equations: 1 = momentum-based (eqs. 11/16), 2 = force-based (eqs. 28/31)",
-            1, ("method",)),
+            f"Identification equations: {Method.MOMENTUM:d} = momentum-based (eqs. 11/16), "
+            f"{Method.FORCE:d} = force-based (eqs. 28/31)", int(Method.MOMENTUM), ("method",)),
         Var("solver", "parameter", "fixed", "Integer", None,
-            "Solver: 1 = the paper's modified RLS (eqs. 34-38), 2 = joint RLS over the 20 standard "
-            "parameters", 1, ("solver",)),
+            f"Solver: {Solver.PAPER:d} = the paper's modified RLS (eqs. 34-38), {Solver.JOINT:d} = "
+            "joint RLS over the 20 standard parameters", int(Solver.PAPER), ("solver",)),
         Var("accel_source", "parameter", "fixed", "Integer", None,
-            "Force method accelerations: 1 = measured inputs, 2 = central differences of the "
-            "velocity inputs (one sample delay)", 1, ("accel_source",)),
+            f"Force method accelerations: {AccelSource.MEASURED:d} = measured inputs, "
+            f"{AccelSource.DIFFERENCED:d} = central differences of the velocity inputs (one "
+            "sample delay)", int(AccelSource.MEASURED), ("accel_source",)),
         Var("lambda", "parameter", "fixed", "Real", "1", "RLS forgetting factor (0 < lambda <= 1)",
             1.0, ("lambda",)),
         Var("P0_mu", "parameter", "fixed", "Real", "1",
@@ -227,36 +290,174 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
 
 
 #: The 20 estimates (and truth parameters), in the order of ``Identifier.vector()``.
-ESTIMATE_NAMES: Tuple[str, ...] = tuple(
-    f"{who}.{p}" for who in ("base", "target") for p in ("m", "b[1]", "b[2]", "b[3]", *INERTIA_NAMES))
+ESTIMATE_NAMES: Tuple[str, ...] = tuple(f"{who}.{p}" for who in BODIES for p in BODY_PARAMETERS)
+
+
+@dataclass(frozen=True)
+class BodyLayout:
+    """Where one body's parameters sit in each of the estimator's vectors.
+
+    The 20-vectors (estimates and truth in the order of :data:`ESTIMATE_NAMES`; the standard
+    parameters ``[m, m b, I_O#]``; ``D(mu)`` = ``[m J(b)]``) share one shape, 10 entries per body:
+    ``m``, then a first-order triple (``b`` or ``m b``), then six inertia entries (``I`` in
+    :data:`INERTIA_NAMES` order, ``I_O#`` in :data:`SHARP_NAMES` order, or ``m bb``). The
+    paper's ``mu = [m1, m1 b1, mn, mn bn]`` (8,) and ``theta = [I1#, In#]`` (12,) hold 4 and 6.
+    """
+
+    name: str            # 'base' | 'target'
+    index: int           # 0 | 1
+    vec: slice           # the body's 10 entries of a 20-vector
+    m: int               # its mass
+    first: slice         # b (estimates) or m b (standard parameters, D)
+    mass_first: slice    # m and first: [m, b] or [m, m b]
+    inertia: slice       # I (estimates), I_O# (standard parameters) or m bb (D)
+    principal: slice     # Ixx, Iyy, Izz in the estimates
+    mu: slice            # [m, m b] in the paper's mu (8,)
+    mu_m: int
+    mu_first: slice
+    theta: slice         # I# in the paper's theta (12,)
+
+    @classmethod
+    def of(cls, name: str) -> "BodyLayout":
+        k = BODIES.index(name)
+        o, n_i = len(BODY_PARAMETERS) * k, len(INERTIA_NAMES)
+        return cls(name, k, slice(o, o + 1 + 3 + n_i), o, slice(o + 1, o + 4), slice(o, o + 4),
+                   slice(o + 4, o + 4 + n_i), slice(o + 4, o + 7), slice(4 * k, 4 * k + 4), 4 * k,
+                   slice(4 * k + 1, 4 * k + 4), slice(n_i * k, n_i * k + n_i))
+
+
+class ParameterLayout:
+    """The estimator's parameter vectors, named: derived from :data:`ESTIMATE_NAMES` and the set
+    of estimates a robot's model identifies.
+
+    Parameters
+    ----------
+    identified : sequence of str
+        The identified estimates (:func:`identified_estimates`); the others stay at their
+        guesses. Default: all 20.
+
+    Attributes
+    ----------
+    names : (20,) the estimate names;  bodies : (base, target) :class:`BodyLayout`
+    n_mu, n_theta : 8, 12 (sizes of the paper's mu and theta)
+    first_order : (20,) bool
+        Masses and first moments (initial covariance ``P0_mu``); the rest are inertias
+        (``P0_theta``).
+    identified : (20,) bool
+        Identified entries of the estimates (and of the standard parameters, where the inertia
+        entries are in :data:`SHARP_NAMES` order: see ``standard_active``).
+    mu_active, theta_active, standard_active : int arrays
+        The identified entries of mu (8,), theta (12,) and the standard parameters (20,).
+    rows_lin, rows_ang : int arrays
+        The equation rows that carry information: the translation axes whose CoM offset is
+        identified, the rotation axes whose principal moment is identified (planar: x, y and z).
+    sharp_to_project : (6,) int
+        ``I = I#[sharp_to_project]`` (the paper's order into :data:`INERTIA_NAMES` order).
+    """
+
+    n_mu, n_theta = 8, 12
+    #: ``I = I#[SHARP_TO_PROJECT]``; ``I# = I[PROJECT_TO_SHARP]``
+    sharp_to_project = np.array([SHARP_NAMES.index(n) for n in INERTIA_NAMES])
+    project_to_sharp = np.argsort(sharp_to_project)
+
+    def __init__(self, identified: Sequence[str] = ESTIMATE_NAMES):
+        unknown = set(identified) - set(ESTIMATE_NAMES)
+        if unknown:
+            raise ValueError(f"not estimate names: {sorted(unknown)}")
+        self.names = ESTIMATE_NAMES
+        self.bodies = tuple(BodyLayout.of(b) for b in BODIES)
+        self.base, self.target = self.bodies
+        self.first_order = np.zeros(len(self.names), bool)
+        for b in self.bodies:
+            self.first_order[b.mass_first] = True
+        self.identified = np.array([n in identified for n in self.names])
+        mu, th, std = [], [], []
+        for b in self.bodies:
+            first = np.flatnonzero(self.identified[b.mass_first])        # m, b
+            sharp = np.sort(self.sharp_to_project[self.identified[b.inertia]])
+            mu += (b.mu.start + first).tolist()
+            th += (b.theta.start + sharp).tolist()
+            std += (b.m + first).tolist() + (b.inertia.start + sharp).tolist()
+        self.mu_active, self.theta_active = np.array(mu, int), np.array(th, int)
+        self.standard_active = np.array(std, int)
+        self.rows_lin = np.flatnonzero(self.identified[self.base.first])
+        self.rows_ang = np.flatnonzero(self.identified[self.base.principal])
+        self.complete = bool(self.identified.all())
+
+    @classmethod
+    def for_robot(cls, robot: Robot) -> "ParameterLayout":
+        return cls(identified_estimates(robot))
+
+    def body(self, name: str) -> BodyLayout:
+        return self.bodies[BODIES.index(name)]
+
+    def index(self, name: str) -> int:
+        """Position of an estimate name (``"target.Izz"``) in the 20-vectors."""
+        return self.names.index(name)
+
+    def per_body(self, vec: np.ndarray) -> Dict[str, np.ndarray]:
+        """``{'base': (..., 10), 'target': (..., 10)}`` views of a (..., 20) vector (estimates,
+        their standard deviations, errors)."""
+        vec = np.asarray(vec)
+        return {b.name: vec[..., b.vec] for b in self.bodies}
+
+    def vector(self, base: RigidBody, target: RigidBody) -> np.ndarray:
+        """Two bodies as one (20,) vector in the order of :data:`ESTIMATE_NAMES`."""
+        out = np.empty(len(self.names))
+        for b, body in zip(self.bodies, (base, target)):
+            out[b.m] = body.mass
+            out[b.first] = body.com
+            out[b.inertia] = body.inertia
+        return out
+
+    def error_scale(self, truth: np.ndarray) -> np.ndarray:
+        """Scale of the relative error of each entry of a (20,) truth vector: ``|truth|``, or
+        where the truth is zero (a CoM component, a product of inertia) 1 (kg or m) for the
+        mass and CoM entries and the body's largest principal moment (1 kg.m2 if all are zero)
+        for the inertia entries. Never zero, so a relative error is never NaN."""
+        truth = np.asarray(truth, float)
+        scale = np.abs(truth)
+        for b in self.bodies:
+            imax = scale[b.principal].max()
+            s = scale[b.vec]                              # a view: written into scale
+            zero = s == 0.0
+            s[zero & self.first_order[b.vec]] = 1.0
+            s[zero & ~self.first_order[b.vec]] = imax if imax > 0.0 else 1.0
+        return scale
+
+
+#: the layout of a spatial robot's estimates (all 20 identified): the error metric's
+LAYOUT = ParameterLayout()
 
 
 def estimate_vector(base: RigidBody, target: RigidBody) -> np.ndarray:
     """Two bodies as one (20,) vector in the order of :data:`ESTIMATE_NAMES` (the truth that
     ``Identifier.vector()`` estimates)."""
-    return np.concatenate([[base.mass], base.com, base.inertia,
-                           [target.mass], target.com, target.inertia]).astype(float)
+    return LAYOUT.vector(base, target)
 
 
 def error_scale(truth: np.ndarray) -> np.ndarray:
-    """Scale of the relative error of each entry of a (20,) truth vector: ``|truth|``, or where
-    the truth is zero (a CoM component, a product of inertia) 1 m for ``b`` and the body's
-    largest principal moment for the inertia elements."""
-    truth = np.asarray(truth, float)
-    scale = np.abs(truth)
-    for o in (0, 10):
-        imax = np.abs(truth[o + 4:o + 7]).max()
-        for i in range(o, o + 10):
-            if scale[i] == 0.0:
-                scale[i] = 1.0 if i - o < 4 else (imax if imax > 0.0 else 1.0)
-    return scale
+    """Scale of the relative error of each entry of a (20,) truth vector
+    (:meth:`ParameterLayout.error_scale`)."""
+    return LAYOUT.error_scale(truth)
 
 
 def relative_errors(est: np.ndarray, truth: np.ndarray) -> np.ndarray:
     """``|est - truth| / error_scale(truth)``; ``est`` (..., 20) in the order of
-    :data:`ESTIMATE_NAMES`."""
+    :data:`ESTIMATE_NAMES`. Finite wherever ``est`` and ``truth`` are (also for a zero truth)."""
     truth = np.asarray(truth, float)
     return np.abs(np.asarray(est, float) - truth) / error_scale(truth)
+
+
+def relative_errors_by_name(est: Mapping[str, float], truth: Mapping[str, float]
+                            ) -> Dict[str, float]:
+    """:func:`relative_errors` for mappings name -> value, for the names that have both an
+    estimate and a truth (the scale of a missing truth entry is that of a zero truth)."""
+    t = np.array([truth.get(n, 0.0) for n in ESTIMATE_NAMES], float)
+    scale = error_scale(np.where(np.isfinite(t), t, 0.0))
+    return {n: abs(float(est[n]) - float(truth[n])) / s
+            for n, s in zip(ESTIMATE_NAMES, scale.tolist())
+            if est.get(n) is not None and truth.get(n) is not None}
 
 
 def identified_estimates(robot: Robot) -> List[str]:

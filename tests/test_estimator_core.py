@@ -16,10 +16,11 @@ import numpy as np
 import pytest
 
 from conftest import PLANAR_IDENTIFIED, relative_errors, truth_vector
+from oracles import regressors as rg
+from oracles.kinematics import ArmKinematics
 from spacerobot.estimator import Identifier
-from spacerobot.estimator import regressors as rg
+from spacerobot.estimator import parameters as par
 from spacerobot.estimator.rls import ModifiedRLS
-from spacerobot.kinematics import ArmKinematics
 from spacerobot.plant import Plant
 from spacerobot.robots import PAPER_PLANAR_MEDIUM, scenario
 
@@ -88,16 +89,16 @@ def test_modified_rls_equals_batch_at_latest_mu(lam):
         psi = rng.normal(size=(3, 20)) * 0.05
         # noise, so that mu_k moves from sample to sample and re-referencing matters
         b = A @ mu_true + rng.normal(scale=2.0, size=3)
-        y = phi @ th_true - psi @ rg.D_of_mu(mu_true) + rng.normal(scale=2.0, size=3)
+        y = phi @ th_true - psi @ par.D_of_mu(mu_true) + rng.normal(scale=2.0, size=3)
         for lst, x in ((As, A), (bs, b), (phis, phi), (ys, y), (psis, psi)):
             lst.append(x)
         rls.update(A, b, phi, y, psi)
         # naive: theta's equation evaluated at each sample's own mu, never re-referenced
         naive.lin.update(A, b)
-        naive.ang.update(phi, y + psi @ rg.D_of_mu(naive.lin.x))
+        naive.ang.update(phi, y + psi @ par.D_of_mu(naive.lin.x))
 
         mu_b = _batch(As, bs, mu0, P_mu0, lam)
-        D = rg.D_of_mu(rls.mu)       # the latest mu
+        D = par.D_of_mu(rls.mu)       # the latest mu
         th_b = _batch(phis, [yk + pk @ D for yk, pk in zip(ys, psis)], th0, P_th0, lam)
         worst_mu = max(worst_mu, np.linalg.norm(rls.mu - mu_b) / np.linalg.norm(mu_b))
         worst_th = max(worst_th, np.linalg.norm(rls.theta - th_b) / np.linalg.norm(th_b))
@@ -124,7 +125,7 @@ def test_modified_rls_equals_batch_at_latest_mu(lam):
 def _truth_params(sc):
     b, t = sc.robot.base, sc.target
     mu = np.concatenate([[b.mass], b.mass * np.array(b.com), [t.mass], t.mass * np.array(t.com)])
-    th = np.concatenate([rg.sharp_vector(b.inertia_matrix()), rg.sharp_vector(t.inertia_matrix())])
+    th = np.concatenate([par.sharp_vector(b.inertia_matrix()), par.sharp_vector(t.inertia_matrix())])
     return mu, th
 
 
@@ -132,7 +133,7 @@ def _truth_params(sc):
 def test_regressors_reproduce_plant_momentum_and_forces(which, planar_record, spatial_record):
     sc, rec = planar_record if which == "planar" else spatial_record
     mu, th = _truth_params(sc)
-    D = rg.D_of_mu(mu)
+    D = par.D_of_mu(mu)
     kin = ArmKinematics(sc.robot)
     ident = Identifier(sc.robot, sc.guess, "force")
     ident_m = Identifier(sc.robot, sc.guess, "momentum")
@@ -362,8 +363,9 @@ def test_std_delta_method_matches_finite_differences(which, solver, planar_recor
     ident = Identifier(sc.robot, sc.guess, "momentum", solver)
     for t, o in rec[:40]:
         ident.update(t, o)
-    cov, z, g = ident._covariance()
-    # central differences of the map z -> vector(), independent of Identifier._jacobian
+    solver = ident.solver
+    cov, z, g = solver.covariance(), solver.z(), solver.vector_of
+    # central differences of the map z -> vector(), independent of the solver's jacobian()
     J = np.empty((20, len(z)))
     for j in range(len(z)):
         dz = 1e-6 * max(abs(z[j]), 1e-2)
@@ -371,7 +373,7 @@ def test_std_delta_method_matches_finite_differences(which, solver, planar_recor
         zp[j] += dz
         zm[j] -= dz
         J[:, j] = (g(zp) - g(zm)) / (2 * dz)
-    np.testing.assert_allclose(ident._jacobian(z), J, rtol=1e-6, atol=1e-7)
+    np.testing.assert_allclose(solver.jacobian(z), J, rtol=1e-6, atol=1e-7)
     ref = np.sqrt(np.einsum("ij,jk,ik->i", J, cov, J))
     np.testing.assert_allclose(ident.std(), ref, rtol=1e-6)
     np.testing.assert_array_equal(ident.vector(), g(z))     # the map is the reported vector

@@ -1,13 +1,15 @@
 """The identifier's compiled kernels (spacerobot/estimator/kernels.py) against the NumPy
-reference of the same equations (spacerobot.kinematics, spacerobot.estimator.regressors), at
-random, non-physical inputs where no term vanishes; and the RLS step's refusals."""
+reference of the same equations (the test oracles tests/oracles/kinematics.py and
+regressors.py), at random, non-physical inputs where no term vanishes; the RLS step's
+refusals; the one validation rule on both of its paths."""
 import numpy as np
 import pytest
 
+from oracles import regressors as rg
+from oracles.kinematics import ArmKinematics
 from spacerobot.estimator import RLS, Identifier
-from spacerobot.estimator import regressors as rg
-from spacerobot.estimator.identifier import KEYS
-from spacerobot.kinematics import ArmKinematics
+from spacerobot.estimator import parameters as par
+from spacerobot.estimator.identifier import KEYS, ROTATION_TOL
 from spacerobot.robots import scenario
 
 
@@ -65,7 +67,7 @@ def test_compiled_equations_match_numpy_reference(robot, method):
 
 def test_D_of_mu_is_the_paper_map():
     mu = np.array([500.0, 50.0, -50.0, 25.0, 250.0, 62.5, 25.0, -12.5])
-    D = rg.D_of_mu(mu)
+    D = par.D_of_mu(mu)
     for k in range(2):
         m, b = mu[4 * k], mu[4 * k + 1:4 * k + 4] / mu[4 * k]
         J = [1.0, *b, b[0] ** 2, b[0] * b[1], b[0] * b[2], b[1] ** 2, b[1] * b[2], b[2] ** 2]
@@ -100,17 +102,42 @@ def test_sample_of_wrong_shape_is_rejected_with_its_name():
     assert list(KEYS)[6] == "q"
 
 
-def test_rotation_tolerance_band_and_list_inputs_are_accepted():
-    """The fast path's rotation test (5e-7) is tighter than the rule (|A^T A - I| <= 1e-6):
-    a sample in between takes the careful path and is used; so are samples given as lists."""
+def _dcm_with_error(err):
+    """A DCM with ``max |A^T A - I| = err`` (one column stretched), det > 0."""
+    A = np.eye(3)
+    A[0, 0] = np.sqrt(1.0 + err)
+    return A
+
+
+@pytest.mark.parametrize("as_lists", [False, True])
+def test_one_rotation_rule_on_both_validation_paths(as_lists):
+    """|A^T A - I| <= ROTATION_TOL (1e-6) and det > 0: accepted just inside the tolerance,
+    rejected just outside it and for a reflection, whether the sample comes as arrays (the fast
+    path) or as lists (the careful path): the two paths give one verdict."""
+    assert ROTATION_TOL == 1e-6
     sc = scenario("spatial")
     rng = np.random.default_rng(5)
-    s = random_sample(rng, sc.robot.n_joints)
+    reflection = np.diag([1.0, 1.0, -1.0])
+    cases = [(_dcm_with_error(0.9 * ROTATION_TOL), True), (_dcm_with_error(0.5 * ROTATION_TOL), True),
+             (_dcm_with_error(1.1 * ROTATION_TOL), False), (_dcm_with_error(2e-6), False),
+             (reflection, False)]
+    for A, ok in cases:
+        err = np.abs(A.T @ A - np.eye(3)).max()      # independent of the kernel
+        assert (err <= 1e-6 and np.linalg.det(A) > 0) == ok
+        ident = Identifier(sc.robot, sc.guess)
+        s = random_sample(rng, sc.robot.n_joints)
+        s["A"] = A
+        if as_lists:
+            s = {k: np.asarray(v).tolist() for k, v in s.items()}
+        status = ident.update(0.0, s)
+        if ok:
+            assert status == 1 and ident.reference is not None, (err, ident.message)
+        else:
+            assert status == 4 and ident.reference is None and ident.rejected == 1, err
+            assert "base.A is not a rotation matrix" in ident.message
+    # lists are accepted as samples
     ident = Identifier(sc.robot, sc.guess)
-    A = np.eye(3)
-    A[0, 0] = 1.0 + 3.5e-7                       # |A^T A - I| = 7e-7
-    assert 5e-7 < np.abs(A.T @ A - np.eye(3)).max() <= 1e-6
-    s["A"] = A
-    assert ident.update(0.0, s) == 1 and ident.reference is not None, ident.message
-    s2 = {k: np.asarray(v).tolist() for k, v in random_sample(rng, sc.robot.n_joints).items()}
-    assert ident.update(0.1, s2) == 2 and ident.samples == 1, ident.message
+    for t in (0.0, 0.1):
+        s = {k: np.asarray(v).tolist() for k, v in random_sample(rng, sc.robot.n_joints).items()}
+        ident.update(t, s)
+    assert ident.samples == 1 and ident.status == 2, ident.message

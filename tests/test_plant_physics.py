@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from spacerobot.kinematics import ArmKinematics, body_momentum
+from oracles.kinematics import ArmKinematics, body_momentum
 from spacerobot.plant import Plant
 from spacerobot.robots import scenario
 

@@ -1,7 +1,10 @@
 """The identifier: measurements in, estimates of base and target out, one sample at a time.
 
 Uses only the robot description (the known arm) and the measured signals of the interface
-contract; never the plant.
+contract; never the plant. The identifier validates a sample, builds its equations (momentum or
+force form, :class:`spacerobot.interface.Method`) and keeps the bookkeeping around them (the
+momentum reference, the differencing history, counters, status, diagnostics); a solver
+(:mod:`.solvers`, :class:`spacerobot.interface.Solver`) owns the parameters.
 """
 from __future__ import annotations
 
@@ -11,15 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics import ArmKinematics
+from ..interface import AccelSource, Method, ParameterLayout, Solver
+from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import kernels
-from . import regressors as rg
-from .rls import RLS, ModifiedRLS
-
-METHODS = ("momentum", "force")
-SOLVERS = ("paper", "joint")
-ACCEL_SOURCES = ("measured", "differenced")
+from .solvers import ParameterSolver, make_solver
 
 #: measurement keys and their shapes (n = number of arm joints)
 KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
@@ -27,6 +26,10 @@ KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "
 #: largest accepted input magnitude (SI units): far beyond any spacecraft state, far below
 #: the magnitudes at which the equations' products would overflow
 INPUT_LIMIT = 1e15
+
+#: the validation rule for ``base.A``: a rotation matrix, ``max |A^T A - I| <= ROTATION_TOL``
+#: and ``det A > 0`` (:func:`.kernels.rotation_error`, the one test both validation paths use)
+ROTATION_TOL = 1e-6
 
 # status codes (see spacerobot.interface.STATUS)
 NO_SAMPLE, REFERENCE, ESTIMATING, REJECT_NONFINITE, REJECT_INCONSISTENT = 0, 1, 2, 3, 4
@@ -50,16 +53,22 @@ class Identifier:
         Robot description; only the arm links (known) and ``planar`` are used.
     guess : Guess
         Initial guesses of both bodies and the initial covariances ``P0_mu``, ``P0_theta``.
-    method : {'momentum', 'force'}
+    method : Method or {'momentum', 'force'} or FMI code
         Momentum-based (eqs. 11/16, uses the impulses J, H) or force-based (eqs. 28/31, uses
         F, M and accelerations).
-    solver : {'paper', 'joint'}
-        The paper's modified RLS over (mu, theta), or one RLS over the 20 standard parameters.
-    accel_source : {'measured', 'differenced'}
+    solver : Solver or {'paper', 'joint'} or FMI code
+        The paper's modified RLS over (mu, theta) (:class:`.PaperSolver`), or one RLS over the
+        20 standard parameters (:class:`.JointSolver`).
+    accel_source : AccelSource or {'measured', 'differenced'} or FMI code
         Force method only: measured accelerations, or central differences of the velocities
         (the estimate then lags by one sample).
     lam : float
         Forgetting factor, 0 < lam <= 1.
+
+    Attributes
+    ----------
+    layout : ParameterLayout     the identified parameters and equation rows of ``robot``
+    solver : ParameterSolver     the parameters, their covariance and update
 
     Examples
     --------
@@ -68,14 +77,12 @@ class Identifier:
     >>> ident.estimates()["target"].m                 # doctest: +SKIP
     """
 
-    def __init__(self, robot: Robot, guess: Guess, method: str = "momentum", solver: str = "paper",
-                 accel_source: str = "measured", lam: float = 1.0):
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-        if solver not in SOLVERS:
-            raise ValueError(f"solver must be one of {SOLVERS}, got {solver!r}")
-        if accel_source not in ACCEL_SOURCES:
-            raise ValueError(f"accel_source must be one of {ACCEL_SOURCES}, got {accel_source!r}")
+    def __init__(self, robot: Robot, guess: Guess, method: Method | str = "momentum",
+                 solver: Solver | str = "paper", accel_source: AccelSource | str = "measured",
+                 lam: float = 1.0):
+        method = Method.parse(method, "method")
+        kind = Solver.parse(solver, "solver")
+        accel_source = AccelSource.parse(accel_source, "accel_source")
         if not (0.0 < lam <= 1.0):
             raise ValueError(f"forgetting factor lambda must satisfy 0 < lambda <= 1, got {lam}")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
@@ -84,12 +91,9 @@ class Identifier:
             if not (val > 0.0 and math.isfinite(val)):
                 raise ValueError(f"{name} must be a finite covariance > 0, got {val}")
         self.robot, self.guess = robot, guess
-        self.method, self.solver, self.accel_source, self.lam = method, solver, accel_source, lam
-        self.kin = ArmKinematics(robot)
+        self.method, self.accel_source, self.lam = method, accel_source, lam
         self.n = robot.n_joints
-        kin = self.kin
-        self._geom = tuple(np.ascontiguousarray(a, dtype=float) for a in (
-            kin.xyz, kin.R, kin.axis, kin.mass, kin.com, kin.I, kin.ee_xyz, kin.ee_R))
+        self._geom = ArmGeometry(robot).arrays()
         self._sizes = [3, 3, 9, 3, 3, 3, self.n, self.n, self.n, 3, 3, 3, 3]   # per KEYS entry
         n, q0 = self.n, kernels.Q0
         # (acceleration, velocity) slices of a flattened sample: a_S, alpha_B, qdd
@@ -97,62 +101,19 @@ class Identifier:
                              (slice(kernels.ALPHA_B, kernels.ALPHA_B + 3),
                               slice(kernels.OMEGA_B, kernels.OMEGA_B + 3)),
                              (slice(q0 + 2 * n, q0 + 3 * n), slice(q0 + n, q0 + 2 * n)))
-        planar = robot.planar
-        # active rows / parameters (planar: x, y translation and z rotation only)
-        self.rows_lin = np.array([0, 1]) if planar else np.arange(3)
-        self.rows_ang = np.array([2]) if planar else np.arange(3)
-        self.mu_idx = np.array([0, 1, 2, 4, 5, 6]) if planar else np.arange(8)
-        self.th_idx = np.array([5, 11]) if planar else np.arange(12)
-        # inactive parameters (fixed at their guesses) and whether there are any
-        self._mu_in = np.setdiff1d(np.arange(8), self.mu_idx)
-        self._th_in = np.setdiff1d(np.arange(12), self.th_idx)
-        self._all_rows = len(self.rows_lin) == 3 and len(self.rows_ang) == 3
-        self._cov_ix = (np.ix_(self.mu_idx, self.mu_idx), np.ix_(self.th_idx, np.arange(8)),
-                        np.ix_(self.th_idx, self.th_idx))
-        mu0, th0 = self._paper_vector(guess)
-        self.mu_full, self.th_full = mu0, th0
-        if solver == "paper":
-            p, r = len(self.mu_idx), len(self.th_idx)
-            self.rls = ModifiedRLS(mu0[self.mu_idx], th0[self.th_idx], guess.P0_mu * np.eye(p),
-                                   guess.P0_theta * np.eye(r), lam, mu_fixed=mu0,
-                                   active=self.mu_idx)
-        else:
-            pi0 = self._standard_vector(guess)
-            self.pi_full = pi0
-            self.pi_idx = np.concatenate([self._std_idx(0), self._std_idx(1)])
-            P0 = np.array([guess.P0_mu if (i % 10) < 4 else guess.P0_theta for i in self.pi_idx])
-            self.rls = RLS(pi0[self.pi_idx], np.diag(P0), lam)
-            self._pi_out = np.setdiff1d(np.arange(20), self.pi_idx)
-            self._lin_cols = np.array([i for i, p in enumerate(self.pi_idx) if p % 10 < 4])
-            self._ang_cols = np.array([i for i, p in enumerate(self.pi_idx) if p % 10 >= 4])
-        self.info_lin = np.zeros((len(self.mu_idx),) * 2)
-        self.info_ang = np.zeros((len(self.th_idx),) * 2)
+        self.layout = ParameterLayout.for_robot(robot)
+        self.solver: ParameterSolver = make_solver(kind, self.layout, guess, lam)
+        self.info_lin = np.zeros((len(self.layout.mu_active),) * 2)
+        self.info_ang = np.zeros((len(self.layout.theta_active),) * 2)
         self.samples = 0
         self.rejected = 0
         self.status = NO_SAMPLE
+        self.message = ""
         self.residual_lin = 0.0
         self.residual_ang = 0.0
         self.reference = None       # momentum method: terms at t0
         self.history = []           # differenced accelerations: last samples (t, flat sample)
         self._exc = None            # cached excitation() (cleared by update / set_state)
-
-    # -- parameter vectors -------------------------------------------------------------------
-    @staticmethod
-    def _paper_vector(g: Guess):
-        mu = np.concatenate([[g.base.mass], g.base.mass * np.array(g.base.com),
-                             [g.target.mass], g.target.mass * np.array(g.target.com)])
-        th = np.concatenate([np.asarray(g.base.inertia)[rg.PROJECT_TO_SHARP],
-                             np.asarray(g.target.inertia)[rg.PROJECT_TO_SHARP]])
-        return mu, th
-
-    @staticmethod
-    def _standard_vector(g: Guess):
-        return np.concatenate([rg.standard_from_physical(b.mass, b.com, b.inertia_matrix())
-                               for b in (g.base, g.target)])
-
-    def _std_idx(self, k: int) -> np.ndarray:
-        loc = np.array([0, 1, 2, 9]) if self.robot.planar else np.arange(10)
-        return 10 * k + loc
 
     # -- equations -----------------------------------------------------------------------------
     def _equations(self, flat: np.ndarray):
@@ -160,7 +121,7 @@ class Identifier:
         see :mod:`.kernels`), from the flattened measurements; momentum form: differenced
         against the reference sample t0 (eqs. 11, 16), None for the reference itself."""
         E = np.empty((3, kernels.N_COLS))
-        force = self.method == "force"
+        force = self.method is Method.FORCE
         kernels.equations(force, flat, self.n, *self._geom, E)
         if force:
             return E
@@ -186,19 +147,23 @@ class Identifier:
 
     def _validate(self, meas: dict):
         """``(status, message, flat)``; ``flat`` is the sample flattened in KEYS order (a new
-        float array; ``A`` row-major), or None if the sample is rejected."""
+        float array; ``A`` row-major), or None if the sample is rejected.
+
+        One rule, two paths to it: a sample is accepted iff every signal has its shape, every
+        value is finite with ``|x| <= INPUT_LIMIT``, and ``base.A`` passes the rotation test
+        (:data:`ROTATION_TOL`). The fast path (one concatenation, one compiled check) accepts
+        exactly those samples given as arrays; the careful path decides the rest with the same
+        compiled rotation test and says what is wrong.
+        """
         try:
-            # fast path: one concatenation, shapes by length, one compiled range/rotation test
             vals = [meas[k] for k in KEYS]
             vals[2] = np.ravel(vals[2])
             if [len(v) for v in vals] == self._sizes and np.shape(meas["A"]) == (3, 3):
                 flat = np.concatenate(vals).astype(float, copy=False)
-                if flat.ndim == 1 and kernels.sample_check(flat, INPUT_LIMIT) == 0:
+                if flat.ndim == 1 and kernels.sample_check(flat, INPUT_LIMIT, ROTATION_TOL) == 0:
                     return ESTIMATING, "", flat
         except (ValueError, TypeError, AttributeError):
             pass
-        # careful path (and the messages; it also accepts what the fast path's tighter
-        # rotation test or its type handling left to it)
         arrays = []
         for k, size in zip(KEYS, self._sizes):
             try:
@@ -215,12 +180,12 @@ class Identifier:
                 return REJECT_NONFINITE, (f"input {k} = {np.array2string(x, precision=4)} is beyond "
                                           f"the physical range |x| <= {INPUT_LIMIT:g} (SI units?)"), None
             arrays.append(x.ravel())
-        A = np.asarray(meas["A"], float)
-        err = np.abs(A.T @ A - np.eye(3)).max()
-        if err > 1e-6 or np.linalg.det(A) <= 0.0:
+        flat = np.concatenate(arrays)
+        err, det = kernels.rotation_error(flat, kernels.A_B)
+        if not (err <= ROTATION_TOL and det > 0.0):
             return REJECT_INCONSISTENT, (f"base.A is not a rotation matrix (|A^T A - I| = "
-                                         f"{err:.3g}, det = {np.linalg.det(A):.6g})"), None
-        return ESTIMATING, "", np.concatenate(arrays)
+                                         f"{err:.3g} > {ROTATION_TOL:g} or det = {det:.6g} <= 0)"), None
+        return ESTIMATING, "", flat
 
     def update(self, t: float, meas: dict) -> int:
         """Process one sample taken at time ``t``. Never raises on bad data.
@@ -264,28 +229,23 @@ class Identifier:
         return status
 
     def _snapshot(self):
-        """What an update may change, for :meth:`_restore`. Cheap: the solvers and the
-        identifier replace their arrays rather than writing into them, except the full
-        parameter vectors (copied here)."""
-        r = self.rls
-        solvers = [r] + ([r.lin, r.ang] if self.solver == "paper" else [])
-        attrs = {k: getattr(self, k) for k in _UPDATED}
-        arrays = {k: getattr(self, k).copy() for k in _WRITTEN if hasattr(self, k)}
-        return [(o, o.__dict__.copy()) for o in solvers], attrs, arrays, list(self.history)
+        """What an update may change, for :meth:`_restore`. Cheap: the solver's snapshot and
+        the identifier's attributes are references (an update rebinds them, never writes into
+        them), the history a shallow copy of its list."""
+        return (self.solver.snapshot(), {k: getattr(self, k) for k in _UPDATED},
+                list(self.history))
 
     def _restore(self, snap) -> None:
-        solvers, attrs, arrays, history = snap
-        for o, d in solvers:
-            o.__dict__.clear()
-            o.__dict__.update(d)
-        for k, v in {**attrs, **arrays}.items():
+        solver, attrs, history = snap
+        self.solver.restore(solver)
+        for k, v in attrs.items():
             setattr(self, k, v)
         self.history = history
         self._exc = None
 
     def _accept(self, t: float, flat: np.ndarray) -> int:
         """The update proper, for a validated sample (see :meth:`update`)."""
-        if self.method == "force" and self.accel_source == "differenced":
+        if self.method is Method.FORCE and self.accel_source is AccelSource.DIFFERENCED:
             flat = self._differenced(t, flat)
             if flat is None:
                 self.status = REFERENCE
@@ -335,178 +295,42 @@ class Identifier:
         return out
 
     def _solve(self, A, b, phi, y, psi):
-        rl, ra = self.rows_lin, self.rows_ang
-        if not self._all_rows:
+        """The solver's update on the identified rows, then the residuals and information."""
+        L = self.layout
+        if not L.complete:
+            rl, ra = L.rows_lin, L.rows_ang
             A, b, phi, y, psi = A[rl], b[rl], phi[ra], y[ra], psi[ra]
-        if self.solver == "paper":
-            # inactive (planar out-of-plane) parameters stay at their guesses: move them right
-            mu_in, th_in = self._mu_in, self._th_in
-            if len(mu_in):
-                b = b - A[:, mu_in].dot(self.mu_full[mu_in])
-                A = A[:, self.mu_idx]
-            if len(th_in):
-                y = y - phi[:, th_in].dot(self.th_full[th_in])
-                phi = phi[:, self.th_idx]
-            e_lin, e_ang, rhs_ang = self.rls.update(A, b, phi, y, psi)
-            self.mu_full[self.mu_idx] = self.rls.mu
-            self.th_full[self.th_idx] = self.rls.theta
-        else:
-            # standard rows: linear [B, 0]; angular [Psi[:, :4], D] per body (sign: psi = -Psi)
-            Y = np.zeros((len(rl) + len(ra), 20))
-            for k in range(2):
-                Y[:len(rl), 10 * k:10 * k + 4] = A[:, 4 * k:4 * k + 4]
-                Y[len(rl):, 10 * k:10 * k + 4] = -psi[:, 10 * k:10 * k + 4]
-                Y[len(rl):, 10 * k + 4:10 * k + 10] = phi[:, 6 * k:6 * k + 6]
-            yy = np.concatenate([b, y])
-            idx = self.pi_idx
-            out = self._pi_out
-            if len(out):
-                yy = yy - Y[:, out].dot(self.pi_full[out])
-            e, _ = self.rls.update(Y[:, idx], yy)
-            self.pi_full[idx] = self.rls.x
-            e_lin, e_ang = e[:len(rl)], e[len(rl):]
-            phi, A = Y[len(rl):, idx], Y[:len(rl), idx]
-            rhs_ang = yy[len(rl):]
-        self.residual_lin = math.sqrt(e_lin.dot(e_lin)) / max(math.sqrt(b.dot(b)), 1e-300)
-        self.residual_ang = math.sqrt(e_ang.dot(e_ang)) / max(math.sqrt(rhs_ang.dot(rhs_ang)),
-                                                              1e-300)
-        if self.solver == "joint":
-            A, phi = A[:, self._lin_cols], phi[:, self._ang_cols]
+        st = self.solver.update(A, b, phi, y, psi)
+        self.residual_lin = _relative_norm(st.e_lin, st.rhs_lin)
+        self.residual_ang = _relative_norm(st.e_ang, st.rhs_ang)
         if self.lam == 1.0:
-            self.info_lin = self.info_lin + A.T.dot(A)
-            self.info_ang = self.info_ang + phi.T.dot(phi)
+            self.info_lin = self.info_lin + st.H_lin.T.dot(st.H_lin)
+            self.info_ang = self.info_ang + st.H_ang.T.dot(st.H_ang)
         else:
-            self.info_lin = self.lam * self.info_lin + A.T.dot(A)
-            self.info_ang = self.lam * self.info_ang + phi.T.dot(phi)
+            self.info_lin = self.lam * self.info_lin + st.H_lin.T.dot(st.H_lin)
+            self.info_ang = self.lam * self.info_ang + st.H_ang.T.dot(st.H_ang)
 
     # -- results --------------------------------------------------------------------------------
-    def parameters(self):
-        """Current estimate as ``(mu (8,), theta (12,))`` in the paper's parameterisation."""
-        if self.solver == "paper":
-            return self.mu_full.copy(), self.th_full.copy()
-        mu, th = np.empty(8), np.empty(12)
-        for k in range(2):
-            m, b, I_c = rg.physical_from_standard(self.pi_full[10 * k:10 * k + 10])
-            mu[4 * k], mu[4 * k + 1:4 * k + 4] = m, m * b
-            th[6 * k:6 * k + 6] = rg.sharp_vector(I_c)
-        return mu, th
-
-    def estimates(self) -> dict:
-        """``{'base': BodyEstimate, 'target': BodyEstimate}``."""
-        mu, th = self.parameters()
-        out = {}
-        for k, who in enumerate(("base", "target")):
-            m = mu[4 * k]
-            out[who] = BodyEstimate(m, mu[4 * k + 1:4 * k + 4] / m,
-                                    th[6 * k:6 * k + 6][rg.SHARP_TO_PROJECT])
-        return out
-
     def vector(self) -> np.ndarray:
-        """Estimates as one (20,) vector: per body m, b (3), I (6, project order)."""
-        if self.solver == "paper":
-            mu, th = self.mu_full, self.th_full
-            out = np.empty(20)
-            for k in range(2):
-                m = mu[4 * k]
-                out[10 * k] = m
-                out[10 * k + 1:10 * k + 4] = mu[4 * k + 1:4 * k + 4] / m
-                out[10 * k + 4:10 * k + 10] = th[6 * k:6 * k + 6][rg.SHARP_TO_PROJECT]
-            return out
-        e = self.estimates()
-        return np.concatenate([np.concatenate([[x.m], x.b, x.I]) for x in (e["base"], e["target"])])
+        """Estimates as one (20,) vector in the order of
+        :data:`spacerobot.interface.ESTIMATE_NAMES`: per body m, b (3), I (6)."""
+        return self.solver.vector()
 
     def std(self) -> np.ndarray:
         """Standard deviations of :meth:`vector` (20,), residual-variance scaled.
 
         Parameters that are not identified (planar out-of-plane ones) report the square root of
         their prior covariance. Propagated with the first-order (delta-method) Jacobian of the
-        map from the internal parameters to :meth:`vector`, written out in :meth:`_jacobian`.
+        map from the solver's internal parameters to :meth:`vector`
+        (:meth:`.ParameterSolver.std`).
         """
-        cov, z, _ = self._covariance()
-        J = self._jacobian(z)
-        return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", J, cov, J), 0.0, None))
+        return self.solver.std()
 
-    def _jacobian(self, z: np.ndarray) -> np.ndarray:
-        """d vector / d z (20, 20) for the internal parameters ``z`` of :meth:`_covariance`.
-
-        Per body (m, c = m b): ``b = c / m`` gives ``db/dc = I / m``, ``db/dm = -c / m^2``.
-        Paper solver: the CoM inertia is a parameter (permuted). Joint solver:
-        ``I_c = I_O - S(c) / m`` with ``S(c) = |c|^2 I - c c^T``, so ``dI_c/dI_O = I``,
-        ``dI_c/dm = S / m^2`` and ``dI_c,ij/dc_k = -(2 c_k d_ij - d_ik c_j - c_i d_jk) / m``.
-        """
-        J = np.zeros((20, 20))
-        perm = rg.SHARP_TO_PROJECT
-        paper = self.solver == "paper"
-        for k in range(2):
-            o = 10 * k
-            zm = 4 * k if paper else o                   # index of m (then c) in z
-            m = z[zm]
-            c = z[zm + 1:zm + 4]
-            J[o, zm] = 1.0
-            for i in range(3):
-                J[o + 1 + i, zm + 1 + i] = 1.0 / m
-                J[o + 1 + i, zm] = -c[i] / m**2
-            zs = 8 + 6 * k if paper else o + 4           # the six inertia entries (paper order)
-            for jp, p in enumerate(perm):                 # output jp <- paper-order entry p
-                J[o + 4 + jp, zs + p] = 1.0
-                if paper:
-                    continue
-                i, j = rg.SHARP_PAIRS[p]
-                S_ij = (c @ c if i == j else 0.0) - c[i] * c[j]
-                J[o + 4 + jp, zm] = S_ij / m**2
-                for kk in range(3):
-                    dS = (2.0 * c[kk] if i == j else 0.0) - (c[j] if kk == i else 0.0) \
-                        - (c[i] if kk == j else 0.0)
-                    J[o + 4 + jp, zm + 1 + kk] = -dS / m
-        return J
-
-    def _covariance(self):
-        """Covariance of the internal parameter vector z, z itself, and z -> :meth:`vector`."""
-        g0 = self.guess
-        if self.solver == "paper":
-            p = len(self.mu_idx)
-            full = p == 8 and len(self.th_idx) == 12
-            cov = np.empty((20, 20))
-            Cmu = self.rls.lin.P * self.rls.lin.sigma2(p)
-            TmA = self.rls.M.dot(rg.D_jacobian(self.mu_full))
-            Cth = self.rls.ang.P * self.rls.ang.sigma2(len(self.th_idx))
-            if full:
-                Cmu_full, Tm = Cmu, TmA
-            else:
-                ix = self._cov_ix
-                Cmu_full = g0.P0_mu * np.eye(8)
-                Cmu_full[ix[0]] = Cmu
-                # theta depends on mu through M: d theta / d mu = M dD/dmu
-                Tm = np.zeros((12, 8))
-                Tm[ix[1]] = TmA
-                Cth_full = g0.P0_theta * np.eye(12)
-                Cth_full[ix[2]] = Cth
-                Cth = Cth_full
-            cov[:8, :8] = Cmu_full
-            TC = Tm.dot(Cmu_full)
-            cov[8:, :8] = TC
-            cov[:8, 8:] = TC.T
-            cov[8:, 8:] = Cth + TC.dot(Tm.T)
-            z = np.concatenate([self.mu_full, self.th_full])
-
-            def g(z):
-                out = []
-                for k in range(2):
-                    m = z[4 * k]
-                    out += [[m], z[4 * k + 1:4 * k + 4] / m,
-                            z[8 + 6 * k:8 + 6 * k + 6][rg.SHARP_TO_PROJECT]]
-                return np.concatenate(out)
-            return cov, z, g
-        cov = np.diag([g0.P0_mu if i % 10 < 4 else g0.P0_theta for i in range(20)]).astype(float)
-        cov[np.ix_(self.pi_idx, self.pi_idx)] = self.rls.P * self.rls.sigma2(len(self.pi_idx))
-
-        def g(z):
-            out = []
-            for k in range(2):
-                m, b, I_c = rg.physical_from_standard(z[10 * k:10 * k + 10])
-                out += [[m], b, rg.sharp_vector(I_c)[rg.SHARP_TO_PROJECT]]
-            return np.concatenate(out)
-        return cov, self.pi_full.copy(), g
+    def estimates(self) -> dict:
+        """``{'base': BodyEstimate, 'target': BodyEstimate}``."""
+        vec = self.vector()
+        return {b.name: BodyEstimate(float(vec[b.m]), vec[b.first], vec[b.inertia])
+                for b in self.layout.bodies}
 
     def excitation(self):
         """Reciprocal condition numbers (scale-free) of the mass and inertia information.
@@ -520,23 +344,26 @@ class Identifier:
     # -- state ------------------------------------------------------------------------------------
     def get_state(self) -> dict:
         """Deep copy of everything that evolves (estimates, covariances, M, references, history)."""
-        keep = ("rls", "mu_full", "th_full", "info_lin", "info_ang", "samples", "rejected",
-                "status", "residual_lin", "residual_ang", "reference", "history")
-        st = {k: _copy(getattr(self, k)) for k in keep}
-        if self.solver == "joint":
-            st["pi_full"] = self.pi_full.copy()
+        st = {k: _copy(getattr(self, k)) for k in _UPDATED + ("rejected", "history")}
+        st["solver"] = _copy(self.solver.snapshot())
         return st
 
     def set_state(self, st: dict) -> None:
+        st = dict(st)
+        self.solver.restore(_copy(st.pop("solver")))
         for k, v in st.items():
             setattr(self, k, _copy(v))
         self._exc = None
 
 
-#: attributes an update rebinds (restored by reference) and arrays it writes into (copied)
+#: attributes of the identifier an update rebinds (restored by reference)
 _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",
             "reference")
-_WRITTEN = ("mu_full", "th_full", "pi_full")
+
+
+def _relative_norm(e: np.ndarray, rhs: np.ndarray) -> float:
+    """``|e| / |rhs|`` (``|rhs|`` floored at 1e-300)."""
+    return math.sqrt(e.dot(e)) / max(math.sqrt(rhs.dot(rhs)), 1e-300)
 
 
 def _split(E: np.ndarray):

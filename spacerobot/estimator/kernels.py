@@ -4,9 +4,9 @@ RLS step.
 One sample needs the arm's forward kinematics (n links), the arm's momentum or rate of
 momentum, the regressors of base and target and two RLS updates: in NumPy some two hundred
 small-array operations, whose call overhead was most of the ~0.2 ms per sample. Here they are
-plain loops compiled by Numba. The equations are those of :mod:`spacerobot.kinematics` (the
-arm recursion, written there in NumPy and used by the tests as the reference) and
-:mod:`.regressors` (the regressors of one body, same notation):
+plain loops compiled by Numba. The equations are those of the NumPy test oracles
+``tests/oracles/kinematics.py`` (the arm recursion) and ``tests/oracles/regressors.py`` (the
+regressors of one body, same notation), which the tests check these kernels against:
 
 * kinematics, revolute joint ``i`` with parent frame ``p``: ``d = A_p xyz_i``,
   ``A_i = A_p R_i Rot(axis_i, q_i)``, ``z = A_i axis_i``, ``w_i = w_p + z qd_i``,
@@ -464,15 +464,10 @@ def modified_rls_update(lin_x, lin_P, ang_x, ang_P, M, D_mu, A, b, phi, y, psi, 
 
 
 @njit(**_NB)
-def sample_check(x, limit):
-    """0 if every entry of the flattened sample ``x`` is within ``[-limit, limit]`` (NaN is
-    not) and its base DCM (entries 6..14) is a rotation (orthonormal to 5e-7, det > 0.5);
-    1 for a value out of range or non-finite, 2 for a non-rotation."""
-    for i in range(x.shape[0]):
-        if not abs(x[i]) <= limit:
-            return 1
-    a00, a01, a02, a10, a11, a12, a20, a21, a22 = (x[6], x[7], x[8], x[9], x[10], x[11], x[12],
-                                                   x[13], x[14])
+def rotation_error(x, o):
+    """``(max |A^T A - I|, det A)`` of the DCM stored row-major at ``x[o:o + 9]``."""
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = (x[o], x[o + 1], x[o + 2], x[o + 3], x[o + 4],
+                                                   x[o + 5], x[o + 6], x[o + 7], x[o + 8])
     err = max(abs(a00 * a00 + a10 * a10 + a20 * a20 - 1.0),
               abs(a01 * a01 + a11 * a11 + a21 * a21 - 1.0),
               abs(a02 * a02 + a12 * a12 + a22 * a22 - 1.0),
@@ -481,6 +476,18 @@ def sample_check(x, limit):
               abs(a01 * a02 + a11 * a12 + a21 * a22))
     det = (a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20)
            + a02 * (a10 * a21 - a11 * a20))
-    if err <= 5e-7 and det > 0.5:
+    return err, det
+
+
+@njit(**_NB)
+def sample_check(x, limit, tol):
+    """0 if every entry of the flattened sample ``x`` is within ``[-limit, limit]`` (NaN is
+    not) and its base DCM is a rotation (:func:`rotation_error` ``<= tol``, det > 0); 1 for a
+    value out of range or non-finite, 2 for a non-rotation."""
+    for i in range(x.shape[0]):
+        if not abs(x[i]) <= limit:
+            return 1
+    err, det = rotation_error(x, A_B)
+    if err <= tol and det > 0.0:
         return 0
     return 2

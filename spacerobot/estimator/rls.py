@@ -5,10 +5,11 @@ Both minimise, with forgetting factor ``lam`` (1 = none), the weighted cost
     sum_k lam^(N-k) |y_k - H_k x|^2 + lam^N (x - x0)^T P0^-1 (x - x0)
 
 one sample at a time, with cost independent of the number of samples.
+
+An update replaces the solver's arrays by new ones and never writes into them, so that a
+snapshot (:meth:`RLS.snapshot`) is a tuple of references and costs nothing.
 """
 from __future__ import annotations
-
-import copy
 
 import numpy as np
 
@@ -22,16 +23,6 @@ def _raise_for(status: int) -> None:
                                     "(covariance no longer positive semi-definite)")
     if status == 2:
         raise FloatingPointError("the update produced non-finite numbers")
-
-
-def _copy_attrs(obj, memo):
-    """Deep copy of a solver object: arrays by ``ndarray.copy``, the rest by ``deepcopy``
-    (much cheaper than the generic deepcopy of the object; same result)."""
-    new = obj.__class__.__new__(obj.__class__)
-    memo[id(obj)] = new
-    for k, v in obj.__dict__.items():
-        new.__dict__[k] = v.copy() if type(v) is np.ndarray else copy.deepcopy(v, memo)
-    return new
 
 
 class RLS:
@@ -49,8 +40,13 @@ class RLS:
         self.ssr = 0.0      # weighted sum of squared normalised a-priori residuals
         self.rows = 0
 
-    def __deepcopy__(self, memo):
-        return _copy_attrs(self, memo)
+    def snapshot(self) -> tuple:
+        """The state an update changes, for :meth:`restore` (references; see the module
+        docstring)."""
+        return self.x, self.P, self.ssr, self.rows
+
+    def restore(self, snap: tuple) -> None:
+        self.x, self.P, self.ssr, self.rows = snap
 
     def update(self, H: np.ndarray, y: np.ndarray):
         """One sample, ``H`` (k, p), ``y`` (k,). Returns the a-priori residual ``y - H x`` and
@@ -81,7 +77,7 @@ class ModifiedRLS:
         A mu = b                        (masses and first moments, eq. 34)
         phi theta = y + psi D(mu)       (inertias, eq. 35)
 
-    with ``D(mu) = [m1 J(b1); mn J(bn)]`` (:func:`.regressors.D_of_mu`, 20 entries).
+    with ``D(mu) = [m1 J(b1); mn J(bn)]`` (:func:`.parameters.D_of_mu`, 20 entries).
     ``M = d theta / d D`` re-references the inertia estimate to the newest ``mu`` so that
     ``theta`` always equals the batch least-squares answer over all samples at the latest ``mu``.
     One update is one compiled call (:func:`.kernels.modified_rls_update`).
@@ -108,8 +104,14 @@ class ModifiedRLS:
         self.D_mu = kernels.D_of_mu(self.mu_fixed)
         self.M = np.zeros((len(theta0), len(self.D_mu)))   # M(0) = 0
 
-    def __deepcopy__(self, memo):
-        return _copy_attrs(self, memo)
+    def snapshot(self) -> tuple:
+        """The state an update changes, for :meth:`restore` (references)."""
+        return self.lin.snapshot(), self.ang.snapshot(), self.M, self.D_mu
+
+    def restore(self, snap: tuple) -> None:
+        lin, ang, self.M, self.D_mu = snap
+        self.lin.restore(lin)
+        self.ang.restore(ang)
 
     @property
     def mu(self) -> np.ndarray:

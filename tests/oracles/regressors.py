@@ -1,4 +1,4 @@
-"""Identification equations: regressors of one body, and the D(mu) map (paper eqs. 11-33).
+"""Test oracle: the identification equations' regressors of one body (paper eqs. 11-33).
 
 Notation (README "Equations"): a body with frame origin O (S for the base, E for the target),
 DCM ``A``, angular velocity ``w`` and acceleration ``beta`` (inertial), CoM offset ``b`` (body
@@ -22,7 +22,10 @@ where ``T`` maps the quadratic monomials ``m bb = m [bx^2, bx by, bx bz, by^2, b
           + m rho x a_O + ([rho]x K - [a_O]x) A (m b) + Q_i T (m bb)   -> S_i m J(b)
 
 The identifier evaluates these rows for both bodies at once in compiled code
-(:func:`.kernels.equations`); the NumPy functions here are the reference it is tested against.
+(:func:`spacerobot.estimator.kernels.equations`); this module is the NumPy reference it is
+tested against (a test oracle, not part of the library: it does not ship in the FMUs). The maps
+between parameterisations (``D(mu)``, ``I#``, standard parameters) are the library's
+(:mod:`spacerobot.estimator.parameters`).
 
 With the 10 standard parameters ``[m, m b, I_O#]`` (``I_O = I_c + m(|b|^2 I - b b^T)``) the same
 rows are linear: ``Y_i = [[B_i, 0], [Psi_i[:, :4], D_i]]`` (momentum) and
@@ -32,13 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kinematics import cross3, skew
-from . import kernels
-
-#: paper order [I11, I12, I13, I22, I23, I33] -> project order (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)
-SHARP_TO_PROJECT = np.array([0, 3, 5, 1, 2, 4])
-#: project order -> paper order
-PROJECT_TO_SHARP = np.argsort(SHARP_TO_PROJECT)
+from oracles.kinematics import cross3, skew
 
 #: (m(|b|^2 I - b b^T))# = T @ [m bx^2, m bx by, m bx bz, m by^2, m by bz, m bz^2]
 T_SHIFT = np.array([
@@ -55,41 +52,6 @@ def sharp_matrix(v: np.ndarray) -> np.ndarray:
     """``[#v]`` of eq. 20: ``I @ v == sharp_matrix(v) @ I#``. Shape (3, 6)."""
     v1, v2, v3 = v
     return np.array([[v1, v2, v3, 0, 0, 0], [0, v1, 0, v2, v3, 0], [0, 0, v1, 0, v2, v3]])
-
-
-def sharp_vector(I: np.ndarray) -> np.ndarray:
-    """``I#`` of eq. 21 from a symmetric 3x3 tensor."""
-    return np.array([I[0, 0], I[0, 1], I[0, 2], I[1, 1], I[1, 2], I[2, 2]])
-
-
-def D_of_mu(mu: np.ndarray) -> np.ndarray:
-    """``D(mu) = [m1 J(b1); mn J(bn)]`` (20,) from ``mu = [m1, m1 b1, mn, mn bn]`` (8,)
-    (compiled: :func:`.kernels.D_of_mu`)."""
-    return kernels.D_of_mu(np.ascontiguousarray(mu, dtype=float))
-
-
-#: index pairs (i, j) of the entries of I# (eq. 21)
-SHARP_PAIRS = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-
-
-def D_jacobian(mu: np.ndarray) -> np.ndarray:
-    """``dD/dmu`` (20, 8), used to propagate the covariance of mu into theta."""
-    Jac = [[0.0] * 8 for _ in range(20)]
-    mu = np.asarray(mu, float).tolist()
-    for k in range(2):
-        m, c = mu[4 * k], mu[4 * k + 1:4 * k + 4]
-        r, cc = 10 * k, 4 * k
-        Jac[r][cc] = 1.0
-        for i in range(3):
-            Jac[r + 1 + i][cc + 1 + i] = 1.0
-        m2 = m**2
-        for p, (i, j) in enumerate(SHARP_PAIRS):
-            # d(c_i c_j / m)
-            row = Jac[r + 4 + p]
-            row[cc] = -c[i] * c[j] / m2
-            row[cc + 1 + i] += c[j] / m
-            row[cc + 1 + j] += c[i] / m
-    return np.array(Jac)
 
 
 def momentum_terms(r_O, A, v_O, w):
@@ -131,23 +93,3 @@ def force_terms(rho, A, a_O, w, beta):
     S[:, 1:4] = (skew(rho) @ K - skew(a_O)) @ A
     S[:, 4:] = Q @ T_SHIFT
     return G, Q, S
-
-
-def standard_from_physical(m: float, b: np.ndarray, I_c: np.ndarray) -> np.ndarray:
-    """``[m, m b, I_O#]`` (paper # order) from mass, CoM offset and CoM inertia."""
-    b = np.asarray(b, float)
-    I_O = I_c + m * (b @ b * np.eye(3) - np.outer(b, b))
-    return np.concatenate([[m], m * b, sharp_vector(I_O)])
-
-
-def physical_from_standard(pi: np.ndarray):
-    """Inverse of :func:`standard_from_physical`: ``(m, b, I_c)``."""
-    m = pi[0]
-    b = pi[1:4] / m
-    I_O = sharp_to_matrix(pi[4:10])
-    return m, b, I_O - m * (b @ b * np.eye(3) - np.outer(b, b))
-
-
-def sharp_to_matrix(s: np.ndarray) -> np.ndarray:
-    """3x3 tensor from ``I#``."""
-    return np.array([[s[0], s[1], s[2]], [s[1], s[3], s[4]], [s[2], s[4], s[5]]])

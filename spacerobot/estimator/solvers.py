@@ -1,0 +1,313 @@
+"""The two solvers of the identification equations, behind one interface.
+
+Both take, one sample at a time, the equations of the identified rows (see
+:mod:`.kernels`)::
+
+    A mu = b                       (masses and first moments; eqs. 11 / 28)
+    phi theta = y + psi D(mu)      (inertias; eqs. 16 / 31)
+
+and own everything that depends on how they parameterise the bodies: the update, the 20
+estimates, their covariance and standard deviations (delta method), and the snapshot that
+undoes a failed update.
+
+* :class:`PaperSolver`: the paper's modified RLS (eqs. 34-38) over ``(mu, theta)``.
+* :class:`JointSolver`: one RLS over the 20 standard parameters ``[m, m b, I_O#]`` per body,
+  in which both equations are linear.
+
+Parameters that the robot's model does not identify (a planar robot's out-of-plane ones,
+:class:`spacerobot.interface.ParameterLayout`) stay at their guesses: their columns move to the
+right-hand side.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import NamedTuple, Tuple
+
+import numpy as np
+
+from ..interface import ParameterLayout, Solver
+from ..robots import Guess
+from . import parameters as par
+from .rls import RLS, ModifiedRLS
+
+
+class Step(NamedTuple):
+    """What one solver update reports to the identifier (k1, k2 = linear, angular rows).
+
+    e_lin (k1,), e_ang (k2,): a-priori residuals;  rhs_lin (k1,), rhs_ang (k2,): the right-hand
+    sides they are relative to;  H_lin (k1, p1), H_ang (k2, p2): the regressor columns of the
+    identified masses / first moments and inertias (for the excitation diagnostics).
+    """
+
+    e_lin: np.ndarray
+    e_ang: np.ndarray
+    rhs_lin: np.ndarray
+    rhs_ang: np.ndarray
+    H_lin: np.ndarray
+    H_ang: np.ndarray
+
+
+class ParameterSolver(ABC):
+    """Interface of a solver (see the module docstring).
+
+    Parameters
+    ----------
+    layout : ParameterLayout
+        The identified parameters and equation rows.
+    guess : Guess
+        Initial guesses of both bodies and the initial covariances ``P0_mu`` (masses, first
+        moments) and ``P0_theta`` (inertias).
+    lam : float
+        Forgetting factor, 0 < lam <= 1.
+    """
+
+    kind: Solver
+
+    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float):
+        self.layout, self.guess, self.lam = layout, guess, lam
+
+    @abstractmethod
+    def update(self, A, b, phi, y, psi) -> Step:
+        """One sample: ``A`` (k1, 8), ``b`` (k1,), ``phi`` (k2, 12), ``y`` (k2,), ``psi``
+        (k2, 20). Raises (``LinAlgError``, ``FloatingPointError``) with the solver unchanged
+        if the update cannot be completed with finite numbers."""
+
+    @abstractmethod
+    def z(self) -> np.ndarray:
+        """The internal parameter vector (20,)."""
+
+    @abstractmethod
+    def vector_of(self, z: np.ndarray) -> np.ndarray:
+        """The map from internal parameters ``z`` to the 20 estimates (``ESTIMATE_NAMES``)."""
+
+    @abstractmethod
+    def covariance(self) -> np.ndarray:
+        """Covariance (20, 20) of :meth:`z`, residual-variance scaled; parameters that are not
+        identified keep their prior covariance."""
+
+    @abstractmethod
+    def jacobian(self, z: np.ndarray) -> np.ndarray:
+        """``d vector_of / d z`` (20, 20), written out (the delta method's Jacobian)."""
+
+    @abstractmethod
+    def snapshot(self) -> tuple:
+        """The state an update changes, for :meth:`restore` (cheap: references)."""
+
+    @abstractmethod
+    def restore(self, snap: tuple) -> None:
+        """Undo every update since :meth:`snapshot` returned ``snap``."""
+
+    def vector(self) -> np.ndarray:
+        """The 20 estimates: per body m, b (3), I (6) (``ESTIMATE_NAMES`` order)."""
+        return self.vector_of(self.z())
+
+    def std(self) -> np.ndarray:
+        """Standard deviations (20,) of :meth:`vector`: the covariance of :meth:`z` propagated
+        through the first-order (delta-method) Jacobian of :meth:`vector_of`."""
+        J = self.jacobian(self.z())
+        return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", J, self.covariance(), J), 0.0, None))
+
+    def prior(self) -> np.ndarray:
+        """Diagonal (20,) of the initial covariance of a 20-vector in the layout's order."""
+        g = self.guess
+        return np.where(self.layout.first_order, g.P0_mu, g.P0_theta).astype(float)
+
+
+def _mass_rows(J: np.ndarray, body, z: np.ndarray, zm: int, zc: slice) -> Tuple[float, np.ndarray]:
+    """Rows m and b of a Jacobian d vector / d z for a body whose mass is ``z[zm]`` and first
+    moment ``c = z[zc]``: ``b = c / m``, ``db/dc = I / m``, ``db/dm = -c / m^2``. Returns
+    ``(m, c)``."""
+    m, c = z[zm], z[zc]
+    J[body.m, zm] = 1.0
+    for i in range(3):
+        J[body.first.start + i, zc.start + i] = 1.0 / m
+        J[body.first.start + i, zm] = -c[i] / m**2
+    return m, c
+
+
+class PaperSolver(ParameterSolver):
+    """The paper's modified RLS (eqs. 34-38) over ``z = [mu (8), theta (12)]``
+    (:class:`.ModifiedRLS`): ``theta`` is always the batch least-squares answer at the
+    latest ``mu``."""
+
+    kind = Solver.PAPER
+
+    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0):
+        super().__init__(layout, guess, lam)
+        L = layout
+        mu0, th0 = par.paper_vectors(guess)
+        self._mu_out = np.setdiff1d(np.arange(L.n_mu), L.mu_active)
+        self._th_out = np.setdiff1d(np.arange(L.n_theta), L.theta_active)
+        self.rls = ModifiedRLS(mu0[L.mu_active], th0[L.theta_active],
+                               guess.P0_mu * np.eye(len(L.mu_active)),
+                               guess.P0_theta * np.eye(len(L.theta_active)), lam, mu_fixed=mu0,
+                               active=L.mu_active)
+        self.mu, self.theta = mu0, th0          # full vectors (rebound by each update)
+        # theta of each body inside z
+        self._z_theta = [slice(L.n_mu + b.theta.start, L.n_mu + b.theta.stop) for b in L.bodies]
+
+    def update(self, A, b, phi, y, psi) -> Step:
+        L = self.layout
+        if len(self._mu_out):                  # fixed parameters to the right-hand side
+            b = b - A[:, self._mu_out].dot(self.mu[self._mu_out])
+            A = A[:, L.mu_active]
+        if len(self._th_out):
+            y = y - phi[:, self._th_out].dot(self.theta[self._th_out])
+            phi = phi[:, L.theta_active]
+        rls = self.rls
+        e_lin, e_ang, rhs_ang = rls.update(A, b, phi, y, psi)
+        if L.complete:
+            self.mu, self.theta = rls.mu, rls.theta
+        else:
+            self.mu, self.theta = self.mu.copy(), self.theta.copy()
+            self.mu[L.mu_active] = rls.mu
+            self.theta[L.theta_active] = rls.theta
+        return Step(e_lin, e_ang, b, rhs_ang, A, phi)
+
+    def z(self) -> np.ndarray:
+        return np.concatenate([self.mu, self.theta])
+
+    def vector_of(self, z: np.ndarray) -> np.ndarray:
+        out = np.empty(len(self.layout.names))
+        for b, zt in zip(self.layout.bodies, self._z_theta):
+            m = z[b.mu_m]
+            out[b.m] = m
+            out[b.first] = z[b.mu_first] / m
+            out[b.inertia] = z[zt][par.SHARP_TO_PROJECT]
+        return out
+
+    def jacobian(self, z: np.ndarray) -> np.ndarray:
+        """Per body: the m and b rows (:func:`_mass_rows`); the CoM inertia is a parameter
+        (permuted)."""
+        J = np.zeros((len(self.layout.names), len(z)))
+        for b, zt in zip(self.layout.bodies, self._z_theta):
+            _mass_rows(J, b, z, b.mu_m, b.mu_first)
+            J[np.arange(b.inertia.start, b.inertia.stop), zt.start + par.SHARP_TO_PROJECT] = 1.0
+        return J
+
+    def covariance(self) -> np.ndarray:
+        """``Cov(mu)`` from the first RLS; ``theta`` depends on ``mu`` through
+        ``d theta / d mu = M dD/dmu``, so ``Cov(theta) = C_theta + T Cov(mu) T^T`` and
+        ``Cov(theta, mu) = T Cov(mu)`` with ``T = M dD/dmu``."""
+        L, g0, rls = self.layout, self.guess, self.rls
+        n_mu = L.n_mu
+        Cmu = rls.lin.P * rls.lin.sigma2(len(L.mu_active))
+        Tm = rls.M.dot(par.D_jacobian(self.mu))
+        Cth = rls.ang.P * rls.ang.sigma2(len(L.theta_active))
+        if not L.complete:
+            Cmu_full = g0.P0_mu * np.eye(n_mu)
+            Cmu_full[np.ix_(L.mu_active, L.mu_active)] = Cmu
+            Tm_full = np.zeros((L.n_theta, n_mu))
+            Tm_full[L.theta_active] = Tm
+            Cth_full = g0.P0_theta * np.eye(L.n_theta)
+            Cth_full[np.ix_(L.theta_active, L.theta_active)] = Cth
+            Cmu, Tm, Cth = Cmu_full, Tm_full, Cth_full
+        cov = np.empty((n_mu + L.n_theta,) * 2)
+        cov[:n_mu, :n_mu] = Cmu
+        TC = Tm.dot(Cmu)
+        cov[n_mu:, :n_mu] = TC
+        cov[:n_mu, n_mu:] = TC.T
+        cov[n_mu:, n_mu:] = Cth + TC.dot(Tm.T)
+        return cov
+
+    def snapshot(self) -> tuple:
+        return self.rls.snapshot(), self.mu, self.theta
+
+    def restore(self, snap: tuple) -> None:
+        rls, self.mu, self.theta = snap
+        self.rls.restore(rls)
+
+
+class JointSolver(ParameterSolver):
+    """One RLS over the 20 standard parameters ``z = [m, m b, I_O#]`` per body (:class:`.RLS`).
+
+    Rows: linear ``[B, 0]``, angular ``[Psi[:, :4], D]`` per body, with ``Psi = -psi`` (its
+    columns of ``m`` and ``m b``; the quadratic ones are the parallel-axis part of ``I_O``).
+    """
+
+    kind = Solver.JOINT
+
+    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0):
+        super().__init__(layout, guess, lam)
+        L = layout
+        self.pi = par.standard_vector((guess.base, guess.target))
+        act = L.standard_active
+        self._out = np.setdiff1d(np.arange(len(L.names)), act)
+        self.rls = RLS(self.pi[act], np.diag(self.prior()[act]), lam)
+        # the identified columns that are masses / first moments, and inertias
+        self._lin_cols = np.flatnonzero(L.first_order[act])
+        self._ang_cols = np.flatnonzero(~L.first_order[act])
+
+    def update(self, A, b, phi, y, psi) -> Step:
+        L = self.layout
+        nl = len(b)
+        Y = np.zeros((nl + len(y), len(L.names)))
+        for body in L.bodies:
+            Y[:nl, body.mass_first] = A[:, body.mu]                 # [B, 0]
+            Y[nl:, body.mass_first] = -psi[:, body.mass_first]      # [Psi[:, :4], D]
+            Y[nl:, body.inertia] = phi[:, body.theta]
+        yy = np.concatenate([b, y])
+        act, out = L.standard_active, self._out
+        if len(out):
+            yy = yy - Y[:, out].dot(self.pi[out])
+        e, _ = self.rls.update(Y[:, act], yy)
+        if L.complete:
+            self.pi = self.rls.x
+        else:
+            self.pi = self.pi.copy()
+            self.pi[act] = self.rls.x
+        Ya = Y[:, act]
+        return Step(e[:nl], e[nl:], b, yy[nl:], Ya[:nl, self._lin_cols], Ya[nl:, self._ang_cols])
+
+    def z(self) -> np.ndarray:
+        return self.pi
+
+    def vector_of(self, z: np.ndarray) -> np.ndarray:
+        out = np.empty(len(self.layout.names))
+        for b in self.layout.bodies:
+            m, com, I_c = par.physical_from_standard(z[b.vec])
+            out[b.m], out[b.first] = m, com
+            out[b.inertia] = par.sharp_vector(I_c)[par.SHARP_TO_PROJECT]
+        return out
+
+    def jacobian(self, z: np.ndarray) -> np.ndarray:
+        """Per body: the m and b rows (:func:`_mass_rows`); ``I_c = I_O - S(c) / m`` with
+        ``S(c) = |c|^2 I - c c^T``, so ``dI_c/dI_O = I``, ``dI_c/dm = S / m^2`` and
+        ``dI_c,ij/dc_k = -(2 c_k d_ij - d_ik c_j - c_i d_jk) / m``."""
+        J = np.zeros((len(self.layout.names), len(z)))
+        for b in self.layout.bodies:
+            m, c = _mass_rows(J, b, z, b.m, b.first)
+            for jp, p in enumerate(par.SHARP_TO_PROJECT):     # output jp <- I# entry p
+                row = b.inertia.start + jp
+                J[row, b.inertia.start + p] = 1.0
+                i, j = par.SHARP_PAIRS[p]
+                S_ij = (c @ c if i == j else 0.0) - c[i] * c[j]
+                J[row, b.m] = S_ij / m**2
+                for kk in range(3):
+                    dS = (2.0 * c[kk] if i == j else 0.0) - (c[j] if kk == i else 0.0) \
+                        - (c[i] if kk == j else 0.0)
+                    J[row, b.first.start + kk] = -dS / m
+        return J
+
+    def covariance(self) -> np.ndarray:
+        act = self.layout.standard_active
+        cov = np.diag(self.prior())
+        cov[np.ix_(act, act)] = self.rls.P * self.rls.sigma2(len(act))
+        return cov
+
+    def snapshot(self) -> tuple:
+        return self.rls.snapshot(), self.pi
+
+    def restore(self, snap: tuple) -> None:
+        rls, self.pi = snap
+        self.rls.restore(rls)
+
+
+#: solver class per :class:`spacerobot.interface.Solver` code
+SOLVERS = {Solver.PAPER: PaperSolver, Solver.JOINT: JointSolver}
+
+
+def make_solver(kind: Solver, layout: ParameterLayout, guess: Guess, lam: float = 1.0
+                ) -> ParameterSolver:
+    """The solver of kind ``kind``."""
+    return SOLVERS[Solver.parse(kind, "solver")](layout, guess, lam)
