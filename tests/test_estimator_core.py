@@ -15,12 +15,13 @@ import math
 import numpy as np
 import pytest
 
-from conftest import PLANAR_IDENTIFIED, relative_errors, truth_vector
+from conftest import ESTIMATE_NAMES, PLANAR_IDENTIFIED, relative_errors, truth_vector
 from oracles import regressors as rg
 from oracles.kinematics import ArmKinematics
 from spacerobot.estimator import Identifier
 from spacerobot.estimator import parameters as par
 from spacerobot.estimator.rls import ModifiedRLS
+from spacerobot.interface import estimate_vector
 from spacerobot.plant import Plant
 from spacerobot.robots import PAPER_PLANAR_MEDIUM, scenario
 
@@ -182,12 +183,6 @@ def test_regressors_reproduce_plant_momentum_and_forces(which, planar_record, sp
 # accuracy on the planar medium target (paper's initial state and guesses)
 # ------------------------------------------------------------------------------------------------
 
-NAMES = ["base.m", "base.b[1]", "base.b[2]", "base.b[3]", "base.Ixx", "base.Iyy", "base.Izz",
-         "base.Ixy", "base.Ixz", "base.Iyz", "target.m", "target.b[1]", "target.b[2]",
-         "target.b[3]", "target.Ixx", "target.Iyy", "target.Izz", "target.Ixy", "target.Ixz",
-         "target.Iyz"]
-
-
 def run_identifier(sc, rec, **kw):
     ident = Identifier(sc.robot, sc.guess, **kw)
     truth = truth_vector(sc)
@@ -220,17 +215,15 @@ def test_planar_medium_within_0p1_percent_by_30s(planar_record, method, solver):
     reach = time_to_band(rec, errs[:, PLANAR_IDENTIFIED])
     print(f"\nplanar medium, {method}/{solver}/measured: max error {final.max():.2e}")
     for j, i in enumerate(PLANAR_IDENTIFIED):
-        paper = PAPER_PLANAR_MEDIUM[method].get(NAMES[i])
-        print(f"  {NAMES[i]:12s} {est[i]: .6f}  err {final[j]:.1e}  within 0.1 % from "
+        paper = PAPER_PLANAR_MEDIUM[method].get(ESTIMATE_NAMES[i])
+        print(f"  {ESTIMATE_NAMES[i]:12s} {est[i]: .6f}  err {final[j]:.1e}  within 0.1 % from "
               f"{reach[j]:.1f} s  (paper {paper})")
-    assert np.all(final < 1e-3), dict(zip([NAMES[i] for i in PLANAR_IDENTIFIED], final))
+    assert np.all(final < 1e-3), dict(zip([ESTIMATE_NAMES[i] for i in PLANAR_IDENTIFIED], final))
     # the guesses were far off (so the test measures convergence, not the start)
     assert errs[0, PLANAR_IDENTIFIED].max() > 0.1
     if solver == "paper":
         # out-of-plane parameters are not identifiable in the planar model: kept at the guesses
-        g = sc.guess
-        guess = np.concatenate([[g.base.mass], g.base.com, g.base.inertia,
-                                [g.target.mass], g.target.com, g.target.inertia])
+        guess = estimate_vector(sc.guess.base, sc.guess.target)
         others = [i for i in range(20) if i not in PLANAR_IDENTIFIED]
         np.testing.assert_array_equal(est[others], guess[others])
 
@@ -245,7 +238,7 @@ def test_planar_medium_differenced_accelerations(planar_record):
     print(f"\nplanar medium, force/paper/differenced: max error {final.max():.2%} "
           f"(paper: 0.67 % on I_n)")
     for j, i in enumerate(PLANAR_IDENTIFIED):
-        print(f"  {NAMES[i]:12s} {est[i]: .6f}  err {final[j]:.2%}")
+        print(f"  {ESTIMATE_NAMES[i]:12s} {est[i]: .6f}  err {final[j]:.2%}")
     assert np.all(np.isfinite(est))
     assert ident.samples == len(rec) - 2        # one sample of delay, two to start
     assert final.max() < 0.05                   # sanity: a few per cent at most

@@ -265,3 +265,25 @@ def test_bad_parameter_fails_initialisation_with_message(planar_fmus, params, wo
         assert good.get("base.m") == 600.0
     finally:
         good.free()
+
+
+# ------------------------------------------------------------------------------------------------
+# test-only oracles do not ship
+# ------------------------------------------------------------------------------------------------
+
+
+def test_fmus_do_not_bundle_the_test_oracles(planar_fmus):
+    """The NumPy reference kinematics and regressors (tests/oracles) are for the tests only:
+    neither FMU carries them, while the estimator carries what it runs."""
+    import zipfile
+    for kind in ("plant", "estimator"):
+        z = zipfile.ZipFile(planar_fmus[kind])
+        sources = {n: z.read(n).decode() for n in z.namelist()
+                   if n.endswith(".py") and "pythonfmu/" not in n}
+        for name, src in sources.items():
+            for oracle in ("def momentum_terms", "def force_terms", "class ArmKinematics",
+                           "def body_momentum", "from oracles", "import oracles"):
+                assert oracle not in src, (kind, name, oracle)
+        if kind == "estimator":
+            assert any(n.endswith("/estimator/solvers.py") for n in sources)
+            assert not any(n.endswith("/regressors.py") for n in sources)
