@@ -51,19 +51,20 @@ def D_jacobian(mu: np.ndarray) -> np.ndarray:
     Per body with ``c = m b``: ``D = [m, c, c_i c_j / m (i <= j)]``, so
     ``d(c_i c_j / m) = -c_i c_j / m^2 dm + c_j / m dc_i + c_i / m dc_j``.
     """
-    Jac = np.zeros((len(LAYOUT.names), LAYOUT.n_mu))
-    mu = np.asarray(mu, float)
+    Jac = [[0.0] * LAYOUT.n_mu for _ in LAYOUT.names]     # lists: cheaper than array writes
+    mu = np.asarray(mu, float).tolist()
     for b in LAYOUT.bodies:
-        m, c = float(mu[b.mu_m]), mu[b.mu_first].tolist()
-        Jac[b.m, b.mu_m] = 1.0
-        Jac[b.first, b.mu_first] = np.eye(3)
+        m, c = mu[b.mu_m], mu[b.mu_first]
+        Jac[b.m][b.mu_m] = 1.0
+        for i in range(3):
+            Jac[b.first.start + i][b.mu_first.start + i] = 1.0
         m2 = m**2
         for p, (i, j) in enumerate(SHARP_PAIRS):
             row = Jac[b.inertia.start + p]
             row[b.mu_m] = -c[i] * c[j] / m2
             row[b.mu_first.start + i] += c[j] / m
             row[b.mu_first.start + j] += c[i] / m
-    return Jac
+    return np.array(Jac)
 
 
 def paper_vectors(g: Guess):

@@ -145,6 +145,7 @@ class PaperSolver(ParameterSolver):
         self.mu, self.theta = mu0, th0          # full vectors (rebound by each update)
         # theta of each body inside z
         self._z_theta = [slice(L.n_mu + b.theta.start, L.n_mu + b.theta.stop) for b in L.bodies]
+        self._ix = (np.ix_(L.mu_active, L.mu_active), np.ix_(L.theta_active, L.theta_active))
 
     def update(self, A, b, phi, y, psi) -> Step:
         L = self.layout
@@ -196,11 +197,11 @@ class PaperSolver(ParameterSolver):
         Cth = rls.ang.P * rls.ang.sigma2(len(L.theta_active))
         if not L.complete:
             Cmu_full = g0.P0_mu * np.eye(n_mu)
-            Cmu_full[np.ix_(L.mu_active, L.mu_active)] = Cmu
+            Cmu_full[self._ix[0]] = Cmu
             Tm_full = np.zeros((L.n_theta, n_mu))
             Tm_full[L.theta_active] = Tm
             Cth_full = g0.P0_theta * np.eye(L.n_theta)
-            Cth_full[np.ix_(L.theta_active, L.theta_active)] = Cth
+            Cth_full[self._ix[1]] = Cth
             Cmu, Tm, Cth = Cmu_full, Tm_full, Cth_full
         cov = np.empty((n_mu + L.n_theta,) * 2)
         cov[:n_mu, :n_mu] = Cmu
@@ -234,6 +235,7 @@ class JointSolver(ParameterSolver):
         act = L.standard_active
         self._out = np.setdiff1d(np.arange(len(L.names)), act)
         self.rls = RLS(self.pi[act], np.diag(self.prior()[act]), lam)
+        self._ix = np.ix_(act, act)
         # the identified columns that are masses / first moments, and inertias
         self._lin_cols = np.flatnonzero(L.first_order[act])
         self._ang_cols = np.flatnonzero(~L.first_order[act])
@@ -290,9 +292,8 @@ class JointSolver(ParameterSolver):
         return J
 
     def covariance(self) -> np.ndarray:
-        act = self.layout.standard_active
         cov = np.diag(self.prior())
-        cov[np.ix_(act, act)] = self.rls.P * self.rls.sigma2(len(act))
+        cov[self._ix] = self.rls.P * self.rls.sigma2(len(self.layout.standard_active))
         return cov
 
     def snapshot(self) -> tuple:
