@@ -146,6 +146,10 @@ class PaperSolver(ParameterSolver):
         # theta of each body inside z
         self._z_theta = [slice(L.n_mu + b.theta.start, L.n_mu + b.theta.stop) for b in L.bodies]
         self._ix = (np.ix_(L.mu_active, L.mu_active), np.ix_(L.theta_active, L.theta_active))
+        # d I / d theta: the permutation I = I#[SHARP_TO_PROJECT], as (rows, columns) of J
+        self._dI = tuple(np.concatenate(x) for x in zip(*[
+            (np.arange(b.inertia.start, b.inertia.stop), zt.start + par.SHARP_TO_PROJECT)
+            for b, zt in zip(L.bodies, self._z_theta)]))
 
     def update(self, A, b, phi, y, psi) -> Step:
         L = self.layout
@@ -181,9 +185,9 @@ class PaperSolver(ParameterSolver):
         """Per body: the m and b rows (:func:`_mass_rows`); the CoM inertia is a parameter
         (permuted)."""
         J = np.zeros((len(self.layout.names), len(z)))
-        for b, zt in zip(self.layout.bodies, self._z_theta):
+        for b in self.layout.bodies:
             _mass_rows(J, b, z, b.mu_m, b.mu_first)
-            J[np.arange(b.inertia.start, b.inertia.stop), zt.start + par.SHARP_TO_PROJECT] = 1.0
+        J[self._dI] = 1.0
         return J
 
     def covariance(self) -> np.ndarray:
