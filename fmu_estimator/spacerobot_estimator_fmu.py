@@ -1,6 +1,8 @@
 """pythonfmu slave of the identifier: a thin wrapper mapping FMI variables to
 spacerobot.estimator. It never imports plant code: inside the FMU the library is bundled as
-``_spacerobot_estimator`` with only the robot description, kinematics and estimator.
+``_spacerobot_estimator`` with only the robot description, the interface table, the arm
+geometry, the kernel loader, the FMI base class and the estimator (``fmi/build.py``'s
+``BUNDLES``).
 """
 import math
 
