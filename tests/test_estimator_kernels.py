@@ -118,7 +118,8 @@ def test_one_rotation_rule_on_both_validation_paths(as_lists):
     sc = scenario("spatial")
     rng = np.random.default_rng(5)
     reflection = np.diag([1.0, 1.0, -1.0])
-    cases = [(_dcm_with_error(0.9 * ROTATION_TOL), True), (_dcm_with_error(0.5 * ROTATION_TOL), True),
+    cases = [(_dcm_with_error(0.9 * ROTATION_TOL), True),
+             (_dcm_with_error(0.5 * ROTATION_TOL), True),
              (_dcm_with_error(1.1 * ROTATION_TOL), False), (_dcm_with_error(2e-6), False),
              (reflection, False)]
     for A, ok in cases:

@@ -1,11 +1,19 @@
-"""The interface table's estimate names and identified sets agree with the estimator core."""
+"""The interface table's estimate names and identified sets agree with the estimator core; the
+parameter layout, the estimator's codes, the error metric and the solvers' snapshot."""
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from spacerobot.estimator import Identifier
-from spacerobot.interface import ESTIMATE_NAMES, estimator_vars, identified_estimates
+from spacerobot.estimator import Identifier, JointSolver, PaperSolver
+from spacerobot.estimator import parameters as par
+from spacerobot.interface import (ACCEL_SOURCES, ESTIMATE_NAMES, METHODS, SOLVERS, AccelSource,
+                                  Method, ParameterLayout, Solver, error_scale, estimate_vector,
+                                  estimator_vars, identified_estimates, relative_errors,
+                                  relative_errors_by_name)
 from spacerobot.plant import Plant
-from spacerobot.robots import PLANAR, SPATIAL, scenario
+from spacerobot.robots import PLANAR, SPATIAL, Guess, RigidBody, scenario
 
 
 def test_identified_estimates_are_as_documented():
@@ -39,12 +47,6 @@ def test_exactly_the_identified_estimates_move(robot):
 # ------------------------------------------------------------------------------------------------
 # the parameter layout, the codes and the error metric
 # ------------------------------------------------------------------------------------------------
-
-from spacerobot.estimator import JointSolver, PaperSolver, parameters as par  # noqa: E402
-from spacerobot.interface import (ACCEL_SOURCES, METHODS, SOLVERS, AccelSource, Method,  # noqa: E402
-                                  ParameterLayout, Solver, error_scale, estimate_vector,
-                                  relative_errors, relative_errors_by_name)
-from spacerobot.robots import Guess, RigidBody  # noqa: E402
 
 #: two bodies whose every parameter differs, so that a wrong position shows
 BASE = RigidBody(500.0, (0.11, -0.12, 0.13), (81.0, 82.0, 83.0, -1.1, 1.2, -1.3))
@@ -107,7 +109,8 @@ def test_codes_are_defined_once_and_parse_labels_codes_and_members():
     assert Method.parse("force") is Method.FORCE is Method.parse(2) is Method.parse(Method.FORCE)
     assert Solver.parse(np.int32(2)) is Solver.JOINT and AccelSource.parse("differenced") == 2
     for bad in (3, 0, "Force", 1.0, True, None):
-        with pytest.raises(ValueError, match=r"method = .* is not one of 1 \(momentum\), 2 \(force\)"):
+        with pytest.raises(ValueError,
+                           match=r"method = .* is not one of 1 \(momentum\), 2 \(force\)"):
             Method.parse(bad, "method")
     # the FMI parameter descriptions name the same codes
     desc = {v.name: v.description for v in estimator_vars(PLANAR, scenario("planar"))}
@@ -183,8 +186,6 @@ def test_solver_snapshot_restore_undoes_updates(solver_cls):
 def test_no_bare_parameter_offsets_outside_the_layout_and_the_kernels():
     """Positions of parameters are written once (interface.ParameterLayout); the numba kernels
     keep theirs as kernel constants."""
-    import re
-    from pathlib import Path
     root = Path(__file__).resolve().parents[1]
     files = [p for p in (root / "spacerobot" / "estimator").glob("*.py") if p.name != "kernels.py"]
     files.append(root / "fmu_estimator" / "spacerobot_estimator_fmu.py")

@@ -4,8 +4,8 @@ independent computations.
 * Thrusters off: total linear and angular momentum (about the inertial origin) conserved.
 * Thrusters on: P(t) - P(0) = J(t) and L(t) - L(0) = H(t) (impulse-momentum theorem).
 * Pinocchio's momentum and accelerations agree with a plain-numpy sum over the bodies
-  (the test oracle ``tests/oracles/kinematics.py``, which does not use Pinocchio), at random states built from
-  physical quantities by this test (its own inverse of the plant's coordinate conventions).
+  (the test oracle ``tests/oracles/kinematics.py``, which does not use Pinocchio), at random
+  states built from physical quantities by this test (its own inverse of the plant's coordinate conventions).
 * Measured accelerations are the time derivatives of the measured velocities.
 * The base attitude follows eq. 39 while the thrusters damp the momentum at F_max.
 * A communication step that is not a multiple of h ends with one shorter RK4 step.

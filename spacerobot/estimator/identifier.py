@@ -183,8 +183,9 @@ class Identifier:
         flat = np.concatenate(arrays)
         err, det = kernels.rotation_error(flat, kernels.A_B)
         if not (err <= ROTATION_TOL and det > 0.0):
-            return REJECT_INCONSISTENT, (f"base.A is not a rotation matrix (|A^T A - I| = "
-                                         f"{err:.3g} > {ROTATION_TOL:g} or det = {det:.6g} <= 0)"), None
+            why = (f"base.A is not a rotation matrix (|A^T A - I| = {err:.3g} > "
+                   f"{ROTATION_TOL:g} or det = {det:.6g} <= 0)")
+            return REJECT_INCONSISTENT, why, None
         return ESTIMATING, "", flat
 
     def update(self, t: float, meas: dict) -> int:
