@@ -10,8 +10,11 @@ value its source had at ``t``, whatever the order of the components.
 from __future__ import annotations
 
 import collections
+import contextlib
 import math
+import signal
 import sys
+import threading
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 from .errors import Calls, SimulationError
@@ -112,18 +115,40 @@ class Master:
         n_steps = len(points) - 1
         bar = tqdm(total=n_steps, disable=not _use_progress(progress), unit="step", desc=desc,
                    delay=0.0 if progress else 2.0, leave=False)
-        try:
-            for k, t in enumerate(points):
-                self.calls.t = t
-                self.exchange()
-                if recorder is not None:
-                    recorder.record(k, t)
-                if k == n_steps:
-                    break
-                self.do_step(t, points[k + 1] - t)
-                bar.update(1)
-        finally:
-            bar.close()
+        with deferred_interrupt() as interrupted:
+            try:
+                for k, t in enumerate(points):
+                    if interrupted():
+                        raise KeyboardInterrupt(f"interrupted at t = {t:g} s")
+                    self.calls.t = t
+                    self.exchange()
+                    if recorder is not None:
+                        recorder.record(k, t)
+                    if k == n_steps:
+                        break
+                    self.do_step(t, points[k + 1] - t)
+                    bar.update(1)
+            finally:
+                bar.close()
+
+
+@contextlib.contextmanager
+def deferred_interrupt():
+    """Within the block, Ctrl-C (SIGINT) only sets a flag, which the stepping loop checks
+    between communication steps: the interrupt then never lands inside an FMU's Python code
+    (pythonfmu would turn it into fmi2Fatal) and the loop stops cleanly with KeyboardInterrupt.
+    Yields the function that tells whether SIGINT arrived. Only in the main thread and only if
+    Python's default handler is installed; otherwise that function always returns False."""
+    hit = []
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield lambda: False
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: hit.append(signum))
+    try:
+        yield lambda: bool(hit)
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _use_progress(progress: Optional[bool]) -> bool:
