@@ -17,17 +17,12 @@ import importlib
 import importlib.util
 import sys
 from pathlib import Path
-from typing import Dict, Mapping, Optional, Sequence
+from typing import Optional, Sequence
 
 from .. import __version__
-from ..interface import ACCEL_SOURCES, METHODS, SOLVERS, identified_estimates
+from ..interface import identified_estimates
 from ..robots import PAPER_PLANAR_MEDIUM, ROBOTS
-
-
-def codes(labels: Mapping[int, str]) -> Dict[str, int]:
-    """Label -> FMI code, the inverse of :data:`interface.METHODS`, :data:`interface.SOLVERS`
-    or :data:`interface.ACCEL_SOURCES` (the one place the inverse is taken)."""
-    return {label: code for code, label in labels.items()}
+from .codes import ACCEL_CODES, METHOD_CODES, SOLVER_CODES, estimator_overrides
 
 
 class CommandError(Exception):
@@ -85,9 +80,7 @@ def cmd_run(args) -> int:
 
     if args.ssp and args.robot:
         raise CommandError("give either --robot or SSP_FILE, not both")
-    overrides = {"estimator.method": codes(METHODS)[args.method],
-                 "estimator.solver": codes(SOLVERS)[args.solver],
-                 "estimator.accel_source": codes(ACCEL_SOURCES)[args.accel]}
+    overrides = estimator_overrides(args.method, args.accel, args.solver)
     overrides.update(parse_assignments(args.set))
     if args.ssp:
         ssp = Path(args.ssp)
@@ -156,10 +149,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--robot", choices=sorted(ROBOTS), help="robot (default planar)")
     p.add_argument("--target", help="parameter set: small|medium|large (planar), default "
                                     "(spatial); default: the one bound in the SSD")
-    p.add_argument("--method", choices=list(codes(METHODS)), default="momentum")
-    p.add_argument("--accel", choices=list(codes(ACCEL_SOURCES)), default="measured",
+    p.add_argument("--method", choices=list(METHOD_CODES), default="momentum")
+    p.add_argument("--accel", choices=list(ACCEL_CODES), default="measured",
                    help="force method: measured accelerations or differenced velocities")
-    p.add_argument("--solver", choices=list(codes(SOLVERS)), default="paper")
+    p.add_argument("--solver", choices=list(SOLVER_CODES), default="paper")
     p.add_argument("--stop-time", type=float, metavar="T",
                    help="stop time [s] (default: the SSD's DefaultExperiment)")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",

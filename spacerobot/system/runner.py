@@ -44,7 +44,7 @@ from .bindings import (apply_component_bindings, apply_overrides, apply_system_b
 from .errors import Calls, SimulationError, fmi_errors
 from .instance import FMUInstance, FMULog
 from .master import Master, initialize, time_grid
-from .reader import ComponentInfo, SystemInfo, open_system, read_system  # noqa: F401
+from .reader import ComponentInfo, SystemInfo, open_system
 from .recorder import Recorder, check_writable, read_csv, write_csv  # noqa: F401
 
 __all__ = ["run_ssp", "simulate", "RunResult", "SimulationError", "format_results",
@@ -241,7 +241,10 @@ def run_ssp(ssp_path: str | Path, parameter_set: Optional[str] = None,
     tmp = Path(tempfile.mkdtemp(prefix="spacerobot_run_"))
     try:
         root_dir, info = open_system(ssp_path, tmp)
-        result = simulate(info, root_dir, parameter_set, stop_time, overrides, progress, tmp)
+        try:
+            result = simulate(info, root_dir, parameter_set, stop_time, overrides, progress, tmp)
+        except SimulationError as e:
+            raise SimulationError(f"{ssp_path}: {e}") from e.__cause__
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     if csv_path is not None:
