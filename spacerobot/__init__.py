@@ -31,6 +31,7 @@ _API = {
     "run_ssp": "spacerobot.system.runner", "RunResult": "spacerobot.system.runner",
     "SimulationError": "spacerobot.system.errors", "read_csv": "spacerobot.system.recorder",
     "FMUInstance": "spacerobot.system.instance", "Master": "spacerobot.system.master",
+    "logger_callbacks": "spacerobot.system.instance",
 }
 
 __all__ = ["__version__", *_API]
