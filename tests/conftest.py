@@ -7,13 +7,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+# pythonfmu from site-packages, before any FMU runs in this process: a pythonfmu FMU loaded
+# in-process puts its resources/ (which bundles a copy of pythonfmu without the binaries) on
+# sys.path, and an FMU built after that would get no binaries/
+import pythonfmu.builder  # noqa: F401
 from fmpy import extract, read_model_description
 
 from spacerobot import interface
 from spacerobot.fmi.build import build_fmu
 from spacerobot.robots import PLANAR, scenario
-from spacerobot import FMUInstance, Master
-from spacerobot.system.instance import logger_callbacks
+from spacerobot import FMUInstance, Master, logger_callbacks
 
 
 @pytest.fixture(scope="session")
@@ -52,7 +55,7 @@ _EXTRACTED: dict = {}
 
 def logged_slave(path, name: str) -> Slave:
     """A conftest ``Slave`` instantiated with its own logger
-    (:func:`spacerobot.system.instance.logger_callbacks`); ``slave.messages`` collects
+    (:func:`spacerobot.logger_callbacks`); ``slave.messages`` collects
     (status, category, message) tuples."""
     key = str(path)
     if key not in _EXTRACTED:

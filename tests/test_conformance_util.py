@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from spacerobot import FMUInstance
-from spacerobot.system.instance import logger_callbacks
+from spacerobot import logger_callbacks
 
 OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
 STATUS_NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}

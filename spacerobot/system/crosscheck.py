@@ -36,6 +36,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from .. import __version__
+from .cli import fail_on_errors
 from .reader import system_of_fmus
 from .runner import simulate
 
@@ -217,6 +218,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=run_cli)
 
 
+@fail_on_errors("crosscheck")
 def run_cli(args) -> int:
     folders = write_crosscheck(args.robot, args.out, target=args.target,
                                stop_time=args.stop_time, step=args.step)

@@ -138,8 +138,9 @@ def _instance(comp: ComponentInfo, root_dir: Path, tmp: Path, log: FMULog) -> FM
     try:
         return FMUInstance(fmu_path, comp.name, callbacks=log.callbacks, logging_on=True,
                            unzipdir=tmp / comp.name, instantiate=False)
-    except ValueError as e:
-        raise SimulationError(f"component {comp.name!r}: {comp.source} {e}") from None
+    except ValueError:
+        raise SimulationError(f"component {comp.name!r}: {comp.source} is not an FMI 2.0 "
+                              f"co-simulation FMU") from None
     except Exception as e:            # zipfile.BadZipFile, a model description fmpy rejects
         raise SimulationError(f"component {comp.name!r}: {comp.source} is not a valid FMU "
                               f"({type(e).__name__}: {e})") from None

@@ -7,6 +7,7 @@ import sys
 from typing import List, Optional, Sequence, Tuple
 
 from ..bindings import parse_assignments
+from ..cli import fail_on_errors
 from .execute import run_sweep
 from .plot import plot_sweep
 from .points import make_points
@@ -136,6 +137,7 @@ def _settings(args: argparse.Namespace) -> dict:
     return cfg
 
 
+@fail_on_errors("sweep")
 def cli_sweep(args: argparse.Namespace) -> int:
     """The ``spacerobot sweep`` command; returns the exit status (1 if a point failed)."""
     cfg = _settings(args)
