@@ -429,3 +429,15 @@ def test_fmpy_simulate_ssp_runs_the_package_with_a_parameter_set(systems):
     # fmpy applied the parameter set: the base starts at 5 m/s, not the bound 1 m/s
     assert abs(res["plant.base.v[1]"][0] - 5.0) < 0.05
     assert np.all(np.isfinite(res["estimator.base.m"]))
+
+
+def test_system_of_fmus_wires_every_input_by_name(planar_fmus):
+    from spacerobot.system.reader import system_of_fmus
+
+    info = system_of_fmus(planar_fmus, 0.1, 1.0)
+    assert info.connections == [("plant", n, "estimator", n)
+                                for n in interface.connections(ROBOTS["planar"])]
+    # the other way round too: a component listed first may be the destination
+    back = system_of_fmus({"estimator": planar_fmus["estimator"], "plant": planar_fmus["plant"]},
+                          0.1, 1.0)
+    assert sorted(back.connections) == sorted(info.connections)
