@@ -1,4 +1,5 @@
-"""The README's quick start is what CI runs: two fenced shell blocks, the second in .ci/run."""
+"""The README's quick start is what CI runs (two fenced shell blocks, the second in .ci/run), and
+its Python blocks (the fmpy recipe, the Python API) run as written."""
 import re
 from pathlib import Path
 

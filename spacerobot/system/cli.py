@@ -13,6 +13,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib
 import importlib.util
 import sys
@@ -33,6 +34,7 @@ def fail_on_errors(command: str):
     """Decorator of a sub-command: every expected failure becomes one line ``spacerobot
     <command>: error: ...`` on stderr and exit status 1; Ctrl-C exit status 130."""
     def wrap(func):
+        @functools.wraps(func)
         def run(args) -> int:
             from .errors import SimulationError
             try:
@@ -46,7 +48,6 @@ def fail_on_errors(command: str):
                     msg = f"{e.filename}: {e.strerror or msg}"
                 print(f"spacerobot {command}: error: {msg}", file=sys.stderr)
                 return 1
-        run.__doc__ = func.__doc__
         return run
     return wrap
 
