@@ -67,32 +67,10 @@ def run_sweep(points: Sequence[Point], out_csv, *, workers: int = 2,
 def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp, progress,
                runner, builder) -> SweepSummary:
     summary = SweepSummary(csv=str(out))
-    uniq: Dict[str, Point] = {}
-    for p in points:
-        uniq.setdefault(p.id, p)
-    summary.total = len(uniq)
-    if out.exists() and out.stat().st_size:
-        _check_header(out)
-    rows = read_table(out)
-    done = {r["sweep_id"] for r in rows if r["status"] == "ok"}
-    todo = [p for pid, p in uniq.items() if pid not in done]
-    summary.skipped = summary.total - len(todo)
+    todo = _points_to_run(points, out, summary)
     if not todo:
         return summary
-    todo_ids = {p.id for p in todo}
-    if any(r["sweep_id"] in todo_ids for r in rows):      # failed before: drop the old rows
-        _rewrite(out, [r for r in rows if r["sweep_id"] not in todo_ids])
-
-    ssp_paths = dict(ssp or {})
-    robots = sorted({p.robot for p in todo} - set(ssp_paths))
-    if robots:
-        build = _resolve(builder)
-        bdir = Path(build_dir) if build_dir else out.with_name(out.name + ".build")
-        for rb in robots:
-            built = build(rb, bdir / rb)
-            if isinstance(built, Mapping):       # build_system returns {'ssp': path, ...}
-                built = built["ssp"]
-            ssp_paths[rb] = str(Path(built).resolve())
+    ssp_paths = _build_systems(todo, out, ssp, build_dir, builder)
 
     from distributed import Client, LocalCluster, as_completed
 
@@ -107,11 +85,8 @@ def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp,
                                        threads_per_worker=1, dashboard_address=":0")
                 client = own_client = Client(cluster)
         stamp = f"{time.time_ns():x}"
-        futures = {}
-        for p in todo:
-            fut = client.submit(run_point, p, ssp_paths[p.robot], runner, pure=False,
-                                key=f"sweep-{p.id}-{stamp}", retries=0)
-            futures[fut] = p
+        futures = {client.submit(run_point, p, ssp_paths[p.robot], runner, pure=False,
+                                 key=f"sweep-{p.id}-{stamp}", retries=0): p for p in todo}
         summary.submitted = len(futures)
         bar = None
         if progress:
@@ -147,3 +122,40 @@ def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp,
         if cluster is not None:
             cluster.close()
     return summary
+
+
+def _points_to_run(points: Sequence[Point], out: Path, summary: SweepSummary) -> List[Point]:
+    """The points of the grid not yet in the table with status ok (counted in ``summary``);
+    the old rows of points that failed before are dropped, so the table keeps one row each."""
+    uniq: Dict[str, Point] = {}
+    for p in points:
+        uniq.setdefault(p.id, p)
+    summary.total = len(uniq)
+    if out.exists() and out.stat().st_size:
+        _check_header(out)
+    rows = read_table(out)
+    done = {r["sweep_id"] for r in rows if r["status"] == "ok"}
+    todo = [p for pid, p in uniq.items() if pid not in done]
+    summary.skipped = summary.total - len(todo)
+    todo_ids = {p.id for p in todo}
+    if any(r["sweep_id"] in todo_ids for r in rows):
+        _rewrite(out, [r for r in rows if r["sweep_id"] not in todo_ids])
+    return todo
+
+
+def _build_systems(todo: Sequence[Point], out: Path, ssp: Optional[Mapping[str, str]],
+                   build_dir, builder: str) -> Dict[str, str]:
+    """``{robot: absolute .ssp path}`` for every robot of ``todo``: given in ``ssp``, or built
+    with ``builder`` into ``build_dir`` (default ``<out>.build/``) before any point runs."""
+    ssp_paths = dict(ssp or {})
+    robots = sorted({p.robot for p in todo} - set(ssp_paths))
+    if robots:
+        build = _resolve(builder)
+        bdir = Path(build_dir) if build_dir else out.with_name(out.name + ".build")
+        for rb in robots:
+            built = build(rb, bdir / rb)
+            if isinstance(built, Mapping):       # build_system returns {'ssp': path, ...}
+                built = built["ssp"]
+            ssp_paths[rb] = str(Path(built).resolve())
+    return ssp_paths
+
