@@ -3,7 +3,7 @@
 Sections:
 
 1. co-simulation speed: the whole system (plant FMU + estimator FMU through fmpy, 0.1 s
-   communication step, :func:`spacerobot.system.runner.run_ssp`) against a bare RK4 loop over
+   communication step, :func:`spacerobot.run_ssp`) against a bare RK4 loop over
    Pinocchio's ABA on the same robot at the same 1 ms step; where the time goes;
 2. estimator cost per sample: core ``Identifier.update``, the estimator FMU's ``doStep`` through
    fmpy, and a two-step batch least-squares re-solve over all N samples;
@@ -41,12 +41,10 @@ ROOT = HERE.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from spacerobot.estimator import Identifier  # noqa: E402
-from spacerobot.plant import Plant  # noqa: E402
-from spacerobot.interface import (ESTIMATE_NAMES, estimate_vector,  # noqa: E402
-                                  identified_estimates, relative_errors)
-from spacerobot.system.instance import FMUInstance  # noqa: E402
-from spacerobot.robots import PAPER_PLANAR_MEDIUM, PLANAR, scenario  # noqa: E402
+from spacerobot import (ESTIMATE_NAMES, PAPER_PLANAR_MEDIUM, FMUInstance,  # noqa: E402
+                        Identifier, Master, Plant, estimate_vector, identified_estimates,
+                        relative_errors, run_ssp, scenario)
+from spacerobot.robots import PLANAR  # noqa: E402
 
 NAMES = list(ESTIMATE_NAMES)
 #: parameters the planar model identifies (x, y translation, z rotation)
@@ -127,18 +125,20 @@ def bare_rk4(sc, seconds: float) -> float:
     return time.process_time() - t0
 
 
-class Slave(FMUInstance):
+def started(path: Path, name: str) -> FMUInstance:
     """An :class:`FMUInstance` initialised with its default parameters."""
+    return FMUInstance(path, name).init()
 
-    def __init__(self, path: Path, name: str):
-        super().__init__(path, name)
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        self.fmu.exitInitializationMode()
+
+def pair(plant_fmu: Path, estimator_fmu: Path) -> Master:
+    """Plant and estimator (default parameters) wired name to name by the co-simulation loop."""
+    plant, est = started(plant_fmu, "plant"), started(estimator_fmu, "estimator")
+    return Master({"plant": plant, "estimator": est},
+                  [("plant", n, "estimator", n) for n in est.names("input")])
 
 
 def build_systems(robots, out: Path) -> dict:
-    from spacerobot.system.ssd import build_system
+    from spacerobot import build_system
     paths = {}
     for r in robots:
         paths[r] = build_system(r, out / r)
@@ -162,7 +162,6 @@ def table(header, rows) -> str:
 def cosim_speed(systems: dict, seconds: dict, repeats: int) -> dict:
     """run_ssp at two stop times (the difference removes instantiation and set-up) and the bare
     RK4 loop, interleaved, best of ``repeats``; plus a per-component breakdown."""
-    from spacerobot.system.runner import run_ssp
     gc.collect()               # start every round with no garbage of earlier sections
     res = {}
     for robot, ssp_paths in systems.items():
@@ -213,11 +212,9 @@ def merge_rounds(rounds: list) -> dict:
 def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
     """Where one communication step (0.1 s) goes: the cores alone, the two doSteps through fmpy,
     and the data exchange / recording calls, measured in a run_ssp-like loop."""
-    plant = Slave(ssp_paths["plant"], "plant")
-    est = Slave(ssp_paths["estimator"], "estimator")
+    master = pair(ssp_paths["plant"], ssp_paths["estimator"])
+    plant, est = master.instances["plant"], master.instances["estimator"]
     try:
-        ins = est.names("input")
-        pvr, evr = plant.vrs(ins), est.vrs(ins)
         p_out = plant.vrs(plant.names("output"))
         e_out = [v.valueReference for v in est.vars.values()
                  if v.causality == "output" and v.type == "Real"]
@@ -236,7 +233,7 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
             tt = dict.fromkeys(keys, 0.0)
             for _ in range(block):
                 c = time.process_time()
-                est.fmu.setReal(evr, list(plant.fmu.getReal(pvr)))
+                master.exchange()
                 c1 = time.process_time()
                 plant.fmu.getReal(p_out)
                 est.fmu.getReal(other_vr)
@@ -274,7 +271,6 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
 
 def profile_summary(ssp_path: Path, seconds: float, top: int = 14) -> str:
     """cProfile of a run_ssp run (the FMUs' Python code runs in this interpreter)."""
-    from spacerobot.system.runner import run_ssp
     pr = cProfile.Profile()
     pr.enable()
     run_ssp(ssp_path, stop_time=seconds, progress=False)
@@ -329,7 +325,7 @@ def fmu_dostep_cost(est_fmu: Path, outs: list, names: list, repeats: int = 3) ->
     rows = [[value(o, n) for n in names] for o in outs]
     best = {"setReal": math.inf, "doStep": math.inf, "getReal": math.inf}
     for _ in range(repeats):
-        est = Slave(est_fmu, "estimator")
+        est = started(est_fmu, "estimator")
         try:
             vr = est.vrs(names)
             out_vr = est.vrs([n for n in NAMES if n in est.vars])
@@ -437,11 +433,11 @@ MEMORY_CHILD = r"""
 import json, resource, sys, time
 import psutil
 sys.path.insert(0, sys.argv[1])
-from benchmarks.run import Slave
+from benchmarks.run import pair
 from pathlib import Path
-plant = Slave(Path(sys.argv[2]), "plant"); est = Slave(Path(sys.argv[3]), "estimator")
+master = pair(Path(sys.argv[2]), Path(sys.argv[3]))
+plant, est = master.instances["plant"], master.instances["estimator"]
 marks = [float(x) for x in sys.argv[4].split(",")]
-ins = est.names("input"); pvr, evr = plant.vrs(ins), est.vrs(ins)
 outs = [v.valueReference for v in est.vars.values() if v.causality == "output" and v.type == "Real"]
 proc = psutil.Process()
 res = [{"t": 0.0, "rss_MB": proc.memory_info().rss / 2**20,
@@ -449,8 +445,7 @@ res = [{"t": 0.0, "rss_MB": proc.memory_info().rss / 2**20,
 t, k, c0 = 0.0, 0, time.perf_counter()
 for mark in marks:
     while t < mark - 1e-9:
-        est.fmu.setReal(evr, list(plant.fmu.getReal(pvr)))
-        plant.fmu.doStep(t, 0.1); est.fmu.doStep(t, 0.1)
+        master.step(t, 0.1)
         est.fmu.getReal(outs)
         k += 1; t = k * 0.1
     res.append({"t": round(t, 6), "rss_MB": proc.memory_info().rss / 2**20,
@@ -599,7 +594,7 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
 
     # 1
     L.append("## 1. Co-simulation speed\n")
-    L.append("Whole system = `spacerobot.system.runner.run_ssp` on the packaged `.ssp` (plant FMU "
+    L.append("Whole system = `spacerobot.run_ssp` on the packaged `.ssp` (plant FMU "
              "and estimator FMU through fmpy, communication step 0.1 s, every output recorded at "
              "every step, as the product runs). Its cost per simulated second is the difference "
              "of two runs (1 s and 1 s + T), which removes extraction, instantiation and "

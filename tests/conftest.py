@@ -1,7 +1,5 @@
-"""Shared fixtures: FMUs built once per test session, and a minimal fmpy loop over the pair.
-
-The loop here is deliberately low level (it lets tests inject samples, save/restore state, and
-read every output); the SSP runner in ``spacerobot.system`` is tested separately.
+"""Shared fixtures: FMUs built once per test session, and the pair of them stepped by the
+project's co-simulation loop (:class:`spacerobot.Master`), with a hook to inject samples.
 """
 from __future__ import annotations
 
@@ -9,12 +7,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+# pythonfmu from site-packages, before any FMU runs in this process: a pythonfmu FMU loaded
+# in-process puts its resources/ (which bundles a copy of pythonfmu without the binaries) on
+# sys.path, and an FMU built after that would get no binaries/
+import pythonfmu.builder  # noqa: F401
 from fmpy import extract, read_model_description
 
 from spacerobot import interface
 from spacerobot.fmi.build import build_fmu
 from spacerobot.robots import PLANAR, scenario
-from spacerobot.system.instance import FMUInstance, logger_callbacks
+from spacerobot import FMUInstance, Master, logger_callbacks
 
 
 @pytest.fixture(scope="session")
@@ -53,7 +55,7 @@ _EXTRACTED: dict = {}
 
 def logged_slave(path, name: str) -> Slave:
     """A conftest ``Slave`` instantiated with its own logger
-    (:func:`spacerobot.system.instance.logger_callbacks`); ``slave.messages`` collects
+    (:func:`spacerobot.logger_callbacks`); ``slave.messages`` collects
     (status, category, message) tuples."""
     key = str(path)
     if key not in _EXTRACTED:
@@ -68,13 +70,7 @@ def logged_slave(path, name: str) -> Slave:
 
 def started_slave(path, params: dict, name: str) -> Slave:
     """A :func:`logged_slave` set up at t = 0, with ``params`` set, and initialised."""
-    s = logged_slave(path, name)
-    s.fmu.setupExperiment(startTime=0.0)
-    s.fmu.enterInitializationMode()
-    for k, v in params.items():
-        s.set(k, v)
-    s.fmu.exitInitializationMode()
-    return s
+    return logged_slave(path, name).init(params)
 
 
 FMI_ERROR, FMI_FATAL = 3, 4
@@ -100,31 +96,27 @@ def assert_initialisation_fails(path, params: dict, words) -> None:
 
 
 class Pair:
-    """Plant and estimator FMUs wired name-to-name, stepped at ``dt``."""
+    """Plant and estimator FMUs wired name-to-name, stepped at ``dt`` by :class:`Master`."""
 
     def __init__(self, fmus: dict, plant_params: dict | None = None,
                  est_params: dict | None = None):
-        self.plant = Slave(fmus["plant"], "plant")
-        self.est = Slave(fmus["estimator"], "estimator")
-        for s, params in ((self.plant, plant_params or {}), (self.est, est_params or {})):
-            s.fmu.setupExperiment(startTime=0.0)
-            s.fmu.enterInitializationMode()
-            for k, v in params.items():
-                s.set(k, v)
-            s.fmu.exitInitializationMode()
+        self.plant = Slave(fmus["plant"], "plant").init(plant_params)
+        self.est = Slave(fmus["estimator"], "estimator").init(est_params)
         self.inputs = self.est.names("input")
-        self._pvr = [self.plant.vars[n].valueReference for n in self.inputs]
-        self._evr = [self.est.vars[n].valueReference for n in self.inputs]
+        self.master = Master({"plant": self.plant, "estimator": self.est},
+                             [("plant", n, "estimator", n) for n in self.inputs])
+        self._read = self.plant.reader(self.inputs)
         self.t = 0.0
 
     def sample(self) -> np.ndarray:
-        return np.array(self.plant.fmu.getReal(self._pvr))
+        return self._read()
 
     def step(self, dt: float = 0.1, sample: np.ndarray | None = None) -> None:
-        """Feed the plant outputs (or ``sample``) to the estimator, then step both."""
-        self.est.fmu.setReal(self._evr, list(self.sample() if sample is None else sample))
-        self.plant.fmu.doStep(self.t, dt)
-        self.est.fmu.doStep(self.t, dt)
+        """Feed the plant outputs (or ``sample`` instead) to the estimator, then step both."""
+        self.master.exchange()
+        if sample is not None:
+            self.est.set_many(self.inputs, sample)
+        self.master.do_step(self.t, dt)
         self.t += dt
 
     def estimates(self) -> dict:

@@ -6,14 +6,16 @@ import os
 import shutil
 import subprocess
 import sys
+import zipfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+import spacerobot
+from spacerobot import ESTIMATE_NAMES, read_csv
 from spacerobot.robots import PAPER_PLANAR_MEDIUM, TARGETS
 from spacerobot.system import cli
-from spacerobot.system.runner import estimate_names, read_csv
 
 CLI = [sys.executable, "-m", "spacerobot.system.cli"]
 
@@ -32,7 +34,7 @@ def _table(stdout: str) -> dict:
     rows = {}
     for line in stdout.splitlines():
         parts = line.split()
-        if parts and parts[0] in estimate_names():
+        if parts and parts[0] in ESTIMATE_NAMES:
             est, truth = float(parts[1]), float(parts[2])
             rest = parts[3:]
             err_len = 2      # "0.00012 %" or "abs 1.2e-05"
@@ -78,7 +80,7 @@ def planar_run(built, workdir):
 def test_run_prints_table_with_paper_values_and_writes_csv(planar_run):
     p, out = planar_run
     table = _table(p.stdout)
-    assert set(table) == set(estimate_names())
+    assert set(table) == set(ESTIMATE_NAMES)
     data = read_csv(out)
     assert data["time"][-1] == pytest.approx(2.0)
     assert len(data["time"]) == 21
@@ -101,7 +103,8 @@ def test_run_robot_builds_if_needed_and_uses_default_csv_name(workdir):
     p = _run(["run", "--robot", "planar", "--build-dir", "bd", "--target", "small",
               "--method", "force", "--accel", "differenced", "--stop-time", "1"], cwd=d)
     assert (d / "bd" / "planar.ssp").is_file()
-    csv_path = d / "results" / "planar-small-force.csv"
+    # the default name holds method, acceleration source and solver: runs do not overwrite
+    csv_path = d / "results" / "planar-small-force-differenced-paper.csv"
     assert csv_path.is_file()
     table = _table(p.stdout)
     assert table["target.m"][1] == TARGETS["planar"]["small"].mass
@@ -112,8 +115,126 @@ def test_run_reports_fmu_errors(built, workdir):
     p = _run(["run", built["ssp"], "--stop-time", "1", "--out", workdir / "bad.csv",
               "--set", "plant.base.m=-1"], cwd=workdir, check=False)
     assert p.returncode == 1
-    assert "plant" in p.stderr and "base.m must be > 0" in p.stderr
+    first, *rest = p.stderr.strip().splitlines()
+    assert first.startswith(f"spacerobot run: error: {built['ssp']}: component 'plant' returned "
+                            "Fatal from fmi2ExitInitializationMode")
+    assert any("base.m must be > 0" in line for line in rest)     # the FMU's own message
     assert "Traceback" not in p.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# bad input: one line naming the user's file or value, a non-zero exit, no traceback
+# ---------------------------------------------------------------------------------------------
+
+def _main(args, capsys) -> tuple:
+    """``cli.main(args)`` in-process: (exit status, stderr lines)."""
+    status = cli.main([str(a) for a in args])
+    return status, capsys.readouterr().err.strip().splitlines()
+
+
+def _repack(ssp: Path, out: Path, change) -> Path:
+    """A copy of ``ssp`` with ``change(name, bytes) -> bytes or None (left out)`` applied."""
+    with zipfile.ZipFile(ssp) as src, zipfile.ZipFile(out, "w") as dst:
+        for name in src.namelist():
+            data = change(name, src.read(name))
+            if data is not None:
+                dst.writestr(name, data)
+    return out
+
+
+def test_corrupt_fmu_inside_the_ssp(built, tmp_path):
+    bad = _repack(built["ssp"], tmp_path / "corrupt.ssp", lambda n, b: (
+        b[: len(b) // 2] if n.endswith("SpaceRobotPlant.fmu") else b))
+    p = _run(["run", bad, "--stop-time", "0.2", "--out", tmp_path / "x.csv"], cwd=tmp_path,
+             check=False)
+    assert p.returncode == 1 and "Traceback" not in p.stderr, p.stderr
+    assert p.stderr.strip().splitlines() == [
+        f"spacerobot run: error: {bad}: component 'plant': resources/SpaceRobotPlant.fmu is "
+        "not a valid FMU (BadZipFile: File is not a zip file)"]
+
+
+def test_malformed_ssd_xml(built, tmp_path, capsys):
+    bad = _repack(built["ssp"], tmp_path / "broken.ssp", lambda n, b: (
+        b.replace(b"</ssd:System>", b"</ssd:Sys>") if n == "SystemStructure.ssd" else b))
+    status, err = _main(["run", bad, "--out", tmp_path / "x.csv"], capsys)
+    assert status == 1 and len(err) == 1, err
+    assert err[0].startswith(f"spacerobot run: error: {bad}: SystemStructure.ssd or a parameter "
+                             "set in it is not well-formed XML")
+
+
+def test_zip_without_ssd_names_the_users_file(built, tmp_path, capsys):
+    bad = _repack(built["ssp"], tmp_path / "nossd.ssp",
+                  lambda n, b: None if n == "SystemStructure.ssd" else b)
+    status, err = _main(["run", bad, "--out", tmp_path / "x.csv"], capsys)
+    assert (status, err) == (1, [f"spacerobot run: error: {bad} has no SystemStructure.ssd: "
+                                 "not an SSP package"])
+    plain = tmp_path / "notes.txt"
+    plain.write_text("not a zip")
+    status, err = _main(["run", plain, "--out", tmp_path / "x.csv"], capsys)
+    assert (status, err) == (1, [f"spacerobot run: error: {plain} is neither a folder nor a "
+                                 ".ssp (zip) archive"])
+
+
+def test_missing_file_and_bad_values(tmp_path, capsys):
+    missing = tmp_path / "nope.ssp"
+    status, err = _main(["run", missing], capsys)
+    assert (status, err) == (1, [f"spacerobot run: error: {missing} does not exist"])
+    status, err = _main(["plot", missing], capsys)
+    assert status == 1 and len(err) == 1 and str(missing) in err[0], err
+    status, err = _main(["run", "--robot", "planar", "--set", "plant.F_max=ten",
+                         "--out", tmp_path / "x.csv"], capsys)
+    assert (status, err) == (1, ["spacerobot run: error: --set plant.F_max: 'ten' is not a "
+                                 "number"])
+
+
+def test_out_is_checked_before_the_run(built, tmp_path, capsys, monkeypatch):
+    """A folder or an unwritable place as --out fails at once, before the .ssp is opened."""
+    from spacerobot.system import runner
+    monkeypatch.setattr(runner, "open_system", lambda *a: pytest.fail("the run started"))
+    status, err = _main(["run", built["ssp"], "--out", tmp_path], capsys)
+    assert (status, err) == (1, [f"spacerobot run: error: {tmp_path} is a directory; give a "
+                                 "file name for the results"])
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    status, err = _main(["run", built["ssp"], "--out", blocker / "r.csv"], capsys)
+    assert status == 1 and len(err) == 1 and str(blocker / "r.csv") in err[0], err
+
+
+def test_ctrl_c_stops_cleanly(built, tmp_path, capsys, monkeypatch):
+    """SIGINT during the stepping loop: the loop stops at the next communication point, every
+    FMU instance is freed, exit status 130 with one line."""
+    import signal
+
+    from fmpy.fmi2 import FMU2Slave
+    from spacerobot.system.master import Master
+
+    freed, steps = [], []
+    orig_free, orig_step = FMU2Slave.freeInstance, Master.do_step
+
+    def free(slave):
+        freed.append(slave.instanceName)
+        return orig_free(slave)
+
+    def do_step(self, t, dt):
+        steps.append(t)
+        if len(steps) == 3:
+            signal.raise_signal(signal.SIGINT)          # what Ctrl-C in the terminal sends
+        return orig_step(self, t, dt)
+    monkeypatch.setattr(FMU2Slave, "freeInstance", free)
+    monkeypatch.setattr(Master, "do_step", do_step)
+    status, err = _main(["run", built["ssp"], "--stop-time", "5", "--out", tmp_path / "x.csv"],
+                        capsys)
+    assert (status, err) == (130, ["spacerobot run: interrupted"])
+    assert len(steps) == 3                              # stopped before the fourth step
+    assert sorted(freed) == ["estimator", "plant"]
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_version():
+    p = subprocess.run([sys.executable, "-m", "spacerobot", "--version"], capture_output=True,
+                       text=True, timeout=120)
+    assert p.returncode == 0
+    assert p.stdout.strip() == f"spacerobot {spacerobot.__version__}"
 
 
 def test_plot_writes_png(planar_run, workdir):
@@ -135,7 +256,7 @@ def test_plot_titles_zero_truth_panels_as_absolute_error(tmp_path, monkeypatch):
             "plant.base.m": np.full_like(t, 500.0), "estimator.base.m": 500 + np.exp(-t),
             "plant.target.b[2]": np.zeros_like(t), "estimator.target.b[2]": 0.01 * np.exp(-t),
             "plant.base.Ixx": np.full_like(t, 83.0), "estimator.base.Ixx": np.full_like(t, 100.0)}
-    from spacerobot.system.runner import write_csv
+    from spacerobot.system.recorder import write_csv
     path = write_csv(tmp_path / "x.csv", data)
     titles = []
     orig = matplotlib.figure.Figure.savefig

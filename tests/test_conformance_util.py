@@ -1,20 +1,20 @@
 """Helpers of the interface conformance suite (tests/test_conformance_*.py); no tests here.
 
-``Inst`` drives one FMU instance through fmpy's low-level FMI 2.0 API (``FMU2Slave``) with its
-own logger callback, so that every test can see both the status an FMI call returned and the
-messages the FMU logged during that call.
+``Inst`` is the project's :class:`~spacerobot.FMUInstance` with its own logger callback, so
+that every test can see both the status an FMI call returned and the messages the FMU logged
+during that call.
 """
 from __future__ import annotations
 
 import shutil
-from ctypes import byref
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional
 
 import numpy as np
 import pytest
 
-from spacerobot.system.instance import FMUInstance
+from spacerobot import FMUInstance
+from spacerobot import logger_callbacks
 
 OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
 STATUS_NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
@@ -29,43 +29,13 @@ def fmus_for(request, robot: str) -> dict:
     return request.getfixturevalue(f"{robot}_fmus")
 
 
-_ROUTES: Dict[str, List[tuple]] = {}     # instance name -> messages logged by that instance
-_CALLBACKS = None
 _COUNTER = [0]
 
 
-def _logger(env, instance, status, category, message):
-    name = (instance or b"").decode()
-    if name in _ROUTES:
-        _ROUTES[name].append((int(status), (category or b"").decode(), (message or b"").decode()))
-    else:                                 # an instance of someone else: fmpy's default printer
-        from fmpy.fmi1 import printLogMessage
-        printLogMessage(env, instance, status, category, message)
-
-
-def _callbacks():
-    """ONE callback structure for the whole process. fmpy's addLoggerProxy keeps a single global
-    pointer to the Python logger (the proxy formats the printf arguments, then calls it): giving
-    every instance its own ctypes logger leaves that pointer dangling once the last one is
-    garbage collected (heap corruption at exit), and routes all messages to the newest one."""
-    global _CALLBACKS
-    if _CALLBACKS is None:
-        from fmpy.fmi1 import calloc, free
-        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-        from fmpy.logging import addLoggerProxy
-
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(_logger)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(cb))
-        _CALLBACKS = cb
-    return _CALLBACKS
-
-
 class Inst(FMUInstance):
-    """One FMU instance with name-based access and captured log messages."""
+    """An :class:`FMUInstance` with its own logger (``messages``: (status, category, text)),
+    whose ``set``/``step`` return the FMI status instead of raising, for tests of the status
+    codes."""
 
     _extracted: Dict[str, tuple] = {}
 
@@ -76,10 +46,12 @@ class Inst(FMUInstance):
         if path not in Inst._extracted:             # one extraction per FMU file and session
             Inst._extracted[path] = (read_model_description(path), extract(path))
         _COUNTER[0] += 1
-        self.name = f"conformance-{name}-{_COUNTER[0]}"   # unique: messages are routed by it
-        self.messages: List[tuple] = _ROUTES.setdefault(self.name, [])
-        super().__init__(path, self.name, callbacks=_callbacks(), logging_on=logging_on,
-                         extracted=Inst._extracted[path])
+        messages: List[tuple] = []
+        cb = logger_callbacks(lambda _inst, status, category, text:
+                              messages.append((status, category, text)))
+        super().__init__(path, f"conformance-{name}-{_COUNTER[0]}", callbacks=cb,
+                         logging_on=logging_on, extracted=Inst._extracted[path])
+        self.messages = messages
         self.freed = False
         _LIVE.append(self)
 
@@ -94,33 +66,6 @@ class Inst(FMUInstance):
         if v.type == "Integer":
             return self.fmu.fmi2SetInteger(self.fmu.component, vr, 1, (fmi2Integer * 1)(int(value)))
         return self.fmu.fmi2SetReal(self.fmu.component, vr, 1, (fmi2Real * 1)(float(value)))
-
-    def set_many(self, names: Sequence[str], values: Sequence[float]) -> None:
-        self.fmu.setReal([self.vars[n].valueReference for n in names], [float(x) for x in values])
-
-    def values(self, names: Optional[Sequence[str]] = None) -> Dict[str, float]:
-        """Current values of ``names`` (default: every variable), Reals and Integers."""
-        names = list(self.vars) if names is None else list(names)
-        reals = [n for n in names if self.vars[n].type == "Real"]
-        ints = [n for n in names if self.vars[n].type == "Integer"]
-        out = {}
-        if reals:
-            out.update(zip(reals, self.fmu.getReal([self.vars[n].valueReference for n in reals])))
-        if ints:
-            out.update(zip(ints, self.fmu.getInteger([self.vars[n].valueReference for n in ints])))
-        return {n: out[n] for n in names}
-
-    def outputs(self) -> Dict[str, float]:
-        return self.values(self.names("output"))
-
-    # -- lifecycle ----------------------------------------------------------------------------
-    def init(self, params: Optional[dict] = None, start: float = 0.0) -> "Inst":
-        self.fmu.setupExperiment(startTime=start)
-        self.fmu.enterInitializationMode()
-        for k, v in (params or {}).items():
-            self.set(k, v)
-        self.fmu.exitInitializationMode()
-        return self
 
     def step(self, t: float, dt: float) -> int:
         """fmi2DoStep; returns the status (fmpy raises FMICallException above Warning)."""
@@ -139,8 +84,10 @@ class Inst(FMUInstance):
         return status, self.messages[n:]
 
     def free(self) -> None:
+        """fmi2FreeInstance only (no fmi2Terminate: the tests choose when to terminate)."""
         if not self.freed:
-            self.fmu.freeInstance()
+            self.initialized = False
+            super().free()
             self.freed = True
         if self in _LIVE:
             _LIVE.remove(self)

@@ -12,20 +12,20 @@ import shutil
 
 import pytest
 
+from spacerobot import build_system
 from spacerobot.system import sweep as sw
 from spacerobot.system.sweep import (COLUMNS, PARAMS, Point, make_points, point_id, read_table,
                                      run_sweep)
 
 RUNNER = sw.DEFAULT_RUNNER
-BUILDER = sw.DEFAULT_BUILDER
 STOP = 1.5
 
 
 @pytest.fixture(scope="module")
 def ssp(tmp_path_factory):
     """``{'planar': path}``: the system built once for this module."""
-    built = sw._resolve(BUILDER)("planar", tmp_path_factory.mktemp("sweep_ssp") / "planar")
-    return {"planar": str(built["ssp"] if isinstance(built, dict) else built)}
+    built = build_system("planar", tmp_path_factory.mktemp("sweep_ssp") / "planar")
+    return {"planar": str(built["ssp"])}
 
 
 def _grid():

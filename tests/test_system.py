@@ -12,10 +12,10 @@ import fmpy
 import fmpy.ssp.ssd
 from fmpy import read_model_description
 
-from spacerobot import interface
+from spacerobot import SimulationError, interface, read_csv, run_ssp
 from spacerobot.robots import ROBOTS, TARGETS, scenario
 from spacerobot.system import runner, ssd
-from spacerobot.system.runner import SimulationError, estimate_names, read_csv, run_ssp
+from spacerobot.system.master import Master
 
 NS = ssd.NS
 SCHEMA_DIR = Path(fmpy.__file__).parent / "ssp" / "schema"
@@ -185,12 +185,73 @@ def test_ssv_values_are_the_scenario_truth(robot, systems):
         assert [vals[f"base.omega0[{i}]"] for i in (1, 2, 3)] == list(sc.omega0)
 
 
-def test_estimate_names_are_the_interface_parameters():
+def test_run_pairs_estimates_with_truths_by_name(planar_baseline):
+    """The runner knows no estimator names: it pairs every estimator output with the plant
+    parameter of the same name, which gives exactly the 20 estimates of the interface."""
     sc = scenario("planar")
     est_out = [v.name for v in interface.estimator_vars(sc.robot, sc)
                if v.causality == "output" and v.key[0] in ("est_base", "est_target")]
-    assert estimate_names() == est_out
-    assert len(estimate_names()) == 20
+    res = planar_baseline
+    assert list(res.final) == list(res.truth) == est_out == list(interface.ESTIMATE_NAMES)
+    for n in est_out:
+        assert res.final[n] == res.data[f"estimator.{n}"][-1]
+        assert res.truth[n] == res.data[f"plant.{n}"][-1]
+    # relative errors: finite everywhere, also where the truth is zero (scale 1 m for b)
+    rel = res.relative_errors()
+    assert list(rel) == est_out and all(np.isfinite(list(rel.values())))
+    zero = [n for n in est_out if res.truth[n] == 0.0 and ".b[" in n]
+    assert zero, "the planar scenario has a zero CoM component"
+    for n in zero:
+        assert rel[n] == abs(res.final[n])
+    assert rel["target.m"] == abs(res.final["target.m"] - 250.0) / 250.0
+
+
+class _FakeVar:
+    def __init__(self, vr, type_="Real"):
+        self.valueReference, self.type = vr, type_
+
+
+class _FakeFMU:
+    """Output value reference 0 = 10 * (instance number) + steps taken; input vr 1."""
+
+    def __init__(self, base, log):
+        self.base, self.k, self.u, self.log = base, 0, None, log
+
+    def getReal(self, vrs):
+        self.log.append(("get", self.base))
+        return [float(self.base + self.k) for _ in vrs]
+
+    def setReal(self, vrs, values):
+        self.log.append(("set", self.base))
+        self.u = list(values)
+
+    def doStep(self, currentCommunicationPoint, communicationStepSize):
+        self.k += 1
+
+
+class _Fake:
+    def __init__(self, base, log):
+        self.fmu = _FakeFMU(base, log)
+        self.vars = {"y": _FakeVar(0), "u": _FakeVar(1)}
+
+    def var(self, n):
+        return self.vars[n]
+
+
+def test_master_wires_connections_in_both_directions():
+    """a.y -> b.u and b.y -> a.u (a feedback loop): every output is read at t before any input
+    is set, so each input gets its source's value at t, whatever the component order."""
+    log = []
+    a, b = _Fake(10, log), _Fake(20, log)
+    m = Master({"a": a, "b": b}, [("a", "y", "b", "u"), ("b", "y", "a", "u")])
+    for k in range(3):
+        m.step(0.1 * k, 0.1)
+        assert b.fmu.u == [10.0 + k] and a.fmu.u == [20.0 + k]
+    assert (a.fmu.k, b.fmu.k) == (3, 3)
+    assert log[:4] == [("get", 10), ("get", 20), ("set", 20), ("set", 10)]
+    with pytest.raises(SimulationError, match="types differ"):
+        a.vars["i"] = _FakeVar(2, "Integer")
+        Master({"a": a, "b": b}, [("a", "i", "b", "u")])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -220,7 +281,7 @@ def test_run_applies_bound_set_and_records_everything(systems, planar_baseline):
     # the estimator consumed one sample per step (the first one is the momentum reference)
     assert res.data["estimator.diag.status"][-1] == 2
     assert np.all(np.diff(res.data["estimator.diag.samples"][1:]) == 1)
-    assert set(res.final) == set(estimate_names())
+    assert set(res.final) == set(interface.ESTIMATE_NAMES)
     assert res.final["target.m"] == res.data["estimator.target.m"][-1]
 
 
@@ -368,3 +429,15 @@ def test_fmpy_simulate_ssp_runs_the_package_with_a_parameter_set(systems):
     # fmpy applied the parameter set: the base starts at 5 m/s, not the bound 1 m/s
     assert abs(res["plant.base.v[1]"][0] - 5.0) < 0.05
     assert np.all(np.isfinite(res["estimator.base.m"]))
+
+
+def test_system_of_fmus_wires_every_input_by_name(planar_fmus):
+    from spacerobot.system.reader import system_of_fmus
+
+    info = system_of_fmus(planar_fmus, 0.1, 1.0)
+    assert info.connections == [("plant", n, "estimator", n)
+                                for n in interface.connections(ROBOTS["planar"])]
+    # the other way round too: a component listed first may be the destination
+    back = system_of_fmus({"estimator": planar_fmus["estimator"], "plant": planar_fmus["plant"]},
+                          0.1, 1.0)
+    assert sorted(back.connections) == sorted(info.connections)

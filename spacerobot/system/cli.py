@@ -13,37 +13,50 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib
 import importlib.util
 import sys
 from pathlib import Path
 from typing import Optional, Sequence
 
-from ..interface import ACCEL_SOURCES, METHODS, SOLVERS, identified_estimates
+from .. import __version__
+from ..interface import identified_estimates
 from ..robots import PAPER_PLANAR_MEDIUM, ROBOTS
-
-_CODE = {"method": {v: k for k, v in METHODS.items()},
-         "solver": {v: k for k, v in SOLVERS.items()},
-         "accel": {v: k for k, v in ACCEL_SOURCES.items()}}
+from .codes import ACCEL_CODES, METHOD_CODES, SOLVER_CODES, estimator_overrides
 
 
-def _parse_set(items: Sequence[str]) -> dict:
-    out = {}
-    for item in items or ():
-        name, sep, val = item.partition("=")
-        if not sep or not name.strip():
-            raise SystemExit(f"spacerobot run: --set expects NAME=VALUE, got {item!r}")
-        try:
-            out[name.strip()] = float(val)
-        except ValueError:
-            raise SystemExit(f"spacerobot run: --set {name}: {val!r} is not a number")
-    return out
+class CommandError(Exception):
+    """A failure the command line reports in one line (exit status 1), without a traceback."""
+
+
+def fail_on_errors(command: str):
+    """Decorator of a sub-command: every expected failure becomes one line ``spacerobot
+    <command>: error: ...`` on stderr and exit status 1; Ctrl-C exit status 130."""
+    def wrap(func):
+        @functools.wraps(func)
+        def run(args) -> int:
+            from .errors import SimulationError
+            try:
+                return func(args)
+            except KeyboardInterrupt:
+                print(f"spacerobot {command}: interrupted", file=sys.stderr)
+                return 130
+            except (CommandError, SimulationError, OSError, ValueError, KeyError) as e:
+                msg = e.args[0] if isinstance(e, KeyError) and e.args else e
+                if isinstance(e, OSError) and e.filename and str(e.filename) not in str(msg):
+                    msg = f"{e.filename}: {e.strerror or msg}"
+                print(f"spacerobot {command}: error: {msg}", file=sys.stderr)
+                return 1
+        return run
+    return wrap
 
 
 # ----------------------------------------------------------------------------------------------
 # sub-commands
 # ----------------------------------------------------------------------------------------------
 
+@fail_on_errors("build")
 def cmd_build(args) -> int:
     from .ssd import build_system
     out = Path(args.out) if args.out else Path("build") / args.robot
@@ -52,35 +65,41 @@ def cmd_build(args) -> int:
     return 0
 
 
+def result_name(robot: Optional[str], ssp: Path, target: Optional[str], args) -> Path:
+    """Default results CSV: ``results/<robot>-<target>-<method>-<accel>-<solver>.csv``, so that
+    runs that differ in any of them do not overwrite each other."""
+    return Path("results") / (f"{robot or ssp.stem}-{target or 'bound'}-{args.method}-"
+                              f"{args.accel}-{args.solver}.csv")
+
+
+@fail_on_errors("run")
 def cmd_run(args) -> int:
-    from .runner import SimulationError, format_results, run_ssp
+    from .bindings import parse_assignments
+    from .recorder import check_writable
+    from .runner import format_results, run_ssp
     from .ssd import default_parameter_set, ensure_ssp, robot_of
 
     if args.ssp and args.robot:
-        raise SystemExit("spacerobot run: give either --robot or SSP_FILE, not both")
+        raise CommandError("give either --robot or SSP_FILE, not both")
+    overrides = estimator_overrides(args.method, args.accel, args.solver)
+    overrides.update(parse_assignments(args.set))
     if args.ssp:
         ssp = Path(args.ssp)
         if not ssp.exists():
-            raise SystemExit(f"spacerobot run: {ssp} does not exist")
+            raise CommandError(f"{ssp} does not exist")
         robot = robot_of(ssp)
     else:
         robot = args.robot or "planar"
-        ssp = ensure_ssp(robot, args.build_dir)
+        ssp = None
     target = args.target or (default_parameter_set(robot) if robot else None)
-    overrides = {"estimator.method": _CODE["method"][args.method],
-                 "estimator.solver": _CODE["solver"][args.solver],
-                 "estimator.accel_source": _CODE["accel"][args.accel]}
-    overrides.update(_parse_set(args.set))
-    label = f"{robot or ssp.stem}-{target or 'bound'}-{args.method}"
-    csv_path = Path(args.out) if args.out else Path("results") / f"{label}.csv"
-    try:
-        res = run_ssp(ssp, parameter_set=args.target, stop_time=args.stop_time,
-                      overrides=overrides, csv_path=csv_path,
-                      progress=False if args.no_progress else None)
-    except (SimulationError, KeyError, ValueError) as e:
-        msg = e.args[0] if isinstance(e, KeyError) and e.args else e
-        print(f"spacerobot run: error: {msg}", file=sys.stderr)
-        return 1
+    csv_path = Path(args.out) if args.out else result_name(robot, ssp or Path(robot), target,
+                                                             args)
+    check_writable(csv_path)              # before the build and the run: results never lost
+    if ssp is None:
+        ssp = ensure_ssp(robot, args.build_dir)
+    res = run_ssp(ssp, parameter_set=args.target, stop_time=args.stop_time,
+                  overrides=overrides, csv_path=csv_path,
+                  progress=False if args.no_progress else None)
     paper = (PAPER_PLANAR_MEDIUM.get(args.method) if robot == "planar" and target == "medium"
              else None)
     print(f"{ssp}: robot {robot or '?'}, parameter set {target or '(as bound)'}, method "
@@ -94,13 +113,10 @@ def cmd_run(args) -> int:
     return 0
 
 
+@fail_on_errors("plot")
 def cmd_plot(args) -> int:
     from .plot import plot_csv
-    try:
-        print(plot_csv(args.csv, args.out))
-    except (OSError, ValueError) as e:
-        print(f"spacerobot plot: error: {e}", file=sys.stderr)
-        return 1
+    print(plot_csv(args.csv, args.out))
     return 0
 
 
@@ -114,6 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="spacerobot",
         description="Online identification of base and target inertial parameters of a space "
                     "robot after capture: FMUs, SSP system, co-simulation, plots.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
 
@@ -133,16 +150,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--robot", choices=sorted(ROBOTS), help="robot (default planar)")
     p.add_argument("--target", help="parameter set: small|medium|large (planar), default "
                                     "(spatial); default: the one bound in the SSD")
-    p.add_argument("--method", choices=list(_CODE["method"]), default="momentum")
-    p.add_argument("--accel", choices=list(_CODE["accel"]), default="measured",
+    p.add_argument("--method", choices=list(METHOD_CODES), default="momentum")
+    p.add_argument("--accel", choices=list(ACCEL_CODES), default="measured",
                    help="force method: measured accelerations or differenced velocities")
-    p.add_argument("--solver", choices=list(_CODE["solver"]), default="paper")
+    p.add_argument("--solver", choices=list(SOLVER_CODES), default="paper")
     p.add_argument("--stop-time", type=float, metavar="T",
                    help="stop time [s] (default: the SSD's DefaultExperiment)")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="FMU parameter override, e.g. plant.base.v0[1]=5 (repeatable)")
     p.add_argument("--out", metavar="CSV",
-                   help="results CSV (default results/<robot>-<target>-<method>.csv)")
+                   help="results CSV (default "
+                   "results/<robot>-<target>-<method>-<accel>-<solver>.csv)")
     p.add_argument("--build-dir", metavar="DIR", help="where to build the .ssp for --robot "
                                                       "(default build/<robot>/)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

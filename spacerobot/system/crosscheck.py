@@ -9,7 +9,7 @@ Appendix B "CSV rules"; https://github.com/modelica/fmi-cross-check), into
 - ``<Model>_ref.opt``    ``StartTime``, ``StopTime``, ``StepSize`` (the fixed communication step),
                          ``RelTol``, plus the optional ``OutputIntervalLength``;
 - ``<Model>_ref.csv``    the reference result (time + at most 10 important outputs, as the rules
-                         recommend), computed by our own fixed-step master over fmpy's FMU2Slave;
+                         recommend), computed by the project's co-simulation loop (:func:`.runner.simulate`);
 - ``<Model>_in.csv``     the input signals (estimator only: the plant has no inputs). They are the
                          plant outputs sampled at every communication point, i.e. exactly what the
                          estimator receives when wired to the plant;
@@ -36,7 +36,9 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from .. import __version__
-from .instance import FMUInstance
+from .cli import fail_on_errors
+from .reader import system_of_fmus
+from .runner import simulate
 
 TOOL_NAME = "spacerobot"
 MAX_CSV_BYTES = 1_000_000          # cross-check rule: a CSV file must not be larger than 1 MB
@@ -59,69 +61,35 @@ REF_VARIABLES = {
 MODELS = {"plant": "SpaceRobotPlant", "estimator": "SpaceRobotEstimator"}
 
 
-# -- a minimal fixed-step master over fmpy's FMU2Slave -------------------------------------------
-class _Instance(FMUInstance):
-    """An :class:`FMUInstance` with a vectorised reader of named outputs."""
-
-    def reader(self, names: Sequence[str]):
-        reals = [(i, self.vars[n].valueReference) for i, n in enumerate(names)
-                 if self.vars[n].type == "Real"]
-        ints = [(i, self.vars[n].valueReference) for i, n in enumerate(names)
-                if self.vars[n].type != "Real"]
-
-        def read() -> np.ndarray:
-            out = np.empty(len(names))
-            if reals:
-                out[[i for i, _ in reals]] = self.fmu.getReal([vr for _, vr in reals])
-            if ints:
-                out[[i for i, _ in ints]] = self.fmu.getInteger([vr for _, vr in ints])
-            return out
-        return read
-
-
+# -- the reference run: the project's one co-simulation loop ---------------------------------------
 def reference_run(plant_fmu: Path, estimator_fmu: Path, stop_time: float, step: float) -> dict:
     """Run plant -> estimator with default start values at a fixed communication step.
 
-    At every communication point t_k the estimator's inputs are set to the plant's outputs at
-    t_k, then both FMUs step from t_k to t_{k+1} = (k + 1) * step (the time grid fmpy's
-    ``simulate_fmu`` uses). Returns ``{"time", "plant_names", "plant", "inputs_names",
+    The system of the two FMU files wired name to name (:func:`.reader.system_of_fmus`) run by
+    :func:`.runner.simulate`: at every communication point t_k the estimator's inputs are set
+    to the plant's outputs at t_k, then both FMUs step to t_{k+1} = (k + 1) * step (the time grid
+    fmpy's ``simulate_fmu`` uses). Returns ``{"time", "plant_names", "plant", "inputs_names",
     "inputs", "est_names", "est"}`` with one row per communication point, t = 0 included.
     """
-    n = _n_steps(stop_time, step)
-    plant = _Instance(Path(plant_fmu), "plant")
-    est = _Instance(Path(estimator_fmu), "estimator")
-    try:
-        inputs = est.names("input")
-        missing = [x for x in inputs if x not in plant.vars]
-        if missing:
-            raise ValueError(f"plant has no outputs for estimator inputs {missing}")
-        p_names, e_names = plant.names("output"), est.names("output")
-        read_p, read_in, read_e = plant.reader(p_names), plant.reader(inputs), est.reader(e_names)
-        in_vrs = [est.vars[x].valueReference for x in inputs]
-        for inst in (plant, est):
-            inst.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
-            inst.fmu.enterInitializationMode()
-        est.fmu.setReal(in_vrs, list(read_in()))
-        for inst in (plant, est):
-            inst.fmu.exitInitializationMode()
-        t = 0.0
-        times, P, U, E = [t], [read_p()], [], [read_e()]
-        for k in range(n):
-            u = read_in()
-            U.append(u)
-            est.fmu.setReal(in_vrs, list(u))
-            plant.fmu.doStep(t, step)
-            est.fmu.doStep(t, step)
-            t = (k + 1) * step
-            times.append(t)
-            P.append(read_p())
-            E.append(read_e())
-        U.append(read_in())     # the inputs at the stop time (last row of _in.csv)
-    finally:
-        plant.close()
-        est.close()
-    return {"time": np.array(times), "plant_names": p_names, "plant": np.array(P),
-            "inputs_names": inputs, "inputs": np.array(U), "est_names": e_names, "est": np.array(E)}
+    from fmpy import read_model_description
+
+    _n_steps(stop_time, step)
+    fmus = {"plant": Path(plant_fmu), "estimator": Path(estimator_fmu)}
+    variables = {k: read_model_description(str(p)).modelVariables for k, p in fmus.items()}
+    names = {k: [v.name for v in vs if v.causality == c]
+             for k, c, vs in (("plant", "output", variables["plant"]),
+                              ("inputs", "input", variables["estimator"]),
+                              ("est", "output", variables["estimator"]))}
+    missing = [x for x in names["inputs"] if x not in names["plant"]]
+    if missing:
+        raise ValueError(f"plant has no outputs for estimator inputs {missing}")
+    res = simulate(system_of_fmus(fmus, step, stop_time), ".", progress=False)
+
+    def table(comp: str, cols) -> np.ndarray:
+        return np.column_stack([res.data[f"{comp}.{n}"].astype(float) for n in cols])
+    return {"time": res.time, "plant_names": names["plant"], "plant": table("plant", names["plant"]),
+            "inputs_names": names["inputs"], "inputs": table("estimator", names["inputs"]),
+            "est_names": names["est"], "est": table("estimator", names["est"])}
 
 
 def _n_steps(stop_time: float, step: float) -> int:
@@ -250,6 +218,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=run_cli)
 
 
+@fail_on_errors("crosscheck")
 def run_cli(args) -> int:
     folders = write_crosscheck(args.robot, args.out, target=args.target,
                                stop_time=args.stop_time, step=args.step)

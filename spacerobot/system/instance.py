@@ -1,13 +1,22 @@
 """One FMI 2.0 co-simulation FMU, extracted and instantiated through fmpy, addressed by name.
 
-Used by the cross-check writer, the benchmarks and the tests; the SSP runner keeps its own
-instance type because it also carries the SSD component and maps FMI errors to messages.
+The one instance wrapper of the project: the co-simulation master (:mod:`.master`), the SSP
+runner, the cross-check writer, the benchmarks and the tests all use :class:`FMUInstance`.
+:class:`FMULog` collects the messages of every instance of a run through
+:func:`logger_callbacks`.
 """
 from __future__ import annotations
 
+import collections
+import difflib
 import shutil
 from pathlib import Path
-from typing import Callable, List, Optional, Sequence
+from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple
+
+import numpy as np
+
+#: FMI 2.0 status codes -> names
+STATUS_NAMES = ["OK", "Warning", "Discard", "Error", "Fatal", "Pending"]
 
 
 def logger_callbacks(sink: Callable[[str, int, str, str], None]):
@@ -42,27 +51,72 @@ def logger_callbacks(sink: Callable[[str, int, str, str], None]):
     return cb
 
 
+class FMULog:
+    """Collects the log messages of the instances that use :attr:`callbacks`: the last
+    ``maxlen`` per instance (:meth:`recent`) and every message of status Warning or worse
+    (:attr:`all`, at most 10000)."""
+
+    def __init__(self, maxlen: int = 200):
+        self.messages: Dict[str, collections.deque] = collections.defaultdict(
+            lambda: collections.deque(maxlen=maxlen))
+        self.all: List[Tuple[str, str, str, str]] = []
+
+        def sink(inst: str, status: int, category: str, text: str) -> None:
+            label = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
+            rec = (inst, label, category, text)
+            self.messages[inst].append(rec)
+            if status >= 1 and len(self.all) < 10000:   # warnings and worse
+                self.all.append(rec)
+
+        self.callbacks = logger_callbacks(sink)
+
+    def recent(self, instance: str, n: int = 10) -> str:
+        """The last ``n`` messages of ``instance``, one indented line each."""
+        msgs = list(self.messages.get(instance, []))[-n:]
+        if not msgs:
+            return "  (the FMU logged no messages)"
+        return "\n".join(f"  [{s}] {c}: {m}" for _, s, c, m in msgs)
+
+
 class FMUInstance:
-    """An instantiated FMU with name-based access (fmpy's low-level ``FMU2Slave``).
+    """An FMU instance with name-based access (over fmpy's low-level ``FMU2Slave``).
 
     Parameters
     ----------
     path : the .fmu file
     name : instance name
-    callbacks : fmpy ``fmi2CallbackFunctions`` to instantiate with (default: fmpy's)
+    callbacks : fmpy ``fmi2CallbackFunctions`` to instantiate with (default: fmpy's), e.g.
+        :attr:`FMULog.callbacks` or :func:`logger_callbacks`; kept alive with the instance
     logging_on : passed to ``fmi2Instantiate``
     extracted : ``(model description, unzip folder)`` already at hand for this FMU (the folder
         is then shared and not removed by :meth:`close`)
+    unzipdir : where to extract the FMU (default: a new temporary folder)
+    instantiate : call ``fmi2Instantiate`` now (False: call :meth:`instantiate` later)
+
+    Raises
+    ------
+    ValueError
+        The file is not an FMI 2.0 co-simulation FMU (``zipfile.BadZipFile``, a subclass of
+        Exception, for a file that is not a zip archive at all).
     """
 
     def __init__(self, path: str | Path, name: str, callbacks=None, logging_on: bool = False,
-                 extracted: Optional[tuple] = None):
+                 extracted: Optional[tuple] = None, unzipdir: Optional[str | Path] = None,
+                 instantiate: bool = True):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
+        self.name = name
+        self.path = Path(path)
         if extracted is None:
-            self.md, self.dir, self._owns_dir = (read_model_description(str(path)),
-                                                 extract(str(path)), True)
+            md = read_model_description(str(path))
+        else:
+            md = extracted[0]
+        if md.fmiVersion != "2.0" or md.coSimulation is None:
+            raise ValueError(f"{path}: only FMI 2.0 co-simulation FMUs are supported")
+        if extracted is None:
+            self.md, self.dir, self._owns_dir = md, extract(
+                str(path), unzipdir=None if unzipdir is None else str(unzipdir)), True
         else:
             (self.md, self.dir), self._owns_dir = extracted, False
         self.vars = {v.name: v for v in self.md.modelVariables}
@@ -70,35 +124,127 @@ class FMUInstance:
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName=name)
         self._callbacks = callbacks              # kept alive as long as the instance
-        self.fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
+        self._logging_on = logging_on
+        self.instantiated = self.initialized = False
+        self.fatal = False                       #: set after fmi2Fatal: only free, never terminate
+        if instantiate:
+            self.instantiate()
 
-    def names(self, causality: str) -> List[str]:
-        """Variable names of one causality, in model-description order."""
-        return [n for n, v in self.vars.items() if v.causality == causality]
+    # -- lifecycle ------------------------------------------------------------------------------
+    def instantiate(self) -> None:
+        """fmi2Instantiate (with the callbacks and logging flag given to the constructor)."""
+        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=self._logging_on)
+        self.instantiated = True
 
-    def vrs(self, names: Sequence[str]) -> List[int]:
-        return [self.vars[n].valueReference for n in names]
-
-    def set(self, name: str, value) -> None:
-        v = self.vars[name]
-        if v.type == "Integer":
-            self.fmu.setInteger([v.valueReference], [int(value)])
-        else:
-            self.fmu.setReal([v.valueReference], [float(value)])
-
-    def get(self, name: str):
-        v = self.vars[name]
-        if v.type == "Integer":
-            return self.fmu.getInteger([v.valueReference])[0]
-        return self.fmu.getReal([v.valueReference])[0]
+    def init(self, params: Optional[Mapping[str, object]] = None, start: float = 0.0,
+             stop: Optional[float] = None) -> "FMUInstance":
+        """fmi2SetupExperiment, fmi2EnterInitializationMode, set ``params``,
+        fmi2ExitInitializationMode; returns ``self``."""
+        self.fmu.setupExperiment(startTime=start, stopTime=stop)
+        self.fmu.enterInitializationMode()
+        for k, v in (params or {}).items():
+            self.set(k, v)
+        self.fmu.exitInitializationMode()
+        self.initialized = True
+        return self
 
     def free(self) -> None:
-        """fmi2Terminate and fmi2FreeInstance."""
-        self.fmu.terminate()
-        self.fmu.freeInstance()
+        """fmi2Terminate (if initialised and not fatal) and fmi2FreeInstance. Never raises:
+        this is the clean-up that runs after any error, and it runs once."""
+        if not self.instantiated:
+            return
+        try:
+            if self.initialized and not self.fatal:
+                self.fmu.terminate()
+        except Exception:
+            pass
+        finally:
+            try:
+                self.fmu.freeInstance()
+            except Exception:
+                pass
+            self.instantiated = self.initialized = False
 
     def close(self) -> None:
         """:meth:`free`, and remove the unzip folder if this instance extracted it."""
         self.free()
         if self._owns_dir:
             shutil.rmtree(self.dir, ignore_errors=True)
+
+    # -- variables ------------------------------------------------------------------------------
+    def var(self, name: str):
+        """The model variable ``name``; KeyError naming close matches if there is none."""
+        try:
+            return self.vars[name]
+        except KeyError:
+            close = difflib.get_close_matches(name, list(self.vars), n=3)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
+            raise KeyError(f"component {self.name!r} has no variable {name!r}{hint}") from None
+
+    def names(self, causality: str) -> List[str]:
+        """Variable names of one causality, in model-description order."""
+        return [n for n, v in self.vars.items() if v.causality == causality]
+
+    def vrs(self, names: Sequence[str]) -> List[int]:
+        return [self.var(n).valueReference for n in names]
+
+    def set(self, name: str, value) -> None:
+        """Set one variable from a number or its text (as in an .ssv), by its FMI type."""
+        v = self.var(name)
+        vr = [v.valueReference]
+        if v.type == "Real":
+            self.fmu.setReal(vr, [float(value)])
+        elif v.type in ("Integer", "Enumeration"):
+            fv = float(value)
+            if fv != int(fv):
+                raise ValueError(f"{self.name}.{name} is an {v.type}; got non-integer {value!r}")
+            self.fmu.setInteger(vr, [int(fv)])
+        elif v.type == "Boolean":
+            b = value if isinstance(value, bool) else str(value).lower() in ("1", "true", "1.0")
+            self.fmu.setBoolean(vr, [b])
+        else:
+            self.fmu.setString(vr, [str(value)])
+
+    def set_many(self, names: Sequence[str], values: Sequence[float]) -> None:
+        """fmi2SetReal of several Real variables at once."""
+        self.fmu.setReal(self.vrs(names), [float(x) for x in values])
+
+    def get(self, name: str):
+        """The value of one Real, Integer/Enumeration or Boolean variable."""
+        v = self.var(name)
+        if v.type in ("Integer", "Enumeration"):
+            return self.fmu.getInteger([v.valueReference])[0]
+        if v.type == "Boolean":
+            return self.fmu.getBoolean([v.valueReference])[0]
+        return self.fmu.getReal([v.valueReference])[0]
+
+    def values(self, names: Optional[Sequence[str]] = None) -> Dict[str, float]:
+        """Current values of ``names`` (default: every Real and Integer variable)."""
+        names = ([n for n, v in self.vars.items() if v.type in ("Real", "Integer")]
+                 if names is None else list(names))
+        return dict(zip(names, self.reader(names)().tolist()))
+
+    def outputs(self) -> Dict[str, float]:
+        return self.values(self.names("output"))
+
+    def reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
+        """A function that reads ``names`` (Real, Integer/Enumeration, Boolean) into a float
+        array with one fmi2Get call per type."""
+        groups: Dict[str, Tuple[List[int], List[int]]] = {}
+        for i, n in enumerate(names):
+            v = self.var(n)
+            typ = {"Enumeration": "Integer"}.get(v.type, v.type)
+            if typ not in ("Real", "Integer", "Boolean"):
+                raise ValueError(f"{self.name}.{n}: {v.type} variables cannot be read as numbers")
+            idx, vrs = groups.setdefault(typ, ([], []))
+            idx.append(i)
+            vrs.append(v.valueReference)
+        getters = [(idx, vrs, getattr(self.fmu, f"get{typ}")) for typ, (idx, vrs) in groups.items()]
+        size = len(names)
+
+        def read() -> np.ndarray:
+            out = np.empty(size)
+            for idx, vrs, get in getters:
+                out[idx] = get(vrs)
+            return out
+        return read

@@ -12,7 +12,8 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .runner import estimate_names, read_csv
+from ..interface import ESTIMATE_NAMES
+from .recorder import read_csv
 
 #: the paper's accuracy band (relative)
 BAND = 1e-3
@@ -25,7 +26,7 @@ def identified(data: Dict[str, np.ndarray], prefix: str = "estimator.") -> List[
     estimates keep their initial guess and are left out.
     """
     out = []
-    for n in estimate_names():
+    for n in ESTIMATE_NAMES:
         col = data.get(prefix + n)
         if col is not None and col.dtype.kind == "f" and len(col) and np.ptp(col) > 0.0:
             out.append(n)

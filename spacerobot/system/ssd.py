@@ -13,7 +13,7 @@ Layout of a generated system (the same inside ``<robot>.ssp`` and under ``ssp/<r
     resources/<set>.ssv                    one parameter set per scenario (planar: small,
                                            medium, large; spatial: default)
 
-Tool compatibility (see docs/DESIGN §5): ``version="1.0"``; namespace prefixes exactly ``ssd:``,
+Tool compatibility (what OMSimulator and libcosim need to load the .ssp): ``version="1.0"``; namespace prefixes exactly ``ssd:``,
 ``ssc:``, ``ssv:``; one flat root System holding the two components; every connector typed
 (``<ssc:Real unit="..."/>`` or ``<ssc:Integer/>``) with its unit declared in ``ssd:Units``; the
 parameter set bound at component level (a ParameterBinding on the plant component); the

@@ -1,0 +1,160 @@
+"""The co-simulation loop: fixed communication points, Jacobi exchange, one doStep per
+component and point.
+
+At every communication point ``t`` the master first reads every connected output of every
+component (all at ``t``), then sets every connected input, then steps every component from ``t``
+to the next point. Because all reads come before all writes, a connection may go either way
+between two components (plant -> estimator and estimator -> plant alike): each input gets the
+value its source had at ``t``, whatever the order of the components.
+"""
+from __future__ import annotations
+
+import collections
+import contextlib
+import math
+import signal
+import sys
+import threading
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
+
+from .errors import Calls, SimulationError
+
+#: (start component, start connector, end component, end connector)
+Connection = Tuple[str, str, str, str]
+
+
+def time_grid(start: float, stop: float, step: float) -> List[float]:
+    """Communication points ``start + k step`` up to ``stop``; a stop time that is not on that
+    grid gets a shorter last step, so that the run ends exactly at the stop time."""
+    if not (math.isfinite(stop) and stop > start):
+        raise ValueError(f"stop_time must be finite and > start time {start}, got {stop}")
+    n_steps = max(1, int(math.ceil((stop - start) / step - 1e-9)))
+    return [min(start + k * step, stop) for k in range(n_steps)] + [stop]
+
+
+def initialize(instances: Mapping[str, object], start: float, stop: float,
+               calls: Optional[Calls] = None) -> None:
+    """fmi2SetupExperiment, fmi2EnterInitializationMode, fmi2ExitInitializationMode of every
+    instance (parameters are set before, between instantiation and this call)."""
+    calls = calls or Calls()
+    calls.phase, calls.t = "initialisation", start
+    for name, inst in instances.items():
+        calls(name, "fmi2SetupExperiment")
+        inst.fmu.setupExperiment(startTime=start, stopTime=stop)
+        calls(name, "fmi2EnterInitializationMode")
+        inst.fmu.enterInitializationMode()
+        calls(name, "fmi2ExitInitializationMode")
+        inst.fmu.exitInitializationMode()
+        inst.initialized = True
+
+
+class Master:
+    """Fixed-step Jacobi master over :class:`~.instance.FMUInstance` objects.
+
+    Parameters
+    ----------
+    instances : ``{component name: FMUInstance}``, instantiated and initialised
+    connections : every ``(source, output, destination, input)`` to wire
+    calls : :class:`~.errors.Calls` kept up to date for error messages
+
+    Raises
+    ------
+    SimulationError
+        A connection between variables of different FMI types.
+    """
+
+    def __init__(self, instances: Mapping[str, object], connections: Sequence[Connection],
+                 calls: Optional[Calls] = None):
+        self.instances = dict(instances)
+        self.calls = calls or Calls()
+        # batched fmi2Get/fmi2Set per (source, destination, type)
+        wires: Dict[tuple, Tuple[List[int], List[int]]] = collections.defaultdict(
+            lambda: ([], []))
+        for a, ac, b, bc in connections:
+            va, vb = self.instances[a].var(ac), self.instances[b].var(bc)
+            if va.type != vb.type:
+                raise SimulationError(f"connection {a}.{ac} ({va.type}) -> {b}.{bc} ({vb.type}): "
+                                      f"types differ")
+            typ = {"Real": "Real", "Boolean": "Boolean"}.get(va.type, "Integer")
+            wires[(a, b, typ)][0].append(va.valueReference)
+            wires[(a, b, typ)][1].append(vb.valueReference)
+        self._wires = [(a, b, typ, src, dst) for (a, b, typ), (src, dst) in wires.items()]
+
+    def exchange(self) -> None:
+        """Read every connected output, then set every connected input."""
+        calls, insts = self.calls, self.instances
+        values = []
+        for a, _, typ, src, _ in self._wires:
+            calls(a, f"fmi2Get{typ}")
+            values.append(list(getattr(insts[a].fmu, f"get{typ}")(src)))
+        for (_, b, typ, _, dst), vals in zip(self._wires, values):
+            calls(b, f"fmi2Set{typ}")
+            getattr(insts[b].fmu, f"set{typ}")(dst, vals)
+
+    def do_step(self, t: float, dt: float) -> None:
+        """fmi2DoStep(t, dt) of every component, in the order of ``instances``."""
+        self.calls.t = t
+        for name, inst in self.instances.items():
+            self.calls(name, "fmi2DoStep")
+            inst.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
+
+    def step(self, t: float, dt: float) -> None:
+        """One communication step: :meth:`exchange` at ``t``, then :meth:`do_step`."""
+        self.calls.t = t
+        self.exchange()
+        self.do_step(t, dt)
+
+    def run(self, points: Sequence[float], recorder=None, progress: Optional[bool] = None,
+            desc: str = "") -> None:
+        """The stepping loop: at every point exchange, record (``recorder.record(k, t)``),
+        and step to the next point.
+        ``progress``: tqdm bar (None: only on a terminal, after 2 s)."""
+        from tqdm import tqdm
+
+        self.calls.phase = "stepping"
+        n_steps = len(points) - 1
+        bar = tqdm(total=n_steps, disable=not _use_progress(progress), unit="step", desc=desc,
+                   delay=0.0 if progress else 2.0, leave=False)
+        with deferred_interrupt() as interrupted:
+            try:
+                for k, t in enumerate(points):
+                    if interrupted():
+                        raise KeyboardInterrupt(f"interrupted at t = {t:g} s")
+                    self.calls.t = t
+                    self.exchange()
+                    if recorder is not None:
+                        recorder.record(k, t)
+                    if k == n_steps:
+                        break
+                    self.do_step(t, points[k + 1] - t)
+                    bar.update(1)
+            finally:
+                bar.close()
+
+
+@contextlib.contextmanager
+def deferred_interrupt():
+    """Within the block, Ctrl-C (SIGINT) only sets a flag, which the stepping loop checks
+    between communication steps: the interrupt then never lands inside an FMU's Python code
+    (pythonfmu would turn it into fmi2Fatal) and the loop stops cleanly with KeyboardInterrupt.
+    Yields the function that tells whether SIGINT arrived. Only in the main thread and only if
+    Python's default handler is installed; otherwise that function always returns False."""
+    hit = []
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield lambda: False
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: hit.append(signum))
+    try:
+        yield lambda: bool(hit)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _use_progress(progress: Optional[bool]) -> bool:
+    if progress is not None:
+        return bool(progress)
+    try:
+        return sys.stderr.isatty()
+    except Exception:
+        return False

@@ -1,0 +1,113 @@
+"""Recording a co-simulation: one row per communication point of chosen variables of every
+component (:class:`Recorder`), and the CSV files of a run (:func:`write_csv`, :func:`read_csv`,
+:func:`check_writable`)."""
+from __future__ import annotations
+
+import csv
+import os
+from pathlib import Path
+from typing import Dict, List, Mapping, Sequence
+
+import numpy as np
+
+from .errors import Calls
+
+_TYPES = ("Real", "Integer", "Boolean")          # String variables are not recorded
+
+
+class Recorder:
+    """Rows ``[t, values...]`` of the variables ``names[component]`` of every instance.
+
+    Columns are ``time`` and ``<component>.<variable>``, per component in the order Real,
+    Integer, Boolean; :meth:`data` returns Integer and Boolean columns with their own dtype.
+    """
+
+    def __init__(self, instances: Mapping[str, object], names: Mapping[str, Sequence[str]],
+                 n_rows: int, calls: Calls = None):
+        self.instances = instances
+        self.calls = calls or Calls()
+        self.groups: Dict[str, Dict[str, tuple]] = {}
+        self.columns: List[str] = ["time"]
+        for comp, vnames in names.items():
+            g = {typ: ([], []) for typ in _TYPES}
+            for n in vnames:
+                v = instances[comp].var(n)
+                typ = "Integer" if v.type == "Enumeration" else v.type
+                if typ in g:
+                    g[typ][0].append(n)
+                    g[typ][1].append(v.valueReference)
+            self.groups[comp] = g
+            for typ in _TYPES:
+                self.columns += [f"{comp}.{v}" for v in g[typ][0]]
+        self.buf = np.empty((n_rows, len(self.columns)))
+
+    def record(self, k: int, t: float) -> None:
+        """Row ``k``: the time ``t`` and the current values."""
+        row = [t]
+        for comp, g in self.groups.items():
+            fmu = self.instances[comp].fmu
+            for typ in _TYPES:
+                vrs = g[typ][1]
+                if vrs:
+                    self.calls(comp, f"fmi2Get{typ}")
+                    row += [float(x) for x in getattr(fmu, f"get{typ}")(vrs)]
+        self.buf[k] = row
+
+    def data(self) -> Dict[str, np.ndarray]:
+        """Column name -> (N,) array."""
+        data = {c: self.buf[:, j].copy() for j, c in enumerate(self.columns)}
+        for comp, g in self.groups.items():
+            for v in g["Integer"][0]:
+                data[f"{comp}.{v}"] = data[f"{comp}.{v}"].astype(np.int64)
+            for v in g["Boolean"][0]:
+                data[f"{comp}.{v}"] = data[f"{comp}.{v}"].astype(bool)
+        return data
+
+
+def check_writable(path: str | Path) -> Path:
+    """Check, before a long run, that a results file can be written at ``path`` (its folder is
+    created); raises OSError naming the path otherwise."""
+    path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path} is a directory; give a file name for the results")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise OSError(f"cannot create the folder of {path}: {e.strerror or e}") from None
+    if not path.parent.is_dir():
+        raise NotADirectoryError(f"{path.parent} is not a folder; cannot write {path}")
+    if (path.exists() and not os.access(path, os.W_OK)) or not os.access(path.parent, os.W_OK):
+        raise PermissionError(f"cannot write {path}: permission denied")
+    return path
+
+
+def write_csv(path: str | Path, data: Mapping[str, np.ndarray]) -> Path:
+    """Write columns ``data`` (name -> 1-D array) to ``path``; returns the path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    names = list(data)
+    cols = [np.asarray(data[n]) for n in names]
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(names)
+        for i in range(len(cols[0]) if cols else 0):
+            w.writerow([repr(float(c[i])) if c.dtype.kind == "f" else str(c[i]) for c in cols])
+    return path
+
+
+def read_csv(path: str | Path) -> Dict[str, np.ndarray]:
+    """Read a CSV written by :func:`write_csv` (or any numeric CSV with a header row);
+    non-numeric columns are returned as string arrays."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        raise ValueError(f"{path}: empty CSV file")
+    header, body = rows[0], rows[1:]
+    out = {}
+    for j, n in enumerate(header):
+        col = [r[j] for r in body]
+        try:
+            out[n] = np.array([float(x) for x in col])
+        except ValueError:
+            out[n] = np.array(col)
+    return out

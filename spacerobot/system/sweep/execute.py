@@ -1,0 +1,161 @@
+"""Executing a sweep on Dask: skip finished points, build each robot's .ssp once, submit the
+rest to a local cluster or an existing scheduler, write each row as it finishes."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
+
+from .points import Point
+from .run import DEFAULT_BUILDER, DEFAULT_RUNNER, _resolve, run_point
+from .table import _check_header, _exclusive, _rewrite, _Table, read_table
+
+@dataclass
+class SweepSummary:
+    total: int = 0                 #: points in the grid
+    skipped: int = 0               #: already in the table with status ok
+    submitted: int = 0             #: run in this call
+    ok: int = 0
+    failed: int = 0
+    failures: List[Tuple[str, str]] = field(default_factory=list)   #: (sweep_id, error)
+    csv: str = ""
+
+    def __str__(self) -> str:
+        s = (f"{self.total} points: {self.skipped} already done, {self.submitted} run, "
+             f"{self.ok} ok, {self.failed} failed -> {self.csv}")
+        for pid, err in self.failures:
+            s += f"\n  failed {pid}: {err}"
+        return s
+
+
+def _failed_row(point: Point, err: str) -> Dict[str, object]:
+    row = dict(point.columns())
+    row.update(status="failed", error=err)
+    return row
+
+
+def run_sweep(points: Sequence[Point], out_csv, *, workers: int = 2,
+              scheduler: Optional[str] = None, client=None, build_dir=None,
+              ssp: Optional[Mapping[str, str]] = None, progress: bool = True,
+              runner: str = DEFAULT_RUNNER, builder: str = DEFAULT_BUILDER) -> SweepSummary:
+    """Run every point not yet done and append its row to ``out_csv``.
+
+    Parameters
+    ----------
+    points : the grid (see :func:`make_points`).
+    out_csv : the results table; created, or resumed if it exists.
+    workers : number of worker processes of the local cluster.
+    scheduler : address of an existing Dask scheduler (then no local cluster is started).
+    client : an existing ``distributed.Client`` (takes precedence over ``scheduler``).
+    build_dir : where the .ssp of each robot is built (default: ``<out_csv>.build/``).
+    ssp : ``{robot: path}`` of already built .ssp files (skips the build for those robots).
+    progress : show a tqdm progress bar.
+    runner, builder : ``"module:function"`` of the co-simulation runner and of the SSP build.
+
+    Only one sweep at a time may write a table: a second one on the same ``out_csv`` raises
+    :class:`SweepLocked` (an advisory lock on ``<out_csv>.lock``, held while the sweep runs).
+    """
+    out = Path(out_csv)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with _exclusive(out):
+        return _run_sweep(points, out, workers=workers, scheduler=scheduler, client=client,
+                          build_dir=build_dir, ssp=ssp, progress=progress, runner=runner,
+                          builder=builder)
+
+
+def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp, progress,
+               runner, builder) -> SweepSummary:
+    summary = SweepSummary(csv=str(out))
+    todo = _points_to_run(points, out, summary)
+    if not todo:
+        return summary
+    ssp_paths = _build_systems(todo, out, ssp, build_dir, builder)
+
+    from distributed import Client, LocalCluster, as_completed
+
+    cluster = own_client = None
+    table = _Table(out)
+    try:
+        if client is None:
+            if scheduler:
+                client = own_client = Client(scheduler)
+            else:
+                cluster = LocalCluster(n_workers=int(workers), processes=True,
+                                       threads_per_worker=1, dashboard_address=":0")
+                client = own_client = Client(cluster)
+        stamp = f"{time.time_ns():x}"
+        futures = {client.submit(run_point, p, ssp_paths[p.robot], runner, pure=False,
+                                 key=f"sweep-{p.id}-{stamp}", retries=0): p for p in todo}
+        summary.submitted = len(futures)
+        bar = None
+        if progress:
+            from tqdm.auto import tqdm
+            bar = tqdm(total=len(futures), desc="sweep", unit="point")
+        try:
+            for fut in as_completed(list(futures)):
+                p = futures[fut]
+                try:
+                    row = fut.result()
+                except Exception as e:  # noqa: BLE001 -- worker died, task lost ...
+                    row = _failed_row(p, f"{type(e).__name__}: {e}")
+                table.write(row)
+                if row["status"] == "ok":
+                    summary.ok += 1
+                else:
+                    summary.failed += 1
+                    summary.failures.append((p.id, str(row["error"])))
+                if bar is not None:
+                    bar.update(1)
+                    bar.set_postfix(ok=summary.ok, failed=summary.failed)
+                fut.release()
+        finally:
+            if bar is not None:
+                bar.close()
+            for fut in futures:
+                if not fut.done():
+                    fut.cancel()
+    finally:
+        table.close()
+        if own_client is not None:
+            own_client.close()
+        if cluster is not None:
+            cluster.close()
+    return summary
+
+
+def _points_to_run(points: Sequence[Point], out: Path, summary: SweepSummary) -> List[Point]:
+    """The points of the grid not yet in the table with status ok (counted in ``summary``);
+    the old rows of points that failed before are dropped, so the table keeps one row each."""
+    uniq: Dict[str, Point] = {}
+    for p in points:
+        uniq.setdefault(p.id, p)
+    summary.total = len(uniq)
+    if out.exists() and out.stat().st_size:
+        _check_header(out)
+    rows = read_table(out)
+    done = {r["sweep_id"] for r in rows if r["status"] == "ok"}
+    todo = [p for pid, p in uniq.items() if pid not in done]
+    summary.skipped = summary.total - len(todo)
+    todo_ids = {p.id for p in todo}
+    if any(r["sweep_id"] in todo_ids for r in rows):
+        _rewrite(out, [r for r in rows if r["sweep_id"] not in todo_ids])
+    return todo
+
+
+def _build_systems(todo: Sequence[Point], out: Path, ssp: Optional[Mapping[str, str]],
+                   build_dir, builder: str) -> Dict[str, str]:
+    """``{robot: absolute .ssp path}`` for every robot of ``todo``: given in ``ssp``, or built
+    with ``builder`` into ``build_dir`` (default ``<out>.build/``) before any point runs."""
+    ssp_paths = dict(ssp or {})
+    robots = sorted({p.robot for p in todo} - set(ssp_paths))
+    if robots:
+        build = _resolve(builder)
+        bdir = Path(build_dir) if build_dir else out.with_name(out.name + ".build")
+        for rb in robots:
+            built = build(rb, bdir / rb)
+            if isinstance(built, Mapping):       # build_system returns {'ssp': path, ...}
+                built = built["ssp"]
+            ssp_paths[rb] = str(Path(built).resolve())
+    return ssp_paths
+
