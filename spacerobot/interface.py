@@ -163,7 +163,7 @@ EXCITATION_DOC = {
     "qd_max": ("rad/s", "Bound on each joint excitation reference rate"),
     "qdd_max": ("rad/s2", "Bound on each joint excitation reference acceleration"),
     "period": ("s", "Period of the slowest excitation component (components in [1, 3] x 2 pi/period)"),
-    "ramp": ("s", "Duration of a change of the excitation level (half-cosine, no jump)"),
+    "ramp": ("s", "Duration of a change of the excitation level (quintic ramp, no jump)"),
 }
 
 
@@ -174,7 +174,7 @@ def plant_excitation_vars(sc: Scenario) -> List[Var]:
              "Requested excitation level, 0..1 (0 = none: the paper's motion; values outside "
              "are clipped with a warning, NaN makes the step fail with Discard)", 0.0, ("excite",)),
          Var("excite.level", "output", "continuous", "Real", "1",
-             "Excitation level in effect (follows ident.excite along a half-cosine ramp)", None,
+             "Excitation level in effect (follows ident.excite along a quintic ramp)", None,
              ("excite_level", 0))]
     for name, (unit, doc) in EXCITATION_DOC.items():
         v.append(Var(f"excite.{name}", "parameter", "fixed", "Real", unit, doc,

@@ -325,9 +325,10 @@ class Excitation:
       keeps ``|q_ref - q_home| <= q_max``, ``|qd_ref| <= qd_max`` and ``|qdd_ref| <= qdd_max``,
       ramp included (see :meth:`channels`).
 
-    ``s(t)`` moves from its current value to a new input value along a half-cosine of duration
-    ``ramp`` (continuous, with bounded first and second derivatives), so switching the
-    excitation on or off never makes the references jump.
+    ``s(t)`` moves from its current value to a new input value in ``ramp`` seconds along a
+    quintic whose first and second derivatives vanish at both ends, so switching the
+    excitation on or off never makes the references jump (nor, from a settled level, their
+    accelerations).
 
     Attributes
     ----------
@@ -339,10 +340,10 @@ class Excitation:
     ramp : float      duration of a change of the excitation level [s]
     """
 
-    att_max: float = 0.1
+    att_max: float = 0.3
     q_max: float = 0.3
-    qd_max: float = 0.1
-    qdd_max: float = 0.05
+    qd_max: float = 0.2
+    qdd_max: float = 0.1
     period: float = 30.0
     ramp: float = 10.0
 
@@ -358,9 +359,11 @@ class Excitation:
                 raise ValueError(f"excite.{k} must be a finite number > 0 s, got {val}")
 
     def ramp_bounds(self) -> Tuple[float, float]:
-        """``(max |s'|, max |s''|)`` of the half-cosine ramp of a unit change [1/s, 1/s2]."""
-        k = math.pi / self.ramp
-        return 0.5 * k, 0.5 * k * k
+        """``(max |s'|, max |s''|)`` of the ramp of a unit change [1/s, 1/s2]: the quintic
+        ``p(x) = 10 x^3 - 15 x^4 + 6 x^5`` has ``max p' = 15/8`` (x = 1/2) and
+        ``max |p''| = 10/sqrt(3)`` (x = (3 -+ sqrt(3))/6)."""
+        T = self.ramp
+        return 15.0 / 8.0 / T, 10.0 / math.sqrt(3.0) / (T * T)
 
     def channels(self, n_att: int, n_joints: int) -> np.ndarray:
         """The reference channels as a ``(n_att + n_joints, 5)`` table.
@@ -510,7 +513,7 @@ def random_body(rng: np.random.Generator, mass_range, edge_range, planar: bool) 
     I = R @ box.inertia_matrix() @ R.T
     com = _random_direction(rng, planar) * rng.uniform(*RANDOM_RANGES["com_offset"])
     return RigidBody(float(m), tuple(float(c) for c in com),
-                     (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]))
+                     tuple(float(x) for x in (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])))
 
 
 def random_scenario(robot: str, rng: np.random.Generator, name: str | None = None) -> Scenario:

@@ -183,20 +183,23 @@ def _sym3_eigenvalues(a00, a01, a02, a11, a12, a22):
 def ramp_level(t, ramp):
     """Excitation level ``s`` and its derivatives at time ``t`` [s].
 
-    ``ramp = [s0, u, t0, T]``: from ``s0`` at ``t0`` the level moves to ``u`` along a
-    half-cosine of duration ``T``, ``s = s0 + (u - s0) (1 - cos(pi tau / T)) / 2``,
-    ``tau = t - t0``; it stays at ``u`` afterwards. Returns ``(s, ds/dt, d2s/dt2)``.
+    ``ramp = [s0, u, t0, T]``: from ``s0`` at ``t0`` the level moves to ``u`` in ``T`` along
+    the quintic ``s = s0 + (u - s0) p(x)``, ``p = 10 x^3 - 15 x^4 + 6 x^5``,
+    ``x = (t - t0) / T``, whose first and second derivatives vanish at both ends (a ramp from
+    rest starts and ends without a step in the reference accelerations); it stays at ``u``
+    afterwards. Returns ``(s, ds/dt, d2s/dt2)``.
     """
     s0, u, t0, T = ramp[0], ramp[1], ramp[2], ramp[3]
-    tau = t - t0
-    if tau >= T:
+    x = (t - t0) / T
+    if x >= 1.0:
         return u, 0.0, 0.0
-    if tau <= 0.0:
-        tau = 0.0
+    if x <= 0.0:
+        x = 0.0
     d = u - s0
-    k = math.pi / T
-    c, sn = math.cos(k * tau), math.sin(k * tau)
-    return s0 + 0.5 * d * (1.0 - c), 0.5 * d * k * sn, 0.5 * d * k * k * c
+    xm = 1.0 - x
+    return (s0 + d * x * x * x * (10.0 + x * (6.0 * x - 15.0)),
+            d * 30.0 * x * x * xm * xm / T,
+            d * 60.0 * x * xm * (1.0 - 2.0 * x) / (T * T))
 
 
 @njit(**_NB)

@@ -155,8 +155,8 @@ class Plant:
     def set_excitation(self, level: float) -> None:
         """Ask for the excitation level ``level`` in [0, 1] from now on.
 
-        The level in effect moves there from its current value along a half-cosine of duration
-        ``excitation.ramp`` (no jump in the references); asking again for the level already
+        The level in effect moves there from its current value in ``excitation.ramp`` seconds
+        (:func:`.kernels.ramp_level`; no jump in the references); asking again for the level already
         requested changes nothing. Raises ``ValueError`` for a level outside [0, 1] or NaN.
         """
         level = float(level)
