@@ -13,6 +13,9 @@ The equations are those of :mod:`.control` (documented there) and :mod:`.dynamic
 * thrusters, eqs. 40-41, per inertial axis on the system momentum ``[P, L_c]``;
 * arm attitude law, eq. 39, by an inertia-weighted, selectively damped right pseudo-inverse
   with a null-space posture term and a bound on the joint accelerations;
+* the optional excitation (issue #12): eq. 39 about a multi-sine attitude reference and the
+  posture term about a multi-sine joint reference, scaled by a ramped level
+  (:func:`ramp_level`, :func:`channel`, :func:`reference`; design in ``docs/models.md``);
 * state derivative ``[dJ = F, dH = M + r_S x F, dq/dt, dv/dt]`` with ``dq/dt`` of the root
   joint written out (quaternion / (cos, sin) kinematics), so classic RK4 applies unchanged.
 

@@ -143,8 +143,9 @@ class Plant:
         if q.shape != (self._nq,) or v.shape != (self._nv,) or J.shape != (3,) or H.shape != (3,):
             raise ValueError(f"state shapes q {q.shape}, v {v.shape}, J {J.shape}, H {H.shape} "
                              f"do not fit this plant (nq = {self._nq}, nv = {self._nv})")
-        if ramp.shape != (4,):
-            raise ValueError(f"excitation ramp state must have 4 entries, got {ramp.shape}")
+        if ramp.shape != (4,) or not np.all(np.isfinite(ramp)) or not ramp[3] > 0.0:
+            raise ValueError(f"excitation ramp state must be 4 finite numbers [s0, u, t0, T > 0], "
+                             f"got {ramp}")
         self._ramp = ramp
         self._x = np.concatenate([J, H, q, v])
         self._publish()
@@ -156,8 +157,9 @@ class Plant:
         """Ask for the excitation level ``level`` in [0, 1] from now on.
 
         The level in effect moves there from its current value in ``excitation.ramp`` seconds
-        (:func:`.kernels.ramp_level`; no jump in the references); asking again for the level already
-        requested changes nothing. Raises ``ValueError`` for a level outside [0, 1] or NaN.
+        (:func:`.kernels.ramp_level`; no jump in the references); asking again for the level
+        already requested changes nothing. Raises ``ValueError`` for a level outside [0, 1] or
+        NaN (the plant is then unchanged).
         """
         level = float(level)
         if not (0.0 <= level <= 1.0):
@@ -278,7 +280,7 @@ class Plant:
         """What the sensors measure at the current instant, plus truth momentum.
 
         Keys follow the interface contract: ``r_S, v_S, A, omega_B, a_S, alpha_B, q, qd, qdd,
-        F, M, J, H, P, L, tau``.
+        F, M, J, H, P, L, tau``, and ``excite_level`` (1,): the excitation level in effect.
         """
         u = self.controls()
         pm, q, v = self.pm, self.q, self.v
