@@ -3,12 +3,14 @@
 Built by ``spacerobot build``; inside the FMU the library is bundled as ``_spacerobot_plant``
 (a unique name, so that it can share a process with the estimator FMU).
 """
+import math
+
 import numpy as np
 
 from _spacerobot_plant.fmi.slave import InterfaceSlave, _escape
 from _spacerobot_plant.interface import plant_vars
 from _spacerobot_plant.plant import Plant
-from _spacerobot_plant.robots import Controller
+from _spacerobot_plant.robots import Controller, Excitation
 from pythonfmu.enums import Fmi2Status
 
 #: longest accepted communication step [s] (1e5 internal steps at the default h)
@@ -37,10 +39,11 @@ class SpaceRobotPlant(InterfaceSlave):
         try:
             base, target = self._body("base"), self._body("target")
             ctrl = Controller(**{k: float(v[k]) for k in Controller.__dataclass_fields__})
+            ex = Excitation(**{k: float(v[f"excite.{k}"]) for k in Excitation.__dataclass_fields__})
             v0 = [float(v[f"base.v0[{i}]"]) for i in (1, 2, 3)]
             w0 = [float(v[f"base.omega0[{i}]"]) for i in (1, 2, 3)]
-            # the core checks the bodies, the controller bounds and h
-            self.plant = Plant(self.robot, base, target, ctrl, v0, w0, float(v["h"]))
+            # the core checks the bodies, the controller and excitation bounds and h
+            self.plant = Plant(self.robot, base, target, ctrl, v0, w0, float(v["h"]), ex)
         except ValueError as e:
             self._fail(f"invalid plant parameters: {e}")
         self._refresh()
@@ -61,8 +64,12 @@ class SpaceRobotPlant(InterfaceSlave):
             self.log(_escape(f"communication point {current_time!r} s differs from the plant "
                              f"time {self.plant.t!r} s; continuing from the plant state"),
                      Fmi2Status.warning)
+        level = self._excite_input(current_time)
+        if level is None:
+            return False
         before = self.plant.get_state()
         try:
+            self.plant.set_excitation(level)
             self.plant.advance(step_size)
             self._refresh()
         except (FloatingPointError, ValueError, np.linalg.LinAlgError) as e:
@@ -72,6 +79,21 @@ class SpaceRobotPlant(InterfaceSlave):
                              f"{e}; state kept at t = {self.plant.t:.6g} s"), Fmi2Status.discard)
             return False
         return True
+
+    def _excite_input(self, current_time: float):
+        """The input ``ident.excite`` as a level in [0, 1]: clipped with a warning when outside,
+        ``None`` (the step is discarded, state unchanged) when it is not a number."""
+        u = float(self.values["ident.excite"])
+        if math.isnan(u):
+            self.log(_escape(f"ident.excite is NaN at t = {current_time:.6g} s: step discarded, "
+                             f"state kept at t = {self.plant.t:.6g} s"), Fmi2Status.discard)
+            return None
+        if not 0.0 <= u <= 1.0:
+            clipped = min(max(u, 0.0), 1.0)
+            self.log(_escape(f"ident.excite = {u!r} at t = {current_time:.6g} s is outside "
+                             f"[0, 1]; using {clipped}"), Fmi2Status.warning)
+            return clipped
+        return u
 
     # -- state -----------------------------------------------------------------------------------
     def _core_state(self):

@@ -163,6 +163,33 @@ def plant_vars(robot: Robot, sc: Scenario) -> List[Var]:
         v.append(Var(name, "parameter", "fixed", "Real", unit, doc, float(getattr(ctrl, name)),
                      ("ctrl", name)))
     v.append(Var("h", "parameter", "fixed", "Real", "s", "Internal RK4 step", sc.h, ("h",)))
+    v += plant_excitation_vars(sc)
+    return v
+
+
+#: plant excitation parameters (``excite.<field>`` of robots.Excitation): unit, description
+EXCITATION_DOC = {
+    "att_max": ("rad", "Amplitude bound of the base attitude excitation reference, per axis"),
+    "q_max": ("rad", "Amplitude bound of each joint excitation reference about the home posture"),
+    "qd_max": ("rad/s", "Bound on each joint excitation reference rate"),
+    "qdd_max": ("rad/s2", "Bound on each joint excitation reference acceleration"),
+    "period": ("s", "Period of the slowest excitation component (components in [1, 3] x 2 pi/period)"),
+    "ramp": ("s", "Duration of a change of the excitation level (quintic ramp, no jump)"),
+}
+
+
+def plant_excitation_vars(sc: Scenario) -> List[Var]:
+    """The plant's excitation input ``ident.excite``, its level output and parameters."""
+    ex = sc.excitation
+    v = [Var("ident.excite", "input", "continuous", "Real", "1",
+             "Requested excitation level, 0..1 (0 = none: the paper's motion; values outside "
+             "are clipped with a warning, NaN makes the step fail with Discard)", 0.0, ("excite",)),
+         Var("excite.level", "output", "continuous", "Real", "1",
+             "Excitation level in effect (follows ident.excite along a quintic ramp)", None,
+             ("excite_level", 0))]
+    for name, (unit, doc) in EXCITATION_DOC.items():
+        v.append(Var(f"excite.{name}", "parameter", "fixed", "Real", unit, doc,
+                     float(getattr(ex, name)), ("excite_par", name)))
     return v
 
 

@@ -304,6 +304,97 @@ class Controller:
                 raise ValueError(f"{k} must be >= 0, got {getattr(self, k)}")
 
 
+#: golden-ratio conjugate and sqrt(2): irrational steps that spread the excitation frequencies
+#: and phases over their ranges without repeating (no two channels share a frequency)
+_PHI = (math.sqrt(5.0) - 1.0) / 2.0
+_SQRT2 = math.sqrt(2.0)
+
+
+@dataclass(frozen=True)
+class Excitation:
+    """Bounded, persistently exciting motion the plant adds on request (input ``ident.excite``).
+
+    Two references, each channel a sum of two sines at incommensurate frequencies in
+    ``[w_f, 3 w_f]``, ``w_f = 2 pi / period``, scaled by the excitation level ``s(t)``:
+
+    * base attitude (rotation vector about the initial attitude; z only for a planar robot),
+      amplitude ``att_max`` per axis, tracked through the paper's arm law (eq. 39 becomes the
+      error dynamics about the reference);
+    * joint posture, ``q_home + s f_i(t)``, tracked by the null-space posture term, so the
+      attitude task is not disturbed. The amplitude of each joint channel is the largest that
+      keeps ``|q_ref - q_home| <= q_max``, ``|qd_ref| <= qd_max`` and ``|qdd_ref| <= qdd_max``,
+      ramp included (see :meth:`channels`).
+
+    ``s(t)`` moves from its current value to a new input value in ``ramp`` seconds along a
+    quintic whose first and second derivatives vanish at both ends, so switching the
+    excitation on or off never makes the references jump (nor, from a settled level, their
+    accelerations).
+
+    Attributes
+    ----------
+    att_max : float   amplitude bound of the base attitude reference, per axis [rad]
+    q_max : float     amplitude bound of each joint reference about the home posture [rad]
+    qd_max : float    bound on each joint reference rate [rad/s]
+    qdd_max : float   bound on each joint reference acceleration [rad/s2]
+    period : float    period of the slowest component, 2 pi / w_f [s]
+    ramp : float      duration of a change of the excitation level [s]
+    """
+
+    att_max: float = 0.3
+    q_max: float = 0.3
+    qd_max: float = 0.2
+    qdd_max: float = 0.1
+    period: float = 30.0
+    ramp: float = 10.0
+
+    def check(self) -> None:
+        """Raise ``ValueError`` naming the first parameter out of range."""
+        for k in ("att_max", "q_max", "qd_max", "qdd_max"):
+            val = getattr(self, k)
+            if not (math.isfinite(val) and val >= 0.0):
+                raise ValueError(f"excite.{k} must be a finite number >= 0, got {val}")
+        for k in ("period", "ramp"):
+            val = getattr(self, k)
+            if not (math.isfinite(val) and val > 0.0):
+                raise ValueError(f"excite.{k} must be a finite number > 0 s, got {val}")
+
+    def ramp_bounds(self) -> Tuple[float, float]:
+        """``(max |s'|, max |s''|)`` of the ramp of a unit change [1/s, 1/s2]: the quintic
+        ``p(x) = 10 x^3 - 15 x^4 + 6 x^5`` has ``max p' = 15/8`` (x = 1/2) and
+        ``max |p''| = 10/sqrt(3)`` (x = (3 -+ sqrt(3))/6)."""
+        T = self.ramp
+        return 15.0 / 8.0 / T, 10.0 / math.sqrt(3.0) / (T * T)
+
+    def channels(self, n_att: int, n_joints: int) -> np.ndarray:
+        """The reference channels as a ``(n_att + n_joints, 5)`` table.
+
+        Row ``c``: ``(a, w1, phi1, w2, phi2)``; the channel is
+        ``f_c(t) = a/2 [sin(w1 t + phi1) + sin(w2 t + phi2)]``, rows ``0..n_att-1`` the attitude
+        axes, then the joints. ``|f| <= a``, ``|f'| <= a (w1 + w2)/2``,
+        ``|f''| <= a (w1^2 + w2^2)/2``; with the level ``s`` (``0 <= s <= 1``, ``|s'| <= S1``,
+        ``|s''| <= S2``) the joint reference ``s f`` has rate ``<= a (S1 + (w1 + w2)/2)`` and
+        acceleration ``<= a (S2 + S1 (w1 + w2) + (w1^2 + w2^2)/2)``, and ``a`` is the largest
+        value keeping these within ``qd_max``, ``qdd_max`` (and ``a <= q_max``).
+        """
+        wf = 2.0 * math.pi / self.period
+        S1, S2 = self.ramp_bounds()
+        tab = np.empty((n_att + n_joints, 5))
+        for c in range(n_att + n_joints):
+            k = 2 * c + 1
+            w1 = wf * (1.0 + 2.0 * ((_PHI * k) % 1.0))          # in [w_f, 3 w_f)
+            w2 = wf * (1.0 + 2.0 * ((_PHI * (k + 1)) % 1.0))
+            p1 = 2.0 * math.pi * ((_SQRT2 * k) % 1.0)
+            p2 = 2.0 * math.pi * ((_SQRT2 * (k + 1)) % 1.0)
+            if c < n_att:
+                a = self.att_max
+            else:
+                rate = S1 + 0.5 * (w1 + w2)
+                acc = S2 + S1 * (w1 + w2) + 0.5 * (w1 * w1 + w2 * w2)
+                a = min(self.q_max, self.qd_max / rate, self.qdd_max / acc)
+            tab[c] = (a, w1, p1, w2, p2)
+        return tab
+
+
 @dataclass(frozen=True)
 class Guess:
     """Initial guesses and initial covariances of the estimator (paper §V defaults)."""
@@ -333,6 +424,7 @@ class Scenario:
     omega0: Vec3
     controller: Controller = field(default_factory=Controller)
     guess: Guess = None  # type: ignore[assignment]
+    excitation: Excitation = field(default_factory=Excitation)
     h: float = 1e-3
     sample_time: float = 0.1
     stop_time: float = 30.0
@@ -350,7 +442,8 @@ def scenario_from_dict(d: dict) -> Scenario:
                     v0=tuple(d["v0"]), omega0=tuple(d["omega0"]),
                     controller=Controller(**d["controller"]),
                     guess=Guess(_body(g["base"]), _body(g["target"]), g["P0_mu"], g["P0_theta"]),
-                    h=d["h"], sample_time=d["sample_time"], stop_time=d["stop_time"])
+                    h=d["h"], sample_time=d["sample_time"], stop_time=d["stop_time"],
+                    excitation=Excitation(**d.get("excitation", {})))
 
 
 def scenario(robot: str = "planar", target: str | None = None, **overrides) -> Scenario:
@@ -375,6 +468,74 @@ def scenario(robot: str = "planar", target: str | None = None, **overrides) -> S
                 guess=PAPER_GUESS[robot])
     base.update(overrides)
     return Scenario(**base)
+
+
+# --------------------------------------------------------------------------------------------
+# Random real cases (Monte Carlo study): bodies a user might capture, not the paper's.
+# --------------------------------------------------------------------------------------------
+
+#: ranges of :func:`random_scenario` (masses [kg], box edges [m], CoM offset [m], tumbling
+#: [rad/s], drift [m/s])
+RANDOM_RANGES = {
+    "base_mass": (400.0, 700.0), "base_edge": (0.6, 1.6),
+    "target_mass": (50.0, 600.0), "target_edge": (0.3, 1.0),
+    "com_offset": (0.02, 0.3), "omega0": (0.0, 0.2), "v0": (0.0, 5.0),
+}
+
+
+def _random_direction(rng: np.random.Generator, planar: bool) -> np.ndarray:
+    """Unit vector uniform on the sphere (on the x-y circle when planar)."""
+    if planar:
+        a = rng.uniform(0.0, 2.0 * math.pi)
+        return np.array([math.cos(a), math.sin(a), 0.0])
+    d = rng.normal(size=3)
+    return d / np.linalg.norm(d)
+
+
+def _random_rotation(rng: np.random.Generator, planar: bool) -> np.ndarray:
+    """Rotation uniform on SO(3) (about z only when planar)."""
+    if planar:
+        return rot("z", rng.uniform(0.0, 2.0 * math.pi))
+    qv = rng.normal(size=4)
+    x, y, z, w = qv / np.linalg.norm(qv)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def random_body(rng: np.random.Generator, mass_range, edge_range, planar: bool) -> RigidBody:
+    """A uniform box of random mass and edges, turned by a random rotation ``R`` and with a
+    random CoM offset: ``I_c = R diag(I_box) R^T`` (non-zero products of inertia, and a real
+    body by construction: a box's principal moments obey the triangle inequality)."""
+    m = rng.uniform(*mass_range)
+    box = cuboid(m, *rng.uniform(*edge_range, size=3))
+    R = _random_rotation(rng, planar)
+    I = R @ box.inertia_matrix() @ R.T
+    com = _random_direction(rng, planar) * rng.uniform(*RANDOM_RANGES["com_offset"])
+    return RigidBody(float(m), tuple(float(c) for c in com),
+                     tuple(float(x) for x in (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])))
+
+
+def random_scenario(robot: str, rng: np.random.Generator, name: str | None = None) -> Scenario:
+    """A random real case for ``robot``: base, target and initial tumbling drawn from
+    :data:`RANDOM_RANGES`; the robot's arm, the paper's guesses and controller, 60 s.
+
+    Deterministic given the generator's state (``np.random.default_rng(seed)``). For the planar
+    robot, offsets lie in x-y, inertia tensors are turned about z only, and the initial motion
+    is a z rotation and an x-y drift.
+    """
+    if robot not in ROBOTS:
+        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(ROBOTS)}")
+    rb, planar, rr = ROBOTS[robot], ROBOTS[robot].planar, RANDOM_RANGES
+    base = random_body(rng, rr["base_mass"], rr["base_edge"], planar)
+    target = random_body(rng, rr["target_mass"], rr["target_edge"], planar)
+    omega0 = _random_direction(rng, planar) * rng.uniform(*rr["omega0"])
+    if planar:
+        omega0 = np.array([0.0, 0.0, omega0[0]])   # signed rate about z
+    v0 = _random_direction(rng, planar) * rng.uniform(*rr["v0"])
+    return Scenario(name=name or f"{robot}-random", robot=replace(rb, base=base), target=target,
+                    v0=tuple(float(x) for x in v0), omega0=tuple(float(x) for x in omega0),
+                    guess=PAPER_GUESS[robot], stop_time=60.0)
 
 
 #: The values the paper prints for the planar medium target (Section V.A.1), CoM inertia Izz.

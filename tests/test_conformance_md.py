@@ -158,6 +158,8 @@ CONTRACT_UNITS = [
     (r"base\.v0\[\d\]", "m/s"), (r"base\.omega0\[\d\]", "rad/s"),
     (r"F_max", "N"), (r"M_max", "N.m"), (r"P_max", "N.s"), (r"L_max", "N.m.s"),
     (r"K_[FMD]|K_Dn", "1/s"), (r"K_Pn?", "1/s2"), (r"qdd_max", "rad/s2"), (r"h", "s"),
+    (r"ident\.excite|excite\.level", "1"), (r"excite\.(att_max|q_max)", "rad"),
+    (r"excite\.qd_max", "rad/s"), (r"excite\.qdd_max", "rad/s2"), (r"excite\.(period|ramp)", "s"),
     (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta)", "1"),
 ]
 

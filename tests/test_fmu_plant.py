@@ -7,9 +7,13 @@ parameters and bad steps.
 * Each invalid parameter makes fmi2ExitInitializationMode fail (fmi2Fatal) with a readable
   message naming the parameter; the instance can be freed and a fresh one runs.
 * A bad communication step is discarded with the state unchanged.
+* Excitation (issue #12): ``ident.excite`` reaches the core (the FMU equals the core with the
+  same level requests); a value outside [0, 1] is clipped with a warning; NaN discards the
+  step with the state unchanged; a bad ``excite.*`` parameter fails initialisation by name.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 
@@ -36,6 +40,8 @@ OUTPUT_KEYS = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "o
 
 
 def core_value(out: dict, name: str) -> float:
+    if name == "excite.level":
+        return float(out["excite_level"][0])
     m = re.fullmatch(r"([a-z]+\.[A-Za-z]+)\[(\d+)(?:,(\d+))?\]", name)
     assert m, name
     arr = out[OUTPUT_KEYS[m.group(1)]]
@@ -74,8 +80,6 @@ def _params(case) -> dict:
 
 
 def test_fmu_outputs_equal_core(spatial_fmus):
-    import dataclasses
-
     case = _spatial_case()
     sc = scenario("spatial")
     ctrl = dataclasses.replace(sc.controller, F_max=case["F_max"], M_max=case["M_max"],
@@ -83,8 +87,8 @@ def test_fmu_outputs_equal_core(spatial_fmus):
     core = Plant(sc.robot, case["base"], case["target"], ctrl, case["v0"], case["omega0"], sc.h)
     s = started_slave(spatial_fmus["plant"], _params(case), "plant")
     outs = s.names("output")
-    # 11 three-vectors (r v omega a alpha F M J H P L), the DCM, q qd qdd tau
-    assert len(outs) == 11 * 3 + 9 + 4 * sc.robot.n_joints
+    # 11 three-vectors (r v omega a alpha F M J H P L), the DCM, q qd qdd tau, excite.level
+    assert len(outs) == 11 * 3 + 9 + 4 * sc.robot.n_joints + 1
     t = 0.0
     try:
         for dt in (None, 0.1005, 0.2995, 0.1):
@@ -144,6 +148,8 @@ BAD_PARAMETERS = [
     ({"base.b[1]": math.nan}, ["base.b[1]", "nan"]),
     ({"target.Iyy": math.inf}, ["target.Iyy", "inf"]),
     ({"base.v0[2]": math.nan}, ["base.v0[2]", "nan"]),
+    ({"excite.period": 0.0}, ["excite.period", "> 0"]),
+    ({"excite.qd_max": -0.1}, ["excite.qd_max", ">= 0"]),
 ]
 
 
@@ -186,3 +192,80 @@ def test_bad_communication_step_is_discarded(planar_fmus):
             assert s.get(n) == pytest.approx(core_value(o, n), rel=1e-12, abs=1e-12), n
     finally:
         s.free()
+
+
+# ------------------------------------------------------------------------------------------------
+# excitation input
+# ------------------------------------------------------------------------------------------------
+
+def test_excite_input_reaches_the_core_clipped_and_nan_discarded(planar_fmus):
+    sc = scenario("planar")
+    s = started_slave(planar_fmus["plant"], {"excite.ramp": 2.0, "excite.att_max": 0.2}, "plant")
+    core = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
+                 dataclasses.replace(sc.excitation, ramp=2.0, att_max=0.2))
+    outs = s.names("output")
+    assert s.get("ident.excite") == 0.0
+    t = 0.0
+
+    def step(u_fmu, u_core):
+        nonlocal t
+        s.set("ident.excite", u_fmu)
+        s.fmu.doStep(t, 0.5)
+        core.set_excitation(u_core)
+        core.advance(0.5)
+        t += 0.5
+        o = core.outputs()
+        for n in outs:
+            assert s.get(n) == pytest.approx(core_value(o, n), rel=1e-12, abs=1e-12), (t, n)
+
+    try:
+        step(1.0, 1.0)
+        assert 0.0 < s.get("excite.level") < 1.0                    # ramping up
+        n_msgs = len(s.messages)
+        step(1.7, 1.0)                                               # clipped, with a warning
+        warn = [m for st, _, m in s.messages[n_msgs:] if st == FMI_WARNING]
+        assert any("ident.excite" in m and "1.7" in m for m in warn), s.messages
+        step(0.5, 0.5)
+        step(-3.0, 0.0)
+        before = [s.get(n) for n in outs]
+        s.set("ident.excite", math.nan)
+        with pytest.raises(FMICallException) as exc:
+            s.fmu.doStep(t, 0.5)
+        assert exc.value.status == FMI_DISCARD
+        assert any("ident.excite" in m and "NaN" in m for _, _, m in s.messages)
+        assert [s.get(n) for n in outs] == before
+        step(0.0, 0.0)                                               # and it goes on
+    finally:
+        s.free()
+
+
+def test_fmu_state_carries_the_excitation_ramp(planar_fmus):
+    """A state serialised in the middle of a ramp, restored into another instance (whose input
+    was never set), continues bit for bit; the level and the input come with it."""
+    params = {"excite.ramp": 2.0}
+    a = started_slave(planar_fmus["plant"], params, "a")
+    b = started_slave(planar_fmus["plant"], params, "b")
+    try:
+        outs = a.names("output")
+        a.set("ident.excite", 1.0)
+        a.fmu.doStep(0.0, 0.5)
+        a.fmu.doStep(0.5, 0.5)
+        level = a.get("excite.level")
+        assert 0.0 < level < 1.0                                     # mid-ramp
+        st = a.fmu.getFMUstate()
+        data = a.fmu.serializeFMUstate(st)
+        a.fmu.freeFMUstate(st)
+        for t in (1.0, 1.5):
+            a.fmu.doStep(t, 0.5)
+        ref = [a.get(n) for n in outs]
+        s = b.fmu.deSerializeFMUstate(data)
+        b.fmu.setFMUstate(s)
+        b.fmu.freeFMUstate(s)
+        assert b.get("ident.excite") == 1.0 and b.get("excite.level") == level
+        for t in (1.0, 1.5):
+            b.fmu.doStep(t, 0.5)
+        assert [b.get(n) for n in outs] == ref
+        assert b.get("excite.level") == pytest.approx(1.0, abs=1e-12)   # the ramp went on
+    finally:
+        a.free()
+        b.free()

@@ -71,8 +71,10 @@ def _bounded(x, K, x_max, u_max):
     return np.where(np.abs(x) >= x_max, np.sign(K * x) * u_max, inside)
 
 
-def reference_control(planar, q, v, M, nle, hg, c, q_home):
-    """Eqs. 39-41 as documented in spacerobot/plant/kernels.py, by LAPACK and Pinocchio."""
+def reference_control(planar, q, v, M, nle, hg, c, q_home, refs=None):
+    """Eqs. 39-41 as documented in spacerobot/plant/kernels.py, by LAPACK and Pinocchio.
+
+    ``refs``: optional excitation references ``(e_r, e_r', e_r'', q_r, q_r', q_r'')``."""
     nv = len(v)
     nb = 3 if planar else 6
     rot = slice(2, 3) if planar else slice(3, 6)
@@ -98,8 +100,9 @@ def reference_control(planar, q, v, M, nle, hg, c, q_home):
     damp = np.where(r < kernels.DLS_RATIO, kernels.DLS_RATIO * lmax * (1 - r / kernels.DLS_RATIO) ** 2,
                     0.0)
     Gp = WiGt @ U @ np.diag(1.0 / (lam + damp)) @ U.T
-    post = -c.K_Pn * (q[-(nv - nb):] - q_home) - c.K_Dn * v[nb:]
-    alpha_des = -c.K_D * v[rot] - c.K_P * e
+    er, der, dder, qr, dqr, ddqr = refs if refs is not None else (0.0,) * 6
+    post = ddqr - c.K_Pn * (q[-(nv - nb):] - q_home - qr) - c.K_Dn * (v[nb:] - dqr)
+    alpha_des = dder - c.K_D * (v[rot] - der) - c.K_P * (e - er)
     qdd = Gp @ (y0[rot] - alpha_des - G @ post) + post
     peak = np.abs(qdd).max()
     if peak > c.qdd_max:
@@ -109,11 +112,16 @@ def reference_control(planar, q, v, M, nle, hg, c, q_home):
     return np.concatenate([F, Mt]), np.concatenate([f_b, tau]), acc
 
 
-def _run_kernel(planar, q, v, M, nle, hg, c, q_home):
+#: excitation off: level 0 and no ramp under way (the table is then never read)
+NO_RAMP, NO_TAB = np.array([0.0, 0.0, 0.0, 1.0]), np.zeros((9, 5))
+
+
+def _run_kernel(planar, q, v, M, nle, hg, c, q_home, t=0.0, ramp=NO_RAMP, tab=NO_TAB):
     par = np.array([getattr(c, k) for k in kernels.PARAMS], float)
     nv = len(v)
     gen, acc, FM = np.zeros(nv), np.zeros(nv), np.zeros(6)
-    err = kernels.control(planar, q, v, M, nle, hg, par, np.asarray(q_home, float), gen, acc, FM)
+    err = kernels.control(planar, q, v, M, nle, hg, par, np.asarray(q_home, float), t, ramp, tab,
+                          gen, acc, FM)
     assert err == 0
     return FM, gen, acc
 
@@ -140,6 +148,56 @@ def test_control_kernel_matches_reference_along_a_run(robot):
         saturated += np.abs(acc[plant.pm.nb:]).max() >= sc.controller.qdd_max * (1 - 1e-12)
     if robot == "spatial":
         assert saturated > 0          # the bounded branch is exercised too
+
+
+def _numpy_references(t, ramp, tab, r):
+    """Excitation references written out (robots.Excitation, kernels.ramp_level): level
+    s = s0 + (u - s0) p(x), p = 10 x^3 - 15 x^4 + 6 x^5, x = (t - t0)/T, times
+    f = a/2 (sin(w1 t + p1) + sin(w2 t + p2))."""
+    s0, u, t0, T = ramp
+    x = min(max((t - t0) / T, 0.0), 1.0)
+    s = s0 + (u - s0) * (10 * x ** 3 - 15 * x ** 4 + 6 * x ** 5)
+    ds = (u - s0) * (30 * x ** 2 - 60 * x ** 3 + 30 * x ** 4) / T
+    dds = (u - s0) * (60 * x - 180 * x ** 2 + 120 * x ** 3) / T ** 2
+    a, w1, p1, w2, p2 = tab.T
+    f = a / 2 * (np.sin(w1 * t + p1) + np.sin(w2 * t + p2))
+    df = a / 2 * (w1 * np.cos(w1 * t + p1) + w2 * np.cos(w2 * t + p2))
+    ddf = -a / 2 * (w1 ** 2 * np.sin(w1 * t + p1) + w2 ** 2 * np.sin(w2 * t + p2))
+    x, dx, ddx = s * f, ds * f + s * df, dds * f + 2 * ds * df + s * ddf
+    return x[:r], dx[:r], ddx[:r], x[r:], dx[r:], ddx[r:]
+
+
+@pytest.mark.parametrize("robot", ["planar", "spatial"])
+def test_control_kernel_with_excitation_matches_reference(robot):
+    """With the excitation on (mid-ramp and after it), the kernel is eq. 39 about the attitude
+    reference and the posture law about the joint reference, as written out with NumPy."""
+    from spacerobot.robots import Excitation
+
+    sc = scenario(robot)
+    ex = Excitation(att_max=0.2, q_max=0.5, qd_max=0.3, qdd_max=0.2, period=12.0, ramp=4.0)
+    plant = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h, ex)
+    plant.set_excitation(0.8)
+    model, data = plant.pm.model, plant.pm.model.createData()
+    r = 1 if plant.pm.planar else 3
+    tab = ex.channels(r, plant.pm.n)
+    for _ in range(12):
+        plant.advance(0.5)
+        q, v, t = plant.q.copy(), plant.v.copy(), plant.t
+        M = pin.crba(model, data, q).copy()
+        nle = pin.nonLinearEffects(model, data, q, v).copy()
+        hg = pin.computeCentroidalMomentum(model, data, q, v).vector.copy()
+        ramp = plant.get_state()["excite_ramp"]
+        refs = _numpy_references(t, ramp, tab, r)
+        assert np.abs(refs[3]).max() > 0.0
+        out = _run_kernel(plant.pm.planar, q, v, M, nle, hg, sc.controller, plant.q_home, t, ramp,
+                          tab)
+        ref = reference_control(plant.pm.planar, q, v, M, nle, hg, sc.controller, plant.q_home,
+                                refs)
+        for x, y in zip(out, ref):
+            np.testing.assert_allclose(x, y, rtol=0, atol=1e-8 * np.abs(y).max())
+        # and it differs from the law without excitation
+        off = _run_kernel(plant.pm.planar, q, v, M, nle, hg, sc.controller, plant.q_home)
+        assert np.abs(off[2] - out[2]).max() > 1e-6
 
 
 def test_control_kernel_damped_branch():
@@ -176,9 +234,12 @@ def test_control_kernel_reports_singular_inertia():
     args = (q, np.zeros(nv))
     bufs = (np.zeros(nv), np.zeros(nv), np.zeros(6))
     M = np.zeros((nv, nv))
-    assert kernels.control(True, *args, M, np.zeros(nv), np.zeros(6), par, np.zeros(3), *bufs) == 1
+    ex = (0.0, NO_RAMP, NO_TAB)
+    assert kernels.control(True, *args, M, np.zeros(nv), np.zeros(6), par, np.zeros(3), *ex,
+                           *bufs) == 1
     M = np.diag([1.0, 1.0, 1.0, 0.0, 1.0, 1.0])
-    assert kernels.control(True, *args, M, np.zeros(nv), np.zeros(6), par, np.zeros(3), *bufs) == 2
+    assert kernels.control(True, *args, M, np.zeros(nv), np.zeros(6), par, np.zeros(3), *ex,
+                           *bufs) == 2
 
 
 # -- the persistent kernel cache -------------------------------------------------------------------

@@ -13,6 +13,9 @@ The equations are those of :mod:`.control` (documented there) and :mod:`.dynamic
 * thrusters, eqs. 40-41, per inertial axis on the system momentum ``[P, L_c]``;
 * arm attitude law, eq. 39, by an inertia-weighted, selectively damped right pseudo-inverse
   with a null-space posture term and a bound on the joint accelerations;
+* the optional excitation (issue #12): eq. 39 about a multi-sine attitude reference and the
+  posture term about a multi-sine joint reference, scaled by a ramped level
+  (:func:`ramp_level`, :func:`channel`, :func:`reference`; design in ``docs/models.md``);
 * state derivative ``[dJ = F, dH = M + r_S x F, dq/dt, dv/dt]`` with ``dq/dt`` of the root
   joint written out (quaternion / (cos, sin) kinematics), so classic RK4 applies unchanged.
 
@@ -180,7 +183,50 @@ def _sym3_eigenvalues(a00, a01, a02, a11, a12, a22):
 
 
 @njit(**_NB)
-def control(planar, q, v, M, nle, hg, par, q_home, gen, acc, FM):
+def ramp_level(t, ramp):
+    """Excitation level ``s`` and its derivatives at time ``t`` [s].
+
+    ``ramp = [s0, u, t0, T]``: from ``s0`` at ``t0`` the level moves to ``u`` in ``T`` along
+    the quintic ``s = s0 + (u - s0) p(x)``, ``p = 10 x^3 - 15 x^4 + 6 x^5``,
+    ``x = (t - t0) / T``, whose first and second derivatives vanish at both ends (a ramp from
+    rest starts and ends without a step in the reference accelerations); it stays at ``u``
+    afterwards. Returns ``(s, ds/dt, d2s/dt2)``.
+    """
+    s0, u, t0, T = ramp[0], ramp[1], ramp[2], ramp[3]
+    x = (t - t0) / T
+    if x >= 1.0:
+        return u, 0.0, 0.0
+    if x <= 0.0:
+        x = 0.0
+    d = u - s0
+    xm = 1.0 - x
+    return (s0 + d * x * x * x * (10.0 + x * (6.0 * x - 15.0)),
+            d * 30.0 * x * x * xm * xm / T,
+            d * 60.0 * x * xm * (1.0 - 2.0 * x) / (T * T))
+
+
+@njit(**_NB)
+def channel(tab, c, t):
+    """Reference channel ``c`` of the excitation table at ``t``: ``(f, f', f'')`` of
+    ``f = a/2 [sin(w1 t + p1) + sin(w2 t + p2)]`` (table rows ``(a, w1, p1, w2, p2)``)."""
+    a, w1, p1, w2, p2 = tab[c, 0], tab[c, 1], tab[c, 2], tab[c, 3], tab[c, 4]
+    s1, c1 = math.sin(w1 * t + p1), math.cos(w1 * t + p1)
+    s2, c2 = math.sin(w2 * t + p2), math.cos(w2 * t + p2)
+    h = 0.5 * a
+    return h * (s1 + s2), h * (w1 * c1 + w2 * c2), -h * (w1 * w1 * s1 + w2 * w2 * s2)
+
+
+@njit(**_NB)
+def reference(t, ramp, tab, c):
+    """Scaled reference ``s(t) f_c(t)`` of channel ``c`` and its first two time derivatives
+    (product rule; ``s`` from :func:`ramp_level`). Callable from Python (tests, docs)."""
+    s, ds, dds = ramp_level(t, ramp)
+    f, df, ddf = channel(tab, c, t)
+    return s * f, ds * f + s * df, dds * f + 2.0 * ds * df + s * ddf
+
+
+@njit(**_NB)
+def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
     """Thruster and arm commands at the state ``(q, v)``, held over the next internal step.
 
     Parameters
@@ -191,6 +237,16 @@ def control(planar, q, v, M, nle, hg, par, q_home, gen, acc, FM):
     hg : (6,)                system momentum ``[P, L_c]`` (inertial; L about the system CoM)
     par : (11,)              controller parameters in the order :data:`PARAMS`
     q_home : (n,)            null-space posture
+    t : float                time of the state [s] (the excitation references)
+    ramp : (4,)              excitation level ramp ``[s0, u, t0, T]`` (:func:`ramp_level`)
+    tab : (r + n, 5)         excitation channels: ``r`` attitude axes (1 planar, 3 spatial),
+                             then the joints (:func:`channel`)
+
+    With the excitation level and its derivatives all zero, the references are not evaluated
+    at all (the law is then exactly the paper's, bit for bit). Otherwise eq. 39 becomes the
+    error dynamics about the attitude reference ``e_r``,
+    ``alpha_des = e_r'' - K_D (omega - e_r') - K_P (e - e_r)``, and the posture term tracks the
+    joint reference ``q_home + q_r``: ``q_r'' - K_Pn (q - q_home - q_r) - K_Dn (qd - q_r')``.
 
     Writes ``FM`` (6,) = thruster ``[F, M]`` (inertial), ``gen`` (nv,) = ``[f_b, tau]`` (the
     base part is the thrust in base coordinates, the arm part the joint torques) and ``acc``
@@ -266,6 +322,18 @@ def control(planar, q, v, M, nle, hg, par, q_home, gen, acc, FM):
     rhs = np.empty(r)
     for j in range(r):
         s = sol[r0 + j, n] + KD * v[r0 + j] + KP * e[3 - r + j]
+        rhs[j] = s
+    lev, dlev, ddlev = ramp_level(t, ramp)
+    if lev != 0.0 or dlev != 0.0 or ddlev != 0.0:
+        # excitation: posture about q_home + q_r, attitude error about e_r
+        for i in range(n):
+            qr, dqr, ddqr = reference(t, ramp, tab, r + i)
+            post[i] += ddqr + KPn * qr + KDn * dqr
+        for j in range(r):
+            er, der, dder = reference(t, ramp, tab, j)
+            rhs[j] -= dder + KD * der + KP * er
+    for j in range(r):
+        s = rhs[j]
         for p in range(n):
             s -= sol[r0 + j, p] * post[p]
         rhs[j] = s

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..robots import Controller, RigidBody, Robot
+from ..robots import Controller, Excitation, RigidBody, Robot
 from . import kernels
 from .dynamics import (PlantModel, base_acceleration, base_generalised_velocity, base_position,
                        base_rotation, base_velocity, build_model, initial_configuration, momentum)
@@ -48,16 +48,22 @@ class Plant:
     v0 : (3,)      initial velocity of S, inertial [m/s]
     omega0 : (3,)  initial base angular velocity, base frame [rad/s]
     h : float      internal RK4 step [s]
+    excitation : Excitation
+        bounds and frequencies of the excitation motion; its level starts at 0 (the paper's
+        behaviour) and follows :meth:`set_excitation`
     """
 
     def __init__(self, robot: Robot, base: RigidBody, target: RigidBody, controller: Controller,
-                 v0, omega0, h: float = 1e-3):
+                 v0, omega0, h: float = 1e-3, excitation: Excitation = Excitation()):
         if not (0.0 < h <= 1.0):
             raise ValueError(f"h must be in (0, 1] s, got {h}")
         base.check("base")
         target.check("target")
         controller.check()
-        self._init_args = (robot, base, target, controller, tuple(v0), tuple(omega0), h)
+        excitation.check()
+        self._init_args = (robot, base, target, controller, tuple(v0), tuple(omega0), h,
+                           excitation)
+        self.excitation = excitation
         self.pm: PlantModel = build_model(robot, base, target)
         self.data = self.pm.model.createData()
         self.controller = controller
@@ -82,6 +88,10 @@ class Plant:
         self._acc = np.zeros(self._nv)                       # dv/dt under the held controls
         self._FM = np.zeros(6)                               # thrust [F, M], inertial
         self._par = np.array([getattr(controller, k) for k in kernels.PARAMS], float)
+        # excitation: reference channels (attitude axes, then joints) and the level ramp
+        # [s0, u, t0, T] (kernels.ramp_level); level 0 until set_excitation asks for more
+        self._ex_tab = excitation.channels(1 if robot.planar else 3, self.pm.n)
+        self._ramp = np.array([0.0, 0.0, 0.0, excitation.ramp])
         self.t = 0.0
         self._x = np.concatenate([np.zeros(6), q, v])
         self._publish()
@@ -121,7 +131,7 @@ class Plant:
         """A deep copy of everything that determines the future (controls are derived)."""
         self._collect()
         return {"t": self.t, "q": self.q.copy(), "v": self.v.copy(), "J": self.J.copy(),
-                "H": self.H.copy()}
+                "H": self.H.copy(), "excite_ramp": self._ramp.copy()}
 
     def set_state(self, s: dict) -> None:
         self.t = float(s["t"])
@@ -129,13 +139,50 @@ class Plant:
         v = np.array(s["v"], float)
         J = np.array(s["J"], float)
         H = np.array(s["H"], float)
+        ramp = np.array(s.get("excite_ramp", [0.0, 0.0, 0.0, self.excitation.ramp]), float)
         if q.shape != (self._nq,) or v.shape != (self._nv,) or J.shape != (3,) or H.shape != (3,):
             raise ValueError(f"state shapes q {q.shape}, v {v.shape}, J {J.shape}, H {H.shape} "
                              f"do not fit this plant (nq = {self._nq}, nv = {self._nv})")
+        if ramp.shape != (4,) or not np.all(np.isfinite(ramp)) or not ramp[3] > 0.0:
+            raise ValueError(f"excitation ramp state must be 4 finite numbers [s0, u, t0, T > 0], "
+                             f"got {ramp}")
+        self._ramp = ramp
         self._x = np.concatenate([J, H, q, v])
         self._publish()
         self._u = None
         self._loaded = self._ctrl_x = None
+
+    # -- excitation --------------------------------------------------------------------------
+    def set_excitation(self, level: float) -> None:
+        """Ask for the excitation level ``level`` in [0, 1] from now on.
+
+        The level in effect moves there from its current value in ``excitation.ramp`` seconds
+        (:func:`.kernels.ramp_level`; no jump in the references); asking again for the level
+        already requested changes nothing. Raises ``ValueError`` for a level outside [0, 1] or
+        NaN (the plant is then unchanged).
+        """
+        level = float(level)
+        if not (0.0 <= level <= 1.0):
+            raise ValueError(f"excitation level must be in [0, 1], got {level}")
+        if level == self._ramp[1]:
+            return
+        s_now = kernels.ramp_level(self.t, self._ramp)[0]
+        self._ramp = np.array([s_now, level, self.t, self.excitation.ramp])
+        self._u = None
+        self._ctrl_x = None
+
+    def excitation_level(self) -> tuple:
+        """``(s, ds/dt, d2s/dt2)``: the excitation level in effect now and its derivatives."""
+        return kernels.ramp_level(self.t, self._ramp)
+
+    def references(self) -> dict:
+        """The excitation references now (zero when the level is 0): ``att`` (r,) base attitude
+        [rad] and ``q`` (n,) joint offsets from the home posture [rad], each with ``_d``
+        (rate) and ``_dd`` (acceleration) companions; r = 1 planar (z), 3 spatial."""
+        tab, r = self._ex_tab, 1 if self.pm.planar else 3
+        vals = np.array([kernels.reference(self.t, self._ramp, tab, c) for c in range(len(tab))])
+        return {"att": vals[:r, 0], "att_d": vals[:r, 1], "att_dd": vals[:r, 2],
+                "q": vals[r:, 0], "q_d": vals[r:, 1], "q_dd": vals[r:, 2]}
 
     # -- controls ----------------------------------------------------------------------------
     def controls(self) -> Controls:
@@ -161,7 +208,8 @@ class Plant:
             self._loaded = x
         pin.computeAllTerms(model, data, qn, vs)
         err = kernels.control(self.pm.planar, qn, vs, data.M, data.nle, data.hg.vector,
-                              self._par, self.q_home, self._gen, self._acc, self._FM)
+                              self._par, self.q_home, self.t, self._ramp, self._ex_tab,
+                              self._gen, self._acc, self._FM)
         if err:
             raise np.linalg.LinAlgError(kernels.ERRORS[err])
         self._ctrl_x = x
@@ -232,7 +280,7 @@ class Plant:
         """What the sensors measure at the current instant, plus truth momentum.
 
         Keys follow the interface contract: ``r_S, v_S, A, omega_B, a_S, alpha_B, q, qd, qdd,
-        F, M, J, H, P, L, tau``.
+        F, M, J, H, P, L, tau``, and ``excite_level`` (1,): the excitation level in effect.
         """
         u = self.controls()
         pm, q, v = self.pm, self.q, self.v
@@ -246,6 +294,7 @@ class Plant:
             "q": q[-n:].copy(), "qd": v[-n:].copy(), "qdd": u.a[-n:].copy(),
             "F": u.F.copy(), "M": u.M.copy(), "J": self.J.copy(), "H": self.H.copy(),
             "P": P, "L": L_O, "tau": u.tau.copy(),
+            "excite_level": np.array([kernels.ramp_level(self.t, self._ramp)[0]]),
         }
 
 
