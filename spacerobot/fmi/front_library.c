@@ -24,10 +24,11 @@
  *      isolated PyConfig with the recorded home and search path (environment variables ignored,
  *      no signal handlers installed), and the GIL released. Anything missing: NULL, and the
  *      host's logger says what is missing.
- *   2. pythonfmu_export.so is loaded and every fmi2 call is forwarded to it. The Python side
- *      calls spacerobot_flag_error() before raising an exception that means "this call is
- *      refused, state unchanged": the front then returns fmi2Error where pythonfmu says
- *      fmi2Fatal.
+ *   2. pythonfmu_export.so is loaded and every fmi2 call is forwarded to it (the front's
+ *      component holds pythonfmu's and a copy of the host's callbacks). The Python side calls
+ *      spacerobot_flag_error() before raising an exception that means "this call is refused,
+ *      state unchanged": the front then returns fmi2Error where pythonfmu says fmi2Fatal, and
+ *      logs pythonfmu's report of that exception as an error too.
  *   3. The front pins itself in memory and registers an exit handler after pythonfmu's static
  *      guard exists; exit handlers run in reverse order, so at exit() it releases pythonfmu's
  *      guard once (finalizePythonInterpreter) before the C++ runtime destroys it, then finalises
@@ -122,13 +123,27 @@ static __thread int error_flagged;     /* set by the Python side: the failing ca
 __attribute__((visibility("default"))) void spacerobot_flag_error(void) { error_flagged = 1; }
 
 /* ---- helpers ---------------------------------------------------------------------------- */
+/* The FMI logger's message is a printf format. Hosts that format it (fmpy, fmuCheck) and hosts
+   that print it as it is both get readable text when it has no arguments and every '%' is
+   doubled, which is what pythonfmu and the FMU's Python code do: the front does the same. */
+static void escape_percent(const char *text, char *out, size_t n) {
+    size_t k = 0;
+    for (; *text && k + 2 < n; text++) {
+        if (*text == '%') out[k++] = '%';
+        out[k++] = *text;
+    }
+    out[k] = 0;
+}
+
 static void say(const fmi2CallbackFunctions *cb, fmi2String instance, fmi2Status status,
                 const char *text) {
     static const char *category[] = {"logStatusOK", "logStatusWarning", "logStatusDiscard",
                                      "logStatusError", "logStatusFatal", "logStatusPending"};
+    char escaped[2 * MSG];
+    escape_percent(text, escaped, sizeof escaped);
     if (cb && cb->logger)
         cb->logger(cb->componentEnvironment, instance ? instance : "", status,
-                   category[(int)status], "%s", text);
+                   category[(int)status], escaped);
     else
         fprintf(stderr, "%s: %s\n", instance ? instance : "FMU", text);
 }
@@ -391,11 +406,45 @@ static int ensure_loaded(const char *resource_uri, char *err, size_t n, char *wa
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 const char *fmi2GetVersion(void) { return fmi2Version; }
 
+/* One instance: pythonfmu's component and the host's callbacks, which pythonfmu reaches through
+   log_relay (so that a refusal it reports as Fatal is logged as the Error it is returned as). */
+typedef struct {
+    fmi2Component inner;
+    fmi2CallbackFunctions host;     /* the host's callbacks, copied */
+    fmi2CallbackFunctions relay;    /* given to pythonfmu: logger = log_relay, env = this */
+} Instance;
+
+static void log_relay(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                      fmi2String category, fmi2String message, ...) {
+    const Instance *inst = (const Instance *)env;
+    char text[MSG], escaped[2 * MSG];
+    va_list args;
+    if (!inst->host.logger) return;
+    va_start(args, message);
+    vsnprintf(text, sizeof text, message ? message : "", args);
+    va_end(args);
+    if (status == fmi2Fatal && error_flagged) {
+        /* pythonfmu's report of the exception that carries a refusal: the reason was logged
+           just before by the FMU's Python code */
+        const char *where = strchr(text, '['), *end = where ? strchr(where, ']') : NULL;
+        char call[128] = "the call";
+        if (where && end && end - where < 100)
+            snprintf(call, sizeof call, "%.*s", (int)(end - where + 1), where);
+        snprintf(text, sizeof text, "%s refused with fmi2Error (reason logged above); the "
+                 "instance's state is unchanged", call);
+        status = fmi2Error;
+        category = "logStatusError";
+    }
+    escape_percent(text, escaped, sizeof escaped);
+    inst->host.logger(inst->host.componentEnvironment, name, status, category, escaped);
+}
+
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn) {
     char err[MSG] = "", warn[MSG] = "";
+    Instance *inst;
     int ok;
     pthread_mutex_lock(&load_lock);
     ok = ensure_loaded(fmuResourceLocation, err, sizeof err, warn, sizeof warn);
@@ -405,12 +454,29 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         return NULL;
     }
     if (warn[0]) say(functions, instanceName, fmi2Warning, warn);
-    return pf.Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation, functions,
-                          visible, loggingOn);
+    if (!functions || !(inst = (Instance *)calloc(1, sizeof *inst))) {
+        say(functions, instanceName, fmi2Error, functions ? "out of memory"
+                                                          : "fmi2Instantiate: functions is NULL");
+        return NULL;
+    }
+    inst->host = *functions;
+    inst->relay = *functions;
+    inst->relay.logger = log_relay;
+    inst->relay.componentEnvironment = inst;
+    error_flagged = 0;
+    inst->inner = pf.Instantiate(instanceName, fmuType, fmuGUID, fmuResourceLocation,
+                                 &inst->relay, visible, loggingOn);
+    if (!inst->inner) {
+        free(inst);
+        return NULL;
+    }
+    return inst;
 }
 
 void fmi2FreeInstance(fmi2Component c) {
-    if (loaded && c) pf.FreeInstance(c);
+    if (!loaded || !c) return;
+    pf.FreeInstance(((Instance *)c)->inner);
+    free(c);
 }
 
 /* forward a call; a refusal flagged by the Python side is fmi2Error, not pythonfmu's Fatal */
@@ -418,7 +484,9 @@ void fmi2FreeInstance(fmi2Component c) {
     fmi2Status fmi2##name params {                                                         \
         fmi2Status status_;                                                                \
         if (!loaded) return fmi2Error;                                                     \
+        if (!c) return fmi2Error;                                                          \
         error_flagged = 0;                                                                 \
+        c = ((Instance *)c)->inner;                                                        \
         status_ = pf.name args;                                                            \
         return (status_ == fmi2Fatal && error_flagged) ? fmi2Error : status_;              \
     }
