@@ -206,13 +206,6 @@ def assert_same(a: Dict[str, float], b: Dict[str, float], what: str = "") -> Non
         f"{n}: {a[n]!r} vs {b[n]!r}" for n in bad[:4])
 
 
-def c_compiler() -> Optional[str]:
-    for cc in ("cc", "gcc", "clang"):
-        if shutil.which(cc):
-            return shutil.which(cc)
-    return None
-
-
 def skip_unless(cond: bool, reason: str) -> None:
     if not cond:
         pytest.skip(reason)
