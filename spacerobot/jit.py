@@ -58,10 +58,11 @@ def cache_root() -> Path:
     return (Path(xdg) if xdg else Path.home() / ".cache") / "spacerobot"
 
 
-def cache_folder(full_name: str, code: bytes) -> Path:
-    """Folder of the module ``full_name`` with source ``code`` under :func:`cache_root`."""
+def cache_folder(full_name: str, code: bytes, root: Path | None = None) -> Path:
+    """Folder of the module ``full_name`` with source ``code`` under ``root`` (default
+    :func:`cache_root`)."""
     key = hashlib.sha256(full_name.encode() + b"\0" + code).hexdigest()[:20]
-    return cache_root() / f"{full_name.rsplit('.', 1)[-1]}-{key}"
+    return (cache_root() if root is None else root) / f"{full_name.rsplit('.', 1)[-1]}-{key}"
 
 
 def _stable_copy(full_name: str, src: Path) -> Path:

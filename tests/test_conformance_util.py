@@ -6,7 +6,6 @@ messages the FMU logged during that call.
 """
 from __future__ import annotations
 
-import shutil
 from ctypes import byref
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
