@@ -234,3 +234,31 @@ def test_c_host_gets_null_and_the_reason_when_the_python_is_missing(request, hos
     assert "fmi2Instantiate of" in r.stderr and "returned NULL" in r.stderr
     logged = [line for line in r.stderr.splitlines() if "[status 3][logStatusError]" in line]
     assert any(all(w in line for w in words) for line in logged), (case, r.stderr[-2000:])
+
+
+def test_the_record_names_this_python_and_where_the_runtime_packages_are(request):
+    """resources/python_runtime.txt: this interpreter's home and libpython, and a search path
+    that reaches numpy, numba and pinocchio (a .pth-added folder) but not the project."""
+    import numba
+    import numpy
+    import pinocchio
+
+    for kind in ("plant", "estimator"):
+        fmu = Unzipped(fmus_for(request, "planar")[kind])
+        record = (fmu.dir / "resources" / front_library.RECORD_NAME).read_text().splitlines()
+        values = {}
+        for line in record:
+            if "=" in line and not line.startswith("#"):
+                key, value = line.split("=", 1)
+                values.setdefault(key, []).append(value)
+        assert values["version"] == [f"{sys.version_info.major}.{sys.version_info.minor}"]
+        assert values["home"] == [sys.base_prefix]
+        assert Path(values["library"][0]).is_file() and "libpython" in values["library"][0]
+        paths = [Path(p) for p in values["path"]]
+        folders = [Path(numpy.__file__).parent.parent, Path(numba.__file__).parent.parent,
+                   Path(pinocchio.__file__).parent.parent, Path(os.__file__).parent]
+        for folder in folders:                   # site-packages (x3) and the standard library
+            assert folder.resolve() in [p.resolve() for p in paths], folder
+        project = Path(__file__).resolve().parents[1]
+        assert all(p.resolve() != project for p in paths)
+        assert (fmu.dir / "binaries" / "linux64" / front_library.PYTHONFMU_NAME).is_file()
