@@ -262,3 +262,34 @@ def test_the_record_names_this_python_and_where_the_runtime_packages_are(request
         project = Path(__file__).resolve().parents[1]
         assert all(p.resolve() != project for p in paths)
         assert (fmu.dir / "binaries" / "linux64" / front_library.PYTHONFMU_NAME).is_file()
+
+
+def test_without_a_c_compiler_the_build_warns_and_keeps_pythonfmus_binary(monkeypatch, tmp_path):
+    """The documented fallback: a RuntimeWarning, pythonfmu's stock binary, no record; the FMU
+    still runs in a Python host, where refusals are fmi2Fatal (the stock binary's only error)."""
+    import zipfile
+
+    import pythonfmu
+    from fmpy.fmi1 import FMICallException
+
+    from spacerobot.fmi.build import build_fmu
+    from spacerobot.robots import scenario
+
+    monkeypatch.setattr(front_library, "c_compiler", lambda: None)
+    monkeypatch.setattr(front_library, "front_binary",
+                        lambda: front_library.compile_front(tmp_path / "front.so"))
+    with pytest.warns(RuntimeWarning, match="keeping pythonfmu's stock binary.*no C compiler"):
+        fmu = build_fmu("estimator", scenario("planar"), tmp_path / "stock")
+    stock = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
+             / "libpythonfmu-export.so").read_bytes()
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("binaries/linux64/SpaceRobotEstimator.so") == stock
+        assert f"resources/{front_library.RECORD_NAME}" not in z.namelist()
+    inst = Inst(fmu, "stock")
+    inst.fmu.setupExperiment(startTime=0.0)
+    inst.fmu.enterInitializationMode()
+    inst.set("lambda", 0.0)
+    with pytest.raises(FMICallException) as exc:
+        inst.fmu.exitInitializationMode()
+    assert exc.value.status == 4
+    assert any("lambda" in m for _, _, m in inst.messages)
