@@ -1,7 +1,7 @@
 """Workarounds for pythonfmu 0.7.0 on the Python side of the FMUs; delete them with the bugs.
 
-- :func:`survive_fatal`: pythonfmu's C++ layer releases one reference too many on every
-  exception; the wrapper balances it.
+- :func:`survive_fatal` (:func:`guard_entry_points`): pythonfmu's C++ layer releases one
+  reference too many on every exception; the wrapper balances it.
 - :func:`binary_hooks` / :class:`BinaryHooks`: pythonfmu maps every exception to ``fmi2Fatal``.
   The project's front library (``front_library.c``, the FMU's binary) returns ``fmi2Error``
   instead when the Python side flags the exception as a refusal that left the state unchanged.
@@ -15,6 +15,12 @@ import functools
 import os
 import sys
 from typing import Callable, Dict, Optional, Tuple, Type
+
+#: methods the pythonfmu C++ layer calls on the slave instance
+ENTRY_POINTS = ("setup_experiment", "enter_initialization_mode", "exit_initialization_mode",
+                "do_step", "terminate", "set_real", "set_integer", "set_boolean", "set_string",
+                "get_real", "get_integer", "get_boolean", "get_string", "_get_fmu_state",
+                "_set_fmu_state")
 
 _Py_IncRef = ctypes.pythonapi.Py_IncRef
 _Py_IncRef.argtypes = [ctypes.py_object]
@@ -109,3 +115,10 @@ def survive_fatal(slave, method, hooks: BinaryHooks,
                 hooks.flag_error()
             raise
     return guarded
+
+
+def guard_entry_points(slave, hooks: BinaryHooks,
+                       refusals: Tuple[Type[BaseException], ...] = ()) -> None:
+    """Wrap every :data:`ENTRY_POINTS` method of ``slave`` with :func:`survive_fatal`."""
+    for name in ENTRY_POINTS:
+        setattr(slave, name, survive_fatal(slave, getattr(slave, name), hooks, refusals))

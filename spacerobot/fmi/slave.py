@@ -23,7 +23,7 @@ from xml.etree.ElementTree import Element, SubElement
 from .. import jit
 from ..interface import UNITS, Var
 from ..robots import INERTIA_NAMES, RigidBody, scenario_from_dict
-from .pythonfmu_compat import binary_hooks, survive_fatal
+from .pythonfmu_compat import binary_hooks, guard_entry_points
 
 CONFIG_FILE = "spacerobot_config.json"
 
@@ -31,13 +31,6 @@ CONFIG_FILE = "spacerobot_config.json"
 def _escape(msg: str) -> str:
     """FMI loggers treat the message as a printf format: escape '%'."""
     return msg.replace("%", "%%")
-
-
-#: methods the pythonfmu C++ layer calls on the slave instance
-_ENTRY_POINTS = ("setup_experiment", "enter_initialization_mode", "exit_initialization_mode",
-                 "do_step", "terminate", "set_real", "set_integer", "set_boolean", "set_string",
-                 "get_real", "get_integer", "get_boolean", "get_string", "_get_fmu_state",
-                 "_set_fmu_state")
 
 
 class FmiError(ValueError):
@@ -85,8 +78,7 @@ class InterfaceSlave(Fmi2Slave):
         self._outputs: Dict[str, float] = {}
         self.phase = "instantiated"
         self._dirty = True          # parameters changed since the outputs were computed
-        for name in _ENTRY_POINTS:
-            setattr(self, name, survive_fatal(self, getattr(self, name), self._hooks, (FmiError,)))
+        guard_entry_points(self, self._hooks, (FmiError,))
         for var in variables:
             cls = Real if var.type == "Real" else Integer
             kw = dict(causality=getattr(Fmi2Causality, var.causality),
