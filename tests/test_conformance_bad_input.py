@@ -2,7 +2,8 @@
 
 One table (CATALOGUE) of bad inputs, each with the FMI status it must get, the message the FMU
 must log, and what must survive. pythonfmu 0.7.0 can only return OK, Discard (do_step returns
-False) and Fatal (any Python exception), so (docs/fmus.md, "Status mapping"):
+False) and Fatal (any Python exception); the FMUs' front library returns Error for the exceptions
+the Python side marks as refusals (docs/fmus.md, "Status mapping"), so:
 
 - estimator samples that are non-finite, not a rotation, or so large that the update would
   overflow: OK, a logged warning, ``diag.status`` 3/4, ``diag.rejected`` + 1, every other output
@@ -10,13 +11,14 @@ False) and Fatal (any Python exception), so (docs/fmus.md, "Status mapping"):
   sample (an independent computation with spacerobot.estimator.Identifier);
 - invalid parameters (masses <= 0, inertias not positive definite or violating the triangle
   inequality, non-finite values, h, bounds, lambda, covariances, unknown method/solver/
-  accel_source): Fatal at fmi2ExitInitializationMode with a logged error naming the parameter;
+  accel_source): Error at fmi2ExitInitializationMode with a logged error naming the parameter;
   the instance can be freed and a new instance in the same process runs normally;
 - communication steps that are zero, negative, non-finite or (plant) longer than 100 s, and
   non-finite communication points: Discard with a message, every output unchanged, and the run
   continues exactly as a run that never saw the call;
-- calls out of lifecycle order: Discard (doStep) or Fatal (the others) with a message, state
-  unchanged.
+- calls out of lifecycle order, setting an output, a wrong type or an unknown value reference:
+  Discard (doStep) or Error (the others) with a message, state unchanged; nothing is logged
+  with status Fatal.
 """
 from __future__ import annotations
 
@@ -83,46 +85,46 @@ CATALOGUE = [
     Bad("overflowing-velocity", "estimator", "sample", ("base.v[1]", 1e200), OK,
         r"sample skipped .*\[input base\.v\[1\]\].*beyond the physical range", WARNING, diag=3),
     # -- parameters, refused at fmi2ExitInitializationMode ------------------------------------
-    Bad("negative-base-mass", "plant", "param", {"base.m": -1.0}, FATAL,
+    Bad("negative-base-mass", "plant", "param", {"base.m": -1.0}, ERROR,
         r"base\.m must be > 0 kg, got -1", ERROR),
-    Bad("zero-target-mass", "plant", "param", {"target.m": 0.0}, FATAL,
+    Bad("zero-target-mass", "plant", "param", {"target.m": 0.0}, ERROR,
         r"target\.m must be > 0 kg, got 0", ERROR),
-    Bad("inertia-not-positive-definite", "plant", "param", {"base.Ixx": -1.0}, FATAL,
+    Bad("inertia-not-positive-definite", "plant", "param", {"base.Ixx": -1.0}, ERROR,
         r"base inertia must be positive definite", ERROR),
-    Bad("inertia-product-too-large", "plant", "param", {"target.Ixy": 1e3}, FATAL,
+    Bad("inertia-product-too-large", "plant", "param", {"target.Ixy": 1e3}, ERROR,
         r"target inertia must be positive definite", ERROR),
     Bad("inertia-triangle-inequality", "plant", "param",
-        {"target.Ixx": 10.0, "target.Iyy": 1.0, "target.Izz": 1.0}, FATAL,
+        {"target.Ixx": 10.0, "target.Iyy": 1.0, "target.Izz": 1.0}, ERROR,
         r"target inertia violates the triangle inequality", ERROR),
-    Bad("nan-com", "plant", "param", {"base.b[1]": NAN}, FATAL,
+    Bad("nan-com", "plant", "param", {"base.b[1]": NAN}, ERROR,
         r"non-finite parameter value\(s\): base\.b\[1\] = nan", ERROR),
-    Bad("zero-internal-step", "plant", "param", {"h": 0.0}, FATAL, r"h must be in \(0, 1\] s", ERROR),
-    Bad("long-internal-step", "plant", "param", {"h": 2.0}, FATAL, r"h must be in \(0, 1\] s", ERROR),
-    Bad("negative-force-bound", "plant", "param", {"F_max": -1.0}, FATAL, r"F_max must be >= 0", ERROR),
-    Bad("zero-guess-mass", "estimator", "param", {"guess.base.m": 0.0}, FATAL,
+    Bad("zero-internal-step", "plant", "param", {"h": 0.0}, ERROR, r"h must be in \(0, 1\] s", ERROR),
+    Bad("long-internal-step", "plant", "param", {"h": 2.0}, ERROR, r"h must be in \(0, 1\] s", ERROR),
+    Bad("negative-force-bound", "plant", "param", {"F_max": -1.0}, ERROR, r"F_max must be >= 0", ERROR),
+    Bad("zero-guess-mass", "estimator", "param", {"guess.base.m": 0.0}, ERROR,
         r"guess\.base\.m must be > 0 kg", ERROR),
-    Bad("negative-guess-mass", "estimator", "param", {"guess.target.m": -5.0}, FATAL,
+    Bad("negative-guess-mass", "estimator", "param", {"guess.target.m": -5.0}, ERROR,
         r"guess\.target\.m must be > 0 kg", ERROR),
     Bad("guess-inertia-triangle", "estimator", "param",
-        {"guess.target.Ixx": 30.0, "guess.target.Iyy": 10.0, "guess.target.Izz": 10.0}, FATAL,
+        {"guess.target.Ixx": 30.0, "guess.target.Iyy": 10.0, "guess.target.Izz": 10.0}, ERROR,
         r"guess\.target inertia violates the triangle inequality", ERROR),
-    Bad("infinite-guess-inertia", "estimator", "param", {"guess.target.Izz": INF}, FATAL,
+    Bad("infinite-guess-inertia", "estimator", "param", {"guess.target.Izz": INF}, ERROR,
         r"non-finite parameter value\(s\): guess\.target\.Izz = inf", ERROR),
-    Bad("zero-forgetting-factor", "estimator", "param", {"lambda": 0.0}, FATAL,
+    Bad("zero-forgetting-factor", "estimator", "param", {"lambda": 0.0}, ERROR,
         r"lambda must satisfy 0 < lambda <= 1, got 0", ERROR),
-    Bad("forgetting-factor-above-one", "estimator", "param", {"lambda": 1.5}, FATAL,
+    Bad("forgetting-factor-above-one", "estimator", "param", {"lambda": 1.5}, ERROR,
         r"lambda must satisfy 0 < lambda <= 1, got 1.5", ERROR),
-    Bad("negative-covariance", "estimator", "param", {"P0_mu": -1.0}, FATAL,
+    Bad("negative-covariance", "estimator", "param", {"P0_mu": -1.0}, ERROR,
         r"P0_mu must be a finite covariance > 0", ERROR),
-    Bad("nan-covariance", "estimator", "param", {"P0_theta": NAN}, FATAL,
+    Bad("nan-covariance", "estimator", "param", {"P0_theta": NAN}, ERROR,
         r"non-finite parameter value\(s\): P0_theta = nan", ERROR),
-    Bad("unknown-method", "estimator", "param", {"method": 3}, FATAL,
+    Bad("unknown-method", "estimator", "param", {"method": 3}, ERROR,
         r"method = 3 is not one of 1 \(momentum\), 2 \(force\)", ERROR),
-    Bad("unknown-method-zero", "estimator", "param", {"method": 0}, FATAL,
+    Bad("unknown-method-zero", "estimator", "param", {"method": 0}, ERROR,
         r"method = 0 is not one of", ERROR),
-    Bad("unknown-solver", "estimator", "param", {"solver": 7}, FATAL,
+    Bad("unknown-solver", "estimator", "param", {"solver": 7}, ERROR,
         r"solver = 7 is not one of 1 \(paper\), 2 \(joint\)", ERROR),
-    Bad("unknown-accel-source", "estimator", "param", {"accel_source": -1}, FATAL,
+    Bad("unknown-accel-source", "estimator", "param", {"accel_source": -1}, ERROR,
         r"accel_source = -1 is not one of 1 \(measured\), 2 \(differenced\)", ERROR),
     # -- communication steps ------------------------------------------------------------------
     *[Bad(f"{kind}-step-{label}", kind, "step", (0.0, dt), DISCARD,
@@ -150,18 +152,18 @@ CATALOGUE = [
     *[Bad(f"{kind}-doStep-in-initialisation-mode", kind, "order", _order_in_init_mode, DISCARD,
           r"doStep called in phase 'initialization'")
       for kind in ("plant", "estimator")],
-    *[Bad(f"{kind}-exit-without-enter", kind, "order", _order_exit_without_enter, FATAL,
+    *[Bad(f"{kind}-exit-without-enter", kind, "order", _order_exit_without_enter, ERROR,
           r"fmi2ExitInitializationMode called in phase 'instantiated'; call "
           r"fmi2EnterInitializationMode first", ERROR)
       for kind in ("plant", "estimator")],
     *[Bad(f"{kind}-{what}", kind, "running", what, status, msg, log)
       for kind in ("plant", "estimator")
       for what, status, msg, log in (
-          ("enter-initialisation-while-stepping", FATAL,
+          ("enter-initialisation-while-stepping", ERROR,
            r"fmi2EnterInitializationMode called in phase 'stepping'; it is only allowed once", ERROR),
-          ("set-an-output", FATAL, r"is an output and cannot be set", ERROR),
-          ("setInteger-on-a-Real", FATAL, r"is not of type Integer", None),
-          ("unknown-value-reference", FATAL, r"getReal.*99999", None),
+          ("set-an-output", ERROR, r"is an output and cannot be set", ERROR),
+          ("setInteger-on-a-Real", ERROR, r"fmi2SetInteger: .* is not of type Integer", ERROR),
+          ("unknown-value-reference", ERROR, r"fmi2GetReal: unknown value reference 99999", ERROR),
           ("doStep-after-terminate", DISCARD, r"doStep called in phase 'terminated'", None))],
 ]
 
@@ -335,6 +337,7 @@ def _check(bad, status, msgs):
     names = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
     assert status == bad.status, f"status {names.get(status)} (expected {names[bad.status]}); {msgs}"
     assert _matching(msgs, bad.message, bad.log_status), (bad.message, msgs)
+    assert all(st < FATAL for st, _, _ in msgs), f"a message logged as Fatal: {msgs}"
 
 
 def test_catalogue_covers_every_category():

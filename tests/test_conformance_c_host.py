@@ -1,44 +1,42 @@
-"""Interface conformance (issue #5), part 5: a host that is not Python.
+"""Interface conformance (issue #5, #13), part 5: a host that is not Python.
 
 tests/c_host/fmu_host.c is compiled here with the system C compiler against fmpy's bundled FMI
-2.0 headers. It dlopen()s the FMU binaries and drives them through the FMI C API, in the
-environment docs/fmus.md documents for pythonfmu FMUs in non-Python hosts:
+2.0 headers. It dlopen()s the FMU binaries (the project's front library, docs/fmus.md) and
+drives them through the FMI C API only, started with an EMPTY environment (only PATH: no
+LD_PRELOAD, PYTHONHOME, PYTHONPATH, not even HOME):
 
-    LD_PRELOAD=<LIBDIR>/<LDLIBRARY>   (the shared libpython the FMU's Python code needs)
-    PYTHONHOME=<sys.base_prefix>
-    PYTHONPATH=<the entries of this interpreter's sys.path> (numpy, pinocchio, ...)
+- the plant alone for 20 steps after 20 instantiate/free cycles: every output equals fmpy's run
+  of the same FMU to 1e-12, and a state serialised in C, restored and re-run gives bit-identical
+  values; exit status 0;
+- plant and estimator wired in C (two FMUs in one process; both robots): the estimates equal
+  fmpy's wired run to 1e-12;
+- exit status 0 whether the host frees its instances, also dlcloses the libraries, or neither;
+  the same with two FMUs of each robot (four FMUs) in one process;
+- a missing or broken record of the Python installation: fmi2Instantiate returns NULL and the
+  host's logger gets the reason.
 
-- the plant alone for 20 steps: every output equals fmpy's run of the same FMU to 1e-12, and a
-  state serialised in C, restored and re-run gives bit-identical values;
-- plant and estimator wired in C: the estimates equal fmpy's wired run to 1e-12;
-- without LD_PRELOAD the binary cannot even be loaded (the requirement is real).
-
-Skipped, with the reason, when there is no C compiler, no shared libpython or no FMI headers.
+Skipped, with the reason, when the FMUs were built without the front library (no C compiler or
+no shared libpython at build time).
 """
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
-import sysconfig
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
-from test_conformance_util import DT, OK, ROBOTS, Inst, c_compiler, fmus_for
+from test_conformance_util import DT, OK, ROBOTS, Inst, fmus_for
+
+from spacerobot.fmi import front_library
+from spacerobot.fmi.front_library import c_compiler
 
 SOURCE = Path(__file__).parent / "c_host" / "fmu_host.c"
 N = 20
-
-
-def libpython() -> Path | None:
-    cfg = sysconfig.get_config_vars()
-    if not cfg.get("Py_ENABLE_SHARED"):
-        return None
-    path = Path(cfg.get("LIBDIR") or "", cfg.get("LDLIBRARY") or "")
-    return path if path.is_file() and path.suffix.startswith(".so") else None
 
 
 def fmi_headers() -> Path | None:
@@ -48,27 +46,20 @@ def fmi_headers() -> Path | None:
     return d if (d / "fmi2Functions.h").is_file() else None
 
 
-def host_environment(preload: bool = True) -> dict:
-    env = dict(os.environ)
-    if preload:
-        env["LD_PRELOAD"] = str(libpython())
-    else:
-        env.pop("LD_PRELOAD", None)
-    env["PYTHONHOME"] = sys.base_prefix
-    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p and os.path.isdir(p))
-    return env
+def host_environment() -> dict:
+    """Empty but for PATH: what a tool started from a desktop or a scheduler may see."""
+    return {"PATH": os.environ.get("PATH", "/usr/bin:/bin")}
 
 
 @pytest.fixture(scope="module")
 def host(tmp_path_factory) -> Path:
     if sys.platform != "linux":
         pytest.skip("the C host test is written for Linux (dlopen, binaries/linux64)")
+    try:
+        front_library.front_binary()
+    except front_library.FrontLibraryUnavailable as e:
+        pytest.skip(f"the FMUs carry pythonfmu's stock binary here: {e}")
     cc = c_compiler()
-    if cc is None:
-        pytest.skip("no C compiler (cc, gcc or clang) on PATH")
-    if libpython() is None:
-        pytest.skip("this Python has no shared libpython (Py_ENABLE_SHARED = 0): a non-Python "
-                    "host cannot load a pythonfmu FMU with it")
     if fmi_headers() is None:
         pytest.skip("fmpy's FMI 2.0 headers (fmpy/c-code/fmi2Functions.h) not found")
     exe = tmp_path_factory.mktemp("c_host") / "fmu_host"
@@ -92,9 +83,9 @@ class Unzipped:
                       if v.causality == "output" and v.type == "Real"]
 
 
-def run_host(host: Path, args, preload=True) -> subprocess.CompletedProcess:
+def run_host(host: Path, args) -> subprocess.CompletedProcess:
     return subprocess.run([str(host), *map(str, args)], capture_output=True, text=True,
-                          env=host_environment(preload), timeout=300)
+                          env=host_environment(), timeout=600)
 
 
 def parse(stdout: str) -> np.ndarray:
@@ -105,9 +96,10 @@ def parse(stdout: str) -> np.ndarray:
 def test_c_host_runs_the_plant_like_fmpy(request, host, robot):
     fmus = fmus_for(request, robot)
     plant = Unzipped(fmus["plant"])
-    r = run_host(host, ["-s", N // 2, plant.so, plant.md.guid, plant.uri, DT, N,
+    r = run_host(host, ["-c", 20, "-s", N // 2, plant.so, plant.md.guid, plant.uri, DT, N,
                         ",".join(str(plant.vr[n]) for n in plant.reals)])
     assert r.returncode == 0, r.stderr[-3000:]
+    assert "20 instantiate/free cycles done" in r.stderr
     assert "state round trip after step 10" in r.stderr and "identical" in r.stderr
     c_rows = parse(r.stdout)
     assert c_rows.shape == (N + 1, 1 + len(plant.reals))
@@ -153,7 +145,151 @@ def test_c_host_wires_plant_and_estimator_like_fmpy(request, host, robot):
     assert np.abs(py_est[-1] - py_est[0]).max() > 1.0     # the estimates did move
 
 
-def test_c_host_needs_libpython_preloaded(request, host):
+def wired_args(plant: Unzipped, est: Unzipped, n: int = N) -> list:
+    inputs = [v.name for v in est.md.modelVariables if v.causality == "input"]
+    return ["-e", est.so, "-g", est.md.guid, "-r", est.uri,
+            "-w", ",".join(f"{plant.vr[k]}:{est.vr[k]}" for k in inputs),
+            "-o", str(est.vr["target.m"]), plant.so, plant.md.guid, plant.uri, DT, n,
+            plant.vr["base.r[1]"]]
+
+
+@pytest.mark.parametrize("mode", ["free", "dlclose", "none"])
+def test_c_host_exits_cleanly_however_it_ends(request, host, mode):
+    """No crash at exit (pythonfmu 0.7.0 alone aborts with a double free, exit status 134)
+    whether the host frees its instances, also unloads the libraries, or does neither."""
     plant = Unzipped(fmus_for(request, "planar")["plant"])
-    r = run_host(host, [plant.so, plant.md.guid, plant.uri, DT, 1, 0], preload=False)
-    assert r.returncode == 2 and "undefined symbol" in r.stderr, r.stderr[-2000:]
+    est = Unzipped(fmus_for(request, "planar")["estimator"])
+    r = run_host(host, ["-x", mode, "-c", 2, *wired_args(plant, est, 3)])
+    assert r.returncode == 0, (r.returncode, r.stderr[-3000:])
+    assert len(r.stdout.strip().splitlines()) == 4
+
+
+def test_c_host_runs_four_fmus_in_one_process(request, host, tmp_path):
+    """Both robots' plant + estimator in one process: the spatial pair loaded after the planar
+    one, same results as when each pair runs alone."""
+    pairs = {robot: (Unzipped(fmus_for(request, robot)["plant"]),
+                     Unzipped(fmus_for(request, robot)["estimator"])) for robot in ROBOTS}
+    src = tmp_path / "four.c"
+    # the host's main, run twice in one process: once per robot (a second copy of main's
+    # state would be a second host; here the same libraries stay loaded in between)
+    code = SOURCE.read_text().replace("int main(int argc, char **argv)",
+                                      "static int host_main(int argc, char **argv)")
+    code += """
+int main(int argc, char **argv) {
+    int split = 1, rc;
+    while (split < argc && strcmp(argv[split], "--") != 0) split++;
+    rc = host_main(split, argv);
+    if (rc) return rc;
+    argv[split] = argv[0];
+    optind = 1;
+    return host_main(argc - split, argv + split);
+}
+"""
+    src.write_text(code)
+    exe = tmp_path / "four"
+    r = subprocess.run([c_compiler(), "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-O1",
+                        f"-I{fmi_headers()}", "-o", str(exe), str(src), "-ldl"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    both = run_host(exe, [*wired_args(*pairs["planar"]), "--", *wired_args(*pairs["spatial"])])
+    assert both.returncode == 0, both.stderr[-3000:]
+    alone = {robot: run_host(host, wired_args(*pairs[robot])) for robot in ROBOTS}
+    assert all(a.returncode == 0 for a in alone.values())
+    assert both.stdout == alone["planar"].stdout + alone["spatial"].stdout
+
+
+def broken_copy(unzipped: Unzipped, tmp_path: Path, edit) -> Unzipped:
+    """A copy of an extracted FMU whose record resources/python_runtime.txt is changed by
+    ``edit(text) -> text | None`` (None: the record is deleted)."""
+    dst = tmp_path / "fmu"
+    shutil.copytree(unzipped.dir, dst)
+    copy = Unzipped.__new__(Unzipped)
+    copy.__dict__.update(unzipped.__dict__)
+    copy.dir, copy.so = dst, dst / unzipped.so.relative_to(unzipped.dir)
+    copy.uri = (dst / "resources").as_uri()
+    record = dst / "resources" / front_library.RECORD_NAME
+    text = edit(record.read_text())
+    if text is None:
+        record.unlink()
+    else:
+        record.write_text(text)
+    return copy
+
+
+@pytest.mark.parametrize("case,edit,words", [
+    ("missing record", lambda t: None, ["python_runtime.txt", "cannot be read"]),
+    ("incomplete record", lambda t: "version=3.11\n", ["is incomplete"]),
+    ("Python home gone", lambda t: t.replace("home=", "home=/nonexistent"),
+     ["home /nonexistent", "does not exist"]),
+    ("libpython gone", lambda t: t.replace("library=", "library=/nonexistent"),
+     ["Python library", "/nonexistent", "cannot be loaded"]),
+    ("package folder gone", lambda t: t.replace("path=", "path=/nonexistent", 1),
+     ["search path", "/nonexistent", "does not exist"]),
+])
+def test_c_host_gets_null_and_the_reason_when_the_python_is_missing(request, host, tmp_path,
+                                                                     case, edit, words):
+    plant = broken_copy(Unzipped(fmus_for(request, "planar")["plant"]), tmp_path, edit)
+    r = run_host(host, [plant.so, plant.md.guid, plant.uri, DT, 1, 0])
+    assert r.returncode == 4, (case, r.returncode, r.stderr[-2000:])
+    assert "fmi2Instantiate of" in r.stderr and "returned NULL" in r.stderr
+    logged = [line for line in r.stderr.splitlines() if "[status 3][logStatusError]" in line]
+    assert any(all(w in line for w in words) for line in logged), (case, r.stderr[-2000:])
+
+
+def test_the_record_names_this_python_and_where_the_runtime_packages_are(request):
+    """resources/python_runtime.txt: this interpreter's home and libpython, and a search path
+    that reaches numpy, numba and pinocchio (a .pth-added folder) but not the project."""
+    import numba
+    import numpy
+    import pinocchio
+
+    for kind in ("plant", "estimator"):
+        fmu = Unzipped(fmus_for(request, "planar")[kind])
+        record = (fmu.dir / "resources" / front_library.RECORD_NAME).read_text().splitlines()
+        values = {}
+        for line in record:
+            if "=" in line and not line.startswith("#"):
+                key, value = line.split("=", 1)
+                values.setdefault(key, []).append(value)
+        assert values["version"] == [f"{sys.version_info.major}.{sys.version_info.minor}"]
+        assert values["home"] == [sys.base_prefix]
+        assert Path(values["library"][0]).is_file() and "libpython" in values["library"][0]
+        paths = [Path(p) for p in values["path"]]
+        folders = [Path(numpy.__file__).parent.parent, Path(numba.__file__).parent.parent,
+                   Path(pinocchio.__file__).parent.parent, Path(os.__file__).parent]
+        for folder in folders:                   # site-packages (x3) and the standard library
+            assert folder.resolve() in [p.resolve() for p in paths], folder
+        project = Path(__file__).resolve().parents[1]
+        assert all(p.resolve() != project for p in paths)
+        assert (fmu.dir / "binaries" / "linux64" / front_library.PYTHONFMU_NAME).is_file()
+
+
+def test_without_a_c_compiler_the_build_warns_and_keeps_pythonfmus_binary(monkeypatch, tmp_path):
+    """The documented fallback: a RuntimeWarning, pythonfmu's stock binary, no record; the FMU
+    still runs in a Python host, where refusals are fmi2Fatal (the stock binary's only error)."""
+    import zipfile
+
+    import pythonfmu
+    from fmpy.fmi1 import FMICallException
+
+    from spacerobot.fmi.build import build_fmu
+    from spacerobot.robots import scenario
+
+    monkeypatch.setattr(front_library, "c_compiler", lambda: None)
+    monkeypatch.setattr(front_library, "front_binary",
+                        lambda: front_library.compile_front(tmp_path / "front.so"))
+    with pytest.warns(RuntimeWarning, match="keeping pythonfmu's stock binary.*no C compiler"):
+        fmu = build_fmu("estimator", scenario("planar"), tmp_path / "stock")
+    stock = (Path(pythonfmu.__file__).parent / "resources" / "binaries" / "linux64"
+             / "libpythonfmu-export.so").read_bytes()
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("binaries/linux64/SpaceRobotEstimator.so") == stock
+        assert f"resources/{front_library.RECORD_NAME}" not in z.namelist()
+    inst = Inst(fmu, "stock")
+    inst.fmu.setupExperiment(startTime=0.0)
+    inst.fmu.enterInitializationMode()
+    inst.set("lambda", 0.0)
+    with pytest.raises(FMICallException) as exc:
+        inst.fmu.exitInitializationMode()
+    assert exc.value.status == 4
+    assert any("lambda" in m for _, _, m in inst.messages)

@@ -11,7 +11,7 @@
   0.05 + 0.15 s equal 0.1 + 0.1 s exactly (both are whole numbers of RK4 steps); steps that are
   not multiples of h are deterministic and within 1e-5 of the regular run; the estimator's
   estimates depend on the samples, not on the step sizes (momentum, force-measured, joint);
-- a fixed parameter set after initialisation is refused (fmi2Fatal per the documented mapping,
+- a fixed parameter set after initialisation is refused (fmi2Error per the documented mapping,
   with a logged message naming the parameter), the value, the outputs and the continuation are
   unchanged.
 """
@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
-from test_conformance_util import (DT, FATAL, OK, ROBOTS, Inst, as_array, assert_same, feed,
+from test_conformance_util import (DT, ERROR, OK, ROBOTS, Inst, as_array, assert_same, feed,
                                    fmus_for, plant_samples)
 
 N = 10          # communication steps of 0.1 s per run (1 s simulated)
@@ -245,7 +245,7 @@ def test_fixed_parameter_after_initialisation_is_refused(robot_fmus, kind, name,
     advance(0, N // 2)
     before_value, before = inst.get(name), inst.outputs()
     status, msgs = inst.call(inst.set, name, value)
-    assert status == FATAL
+    assert status == ERROR
     assert any(name in m and "fixed parameter" in m and "cannot be changed" in m
                for _, _, m in msgs), msgs
     assert inst.get(name) == before_value

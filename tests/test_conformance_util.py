@@ -6,7 +6,6 @@ during that call.
 """
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 from typing import Dict, List, Optional
 
@@ -151,13 +150,6 @@ def assert_same(a: Dict[str, float], b: Dict[str, float], what: str = "") -> Non
     bad = [n for n, s in zip(a, same) if not s]
     assert not bad, f"{what}: differ in {bad[:8]}: " + ", ".join(
         f"{n}: {a[n]!r} vs {b[n]!r}" for n in bad[:4])
-
-
-def c_compiler() -> Optional[str]:
-    for cc in ("cc", "gcc", "clang"):
-        if shutil.which(cc):
-            return shutil.which(cc)
-    return None
 
 
 def skip_unless(cond: bool, reason: str) -> None:

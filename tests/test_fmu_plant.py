@@ -4,7 +4,7 @@ parameters and bad steps.
 * Every output of the FMU equals the core ``Plant`` run with the same (non-default)
   parameters; names are parsed here, independently of ``spacerobot.interface``.
 * A communication step that is not a multiple of h ends with one shorter internal step.
-* Each invalid parameter makes fmi2ExitInitializationMode fail (fmi2Fatal) with a readable
+* Each invalid parameter makes fmi2ExitInitializationMode fail (fmi2Error) with a readable
   message naming the parameter; the instance can be freed and a fresh one runs.
 * A bad communication step is discarded with the state unchanged.
 * Excitation (issue #12): ``ident.excite`` reaches the core (the FMU equals the core with the
@@ -133,7 +133,7 @@ def test_partial_step_through_fmu(planar_fmus):
 
 
 # ------------------------------------------------------------------------------------------------
-# invalid parameters -> fmi2Fatal at exitInitializationMode with a readable message
+# invalid parameters -> fmi2Error at exitInitializationMode with a readable message
 # ------------------------------------------------------------------------------------------------
 
 BAD_PARAMETERS = [

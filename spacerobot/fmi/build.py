@@ -5,6 +5,10 @@ of this library it needs, renamed to a package unique to that FMU (``_spacerobot
 ``_spacerobot_estimator``) so that both can run in one Python process. The estimator bundle
 has no plant code and no Pinocchio. The scenario (robot description and defaults) goes into
 ``resources/spacerobot_config.json``.
+
+pythonfmu's Linux binary is then replaced by the project's front library
+(:mod:`.front_library`), so that any FMI host loads the FMU with no set-up and exits cleanly;
+without a C compiler (or a shared libpython) the stock binary stays, with a warning.
 """
 from __future__ import annotations
 
@@ -16,6 +20,7 @@ import tempfile
 from pathlib import Path
 
 from ..robots import Scenario, scenario_to_dict
+from . import front_library
 
 LIB = Path(__file__).resolve().parents[1]          # the spacerobot package
 ROOT = LIB.parent                                   # repository / install root
@@ -50,8 +55,8 @@ def build_fmu(kind: str, sc: Scenario, out_dir: str | Path) -> Path:
         for item in BUNDLES[kind]:
             src = LIB / item
             if src.is_dir():
-                shutil.copytree(src, pkg / item, ignore=shutil.ignore_patterns("__pycache__",
-                                                                              "build.py"))
+                shutil.copytree(src, pkg / item, ignore=shutil.ignore_patterns(
+                    "__pycache__", "build.py", "front_library.*"))
             else:
                 shutil.copy2(src, pkg / item)
         config = stage / "spacerobot_config.json"
@@ -73,4 +78,6 @@ def build_fmu(kind: str, sc: Scenario, out_dir: str | Path) -> Path:
             for mod in [m for m in sys.modules if m.startswith(f"_spacerobot_{kind}")
                         or m == script.stem]:
                 del sys.modules[mod]
-    return Path(fmu)
+    fmu = Path(fmu)
+    front_library.install(fmu, fmu.stem)
+    return fmu

@@ -2,28 +2,28 @@
 InitialUnknowns in the model description, lifecycle checks, full state get/set/serialise.
 
 pythonfmu 0.7.0 maps any Python exception to ``fmi2Fatal`` and ``do_step() -> False`` to
-``fmi2Discard``; it has no way to return ``fmi2Error``. So: invalid parameters and calls out of
-lifecycle order raise (``fmi2Fatal``, message logged first); a step that cannot be completed
-returns Discard with the state as before the step.
+``fmi2Discard``. Invalid parameters, calls out of lifecycle order and invalid value references
+raise :class:`FmiError` after logging their message; the FMU's front library turns those into
+``fmi2Error`` (:mod:`.pythonfmu_compat`). A step that cannot be completed returns Discard with
+the state as before the step.
 """
 from __future__ import annotations
 
 import copy
-import ctypes
-import functools
 import json
 import math
 import os
 import pickle
-import sys
 from typing import Dict, List
 
-from pythonfmu import Fmi2Slave, Integer, Real
+from pythonfmu import Boolean, Fmi2Slave, Integer, Real, String
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from xml.etree.ElementTree import Element, SubElement
 
+from .. import jit
 from ..interface import UNITS, Var
 from ..robots import INERTIA_NAMES, RigidBody, scenario_from_dict
+from .pythonfmu_compat import binary_hooks, guard_entry_points
 
 CONFIG_FILE = "spacerobot_config.json"
 
@@ -33,71 +33,9 @@ def _escape(msg: str) -> str:
     return msg.replace("%", "%%")
 
 
-#: methods the pythonfmu C++ layer calls on the slave instance
-_ENTRY_POINTS = ("setup_experiment", "enter_initialization_mode", "exit_initialization_mode",
-                 "do_step", "terminate", "set_real", "set_integer", "set_boolean", "set_string",
-                 "get_real", "get_integer", "get_boolean", "get_string", "_get_fmu_state",
-                 "_set_fmu_state")
-_Py_IncRef = ctypes.pythonapi.Py_IncRef
-_Py_IncRef.argtypes = [ctypes.py_object]
-_Py_IncRef.restype = None
-
-
-def _survive_fatal(slave, method):
-    """Wrap an entry point so that an exception (reported as fmi2Fatal) leaves the instance usable.
-
-    pythonfmu 0.7.0's C++ ``handle_py_exception`` calls ``cleanPyObject()``, which Py_DECREFs
-    the slave class, the slave instance and its log queue once per exception although it does
-    not give up its references to them: after one fatal the instance is garbage the next
-    ``gc`` pass may free, and a second fatal (or fatal + fmi2FreeInstance a few times in one
-    process) crashes the host. Taking one extra reference of each before the exception leaves
-    C++ balances that decrement exactly.
-    """
-    @functools.wraps(method)
-    def guarded(*args, **kwargs):
-        try:
-            return method(*args, **kwargs)
-        except BaseException:
-            for obj in (type(slave), slave, slave.log_queue):
-                _Py_IncRef(obj)
-            raise
-    return guarded
-
-
-_EXIT_FIX_DONE: set = set()
-
-
-def _avoid_double_free_at_exit(resources: str, model_identifier: str) -> None:
-    """Work around a pythonfmu 0.7.0 crash at process exit in Python hosts (Linux).
-
-    The FMU binary keeps its interpreter guard in a static ``std::shared_ptr`` and also resets it
-    from an ``__attribute__((destructor))`` (``finalizePythonInterpreter``). At ``exit()`` the C++
-    static destructor runs first, then the destructor function assigns to the destroyed
-    shared_ptr and frees its control block a second time (valgrind: invalid read in
-    finalizePythonInterpreter of a block freed by __run_exit_handlers); glibc then sometimes
-    aborts ("corrupted double-linked list") after the host's work is done. Calling the exported
-    ``finalizePythonInterpreter`` from a Python ``atexit`` handler, which runs before the C exit
-    handlers, releases the guard once, while it is still alive; the later calls see an empty
-    pointer. Only when the host is a Python process (``sys.orig_argv`` non-empty): when
-    pythonfmu started the interpreter itself (C hosts), Python's atexit runs inside that very
-    destructor, so nothing is done there.
-    """
-    if not sys.platform.startswith("linux") or not getattr(sys, "orig_argv", None):
-        return
-    so = os.path.normpath(os.path.join(resources or ".", os.pardir, "binaries", "linux64",
-                                       model_identifier + ".so"))
-    if so in _EXIT_FIX_DONE or not os.path.isfile(so):
-        return
-    try:
-        lib = ctypes.CDLL(so, mode=getattr(os, "RTLD_NOLOAD", 4) | os.RTLD_NOW)
-        fn = lib.finalizePythonInterpreter
-    except (OSError, AttributeError):
-        return              # not loaded under this path, or another pythonfmu version
-    import atexit
-
-    fn.restype, fn.argtypes = None, []
-    atexit.register(fn)
-    _EXIT_FIX_DONE.add(so)
+class FmiError(ValueError):
+    """A call refused with a logged message and the state unchanged: ``fmi2Error`` (with
+    pythonfmu's stock binary, which cannot return it, ``fmi2Fatal``)."""
 
 
 class InterfaceSlave(Fmi2Slave):
@@ -116,8 +54,11 @@ class InterfaceSlave(Fmi2Slave):
         self.robot = self.scenario.robot
         self.default_experiment = DefaultExperiment(0.0, self.scenario.stop_time,
                                                     self.scenario.sample_time)
+        self._hooks = binary_hooks(self.resources, type(self).__name__)
+        self._hooks.guard_exit()
+        for msg in jit.NOTICES:            # kernel cache problems (the FMU runs nevertheless)
+            self.log(_escape(msg), Fmi2Status.warning)
         self._register_interface(variables_of(self.robot, self.scenario))
-        _avoid_double_free_at_exit(self.resources, type(self).__name__)
 
     def _body(self, prefix: str) -> RigidBody:
         """The rigid body held in parameters ``<prefix>.m``, ``.b[1..3]``, ``.Ixx`` ...
@@ -137,8 +78,7 @@ class InterfaceSlave(Fmi2Slave):
         self._outputs: Dict[str, float] = {}
         self.phase = "instantiated"
         self._dirty = True          # parameters changed since the outputs were computed
-        for name in _ENTRY_POINTS:
-            setattr(self, name, _survive_fatal(self, getattr(self, name)))
+        guard_entry_points(self, self._hooks, (FmiError,))
         for var in variables:
             cls = Real if var.type == "Real" else Integer
             kw = dict(causality=getattr(Fmi2Causality, var.causality),
@@ -168,8 +108,8 @@ class InterfaceSlave(Fmi2Slave):
         res = []
         for vr in vrs:
             name = names.get(vr)
-            if name is None:                      # not a Real: pythonfmu's error
-                return super().get_real(vrs)
+            if name is None:                      # not a Real
+                self._check_refs("getReal", vrs, Real)
             x = outs.get(name)
             if x is None:                         # input/parameter, or computed when read
                 x = values[name] if name in values else self._get_output(name)
@@ -181,9 +121,44 @@ class InterfaceSlave(Fmi2Slave):
         for vr, x in zip(vrs, values):
             name = inputs.get(vr)
             if name is None:                      # parameters (checked), outputs, other types
+                self._check_refs("setReal", [vr], Real)
                 super().set_real([vr], [x])
             else:
                 store[name] = x
+
+    def _check_refs(self, call: str, vrs, cls) -> None:
+        """Refuse (fmi2Error) unknown value references and variables of another type."""
+        for vr in vrs:
+            var = self.vars.get(vr)
+            if var is None:
+                self._fail(f"fmi2{call[0].upper()}{call[1:]}: unknown value reference {vr}")
+            if not isinstance(var, cls):
+                self._fail(f"fmi2{call[0].upper()}{call[1:]}: {var.name} (value reference {vr}) "
+                           f"is not of type {cls.__name__}")
+
+    def get_integer(self, vrs):
+        self._check_refs("getInteger", vrs, Integer)
+        return super().get_integer(vrs)
+
+    def set_integer(self, vrs, values):
+        self._check_refs("setInteger", vrs, Integer)
+        super().set_integer(vrs, values)
+
+    def get_boolean(self, vrs):
+        self._check_refs("getBoolean", vrs, Boolean)
+        return super().get_boolean(vrs)
+
+    def set_boolean(self, vrs, values):
+        self._check_refs("setBoolean", vrs, Boolean)
+        super().set_boolean(vrs, values)
+
+    def get_string(self, vrs):
+        self._check_refs("getString", vrs, String)
+        return super().get_string(vrs)
+
+    def set_string(self, vrs, values):
+        self._check_refs("setString", vrs, String)
+        super().set_string(vrs, values)
 
     # -- values -------------------------------------------------------------------------------
     def _set(self, name: str, value) -> None:
@@ -193,7 +168,7 @@ class InterfaceSlave(Fmi2Slave):
             msg = (f"{name} is a fixed parameter and cannot be changed after initialisation "
                    f"(tried to set {value!r}); the value stays {self.values[name]!r}")
             self.log(_escape(msg), Fmi2Status.error)
-            raise RuntimeError(msg)
+            raise FmiError(msg)
         self.values[name] = value
         if var.causality == "parameter":
             self._dirty = True
@@ -209,9 +184,9 @@ class InterfaceSlave(Fmi2Slave):
         return self._outputs.get(name, 0)
 
     def _fail(self, msg: str) -> None:
-        """Log an error and raise (pythonfmu turns it into fmi2Fatal)."""
+        """Log an error and raise :class:`FmiError` (the call returns fmi2Error)."""
         self.log(_escape(msg), Fmi2Status.error)
-        raise ValueError(msg)
+        raise FmiError(msg)
 
     def _check_finite_params(self) -> None:
         bad = [f"{n} = {v!r}" for n, v in self.values.items()

@@ -198,9 +198,9 @@ def _readme(model: str, robot: str, stop_time: float, step: float, kind: str) ->
             f"Reference computed by spacerobot {__version__} (`spacerobot crosscheck`): fixed "
             f"communication step {step} s from 0 to {stop_time} s, default start values, "
             f"plant -> estimator wired name to name.\n{inputs}\n"
-            "Loading the FMU outside Python needs `LD_PRELOAD=<libpython3.x.so>`, `PYTHONHOME` "
-            "and `PYTHONPATH` with numpy (and pinocchio for the plant): see docs/fmus.md of the "
-            "spacerobot project.\n")
+            "Any FMI host loads the FMU without set-up on a Linux machine that has the Python "
+            "installation recorded in resources/python_runtime.txt, at the same paths, with numpy "
+            "and numba (and pin for the plant): see docs/fmus.md of the spacerobot project.\n")
 
 
 # -- command line ------------------------------------------------------------------------------------

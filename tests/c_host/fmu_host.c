@@ -8,6 +8,11 @@
  * prints the requested Real variables as CSV (time first, %.17g, so values round-trip exactly).
  *
  * Options:
+ *   -c N        before the run, N cycles of instantiate, initialise, one step, terminate, free
+ *               of the first FMU (instances must come and go without leaking or crashing).
+ *   -x MODE     how the host ends: "free" (default: fmi2Terminate + fmi2FreeInstance),
+ *               "dlclose" (also dlclose every FMU library) or "none" (return from main with the
+ *               instances alive and the libraries loaded).
  *   -s K        after step K take the FMU state, serialise it to bytes and free it; at the end
  *               deserialise, restore, re-run the steps after K and exit 5 unless every printed
  *               variable ends bit-identical.
@@ -18,9 +23,9 @@
  *
  * usage: fmu_host [options] BINARY.so GUID RESOURCE_URI DT NSTEPS VR1,VR2,... [VR=VALUE ...]
  *
- * A pythonfmu binary has unresolved Python C-API symbols: run it with
- *   LD_PRELOAD=<libpython3.x.so> PYTHONHOME=<sys.base_prefix> PYTHONPATH=<site-packages ...>
- * (docs/fmus.md, "Non-Python hosts").
+ * It needs no set-up and calls nothing but the FMI 2.0 C API: the FMU's own binary finds its
+ * Python (docs/fmus.md, "Non-Python hosts"). If fmi2Instantiate returns NULL, the host exits 4
+ * after the FMU's logged messages.
  */
 #include <dlfcn.h>
 #include <stdarg.h>
@@ -124,11 +129,30 @@ static size_t parse_list(const char *text, unsigned long *out, size_t max) {
 
 #define MAXV 1024
 
+/* one short life of an instance: instantiate, initialise, one step, terminate, free */
+static void cycle(Fmu *f, const char *guid, const char *resources, double dt) {
+    fmi2Component c = f->Instantiate("c_host_cycle", fmi2CoSimulation, guid, resources,
+                                     &callbacks, fmi2False, fmi2False);
+    if (!c) {
+        fprintf(stderr, "fmu_host: fmi2Instantiate (cycle) returned NULL\n");
+        exit(4);
+    }
+    CHECK(f->SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+    CHECK(f->EnterInitializationMode(c));
+    CHECK(f->ExitInitializationMode(c));
+    CHECK(f->DoStep(c, 0.0, dt, fmi2True));
+    CHECK(f->Terminate(c));
+    f->FreeInstance(c);
+}
+
 int main(int argc, char **argv) {
-    int opt, state_step = -1, i, k;
+    int opt, state_step = -1, cycles = 0, i, k;
     const char *est_so = NULL, *est_guid = NULL, *est_res = NULL, *wires = NULL, *est_out = NULL;
-    while ((opt = getopt(argc, argv, "s:e:g:r:w:o:")) != -1) {
+    const char *exit_mode = "free";
+    while ((opt = getopt(argc, argv, "c:x:s:e:g:r:w:o:")) != -1) {
         switch (opt) {
+        case 'c': cycles = atoi(optarg); break;
+        case 'x': exit_mode = optarg; break;
         case 's': state_step = atoi(optarg); break;
         case 'e': est_so = optarg; break;
         case 'g': est_guid = optarg; break;
@@ -139,7 +163,7 @@ int main(int argc, char **argv) {
         }
     }
     if (argc - optind < 6 || (est_so && !(est_guid && est_res && wires && est_out))) {
-        fprintf(stderr, "usage: %s [-s K] [-e EST.so -g GUID -r URI -w P:E,... -o E,...] "
+        fprintf(stderr, "usage: %s [-c N] [-x free|dlclose|none] [-s K] [-e EST.so -g GUID -r URI -w P:E,... -o E,...] "
                         "BINARY.so GUID RESOURCE_URI DT NSTEPS VRS [VR=VALUE ...]\n", argv[0]);
         return 1;
     }
@@ -157,6 +181,8 @@ int main(int argc, char **argv) {
     memset(&plant, 0, sizeof plant);
     memset(&est, 0, sizeof est);
     load(&plant, so, "c_host_plant", guid, resources);
+    for (i = 0; i < cycles; i++) cycle(&plant, guid, resources, dt);
+    if (cycles) fprintf(stderr, "fmu_host: %d instantiate/free cycles done\n", cycles);
     if (est_so) {
         size_t m = parse_list(wires, tmp, 2 * MAXV);
         nwire = m / 2;
@@ -248,28 +274,17 @@ int main(int argc, char **argv) {
                 state_step, nbytes);
     }
 
+    free(bytes);
+    if (strcmp(exit_mode, "none") == 0) return 0;     /* instances alive, libraries loaded */
     CHECK(plant.Terminate(plant.c));
     plant.FreeInstance(plant.c);
     if (est_so) {
         CHECK(est.Terminate(est.c));
         est.FreeInstance(est.c);
     }
-    free(bytes);
-    /* pythonfmu 0.7.0 binaries keep their interpreter guard in a static std::shared_ptr and
-       reset it again from a library destructor; at exit() the static destructor runs first and
-       the destructor then frees the guard a second time (glibc aborts: "free(): corrupted
-       unsorted chunks"). Releasing the guards explicitly, while everything is alive, finalises
-       the embedded interpreter once and leaves nothing for exit() to free twice. The library
-       that started the interpreter (the first one loaded) goes last. */
-    {
-        void (*finalize)(void);
-        if (est_so) {
-            *(void **)(&finalize) = dlsym(est.lib, "finalizePythonInterpreter");
-            if (finalize) finalize();
-        }
-        *(void **)(&finalize) = dlsym(plant.lib, "finalizePythonInterpreter");
-        if (finalize) finalize();
+    if (strcmp(exit_mode, "dlclose") == 0) {
+        if (est_so && dlclose(est.lib) != 0) return 6;
+        if (dlclose(plant.lib) != 0) return 6;
     }
-    /* no dlclose: the embedded interpreter's extension modules stay mapped */
     return 0;
 }
