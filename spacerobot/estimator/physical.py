@@ -1,0 +1,133 @@
+"""Physical consistency of an estimated rigid body, and the projection onto real bodies.
+
+A set of inertial parameters ``(m, b, I_c)`` (mass, centre-of-mass offset, inertia about the
+centre of mass) belongs to a real mass distribution iff its 4x4 pseudo-inertia matrix
+
+    J = [[Sigma_c + m b b^T, m b],      Sigma_c = tr(I_c)/2 * 1 - I_c
+         [m b^T,             m  ]]      (the second moment of the mass about the CoM)
+
+is positive definite (Wensing, Kim, Slotine, IEEE RA-L 2017). Its Schur complement with
+respect to ``m`` is ``Sigma_c``, so
+
+    J > 0   <=>   m > 0  and  Sigma_c > 0,
+
+and ``Sigma_c > 0`` is exactly "I_c positive definite with strict triangle inequalities"
+(the eigenvalues of ``Sigma_c`` are ``(I2 + I3 - I1) / 2`` and its two permutations).
+
+The set of real bodies is therefore a product in the coordinates ``(m, b, Sigma_c)``:
+``{m >= m_min} x R^3 x {Sigma_c >= s_min 1}``, and the Euclidean projection onto a product is
+the product of the projections: clip the mass, keep the centre of mass, clip the eigenvalues of
+``Sigma_c`` (the Frobenius-nearest matrix with eigenvalues >= s_min). That is
+:func:`project_body`: a closed form, one 3x3 symmetric eigen-decomposition, constant cost, and
+the identity (bit for bit) on a body that is already physical.
+
+The estimator applies it to what it reports only; its least-squares state is never changed, so
+the estimates stay the exact least-squares ones and converge to the truth as before, and the
+projection stops acting as soon as the least-squares estimate is physical.
+
+For a planar robot the out-of-plane components are not identified (they stay at the guesses);
+since ``Izz = Sigma_xx + Sigma_yy``, clipping a negative out-of-plane second moment
+``Sigma_zz`` (an identified ``Izz`` larger than the guessed ``Ixx + Iyy``) keeps the identified
+``Izz`` and raises the unidentified ``Ixx``, ``Iyy`` (exactly so for a diagonal tensor).
+"""
+from __future__ import annotations
+
+from typing import Tuple
+
+import numpy as np
+
+__all__ = ["second_moment", "inertia_from_second_moment", "pseudo_inertia", "is_physical",
+           "project_body"]
+
+#: smallest eigenvalue of Sigma_c kept by the projection, relative to the largest |eigenvalue|
+#: (a body this flat is still a real one: its inertia satisfies the strict triangle inequality)
+REL_SIGMA_MIN = 1e-6
+#: smallest mass kept by the projection, relative to the caller's mass scale
+REL_MASS_MIN = 1e-6
+
+
+def _sym(I6) -> np.ndarray:
+    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = I6
+    return np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]], dtype=float)
+
+
+def _six(M: np.ndarray) -> np.ndarray:
+    return np.array([M[0, 0], M[1, 1], M[2, 2], M[0, 1], M[0, 2], M[1, 2]])
+
+
+def second_moment(I6) -> np.ndarray:
+    """``Sigma_c = tr(I_c)/2 * 1 - I_c`` (3, 3) from ``I6 = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``.
+
+    ``Sigma_c = integral of x x^T dm`` about the centre of mass [kg.m2].
+    """
+    I = _sym(I6)
+    return 0.5 * np.trace(I) * np.eye(3) - I
+
+
+def inertia_from_second_moment(S: np.ndarray) -> np.ndarray:
+    """``I_c = tr(Sigma_c) * 1 - Sigma_c`` as ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` (6,)."""
+    S = np.asarray(S, dtype=float)
+    return _six(np.trace(S) * np.eye(3) - S)
+
+
+def pseudo_inertia(m: float, b, I6) -> np.ndarray:
+    """The 4x4 pseudo-inertia matrix ``J`` about the body frame origin (module docstring)."""
+    b = np.asarray(b, dtype=float)
+    J = np.empty((4, 4))
+    J[:3, :3] = second_moment(I6) + m * np.outer(b, b)      # Sigma_O = Sigma_c + m b b^T
+    J[:3, 3] = J[3, :3] = m * b                              # first moment h = m b
+    J[3, 3] = m
+    return J
+
+
+def is_physical(m: float, b, I6) -> bool:
+    """True iff ``(m, b, I6)`` is a real rigid body: finite, ``m > 0``, ``Sigma_c > 0``.
+
+    Equivalent to the pseudo-inertia matrix being positive definite; tested by a Cholesky
+    factorisation (no tolerance: a body on the boundary, e.g. a rod, is not accepted).
+    """
+    vals = np.concatenate([[m], np.ravel(b), np.ravel(I6)]).astype(float)
+    if not np.all(np.isfinite(vals)) or not m > 0.0:
+        return False
+    try:
+        np.linalg.cholesky(second_moment(I6))
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarray, np.ndarray, bool]:
+    """The nearest real rigid body to ``(m, b, I6)`` in the ``(m, b, Sigma_c)`` coordinates.
+
+    Parameters
+    ----------
+    m : float
+        Mass estimate [kg], finite, any sign.
+    b : (3,) array_like
+        Centre-of-mass offset [m], finite; kept as it is.
+    I6 : (6,) array_like
+        Inertia about the CoM ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` [kg.m2], finite, any values.
+    m_scale : float
+        Mass scale [kg] (e.g. the initial guess) setting the smallest mass kept,
+        ``REL_MASS_MIN * m_scale``.
+
+    Returns
+    -------
+    m : float
+    b : (3,) ndarray
+    I6 : (6,) ndarray
+    projected : bool
+        False when the input was already physical; the outputs are then the inputs, exactly.
+    """
+    b = np.array(b, dtype=float)
+    I6 = np.array(I6, dtype=float)
+    if is_physical(m, b, I6):
+        return float(m), b, I6, False
+    # m >= m_min: projection onto a half-line
+    m_min = REL_MASS_MIN * abs(m_scale)
+    m_out = float(m) if m >= m_min else m_min
+    # Sigma_c >= s_min 1: clip the eigenvalues (Frobenius-nearest), I_c = tr(S) 1 - S
+    lam, V = np.linalg.eigh(second_moment(I6))
+    s_min = REL_SIGMA_MIN * max(float(np.max(np.abs(lam))), np.finfo(float).tiny)
+    S = (V * np.maximum(lam, s_min)) @ V.T
+    return m_out, b, inertia_from_second_moment(0.5 * (S + S.T)), True
