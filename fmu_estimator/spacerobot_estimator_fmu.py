@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from _spacerobot_estimator.estimator import Identifier
+from _spacerobot_estimator.estimator import ExcitationRequest, Identifier
 from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT
 from _spacerobot_estimator.fmi.slave import InterfaceSlave, _escape
 from _spacerobot_estimator.interface import (LAYOUT, STATUS, AccelSource, Method, Solver,
@@ -34,17 +34,18 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._inputs = [(n, v.key) for n, v in self.interface.items() if v.causality == "input"]
         self._input_names = [n for n, _ in self._inputs]
         self._groups = _input_groups(self._inputs, self.robot.n_joints)
-        self._sd = None
-        # outputs: estimates (named as in Identifier.vector()), scalars (an attribute of the
-        # Identifier), and the standard deviations ("sd." + an estimate name) and excitation,
-        # computed when read (None)
+        self.request = None
+        # outputs: estimates and their standard deviations ("sd." + an estimate name), from
+        # the identifier's report; scalars (attributes of the Identifier); the identified and
+        # physical flags; the excitation request; the excitation diagnostics, computed when read
         outs = [(n, v.key) for n, v in self.interface.items() if v.causality == "output"]
         self._est_names = [n for n, k in outs if k[0] in _ESTIMATES]
         self._est_pos = np.array([LAYOUT.index(n) for n in self._est_names], dtype=int)
-        self._sd_pos = {n: LAYOUT.index(n[len(_SD):]) for n, k in outs if k[0] in _SDS}
+        self._sd_names = [n for n, k in outs if k[0] in _SDS]
+        self._sd_pos = np.array([LAYOUT.index(n[len(_SD):]) for n in self._sd_names], dtype=int)
         self._scalar_outputs = [(n, k[0]) for n, k in outs if k[0] in _SCALAR_OUTPUTS]
-        self._lazy_outputs = {n: None for n, k in outs
-                              if k[0] not in _SCALAR_OUTPUTS + _ESTIMATES}
+        self._flag_outputs = [(n, k) for n, k in outs if k[0] in _FLAGS]
+        self._lazy_outputs = {n: None for n, k in outs if k[0] in _LAZY}
 
     def _initialise(self) -> None:
         v = self.values
@@ -53,34 +54,34 @@ class SpaceRobotEstimator(InterfaceSlave):
                 ("method", Method), ("solver", Solver), ("accel_source", AccelSource))]
             guess = Guess(self._body("guess.base"), self._body("guess.target"),
                           float(v["P0_mu"]), float(v["P0_theta"]))
-            self.ident = Identifier(self.robot, guess, *codes, float(v["lambda"]))
+            self.ident = Identifier(self.robot, guess, *codes, float(v["lambda"]),
+                                    sd_rel=float(v["ident.sd_rel"]))
+            self.request = ExcitationRequest(int(v["ident.excite_mode"]),
+                                             float(v["ident.excite_level"]))
         except ValueError as e:
             self._fail(f"invalid estimator parameters: {e}")
         self._refresh()
 
     def _refresh(self) -> None:
-        est = self.ident.vector()
-        o = dict(zip(self._est_names, est[self._est_pos].tolist()))
         ident = self.ident
+        rep = ident.report()
+        o = dict(zip(self._est_names, rep.vector[self._est_pos].tolist()))
+        o.update(zip(self._sd_names, rep.std[self._sd_pos].tolist()))
         for name, attr in self._scalar_outputs:
             o[name] = getattr(ident, attr)
+        for name, (kind, who) in self._flag_outputs:
+            o[name] = int(getattr(rep, kind)[who])
+        o[_EXCITE] = self.request(rep.identified)
         o.update(self._lazy_outputs)
         self._outputs = o
-        self._sd = None
 
     def _get_output(self, name: str):
         self._ensure_current()
-        var = self.interface[name]
-        if var.key[0] in _SDS:
+        key = self.interface[name].key[0]
+        if key in _LAZY:
             if self.ident is None:
                 return 0.0
-            if self._sd is None:
-                self._sd = self.ident.std()
-            return float(self._sd[self._sd_pos[name]])
-        if var.key[0] in ("excitation_mu", "excitation_theta"):
-            if self.ident is None:
-                return 0.0
-            return self.ident.excitation()[0 if var.key[0] == "excitation_mu" else 1]
+            return self.ident.excitation()[_LAZY.index(key)]
         return self._outputs.get(name, 0)
 
     def do_step(self, current_time: float, step_size: float) -> bool:
@@ -119,6 +120,12 @@ _SCALAR_OUTPUTS = ("samples", "rejected", "status", "residual_lin", "residual_an
 _ESTIMATES = ("est_base", "est_target")
 _SDS = ("sd_base", "sd_target")
 _SD = "sd."
+#: per-body 0/1 outputs: key (Report attribute, body)
+_FLAGS = ("identified", "physical")
+#: the excitation request output
+_EXCITE = "ident.excite"
+#: outputs computed when read: the excitation diagnostics (mu, theta)
+_LAZY = ("excitation_mu", "excitation_theta")
 
 
 def _input_groups(inputs, n: int):

@@ -244,10 +244,24 @@ class AccelSource(Code):
     DIFFERENCED = 2
 
 
+#: smallest scale of a CoM component's relative error [m] (:meth:`ParameterLayout.error_scale`)
+COM_SCALE_MIN = 0.05
+
+
+class ExciteMode(Code):
+    """When the estimator asks the plant for excitation (output ``ident.excite``): never, while
+    a body is not identified yet, or always (tracking)."""
+
+    OFF = 0
+    UNTIL_IDENTIFIED = 1
+    ALWAYS = 2
+
+
 #: Estimator enumerations (Integer parameters): code -> label
 METHODS: Dict[int, str] = Method.table()
 SOLVERS: Dict[int, str] = Solver.table()
 ACCEL_SOURCES: Dict[int, str] = AccelSource.table()
+EXCITE_MODES: Dict[int, str] = ExciteMode.table()
 
 #: Estimator status codes (``diag.status``)
 STATUS = {
@@ -312,7 +326,30 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
         Var("diag.excitation_theta", "output", "continuous", "Real", "1",
             "Identifiability of the inertias: reciprocal condition number of their information "
             "matrix (0 = not identifiable yet)", None, ("excitation_theta",)),
+        Var("ident.sd_rel", "parameter", "fixed", "Real", "1",
+            "A body counts as identified when every one of its identified estimates has a "
+            "standard deviation below this fraction of its error scale", 1e-3, ("sd_rel",)),
+        Var("ident.excite_mode", "parameter", "fixed", "Integer", None,
+            f"Excitation request (output ident.excite): {ExciteMode.OFF:d} = never, "
+            f"{ExciteMode.UNTIL_IDENTIFIED:d} = while a body is not identified, "
+            f"{ExciteMode.ALWAYS:d} = always (tracking)", int(ExciteMode.UNTIL_IDENTIFIED),
+            ("excite_mode",)),
+        Var("ident.excite_level", "parameter", "fixed", "Real", "1",
+            "Excitation level requested while excitation is wanted (0..1)", 1.0,
+            ("excite_level",)),
+        Var("ident.excite", "output", "continuous", "Real", "1",
+            "Excitation level requested from the plant (wire to the plant input of the same "
+            "name): ident.excite_level while wanted (ident.excite_mode), else 0", None,
+            ("excite",)),
     ]
+    for who in BODIES:
+        v += [Var(f"diag.identified.{who}", "output", "discrete", "Integer", None,
+                  f"1 when every identified estimate of the {who} has a standard deviation below "
+                  f"ident.sd_rel of its error scale, else 0", None, ("identified", who)),
+              Var(f"diag.physical.{who}", "output", "discrete", "Integer", None,
+                  f"1 when the least-squares estimate of the {who} is a real rigid body; 0 when "
+                  f"the reported {who} estimate is its projection onto real bodies", None,
+                  ("physical", who))]
     return v
 
 
@@ -438,18 +475,28 @@ class ParameterLayout:
         return out
 
     def error_scale(self, truth: np.ndarray) -> np.ndarray:
-        """Scale of the relative error of each entry of a (20,) truth vector: ``|truth|``, or
-        where the truth is zero (a CoM component, a product of inertia) 1 (kg or m) for the
-        mass and CoM entries and the body's largest principal moment (1 kg.m2 if all are zero)
-        for the inertia entries. Never zero, so a relative error is never NaN."""
+        """Scale of the relative error of each entry of a (20,) vector (a truth, or an estimate
+        for relative standard deviations). Never zero, so a relative error is never NaN:
+
+        * mass: ``|m|`` (1 kg if zero);
+        * CoM component: ``max(|b_i|, COM_SCALE_MIN)``: a CoM error is relative to the offset,
+          but to at least 5 cm (an offset near zero would make any error look huge);
+        * moment ``Ixx, Iyy, Izz``: ``|I_ii|`` (the body's largest moment if zero);
+        * product of inertia: the body's largest moment ``Ixx, Iyy, Izz`` (``|I_ij|`` never
+          exceeds it for a real body; a product near zero would make any error look huge).
+          1 kg.m2 if all moments are zero.
+        """
         truth = np.asarray(truth, float)
         scale = np.abs(truth)
         for b in self.bodies:
             imax = scale[b.principal].max()
-            s = scale[b.vec]                              # a view: written into scale
-            zero = s == 0.0
-            s[zero & self.first_order[b.vec]] = 1.0
-            s[zero & ~self.first_order[b.vec]] = imax if imax > 0.0 else 1.0
+            imax = imax if imax > 0.0 else 1.0
+            if scale[b.m] == 0.0:
+                scale[b.m] = 1.0
+            scale[b.first] = np.maximum(scale[b.first], COM_SCALE_MIN)
+            principal = scale[b.principal]                  # a view: written into scale
+            principal[principal == 0.0] = imax
+            scale[b.principal.stop:b.inertia.stop] = imax   # the products of inertia
         return scale
 
 

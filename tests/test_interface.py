@@ -140,14 +140,14 @@ def test_identifier_takes_labels_codes_or_members_alike():
 
 
 def test_error_metric_is_finite_for_zero_truth_and_scaled_as_documented():
-    truth = estimate_vector(RigidBody(400.0, (0.0, 0.5, 0.0), (10.0, 20.0, 30.0, 0.0, 0.0, 0.0)),
-                            RigidBody(100.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)))
+    truth = estimate_vector(RigidBody(400.0, (0.0, 0.5, 0.01), (10.0, 20.0, 30.0, 0.0, -2.0, 0.0)),
+                            RigidBody(0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)))
     est = truth + 0.01
     s = error_scale(truth)
-    # |truth|; zero CoM -> 1 m; zero product of inertia -> the largest principal moment (30);
-    # a body with no inertia at all -> 1
-    np.testing.assert_array_equal(s[:10], [400, 1, 0.5, 1, 10, 20, 30, 30, 30, 30])
-    np.testing.assert_array_equal(s[10:], [100] + [1.0] * 9)
+    # |truth|; a CoM component -> at least 5 cm; a product of inertia (zero or not) -> the
+    # largest moment (30); a body with no mass and no inertia at all -> 1 kg, 5 cm, 1 kg.m2
+    np.testing.assert_array_equal(s[:10], [400, 0.05, 0.5, 0.05, 10, 20, 30, 30, 30, 30])
+    np.testing.assert_array_equal(s[10:], [1.0] + [0.05] * 3 + [1.0] * 6)
     rel = relative_errors(est, truth)
     assert np.all(np.isfinite(rel))
     np.testing.assert_allclose(rel, 0.01 / s, rtol=1e-12)

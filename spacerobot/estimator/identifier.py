@@ -14,10 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..interface import AccelSource, Method, ParameterLayout, Solver
+from ..interface import AccelSource, ExciteMode, Method, ParameterLayout, Solver
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import kernels
+from .physical import project_body
 from .solvers import ParameterSolver, make_solver
 
 #: measurement keys and their shapes (n = number of arm joints)
@@ -33,6 +34,31 @@ ROTATION_TOL = 1e-6
 
 # status codes (see spacerobot.interface.STATUS)
 NO_SAMPLE, REFERENCE, ESTIMATING, REJECT_NONFINITE, REJECT_INCONSISTENT = 0, 1, 2, 3, 4
+
+
+#: default relative standard deviation below which every estimate of a body counts as identified
+SD_REL = 1e-3
+
+
+@dataclass(frozen=True)
+class Report:
+    """What the estimator reports at one instant (:meth:`Identifier.report`).
+
+    Attributes
+    ----------
+    vector : (20,) the estimates, each body a real rigid body: the least-squares estimate,
+        projected onto real bodies where it is not one (:func:`.physical.project_body`)
+    std : (20,) standard deviations of the least-squares estimate (:meth:`Identifier.std`)
+    identified : {'base': bool, 'target': bool}, every identified estimate of the body has
+        ``std <= sd_rel * error scale`` (and at least one sample was used)
+    physical : {'base': bool, 'target': bool}, the least-squares estimate of the body was a
+        real body already (False: ``vector`` holds its projection)
+    """
+
+    vector: np.ndarray
+    std: np.ndarray
+    identified: dict
+    physical: dict
 
 
 @dataclass
@@ -64,6 +90,9 @@ class Identifier:
         (the estimate then lags by one sample).
     lam : float
         Forgetting factor, 0 < lam <= 1.
+    sd_rel : float
+        Relative standard deviation below which a body counts as identified (:meth:`report`),
+        0 < sd_rel < 1.
 
     Attributes
     ----------
@@ -79,19 +108,22 @@ class Identifier:
 
     def __init__(self, robot: Robot, guess: Guess, method: Method | str = "momentum",
                  solver: Solver | str = "paper", accel_source: AccelSource | str = "measured",
-                 lam: float = 1.0):
+                 lam: float = 1.0, sd_rel: float = SD_REL):
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
         if not (0.0 < lam <= 1.0):
             raise ValueError(f"forgetting factor lambda must satisfy 0 < lambda <= 1, got {lam}")
+        if not (0.0 < sd_rel < 1.0):
+            raise ValueError(f"relative standard deviation threshold must satisfy "
+                             f"0 < sd_rel < 1, got {sd_rel}")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
             body.check(name)
         for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
             if not (val > 0.0 and math.isfinite(val)):
                 raise ValueError(f"{name} must be a finite covariance > 0, got {val}")
         self.robot, self.guess = robot, guess
-        self.method, self.accel_source, self.lam = method, accel_source, lam
+        self.method, self.accel_source, self.lam, self.sd_rel = method, accel_source, lam, sd_rel
         self.n = robot.n_joints
         self._geom = ArmGeometry(robot).arrays()
         self._sizes = [3, 3, 9, 3, 3, 3, self.n, self.n, self.n, 3, 3, 3, 3]   # per KEYS entry
@@ -318,17 +350,41 @@ class Identifier:
         return self.solver.vector()
 
     def std(self) -> np.ndarray:
-        """Standard deviations of :meth:`vector` (20,), residual-variance scaled.
+        """Standard deviations of :meth:`vector` (20,) (:meth:`.ParameterSolver.uncertainty`).
 
-        Parameters that are not identified (planar out-of-plane ones) report the square root of
-        their prior covariance. Propagated with the first-order (delta-method) Jacobian of the
-        map from the solver's internal parameters to :meth:`vector`
-        (:meth:`.ParameterSolver.std`).
+        ``sd^2`` = the data's scatter (solver covariance times the a-posteriori residual
+        variance) + the square of the prior's pull (the distance from the estimate to the
+        data-only least-squares answer), both through the delta-method Jacobian of the map from
+        the solver's parameters to :meth:`vector`. Without noise the pull is the estimate's
+        error itself (to first order). An estimate the data do not determine yet reports at
+        least its error scale (100 %). Parameters that are not identified (planar out-of-plane
+        ones) report the square root of their prior covariance.
         """
         return self.solver.std()
 
+    def report(self) -> Report:
+        """The estimates as reported: physically consistent, with their standard deviations,
+        and whether each body is identified (see :class:`Report`).
+
+        The projection acts on the output only: the solver keeps the exact least-squares
+        state, so the report equals :meth:`vector` as soon as that is physical.
+        """
+        ls, sd = self.vector(), self.std()
+        out, identified, physical = ls.copy(), {}, {}
+        for b, g in zip(self.layout.bodies, (self.guess.base, self.guess.target)):
+            m, com, I6, projected = project_body(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
+            out[b.m], out[b.first], out[b.inertia] = m, com, I6
+            physical[b.name] = not projected
+        scale = self.layout.error_scale(out)
+        ok = sd <= self.sd_rel * scale
+        for b in self.layout.bodies:
+            ids = self.layout.identified[b.vec]
+            identified[b.name] = bool(self.samples > 0 and ok[b.vec][ids].all())
+        return Report(out, sd, identified, physical)
+
     def estimates(self) -> dict:
-        """``{'base': BodyEstimate, 'target': BodyEstimate}``."""
+        """``{'base': BodyEstimate, 'target': BodyEstimate}`` (the least-squares estimates;
+        :meth:`report` has the physically consistent ones)."""
         vec = self.vector()
         return {b.name: BodyEstimate(float(vec[b.m]), vec[b.first], vec[b.inertia])
                 for b in self.layout.bodies}
@@ -401,3 +457,34 @@ def _rcond(info: np.ndarray) -> float:
         d = np.sqrt(dg)
     lam = np.linalg.eigvalsh(info / (d[:, None] * d))
     return float(max(lam[0], 0.0) / lam[-1])
+
+
+
+@dataclass(frozen=True)
+class ExcitationRequest:
+    """The excitation level the estimator asks the plant for (output ``ident.excite``).
+
+    Parameters
+    ----------
+    mode : :class:`spacerobot.interface.ExciteMode` (member, code or label)
+        OFF: 0. UNTIL_IDENTIFIED: ``level`` while a body is not identified, 0 once both are.
+        ALWAYS: ``level`` (keeps the parameters observable, for tracking slow changes with a
+        forgetting factor).
+    level : float
+        Requested level, 0..1.
+    """
+
+    mode: ExciteMode = ExciteMode.UNTIL_IDENTIFIED
+    level: float = 1.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "mode", ExciteMode.parse(self.mode, "ident.excite_mode"))
+        if not (0.0 <= self.level <= 1.0):
+            raise ValueError(f"ident.excite_level must be in [0, 1], got {self.level}")
+
+    def __call__(self, identified: dict) -> float:
+        """The level for the bodies' identified flags (:attr:`Report.identified`)."""
+        if self.mode is ExciteMode.ALWAYS or (self.mode is ExciteMode.UNTIL_IDENTIFIED
+                                              and not all(identified.values())):
+            return float(self.level)
+        return 0.0

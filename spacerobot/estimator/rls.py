@@ -37,16 +37,15 @@ class RLS:
         self.x = np.array(x0, float)
         self.P = np.array(P0, float)
         self.lam = float(lam)
-        self.ssr = 0.0      # weighted sum of squared normalised a-priori residuals
         self.rows = 0
 
     def snapshot(self) -> tuple:
         """The state an update changes, for :meth:`restore` (references; see the module
         docstring)."""
-        return self.x, self.P, self.ssr, self.rows
+        return self.x, self.P, self.rows
 
     def restore(self, snap: tuple) -> None:
-        self.x, self.P, self.ssr, self.rows = snap
+        self.x, self.P, self.rows = snap
 
     def update(self, H: np.ndarray, y: np.ndarray):
         """One sample, ``H`` (k, p), ``y`` (k,). Returns the a-priori residual ``y - H x`` and
@@ -60,15 +59,9 @@ class RLS:
         y = np.ascontiguousarray(y, dtype=float)
         x, P, e, K, q, status = kernels.rls_update(self.x, self.P, H, y, self.lam)
         _raise_for(status)
-        self.ssr = self.lam * self.ssr + q     # sum of e^T (lam I + H P H^T)^-1 e
         self.rows += len(y)
         self.x, self.P = x, P
         return e, K
-
-    def sigma2(self, p: int) -> float:
-        """Residual variance estimate ``ssr / (rows - p)`` (1 before there is redundancy)."""
-        dof = self.rows - p
-        return self.ssr / dof if dof > 0 and self.ssr > 0 else 1.0
 
 
 class ModifiedRLS:
@@ -132,7 +125,7 @@ class ModifiedRLS:
             c(phi, dtype=float), c(y, dtype=float), c(psi, dtype=float), lin.lam, self.mu_fixed,
             self.active)
         _raise_for(status)
-        lin.x, lin.P, lin.ssr, lin.rows = x1, P1, lin.lam * lin.ssr + q1, lin.rows + len(e1)
-        ang.x, ang.P, ang.ssr, ang.rows = x2, P2, ang.lam * ang.ssr + q2, ang.rows + len(e2)
+        lin.x, lin.P, lin.rows = x1, P1, lin.rows + len(e1)
+        ang.x, ang.P, ang.rows = x2, P2, ang.rows + len(e2)
         self.M, self.D_mu = M, D
         return e1, e2, rhs

@@ -7,8 +7,8 @@ Both take, one sample at a time, the equations of the identified rows (see
     phi theta = y + psi D(mu)      (inertias; eqs. 16 / 31)
 
 and own everything that depends on how they parameterise the bodies: the update, the 20
-estimates, their covariance and standard deviations (delta method), and the snapshot that
-undoes a failed update.
+estimates, their uncertainty (:mod:`.uncertainty`: the a-posteriori residual variance and the
+prior's pull, propagated by the delta method), and the snapshot that undoes a failed update.
 
 * :class:`PaperSolver`: the paper's modified RLS (eqs. 34-38) over ``(mu, theta)``.
 * :class:`JointSolver`: one RLS over the 20 standard parameters ``[m, m b, I_O#]`` per body,
@@ -29,6 +29,7 @@ from ..interface import ParameterLayout, Solver
 from ..robots import Guess
 from . import parameters as par
 from .rls import RLS, ModifiedRLS
+from .uncertainty import Gram, prior_pull, residual_variance
 
 
 class Step(NamedTuple):
@@ -82,8 +83,15 @@ class ParameterSolver(ABC):
 
     @abstractmethod
     def covariance(self) -> np.ndarray:
-        """Covariance (20, 20) of :meth:`z`, residual-variance scaled; parameters that are not
-        identified keep their prior covariance."""
+        """Covariance (20, 20) of :meth:`z` from the data's scatter: the solver covariance
+        scaled by the a-posteriori residual variance (:func:`.uncertainty.residual_variance`);
+        parameters that are not identified keep their prior covariance."""
+
+    @abstractmethod
+    def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
+        """``(delta (20,), unobserved (20,) bool)`` for :meth:`z`: how far the prior pulls the
+        estimate from the data-only least-squares answer (:func:`.uncertainty.prior_pull`),
+        and the entries the data have not determined at all."""
 
     @abstractmethod
     def jacobian(self, z: np.ndarray) -> np.ndarray:
@@ -101,11 +109,28 @@ class ParameterSolver(ABC):
         """The 20 estimates: per body m, b (3), I (6) (``ESTIMATE_NAMES`` order)."""
         return self.vector_of(self.z())
 
-    def std(self) -> np.ndarray:
-        """Standard deviations (20,) of :meth:`vector`: the covariance of :meth:`z` propagated
-        through the first-order (delta-method) Jacobian of :meth:`vector_of`."""
+    def uncertainty(self) -> Tuple[np.ndarray, np.ndarray]:
+        """``(sd (20,), unobserved (20,) bool)`` of :meth:`vector`.
+
+        ``sd^2 = diag(J C J^T) + (J delta)^2``: the data's scatter (:meth:`covariance` ``C``)
+        and the prior's pull ``delta`` (:meth:`prior_pull`), both through the first-order
+        (delta-method) Jacobian ``J`` of :meth:`vector_of`. ``unobserved``: estimates that
+        depend on a direction the data have not observed (their ``sd`` bounds nothing).
+        """
         J = self.jacobian(self.z())
-        return np.sqrt(np.clip(np.einsum("ij,jk,ik->i", J, self.covariance(), J), 0.0, None))
+        delta, unobserved_z = self.prior_pull()
+        var = np.einsum("ij,jk,ik->i", J, self.covariance(), J) + (J @ delta) ** 2
+        unobserved = (J[:, unobserved_z] != 0.0).any(axis=1)
+        return np.sqrt(np.clip(var, 0.0, None)), unobserved
+
+    def std(self) -> np.ndarray:
+        """Standard deviations (20,) of :meth:`vector` (:meth:`uncertainty`); an unobserved
+        estimate reports at least its error scale (a relative standard deviation of 100 %)."""
+        sd, unobserved = self.uncertainty()
+        if unobserved.any():
+            floor = self.layout.error_scale(self.vector())
+            sd[unobserved] = np.maximum(sd[unobserved], floor[unobserved])
+        return sd
 
     def prior(self) -> np.ndarray:
         """Diagonal (20,) of the initial covariance of a 20-vector in the layout's order."""
@@ -143,6 +168,12 @@ class PaperSolver(ParameterSolver):
                                guess.P0_theta * np.eye(len(L.theta_active)), lam, mu_fixed=mu0,
                                active=L.mu_active)
         self.mu, self.theta = mu0, th0          # full vectors (rebound by each update)
+        p, r = len(L.mu_active), len(L.theta_active)
+        self._mu0, self._th0 = mu0[L.mu_active], th0[L.theta_active]
+        self._W0 = (np.eye(p) / guess.P0_mu, np.eye(r) / guess.P0_theta)     # P0^-1
+        # Gram matrices of the rows [A | b] and [phi | y | psi] (residuals at any mu, theta)
+        self.gram_lin = Gram.empty(p + 1, lam)
+        self.gram_ang = Gram.empty(r + 1 + len(self.rls.D_mu), lam)
         # theta of each body inside z
         self._z_theta = [slice(L.n_mu + b.theta.start, L.n_mu + b.theta.stop) for b in L.bodies]
         self._ix = (np.ix_(L.mu_active, L.mu_active), np.ix_(L.theta_active, L.theta_active))
@@ -161,6 +192,8 @@ class PaperSolver(ParameterSolver):
             phi = phi[:, L.theta_active]
         rls = self.rls
         e_lin, e_ang, rhs_ang = rls.update(A, b, phi, y, psi)
+        self.gram_lin = self.gram_lin.add(np.column_stack([A, b]))
+        self.gram_ang = self.gram_ang.add(np.column_stack([phi, y, psi]))
         if L.complete:
             self.mu, self.theta = rls.mu, rls.theta
         else:
@@ -196,9 +229,10 @@ class PaperSolver(ParameterSolver):
         ``Cov(theta, mu) = T Cov(mu)`` with ``T = M dD/dmu``."""
         L, g0, rls = self.layout, self.guess, self.rls
         n_mu = L.n_mu
-        Cmu = rls.lin.P * rls.lin.sigma2(len(L.mu_active))
+        s2_lin, s2_ang = self._residual_variances()
+        Cmu = rls.lin.P * s2_lin
         Tm = rls.M.dot(par.D_jacobian(self.mu))
-        Cth = rls.ang.P * rls.ang.sigma2(len(L.theta_active))
+        Cth = rls.ang.P * s2_ang
         if not L.complete:
             Cmu_full = g0.P0_mu * np.eye(n_mu)
             Cmu_full[self._ix[0]] = Cmu
@@ -215,11 +249,35 @@ class PaperSolver(ParameterSolver):
         cov[n_mu:, n_mu:] = Cth + TC.dot(Tm.T)
         return cov
 
+    def _residual_variances(self) -> Tuple[float, float]:
+        """A-posteriori residual variances of both equations at the current ``mu``, ``theta``:
+        ``|A mu - b|^2`` and ``|phi theta - y - psi D(mu)|^2`` over all samples, per degree
+        of freedom."""
+        rls, gl, ga = self.rls, self.gram_lin, self.gram_ang
+        s2_lin = residual_variance(gl.S, np.append(rls.mu, -1.0), gl.rows, len(rls.mu))
+        z_ang = np.concatenate([rls.theta, [-1.0], -rls.D_mu])
+        return s2_lin, residual_variance(ga.S, z_ang, ga.rows, len(rls.theta))
+
+    def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
+        """Per equation (:func:`.uncertainty.prior_pull`); ``theta`` also moves with ``mu``'s
+        pull through ``d theta / d mu = M dD/dmu`` (the batch answer at the true ``mu``)."""
+        L, rls, gl, ga = self.layout, self.rls, self.gram_lin, self.gram_ang
+        p, r = len(rls.mu), len(rls.theta)
+        d_mu, u_mu = prior_pull(gl.decay * self._W0[0], gl.S[:p, :p], rls.mu, self._mu0)
+        d_th, u_th = prior_pull(ga.decay * self._W0[1], ga.S[:r, :r], rls.theta, self._th0)
+        Tm = rls.M.dot(par.D_jacobian(self.mu))[:, L.mu_active]       # (r, p)
+        d_th = d_th + Tm @ d_mu
+        u_th = u_th | (Tm[:, u_mu] != 0.0).any(axis=1)
+        delta, unobserved = np.zeros(L.n_mu + L.n_theta), np.zeros(L.n_mu + L.n_theta, bool)
+        delta[L.mu_active], unobserved[L.mu_active] = d_mu, u_mu
+        delta[L.n_mu + L.theta_active], unobserved[L.n_mu + L.theta_active] = d_th, u_th
+        return delta, unobserved
+
     def snapshot(self) -> tuple:
-        return self.rls.snapshot(), self.mu, self.theta
+        return self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang
 
     def restore(self, snap: tuple) -> None:
-        rls, self.mu, self.theta = snap
+        rls, self.mu, self.theta, self.gram_lin, self.gram_ang = snap
         self.rls.restore(rls)
 
 
@@ -239,6 +297,8 @@ class JointSolver(ParameterSolver):
         act = L.standard_active
         self._out = np.setdiff1d(np.arange(len(L.names)), act)
         self.rls = RLS(self.pi[act], np.diag(self.prior()[act]), lam)
+        self._pi0, self._W0 = self.pi[act], np.diag(1.0 / self.prior()[act])
+        self.gram = Gram.empty(len(act) + 1, lam)        # rows [Y | y]
         self._ix = np.ix_(act, act)
         # the identified columns that are masses / first moments, and inertias
         self._lin_cols = np.flatnonzero(L.first_order[act])
@@ -257,6 +317,7 @@ class JointSolver(ParameterSolver):
         if len(out):
             yy = yy - Y[:, out].dot(self.pi[out])
         e, _ = self.rls.update(Y[:, act], yy)
+        self.gram = self.gram.add(np.column_stack([Y[:, act], yy]))
         if L.complete:
             self.pi = self.rls.x
         else:
@@ -296,15 +357,23 @@ class JointSolver(ParameterSolver):
         return J
 
     def covariance(self) -> np.ndarray:
+        g, x = self.gram, self.rls.x
         cov = np.diag(self.prior())
-        cov[self._ix] = self.rls.P * self.rls.sigma2(len(self.layout.standard_active))
+        cov[self._ix] = self.rls.P * residual_variance(g.S, np.append(x, -1.0), g.rows, len(x))
         return cov
 
+    def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
+        g, x, act = self.gram, self.rls.x, self.layout.standard_active
+        d, u = prior_pull(g.decay * self._W0, g.S[:len(x), :len(x)], x, self._pi0)
+        delta, unobserved = np.zeros(len(self.pi)), np.zeros(len(self.pi), bool)
+        delta[act], unobserved[act] = d, u
+        return delta, unobserved
+
     def snapshot(self) -> tuple:
-        return self.rls.snapshot(), self.pi
+        return self.rls.snapshot(), self.pi, self.gram
 
     def restore(self, snap: tuple) -> None:
-        rls, self.pi = snap
+        rls, self.pi, self.gram = snap
         self.rls.restore(rls)
 
 

@@ -26,7 +26,7 @@ adds the statistical spread. A parameter touching an unobserved direction is fla
 """
 from __future__ import annotations
 
-from typing import Tuple
+from typing import NamedTuple, Tuple
 
 import numpy as np
 
@@ -36,30 +36,30 @@ __all__ = ["Gram", "prior_pull", "residual_variance"]
 REL_EIG_MIN = 1e-12
 
 
-class Gram:
-    """Weighted Gram matrix ``S = sum_k lam^(N-k) [H_k | y_k]^T [H_k | y_k]`` of a linear model.
+class Gram(NamedTuple):
+    """Weighted Gram matrix ``S = sum_k lam^(N-k) [H_k | y_k]^T [H_k | y_k]`` of a linear model,
+    the number of rows seen and the prior's remaining weight ``decay = lam^N``.
 
-    Parameters
-    ----------
-    n : int
-        Number of columns of the augmented rows (parameters + right-hand sides).
-    lam : float
-        Forgetting factor (the same as the solver's).
+    Immutable: :meth:`add` returns the updated one (so a solver's snapshot is a reference).
     """
 
-    def __init__(self, n: int, lam: float = 1.0):
-        self.S = np.zeros((n, n))
-        self.lam = float(lam)
-        self.rows = 0
+    S: np.ndarray
+    rows: int = 0
+    lam: float = 1.0
+    decay: float = 1.0
 
-    def update(self, rows: np.ndarray) -> None:
-        """Add the augmented rows (k, n)."""
+    @classmethod
+    def empty(cls, n: int, lam: float = 1.0) -> "Gram":
+        """No rows yet; ``n`` columns (parameters + right-hand sides)."""
+        return cls(np.zeros((n, n)), 0, float(lam), 1.0)
+
+    def add(self, rows: np.ndarray) -> "Gram":
+        """With the augmented rows (k, n) of one more sample."""
         rows = np.asarray(rows, dtype=float)
         if self.lam == 1.0:
-            self.S = self.S + rows.T @ rows
-        else:
-            self.S = self.lam * self.S + rows.T @ rows
-        self.rows += rows.shape[0]
+            return Gram(self.S + rows.T @ rows, self.rows + rows.shape[0], 1.0, 1.0)
+        return Gram(self.lam * self.S + rows.T @ rows, self.rows + rows.shape[0], self.lam,
+                    self.lam * self.decay)
 
 
 def residual_variance(S: np.ndarray, z: np.ndarray, rows: int, p: int) -> float:
@@ -77,14 +77,14 @@ def residual_variance(S: np.ndarray, z: np.ndarray, rows: int, p: int) -> float:
     return max(float(z @ S @ z), 0.0) / dof
 
 
-def prior_pull(P: np.ndarray, G: np.ndarray, x: np.ndarray, x0: np.ndarray
+def prior_pull(W0: np.ndarray, G: np.ndarray, x: np.ndarray, x0: np.ndarray
                ) -> Tuple[np.ndarray, np.ndarray]:
-    """The prior's pull ``delta = x - x_LS = -G^-1 W0 (x - x0)`` with ``W0 = P^-1 - G``.
+    """The prior's pull ``delta = x - x_LS = -G^-1 W0 (x - x0)``.
 
     Parameters
     ----------
-    P : (p, p) solver covariance;  G : (p, p) information (same weighting);
-    x : (p,) estimate;  x0 : (p,) initial estimate.
+    W0 : (p, p) the prior's remaining weight ``lam^N P0^-1``;  G : (p, p) information (same
+    weighting, :class:`Gram`);  x : (p,) estimate;  x0 : (p,) initial estimate.
 
     Returns
     -------
@@ -96,18 +96,16 @@ def prior_pull(P: np.ndarray, G: np.ndarray, x: np.ndarray, x0: np.ndarray
     p = len(x)
     dg = np.diag(G).copy()
     unobserved = ~(dg > 0.0)
-    d = np.where(unobserved, 1.0, np.sqrt(np.where(unobserved, 1.0, dg)))
+    d = np.sqrt(np.where(unobserved, 1.0, dg))
     Gs = G / np.outer(d, d)                                  # scale-free information
     Gs[unobserved, :] = 0.0
     Gs[:, unobserved] = 0.0
     lam, V = np.linalg.eigh(Gs)
     big = lam[-1] if p and lam[-1] > 0.0 else 0.0
     keep = lam > REL_EIG_MIN * big
-    W0 = np.linalg.inv(P) - G                                # the prior's remaining weight
     r = W0 @ (np.asarray(x, float) - np.asarray(x0, float)) / d
     Vk = V[:, keep]
     delta = -(Vk / lam[keep]) @ (Vk.T @ r) / d               # -G^-1 W0 (x - x0), observed part
     if not np.all(keep):
-        Vn = V[:, ~keep]
-        unobserved = unobserved | (np.abs(Vn).max(axis=1) > 1e-6)
+        unobserved = unobserved | (np.abs(V[:, ~keep]).max(axis=1) > 1e-6)
     return delta, unobserved
