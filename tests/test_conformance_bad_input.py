@@ -217,7 +217,7 @@ def _core_without(robot, names, samples, skip, n=N):
                                                  else 3)
             meas.setdefault(group, np.zeros(shape))[idx] = x
         ident.update(k * DT, meas)
-    return ident.vector(), ident.samples
+    return ident.report().vector, ident.samples
 
 
 ESTIMATES = [f"{who}.{p}" for who in ("base", "target")

@@ -161,6 +161,7 @@ CONTRACT_UNITS = [
     (r"ident\.excite|excite\.level", "1"), (r"excite\.(att_max|q_max)", "rad"),
     (r"excite\.qd_max", "rad/s"), (r"excite\.qdd_max", "rad/s2"), (r"excite\.(period|ramp)", "s"),
     (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta)", "1"),
+    (r"ident\.(sd_rel|excite_level)", "1"),
 ]
 
 

@@ -1,15 +1,42 @@
 """Executing a sweep on Dask: skip finished points, build each robot's .ssp once, submit the
-rest to a local cluster or an existing scheduler, write each row as it finishes."""
+rest to a local cluster or an existing scheduler, write each row as it finishes.
+
+The same machinery runs any study whose items are co-simulations of one robot's .ssp
+(:class:`Study`): the parameter sweep, and the Monte Carlo study
+(:mod:`spacerobot.system.montecarlo`). An item has ``id`` (stable hash), ``robot`` and
+``columns()`` (its parameters as table columns, including the study's key column).
+"""
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List, Mapping, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 from .points import Point
 from .run import DEFAULT_BUILDER, DEFAULT_RUNNER, _resolve, run_point
-from .table import _check_header, _exclusive, _rewrite, _Table, read_table
+from .table import COLUMNS, _check_header, _exclusive, _rewrite, _Table, read_table
+
+
+@dataclass(frozen=True)
+class Study:
+    """What kind of table a run of :func:`run_sweep` writes, and how one item runs.
+
+    name : str                   "sweep", "montecarlo" (messages, progress bar, Dask keys)
+    columns : tuple of str       the table's columns
+    key : str                    the column holding the item's id
+    task : callable              ``task(item, ssp_path, runner) -> row`` (never raises; a
+                                 failure is a row with ``status = failed``)
+    """
+
+    name: str = "sweep"
+    columns: Tuple[str, ...] = COLUMNS
+    key: str = "sweep_id"
+    task: Callable = run_point
+
+
+#: the parameter sweep
+SWEEP = Study()
 
 @dataclass
 class SweepSummary:
@@ -29,7 +56,7 @@ class SweepSummary:
         return s
 
 
-def _failed_row(point: Point, err: str) -> Dict[str, object]:
+def _failed_row(point, err: str) -> Dict[str, object]:
     row = dict(point.columns())
     row.update(status="failed", error=err)
     return row
@@ -38,7 +65,8 @@ def _failed_row(point: Point, err: str) -> Dict[str, object]:
 def run_sweep(points: Sequence[Point], out_csv, *, workers: int = 2,
               scheduler: Optional[str] = None, client=None, build_dir=None,
               ssp: Optional[Mapping[str, str]] = None, progress: bool = True,
-              runner: str = DEFAULT_RUNNER, builder: str = DEFAULT_BUILDER) -> SweepSummary:
+              runner: str = DEFAULT_RUNNER, builder: str = DEFAULT_BUILDER,
+              study: Study = SWEEP) -> SweepSummary:
     """Run every point not yet done and append its row to ``out_csv``.
 
     Parameters
@@ -52,6 +80,7 @@ def run_sweep(points: Sequence[Point], out_csv, *, workers: int = 2,
     ssp : ``{robot: path}`` of already built .ssp files (skips the build for those robots).
     progress : show a tqdm progress bar.
     runner, builder : ``"module:function"`` of the co-simulation runner and of the SSP build.
+    study : the kind of items and table (default: the parameter sweep, :data:`SWEEP`).
 
     Only one sweep at a time may write a table: a second one on the same ``out_csv`` raises
     :class:`SweepLocked` (an advisory lock on ``<out_csv>.lock``, held while the sweep runs).
@@ -61,13 +90,13 @@ def run_sweep(points: Sequence[Point], out_csv, *, workers: int = 2,
     with _exclusive(out):
         return _run_sweep(points, out, workers=workers, scheduler=scheduler, client=client,
                           build_dir=build_dir, ssp=ssp, progress=progress, runner=runner,
-                          builder=builder)
+                          builder=builder, study=study)
 
 
 def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp, progress,
-               runner, builder) -> SweepSummary:
+               runner, builder, study: Study) -> SweepSummary:
     summary = SweepSummary(csv=str(out))
-    todo = _points_to_run(points, out, summary)
+    todo = _points_to_run(points, out, summary, study)
     if not todo:
         return summary
     ssp_paths = _build_systems(todo, out, ssp, build_dir, builder)
@@ -75,7 +104,7 @@ def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp,
     from distributed import Client, LocalCluster, as_completed
 
     cluster = own_client = None
-    table = _Table(out)
+    table = _Table(out, study.columns)
     try:
         if client is None:
             if scheduler:
@@ -85,13 +114,13 @@ def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp,
                                        threads_per_worker=1, dashboard_address=":0")
                 client = own_client = Client(cluster)
         stamp = f"{time.time_ns():x}"
-        futures = {client.submit(run_point, p, ssp_paths[p.robot], runner, pure=False,
-                                 key=f"sweep-{p.id}-{stamp}", retries=0): p for p in todo}
+        futures = {client.submit(study.task, p, ssp_paths[p.robot], runner, pure=False,
+                                 key=f"{study.name}-{p.id}-{stamp}", retries=0): p for p in todo}
         summary.submitted = len(futures)
         bar = None
         if progress:
             from tqdm.auto import tqdm
-            bar = tqdm(total=len(futures), desc="sweep", unit="point")
+            bar = tqdm(total=len(futures), desc=study.name, unit="point")
         try:
             for fut in as_completed(list(futures)):
                 p = futures[fut]
@@ -124,7 +153,8 @@ def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp,
     return summary
 
 
-def _points_to_run(points: Sequence[Point], out: Path, summary: SweepSummary) -> List[Point]:
+def _points_to_run(points: Sequence[Point], out: Path, summary: SweepSummary,
+                   study: Study = SWEEP) -> List[Point]:
     """The points of the grid not yet in the table with status ok (counted in ``summary``);
     the old rows of points that failed before are dropped, so the table keeps one row each."""
     uniq: Dict[str, Point] = {}
@@ -132,14 +162,15 @@ def _points_to_run(points: Sequence[Point], out: Path, summary: SweepSummary) ->
         uniq.setdefault(p.id, p)
     summary.total = len(uniq)
     if out.exists() and out.stat().st_size:
-        _check_header(out)
-    rows = read_table(out)
-    done = {r["sweep_id"] for r in rows if r["status"] == "ok"}
+        _check_header(out, study.columns, study.name)
+    key = study.key
+    rows = read_table(out, key)
+    done = {r[key] for r in rows if r["status"] == "ok"}
     todo = [p for pid, p in uniq.items() if pid not in done]
     summary.skipped = summary.total - len(todo)
     todo_ids = {p.id for p in todo}
-    if any(r["sweep_id"] in todo_ids for r in rows):
-        _rewrite(out, [r for r in rows if r["sweep_id"] not in todo_ids])
+    if any(r[key] in todo_ids for r in rows):
+        _rewrite(out, [r for r in rows if r[key] not in todo_ids], study.columns)
     return todo
 
 

@@ -22,9 +22,9 @@ COLUMNS: Tuple[str, ...] = (
     + tuple(f"relerr.{p}" for p in PARAMS))
 
 
-
-def read_table(csv_path) -> List[Dict[str, str]]:
-    """Rows of a sweep table (complete lines only); ``[]`` if the file does not exist."""
+def read_table(csv_path, key: str = "sweep_id") -> List[Dict[str, str]]:
+    """Rows of a results table (complete lines only, with a value in the ``key`` column);
+    ``[]`` if the file does not exist."""
     path = Path(csv_path)
     if not path.exists() or path.stat().st_size == 0:
         return []
@@ -32,22 +32,22 @@ def read_table(csv_path) -> List[Dict[str, str]]:
     if not text.endswith("\n"):               # an interrupted write: drop the partial line
         text = text[: text.rfind("\n") + 1]
     reader = csv.DictReader(io.StringIO(text))
-    return [r for r in reader if r.get("sweep_id") and None not in r.values()
+    return [r for r in reader if r.get(key) and None not in r.values()
             and None not in r]
 
 
-def _check_header(path: Path) -> None:
+def _check_header(path: Path, columns: Tuple[str, ...] = COLUMNS, what: str = "sweep") -> None:
     with path.open(newline="") as f:
         header = next(csv.reader(f), None)
-    if header is not None and tuple(header) != COLUMNS:
-        raise ValueError(f"{path} is not a sweep table of this version (its columns differ); "
+    if header is not None and tuple(header) != tuple(columns):
+        raise ValueError(f"{path} is not a {what} table of this version (its columns differ); "
                          f"choose another output file")
 
 
-def _rewrite(path: Path, rows: List[Dict[str, str]]) -> None:
+def _rewrite(path: Path, rows: List[Dict[str, str]], columns: Tuple[str, ...] = COLUMNS) -> None:
     tmp = path.with_name(path.name + ".tmp")
     with tmp.open("w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=COLUMNS)
+        w = csv.DictWriter(f, fieldnames=columns)
         w.writeheader()
         w.writerows(rows)
         f.flush()
@@ -58,8 +58,8 @@ def _rewrite(path: Path, rows: List[Dict[str, str]]) -> None:
 class _Table:
     """Append-only writer: one flushed (and fsynced) line per finished point."""
 
-    def __init__(self, path: Path):
-        self.path = path
+    def __init__(self, path: Path, columns: Tuple[str, ...] = COLUMNS):
+        self.path, self.columns = path, tuple(columns)
         path.parent.mkdir(parents=True, exist_ok=True)
         new = not path.exists() or path.stat().st_size == 0
         if not new:
@@ -68,7 +68,7 @@ class _Table:
                 with path.open("r+b") as f:
                     f.truncate(data.rfind(b"\n") + 1)
         self.f = path.open("a", newline="")
-        self.w = csv.DictWriter(self.f, fieldnames=COLUMNS, extrasaction="ignore")
+        self.w = csv.DictWriter(self.f, fieldnames=self.columns, extrasaction="ignore")
         if new:
             self.w.writeheader()
             self._flush()
@@ -78,7 +78,7 @@ class _Table:
         os.fsync(self.f.fileno())
 
     def write(self, row: Mapping[str, object]) -> None:
-        self.w.writerow({k: ("" if row.get(k) is None else row.get(k)) for k in COLUMNS})
+        self.w.writerow({k: ("" if row.get(k) is None else row.get(k)) for k in self.columns})
         self._flush()
 
     def close(self):
