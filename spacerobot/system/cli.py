@@ -8,6 +8,7 @@
                    [--solver paper|joint] [--stop-time T] [--out CSV] [--set NAME=VALUE ...]
     spacerobot plot CSV [--out PNG]
     spacerobot sweep ...        (spacerobot.system.sweep, if installed)
+    spacerobot montecarlo ...   (spacerobot.system.montecarlo)
     spacerobot crosscheck ...   (spacerobot.system.crosscheck, if installed)
 """
 from __future__ import annotations
@@ -125,7 +126,8 @@ def cmd_plot(args) -> int:
 # ----------------------------------------------------------------------------------------------
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser (with ``sweep``/``crosscheck`` if those modules are installed)."""
+    """The argument parser (with ``sweep``/``montecarlo``/``crosscheck`` if those modules are
+    installed)."""
     parser = argparse.ArgumentParser(
         prog="spacerobot",
         description="Online identification of base and target inertial parameters of a space "
@@ -174,7 +176,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="PNG", help="output PNG (default: CSV with .png suffix)")
     p.set_defaults(func=cmd_plot)
 
-    for mod in ("sweep", "crosscheck"):
+    for mod in ("sweep", "montecarlo", "crosscheck"):
         name = f"{__package__}.{mod}"
         if importlib.util.find_spec(name) is not None:
             importlib.import_module(name).register(sub)

@@ -1,0 +1,324 @@
+"""Monte Carlo study: identification on random real bases, targets and initial states.
+
+Each *case* draws a base, a target and an initial tumbling with
+:func:`spacerobot.robots.random_scenario` from the generator ``default_rng([seed, index])``
+(the same bodies for every method and excitation mode of that index, so they compare on equal
+terms), and runs the robot's SSP system for ``stop_time`` seconds with those plant parameters,
+the estimator's defaults and the chosen method, the excitation loop closed (estimator
+``ident.excite_mode`` = until identified) or off. The cases run on Dask through the sweep's
+executor (:func:`spacerobot.system.sweep.execute.run_sweep` with :data:`STUDY`), one tidy row
+per case (:data:`COLUMNS`), resumable.
+
+Per case, from the recorded series (:func:`.mc_metrics.run_metrics`): the worst relative error
+of the identified estimates at the end (``interface.relative_errors``), the times after which
+it stays below 1 % and 0.1 %, the identified flags and when they rose, whether a flag was ever
+1 while an estimate of its body was more than 1 % off, whether every reported estimate was a
+real body (checked here with :func:`spacerobot.estimator.physical.is_physical`, independently of
+the estimator's own flags), the excitation used, and the largest excitation references against
+their bounds.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import socket
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from .. import interface
+from ..interface import ESTIMATE_NAMES, ExciteMode, ParameterLayout
+from ..robots import ROBOTS, Scenario, random_scenario
+from .codes import estimator_overrides
+from .mc_metrics import run_metrics
+from .sweep.execute import Study, run_sweep
+from .sweep.run import DEFAULT_RUNNER, _resolve
+
+__all__ = ["Case", "make_cases", "run_case", "run_montecarlo", "plot_montecarlo", "COLUMNS",
+           "STUDY", "EXCITE"]
+
+#: excitation modes of a case -> the estimator's ``ident.excite_mode``
+EXCITE = {"closed": ExciteMode.UNTIL_IDENTIFIED, "off": ExciteMode.OFF}
+
+#: plant parameters a case sets (the drawn bodies and initial state)
+_CASE_PARAMS = ("base.", "target.", "base.v0", "base.omega0")
+
+CASE_COLUMNS = ("case_id", "robot", "case", "seed", "method", "accel_source", "solver", "excite",
+                "stop_time", "base_mass", "target_mass", "omega0_norm", "v0_norm")
+METRIC_COLUMNS = ("worst_error", "worst_param", "t_1pct", "t_01pct",
+                  "identified.base", "identified.target", "t_identified.base",
+                  "t_identified.target", "false_identified.base", "false_identified.target",
+                  "physical", "excite_mean", "t_excite_off", "max_att_ref", "att_max",
+                  "max_qd_ref", "qd_max", "max_qd")
+COLUMNS = (CASE_COLUMNS + ("status", "error", "wall_time", "worker") + METRIC_COLUMNS
+           + tuple(f"relerr.{p}" for p in ESTIMATE_NAMES))
+
+
+@dataclass(frozen=True)
+class Case:
+    """One random case: robot, index and seed of the draw, identification set-up, excitation."""
+
+    robot: str = "spatial"
+    index: int = 0
+    seed: int = 0
+    method: str = "momentum"
+    excite: str = "closed"
+    stop_time: float = 60.0
+    accel_source: str = "measured"
+    solver: str = "paper"
+
+    def __post_init__(self):
+        if self.robot not in ROBOTS:
+            raise ValueError(f"robot must be one of {sorted(ROBOTS)}, got {self.robot!r}")
+        if self.excite not in EXCITE:
+            raise ValueError(f"excite must be one of {sorted(EXCITE)}, got {self.excite!r}")
+        if not (self.stop_time > 0.0 and math.isfinite(self.stop_time)):
+            raise ValueError(f"stop time must be a finite number > 0, got {self.stop_time}")
+        estimator_overrides(self.method, self.accel_source, self.solver)   # checks the labels
+
+    @property
+    def id(self) -> str:
+        """Stable 16-hex-digit hash of the case's parameters."""
+        text = json.dumps([self.robot, self.index, self.seed, self.method, self.excite,
+                           repr(float(self.stop_time)), self.accel_source, self.solver])
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def scenario(self) -> Scenario:
+        """The drawn bodies and initial state (the same for every method and excitation)."""
+        return random_scenario(self.robot, np.random.default_rng([self.seed, self.index]),
+                               name=f"{self.robot}-random-{self.seed}-{self.index}")
+
+    def fmi_overrides(self) -> Dict[str, float]:
+        """SSP runner overrides: the drawn plant parameters and the estimator set-up."""
+        sc = self.scenario()
+        ov: Dict[str, float] = {f"plant.{v.name}": float(v.start)
+                                for v in interface.plant_vars(sc.robot, sc)
+                                if v.causality == "parameter" and v.name.startswith(_CASE_PARAMS)}
+        ov.update(estimator_overrides(self.method, self.accel_source, self.solver))
+        ov["estimator.ident.excite_mode"] = int(EXCITE[self.excite])
+        return ov
+
+    def columns(self) -> Dict[str, object]:
+        sc = self.scenario()
+        return {"case_id": self.id, "robot": self.robot, "case": self.index, "seed": self.seed,
+                "method": self.method, "accel_source": self.accel_source, "solver": self.solver,
+                "excite": self.excite, "stop_time": self.stop_time,
+                "base_mass": sc.robot.base.mass, "target_mass": sc.target.mass,
+                "omega0_norm": float(np.linalg.norm(sc.omega0)),
+                "v0_norm": float(np.linalg.norm(sc.v0))}
+
+
+def make_cases(robot: str = "spatial", cases: int = 20, seed: int = 0,
+               methods: Sequence[str] = ("momentum", "force"),
+               excite: Sequence[str] = ("closed",), stop_time: float = 60.0) -> List[Case]:
+    """Every index ``0 .. cases-1`` with every method and excitation mode."""
+    if cases < 1:
+        raise ValueError(f"the number of cases must be >= 1, got {cases}")
+    return [Case(robot, i, seed, m, e, stop_time) for i in range(cases) for m in methods
+            for e in excite]
+
+
+def _series(res, names: Sequence[str], component: str) -> np.ndarray:
+    try:
+        return np.column_stack([res.data[f"{component}.{n}"] for n in names])
+    except KeyError as e:
+        raise RuntimeError(f"the run recorded no column {e.args[0]}: is {component!r} the "
+                           f"project's FMU with the closed excitation loop?") from None
+
+
+def case_row(case: Case, res) -> Dict[str, object]:
+    """The metric columns of one finished run (:class:`~spacerobot.system.runner.RunResult`)."""
+    from ..estimator.physical import is_physical
+
+    robot = ROBOTS[case.robot]
+    layout = ParameterLayout.for_robot(robot)
+    est = _series(res, ESTIMATE_NAMES, "estimator")
+    truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
+    flags = _series(res, ("diag.identified.base", "diag.identified.target"), "estimator")
+    physical = np.array([all(is_physical(e[b.m], e[b.first], e[b.inertia])
+                             for b in layout.bodies) for e in est])
+    excite = res.data["plant.ident.excite"]
+    bodies = {b.name: np.flatnonzero(layout.identified & (np.arange(20) >= b.vec.start)
+                                     & (np.arange(20) < b.vec.stop)) for b in layout.bodies}
+    row: Dict[str, object] = run_metrics(res.time, est, truth, interface.error_scale(truth),
+                                         flags, physical, excite, bodies)
+    row["worst_param"] = ESTIMATE_NAMES[row["worst_param"]]
+    n = robot.n_joints
+    qd = _series(res, [f"arm.qd[{k + 1}]" for k in range(n)], "plant")
+    row["max_qd"] = float(np.abs(qd).max())
+    row["max_qd_ref"] = float(np.abs(_series(res, [f"excite.qd_ref[{k + 1}]" for k in range(n)],
+                                              "plant")).max())
+    row["max_att_ref"] = float(np.abs(_series(res, [f"excite.att_ref[{k + 1}]" for k in range(3)],
+                                               "plant")).max())
+    for name in ("qd_max", "att_max"):
+        row[name] = float(res.parameters[f"plant.excite.{name}"])
+    rel = interface.relative_errors(est[-1], truth)
+    row.update({f"relerr.{p}": float(r) for p, r in zip(ESTIMATE_NAMES, rel)})
+    return row
+
+
+def run_case(case: Case, ssp_path: str, runner: str = DEFAULT_RUNNER) -> Dict[str, object]:
+    """Run one case; never raises: a failure becomes a row with ``status = failed``."""
+    row: Dict[str, object] = dict(case.columns())
+    row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
+    t0 = time.perf_counter()
+    try:
+        res = _resolve(runner)(str(ssp_path), stop_time=case.stop_time,
+                               overrides=case.fmi_overrides(), progress=False)
+        row.update(case_row(case, res))
+        row["status"], row["error"] = "ok", ""
+    except Exception as e:  # noqa: BLE001 -- report every failure in the table
+        msg = str(e).strip() or traceback.format_exc(limit=1).strip().splitlines()[-1]
+        row["status"], row["error"] = "failed", f"{type(e).__name__}: {msg}"
+    row["wall_time"] = round(time.perf_counter() - t0, 3)
+    return row
+
+
+#: the Monte Carlo study for the sweep's executor
+STUDY = Study(name="montecarlo", columns=COLUMNS, key="case_id", task=run_case)
+
+
+def run_montecarlo(cases: Sequence[Case], out_csv, **kwargs):
+    """Run every case not yet in ``out_csv`` on Dask (keywords of
+    :func:`spacerobot.system.sweep.execute.run_sweep`: ``workers``, ``scheduler``, ``client``,
+    ``build_dir``, ``ssp``, ``progress``). Returns the :class:`SweepSummary`."""
+    return run_sweep(cases, out_csv, study=STUDY, **kwargs)
+
+
+def read_results(csv_path) -> List[Dict[str, str]]:
+    """The rows of a Monte Carlo table (complete lines)."""
+    from .sweep.table import read_table
+    return read_table(csv_path, STUDY.key)
+
+
+def summary_table(rows: Sequence[Dict[str, str]]) -> str:
+    """A Markdown table per (method, excitation): cases, within 1 % / 0.1 % at the end, median
+    and largest worst error, median time to 1 % and 0.1 %, identified, false flags, impossible
+    estimates."""
+    groups: Dict[tuple, List[Dict[str, str]]] = {}
+    for r in rows:
+        if r["status"] == "ok":
+            groups.setdefault((r["robot"], r["method"], r["excite"]), []).append(r)
+    lines = ["| robot | method | excitation | cases | within 1 % | within 0.1 % | median worst "
+             "error | largest worst error | median time to 1 % [s] | median time to 0.1 % [s] "
+             "| both identified | false flags | impossible estimates |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for (robot, method, excite), rs in sorted(groups.items()):
+        w = np.array([float(r["worst_error"]) for r in rs])
+        t1 = np.array([float(r["t_1pct"]) for r in rs])
+        t01 = np.array([float(r["t_01pct"]) for r in rs])
+        both = sum(r["identified.base"] == "1" and r["identified.target"] == "1" for r in rs)
+        false = sum(r["false_identified.base"] == "1" or r["false_identified.target"] == "1"
+                    for r in rs)
+        bad = sum(r["physical"] != "1" for r in rs)
+        n = len(rs)
+
+        def med(t):
+            return f"{np.median(t):.1f}" if np.isfinite(t).sum() * 2 > n else "> end"
+        lines.append(f"| {robot} | {method} | {excite} | {n} | {(w < 1e-2).sum()}/{n} | "
+                     f"{(w < 1e-3).sum()}/{n} | {100 * np.median(w):.3g} % | "
+                     f"{100 * w.max():.3g} % | {med(t1)} | {med(t01)} | {both}/{n} | {false} | "
+                     f"{bad} |")
+    return "\n".join(lines)
+
+
+def plot_montecarlo(csv_path, out_png: Optional[str] = None) -> Path:
+    """Distribution of the worst error per method and excitation: the fraction of cases whose
+    worst error at the end is below x, with the 1 % and 0.1 % lines."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [r for r in read_results(csv_path) if r["status"] == "ok"]
+    if not rows:
+        raise ValueError(f"{csv_path} has no finished case to plot")
+    groups: Dict[tuple, List[float]] = {}
+    for r in rows:
+        groups.setdefault((r["method"], r["excite"]), []).append(float(r["worst_error"]))
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for (method, excite), w in sorted(groups.items()):
+        w = np.sort(np.maximum(np.array(w) * 100, 1e-7))
+        frac = np.arange(1, len(w) + 1) / len(w)
+        ax.step(w, frac, where="post", label=f"{method}, excitation {excite} ({len(w)} cases)",
+                ls="-" if excite == "closed" else "--")
+    for x, lab in ((1.0, "1 %"), (0.1, "0.1 %")):
+        ax.axvline(x, color="grey", lw=0.8, ls=":")
+        ax.text(x, 0.02, f" {lab}", color="grey", fontsize=8)
+    ax.set_xscale("log")
+    ax.set_xlabel("worst relative error of the identified estimates at the end [%]")
+    ax.set_ylabel("fraction of cases")
+    ax.set_ylim(0, 1.02)
+    ax.set_title(f"Monte Carlo: {rows[0]['robot']} robot, random bases and targets, "
+                 f"{float(rows[0]['stop_time']):g} s")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="lower right", fontsize=8)
+    out = Path(out_png) if out_png else Path(csv_path).with_suffix(".png")
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# command line: spacerobot montecarlo
+# ----------------------------------------------------------------------------------------------
+
+def register(subparsers):
+    """Add the ``montecarlo`` subcommand to an argparse ``subparsers`` object."""
+    import argparse
+
+    from .cli import fail_on_errors
+
+    p = subparsers.add_parser(
+        "montecarlo", help="identification on random real bases and targets, on Dask",
+        description="Draw random real bases, targets and initial states, run each case through "
+                    "the SSP system on a Dask cluster (local by default) and write one row per "
+                    "case (worst error, times to 1 %% and 0.1 %%, identified flags, physical "
+                    "flag, excitation used) to a resumable CSV, a summary table and a plot of "
+                    "the worst-error distribution.",
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--robot", choices=sorted(ROBOTS), default="spatial")
+    p.add_argument("--cases", type=int, default=20, help="number of random cases")
+    p.add_argument("--seed", type=int, default=0, help="seed of the draws")
+    p.add_argument("--method", nargs="+", default=["momentum", "force"],
+                   choices=["momentum", "force"])
+    p.add_argument("--excite", nargs="+", default=["closed"], choices=sorted(EXCITE),
+                   help="closed: the estimator requests excitation until both bodies are "
+                        "identified; off: no excitation (the paper's behaviour)")
+    p.add_argument("--stop-time", dest="stop_time", type=float, default=60.0, metavar="T")
+    p.add_argument("--workers", type=int, default=2, help="local cluster worker processes")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler")
+    p.add_argument("--build-dir", dest="build_dir", metavar="DIR",
+                   help="where the .ssp is built (default <out>.build/)")
+    p.add_argument("--out", metavar="CSV", help="results table (default "
+                   "results/montecarlo-<robot>-seed<S>.csv; resumed if it exists)")
+    p.add_argument("--plot", metavar="PNG", help="plot (default: the CSV with .png)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=fail_on_errors("montecarlo")(cli_montecarlo))
+    return p
+
+
+def cli_montecarlo(args) -> int:
+    """The ``spacerobot montecarlo`` command; exit status 1 if a case failed."""
+    from .recorder import check_writable
+    from .sweep.table import SweepLocked
+
+    out = Path(args.out or f"results/montecarlo-{args.robot}-seed{args.seed}.csv")
+    check_writable(out)
+    cases = make_cases(args.robot, args.cases, args.seed, args.method, args.excite,
+                       args.stop_time)
+    try:
+        summary = run_montecarlo(cases, out, workers=args.workers, scheduler=args.scheduler,
+                                 build_dir=args.build_dir, progress=not args.no_progress)
+    except SweepLocked as e:
+        raise ValueError(str(e)) from None
+    print(summary)
+    print(summary_table(read_results(out)))
+    print("plot:", plot_montecarlo(out, args.plot))
+    return 1 if summary.failed else 0
