@@ -187,6 +187,10 @@ def plant_excitation_vars(sc: Scenario) -> List[Var]:
          Var("excite.level", "output", "continuous", "Real", "1",
              "Excitation level in effect (follows ident.excite along a quintic ramp)", None,
              ("excite_level", 0))]
+    v += _vec("excite.att_ref", "att_ref", "rad", "Base attitude excitation reference (rotation "
+              "vector about the initial attitude; within excite.att_max per axis)", "output")
+    v += _joint("excite.qd_ref", "qd_ref", "rad/s", "Joint rate excitation reference (within "
+                "excite.qd_max)", sc.robot.n_joints, "output")
     for name, (unit, doc) in EXCITATION_DOC.items():
         v.append(Var(f"excite.{name}", "parameter", "fixed", "Real", unit, doc,
                      float(getattr(ex, name)), ("excite_par", name)))
@@ -546,3 +550,8 @@ def identified_estimates(robot: Robot) -> List[str]:
 def connections(robot: Robot) -> List[str]:
     """Names wired plant output -> estimator input of the same name."""
     return [v.name for v in measurement_vars(robot.n_joints, "input")]
+
+
+def feedback_connections() -> List[str]:
+    """Names wired estimator output -> plant input of the same name (the excitation loop)."""
+    return ["ident.excite"]

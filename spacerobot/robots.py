@@ -446,6 +446,55 @@ def scenario_from_dict(d: dict) -> Scenario:
                     excitation=Excitation(**d.get("excitation", {})))
 
 
+#: An excitation with zero amplitudes: whatever level is requested, the plant moves as the
+#: paper's (bit for bit, ``tests/test_excitation.py``).
+NO_EXCITATION = Excitation(att_max=0.0, q_max=0.0)
+
+
+@dataclass(frozen=True)
+class ParameterSet:
+    """A named parameter set of the generated SSP: a target and whether the plant excites."""
+
+    target: str
+    excited: bool
+    description: str
+
+
+#: The parameter sets of each robot's SSP (one ``.ssv`` each). The paper's scenarios keep the
+#: excitation off (:data:`NO_EXCITATION`), so they reproduce the paper's figures with the
+#: excitation loop wired; the others let the estimator's request move the plant.
+PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
+    "planar": {
+        "small": ParameterSet("small", False, "the paper's planar scenario, small target"),
+        "medium": ParameterSet("medium", False, "the paper's planar scenario, medium target"),
+        "large": ParameterSet("large", False, "the paper's planar scenario, large target"),
+        "paper": ParameterSet("medium", False, "the paper's planar scenario (medium target), "
+                                               "no excitation"),
+        "excited": ParameterSet("medium", True, "medium target, excitation on request of the "
+                                                "estimator"),
+    },
+    "spatial": {
+        "paper": ParameterSet("default", False, "the paper's spatial scenario, no excitation"),
+        "default": ParameterSet("default", True, "the paper's spatial robot and target, "
+                                                 "excitation on request of the estimator"),
+    },
+}
+
+
+def parameter_set_scenario(robot: str, name: str) -> Scenario:
+    """The scenario of parameter set ``name`` of ``robot`` (:data:`PARAMETER_SETS`)."""
+    if robot not in PARAMETER_SETS:
+        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(PARAMETER_SETS)}")
+    sets = PARAMETER_SETS[robot]
+    if name not in sets:
+        raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
+                         f"choose from {sorted(sets)}")
+    ps = sets[name]
+    sc = scenario(robot, ps.target)
+    return replace(sc, name=f"{robot}-{name}",
+                   excitation=sc.excitation if ps.excited else NO_EXCITATION)
+
+
 def scenario(robot: str = "planar", target: str | None = None, **overrides) -> Scenario:
     """The paper's scenario for ``robot`` with the named target; keyword overrides replace fields.
 

@@ -87,13 +87,16 @@ def test_plant_lifecycle_and_outputs_equal_the_core(robot_fmus):
     for prefix, g in groups.items():
         for i in range(3):
             expected[f"{prefix}[{i + 1}]"] = out[g][i]
-    for prefix, g in (("arm.q", "q"), ("arm.qd", "qd"), ("arm.qdd", "qdd"), ("arm.tau", "tau")):
+    for prefix, g in (("arm.q", "q"), ("arm.qd", "qd"), ("arm.qdd", "qdd"), ("arm.tau", "tau"),
+                      ("excite.qd_ref", "qd_ref")):
         for i in range(n):
             expected[f"{prefix}[{i + 1}]"] = out[g][i]
     for i in range(3):
         for j in range(3):
             expected[f"base.A[{i + 1},{j + 1}]"] = out["A"][i][j]
     expected["excite.level"] = out["excite_level"][0]     # issue #12 (excitation off: 0)
+    for i in range(3):
+        expected[f"excite.att_ref[{i + 1}]"] = out["att_ref"][i]
     assert set(expected) == set(fmu_out)
     assert_same({k: fmu_out[k] for k in expected}, {k: float(v) for k, v in expected.items()},
                 "FMU vs core")

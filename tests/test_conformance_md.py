@@ -161,7 +161,8 @@ CONTRACT_UNITS = [
     (r"ident\.excite|excite\.level", "1"), (r"excite\.(att_max|q_max)", "rad"),
     (r"excite\.qd_max", "rad/s"), (r"excite\.qdd_max", "rad/s2"), (r"excite\.(period|ramp)", "s"),
     (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta)", "1"),
-    (r"ident\.(sd_rel|excite_level)", "1"),
+    (r"ident\.(sd_rel|excite_level)", "1"), (r"excite\.att_ref\[\d\]", "rad"),
+    (r"excite\.qd_ref\[\d\]", "rad/s"),
 ]
 
 
@@ -293,7 +294,7 @@ def test_docs_capability_table_matches_the_model_description(planar_fmus, spatia
 # -- generator of the docs tables (run this file as a script) -------------------------------------
 def _group(name: str) -> str:
     name = re.sub(r"\[\d+,\d+\]$", "[1..3,1..3]", name)
-    name = re.sub(r"^(arm\.\w+)\[\d+\]$", r"\1[1..n]", name)
+    name = re.sub(r"^(arm\.\w+|excite\.qd_ref)\[\d+\]$", r"\1[1..n]", name)
     name = re.sub(r"\[\d\]$", "[1..3]", name)
     return re.sub(r"\.(Ixx|Iyy|Izz|Ixy|Ixz|Iyz)$", ".{Ixx,Iyy,Izz,Ixy,Ixz,Iyz}", name)
 

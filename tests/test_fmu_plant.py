@@ -36,13 +36,14 @@ FMI_DISCARD, FMI_WARNING = 2, 1
 OUTPUT_KEYS = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "omega_B",
                "base.a": "a_S", "base.alpha": "alpha_B", "arm.q": "q", "arm.qd": "qd",
                "arm.qdd": "qdd", "thrust.F": "F", "thrust.M": "M", "thrust.J": "J",
-               "thrust.H": "H", "system.P": "P", "system.L": "L", "arm.tau": "tau"}
+               "thrust.H": "H", "system.P": "P", "system.L": "L", "arm.tau": "tau",
+               "excite.att_ref": "att_ref", "excite.qd_ref": "qd_ref"}
 
 
 def core_value(out: dict, name: str) -> float:
     if name == "excite.level":
         return float(out["excite_level"][0])
-    m = re.fullmatch(r"([a-z]+\.[A-Za-z]+)\[(\d+)(?:,(\d+))?\]", name)
+    m = re.fullmatch(r"([a-z]+\.[A-Za-z_]+)\[(\d+)(?:,(\d+))?\]", name)
     assert m, name
     arr = out[OUTPUT_KEYS[m.group(1)]]
     if m.group(3):
@@ -87,8 +88,9 @@ def test_fmu_outputs_equal_core(spatial_fmus):
     core = Plant(sc.robot, case["base"], case["target"], ctrl, case["v0"], case["omega0"], sc.h)
     s = started_slave(spatial_fmus["plant"], _params(case), "plant")
     outs = s.names("output")
-    # 11 three-vectors (r v omega a alpha F M J H P L), the DCM, q qd qdd tau, excite.level
-    assert len(outs) == 11 * 3 + 9 + 4 * sc.robot.n_joints + 1
+    # 12 three-vectors (r v omega a alpha F M J H P L att_ref), the DCM, q qd qdd tau qd_ref,
+    # excite.level
+    assert len(outs) == 12 * 3 + 9 + 5 * sc.robot.n_joints + 1
     t = 0.0
     try:
         for dt in (None, 0.1005, 0.2995, 0.1):

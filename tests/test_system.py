@@ -147,14 +147,18 @@ def test_connections_match_interface_and_built_fmus(robot, systems):
     mv = {k: {v.name: v for v in m.modelVariables} for k, m in md.items()}
     conns = root.findall("ssd:System/ssd:Connections/ssd:Connection", NS)
     names = [c.get("startConnector") for c in conns]
-    assert names == interface.connections(ROBOTS[robot])
-    est_inputs = {n for n, v in mv["estimator"].items() if v.causality == "input"}
-    assert set(names) == est_inputs, "every estimator input must be connected"
+    assert names == interface.connections(ROBOTS[robot]) + interface.feedback_connections()
+    for dest in ("plant", "estimator"):
+        inputs = {n for n, v in mv[dest].items() if v.causality == "input"}
+        assert {c.get("endConnector") for c in conns if c.get("endElement") == dest} == inputs, \
+            f"every {dest} input must be connected"
     for c in conns:
-        assert (c.get("startElement"), c.get("endElement")) == ("plant", "estimator")
+        ends = (c.get("startElement"), c.get("endElement"))
+        feedback = c.get("startConnector") in interface.feedback_connections()
+        assert ends == (("estimator", "plant") if feedback else ("plant", "estimator"))
         assert c.get("startConnector") == c.get("endConnector")
-        a = mv["plant"][c.get("startConnector")]
-        b = mv["estimator"][c.get("endConnector")]
+        a = mv[ends[0]][c.get("startConnector")]
+        b = mv[ends[1]][c.get("endConnector")]
         assert (a.causality, b.causality) == ("output", "input")
         assert a.type == b.type
         assert _fmu_unit(a) == _fmu_unit(b) is not None
@@ -435,8 +439,9 @@ def test_system_of_fmus_wires_every_input_by_name(planar_fmus):
     from spacerobot.system.reader import system_of_fmus
 
     info = system_of_fmus(planar_fmus, 0.1, 1.0)
-    assert info.connections == [("plant", n, "estimator", n)
-                                for n in interface.connections(ROBOTS["planar"])]
+    assert sorted(info.connections) == sorted(
+        [("plant", n, "estimator", n) for n in interface.connections(ROBOTS["planar"])]
+        + [("estimator", n, "plant", n) for n in interface.feedback_connections()])
     # the other way round too: a component listed first may be the destination
     back = system_of_fmus({"estimator": planar_fmus["estimator"], "plant": planar_fmus["plant"]},
                           0.1, 1.0)

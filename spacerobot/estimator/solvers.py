@@ -29,7 +29,7 @@ from ..interface import ParameterLayout, Solver
 from ..robots import Guess
 from . import parameters as par
 from .rls import RLS, ModifiedRLS
-from .uncertainty import Gram, prior_pull, residual_variance
+from .uncertainty import Gram, observed_solve, prior_pull, residual_variance
 
 
 class Step(NamedTuple):
@@ -112,14 +112,21 @@ class ParameterSolver(ABC):
     def uncertainty(self) -> Tuple[np.ndarray, np.ndarray]:
         """``(sd (20,), unobserved (20,) bool)`` of :meth:`vector`.
 
-        ``sd^2 = diag(J C J^T) + (J delta)^2``: the data's scatter (:meth:`covariance` ``C``)
-        and the prior's pull ``delta`` (:meth:`prior_pull`), both through the first-order
-        (delta-method) Jacobian ``J`` of :meth:`vector_of`. ``unobserved``: estimates that
+        ``sd^2 = diag(J C J^T) + (v(z) - v(z - delta))^2``: the data's scatter
+        (:meth:`covariance` ``C`` through the first-order, delta-method, Jacobian ``J`` of the
+        map ``v`` = :meth:`vector_of`) and the prior's pull ``delta`` (:meth:`prior_pull`)
+        through the map itself (its first-order image ``J delta`` where ``z - delta`` has no
+        positive mass). ``unobserved``: estimates that
         depend on a direction the data have not observed (their ``sd`` bounds nothing).
         """
-        J = self.jacobian(self.z())
+        z = self.z()
+        J = self.jacobian(z)
         delta, unobserved_z = self.prior_pull()
-        var = np.einsum("ij,jk,ik->i", J, self.covariance(), J) + (J @ delta) ** 2
+        with np.errstate(all="ignore"):
+            pull = self.vector_of(z) - self.vector_of(z - delta)   # the map's exact difference
+        if not np.all(np.isfinite(pull)):                          # the data-only mass <= 0
+            pull = J @ delta
+        var = np.einsum("ij,jk,ik->i", J, self.covariance(), J) + pull ** 2
         unobserved = (J[:, unobserved_z] != 0.0).any(axis=1)
         return np.sqrt(np.clip(var, 0.0, None)), unobserved
 
@@ -259,14 +266,22 @@ class PaperSolver(ParameterSolver):
         return s2_lin, residual_variance(ga.S, z_ang, ga.rows, len(rls.theta))
 
     def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
-        """Per equation (:func:`.uncertainty.prior_pull`); ``theta`` also moves with ``mu``'s
-        pull through ``d theta / d mu = M dD/dmu`` (the batch answer at the true ``mu``)."""
+        """``mu``: :func:`.uncertainty.prior_pull`. ``theta``: the distance to the data-only
+        answer at the data-only ``mu``; ``theta`` is affine in ``D`` (eqs. 35-38), and the
+        data-only answer moves with ``D`` by ``G^-1 S_phi,psi``, so
+
+            theta - theta_LS = G^-1 [-W0 (theta - theta0) + S_phi,psi (D(mu) - D(mu_LS))]
+
+        with ``S_phi,psi = sum phi^T psi`` from the Gram matrix of ``[phi | y | psi]``."""
         L, rls, gl, ga = self.layout, self.rls, self.gram_lin, self.gram_ang
         p, r = len(rls.mu), len(rls.theta)
         d_mu, u_mu = prior_pull(gl.decay * self._W0[0], gl.S[:p, :p], rls.mu, self._mu0)
-        d_th, u_th = prior_pull(ga.decay * self._W0[1], ga.S[:r, :r], rls.theta, self._th0)
+        mu_ls = self.mu.copy()
+        mu_ls[L.mu_active] -= d_mu
+        rhs = (-(ga.decay * self._W0[1]) @ (rls.theta - self._th0)
+               + ga.S[:r, r + 1:] @ (rls.D_mu - par.D_of_mu(mu_ls)))
+        d_th, u_th = observed_solve(ga.S[:r, :r], rhs)
         Tm = rls.M.dot(par.D_jacobian(self.mu))[:, L.mu_active]       # (r, p)
-        d_th = d_th + Tm @ d_mu
         u_th = u_th | (Tm[:, u_mu] != 0.0).any(axis=1)
         delta, unobserved = np.zeros(L.n_mu + L.n_theta), np.zeros(L.n_mu + L.n_theta, bool)
         delta[L.mu_active], unobserved[L.mu_active] = d_mu, u_mu

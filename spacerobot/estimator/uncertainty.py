@@ -77,6 +77,37 @@ def residual_variance(S: np.ndarray, z: np.ndarray, rows: int, p: int) -> float:
     return max(float(z @ S @ z), 0.0) / dof
 
 
+def observed_solve(G: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """``G^-1 r`` in the directions the information ``G`` observes, and which parameters have
+    a component along one it does not.
+
+    Parameters
+    ----------
+    G : (p, p) information (symmetric, positive semi-definite);  r : (p,) right-hand side.
+
+    Returns
+    -------
+    x : (p,) the solution restricted to the observed directions (0 along the others)
+    unobserved : (p,) bool, parameters with a component along a direction whose scaled
+        eigenvalue is below ``REL_EIG_MIN`` of the largest (or whose information is zero).
+    """
+    p = len(r)
+    dg = np.diag(G).copy()
+    unobserved = ~(dg > 0.0)
+    d = np.sqrt(np.where(unobserved, 1.0, dg))
+    Gs = G / np.outer(d, d)                                  # scale-free information
+    Gs[unobserved, :] = 0.0
+    Gs[:, unobserved] = 0.0
+    lam, V = np.linalg.eigh(Gs)
+    big = lam[-1] if p and lam[-1] > 0.0 else 0.0
+    keep = lam > REL_EIG_MIN * big
+    Vk = V[:, keep]
+    x = (Vk / lam[keep]) @ (Vk.T @ (np.asarray(r, float) / d)) / d
+    if not np.all(keep):
+        unobserved = unobserved | (np.abs(V[:, ~keep]).max(axis=1) > 1e-6)
+    return x, unobserved
+
+
 def prior_pull(W0: np.ndarray, G: np.ndarray, x: np.ndarray, x0: np.ndarray
                ) -> Tuple[np.ndarray, np.ndarray]:
     """The prior's pull ``delta = x - x_LS = -G^-1 W0 (x - x0)``.
@@ -89,23 +120,6 @@ def prior_pull(W0: np.ndarray, G: np.ndarray, x: np.ndarray, x0: np.ndarray
     Returns
     -------
     delta : (p,) the pull in the observed directions (0 along unobserved ones)
-    unobserved : (p,) bool, parameters with a component along a direction the data have not
-        observed (scaled eigenvalue of G below ``REL_EIG_MIN``): their error is not bounded by
-        the data at all.
+    unobserved : (p,) bool (:func:`observed_solve`): the data do not bound these at all.
     """
-    p = len(x)
-    dg = np.diag(G).copy()
-    unobserved = ~(dg > 0.0)
-    d = np.sqrt(np.where(unobserved, 1.0, dg))
-    Gs = G / np.outer(d, d)                                  # scale-free information
-    Gs[unobserved, :] = 0.0
-    Gs[:, unobserved] = 0.0
-    lam, V = np.linalg.eigh(Gs)
-    big = lam[-1] if p and lam[-1] > 0.0 else 0.0
-    keep = lam > REL_EIG_MIN * big
-    r = W0 @ (np.asarray(x, float) - np.asarray(x0, float)) / d
-    Vk = V[:, keep]
-    delta = -(Vk / lam[keep]) @ (Vk.T @ r) / d               # -G^-1 W0 (x - x0), observed part
-    if not np.all(keep):
-        unobserved = unobserved | (np.abs(V[:, ~keep]).max(axis=1) > 1e-6)
-    return delta, unobserved
+    return observed_solve(G, -(W0 @ (np.asarray(x, float) - np.asarray(x0, float))))

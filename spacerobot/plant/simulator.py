@@ -295,7 +295,18 @@ class Plant:
             "F": u.F.copy(), "M": u.M.copy(), "J": self.J.copy(), "H": self.H.copy(),
             "P": P, "L": L_O, "tau": u.tau.copy(),
             "excite_level": np.array([kernels.ramp_level(self.t, self._ramp)[0]]),
+            **self._reference_outputs(),
         }
+
+    def _reference_outputs(self) -> dict:
+        """``att_ref`` (3,) [rad] and ``qd_ref`` (n,) [rad/s]: the excitation references now
+        (zeros while the level is 0; the planar robot's attitude reference is about z)."""
+        att = np.zeros(3)
+        if self._ramp[0] == 0.0 and self._ramp[1] == 0.0:
+            return {"att_ref": att, "qd_ref": np.zeros(self.pm.n)}
+        ref = self.references()
+        att[3 - len(ref["att"]):] = ref["att"]
+        return {"att_ref": att, "qd_ref": ref["q_d"]}
 
 
 def _restore_plant(args, state) -> Plant:

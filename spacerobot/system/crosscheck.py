@@ -36,6 +36,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from .. import __version__
+from ..interface import ExciteMode
 from .cli import fail_on_errors
 from .reader import system_of_fmus
 from .runner import simulate
@@ -62,8 +63,13 @@ MODELS = {"plant": "SpaceRobotPlant", "estimator": "SpaceRobotEstimator"}
 
 
 # -- the reference run: the project's one co-simulation loop ---------------------------------------
+#: the estimator parameter that keeps the excitation loop open in the references
+OPEN_LOOP = ("ident.excite_mode", int(ExciteMode.OFF))
+
+
 def reference_run(plant_fmu: Path, estimator_fmu: Path, stop_time: float, step: float) -> dict:
-    """Run plant -> estimator with default start values at a fixed communication step.
+    """Run plant -> estimator with default start values (the estimator's excitation request
+    off, :data:`OPEN_LOOP`) at a fixed communication step.
 
     The system of the two FMU files wired name to name (:func:`.reader.system_of_fmus`) run by
     :func:`.runner.simulate`: at every communication point t_k the estimator's inputs are set
@@ -83,7 +89,10 @@ def reference_run(plant_fmu: Path, estimator_fmu: Path, stop_time: float, step: 
     missing = [x for x in names["inputs"] if x not in names["plant"]]
     if missing:
         raise ValueError(f"plant has no outputs for estimator inputs {missing}")
-    res = simulate(system_of_fmus(fmus, step, stop_time), ".", progress=False)
+    # the paper's open loop: the estimator asks for no excitation, so the plant's input
+    # ident.excite stays at its start value 0 and the plant alone reproduces its reference
+    res = simulate(system_of_fmus(fmus, step, stop_time), ".", progress=False,
+                   overrides={f"estimator.{OPEN_LOOP[0]}": OPEN_LOOP[1]})
 
     def table(comp: str, cols) -> np.ndarray:
         return np.column_stack([res.data[f"{comp}.{n}"].astype(float) for n in cols])
@@ -196,8 +205,10 @@ def _readme(model: str, robot: str, stop_time: float, step: float, kind: str) ->
               ).format(m=model) if kind == "estimator" else ""
     return (f"# {model} ({robot} robot), FMI 2.0 co-simulation, pythonfmu 0.7.0\n\n"
             f"Reference computed by spacerobot {__version__} (`spacerobot crosscheck`): fixed "
-            f"communication step {step} s from 0 to {stop_time} s, default start values, "
-            f"plant -> estimator wired name to name.\n{inputs}\n"
+            f"communication step {step} s from 0 to {stop_time} s, default start values "
+            f"except the estimator's {OPEN_LOOP[0]} = {OPEN_LOOP[1]} (no excitation request, "
+            f"so the plant's input ident.excite stays 0), plant -> estimator wired name to "
+            f"name.\n{inputs}\n"
             "Any FMI host loads the FMU without set-up on a Linux machine that has the Python "
             "installation recorded in resources/python_runtime.txt, at the same paths, with numpy "
             "and numba (and pin for the plant): see docs/fmus.md of the spacerobot project.\n")

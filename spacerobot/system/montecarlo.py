@@ -46,8 +46,9 @@ __all__ = ["Case", "make_cases", "run_case", "run_montecarlo", "plot_montecarlo"
 #: excitation modes of a case -> the estimator's ``ident.excite_mode``
 EXCITE = {"closed": ExciteMode.UNTIL_IDENTIFIED, "off": ExciteMode.OFF}
 
-#: plant parameters a case sets (the drawn bodies and initial state)
-_CASE_PARAMS = ("base.", "target.", "base.v0", "base.omega0")
+#: plant parameters a case sets: the drawn bodies and initial state, and the excitation bounds
+#: (set explicitly, so that the row can check the references against what was applied)
+_CASE_PARAMS = ("base.", "target.", "excite.")
 
 CASE_COLUMNS = ("case_id", "robot", "case", "seed", "method", "accel_source", "solver", "excite",
                 "stop_time", "base_mass", "target_mass", "omega0_norm", "v0_norm")
@@ -156,8 +157,8 @@ def case_row(case: Case, res) -> Dict[str, object]:
                                               "plant")).max())
     row["max_att_ref"] = float(np.abs(_series(res, [f"excite.att_ref[{k + 1}]" for k in range(3)],
                                                "plant")).max())
-    for name in ("qd_max", "att_max"):
-        row[name] = float(res.parameters[f"plant.excite.{name}"])
+    ex = case.scenario().excitation
+    row["qd_max"], row["att_max"] = ex.qd_max, ex.att_max
     rel = interface.relative_errors(est[-1], truth)
     row.update({f"relerr.{p}": float(r) for p, r in zip(ESTIMATE_NAMES, rel)})
     return row
@@ -296,6 +297,8 @@ def register(subparsers):
     p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler")
     p.add_argument("--build-dir", dest="build_dir", metavar="DIR",
                    help="where the .ssp is built (default <out>.build/)")
+    p.add_argument("--ssp", metavar="SSP_FILE", help="run this .ssp of the robot instead of "
+                   "building one")
     p.add_argument("--out", metavar="CSV", help="results table (default "
                    "results/montecarlo-<robot>-seed<S>.csv; resumed if it exists)")
     p.add_argument("--plot", metavar="PNG", help="plot (default: the CSV with .png)")
@@ -311,11 +314,17 @@ def cli_montecarlo(args) -> int:
 
     out = Path(args.out or f"results/montecarlo-{args.robot}-seed{args.seed}.csv")
     check_writable(out)
+    ssp = None
+    if args.ssp:
+        if not Path(args.ssp).exists():
+            raise ValueError(f"{args.ssp} does not exist")
+        ssp = {args.robot: str(Path(args.ssp).resolve())}
     cases = make_cases(args.robot, args.cases, args.seed, args.method, args.excite,
                        args.stop_time)
     try:
         summary = run_montecarlo(cases, out, workers=args.workers, scheduler=args.scheduler,
-                                 build_dir=args.build_dir, progress=not args.no_progress)
+                                 build_dir=args.build_dir, ssp=ssp,
+                                 progress=not args.no_progress)
     except SweepLocked as e:
         raise ValueError(str(e)) from None
     print(summary)

@@ -10,8 +10,9 @@ Layout of a generated system (the same inside ``<robot>.ssp`` and under ``ssp/<r
     SystemStructure.ssd
     resources/SpaceRobotPlant.fmu          (only in the .ssp)
     resources/SpaceRobotEstimator.fmu      (only in the .ssp)
-    resources/<set>.ssv                    one parameter set per scenario (planar: small,
-                                           medium, large; spatial: default)
+    resources/<set>.ssv                    one parameter set per scenario
+                                           (robots.PARAMETER_SETS; planar: small, medium,
+                                           large, paper, excited; spatial: paper, default)
 
 Tool compatibility (what OMSimulator and libcosim need to load the .ssp): ``version="1.0"``; namespace prefixes exactly ``ssd:``,
 ``ssc:``, ``ssv:``; one flat root System holding the two components; every connector typed
@@ -27,8 +28,9 @@ from pathlib import Path
 from typing import Dict, List, Optional, Tuple
 from xml.sax.saxutils import quoteattr
 
-from ..interface import ESTIMATE_NAMES, UNITS, Var, connections, estimator_vars, plant_vars
-from ..robots import DEFAULT_TARGET, ROBOTS, TARGETS, scenario
+from ..interface import (ESTIMATE_NAMES, EXCITATION_DOC, UNITS, Var, connections,
+                         estimator_vars, feedback_connections, plant_vars)
+from ..robots import DEFAULT_TARGET, PARAMETER_SETS, ROBOTS, parameter_set_scenario, scenario
 
 #: XML namespaces (prefixes are part of the contract: some tools match on them)
 NS = {
@@ -46,10 +48,12 @@ SOURCES = {PLANT: "resources/SpaceRobotPlant.fmu", ESTIMATOR: "resources/SpaceRo
 SSD_NAME = "SystemStructure.ssd"
 GENERATOR = "spacerobot.system.ssd"
 
-#: the plant parameters a parameter set binds (the scenario's truth and initial velocities)
+#: the plant parameters a parameter set binds (the scenario's truth, initial velocities and
+#: excitation bounds)
 SET_PARAMETERS: Tuple[str, ...] = (
     ESTIMATE_NAMES + tuple(f"base.v0[{i}]" for i in (1, 2, 3))
-    + tuple(f"base.omega0[{i}]" for i in (1, 2, 3)))
+    + tuple(f"base.omega0[{i}]" for i in (1, 2, 3))
+    + tuple(f"excite.{k}" for k in EXCITATION_DOC))
 
 
 def _check_robot(robot: str) -> None:
@@ -58,9 +62,10 @@ def _check_robot(robot: str) -> None:
 
 
 def parameter_set_names(robot: str) -> List[str]:
-    """Names of the parameter sets (.ssv) generated for ``robot`` (one per target scenario)."""
+    """Names of the parameter sets (.ssv) generated for ``robot``
+    (:data:`spacerobot.robots.PARAMETER_SETS`)."""
     _check_robot(robot)
-    return list(TARGETS[robot])
+    return list(PARAMETER_SETS[robot])
 
 
 def default_parameter_set(robot: str) -> str:
@@ -79,7 +84,7 @@ def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
     if name not in parameter_set_names(robot):
         raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
                          f"choose from {parameter_set_names(robot)}")
-    sc = scenario(robot, name)
+    sc = parameter_set_scenario(robot, name)
     var = {v.name: v for v in plant_vars(sc.robot, sc)}   # starts = the scenario's values
     return [(n, float(var[n].start), var[n].unit) for n in SET_PARAMETERS]
 
@@ -99,11 +104,12 @@ def _units_xml(units, indent: str, prefix: str) -> List[str]:
 def ssv_xml(robot: str, name: str) -> str:
     """Text of the SSP 1.0 parameter values file ``resources/<name>.ssv``."""
     params = parameter_set(robot, name)
-    sc = scenario(robot, name)
+    desc = (f"{robot}-{name}: {PARAMETER_SETS[robot][name].description}; plant truth (base, "
+            f"target), initial velocities and excitation bounds")
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<ssv:ParameterSet xmlns:ssv="{NS["ssv"]}" xmlns:ssc="{NS["ssc"]}"',
              f'    version="1.0" name={quoteattr(name)} generationTool="{GENERATOR}"',
-             f'    description={quoteattr(f"{sc.name}: plant truth (base, target) and initial velocities")}>',
+             f'    description={quoteattr(desc)}>',
              "  <ssv:Parameters>"]
     for pname, value, unit in params:
         lines.append(f"    <ssv:Parameter name={quoteattr(pname)}>")
@@ -128,14 +134,15 @@ def _connector(var: Var, kind: str, indent: str) -> List[str]:
 def component_connectors(robot: str) -> Dict[str, List[Tuple[str, str, Var]]]:
     """``{component: [(connector name, kind, Var), ...]}`` as declared in the SSD.
 
-    The plant exposes every output and the parameters that the parameter sets bind; the
-    estimator exposes every input (all connected) and every output.
+    The plant exposes every output, its input ``ident.excite`` (the excitation loop) and the
+    parameters that the parameter sets bind; the estimator exposes every input (all
+    connected) and every output.
     """
     _check_robot(robot)
     sc = scenario(robot)
     pv = plant_vars(sc.robot, sc)
     ev = estimator_vars(sc.robot, sc)
-    plant = [(v.name, "output", v) for v in pv if v.causality == "output"]
+    plant = [(v.name, v.causality, v) for v in pv if v.causality in ("input", "output")]
     by_name = {v.name: v for v in pv}
     plant += [(n, "parameter", by_name[n]) for n in SET_PARAMETERS]
     est = [(v.name, v.causality, v) for v in ev if v.causality in ("input", "output")]
@@ -156,7 +163,7 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
     if bound_set not in parameter_set_names(robot):
         raise ValueError(f"unknown parameter set {bound_set!r} for robot {robot!r}; "
                          f"choose from {parameter_set_names(robot)}")
-    sc = scenario(robot, bound_set)
+    sc = parameter_set_scenario(robot, bound_set)
     step = _num(sc.sample_time)
     conns = component_connectors(robot)
     units = {v.unit for c in conns.values() for _, _, v in c if v.type == "Real" and v.unit}
@@ -166,7 +173,7 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
              + "".join(f'\n    xmlns:{p}="{u}"' for p, u in NS.items()),
              f'    version="1.0" name="SpaceRobot_{robot}" generationTool="{GENERATOR}"',
              f"    description={quoteattr('Space robot after capture: plant and inertial-parameter estimator. ' + robot_desc)}>",
-             '  <ssd:System name="root" description="Plant outputs wired to the estimator inputs of the same name">',
+             '  <ssd:System name="root" description="Plant outputs wired to the estimator inputs of the same name; the estimator\'s excitation request wired back to the plant">',
              "    <ssd:Elements>"]
     for comp in (PLANT, ESTIMATOR):
         lines.append(f'      <ssd:Component name="{comp}" type="application/x-fmu-sharedlibrary" '
@@ -186,6 +193,10 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
     for name in connections(ROBOTS[robot]):
         lines.append(f'      <ssd:Connection startElement="{PLANT}" startConnector={quoteattr(name)} '
                      f'endElement="{ESTIMATOR}" endConnector={quoteattr(name)}/>')
+    for name in feedback_connections():        # the excitation loop: estimator -> plant
+        lines.append(f'      <ssd:Connection startElement="{ESTIMATOR}" '
+                     f'startConnector={quoteattr(name)} endElement="{PLANT}" '
+                     f'endConnector={quoteattr(name)}/>')
     lines.append("    </ssd:Connections>")
     lines += ["    <ssd:Annotations>",
               '      <ssc:Annotation type="org.openmodelica">',

@@ -1,0 +1,98 @@
+"""The Monte Carlo study (``spacerobot montecarlo``): a few random spatial cases through the
+two FMUs with the excitation loop closed, on Dask, checked against the drawn truth.
+
+The benchmark (benchmarks/montecarlo.py, report in benchmarks/REPORT.md) runs the same study
+on 20 cases per method, with the excitation loop closed and off.
+"""
+import csv
+
+import numpy as np
+import pytest
+
+from spacerobot import build_system, interface
+from spacerobot.system import cli
+from spacerobot.system.montecarlo import Case, make_cases, read_results
+
+pytest.importorskip("distributed")
+
+
+@pytest.fixture(scope="module")
+def spatial_ssp(spatial_fmus, tmp_path_factory):
+    return build_system("spatial", tmp_path_factory.mktemp("mc") / "spatial",
+                        fmus=spatial_fmus)["ssp"]
+
+
+@pytest.fixture(scope="module")
+def study(spatial_ssp, tmp_path_factory):
+    out = tmp_path_factory.mktemp("mc_out") / "mc.csv"
+    code = cli.main(["montecarlo", "--robot", "spatial", "--cases", "2", "--seed", "11",
+                     "--ssp", str(spatial_ssp), "--out", str(out), "--workers", "2",
+                     "--no-progress"])
+    return code, out, read_results(out)
+
+
+def test_every_case_identified_within_1_percent_and_flags_honest(study):
+    code, out, rows = study
+    assert code == 0 and len(rows) == 4                      # 2 cases x 2 methods
+    for r in rows:
+        assert r["status"] == "ok", r["error"]
+        assert float(r["worst_error"]) < 1e-2, r
+        assert r["identified.base"] == "1" and r["identified.target"] == "1", r
+        assert r["false_identified.base"] == "0" and r["false_identified.target"] == "0"
+        assert r["physical"] == "1"
+        # the loop: excitation requested at first, switched off once both are identified
+        assert 0.0 < float(r["excite_mean"]) < 1.0
+        assert float(r["t_excite_off"]) < float(r["stop_time"])
+        # the excitation references never exceed their bounds
+        assert float(r["max_att_ref"]) <= float(r["att_max"]) * (1 + 1e-12)
+        assert float(r["max_qd_ref"]) <= float(r["qd_max"]) * (1 + 1e-12)
+        assert float(r["max_att_ref"]) > 0.0
+
+
+def test_rows_carry_the_drawn_truth(study):
+    """The relative errors in the table are those of the drawn bodies: recomputed here from
+    the case's own draw."""
+    _, _, rows = study
+    for r in rows:
+        case = Case("spatial", int(r["case"]), int(r["seed"]), r["method"], r["excite"])
+        assert case.id == r["case_id"]
+        sc = case.scenario()
+        assert float(r["base_mass"]) == sc.robot.base.mass
+        assert float(r["target_mass"]) == sc.target.mass
+        rel = np.array([float(r[f"relerr.{p}"]) for p in interface.ESTIMATE_NAMES])
+        assert np.isclose(rel.max(), float(r["worst_error"]), rtol=1e-12)
+
+
+def test_summary_and_plot_written(study, capsys):
+    _, out, _ = study
+    png = out.with_suffix(".png")
+    assert png.exists() and png.stat().st_size > 10_000
+    with open(out, newline="") as f:
+        header = next(csv.reader(f))
+    assert header[0] == "case_id" and "worst_error" in header
+
+
+def test_same_draw_for_every_method_and_excitation():
+    cases = make_cases("spatial", 3, seed=5, methods=("momentum", "force"),
+                       excite=("closed", "off"))
+    assert len(cases) == 12 and len({c.id for c in cases}) == 12
+    by_index = {}
+    for c in cases:
+        ov = {k: v for k, v in c.fmi_overrides().items() if k.startswith("plant.")}
+        by_index.setdefault(c.index, []).append(ov)
+    for ovs in by_index.values():
+        assert all(ov == ovs[0] for ov in ovs)
+    assert by_index[0] != by_index[1]
+    assert cases[0].fmi_overrides()["estimator.ident.excite_mode"] == 1
+    off = [c for c in cases if c.excite == "off"][0]
+    assert off.fmi_overrides()["estimator.ident.excite_mode"] == 0
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--cases", "0"], "number of cases must be >= 1"),
+    (["--ssp", "/nonexistent/x.ssp"], "does not exist"),
+])
+def test_bad_arguments(args, words, tmp_path, capsys):
+    code = cli.main(["montecarlo", "--out", str(tmp_path / "x.csv"), "--no-progress", *args])
+    assert code == 1
+    assert words in capsys.readouterr().err
