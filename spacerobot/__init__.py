@@ -20,18 +20,23 @@ _API = {
     # robots, scenarios and the interface (numpy only)
     "scenario": "spacerobot.robots", "ROBOTS": "spacerobot.robots",
     "TARGETS": "spacerobot.robots", "PAPER_PLANAR_MEDIUM": "spacerobot.robots",
+    "PARAMETER_SETS": "spacerobot.robots", "random_scenario": "spacerobot.robots",
     "ESTIMATE_NAMES": "spacerobot.interface", "METHODS": "spacerobot.interface",
     "SOLVERS": "spacerobot.interface", "ACCEL_SOURCES": "spacerobot.interface",
     "estimate_vector": "spacerobot.interface", "relative_errors": "spacerobot.interface",
-    "identified_estimates": "spacerobot.interface",
+    "identified_estimates": "spacerobot.interface", "error_scale": "spacerobot.interface",
     # numerical cores (Numba; Pinocchio for the plant)
     "Identifier": "spacerobot.estimator", "Plant": "spacerobot.plant",
+    "ExcitationRequest": "spacerobot.estimator", "project_body": "spacerobot.estimator",
+    "is_physical": "spacerobot.estimator",
     # FMUs, the system and its co-simulation (fmpy, lxml)
     "build_fmu": "spacerobot.fmi.build", "build_system": "spacerobot.system.ssd",
     "run_ssp": "spacerobot.system.runner", "RunResult": "spacerobot.system.runner",
     "SimulationError": "spacerobot.system.errors", "read_csv": "spacerobot.system.recorder",
     "FMUInstance": "spacerobot.system.instance", "Master": "spacerobot.system.master",
     "logger_callbacks": "spacerobot.system.instance",
+    # studies on Dask
+    "make_cases": "spacerobot.system.montecarlo", "run_montecarlo": "spacerobot.system.montecarlo",
 }
 
 __all__ = ["__version__", *_API]

@@ -117,7 +117,7 @@ def test_run_reports_fmu_errors(built, workdir):
     assert p.returncode == 1
     first, *rest = p.stderr.strip().splitlines()
     assert first.startswith(f"spacerobot run: error: {built['ssp']}: component 'plant' returned "
-                            "Fatal from fmi2ExitInitializationMode")
+                            "Error from fmi2ExitInitializationMode")
     assert any("base.m must be > 0" in line for line in rest)     # the FMU's own message
     assert "Traceback" not in p.stderr
 

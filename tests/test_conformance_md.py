@@ -5,8 +5,8 @@
   something);
 - every variable has a description, every Real a unit defined in UnitDefinitions, and each unit's
   SI base exponents equal an independent decomposition of the Modelica unit string;
-- the units follow the contract of DESIGN.md section 3, written here independently of
-  spacerobot/interface.py;
+- the units follow the interface contract (README "Interface" and docs/fmus.md), written here
+  independently of spacerobot/interface.py;
 - ModelStructure/Outputs and /InitialUnknowns list exactly the outputs, in ascending order;
 - the FMUs declare exactly the variables of the interface table and the capability flags and
   variables that docs/fmus.md documents.
@@ -145,7 +145,7 @@ def test_every_variable_described_and_every_real_has_a_defined_unit(fmu):
         assert exps == si_exponents(name), f"BaseUnit of {name!r}: {exps}"
 
 
-#: DESIGN.md section 3 (and the parameter lists there), independent of spacerobot/interface.py
+#: the interface contract's units (README "Interface"), independent of spacerobot/interface.py
 CONTRACT_UNITS = [
     (r"base\.r\[\d\]", "m"), (r"base\.v\[\d\]", "m/s"), (r"base\.A\[\d,\d\]", "1"),
     (r"base\.omega\[\d\]", "rad/s"), (r"base\.a\[\d\]", "m/s2"), (r"base\.alpha\[\d\]", "rad/s2"),

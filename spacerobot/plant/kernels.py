@@ -8,7 +8,7 @@ calls: Pinocchio's ``computeAllTerms`` (M, non-linear effects, centroidal moment
 control kernel, and three times ``aba`` + the stage kernel (the first stage's accelerations
 come from the controller's inverse dynamics).
 
-The equations are those of :mod:`.control` (documented there) and :mod:`.dynamics`:
+The equations are the paper's (docs/models.md, "Controllers") and those of :mod:`.dynamics`:
 
 * thrusters, eqs. 40-41, per inertial axis on the system momentum ``[P, L_c]``;
 * arm attitude law, eq. 39, by an inertia-weighted, selectively damped right pseudo-inverse
