@@ -220,7 +220,8 @@ def summary_table(rows: Sequence[Dict[str, str]]) -> str:
         bad = sum(r["physical"] != "1" for r in rs)
         n = len(rs)
 
-        def med(t):
+        def med(t):   # NaN = never settled, i.e. later than the end
+            t = np.where(np.isnan(t), np.inf, t)
             return f"{np.median(t):.1f}" if np.isfinite(t).sum() * 2 > n else "> end"
         lines.append(f"| {robot} | {method} | {excite} | {n} | {(w < 1e-2).sum()}/{n} | "
                      f"{(w < 1e-3).sum()}/{n} | {100 * np.median(w):.3g} % | "
