@@ -1,6 +1,9 @@
 """Robot and scenario definitions: the one description used by plant, estimator, SSP and tests.
 
-Pure data and numpy only (no Pinocchio, no FMI), so that both FMUs can bundle it.
+Pure data and numpy only (no Pinocchio, no FMI), so that both FMUs can bundle it. The robots
+themselves are URDF files (``data/robots/``) that :mod:`spacerobot.urdf` reads into the
+:class:`Robot` record, on first use of :data:`ROBOTS` (the FMUs get the record in their
+configuration and never read a URDF).
 
 Conventions (see README "Conventions"):
 
@@ -11,7 +14,9 @@ Conventions (see README "Conventions"):
   as ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` where ``Ixy`` is the tensor element (minus the
   product of inertia).
 * Joint placements are given relative to the parent link frame; each arm joint is revolute
-  about a unit ``axis`` expressed in its own (child) frame.
+  about a unit ``axis`` expressed in its own (child) frame (URDF's joint ``<origin>`` and
+  ``<axis>``).
+* A robot is named by a key: ``planar``, ``spatial`` or a URDF file (:func:`robot_spec`).
 
 Choices the paper leaves open are documented next to the numbers (``docs/models.md`` too).
 """

@@ -359,7 +359,8 @@ def parse_robot(text: str | bytes, ee: Optional[str] = None, motion: str = "auto
                  ee_rotation=tuple(float(x) for x in ee_frame.R.reshape(9)), q0=q0,
                  description=f"{rd.name} ({Path(where).name}): {base_body.mass:g} kg base, "
                              f"{len(links)}-joint {'planar' if planar else 'spatial'} arm, "
-                             f"{sum(l.body.mass for l in links):g} kg")
+                             f"{sum(l.body.mass for l in links):g} kg, end effector "
+                             f"{ee or link!r}")
 
 
 def load_robot(path: str | Path, ee: Optional[str] = None, motion: str = "auto") -> Robot:
