@@ -390,6 +390,11 @@ def test_ee_before_a_joint_and_unknown_robot_are_refused(capsys):
         parse_robot(text, ee="l1")
     assert main(["run", "--robot", "no-such-robot"]) == 1
     assert "unknown robot 'no-such-robot'" in capsys.readouterr().err
+    assert main(["build", "--robot", "missing.urdf"]) == 1
+    err = capsys.readouterr().err
+    assert "missing.urdf" in err and "No such file" in err
+    assert main(["build", "--robot", "planar", "--ee", "E"]) == 1
+    assert "--ee and --motion apply to a URDF file" in capsys.readouterr().err
 
 
 # ------------------------------------------------------------------------------------------------
@@ -417,3 +422,31 @@ def test_cli_builds_fmus_and_ssp_of_a_urdf_robot(tmp_path, capsys):
     robot = Robot.from_dict(cfg["scenario"]["robot"])
     assert robot == load_robot(SERVICER7, ee="gripper")
     assert robot.ee_xyz == pytest.approx((0.0, 0.0, 0.1))
+    # and runs it through the FMUs (a few seconds; the identification is tested on the cores)
+    csv = tmp_path / "run.csv"
+    assert main(["run", "--robot", str(SERVICER7), "--ee", "gripper", "--build-dir", str(out),
+                 "--stop-time", "3", "--no-progress", "--out", str(csv)]) == 0
+    printed = capsys.readouterr().out
+    assert "robot servicer7" in printed and "target.m" in printed
+    from spacerobot.system.recorder import read_csv
+    data = read_csv(csv)
+    assert "plant.arm.q[7]" in data and len(data["time"]) == 31
+
+
+def test_studies_take_a_urdf_robot_key(tmp_path, monkeypatch):
+    """Sweep points and Monte Carlo cases hold the absolute key of a URDF robot, and take the
+    defaults of its kind."""
+    from spacerobot.system.montecarlo import make_cases
+    from spacerobot.system.sweep.points import expected_truth, make_points
+
+    monkeypatch.chdir(URDF_DIR)
+    (pt,) = make_points("servicer7.urdf#ee=gripper", method="momentum")
+    assert pt.robot == f"{SERVICER7}#ee=gripper"
+    assert (pt.target, pt.v0, pt.stop_time) == ("default", (10.0, 20.0, 30.0), 60.0)
+    assert expected_truth(pt)["base.m"] == 600.0
+    (case,) = make_cases("servicer7.urdf", 1, methods=("momentum",))
+    assert case.robot == str(SERVICER7)
+    sc = case.scenario()
+    assert sc.robot.links == load_robot(SERVICER7).links and sc.robot.base.mass != 600.0
+    with pytest.raises(ValueError, match="unknown robot"):
+        make_points("nothing")

@@ -34,7 +34,8 @@ import numpy as np
 
 from .. import interface
 from ..interface import ESTIMATE_NAMES, ExciteMode, ParameterLayout
-from ..robots import Scenario, check_robot, get_robot, random_scenario, robot_label
+from ..robots import (Scenario, check_robot, get_robot, random_scenario, robot_label,
+                      robot_spec)
 from .codes import estimator_overrides
 from .mc_metrics import run_metrics
 from .sweep.execute import Study, run_sweep
@@ -75,7 +76,8 @@ class Case:
     solver: str = "paper"
 
     def __post_init__(self):
-        check_robot(self.robot)          # a built-in name or a URDF robot key
+        check_robot(self.robot)          # a built-in name or a URDF robot key (made absolute)
+        object.__setattr__(self, "robot", robot_spec(self.robot))
         if self.excite not in EXCITE:
             raise ValueError(f"excite must be one of {sorted(EXCITE)}, got {self.excite!r}")
         if not (self.stop_time > 0.0 and math.isfinite(self.stop_time)):
