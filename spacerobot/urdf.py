@@ -257,8 +257,56 @@ def merge_bodies(parts: List[Tuple[RigidBody, _Frame]]) -> RigidBody:
     return _body(m, c, I)
 
 
-def _identity_frame() -> _Frame:
-    return _Frame()
+class _Assembler:
+    """Walks the chain from the base link and collects the record's bodies.
+
+    ``parts`` are the rigid parts of the body being collected, each placed in that body's
+    frame; ``here`` is the frame of the current link in the body's frame (fixed joints move
+    it); ``R_base`` the current link's orientation in the base frame at q = 0.
+    """
+
+    def __init__(self, rd: _Reader, base_link: str):
+        self.rd = rd
+        self.here = _Frame()
+        self.parts: List[Tuple[RigidBody, _Frame]] = [(rd.inertial(base_link, True), self.here)]
+        self.joint: Optional[dict] = None          # the movable joint of the body collected
+        self.base: Optional[RigidBody] = None
+        self.links: List[ArmLink] = []
+        self.R_base = np.eye(3)
+        self.axes_base: List[Tuple[str, np.ndarray]] = []   # joint axes in the base frame
+
+    def fixed(self, j: dict) -> None:
+        """Merge the child link of fixed joint ``j`` into the current body."""
+        self.here = self.here.then(j["frame"])
+        self.R_base = self.R_base @ j["frame"].R
+        body = self.rd.inertial(j["child"], required=False)
+        if body is not None:
+            self.parts.append((body, self.here))
+
+    def movable(self, j: dict) -> None:
+        """Close the current body; the child link of ``j`` starts the next one."""
+        self.close()
+        self.R_base = self.R_base @ j["frame"].R
+        self.axes_base.append((j["name"], self.R_base @ j["axis"]))
+        self.joint = dict(j, place=self.here.then(j["frame"]))
+        self.here = _Frame()
+        self.parts = [(self.rd.inertial(j["child"], required=True), self.here)]
+
+    def close(self) -> None:
+        """The collected parts become the base or the link of the current joint."""
+        body = merge_bodies(self.parts)
+        j = self.joint
+        if j is None:
+            self.base = body
+            return
+        self.links.append(ArmLink(j["name"], tuple(float(x) for x in j["place"].p),
+                                  tuple(float(x) for x in j["place"].R.reshape(9)),
+                                  tuple(float(x) for x in j["axis"]), body, j["limits"]))
+
+    def planar_axes(self) -> List[str]:
+        """Names of the joints whose axis is NOT parallel to the base z axis."""
+        return [n for n, a in self.axes_base
+                if np.linalg.norm(a[:2]) > PARALLEL_TOL * np.linalg.norm(a)]
 
 
 def parse_robot(text: str | bytes, ee: Optional[str] = None, motion: str = "auto",
@@ -291,76 +339,36 @@ def parse_robot(text: str | bytes, ee: Optional[str] = None, motion: str = "auto
     if not 1 <= n_movable <= MAX_JOINTS:
         rd.fail(f"the chain has {n_movable} revolute joints; 1 to {MAX_JOINTS} are supported")
 
-    # walk the chain: `parts` collects the rigid parts of the current moving body (placed in
-    # its frame by `here`, the frame of the current link in the body's frame)
-    here = _identity_frame()
-    parts: List[Tuple[RigidBody, _Frame]] = []
-    base_body: Optional[RigidBody] = None
-    links: List[ArmLink] = []
-    pending: Optional[dict] = None             # the movable joint whose body is being collected
-    R_base = np.eye(3)                         # current link frame in the base frame (rotation)
-    axes_base = []
-    ee_frame, ee_found = None, ee is None
-
-    def close_body():
-        body = merge_bodies(parts)
-        if pending is None:
-            return body
-        links.append(ArmLink(pending["name"], tuple(float(x) for x in pending["place"].p),
-                             tuple(float(x) for x in pending["place"].R.reshape(9)),
-                             tuple(float(x) for x in pending["axis"]), body,
-                             pending["limits"]))
-        return body
-
-    link = base_link
-    body = rd.inertial(link, required=True)
-    parts.append((body, here))
-    for j in path + [None]:
-        if ee is not None and link == ee:
-            ee_frame, ee_found = here, True
+    asm, ee_frame = _Assembler(rd, base_link), None
+    for link, j in zip([base_link] + [j["child"] for j in path], path + [None]):
+        if link == ee:
+            ee_frame = asm.here
         if j is None:
             break
-        child = j["child"]
         if j["type"] == "fixed":
-            here = here.then(j["frame"])
-            R_base = R_base @ j["frame"].R
-            b = rd.inertial(child, required=False)
-            if b is not None:
-                parts.append((b, here))
+            asm.fixed(j)
+        elif ee_frame is not None:
+            rd.fail(f"end-effector link {ee!r} is not at the tip: joint {j['name']!r} "
+                    f"moves after it")
         else:
-            if ee is not None and ee_found:
-                rd.fail(f"end-effector link {ee!r} is not at the tip: joint {j['name']!r} "
-                        f"moves after it")
-            if pending is None:
-                base_body = close_body()
-            else:
-                close_body()
-            place = here.then(j["frame"])
-            R_base = R_base @ j["frame"].R
-            axes_base.append((j["name"], R_base @ j["axis"]))
-            pending = dict(name=j["name"], place=place, axis=j["axis"], limits=j["limits"])
-            here = _identity_frame()
-            parts = [(rd.inertial(child, required=True), here)]
-        link = child
-    close_body()
-    if ee_frame is None:                     # default: the last link of the chain
-        ee_frame = here
+            asm.movable(j)
+    asm.close()
+    ee_frame = ee_frame or asm.here               # default: the last link of the chain
 
-    planar_axes = all(abs(a[2]) > 0 and np.linalg.norm(a[:2]) <= PARALLEL_TOL * np.linalg.norm(a)
-                      for _, a in axes_base)
-    if motion == "planar" and not planar_axes:
-        bad = [n for n, a in axes_base if np.linalg.norm(a[:2]) > PARALLEL_TOL * np.linalg.norm(a)]
-        rd.fail(f"planar motion forced, but the axes of joints {bad} are not parallel to the "
-                f"base z axis")
-    planar = planar_axes if motion == "auto" else motion == "planar"
+    not_parallel = asm.planar_axes()
+    if motion == "planar" and not_parallel:
+        rd.fail(f"planar motion forced, but the axes of joints {not_parallel} are not "
+                f"parallel to the base z axis")
+    planar = not not_parallel if motion == "auto" else motion == "planar"
+    links = asm.links
     q0 = tuple(0.5 * (l.limits[0] + l.limits[1]) if l.limits else 0.0 for l in links)
-    return Robot(name=rd.name, planar=planar, base=base_body, links=tuple(links),
+    return Robot(name=rd.name, planar=planar, base=asm.base, links=tuple(links),
                  ee_xyz=tuple(float(x) for x in ee_frame.p),
                  ee_rotation=tuple(float(x) for x in ee_frame.R.reshape(9)), q0=q0,
-                 description=f"{rd.name} ({Path(where).name}): {base_body.mass:g} kg base, "
+                 description=f"{rd.name} ({Path(where).name}): {asm.base.mass:g} kg base, "
                              f"{len(links)}-joint {'planar' if planar else 'spatial'} arm, "
                              f"{sum(l.body.mass for l in links):g} kg, end effector "
-                             f"{ee or link!r}")
+                             f"{ee or (path[-1]['child'])!r}")
 
 
 def load_robot(path: str | Path, ee: Optional[str] = None, motion: str = "auto") -> Robot:

@@ -13,8 +13,10 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import json
 import math
-from pathlib import Path
+import re
+import zipfile
 
 import numpy as np
 import pytest
@@ -24,7 +26,7 @@ from spacerobot import interface
 from spacerobot.estimator import ExcitationRequest, Identifier
 from spacerobot.plant import Plant
 from spacerobot.robots import (ROBOTS, URDF_DIR, ArmLink, RigidBody, Robot, get_robot,
-                               robot_kind, robot_spec, scenario)
+                               parameter_set_scenario, robot_kind, robot_spec, scenario)
 from spacerobot.system.cli import main
 from spacerobot.urdf import URDFError, load_robot, parse_robot
 
@@ -122,7 +124,6 @@ def _closed_loop(sc, seconds, method="momentum", dt=0.1):
 def test_builtin_urdf_gives_the_same_outputs_and_estimates_over_20s(name):
     """The excited parameter set, so that the arm's whole description is exercised."""
     sets = {"planar": "excited", "spatial": "default"}
-    from spacerobot.robots import parameter_set_scenario
     sc_new = parameter_set_scenario(name, sets[name])
     sc_ref = dataclasses.replace(sc_new, robot=REFERENCE[name])
     assert sc_new.robot is ROBOTS[name]
@@ -379,7 +380,6 @@ def test_bad_urdf_is_refused_naming_the_element(case, tmp_path, capsys):
     assert status == 1
     assert err.startswith("spacerobot build: error: ") and str(path) in err
     assert len(err.strip().splitlines()) == 1
-    import re
     assert re.search(message, err)
     assert not (tmp_path / "out").exists()               # nothing built
 
@@ -402,9 +402,9 @@ def test_ee_before_a_joint_and_unknown_robot_are_refused(capsys):
 # ------------------------------------------------------------------------------------------------
 
 def test_cli_builds_fmus_and_ssp_of_a_urdf_robot(tmp_path, capsys):
-    import zipfile
-
     from fmpy import read_model_description
+
+    from spacerobot.system.recorder import read_csv
     out = tmp_path / "s7"
     assert main(["build", "--robot", str(SERVICER7), "--ee", "gripper", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
@@ -417,7 +417,6 @@ def test_cli_builds_fmus_and_ssp_of_a_urdf_robot(tmp_path, capsys):
     names = {v.name for v in md.modelVariables}
     assert "arm.qdd[7]" in names and "arm.q[8]" not in names
     with zipfile.ZipFile(out / "SpaceRobotPlant.fmu") as zf:
-        import json
         cfg = json.loads(zf.read("resources/spacerobot_config.json"))
     robot = Robot.from_dict(cfg["scenario"]["robot"])
     assert robot == load_robot(SERVICER7, ee="gripper")
@@ -428,7 +427,6 @@ def test_cli_builds_fmus_and_ssp_of_a_urdf_robot(tmp_path, capsys):
                  "--stop-time", "3", "--no-progress", "--out", str(csv)]) == 0
     printed = capsys.readouterr().out
     assert "robot servicer7" in printed and "target.m" in printed
-    from spacerobot.system.recorder import read_csv
     data = read_csv(csv)
     assert "plant.arm.q[7]" in data and len(data["time"]) == 31
 
