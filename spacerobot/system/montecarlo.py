@@ -22,10 +22,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
-import socket
-import time
-import traceback
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence
@@ -39,7 +35,7 @@ from ..robots import (Scenario, check_robot, get_robot, random_scenario, robot_l
 from .codes import estimator_overrides
 from .mc_metrics import run_metrics
 from .sweep.execute import Study, run_sweep
-from .sweep.run import DEFAULT_RUNNER, _resolve
+from .sweep.run import DEFAULT_RUNNER, run_guarded
 
 __all__ = ["Case", "make_cases", "run_case", "run_montecarlo", "plot_montecarlo", "COLUMNS",
            "STUDY", "EXCITE"]
@@ -165,21 +161,13 @@ def case_row(case: Case, res) -> Dict[str, object]:
     return row
 
 
+def _fill_case(row: Dict[str, object], case: Case, res) -> None:
+    row.update(case_row(case, res))
+
+
 def run_case(case: Case, ssp_path: str, runner: str = DEFAULT_RUNNER) -> Dict[str, object]:
     """Run one case; never raises: a failure becomes a row with ``status = failed``."""
-    row: Dict[str, object] = dict(case.columns())
-    row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
-    t0 = time.perf_counter()
-    try:
-        res = _resolve(runner)(str(ssp_path), stop_time=case.stop_time,
-                               overrides=case.fmi_overrides(), progress=False)
-        row.update(case_row(case, res))
-        row["status"], row["error"] = "ok", ""
-    except Exception as e:  # noqa: BLE001 -- report every failure in the table
-        msg = str(e).strip() or traceback.format_exc(limit=1).strip().splitlines()[-1]
-        row["status"], row["error"] = "failed", f"{type(e).__name__}: {msg}"
-    row["wall_time"] = round(time.perf_counter() - t0, 3)
-    return row
+    return run_guarded(case, ssp_path, runner, _fill_case)
 
 
 #: the Monte Carlo study for the sweep's executor
