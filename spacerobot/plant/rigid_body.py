@@ -1,0 +1,506 @@
+"""Compiled (Numba) rigid-body dynamics of a floating base carrying a serial chain of revolute
+joints: the articulated-body algorithm (forward dynamics), the composite-rigid-body algorithm
+(joint-space inertia ``M``), the recursive Newton-Euler non-linear effects ``c(q, v)`` and the
+centroidal momentum, in Pinocchio's conventions so that Pinocchio is the reference they are
+tested against (tests/test_compiled_dynamics.py).
+
+The model arrays come from a Pinocchio model (:func:`chain_arrays`: joint placements, body
+inertias, joint axes), so any robot Pinocchio builds (from code or URDF) whose root joint is a
+free-flyer or a planar joint, followed by a serial chain of one-axis revolute joints, runs here.
+
+Conventions (Pinocchio's): spatial motion ``[linear; angular]`` and force ``[linear; angular]``
+expressed in the body (joint) frame at its origin; body ``k = 0`` is the base (root joint),
+``k = 1..n`` the links. ``R[k], p[k]`` is the placement of joint ``k`` in its parent's frame
+(``x_parent = R x_k + p``; for ``k = 0`` the identity); a revolute joint turns about
+``axis[k]`` (unit, in its own frame). The planar root joint is the free-flyer restricted to
+``(v_x, v_y, omega_z)``: its motion subspace is the columns 0, 1, 5 of the identity
+(:data:`ROOT_ROWS`), with no bias acceleration (as for the free-flyer, whose velocity is
+expressed in the base frame). The model must be gravity-free (a free-floating robot).
+
+Self-contained (only NumPy and Numba) because it is a compiled kernel module with a persistent
+cache (:mod:`spacerobot.jit`); :mod:`.kernels` uses its functions and is cached with it.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_NB = dict(cache=True, nogil=True)
+
+
+def root_rows(planar: bool) -> np.ndarray:
+    """Rows of the base spatial velocity ``[v; omega]`` that are the base's generalised
+    velocities: all six for the free-flyer, ``(v_x, v_y, omega_z)`` for the planar joint."""
+    return np.array([0, 1, 5] if planar else [0, 1, 2, 3, 4, 5], dtype=np.int64)
+
+
+def chain_arrays(model) -> tuple:
+    """Arrays of the compiled model from a Pinocchio model.
+
+    Parameters
+    ----------
+    model : pinocchio.Model
+        root joint 1 a ``JointModelFreeFlyer`` or ``JointModelPlanar`` at the identity
+        placement, joints 2.. one-axis revolute joints (``RX``, ``RY``, ``RZ``,
+        ``RevoluteUnaligned``), each the child of the previous one; zero gravity.
+
+    Returns
+    -------
+    planar : bool
+    R : (n + 1, 3, 3), p : (n + 1, 3)   joint placements in the parent frame
+    axis : (n + 1, 3)                    revolute axes (row 0 unused)
+    I6 : (n + 1, 6, 6)                   spatial inertias at the joint origins
+    mc : (n + 1, 4)                      mass [kg] and centre of mass (joint frame) [m]
+
+    Raises ``ValueError`` for a model outside that family.
+    """
+    nj = model.njoints
+    root = model.joints[1].shortname() if nj > 1 else ""
+    if root not in ("JointModelFreeFlyer", "JointModelPlanar"):
+        raise ValueError(f"root joint must be a free-flyer or planar joint, got {root!r}")
+    if not np.allclose(model.jointPlacements[1].homogeneous, np.eye(4), rtol=0.0, atol=0.0):
+        raise ValueError("the root joint must be placed at the identity")
+    if np.any(np.asarray(model.gravity.vector) != 0.0):
+        raise ValueError("the compiled dynamics is for a gravity-free model")
+    n = nj - 2
+    R, p = np.zeros((n + 1, 3, 3)), np.zeros((n + 1, 3))
+    axis, I6, mc = np.zeros((n + 1, 3)), np.zeros((n + 1, 6, 6)), np.zeros((n + 1, 4))
+    unit = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0),
+            "JointModelRZ": (0.0, 0.0, 1.0)}
+    for k in range(n + 1):
+        j = k + 1
+        if k > 0:
+            jm = model.joints[j]
+            name = jm.shortname()
+            if model.parents[j] != j - 1:
+                raise ValueError(f"joint {j} is not the child of joint {j - 1}: not a serial chain")
+            if name in unit:
+                axis[k] = unit[name]
+            elif name == "JointModelRevoluteUnaligned":
+                axis[k] = np.asarray(jm.extract().axis, float)
+            else:
+                raise ValueError(f"joint {j} ({name}) is not a one-axis revolute joint")
+        M = model.jointPlacements[j]
+        R[k], p[k] = M.rotation, M.translation
+        Y = model.inertias[j]
+        m, c = float(Y.mass), np.asarray(Y.lever, float)
+        cx = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0]])
+        # I6 = [[m 1, -m [c]x], [m [c]x, I_c - m [c]x [c]x]]  (Pinocchio's Inertia.matrix())
+        I6[k, :3, :3] = m * np.eye(3)
+        I6[k, :3, 3:] = -m * cx
+        I6[k, 3:, :3] = m * cx
+        I6[k, 3:, 3:] = np.asarray(Y.inertia, float) - m * cx @ cx
+        mc[k, 0], mc[k, 1:] = m, c
+    return root == "JointModelPlanar", R, p, axis, I6, mc
+
+
+# -- small linear algebra -------------------------------------------------------------------
+
+
+@njit(**_NB)
+def cholesky(S, L):
+    """Lower Cholesky factor of the SPD matrix ``S`` into ``L``; False if a pivot is <= 0
+    (a NaN pivot passes, so that NaN propagates)."""
+    k = S.shape[0]
+    for j in range(k):
+        d = S[j, j]
+        for p in range(j):
+            d -= L[j, p] * L[j, p]
+        if d <= 0.0:
+            return False
+        d = math.sqrt(d)
+        L[j, j] = d
+        for i in range(j + 1, k):
+            s = S[i, j]
+            for p in range(j):
+                s -= L[i, p] * L[j, p]
+            L[i, j] = s / d
+        for i in range(j):
+            L[i, j] = 0.0
+    return True
+
+
+@njit(**_NB)
+def cho_solve(L, B):
+    """Solve ``L L^T X = B`` in place of ``B`` (k, c)."""
+    k, c = B.shape
+    for col in range(c):
+        for i in range(k):
+            s = B[i, col]
+            for p in range(i):
+                s -= L[i, p] * B[p, col]
+            B[i, col] = s / L[i, i]
+        for i in range(k - 1, -1, -1):
+            s = B[i, col]
+            for p in range(i + 1, k):
+                s -= L[p, i] * B[p, col]
+            B[i, col] = s / L[i, i]
+
+
+# -- spatial algebra ----------------------------------------------------------------------------
+
+
+@njit(**_NB)
+def _joint_transforms(planar, R, p, axis, q, X, oR, op):
+    """Motion transforms parent -> body ``X[k]`` (6, 6) at the configuration ``q`` (unit
+    quaternion / (cos, sin)), and the world placements ``oR[k]`` (3, 3), ``op[k]`` (3,).
+
+    For ``x_parent = Rk x_k + pk`` (``Rk = R[k] Rot(axis[k], q_k)``, Rodrigues):
+    ``v_k = Rk^T (v_p - pk x w_p)``, ``w_k = Rk^T w_p``, i.e.
+    ``X = [[Rk^T, -Rk^T [pk]x], [0, Rk^T]]``.
+    """
+    nb = R.shape[0]
+    nq0 = 4 if planar else 7
+    # base world placement from the root joint
+    if planar:
+        c, s = q[2], q[3]
+        oR[0, 0, 0], oR[0, 0, 1], oR[0, 0, 2] = c, -s, 0.0
+        oR[0, 1, 0], oR[0, 1, 1], oR[0, 1, 2] = s, c, 0.0
+        oR[0, 2, 0], oR[0, 2, 1], oR[0, 2, 2] = 0.0, 0.0, 1.0
+        op[0, 0], op[0, 1], op[0, 2] = q[0], q[1], 0.0
+    else:
+        x, y, z, w = q[3], q[4], q[5], q[6]
+        s2 = 2.0 / (x * x + y * y + z * z + w * w)
+        oR[0, 0, 0] = 1.0 - s2 * (y * y + z * z)
+        oR[0, 0, 1] = s2 * (x * y - z * w)
+        oR[0, 0, 2] = s2 * (x * z + y * w)
+        oR[0, 1, 0] = s2 * (x * y + z * w)
+        oR[0, 1, 1] = 1.0 - s2 * (x * x + z * z)
+        oR[0, 1, 2] = s2 * (y * z - x * w)
+        oR[0, 2, 0] = s2 * (x * z - y * w)
+        oR[0, 2, 1] = s2 * (y * z + x * w)
+        oR[0, 2, 2] = 1.0 - s2 * (x * x + y * y)
+        op[0, 0], op[0, 1], op[0, 2] = q[0], q[1], q[2]
+    Rj = np.empty((3, 3))
+    Rk = np.empty((3, 3))
+    for k in range(1, nb):
+        th = q[nq0 + k - 1]
+        ax, ay, az = axis[k, 0], axis[k, 1], axis[k, 2]
+        sn, cs = math.sin(th), math.cos(th)
+        t = 1.0 - cs
+        # Rot(a, th) = cos I + sin [a]x + (1 - cos) a a^T
+        Rj[0, 0], Rj[0, 1], Rj[0, 2] = cs + t * ax * ax, t * ax * ay - sn * az, t * ax * az + sn * ay
+        Rj[1, 0], Rj[1, 1], Rj[1, 2] = t * ax * ay + sn * az, cs + t * ay * ay, t * ay * az - sn * ax
+        Rj[2, 0], Rj[2, 1], Rj[2, 2] = t * ax * az - sn * ay, t * ay * az + sn * ax, cs + t * az * az
+        for i in range(3):
+            for j in range(3):
+                Rk[i, j] = R[k, i, 0] * Rj[0, j] + R[k, i, 1] * Rj[1, j] + R[k, i, 2] * Rj[2, j]
+        px, py, pz = p[k, 0], p[k, 1], p[k, 2]
+        for i in range(6):
+            for j in range(6):
+                X[k, i, j] = 0.0
+        for i in range(3):
+            r0, r1, r2 = Rk[0, i], Rk[1, i], Rk[2, i]      # row i of Rk^T
+            X[k, i, 0], X[k, i, 1], X[k, i, 2] = r0, r1, r2
+            X[k, 3 + i, 3], X[k, 3 + i, 4], X[k, 3 + i, 5] = r0, r1, r2
+            # -Rk^T [p]x, row i: -(r x ... ) = -(r0 [p]x row0 + r1 row1 + r2 row2)
+            X[k, i, 3] = -(r1 * pz - r2 * py)
+            X[k, i, 4] = -(r2 * px - r0 * pz)
+            X[k, i, 5] = -(r0 * py - r1 * px)
+        # world placement: oR_k = oR_p Rk, op_k = op_p + oR_p pk
+        for i in range(3):
+            for j in range(3):
+                oR[k, i, j] = (oR[k - 1, i, 0] * Rk[0, j] + oR[k - 1, i, 1] * Rk[1, j]
+                               + oR[k - 1, i, 2] * Rk[2, j])
+            op[k, i] = op[k - 1, i] + (oR[k - 1, i, 0] * px + oR[k - 1, i, 1] * py
+                                       + oR[k - 1, i, 2] * pz)
+
+
+@njit(**_NB)
+def _xmul(Xk, a, out):
+    """``out = X a`` (motion to the child)."""
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += Xk[i, j] * a[j]
+        out[i] = s
+
+
+@njit(**_NB)
+def _xtmul_add(Xk, f, out):
+    """``out += X^T f`` (force to the parent)."""
+    for j in range(6):
+        s = 0.0
+        for i in range(6):
+            s += Xk[i, j] * f[i]
+        out[j] += s
+
+
+@njit(**_NB)
+def _congruence_add(Xk, Ia, T, out):
+    """``out += X^T Ia X`` (inertia to the parent); ``T`` (6, 6) scratch."""
+    for i in range(6):
+        for j in range(6):
+            s = 0.0
+            for m in range(6):
+                s += Ia[i, m] * Xk[m, j]
+            T[i, j] = s
+    for i in range(6):
+        for j in range(6):
+            s = 0.0
+            for m in range(6):
+                s += Xk[m, i] * T[m, j]
+            out[i, j] += s
+
+
+@njit(**_NB)
+def _crm(v, m, out):
+    """Motion cross product ``out = v x m`` = ``[w x m_l + v_l x m_w; w x m_w]``."""
+    vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
+    ml0, ml1, ml2, mw0, mw1, mw2 = m[0], m[1], m[2], m[3], m[4], m[5]
+    out[0] = w1 * ml2 - w2 * ml1 + vl1 * mw2 - vl2 * mw1
+    out[1] = w2 * ml0 - w0 * ml2 + vl2 * mw0 - vl0 * mw2
+    out[2] = w0 * ml1 - w1 * ml0 + vl0 * mw1 - vl1 * mw0
+    out[3] = w1 * mw2 - w2 * mw1
+    out[4] = w2 * mw0 - w0 * mw2
+    out[5] = w0 * mw1 - w1 * mw0
+
+
+@njit(**_NB)
+def _crf_add(v, f, out):
+    """Force cross product ``out += v x* f`` = ``[w x f_l; w x f_n + v_l x f_l]``."""
+    vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
+    fl0, fl1, fl2, fn0, fn1, fn2 = f[0], f[1], f[2], f[3], f[4], f[5]
+    out[0] += w1 * fl2 - w2 * fl1
+    out[1] += w2 * fl0 - w0 * fl2
+    out[2] += w0 * fl1 - w1 * fl0
+    out[3] += w1 * fn2 - w2 * fn1 + vl1 * fl2 - vl2 * fl1
+    out[4] += w2 * fn0 - w0 * fn2 + vl2 * fl0 - vl0 * fl2
+    out[5] += w0 * fn1 - w1 * fn0 + vl0 * fl1 - vl1 * fl0
+
+
+@njit(**_NB)
+def _velocities(planar, X, axis, v, vel, cb):
+    """Body velocities ``vel[k]`` and bias accelerations ``cb[k] = vel[k] x (S_k qd_k)``."""
+    nb = X.shape[0]
+    rows = root_rows_nb(planar)
+    nr = rows.shape[0]
+    for i in range(6):
+        vel[0, i] = 0.0
+        cb[0, i] = 0.0
+    for j in range(nr):
+        vel[0, rows[j]] = v[j]
+    vJ = np.zeros(6)
+    for k in range(1, nb):
+        _xmul(X[k], vel[k - 1], vel[k])
+        qd = v[nr + k - 1]
+        vJ[3], vJ[4], vJ[5] = axis[k, 0] * qd, axis[k, 1] * qd, axis[k, 2] * qd
+        for i in range(3):
+            vel[k, 3 + i] += vJ[3 + i]
+        _crm(vel[k], vJ, cb[k])
+
+
+@njit(**_NB)
+def root_rows_nb(planar):
+    """:func:`root_rows` for compiled callers."""
+    if planar:
+        r = np.empty(3, np.int64)
+        r[0], r[1], r[2] = 0, 1, 5
+        return r
+    return np.arange(6)
+
+
+# -- algorithms -------------------------------------------------------------------------------
+
+
+class Workspace:
+    """Preallocated arrays of the algorithms for a chain of ``n`` links (a plain holder; the
+    compiled functions take its arrays)."""
+
+    def __init__(self, n: int):
+        nb = n + 1
+        self.X = np.zeros((nb, 6, 6))
+        self.oR = np.zeros((nb, 3, 3))
+        self.op = np.zeros((nb, 3))
+        self.vel = np.zeros((nb, 6))
+        self.cb = np.zeros((nb, 6))
+        self.IA = np.zeros((nb, 6, 6))
+        self.pA = np.zeros((nb, 6))
+        self.acc = np.zeros((nb, 6))
+
+    def arrays(self) -> tuple:
+        return self.X, self.oR, self.op, self.vel, self.cb, self.IA, self.pA, self.acc
+
+
+@njit(**_NB)
+def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc):
+    """Forward dynamics ``ddq = M^-1 (tau - c(q, v))`` by the articulated-body algorithm.
+
+    Parameters
+    ----------
+    planar : bool
+    R, p, axis, I6 : model arrays of :func:`chain_arrays`
+    q : (nq,)   configuration (unit quaternion / (cos, sin) of the root)
+    v : (nv,)   velocity ``[v_base (nb), qd (n)]``;  tau : (nv,) generalised force
+    ddq : (nv,) output
+    X, oR, op, vel, cb, IA, pA, acc : work arrays (:class:`Workspace`)
+
+    Returns 0, or 1 if the base's articulated inertia is not positive definite.
+    """
+    nb = R.shape[0]
+    rows = root_rows_nb(planar)
+    nr = rows.shape[0]
+    _joint_transforms(planar, R, p, axis, q, X, oR, op)
+    _velocities(planar, X, axis, v, vel, cb)
+    # pass 1: IA_k = I_k, pA_k = v_k x* (I_k v_k)
+    for k in range(nb):
+        for i in range(6):
+            s = 0.0
+            for j in range(6):
+                IA[k, i, j] = I6[k, i, j]
+                s += I6[k, i, j] * vel[k, j]
+            acc[k, i] = s                       # I v (scratch)
+        for i in range(6):
+            pA[k, i] = 0.0
+        _crf_add(vel[k], acc[k], pA[k])
+    # pass 2 (tip to base): U = IA S, D = S^T U, u = tau - S^T pA, articulated inertia to parent
+    Ia = np.empty((6, 6))
+    T = np.empty((6, 6))
+    pa = np.empty(6)
+    U = np.empty((nb, 6))
+    D = np.empty(nb)
+    u = np.empty(nb)
+    for k in range(nb - 1, 0, -1):
+        ax, ay, az = axis[k, 0], axis[k, 1], axis[k, 2]
+        for i in range(6):
+            U[k, i] = IA[k, i, 3] * ax + IA[k, i, 4] * ay + IA[k, i, 5] * az
+        D[k] = U[k, 3] * ax + U[k, 4] * ay + U[k, 5] * az
+        u[k] = tau[nr + k - 1] - (pA[k, 3] * ax + pA[k, 4] * ay + pA[k, 5] * az)
+        # Ia = IA - U U^T / D ;  pa = pA + Ia c + U u / D
+        for i in range(6):
+            for j in range(6):
+                Ia[i, j] = IA[k, i, j] - U[k, i] * U[k, j] / D[k]
+        for i in range(6):
+            s = pA[k, i] + U[k, i] * u[k] / D[k]
+            for j in range(6):
+                s += Ia[i, j] * cb[k, j]
+            pa[i] = s
+        _congruence_add(X[k], Ia, T, IA[k - 1])
+        _xtmul_add(X[k], pa, pA[k - 1])
+    # base: (S^T IA_0 S) dv_b = tau_b - S^T pA_0
+    Sb = np.empty((nr, nr))
+    Lb = np.empty((nr, nr))
+    rhs = np.empty((nr, 1))
+    for i in range(nr):
+        for j in range(nr):
+            Sb[i, j] = IA[0, rows[i], rows[j]]
+        rhs[i, 0] = tau[i] - pA[0, rows[i]]
+    if not cholesky(Sb, Lb):
+        return 1
+    cho_solve(Lb, rhs)
+    for i in range(6):
+        acc[0, i] = 0.0
+    for i in range(nr):
+        ddq[i] = rhs[i, 0]
+        acc[0, rows[i]] = rhs[i, 0]
+    # pass 3 (base to tip): a_k = X a_p + c_k, qdd_k = (u_k - U_k^T a_k) / D_k, a_k += S qdd_k
+    for k in range(1, nb):
+        _xmul(X[k], acc[k - 1], acc[k])
+        s = u[k]
+        for i in range(6):
+            acc[k, i] += cb[k, i]
+            s -= U[k, i] * acc[k, i]
+        qdd = s / D[k]
+        ddq[nr + k - 1] = qdd
+        acc[k, 3] += axis[k, 0] * qdd
+        acc[k, 4] += axis[k, 1] * qdd
+        acc[k, 5] += axis[k, 2] * qdd
+    return 0
+
+
+@njit(**_NB)
+def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, pA, acc):
+    """Joint-space inertia (CRBA), non-linear effects (RNEA at zero acceleration) and the
+    centroidal momentum, as Pinocchio's ``computeAllTerms`` gives ``data.M``, ``data.nle`` and
+    ``data.hg``.
+
+    Writes ``M`` (nv, nv) (both triangles), ``nle`` (nv,) and ``hg`` (6,) = ``[P, L_c]``
+    (inertial frame; angular momentum about the system centre of mass). Returns the system
+    centre of mass (3,) in the inertial frame.
+    """
+    nb = R.shape[0]
+    rows = root_rows_nb(planar)
+    nr = rows.shape[0]
+    _joint_transforms(planar, R, p, axis, q, X, oR, op)
+    _velocities(planar, X, axis, v, vel, cb)
+    # RNEA, forward: a_k = X a_p + c_k (a_0 = 0), f_k = I a_k + v x* (I v); momentum h_k = I v
+    # composite inertias start as the body inertias (IA as scratch)
+    P = np.zeros(3)
+    L = np.zeros(3)
+    com = np.zeros(3)
+    mtot = 0.0
+    hv = np.empty(6)
+    hw = np.empty(3)
+    for k in range(nb):
+        if k == 0:
+            for i in range(6):
+                acc[0, i] = 0.0
+        else:
+            _xmul(X[k], acc[k - 1], acc[k])
+            for i in range(6):
+                acc[k, i] += cb[k, i]
+        for i in range(6):
+            s = 0.0
+            sh = 0.0
+            for j in range(6):
+                IA[k, i, j] = I6[k, i, j]
+                s += I6[k, i, j] * acc[k, j]
+                sh += I6[k, i, j] * vel[k, j]
+            pA[k, i] = s
+            hv[i] = sh
+        _crf_add(vel[k], hv, pA[k])
+        # momentum in the inertial frame about its origin: [oR h_l; oR h_n + op x oR h_l]
+        for i in range(3):
+            hw[i] = oR[k, i, 0] * hv[0] + oR[k, i, 1] * hv[1] + oR[k, i, 2] * hv[2]
+            P[i] += hw[i]
+        for i in range(3):
+            L[i] += oR[k, i, 0] * hv[3] + oR[k, i, 1] * hv[4] + oR[k, i, 2] * hv[5]
+        L[0] += op[k, 1] * hw[2] - op[k, 2] * hw[1]
+        L[1] += op[k, 2] * hw[0] - op[k, 0] * hw[2]
+        L[2] += op[k, 0] * hw[1] - op[k, 1] * hw[0]
+        m = mc[k, 0]
+        mtot += m
+        for i in range(3):
+            com[i] += m * (op[k, i] + oR[k, i, 0] * mc[k, 1] + oR[k, i, 1] * mc[k, 2]
+                           + oR[k, i, 2] * mc[k, 3])
+    for i in range(3):
+        com[i] /= mtot
+    # L_c = L_O - com x P
+    hg[0], hg[1], hg[2] = P[0], P[1], P[2]
+    hg[3] = L[0] - (com[1] * P[2] - com[2] * P[1])
+    hg[4] = L[1] - (com[2] * P[0] - com[0] * P[2])
+    hg[5] = L[2] - (com[0] * P[1] - com[1] * P[0])
+    # backward: nle_k = S^T f_k, f_p += X^T f_k;  composite inertia Ic_p += X^T Ic_k X
+    T = np.empty((6, 6))
+    for k in range(nb - 1, 0, -1):
+        nle[nr + k - 1] = axis[k, 0] * pA[k, 3] + axis[k, 1] * pA[k, 4] + axis[k, 2] * pA[k, 5]
+        _xtmul_add(X[k], pA[k], pA[k - 1])
+        _congruence_add(X[k], IA[k], T, IA[k - 1])
+    for i in range(nr):
+        nle[i] = pA[0, rows[i]]
+    # CRBA: F = Ic_k S_k; M_kk = S_k^T F; up the chain M_jk = S_j^T (X^T ... F)
+    F = np.empty(6)
+    G = np.empty(6)
+    for k in range(nb - 1, 0, -1):
+        ax, ay, az = axis[k, 0], axis[k, 1], axis[k, 2]
+        for i in range(6):
+            F[i] = IA[k, i, 3] * ax + IA[k, i, 4] * ay + IA[k, i, 5] * az
+        col = nr + k - 1
+        for j in range(k, 0, -1):
+            mj = axis[j, 0] * F[3] + axis[j, 1] * F[4] + axis[j, 2] * F[5]
+            M[nr + j - 1, col] = mj
+            M[col, nr + j - 1] = mj
+            for i in range(6):
+                G[i] = 0.0
+            _xtmul_add(X[j], F, G)
+            for i in range(6):
+                F[i] = G[i]
+        for i in range(nr):
+            M[i, col] = F[rows[i]]
+            M[col, i] = F[rows[i]]
+    for i in range(nr):
+        for j in range(nr):
+            M[i, j] = IA[0, rows[i], rows[j]]
+    return com
