@@ -144,12 +144,9 @@ def cho_solve(L, B):
 
 @njit(**_NB)
 def _joint_transforms(planar, R, p, axis, q, X, oR, op):
-    """Motion transforms parent -> body ``X[k]`` (6, 6) at the configuration ``q`` (unit
-    quaternion / (cos, sin)), and the world placements ``oR[k]`` (3, 3), ``op[k]`` (3,).
-
-    For ``x_parent = Rk x_k + pk`` (``Rk = R[k] Rot(axis[k], q_k)``, Rodrigues):
-    ``v_k = Rk^T (v_p - pk x w_p)``, ``w_k = Rk^T w_p``, i.e.
-    ``X = [[Rk^T, -Rk^T [pk]x], [0, Rk^T]]``.
+    """Rotations ``X[k]`` (3, 3) = ``Rk = R[k] Rot(axis[k], q_k)`` (Rodrigues) of each body in
+    its parent at the configuration ``q`` (unit quaternion / (cos, sin)), and the world
+    placements ``oR[k]`` (3, 3), ``op[k]`` (3,). Body ``k`` sits at ``x_parent = Rk x_k + p[k]``.
     """
     nb = R.shape[0]
     nq0 = 4 if planar else 7
@@ -173,76 +170,109 @@ def _joint_transforms(planar, R, p, axis, q, X, oR, op):
         oR[0, 2, 1] = s2 * (y * z + x * w)
         oR[0, 2, 2] = 1.0 - s2 * (x * x + y * y)
         op[0, 0], op[0, 1], op[0, 2] = q[0], q[1], q[2]
-    Rj = np.empty((3, 3))
-    Rk = np.empty((3, 3))
     for k in range(1, nb):
         th = q[nq0 + k - 1]
         ax, ay, az = axis[k, 0], axis[k, 1], axis[k, 2]
         sn, cs = math.sin(th), math.cos(th)
         t = 1.0 - cs
         # Rot(a, th) = cos I + sin [a]x + (1 - cos) a a^T
-        Rj[0, 0], Rj[0, 1], Rj[0, 2] = cs + t * ax * ax, t * ax * ay - sn * az, t * ax * az + sn * ay
-        Rj[1, 0], Rj[1, 1], Rj[1, 2] = t * ax * ay + sn * az, cs + t * ay * ay, t * ay * az - sn * ax
-        Rj[2, 0], Rj[2, 1], Rj[2, 2] = t * ax * az - sn * ay, t * ay * az + sn * ax, cs + t * az * az
+        j00, j01, j02 = cs + t * ax * ax, t * ax * ay - sn * az, t * ax * az + sn * ay
+        j10, j11, j12 = t * ax * ay + sn * az, cs + t * ay * ay, t * ay * az - sn * ax
+        j20, j21, j22 = t * ax * az - sn * ay, t * ay * az + sn * ax, cs + t * az * az
         for i in range(3):
-            for j in range(3):
-                Rk[i, j] = R[k, i, 0] * Rj[0, j] + R[k, i, 1] * Rj[1, j] + R[k, i, 2] * Rj[2, j]
+            r0, r1, r2 = R[k, i, 0], R[k, i, 1], R[k, i, 2]
+            X[k, i, 0] = r0 * j00 + r1 * j10 + r2 * j20
+            X[k, i, 1] = r0 * j01 + r1 * j11 + r2 * j21
+            X[k, i, 2] = r0 * j02 + r1 * j12 + r2 * j22
         px, py, pz = p[k, 0], p[k, 1], p[k, 2]
-        for i in range(6):
-            for j in range(6):
-                X[k, i, j] = 0.0
-        for i in range(3):
-            r0, r1, r2 = Rk[0, i], Rk[1, i], Rk[2, i]      # row i of Rk^T
-            X[k, i, 0], X[k, i, 1], X[k, i, 2] = r0, r1, r2
-            X[k, 3 + i, 3], X[k, 3 + i, 4], X[k, 3 + i, 5] = r0, r1, r2
-            # -Rk^T [p]x, row i: -(r x ... ) = -(r0 [p]x row0 + r1 row1 + r2 row2)
-            X[k, i, 3] = -(r1 * pz - r2 * py)
-            X[k, i, 4] = -(r2 * px - r0 * pz)
-            X[k, i, 5] = -(r0 * py - r1 * px)
         # world placement: oR_k = oR_p Rk, op_k = op_p + oR_p pk
         for i in range(3):
             for j in range(3):
-                oR[k, i, j] = (oR[k - 1, i, 0] * Rk[0, j] + oR[k - 1, i, 1] * Rk[1, j]
-                               + oR[k - 1, i, 2] * Rk[2, j])
+                oR[k, i, j] = (oR[k - 1, i, 0] * X[k, 0, j] + oR[k - 1, i, 1] * X[k, 1, j]
+                               + oR[k - 1, i, 2] * X[k, 2, j])
             op[k, i] = op[k - 1, i] + (oR[k - 1, i, 0] * px + oR[k - 1, i, 1] * py
                                        + oR[k - 1, i, 2] * pz)
 
 
 @njit(**_NB)
-def _xmul(Xk, a, out):
-    """``out = X a`` (motion to the child)."""
-    for i in range(6):
-        s = 0.0
-        for j in range(6):
-            s += Xk[i, j] * a[j]
-        out[i] = s
+def _xmul(Rk, pk, a, out):
+    """Motion to the child: ``out_l = Rk^T (a_l - pk x a_w)``, ``out_w = Rk^T a_w``."""
+    l0 = a[0] - (pk[1] * a[5] - pk[2] * a[4])
+    l1 = a[1] - (pk[2] * a[3] - pk[0] * a[5])
+    l2 = a[2] - (pk[0] * a[4] - pk[1] * a[3])
+    w0, w1, w2 = a[3], a[4], a[5]
+    for i in range(3):
+        out[i] = Rk[0, i] * l0 + Rk[1, i] * l1 + Rk[2, i] * l2
+        out[3 + i] = Rk[0, i] * w0 + Rk[1, i] * w1 + Rk[2, i] * w2
 
 
 @njit(**_NB)
-def _xtmul_add(Xk, f, out):
-    """``out += X^T f`` (force to the parent)."""
-    for j in range(6):
-        s = 0.0
-        for i in range(6):
-            s += Xk[i, j] * f[i]
-        out[j] += s
+def _xtmul_add(Rk, pk, f, out):
+    """Force to the parent: ``out_l += Rk f_l``, ``out_n += Rk f_n + pk x (Rk f_l)``."""
+    l0 = Rk[0, 0] * f[0] + Rk[0, 1] * f[1] + Rk[0, 2] * f[2]
+    l1 = Rk[1, 0] * f[0] + Rk[1, 1] * f[1] + Rk[1, 2] * f[2]
+    l2 = Rk[2, 0] * f[0] + Rk[2, 1] * f[1] + Rk[2, 2] * f[2]
+    out[0] += l0
+    out[1] += l1
+    out[2] += l2
+    out[3] += Rk[0, 0] * f[3] + Rk[0, 1] * f[4] + Rk[0, 2] * f[5] + pk[1] * l2 - pk[2] * l1
+    out[4] += Rk[1, 0] * f[3] + Rk[1, 1] * f[4] + Rk[1, 2] * f[5] + pk[2] * l0 - pk[0] * l2
+    out[5] += Rk[2, 0] * f[3] + Rk[2, 1] * f[4] + Rk[2, 2] * f[5] + pk[0] * l1 - pk[1] * l0
 
 
 @njit(**_NB)
-def _congruence_add(Xk, Ia, T, out):
-    """``out += X^T Ia X`` (inertia to the parent); ``T`` (6, 6) scratch."""
-    for i in range(6):
-        for j in range(6):
-            s = 0.0
-            for m in range(6):
-                s += Ia[i, m] * Xk[m, j]
-            T[i, j] = s
-    for i in range(6):
-        for j in range(6):
-            s = 0.0
-            for m in range(6):
-                s += Xk[m, i] * T[m, j]
-            out[i, j] += s
+def _rot_block(Rk, S, i0, j0, W, out):
+    """``out = Rk S[i0:i0+3, j0:j0+3] Rk^T`` (3, 3); ``W`` (3, 3) scratch."""
+    for i in range(3):
+        r0, r1, r2 = Rk[i, 0], Rk[i, 1], Rk[i, 2]
+        for j in range(3):
+            W[i, j] = r0 * S[i0, j0 + j] + r1 * S[i0 + 1, j0 + j] + r2 * S[i0 + 2, j0 + j]
+    for i in range(3):
+        w0, w1, w2 = W[i, 0], W[i, 1], W[i, 2]
+        for j in range(3):
+            out[i, j] = w0 * Rk[j, 0] + w1 * Rk[j, 1] + w2 * Rk[j, 2]
+
+
+@njit(**_NB)
+def _congruence_add(Rk, pk, Ia, T, out):
+    """``out += X^T Ia X`` (inertia to the parent) for the motion transform
+    ``X = [[Rk^T, -Rk^T P], [0, Rk^T]]``, ``P = [pk]x``, by 3x3 blocks: with
+    ``Ia = [[A, B], [B^T, C]]`` and ``A' = Rk A Rk^T`` (same for B, C),
+    ``X^T Ia X = [[A', B' - A' P], [(.)^T, C' + P B' + (P B')^T - P A' P]]``.
+    ``T`` (6, 6) scratch."""
+    A = T[0:3, 0:3]
+    B = T[0:3, 3:6]
+    C = T[3:6, 3:6]
+    W = T[3:6, 0:3]
+    _rot_block(Rk, Ia, 0, 0, W, A)
+    _rot_block(Rk, Ia, 0, 3, W, B)
+    _rot_block(Rk, Ia, 3, 3, W, C)
+    px, py, pz = pk[0], pk[1], pk[2]
+    # W = A' P, P = [[0, -pz, py], [pz, 0, -px], [-py, px, 0]]
+    for i in range(3):
+        a0, a1, a2 = A[i, 0], A[i, 1], A[i, 2]
+        W[i, 0] = a1 * pz - a2 * py
+        W[i, 1] = -a0 * pz + a2 * px
+        W[i, 2] = a0 * py - a1 * px
+    for i in range(3):
+        for j in range(3):
+            out[i, j] += A[i, j]
+            bij = B[i, j] - W[i, j]
+            out[i, 3 + j] += bij
+            out[3 + j, i] += bij
+    # B <- P B', W <- P (A' P)
+    for j in range(3):
+        b0, b1, b2 = B[0, j], B[1, j], B[2, j]
+        w0, w1, w2 = W[0, j], W[1, j], W[2, j]
+        B[0, j] = -pz * b1 + py * b2
+        B[1, j] = pz * b0 - px * b2
+        B[2, j] = -py * b0 + px * b1
+        W[0, j] = -pz * w1 + py * w2
+        W[1, j] = pz * w0 - px * w2
+        W[2, j] = -py * w0 + px * w1
+    for i in range(3):
+        for j in range(3):
+            out[3 + i, 3 + j] += C[i, j] + B[i, j] + B[j, i] - W[i, j]
 
 
 @njit(**_NB)
@@ -272,7 +302,7 @@ def _crf_add(v, f, out):
 
 
 @njit(**_NB)
-def _velocities(planar, X, axis, v, vel, cb):
+def _velocities(planar, X, p, axis, v, vel, cb):
     """Body velocities ``vel[k]`` and bias accelerations ``cb[k] = vel[k] x (S_k qd_k)``."""
     nb = X.shape[0]
     rows = root_rows_nb(planar)
@@ -284,7 +314,7 @@ def _velocities(planar, X, axis, v, vel, cb):
         vel[0, rows[j]] = v[j]
     vJ = np.zeros(6)
     for k in range(1, nb):
-        _xmul(X[k], vel[k - 1], vel[k])
+        _xmul(X[k], p[k], vel[k - 1], vel[k])
         qd = v[nr + k - 1]
         vJ[3], vJ[4], vJ[5] = axis[k, 0] * qd, axis[k, 1] * qd, axis[k, 2] * qd
         for i in range(3):
@@ -311,7 +341,7 @@ class Workspace:
 
     def __init__(self, n: int):
         nb = n + 1
-        self.X = np.zeros((nb, 6, 6))
+        self.X = np.zeros((nb, 3, 3))       # rotation of each body in its parent
         self.oR = np.zeros((nb, 3, 3))
         self.op = np.zeros((nb, 3))
         self.vel = np.zeros((nb, 6))
@@ -343,7 +373,7 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc)
     rows = root_rows_nb(planar)
     nr = rows.shape[0]
     _joint_transforms(planar, R, p, axis, q, X, oR, op)
-    _velocities(planar, X, axis, v, vel, cb)
+    _velocities(planar, X, p, axis, v, vel, cb)
     # pass 1: IA_k = I_k, pA_k = v_k x* (I_k v_k)
     for k in range(nb):
         for i in range(6):
@@ -377,8 +407,8 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc)
             for j in range(6):
                 s += Ia[i, j] * cb[k, j]
             pa[i] = s
-        _congruence_add(X[k], Ia, T, IA[k - 1])
-        _xtmul_add(X[k], pa, pA[k - 1])
+        _congruence_add(X[k], p[k], Ia, T, IA[k - 1])
+        _xtmul_add(X[k], p[k], pa, pA[k - 1])
     # base: (S^T IA_0 S) dv_b = tau_b - S^T pA_0
     Sb = np.empty((nr, nr))
     Lb = np.empty((nr, nr))
@@ -397,7 +427,7 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc)
         acc[0, rows[i]] = rhs[i, 0]
     # pass 3 (base to tip): a_k = X a_p + c_k, qdd_k = (u_k - U_k^T a_k) / D_k, a_k += S qdd_k
     for k in range(1, nb):
-        _xmul(X[k], acc[k - 1], acc[k])
+        _xmul(X[k], p[k], acc[k - 1], acc[k])
         s = u[k]
         for i in range(6):
             acc[k, i] += cb[k, i]
@@ -424,7 +454,7 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, 
     rows = root_rows_nb(planar)
     nr = rows.shape[0]
     _joint_transforms(planar, R, p, axis, q, X, oR, op)
-    _velocities(planar, X, axis, v, vel, cb)
+    _velocities(planar, X, p, axis, v, vel, cb)
     # RNEA, forward: a_k = X a_p + c_k (a_0 = 0), f_k = I a_k + v x* (I v); momentum h_k = I v
     # composite inertias start as the body inertias (IA as scratch)
     P = np.zeros(3)
@@ -438,7 +468,7 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, 
             for i in range(6):
                 acc[0, i] = 0.0
         else:
-            _xmul(X[k], acc[k - 1], acc[k])
+            _xmul(X[k], p[k], acc[k - 1], acc[k])
             for i in range(6):
                 acc[k, i] += cb[k, i]
         for i in range(6):
@@ -476,8 +506,8 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, 
     T = np.empty((6, 6))
     for k in range(nb - 1, 0, -1):
         nle[nr + k - 1] = axis[k, 0] * pA[k, 3] + axis[k, 1] * pA[k, 4] + axis[k, 2] * pA[k, 5]
-        _xtmul_add(X[k], pA[k], pA[k - 1])
-        _congruence_add(X[k], IA[k], T, IA[k - 1])
+        _xtmul_add(X[k], p[k], pA[k], pA[k - 1])
+        _congruence_add(X[k], p[k], IA[k], T, IA[k - 1])
     for i in range(nr):
         nle[i] = pA[0, rows[i]]
     # CRBA: F = Ic_k S_k; M_kk = S_k^T F; up the chain M_jk = S_j^T (X^T ... F)
@@ -494,7 +524,7 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, 
             M[col, nr + j - 1] = mj
             for i in range(6):
                 G[i] = 0.0
-            _xtmul_add(X[j], F, G)
+            _xtmul_add(X[j], p[j], F, G)
             for i in range(6):
                 F[i] = G[i]
         for i in range(nr):
