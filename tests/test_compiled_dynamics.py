@@ -80,7 +80,7 @@ def test_compiled_dynamics_equal_pinocchio(name):
         assert np.max(np.abs(ddq - ref)) <= TOL * max(1.0, np.max(np.abs(ref)))
         # M, nle, centroidal momentum, centre of mass
         M, nle, hg = np.empty((nv, nv)), np.empty(nv), np.empty(6)
-        com = rb.terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, *ws)
+        com = np.array(rb.terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, *ws))
         pin.computeAllTerms(model, data, q, v)
         Mref = data.M.copy()
         Mref = np.triu(Mref) + np.triu(Mref, 1).T

@@ -504,14 +504,15 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, K, 
     could not be taken; ``xout`` and ``t_reached`` are then the state and time at its start.
     """
     R, p, axis, I6, mc = mdl
-    X, oR, op, vel, cb, IA, pA, accb = ws
+    X, oR, op, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
     nx = x.shape[0]
     for j in range(nx):
         xa[j] = x[j]
     total = n_steps + (1 if rest > 0.0 else 0)
     for k in range(total):
         dt = h if k < n_steps else rest
-        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, X, oR, op, vel, cb, IA, pA, accb)
+        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, X, oR, op, vel, cb, IA, pA, accb, U,
+              Du, M6, v6)
         err = control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM)
         if err:
             for j in range(nx):
@@ -519,7 +520,8 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, K, 
             return err, t
         stage(planar, 0, xa, xa, acc, K, FM, dt, xs, qn, vs, gen, xout)
         for i in range(1, 4):
-            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, X, oR, op, vel, cb, IA, pA, accb):
+            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, X, oR, op, vel, cb, IA, pA, accb, U,
+                   Du, M6, v6):
                 for j in range(nx):
                     xout[j] = xa[j]
                 load(planar, xa, qn, vs)

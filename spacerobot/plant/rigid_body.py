@@ -27,7 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
-_NB = dict(cache=True, nogil=True)
+# error_model='numpy': a division by zero gives inf/NaN (no Python exception check per division)
+_NB = dict(cache=True, nogil=True, error_model="numpy")
 
 
 def root_rows(planar: bool) -> np.ndarray:
@@ -276,19 +277,6 @@ def _congruence_add(Rk, pk, Ia, T, out):
 
 
 @njit(**_NB)
-def _crm(v, m, out):
-    """Motion cross product ``out = v x m`` = ``[w x m_l + v_l x m_w; w x m_w]``."""
-    vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
-    ml0, ml1, ml2, mw0, mw1, mw2 = m[0], m[1], m[2], m[3], m[4], m[5]
-    out[0] = w1 * ml2 - w2 * ml1 + vl1 * mw2 - vl2 * mw1
-    out[1] = w2 * ml0 - w0 * ml2 + vl2 * mw0 - vl0 * mw2
-    out[2] = w0 * ml1 - w1 * ml0 + vl0 * mw1 - vl1 * mw0
-    out[3] = w1 * mw2 - w2 * mw1
-    out[4] = w2 * mw0 - w0 * mw2
-    out[5] = w0 * mw1 - w1 * mw0
-
-
-@njit(**_NB)
 def _crf_add(v, f, out):
     """Force cross product ``out += v x* f`` = ``[w x f_l; w x f_n + v_l x f_l]``."""
     vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
@@ -305,31 +293,34 @@ def _crf_add(v, f, out):
 def _velocities(planar, X, p, axis, v, vel, cb):
     """Body velocities ``vel[k]`` and bias accelerations ``cb[k] = vel[k] x (S_k qd_k)``."""
     nb = X.shape[0]
-    rows = root_rows_nb(planar)
-    nr = rows.shape[0]
+    nr = 3 if planar else 6
     for i in range(6):
         vel[0, i] = 0.0
         cb[0, i] = 0.0
     for j in range(nr):
-        vel[0, rows[j]] = v[j]
-    vJ = np.zeros(6)
+        vel[0, _row(planar, j)] = v[j]
     for k in range(1, nb):
         _xmul(X[k], p[k], vel[k - 1], vel[k])
         qd = v[nr + k - 1]
-        vJ[3], vJ[4], vJ[5] = axis[k, 0] * qd, axis[k, 1] * qd, axis[k, 2] * qd
-        for i in range(3):
-            vel[k, 3 + i] += vJ[3 + i]
-        _crm(vel[k], vJ, cb[k])
+        w0, w1, w2 = axis[k, 0] * qd, axis[k, 1] * qd, axis[k, 2] * qd
+        vel[k, 3] += w0
+        vel[k, 4] += w1
+        vel[k, 5] += w2
+        # c_k = v_k x [0; w_J] = [v_l x w_J; w x w_J]
+        vl0, vl1, vl2, a0, a1, a2 = vel[k, 0], vel[k, 1], vel[k, 2], vel[k, 3], vel[k, 4], vel[k, 5]
+        cb[k, 0] = vl1 * w2 - vl2 * w1
+        cb[k, 1] = vl2 * w0 - vl0 * w2
+        cb[k, 2] = vl0 * w1 - vl1 * w0
+        cb[k, 3] = a1 * w2 - a2 * w1
+        cb[k, 4] = a2 * w0 - a0 * w2
+        cb[k, 5] = a0 * w1 - a1 * w0
 
 
 @njit(**_NB)
-def root_rows_nb(planar):
-    """:func:`root_rows` for compiled callers."""
-    if planar:
-        r = np.empty(3, np.int64)
-        r[0], r[1], r[2] = 0, 1, 5
-        return r
-    return np.arange(6)
+def _row(planar, i):
+    """Row of the base spatial velocity that is base generalised velocity ``i``
+    (:func:`root_rows`)."""
+    return 5 if planar and i == 2 else i
 
 
 # -- algorithms -------------------------------------------------------------------------------
@@ -349,13 +340,19 @@ class Workspace:
         self.IA = np.zeros((nb, 6, 6))
         self.pA = np.zeros((nb, 6))
         self.acc = np.zeros((nb, 6))
+        self.U = np.zeros((nb, 6))          # IA S of each joint
+        self.Du = np.zeros((nb, 2))         # [S^T IA S, tau - S^T pA] of each joint
+        self.M6 = np.zeros((3, 6, 6))       # scratch matrices
+        self.v6 = np.zeros((6, 6))          # scratch vectors
 
     def arrays(self) -> tuple:
-        return self.X, self.oR, self.op, self.vel, self.cb, self.IA, self.pA, self.acc
+        return (self.X, self.oR, self.op, self.vel, self.cb, self.IA, self.pA, self.acc, self.U,
+                self.Du, self.M6, self.v6)
 
 
 @njit(**_NB)
-def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc):
+def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc, U, Du, M6,
+        v6):
     """Forward dynamics ``ddq = M^-1 (tau - c(q, v))`` by the articulated-body algorithm.
 
     Parameters
@@ -365,13 +362,12 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc)
     q : (nq,)   configuration (unit quaternion / (cos, sin) of the root)
     v : (nv,)   velocity ``[v_base (nb), qd (n)]``;  tau : (nv,) generalised force
     ddq : (nv,) output
-    X, oR, op, vel, cb, IA, pA, acc : work arrays (:class:`Workspace`)
+    X, oR, op, vel, cb, IA, pA, acc, U, Du, M6, v6 : work arrays (:class:`Workspace`)
 
     Returns 0, or 1 if the base's articulated inertia is not positive definite.
     """
     nb = R.shape[0]
-    rows = root_rows_nb(planar)
-    nr = rows.shape[0]
+    nr = 3 if planar else 6
     _joint_transforms(planar, R, p, axis, q, X, oR, op)
     _velocities(planar, X, p, axis, v, vel, cb)
     # pass 1: IA_k = I_k, pA_k = v_k x* (I_k v_k)
@@ -386,37 +382,33 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc)
             pA[k, i] = 0.0
         _crf_add(vel[k], acc[k], pA[k])
     # pass 2 (tip to base): U = IA S, D = S^T U, u = tau - S^T pA, articulated inertia to parent
-    Ia = np.empty((6, 6))
-    T = np.empty((6, 6))
-    pa = np.empty(6)
-    U = np.empty((nb, 6))
-    D = np.empty(nb)
-    u = np.empty(nb)
+    Ia, T, Sb = M6[0], M6[1], M6[2]
+    pa = v6[0]
     for k in range(nb - 1, 0, -1):
         ax, ay, az = axis[k, 0], axis[k, 1], axis[k, 2]
         for i in range(6):
             U[k, i] = IA[k, i, 3] * ax + IA[k, i, 4] * ay + IA[k, i, 5] * az
-        D[k] = U[k, 3] * ax + U[k, 4] * ay + U[k, 5] * az
-        u[k] = tau[nr + k - 1] - (pA[k, 3] * ax + pA[k, 4] * ay + pA[k, 5] * az)
+        D = U[k, 3] * ax + U[k, 4] * ay + U[k, 5] * az
+        u = tau[nr + k - 1] - (pA[k, 3] * ax + pA[k, 4] * ay + pA[k, 5] * az)
+        Du[k, 0], Du[k, 1] = D, u
         # Ia = IA - U U^T / D ;  pa = pA + Ia c + U u / D
         for i in range(6):
+            Ui = U[k, i] / D
             for j in range(6):
-                Ia[i, j] = IA[k, i, j] - U[k, i] * U[k, j] / D[k]
+                Ia[i, j] = IA[k, i, j] - Ui * U[k, j]
         for i in range(6):
-            s = pA[k, i] + U[k, i] * u[k] / D[k]
+            s = pA[k, i] + U[k, i] * (u / D)
             for j in range(6):
                 s += Ia[i, j] * cb[k, j]
             pa[i] = s
         _congruence_add(X[k], p[k], Ia, T, IA[k - 1])
         _xtmul_add(X[k], p[k], pa, pA[k - 1])
     # base: (S^T IA_0 S) dv_b = tau_b - S^T pA_0
-    Sb = np.empty((nr, nr))
-    Lb = np.empty((nr, nr))
-    rhs = np.empty((nr, 1))
+    Sb, Lb, rhs = M6[0, :nr, :nr], M6[1, :nr, :nr], v6[1:2, :nr].T
     for i in range(nr):
         for j in range(nr):
-            Sb[i, j] = IA[0, rows[i], rows[j]]
-        rhs[i, 0] = tau[i] - pA[0, rows[i]]
+            Sb[i, j] = IA[0, _row(planar, i), _row(planar, j)]
+        rhs[i, 0] = tau[i] - pA[0, _row(planar, i)]
     if not cholesky(Sb, Lb):
         return 1
     cho_solve(Lb, rhs)
@@ -424,15 +416,15 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc)
         acc[0, i] = 0.0
     for i in range(nr):
         ddq[i] = rhs[i, 0]
-        acc[0, rows[i]] = rhs[i, 0]
+        acc[0, _row(planar, i)] = rhs[i, 0]
     # pass 3 (base to tip): a_k = X a_p + c_k, qdd_k = (u_k - U_k^T a_k) / D_k, a_k += S qdd_k
     for k in range(1, nb):
         _xmul(X[k], p[k], acc[k - 1], acc[k])
-        s = u[k]
+        s = Du[k, 1]
         for i in range(6):
             acc[k, i] += cb[k, i]
             s -= U[k, i] * acc[k, i]
-        qdd = s / D[k]
+        qdd = s / Du[k, 0]
         ddq[nr + k - 1] = qdd
         acc[k, 3] += axis[k, 0] * qdd
         acc[k, 4] += axis[k, 1] * qdd
@@ -441,28 +433,26 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, X, oR, op, vel, cb, IA, pA, acc)
 
 
 @njit(**_NB)
-def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, pA, acc):
+def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, pA, acc, U, Du,
+          M6, v6):
     """Joint-space inertia (CRBA), non-linear effects (RNEA at zero acceleration) and the
     centroidal momentum, as Pinocchio's ``computeAllTerms`` gives ``data.M``, ``data.nle`` and
     ``data.hg``.
 
     Writes ``M`` (nv, nv) (both triangles), ``nle`` (nv,) and ``hg`` (6,) = ``[P, L_c]``
     (inertial frame; angular momentum about the system centre of mass). Returns the system
-    centre of mass (3,) in the inertial frame.
+    centre of mass (3 floats, inertial frame).
     """
     nb = R.shape[0]
-    rows = root_rows_nb(planar)
-    nr = rows.shape[0]
+    nr = 3 if planar else 6
     _joint_transforms(planar, R, p, axis, q, X, oR, op)
     _velocities(planar, X, p, axis, v, vel, cb)
     # RNEA, forward: a_k = X a_p + c_k (a_0 = 0), f_k = I a_k + v x* (I v); momentum h_k = I v
     # composite inertias start as the body inertias (IA as scratch)
-    P = np.zeros(3)
-    L = np.zeros(3)
-    com = np.zeros(3)
+    P, L, com, hv, hw = v6[0, :3], v6[0, 3:], v6[1, :3], v6[2], v6[1, 3:]
+    for i in range(3):
+        P[i] = L[i] = com[i] = 0.0
     mtot = 0.0
-    hv = np.empty(6)
-    hw = np.empty(3)
     for k in range(nb):
         if k == 0:
             for i in range(6):
@@ -502,17 +492,17 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, 
     hg[3] = L[0] - (com[1] * P[2] - com[2] * P[1])
     hg[4] = L[1] - (com[2] * P[0] - com[0] * P[2])
     hg[5] = L[2] - (com[0] * P[1] - com[1] * P[0])
+    c0, c1, c2 = com[0], com[1], com[2]
     # backward: nle_k = S^T f_k, f_p += X^T f_k;  composite inertia Ic_p += X^T Ic_k X
-    T = np.empty((6, 6))
+    T = M6[0]
     for k in range(nb - 1, 0, -1):
         nle[nr + k - 1] = axis[k, 0] * pA[k, 3] + axis[k, 1] * pA[k, 4] + axis[k, 2] * pA[k, 5]
         _xtmul_add(X[k], p[k], pA[k], pA[k - 1])
         _congruence_add(X[k], p[k], IA[k], T, IA[k - 1])
     for i in range(nr):
-        nle[i] = pA[0, rows[i]]
+        nle[i] = pA[0, _row(planar, i)]
     # CRBA: F = Ic_k S_k; M_kk = S_k^T F; up the chain M_jk = S_j^T (X^T ... F)
-    F = np.empty(6)
-    G = np.empty(6)
+    F, G = v6[3], v6[4]
     for k in range(nb - 1, 0, -1):
         ax, ay, az = axis[k, 0], axis[k, 1], axis[k, 2]
         for i in range(6):
@@ -528,9 +518,9 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, X, oR, op, vel, cb, IA, 
             for i in range(6):
                 F[i] = G[i]
         for i in range(nr):
-            M[i, col] = F[rows[i]]
-            M[col, i] = F[rows[i]]
+            M[i, col] = F[_row(planar, i)]
+            M[col, i] = F[_row(planar, i)]
     for i in range(nr):
         for j in range(nr):
-            M[i, j] = IA[0, rows[i], rows[j]]
-    return com
+            M[i, j] = IA[0, _row(planar, i), _row(planar, j)]
+    return c0, c1, c2
