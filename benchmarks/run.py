@@ -101,9 +101,9 @@ def record_outputs(sc, seconds: float, dt: float = 0.1) -> list:
     return outs
 
 
-def bare_rk4(sc, seconds: float) -> float:
-    """CPU seconds of a bare RK4 loop over pin.aba (zero torques) on the plant's model, at the
-    plant's step, from the plant's initial state: the floor of any RK4 plant on Pinocchio."""
+def bare_rk4(sc, seconds: float) -> tuple:
+    """``(CPU s, wall s)`` of a bare RK4 loop over pin.aba (zero torques) on the plant's model,
+    at the plant's step, from the plant's initial state: Pinocchio called from Python."""
     import pinocchio as pin
     p = new_plant(sc)
     model, data = p.pm.model, p.pm.model.createData()
@@ -111,7 +111,7 @@ def bare_rk4(sc, seconds: float) -> float:
     tau = np.zeros(model.nv)
     h = sc.h
     n = int(round(seconds / h))
-    t0 = time.process_time()
+    t0, w0 = time.process_time(), time.perf_counter()
     for _ in range(n):
         a1 = pin.aba(model, data, q, v, tau)
         v2 = v + 0.5 * h * a1
@@ -122,7 +122,7 @@ def bare_rk4(sc, seconds: float) -> float:
         a4 = pin.aba(model, data, pin.integrate(model, q, h * v3), v4, tau)
         q = pin.integrate(model, q, h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4))
         v = v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-    return time.process_time() - t0
+    return time.process_time() - t0, time.perf_counter() - w0
 
 
 def started(path: Path, name: str) -> FMUInstance:
@@ -171,7 +171,7 @@ def cosim_speed(systems: dict, seconds: dict, repeats: int) -> dict:
         # warm-up: the first run in a process loads the compiled kernels (or compiles them on
         # a machine's very first run); that one-off cost is not part of either measured run
         run_ssp(ssp_paths["ssp"], stop_time=0.2, progress=False)
-        wall_short, wall_long, cpu_short, cpu_long, bare = [], [], [], [], []
+        wall_short, wall_long, cpu_short, cpu_long, bare, bare_wall = [], [], [], [], [], []
         for _ in range(repeats):
             t, c = time.perf_counter(), time.process_time()
             run_ssp(ssp_paths["ssp"], stop_time=T0, progress=False)
@@ -181,7 +181,9 @@ def cosim_speed(systems: dict, seconds: dict, repeats: int) -> dict:
             run_ssp(ssp_paths["ssp"], stop_time=T0 + T, progress=False)
             wall_long.append(time.perf_counter() - t)
             cpu_long.append(time.process_time() - c)
-            bare.append(bare_rk4(sc, T))
+            b_cpu, b_wall = bare_rk4(sc, T)
+            bare.append(b_cpu)
+            bare_wall.append(b_wall)
         steps = T / sc.h
         cpu_marginal = min(cpu_long) - min(cpu_short)        # CPU s per T simulated seconds
         wall_marginal = min(wall_long) - min(wall_short)
@@ -190,6 +192,7 @@ def cosim_speed(systems: dict, seconds: dict, repeats: int) -> dict:
         res[robot] = {"T": T, "setup_s": min(wall_short) - T0 * wall_marginal / T,
                       "cosim_us_per_step": cos_step * 1e6, "bare_us_per_step": bare_step * 1e6,
                       "ratio": cos_step / bare_step, "rtf": T / wall_marginal,
+                      "ratio_wall": wall_marginal / min(bare_wall),
                       "rtf_cpu": T / cpu_marginal, "rtf_bare": T / min(bare),
                       "rtf_total": (T0 + T) / min(wall_long)}
         res[robot]["breakdown"] = breakdown(ssp_paths, sc, min(T, 10.0))
@@ -514,12 +517,12 @@ def main(argv=None) -> int:
     print(f"built FMUs and SSPs in {build}", flush=True)
 
     # 1. speed
-    seconds = {"planar": 3.0, "spatial": 3.0} if quick else {"planar": 20.0, "spatial": 20.0}
+    seconds = {"planar": 3.0, "spatial": 3.0} if quick else {"planar": 10.0, "spatial": 10.0}
     # measured in rounds spread over the run (now, after section 2, after section 3) and
     # merged by taking the best of each figure: robust against bursts of other load
     rounds = [cosim_speed(systems, seconds, repeats=1 if quick else 3)]
     print("speed:", {r: round(v["ratio"], 2) for r, v in rounds[-1].items()}, flush=True)
-    prof = profile_summary(systems["spatial"]["ssp"], 2.0 if quick else 5.0)
+    prof = profile_summary(systems["spatial"]["ssp"], 2.0 if quick else 10.0)
 
     # 2. estimator cost
     rec_s = 10.0 if quick else 60.0
@@ -570,9 +573,36 @@ def main(argv=None) -> int:
     return 0
 
 
+def _before_table(path: Path, speed: dict) -> str:
+    """The same co-simulation figures of an earlier tree (``path``: a saved
+    :func:`merge_rounds` result), against this run; empty if there is no such file."""
+    if not path.exists():
+        return ""
+    base = json.loads(path.read_text())
+    meta = base.get("_meta", {})
+    rows = []
+    for r, v in speed.items():
+        if r not in base:
+            continue
+        b = base[r]
+        bb, vb = b["breakdown"], v["breakdown"]
+        rows.append((r, f"{b['ratio']:.2f} -> **{v['ratio']:.2f}**",
+                     f"{b['cosim_us_per_step']:.1f} -> {v['cosim_us_per_step']:.1f}",
+                     f"{b['rtf']:.0f} -> {v['rtf']:.0f}",
+                     f"{bb['plant_core'] / 100:.1f} -> {vb['plant_core'] / 100:.1f}",
+                     f"{bb['plant_doStep']:.0f} -> {vb['plant_doStep']:.0f}",
+                     f"{bb['estimator_doStep']:.0f} -> {vb['estimator_doStep']:.0f}"))
+    return (f"Before issue #16 ({meta.get('what', '')}; {meta.get('date', '')}), against this "
+            "run (the ratios of that tree were measured against its own bare loop in its own "
+            "run):\n\n" + table(["robot", "ratio to bare RK4 (CPU)", "co-simulation [CPU us / "
+                                 "1 ms step]", "real-time factor (wall)", "plant core [us / RK4 "
+                                 "step]", "plant FMU doStep [us / 0.1 s]", "estimator FMU "
+                                 "doStep [us / 0.1 s]"], rows) + "\n")
+
+
 def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     L = []
-    L.append("# Benchmarks (issue #6)\n")
+    L.append("# Benchmarks (issues #6, #16)\n")
     L.append("Generated by `python benchmarks/run.py`" + (" --quick" if quick else "")
              + "; do not edit by hand. No timing is asserted by any test; these figures "
              "describe one run on one machine.\n")
@@ -606,22 +636,27 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     rows = []
     for r, v in speed.items():
         rows.append((r, fmt(v["T"], 0), fmt(v["bare_us_per_step"]), fmt(v["cosim_us_per_step"]),
-                     f"**{v['ratio']:.2f}**", fmt(v["rtf_bare"], 0), fmt(v["rtf_cpu"], 1),
+                     f"**{v['ratio']:.2f}**", f"{v.get('ratio_wall', math.nan):.2f}",
+                     fmt(v["rtf_bare"], 0), fmt(v["rtf_cpu"], 1),
                      fmt(v["rtf"], 1), fmt(v["rtf_total"], 1), fmt(v["setup_s"], 2)))
     L.append(table(["robot", "T [s]", "bare RK4 [CPU us / 1 ms step]", "co-simulation "
-                    "[CPU us / 1 ms step]", "ratio", "real-time factor, bare RK4 (CPU)",
+                    "[CPU us / 1 ms step]", "ratio (CPU)", "ratio (wall)",
+                    "real-time factor, bare RK4 (CPU)",
                     "real-time factor, co-simulation (CPU)", "real-time factor, co-simulation "
                     "(wall)", "real-time factor incl. set-up, 1 s + T (wall)", "set-up [s]"],
                    rows))
     L.append("\nRatio = co-simulation CPU time / bare RK4 CPU time for the same simulated time "
-             "(both in this process). Real-time factor = simulated seconds per second. Ratio of "
-             "each round: " + "; ".join(f"{r} " + ", ".join(f"{x:.2f}" for x in v.get("ratios", []))
-                                       for r, v in speed.items()) + ".\n")
+             "(both in this process; the wall-time ratio beside it). Real-time factor = simulated "
+             "seconds per second. Ratio (CPU) of each round: "
+             + "; ".join(f"{r} " + ", ".join(f"{x:.2f}" for x in v.get("ratios", []))
+                         for r, v in speed.items())
+             + ". Target of issue #16: ratio <= 0.3 (spatial, 10 s).\n")
+    L.append(_before_table(HERE / "baseline_i16.json", speed))
     base_file = HERE / "baseline_before.json"
     if base_file.exists():
         base = json.loads(base_file.read_text())
         meta = base.get("_meta", {})
-        L.append(f"Before the performance work ({meta.get('what', '')}; {meta.get('date', '')}), "
+        L.append(f"Before the performance work of issue #6 ({meta.get('what', '')}; {meta.get('date', '')}), "
                  "against this run:\n")
         rows = []
         for r in speed:
@@ -659,17 +694,28 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
         f"{r} {v['breakdown']['plant_core'] / 100:.1f} us = "
         f"{v['breakdown']['plant_core'] / 100 / v['bare_us_per_step']:.2f} x the floor"
         for r, v in speed.items())
-    L.append("\nPer RK4 step the plant core makes one `pin.computeAllTerms` call (M, non-linear "
-             "effects, centroidal momentum) and one call of the compiled control kernel where the "
-             "floor makes its first `pin.aba` call (the controller's inverse dynamics give the "
-             "first stage's accelerations), then three `pin.aba` calls, each followed by the "
-             "compiled stage kernel (`spacerobot/plant/kernels.py`); the floor instead makes "
-             "four `pin.integrate` calls and a dozen small NumPy operations. Plant core per RK4 "
-             f"step (this breakdown, against the floor of the table above): {per_step}. The "
-             "rest of the co-simulation cost is the estimator's update once per 0.1 s sample "
-             "and the FMI calls of the master: wiring and recording every output through "
-             "fmpy, including the standard deviations, which are computed when read.\n")
-    L.append("### Profile of a spatial run_ssp run\n")
+    shares = []
+    for r, v in speed.items():
+        b = v["breakdown"]
+        parts = {"plant FMU doStep": b["plant_doStep"], "estimator FMU doStep":
+                 b["estimator_doStep"], "wiring and recording": b["exchange"] + b["record"]
+                 + b["record_sd"]}
+        tot = sum(parts.values())
+        shares.append(f"{r}: {tot:.0f} us = " + ", ".join(
+            f"{k} {x / tot * 100:.0f} %" for k, x in parts.items()))
+    L.append("\nThe plant advances a whole communication step in one compiled call "
+             "(`spacerobot/plant/kernels.py` `advance`): per 1 ms RK4 step the rigid-body terms "
+             "(`spacerobot/plant/rigid_body.py` `terms`: M, non-linear effects, centroidal "
+             "momentum) and the control kernel, whose inverse dynamics give the first stage's "
+             "accelerations, then three compiled articulated-body (`aba`) calls, each followed "
+             "by the stage kernel; Python is entered once per 0.1 s. Plant core per RK4 step "
+             f"(this breakdown, against the floor of the table above): {per_step}. Sum of the "
+             f"measured parts per communication step: {'; '.join(shares)}. The estimator FMU's "
+             "`doStep` is its update plus the identifier's `report()` (physical projection and "
+             "standard deviations, every step, since the excitation request and the identified "
+             "flags depend on them).\n")
+    L.append("### Profile of a spatial run_ssp run (10 s)\n" if not quick else
+             "### Profile of a spatial run_ssp run\n")
     L.append(prof + "\n")
 
     # 2

@@ -21,10 +21,12 @@ compiled again and one that cannot be written is skipped. Each of these gives a
 :class:`RuntimeWarning` and is listed in :data:`NOTICES` (the FMUs log them through the FMI
 logger).
 
-A kernel module must be self-contained (only NumPy, Numba and its own functions): Numba keys a
-cached function by its own source file and does not notice a change in a compiled callee that
-lives in another file, and here the content hash of the one file names the cache. That is why
-the plant's and the estimator's kernel modules each carry their own small Cholesky solve.
+A kernel module must be self-contained (only NumPy, Numba and its own functions), or name the
+sibling kernel modules it calls in ``load(..., deps=...)``: Numba keys a cached function by its
+own source file and does not notice a change in a compiled callee that lives in another file,
+so the sources of those callees are hashed into the cache folder's name as well. (The plant's
+and the estimator's kernel modules, in different FMUs, each carry their own small Cholesky
+solve.)
 """
 from __future__ import annotations
 

@@ -1,12 +1,12 @@
-"""Compiled (Numba) kernels of the plant's hot path: the controllers and the RK4 bookkeeping.
+"""Compiled (Numba) kernels of the plant's hot path: the controllers, the RK4 bookkeeping and
+the loop over a whole communication step.
 
-The plant runs its controllers once per 1 ms internal step and evaluates the RK4 stages in
-between Pinocchio calls; in NumPy that is some sixty small-array operations per step, whose
-call overhead (not arithmetic) was twice the cost of the dynamics itself. Here the same
-equations run as plain loops compiled by Numba, so that one step is a handful of Python-level
-calls: Pinocchio's ``computeAllTerms`` (M, non-linear effects, centroidal momentum), the
-control kernel, and three times ``aba`` + the stage kernel (the first stage's accelerations
-come from the controller's inverse dynamics).
+The plant runs its controllers once per 1 ms internal step and evaluates four RK4 stages per
+step. :func:`advance` runs all the internal steps of one communication step in one call: per
+step the rigid-body terms of :mod:`.rigid_body` (``M``, non-linear effects, centroidal
+momentum) feed :func:`control`, whose inverse dynamics give the first stage's accelerations,
+and the compiled articulated-body algorithm gives those of the three other stages, each
+followed by :func:`stage`. Python is entered once per communication step.
 
 The equations are the paper's (docs/models.md, "Controllers") and those of :mod:`.dynamics`:
 
@@ -24,8 +24,9 @@ kernel returns 0, or a positive code for a singular matrix (see :data:`ERRORS`).
 state propagates as NaN (the plant reports it after the step) and is not mistaken for a
 singular matrix.
 
-Compiled on first use and cached on disk (see :mod:`spacerobot.jit`, which is also why this
-module is self-contained).
+Compiled on first use and cached on disk (see :mod:`spacerobot.jit`): this module uses only
+NumPy, Numba and :mod:`.rigid_body` (another kernel module, whose source is part of this
+module's cache key).
 """
 from __future__ import annotations
 

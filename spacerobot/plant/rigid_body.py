@@ -14,7 +14,7 @@ expressed in the body (joint) frame at its origin; body ``k = 0`` is the base (r
 (``x_parent = R x_k + p``; for ``k = 0`` the identity); a revolute joint turns about
 ``axis[k]`` (unit, in its own frame). The planar root joint is the free-flyer restricted to
 ``(v_x, v_y, omega_z)``: its motion subspace is the columns 0, 1, 5 of the identity
-(:data:`ROOT_ROWS`), with no bias acceleration (as for the free-flyer, whose velocity is
+(:func:`_row`), with no bias acceleration (as for the free-flyer, whose velocity is
 expressed in the base frame). The model must be gravity-free (a free-floating robot).
 
 Self-contained (only NumPy and Numba) because it is a compiled kernel module with a persistent
@@ -29,12 +29,6 @@ from numba import njit
 
 # error_model='numpy': a division by zero gives inf/NaN (no Python exception check per division)
 _NB = dict(cache=True, nogil=True, error_model="numpy")
-
-
-def root_rows(planar: bool) -> np.ndarray:
-    """Rows of the base spatial velocity ``[v; omega]`` that are the base's generalised
-    velocities: all six for the free-flyer, ``(v_x, v_y, omega_z)`` for the planar joint."""
-    return np.array([0, 1, 5] if planar else [0, 1, 2, 3, 4, 5], dtype=np.int64)
 
 
 def chain_arrays(model) -> tuple:
@@ -318,8 +312,8 @@ def _velocities(planar, X, p, axis, v, vel, cb):
 
 @njit(**_NB)
 def _row(planar, i):
-    """Row of the base spatial velocity that is base generalised velocity ``i``
-    (:func:`root_rows`)."""
+    """Row of the base spatial velocity ``[v; omega]`` that is the base's generalised velocity
+    ``i``: all six for the free-flyer, rows 0, 1, 5 (``v_x, v_y, omega_z``) planar."""
     return 5 if planar and i == 2 else i
 
 

@@ -7,11 +7,13 @@ Implementation notes (performance; the equations are those of :mod:`.dynamics` a
   ``q``, ``v``, ``J``, ``H`` are views of it. Every step makes a new ``x`` (the arrays a caller
   kept are never changed behind its back); a caller that assigns e.g. ``plant.q = ...`` is
   noticed at the next step.
-* One RK4 step is a handful of Python-level calls: Pinocchio's ``computeAllTerms`` (M,
-  non-linear effects, centroidal momentum) and the compiled control kernel at the start of the
-  step (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
-  times ``pin.aba`` followed by the compiled stage kernel, which also forms the next stage state
-  and the combination of the four stages.
+* A communication step is one compiled call (:func:`.kernels.advance`): per 1 ms RK4 step the
+  rigid-body terms (:func:`.rigid_body.terms`) and the control kernel at the start of the step
+  (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
+  times the compiled articulated-body algorithm (:func:`.rigid_body.aba`) followed by the stage
+  kernel, which also forms the next stage state and the combination of the four stages. The
+  compiled model's arrays are read from the Pinocchio model (:func:`.rigid_body.chain_arrays`);
+  Pinocchio still gives the momentum outputs once per communication step.
 """
 from __future__ import annotations
 
