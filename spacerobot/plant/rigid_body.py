@@ -216,58 +216,101 @@ def _xtmul_add(Rk, pk, f, out):
 
 
 @njit(**_NB)
-def _rot_block(Rk, S, i0, j0, W, out):
-    """``out = Rk S[i0:i0+3, j0:j0+3] Rk^T`` (3, 3); ``W`` (3, 3) scratch."""
-    for i in range(3):
-        r0, r1, r2 = Rk[i, 0], Rk[i, 1], Rk[i, 2]
-        for j in range(3):
-            W[i, j] = r0 * S[i0, j0 + j] + r1 * S[i0 + 1, j0 + j] + r2 * S[i0 + 2, j0 + j]
-    for i in range(3):
-        w0, w1, w2 = W[i, 0], W[i, 1], W[i, 2]
-        for j in range(3):
-            out[i, j] = w0 * Rk[j, 0] + w1 * Rk[j, 1] + w2 * Rk[j, 2]
+def _rot_sym(Rk, a00, a01, a02, a11, a12, a22):
+    """Upper triangle of ``Rk A Rk^T`` for the symmetric ``A`` given by its upper triangle."""
+    w00 = Rk[0, 0] * a00 + Rk[0, 1] * a01 + Rk[0, 2] * a02          # W = Rk A
+    w01 = Rk[0, 0] * a01 + Rk[0, 1] * a11 + Rk[0, 2] * a12
+    w02 = Rk[0, 0] * a02 + Rk[0, 1] * a12 + Rk[0, 2] * a22
+    w10 = Rk[1, 0] * a00 + Rk[1, 1] * a01 + Rk[1, 2] * a02
+    w11 = Rk[1, 0] * a01 + Rk[1, 1] * a11 + Rk[1, 2] * a12
+    w12 = Rk[1, 0] * a02 + Rk[1, 1] * a12 + Rk[1, 2] * a22
+    w20 = Rk[2, 0] * a00 + Rk[2, 1] * a01 + Rk[2, 2] * a02
+    w21 = Rk[2, 0] * a01 + Rk[2, 1] * a11 + Rk[2, 2] * a12
+    w22 = Rk[2, 0] * a02 + Rk[2, 1] * a12 + Rk[2, 2] * a22
+    return (w00 * Rk[0, 0] + w01 * Rk[0, 1] + w02 * Rk[0, 2],     # (W Rk^T)_ij = W_i . Rk_j
+            w00 * Rk[1, 0] + w01 * Rk[1, 1] + w02 * Rk[1, 2],
+            w00 * Rk[2, 0] + w01 * Rk[2, 1] + w02 * Rk[2, 2],
+            w10 * Rk[1, 0] + w11 * Rk[1, 1] + w12 * Rk[1, 2],
+            w10 * Rk[2, 0] + w11 * Rk[2, 1] + w12 * Rk[2, 2],
+            w20 * Rk[2, 0] + w21 * Rk[2, 1] + w22 * Rk[2, 2])
 
 
 @njit(**_NB)
 def _congruence_add(Rk, pk, Ia, T, out):
     """``out += X^T Ia X`` (inertia to the parent) for the motion transform
-    ``X = [[Rk^T, -Rk^T P], [0, Rk^T]]``, ``P = [pk]x``, by 3x3 blocks: with
+    ``X = [[Rk^T, -Rk^T P], [0, Rk^T]]``, ``P = [pk]x``, by 3x3 blocks: with the symmetric
     ``Ia = [[A, B], [B^T, C]]`` and ``A' = Rk A Rk^T`` (same for B, C),
     ``X^T Ia X = [[A', B' - A' P], [(.)^T, C' + P B' + (P B')^T - P A' P]]``.
-    ``T`` (6, 6) scratch."""
-    A = T[0:3, 0:3]
-    B = T[0:3, 3:6]
-    C = T[3:6, 3:6]
-    W = T[3:6, 0:3]
-    _rot_block(Rk, Ia, 0, 0, W, A)
-    _rot_block(Rk, Ia, 0, 3, W, B)
-    _rot_block(Rk, Ia, 3, 3, W, C)
-    px, py, pz = pk[0], pk[1], pk[2]
-    # W = A' P, P = [[0, -pz, py], [pz, 0, -px], [-py, px, 0]]
+    Only the upper triangle of ``Ia`` is read. ``T`` (6, 6) scratch."""
+    a00, a01, a02, a11, a12, a22 = _rot_sym(Rk, Ia[0, 0], Ia[0, 1], Ia[0, 2], Ia[1, 1],
+                                            Ia[1, 2], Ia[2, 2])
+    c00, c01, c02, c11, c12, c22 = _rot_sym(Rk, Ia[3, 3], Ia[3, 4], Ia[3, 5], Ia[4, 4],
+                                            Ia[4, 5], Ia[5, 5])
+    B = T[0:3, 0:3]
+    W = T[3:6, 3:6]
+    for i in range(3):                       # W = Rk B, B' = W Rk^T
+        r0, r1, r2 = Rk[i, 0], Rk[i, 1], Rk[i, 2]
+        for j in range(3):
+            W[i, j] = r0 * Ia[0, 3 + j] + r1 * Ia[1, 3 + j] + r2 * Ia[2, 3 + j]
     for i in range(3):
-        a0, a1, a2 = A[i, 0], A[i, 1], A[i, 2]
-        W[i, 0] = a1 * pz - a2 * py
-        W[i, 1] = -a0 * pz + a2 * px
-        W[i, 2] = a0 * py - a1 * px
+        w0, w1, w2 = W[i, 0], W[i, 1], W[i, 2]
+        for j in range(3):
+            B[i, j] = w0 * Rk[j, 0] + w1 * Rk[j, 1] + w2 * Rk[j, 2]
+    px, py, pz = pk[0], pk[1], pk[2]
+    # A' P, P = [[0, -pz, py], [pz, 0, -px], [-py, px, 0]] (rows of A' are symmetric)
+    ap00, ap01, ap02 = a01 * pz - a02 * py, a02 * px - a00 * pz, a00 * py - a01 * px
+    ap10, ap11, ap12 = a11 * pz - a12 * py, a12 * px - a01 * pz, a01 * py - a11 * px
+    ap20, ap21, ap22 = a12 * pz - a22 * py, a22 * px - a02 * pz, a02 * py - a12 * px
+    # P (A' P): row i of P times the columns
+    pap00 = -pz * ap10 + py * ap20
+    pap01 = -pz * ap11 + py * ap21
+    pap02 = -pz * ap12 + py * ap22
+    pap11 = pz * ap01 - px * ap21
+    pap12 = pz * ap02 - px * ap22
+    pap22 = -py * ap02 + px * ap12
+    # P B'
+    pb00 = -pz * B[1, 0] + py * B[2, 0]
+    pb01 = -pz * B[1, 1] + py * B[2, 1]
+    pb02 = -pz * B[1, 2] + py * B[2, 2]
+    pb10 = pz * B[0, 0] - px * B[2, 0]
+    pb11 = pz * B[0, 1] - px * B[2, 1]
+    pb12 = pz * B[0, 2] - px * B[2, 2]
+    pb20 = -py * B[0, 0] + px * B[1, 0]
+    pb21 = -py * B[0, 1] + px * B[1, 1]
+    pb22 = -py * B[0, 2] + px * B[1, 2]
+    # A'
+    out[0, 0] += a00
+    out[0, 1] += a01
+    out[0, 2] += a02
+    out[1, 0] += a01
+    out[1, 1] += a11
+    out[1, 2] += a12
+    out[2, 0] += a02
+    out[2, 1] += a12
+    out[2, 2] += a22
+    # B' - A' P and its transpose
+    aps = ((ap00, ap01, ap02), (ap10, ap11, ap12), (ap20, ap21, ap22))
     for i in range(3):
         for j in range(3):
-            out[i, j] += A[i, j]
-            bij = B[i, j] - W[i, j]
+            bij = B[i, j] - aps[i][j]
             out[i, 3 + j] += bij
             out[3 + j, i] += bij
-    # B <- P B', W <- P (A' P)
-    for j in range(3):
-        b0, b1, b2 = B[0, j], B[1, j], B[2, j]
-        w0, w1, w2 = W[0, j], W[1, j], W[2, j]
-        B[0, j] = -pz * b1 + py * b2
-        B[1, j] = pz * b0 - px * b2
-        B[2, j] = -py * b0 + px * b1
-        W[0, j] = -pz * w1 + py * w2
-        W[1, j] = pz * w0 - px * w2
-        W[2, j] = -py * w0 + px * w1
-    for i in range(3):
-        for j in range(3):
-            out[3 + i, 3 + j] += C[i, j] + B[i, j] + B[j, i] - W[i, j]
+    # C' + P B' + (P B')^T - P A' P
+    d00 = c00 + 2.0 * pb00 - pap00
+    d11 = c11 + 2.0 * pb11 - pap11
+    d22 = c22 + 2.0 * pb22 - pap22
+    d01 = c01 + pb01 + pb10 - pap01
+    d02 = c02 + pb02 + pb20 - pap02
+    d12 = c12 + pb12 + pb21 - pap12
+    out[3, 3] += d00
+    out[4, 4] += d11
+    out[5, 5] += d22
+    out[3, 4] += d01
+    out[4, 3] += d01
+    out[3, 5] += d02
+    out[5, 3] += d02
+    out[4, 5] += d12
+    out[5, 4] += d12
 
 
 @njit(**_NB)
