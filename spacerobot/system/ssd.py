@@ -30,7 +30,8 @@ from xml.sax.saxutils import quoteattr
 
 from ..interface import (ESTIMATE_NAMES, EXCITATION_DOC, UNITS, Var, connections,
                          estimator_vars, feedback_connections, plant_vars)
-from ..robots import DEFAULT_TARGET, PARAMETER_SETS, ROBOTS, parameter_set_scenario, scenario
+from ..robots import (DEFAULT_TARGET, PARAMETER_SETS, ROBOTS, check_robot, get_robot,
+                      parameter_set_scenario, robot_files, robot_kind, robot_label, scenario)
 
 #: XML namespaces (prefixes are part of the contract: some tools match on them)
 NS = {
@@ -57,21 +58,21 @@ SET_PARAMETERS: Tuple[str, ...] = (
 
 
 def _check_robot(robot: str) -> None:
-    if robot not in ROBOTS:
-        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(ROBOTS)}")
+    """``robot``: a built-in name or a URDF robot key (:func:`spacerobot.robots.robot_spec`)."""
+    check_robot(robot)
 
 
 def parameter_set_names(robot: str) -> List[str]:
     """Names of the parameter sets (.ssv) generated for ``robot``
     (:data:`spacerobot.robots.PARAMETER_SETS`)."""
     _check_robot(robot)
-    return list(PARAMETER_SETS[robot])
+    return list(PARAMETER_SETS[robot_kind(robot)])
 
 
 def default_parameter_set(robot: str) -> str:
     """The parameter set bound in the SSD (the robot's default target, e.g. planar: medium)."""
     _check_robot(robot)
-    return DEFAULT_TARGET[robot]
+    return DEFAULT_TARGET[robot_kind(robot)]
 
 
 def _num(x: float) -> str:
@@ -104,7 +105,8 @@ def _units_xml(units, indent: str, prefix: str) -> List[str]:
 def ssv_xml(robot: str, name: str) -> str:
     """Text of the SSP 1.0 parameter values file ``resources/<name>.ssv``."""
     params = parameter_set(robot, name)
-    desc = (f"{robot}-{name}: {PARAMETER_SETS[robot][name].description}; plant truth (base, "
+    set_desc = PARAMETER_SETS[robot_kind(robot)][name].description
+    desc = (f"{robot_label(robot)}-{name}: {set_desc}; plant truth (base, "
             f"target), initial velocities and excitation bounds")
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<ssv:ParameterSet xmlns:ssv="{NS["ssv"]}" xmlns:ssc="{NS["ssc"]}"',
@@ -167,11 +169,12 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
     step = _num(sc.sample_time)
     conns = component_connectors(robot)
     units = {v.unit for c in conns.values() for _, _, v in c if v.type == "Real" and v.unit}
-    robot_desc = ROBOTS[robot].description
+    robot_desc = get_robot(robot).description
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              "<ssd:SystemStructureDescription"
              + "".join(f'\n    xmlns:{p}="{u}"' for p, u in NS.items()),
-             f'    version="1.0" name="SpaceRobot_{robot}" generationTool="{GENERATOR}"',
+             f'    version="1.0" name={quoteattr("SpaceRobot_" + robot_label(robot))} '
+             f'generationTool="{GENERATOR}"',
              f"    description={quoteattr('Space robot after capture: plant and inertial-parameter estimator. ' + robot_desc)}>",
              '  <ssd:System name="root" description="Plant outputs wired to the estimator inputs of the same name; the estimator\'s excitation request wired back to the plant">',
              "    <ssd:Elements>"]
@@ -190,7 +193,7 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
         lines.append("      </ssd:Component>")
     lines.append("    </ssd:Elements>")
     lines.append("    <ssd:Connections>")
-    for name in connections(ROBOTS[robot]):
+    for name in connections(get_robot(robot)):
         lines.append(f'      <ssd:Connection startElement="{PLANT}" startConnector={quoteattr(name)} '
                      f'endElement="{ESTIMATOR}" endConnector={quoteattr(name)}/>')
     for name in feedback_connections():        # the excitation loop: estimator -> plant
@@ -257,7 +260,8 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
 
     Parameters
     ----------
-    robot : {'planar', 'spatial'}
+    robot : str
+        'planar', 'spatial' or a URDF robot key (:func:`spacerobot.robots.robot_spec`)
     out_dir : path
         Output folder (created).
     fmus : dict, optional
@@ -268,7 +272,7 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     -------
     dict
         ``{'plant': .fmu, 'estimator': .fmu, 'ssd': SystemStructure.ssd, 'ssv:<set>': .ssv ...,
-        'ssp': <robot>.ssp}``.
+        'ssp': <robot>.ssp}`` (``<robot>``: :func:`spacerobot.robots.robot_label`).
     """
     from ..fmi.build import build_fmu
 
@@ -286,7 +290,7 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
         p.write_text(text, encoding="utf-8")
         key = "ssd" if rel == SSD_NAME else "ssv:" + Path(rel).stem
         paths[key] = p
-    ssp = out / f"{robot}.ssp"
+    ssp = out / f"{robot_label(robot)}.ssp"
     tmp = ssp.with_suffix(".ssp.part")
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
         zf.writestr(SSD_NAME, files[SSD_NAME])
@@ -319,11 +323,12 @@ def robot_of(ssp: str | Path) -> Optional[str]:
     return robot if robot in ROBOTS else None
 
 
-def _newest_source_mtime() -> float:
-    """Newest modification time of the files the FMUs and the SSD are built from."""
+def _newest_source_mtime(robot: Optional[str] = None) -> float:
+    """Newest modification time of the files the FMUs and the SSD are built from (with the
+    URDF of ``robot``)."""
     from ..fmi.build import BUNDLES, LIB, _script
 
-    paths = [Path(__file__)]
+    paths = [Path(__file__), *(robot_files(robot) if robot else ())]
     for kind, items in BUNDLES.items():
         script = _script(kind)
         paths += [script, script.parent / "README.md"]
@@ -337,13 +342,15 @@ def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None) -> Path:
     """Path of ``<out_dir>/<robot>.ssp``, (re)built with :func:`build_system` if it is missing,
     older than any library source it is built from, or its SSD differs from the generator's.
 
-    ``out_dir`` defaults to ``build/<robot>/`` in the current directory.
+    ``out_dir`` defaults to ``build/<robot>/`` in the current directory (``<robot>``: the
+    built-in name or the URDF's robot name, :func:`spacerobot.robots.robot_label`).
     """
     _check_robot(robot)
-    out = Path(out_dir) if out_dir is not None else Path("build") / robot
-    ssp = out / f"{robot}.ssp"
+    label = robot_label(robot)
+    out = Path(out_dir) if out_dir is not None else Path("build") / label
+    ssp = out / f"{label}.ssp"
     fresh = False
-    if ssp.exists() and ssp.stat().st_mtime >= _newest_source_mtime():
+    if ssp.exists() and ssp.stat().st_mtime >= _newest_source_mtime(robot):
         try:
             with zipfile.ZipFile(ssp) as zf:
                 fresh = zf.read(SSD_NAME).decode("utf-8") == ssd_xml(robot)
