@@ -1,14 +1,15 @@
 """The compiled rigid-body dynamics (spacerobot/plant/rigid_body.py) against Pinocchio: forward
 dynamics (ABA), joint-space inertia (CRBA), non-linear effects and centroidal momentum at random
-states, for the planar and spatial robots (with a grasped target) and a randomly generated
-7-joint chain, so that arbitrary serial chains are covered."""
+states, for the planar and spatial robots and the shipped 7-joint servicer URDF (each with a
+grasped target) and a randomly generated 7-joint chain, so that arbitrary serial chains are
+covered."""
 import numpy as np
 import pinocchio as pin
 import pytest
 
 from spacerobot.plant import rigid_body as rb
 from spacerobot.plant.dynamics import build_model
-from spacerobot.robots import ROBOTS, RigidBody
+from spacerobot.robots import ROBOTS, URDF_DIR, RigidBody, get_robot
 
 TOL = 1e-12
 TARGET = RigidBody(120.0, (0.05, 0.02, -0.03), (9.0, 7.0, 5.0, 0.3, -0.2, 0.1))
@@ -46,6 +47,8 @@ def random_chain(rng, n: int = 7) -> pin.Model:
 
 def _models():
     out = {name: build_model(robot, target=TARGET).model for name, robot in ROBOTS.items()}
+    out["servicer7"] = build_model(get_robot(str(URDF_DIR / "servicer7.urdf")),
+                                   target=TARGET).model
     out["chain7"] = random_chain(np.random.default_rng(7))
     return out
 
