@@ -45,6 +45,7 @@ from spacerobot import (ESTIMATE_NAMES, PAPER_PLANAR_MEDIUM, FMUInstance,  # noq
                         Identifier, Master, Plant, estimate_vector, identified_estimates,
                         relative_errors, run_ssp, scenario)
 from spacerobot.robots import PLANAR  # noqa: E402
+from spacerobot.system.instance import ArrayIO  # noqa: E402
 
 NAMES = list(ESTIMATE_NAMES)
 #: parameters the planar model identifies (x, y translation, z rotation)
@@ -228,6 +229,11 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
         sd_vr = [v.valueReference for v in est.vars.values()
                  if v.causality == "output" and v.name.startswith("sd.")]
         other_vr = [r for r in e_out if r not in set(sd_vr)]
+        # the recorder's reads (one preallocated array per component and type, as run_ssp)
+        reads = [ArrayIO(plant.fmu, "Real", p_out), ArrayIO(est.fmu, "Real", other_vr)]
+        if e_int:
+            reads.append(ArrayIO(est.fmu, "Integer", e_int))
+        sd_read = ArrayIO(est.fmu, "Real", sd_vr) if sd_vr else None
         keys = ("exchange", "record", "record_sd", "plant_doStep", "estimator_doStep")
         per = {k: math.inf for k in keys}
         t = 0.0
@@ -238,13 +244,11 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
                 c = time.process_time()
                 master.exchange()
                 c1 = time.process_time()
-                plant.fmu.getReal(p_out)
-                est.fmu.getReal(other_vr)
-                if e_int:
-                    est.fmu.getInteger(e_int)
+                for io_ in reads:
+                    io_.get()
                 c2 = time.process_time()
-                if sd_vr:
-                    est.fmu.getReal(sd_vr)
+                if sd_read is not None:
+                    sd_read.get()
                 c3 = time.process_time()
                 plant.fmu.doStep(t, dt)
                 c4 = time.process_time()
@@ -267,9 +271,63 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
             p.advance(0.1)
         best = min(best, (time.process_time() - c) / block)
     per["plant_core"] = best * 1e6
+    per.update(plant_kernel_parts(p))
     outs = record_outputs(sc, n * 0.1)
     per["estimator_core"] = core_update_cost(outs, sc, "momentum", repeats=4)
+    per["estimator_report"] = core_report_cost(outs, sc, repeats=4)
     return per
+
+
+def plant_kernel_parts(p: Plant, calls: int = 20000) -> dict:
+    """CPU microseconds of one compiled ``rigid_body.terms`` and one ``rigid_body.aba`` call
+    inside compiled code (a Numba loop, so no Python call cost) at the plant's current state:
+    per RK4 step the plant makes one of the first and three of the second."""
+    from numba import njit
+    from spacerobot.plant import rigid_body as rb
+
+    @njit
+    def loop_aba(n, planar, R, pp, axis, I6, q, v, tau, ddq, ws):
+        for _ in range(n):
+            rb.aba(planar, R, pp, axis, I6, q, v, tau, ddq, *ws)
+
+    @njit
+    def loop_terms(n, planar, R, pp, axis, I6, mc, q, v, M, nle, hg, ws):
+        for _ in range(n):
+            rb.terms(planar, R, pp, axis, I6, mc, q, v, M, nle, hg, *ws)
+
+    planar, R, pp, axis, I6, mc = rb.chain_arrays(p.pm.model)
+    ws = tuple(rb.Workspace(R.shape[0] - 1).arrays())
+    v = p.pm.model.nv
+    qn, vs = np.array(p.q, float), np.array(p.v, float)
+    tau, ddq = np.zeros(v), np.empty(v)
+    M, nle, hg = np.empty((v, v)), np.empty(v), np.empty(6)
+    loop_aba(1, planar, R, pp, axis, I6, qn, vs, tau, ddq, ws)          # compile
+    loop_terms(1, planar, R, pp, axis, I6, mc, qn, vs, M, nle, hg, ws)
+    best_a = best_t = math.inf
+    for _ in range(5):
+        c = time.process_time()
+        loop_aba(calls, planar, R, pp, axis, I6, qn, vs, tau, ddq, ws)
+        best_a = min(best_a, (time.process_time() - c) / calls)
+        c = time.process_time()
+        loop_terms(calls, planar, R, pp, axis, I6, mc, qn, vs, M, nle, hg, ws)
+        best_t = min(best_t, (time.process_time() - c) / calls)
+    return {"aba_call": best_a * 1e6, "terms_call": best_t * 1e6}
+
+
+def core_report_cost(outs: list, sc, repeats: int = 3) -> float:
+    """CPU microseconds of ``Identifier.report()`` (physical projection, standard deviations,
+    identified flags) after each sample, as the estimator FMU computes it at every step."""
+    best = math.inf
+    for _ in range(repeats):
+        ident = Identifier(sc.robot, sc.guess, method="momentum")
+        spent = 0.0
+        for k, o in enumerate(outs):
+            ident.update(0.1 * k, o)
+            c = time.process_time()
+            ident.report()
+            spent += time.process_time() - c
+        best = min(best, spent / len(outs))
+    return best * 1e6
 
 
 def profile_summary(ssp_path: Path, seconds: float, top: int = 14) -> str:
@@ -680,21 +738,26 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              "cores alone on the same scenario; best of 8 blocks of 12 communication steps (the "
              "estimator core: best of 4 passes over 10 s of samples).\n")
     rows = []
-    keys = [("plant_core", "plant core alone: `Plant.advance(0.1)` (100 RK4 steps)"),
-            ("plant_doStep", "plant FMU `doStep` through fmpy"),
+    keys = [("plant_core", "plant core alone: `Plant.advance(0.1)` (100 RK4 steps, no excitation)"),
+            ("terms_call", "  one compiled `rigid_body.terms` call (M, nle, momentum; 1 per RK4 step)"),
+            ("aba_call", "  one compiled `rigid_body.aba` call (3 per RK4 step)"),
+            ("plant_doStep", "plant FMU `doStep` through fmpy (closed loop)"),
             ("estimator_core", "estimator core alone: `Identifier.update`"),
-            ("estimator_doStep", "estimator FMU `doStep` through fmpy"),
-            ("exchange", "wiring: plant `getReal` -> estimator `setReal`"),
-            ("record", "recording: `getReal` of all outputs except the standard deviations"),
-            ("record_sd", "recording: `getReal` of the standard deviations (computed lazily)")]
+            ("estimator_report", "estimator core alone: `Identifier.report()` after each update"),
+            ("estimator_doStep", "estimator FMU `doStep` through fmpy (update + report)"),
+            ("exchange", "wiring: plant outputs -> estimator inputs, `ident.excite` back"),
+            ("record", "recording: every output except the standard deviations"),
+            ("record_sd", "recording: the standard deviations (computed in the `doStep`)")]
     for k, lab in keys:
-        rows.append((lab,) + tuple(fmt(speed[r]["breakdown"][k], 0) for r in speed))
+        nd = 2 if k.endswith("_call") else 0
+        rows.append((lab,) + tuple(fmt(speed[r]["breakdown"].get(k, math.nan), nd)
+                                   for r in speed))
     L.append(table(["part"] + [f"{r} [us]" for r in speed], rows))
     per_step = "; ".join(
         f"{r} {v['breakdown']['plant_core'] / 100:.1f} us = "
         f"{v['breakdown']['plant_core'] / 100 / v['bare_us_per_step']:.2f} x the floor"
         for r, v in speed.items())
-    shares = []
+    shares, budget = [], []
     for r, v in speed.items():
         b = v["breakdown"]
         parts = {"plant FMU doStep": b["plant_doStep"], "estimator FMU doStep":
@@ -703,17 +766,25 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
         tot = sum(parts.values())
         shares.append(f"{r}: {tot:.0f} us = " + ", ".join(
             f"{k} {x / tot * 100:.0f} %" for k, x in parts.items()))
+        budget.append(f"{r} {0.3 * v['bare_us_per_step'] * 100:.0f} us")
     L.append("\nThe plant advances a whole communication step in one compiled call "
              "(`spacerobot/plant/kernels.py` `advance`): per 1 ms RK4 step the rigid-body terms "
              "(`spacerobot/plant/rigid_body.py` `terms`: M, non-linear effects, centroidal "
              "momentum) and the control kernel, whose inverse dynamics give the first stage's "
              "accelerations, then three compiled articulated-body (`aba`) calls, each followed "
              "by the stage kernel; Python is entered once per 0.1 s. Plant core per RK4 step "
-             f"(this breakdown, against the floor of the table above): {per_step}. Sum of the "
-             f"measured parts per communication step: {'; '.join(shares)}. The estimator FMU's "
-             "`doStep` is its update plus the identifier's `report()` (physical projection and "
-             "standard deviations, every step, since the excitation request and the identified "
-             "flags depend on them).\n")
+             f"(this breakdown, against the floor of the table above): {per_step}; of it, one "
+             "`terms` and three `aba` calls as in the rows above, the rest the control and "
+             f"stage kernels. Sum of the measured parts per communication step: "
+             f"{'; '.join(shares)}. The estimator FMU's `doStep` is its update plus the "
+             "identifier's `report()` (physical projection of both bodies and standard "
+             "deviations with the prior's pull: eigen-decompositions and small NumPy products "
+             "on 8x8 and 12x12 matrices, every step, since the excitation request and the "
+             "identified flags depend on them). The master reads and writes every connected "
+             "variable and every recorded output with one FMI call per component and type "
+             "through preallocated arrays (`spacerobot/system/instance.py` `ArrayIO`). For "
+             f"the ratio target 0.3 the whole communication step would have to cost "
+             f"{'; '.join(budget)} (0.3 x 100 floor steps).\n")
     L.append("### Profile of a spatial run_ssp run (10 s)\n" if not quick else
              "### Profile of a spatial run_ssp run\n")
     L.append(prof + "\n")
@@ -738,9 +809,9 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              "momentum, regressors of both bodies) and the compiled modified RLS step, plus its "
              "safety net (a snapshot of what the update changes, to undo an update that "
              "overflows; a few us). The FMU's `doStep` adds the gathering of the 45 scalar "
-             "inputs into arrays and the refresh of the outputs; the excitation diagnostics and "
-             "the standard deviations are computed only when read (section 1 shows that cost "
-             "when `run_ssp` records every output). Targets of issue #6: core <= 50 us "
+             "inputs into arrays and the refresh of the outputs with the identifier's `report()` "
+             "(standard deviations, physical projection, identified flags: section 1 shows "
+             "its cost); the excitation diagnostics are computed only when read. Targets of issue #6: core <= 50 us "
              "(spatial), FMU `doStep` <= 150 us.\n")
     L.append("\n### One-step RLS against a batch re-solve\n")
     L.append("The batch alternative re-solves over all N samples at every new sample: stack the "
