@@ -45,6 +45,7 @@ from spacerobot import (ESTIMATE_NAMES, PAPER_PLANAR_MEDIUM, FMUInstance,  # noq
                         Identifier, Master, Plant, estimate_vector, identified_estimates,
                         relative_errors, run_ssp, scenario)
 from spacerobot.robots import PLANAR  # noqa: E402
+from spacerobot.system.instance import ArrayIO  # noqa: E402
 
 NAMES = list(ESTIMATE_NAMES)
 #: parameters the planar model identifies (x, y translation, z rotation)
@@ -101,9 +102,9 @@ def record_outputs(sc, seconds: float, dt: float = 0.1) -> list:
     return outs
 
 
-def bare_rk4(sc, seconds: float) -> float:
-    """CPU seconds of a bare RK4 loop over pin.aba (zero torques) on the plant's model, at the
-    plant's step, from the plant's initial state: the floor of any RK4 plant on Pinocchio."""
+def bare_rk4(sc, seconds: float) -> tuple:
+    """``(CPU s, wall s)`` of a bare RK4 loop over pin.aba (zero torques) on the plant's model,
+    at the plant's step, from the plant's initial state: Pinocchio called from Python."""
     import pinocchio as pin
     p = new_plant(sc)
     model, data = p.pm.model, p.pm.model.createData()
@@ -111,7 +112,7 @@ def bare_rk4(sc, seconds: float) -> float:
     tau = np.zeros(model.nv)
     h = sc.h
     n = int(round(seconds / h))
-    t0 = time.process_time()
+    t0, w0 = time.process_time(), time.perf_counter()
     for _ in range(n):
         a1 = pin.aba(model, data, q, v, tau)
         v2 = v + 0.5 * h * a1
@@ -122,7 +123,7 @@ def bare_rk4(sc, seconds: float) -> float:
         a4 = pin.aba(model, data, pin.integrate(model, q, h * v3), v4, tau)
         q = pin.integrate(model, q, h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4))
         v = v + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-    return time.process_time() - t0
+    return time.process_time() - t0, time.perf_counter() - w0
 
 
 def started(path: Path, name: str) -> FMUInstance:
@@ -171,7 +172,7 @@ def cosim_speed(systems: dict, seconds: dict, repeats: int) -> dict:
         # warm-up: the first run in a process loads the compiled kernels (or compiles them on
         # a machine's very first run); that one-off cost is not part of either measured run
         run_ssp(ssp_paths["ssp"], stop_time=0.2, progress=False)
-        wall_short, wall_long, cpu_short, cpu_long, bare = [], [], [], [], []
+        wall_short, wall_long, cpu_short, cpu_long, bare, bare_wall = [], [], [], [], [], []
         for _ in range(repeats):
             t, c = time.perf_counter(), time.process_time()
             run_ssp(ssp_paths["ssp"], stop_time=T0, progress=False)
@@ -181,7 +182,9 @@ def cosim_speed(systems: dict, seconds: dict, repeats: int) -> dict:
             run_ssp(ssp_paths["ssp"], stop_time=T0 + T, progress=False)
             wall_long.append(time.perf_counter() - t)
             cpu_long.append(time.process_time() - c)
-            bare.append(bare_rk4(sc, T))
+            b_cpu, b_wall = bare_rk4(sc, T)
+            bare.append(b_cpu)
+            bare_wall.append(b_wall)
         steps = T / sc.h
         cpu_marginal = min(cpu_long) - min(cpu_short)        # CPU s per T simulated seconds
         wall_marginal = min(wall_long) - min(wall_short)
@@ -190,6 +193,7 @@ def cosim_speed(systems: dict, seconds: dict, repeats: int) -> dict:
         res[robot] = {"T": T, "setup_s": min(wall_short) - T0 * wall_marginal / T,
                       "cosim_us_per_step": cos_step * 1e6, "bare_us_per_step": bare_step * 1e6,
                       "ratio": cos_step / bare_step, "rtf": T / wall_marginal,
+                      "ratio_wall": wall_marginal / min(bare_wall),
                       "rtf_cpu": T / cpu_marginal, "rtf_bare": T / min(bare),
                       "rtf_total": (T0 + T) / min(wall_long)}
         res[robot]["breakdown"] = breakdown(ssp_paths, sc, min(T, 10.0))
@@ -225,6 +229,11 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
         sd_vr = [v.valueReference for v in est.vars.values()
                  if v.causality == "output" and v.name.startswith("sd.")]
         other_vr = [r for r in e_out if r not in set(sd_vr)]
+        # the recorder's reads (one preallocated array per component and type, as run_ssp)
+        reads = [ArrayIO(plant.fmu, "Real", p_out), ArrayIO(est.fmu, "Real", other_vr)]
+        if e_int:
+            reads.append(ArrayIO(est.fmu, "Integer", e_int))
+        sd_read = ArrayIO(est.fmu, "Real", sd_vr) if sd_vr else None
         keys = ("exchange", "record", "record_sd", "plant_doStep", "estimator_doStep")
         per = {k: math.inf for k in keys}
         t = 0.0
@@ -235,13 +244,11 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
                 c = time.process_time()
                 master.exchange()
                 c1 = time.process_time()
-                plant.fmu.getReal(p_out)
-                est.fmu.getReal(other_vr)
-                if e_int:
-                    est.fmu.getInteger(e_int)
+                for io_ in reads:
+                    io_.get()
                 c2 = time.process_time()
-                if sd_vr:
-                    est.fmu.getReal(sd_vr)
+                if sd_read is not None:
+                    sd_read.get()
                 c3 = time.process_time()
                 plant.fmu.doStep(t, dt)
                 c4 = time.process_time()
@@ -264,9 +271,63 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
             p.advance(0.1)
         best = min(best, (time.process_time() - c) / block)
     per["plant_core"] = best * 1e6
+    per.update(plant_kernel_parts(p))
     outs = record_outputs(sc, n * 0.1)
     per["estimator_core"] = core_update_cost(outs, sc, "momentum", repeats=4)
+    per["estimator_report"] = core_report_cost(outs, sc, repeats=4)
     return per
+
+
+def plant_kernel_parts(p: Plant, calls: int = 20000) -> dict:
+    """CPU microseconds of one compiled ``rigid_body.terms`` and one ``rigid_body.aba`` call
+    inside compiled code (a Numba loop, so no Python call cost) at the plant's current state:
+    per RK4 step the plant makes one of the first and three of the second."""
+    from numba import njit
+    from spacerobot.plant import rigid_body as rb
+
+    @njit
+    def loop_aba(n, planar, R, pp, axis, I6, q, v, tau, ddq, ws):
+        for _ in range(n):
+            rb.aba(planar, R, pp, axis, I6, q, v, tau, ddq, *ws)
+
+    @njit
+    def loop_terms(n, planar, R, pp, axis, I6, mc, q, v, M, nle, hg, ws):
+        for _ in range(n):
+            rb.terms(planar, R, pp, axis, I6, mc, q, v, M, nle, hg, *ws)
+
+    planar, R, pp, axis, I6, mc = rb.chain_arrays(p.pm.model)
+    ws = tuple(rb.Workspace(R.shape[0] - 1).arrays())
+    v = p.pm.model.nv
+    qn, vs = np.array(p.q, float), np.array(p.v, float)
+    tau, ddq = np.zeros(v), np.empty(v)
+    M, nle, hg = np.empty((v, v)), np.empty(v), np.empty(6)
+    loop_aba(1, planar, R, pp, axis, I6, qn, vs, tau, ddq, ws)          # compile
+    loop_terms(1, planar, R, pp, axis, I6, mc, qn, vs, M, nle, hg, ws)
+    best_a = best_t = math.inf
+    for _ in range(5):
+        c = time.process_time()
+        loop_aba(calls, planar, R, pp, axis, I6, qn, vs, tau, ddq, ws)
+        best_a = min(best_a, (time.process_time() - c) / calls)
+        c = time.process_time()
+        loop_terms(calls, planar, R, pp, axis, I6, mc, qn, vs, M, nle, hg, ws)
+        best_t = min(best_t, (time.process_time() - c) / calls)
+    return {"aba_call": best_a * 1e6, "terms_call": best_t * 1e6}
+
+
+def core_report_cost(outs: list, sc, repeats: int = 3) -> float:
+    """CPU microseconds of ``Identifier.report()`` (physical projection, standard deviations,
+    identified flags) after each sample, as the estimator FMU computes it at every step."""
+    best = math.inf
+    for _ in range(repeats):
+        ident = Identifier(sc.robot, sc.guess, method="momentum")
+        spent = 0.0
+        for k, o in enumerate(outs):
+            ident.update(0.1 * k, o)
+            c = time.process_time()
+            ident.report()
+            spent += time.process_time() - c
+        best = min(best, spent / len(outs))
+    return best * 1e6
 
 
 def profile_summary(ssp_path: Path, seconds: float, top: int = 14) -> str:
@@ -514,12 +575,12 @@ def main(argv=None) -> int:
     print(f"built FMUs and SSPs in {build}", flush=True)
 
     # 1. speed
-    seconds = {"planar": 3.0, "spatial": 3.0} if quick else {"planar": 20.0, "spatial": 20.0}
+    seconds = {"planar": 3.0, "spatial": 3.0} if quick else {"planar": 10.0, "spatial": 10.0}
     # measured in rounds spread over the run (now, after section 2, after section 3) and
     # merged by taking the best of each figure: robust against bursts of other load
     rounds = [cosim_speed(systems, seconds, repeats=1 if quick else 3)]
     print("speed:", {r: round(v["ratio"], 2) for r, v in rounds[-1].items()}, flush=True)
-    prof = profile_summary(systems["spatial"]["ssp"], 2.0 if quick else 5.0)
+    prof = profile_summary(systems["spatial"]["ssp"], 2.0 if quick else 10.0)
 
     # 2. estimator cost
     rec_s = 10.0 if quick else 60.0
@@ -570,9 +631,36 @@ def main(argv=None) -> int:
     return 0
 
 
+def _before_table(path: Path, speed: dict) -> str:
+    """The same co-simulation figures of an earlier tree (``path``: a saved
+    :func:`merge_rounds` result), against this run; empty if there is no such file."""
+    if not path.exists():
+        return ""
+    base = json.loads(path.read_text())
+    meta = base.get("_meta", {})
+    rows = []
+    for r, v in speed.items():
+        if r not in base:
+            continue
+        b = base[r]
+        bb, vb = b["breakdown"], v["breakdown"]
+        rows.append((r, f"{b['ratio']:.2f} -> **{v['ratio']:.2f}**",
+                     f"{b['cosim_us_per_step']:.1f} -> {v['cosim_us_per_step']:.1f}",
+                     f"{b['rtf']:.0f} -> {v['rtf']:.0f}",
+                     f"{bb['plant_core'] / 100:.1f} -> {vb['plant_core'] / 100:.1f}",
+                     f"{bb['plant_doStep']:.0f} -> {vb['plant_doStep']:.0f}",
+                     f"{bb['estimator_doStep']:.0f} -> {vb['estimator_doStep']:.0f}"))
+    return (f"Before issue #16 ({meta.get('what', '')}; {meta.get('date', '')}), against this "
+            "run (the ratios of that tree were measured against its own bare loop in its own "
+            "run):\n\n" + table(["robot", "ratio to bare RK4 (CPU)", "co-simulation [CPU us / "
+                                 "1 ms step]", "real-time factor (wall)", "plant core [us / RK4 "
+                                 "step]", "plant FMU doStep [us / 0.1 s]", "estimator FMU "
+                                 "doStep [us / 0.1 s]"], rows) + "\n")
+
+
 def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     L = []
-    L.append("# Benchmarks (issue #6)\n")
+    L.append("# Benchmarks (issues #6, #16)\n")
     L.append("Generated by `python benchmarks/run.py`" + (" --quick" if quick else "")
              + "; do not edit by hand. No timing is asserted by any test; these figures "
              "describe one run on one machine.\n")
@@ -606,22 +694,27 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     rows = []
     for r, v in speed.items():
         rows.append((r, fmt(v["T"], 0), fmt(v["bare_us_per_step"]), fmt(v["cosim_us_per_step"]),
-                     f"**{v['ratio']:.2f}**", fmt(v["rtf_bare"], 0), fmt(v["rtf_cpu"], 1),
+                     f"**{v['ratio']:.2f}**", f"{v.get('ratio_wall', math.nan):.2f}",
+                     fmt(v["rtf_bare"], 0), fmt(v["rtf_cpu"], 1),
                      fmt(v["rtf"], 1), fmt(v["rtf_total"], 1), fmt(v["setup_s"], 2)))
     L.append(table(["robot", "T [s]", "bare RK4 [CPU us / 1 ms step]", "co-simulation "
-                    "[CPU us / 1 ms step]", "ratio", "real-time factor, bare RK4 (CPU)",
+                    "[CPU us / 1 ms step]", "ratio (CPU)", "ratio (wall)",
+                    "real-time factor, bare RK4 (CPU)",
                     "real-time factor, co-simulation (CPU)", "real-time factor, co-simulation "
                     "(wall)", "real-time factor incl. set-up, 1 s + T (wall)", "set-up [s]"],
                    rows))
     L.append("\nRatio = co-simulation CPU time / bare RK4 CPU time for the same simulated time "
-             "(both in this process). Real-time factor = simulated seconds per second. Ratio of "
-             "each round: " + "; ".join(f"{r} " + ", ".join(f"{x:.2f}" for x in v.get("ratios", []))
-                                       for r, v in speed.items()) + ".\n")
+             "(both in this process; the wall-time ratio beside it). Real-time factor = simulated "
+             "seconds per second. Ratio (CPU) of each round: "
+             + "; ".join(f"{r} " + ", ".join(f"{x:.2f}" for x in v.get("ratios", []))
+                         for r, v in speed.items())
+             + ". Target of issue #16: ratio <= 0.3 (spatial, 10 s).\n")
+    L.append(_before_table(HERE / "baseline_i16.json", speed))
     base_file = HERE / "baseline_before.json"
     if base_file.exists():
         base = json.loads(base_file.read_text())
         meta = base.get("_meta", {})
-        L.append(f"Before the performance work ({meta.get('what', '')}; {meta.get('date', '')}), "
+        L.append(f"Before the performance work of issue #6 ({meta.get('what', '')}; {meta.get('date', '')}), "
                  "against this run:\n")
         rows = []
         for r in speed:
@@ -645,31 +738,59 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              "cores alone on the same scenario; best of 8 blocks of 12 communication steps (the "
              "estimator core: best of 4 passes over 10 s of samples).\n")
     rows = []
-    keys = [("plant_core", "plant core alone: `Plant.advance(0.1)` (100 RK4 steps)"),
-            ("plant_doStep", "plant FMU `doStep` through fmpy"),
+    keys = [("plant_core", "plant core alone: `Plant.advance(0.1)` (100 RK4 steps, no excitation)"),
+            ("terms_call", "  one compiled `rigid_body.terms` call (M, nle, momentum; 1 per RK4 step)"),
+            ("aba_call", "  one compiled `rigid_body.aba` call (3 per RK4 step)"),
+            ("plant_doStep", "plant FMU `doStep` through fmpy (closed loop)"),
             ("estimator_core", "estimator core alone: `Identifier.update`"),
-            ("estimator_doStep", "estimator FMU `doStep` through fmpy"),
-            ("exchange", "wiring: plant `getReal` -> estimator `setReal`"),
-            ("record", "recording: `getReal` of all outputs except the standard deviations"),
-            ("record_sd", "recording: `getReal` of the standard deviations (computed lazily)")]
+            ("estimator_report", "estimator core alone: `Identifier.report()` after each update"),
+            ("estimator_doStep", "estimator FMU `doStep` through fmpy (update + report)"),
+            ("exchange", "wiring: plant outputs -> estimator inputs, `ident.excite` back"),
+            ("record", "recording: every output except the standard deviations"),
+            ("record_sd", "recording: the standard deviations (computed in the `doStep`)")]
     for k, lab in keys:
-        rows.append((lab,) + tuple(fmt(speed[r]["breakdown"][k], 0) for r in speed))
+        nd = 2 if k.endswith("_call") else 0
+        rows.append((lab,) + tuple(fmt(speed[r]["breakdown"].get(k, math.nan), nd)
+                                   for r in speed))
     L.append(table(["part"] + [f"{r} [us]" for r in speed], rows))
     per_step = "; ".join(
         f"{r} {v['breakdown']['plant_core'] / 100:.1f} us = "
         f"{v['breakdown']['plant_core'] / 100 / v['bare_us_per_step']:.2f} x the floor"
         for r, v in speed.items())
-    L.append("\nPer RK4 step the plant core makes one `pin.computeAllTerms` call (M, non-linear "
-             "effects, centroidal momentum) and one call of the compiled control kernel where the "
-             "floor makes its first `pin.aba` call (the controller's inverse dynamics give the "
-             "first stage's accelerations), then three `pin.aba` calls, each followed by the "
-             "compiled stage kernel (`spacerobot/plant/kernels.py`); the floor instead makes "
-             "four `pin.integrate` calls and a dozen small NumPy operations. Plant core per RK4 "
-             f"step (this breakdown, against the floor of the table above): {per_step}. The "
-             "rest of the co-simulation cost is the estimator's update once per 0.1 s sample "
-             "and the FMI calls of the master: wiring and recording every output through "
-             "fmpy, including the standard deviations, which are computed when read.\n")
-    L.append("### Profile of a spatial run_ssp run\n")
+    shares, budget = [], []
+    for r, v in speed.items():
+        b = v["breakdown"]
+        parts = {"plant FMU doStep": b["plant_doStep"], "estimator FMU doStep":
+                 b["estimator_doStep"], "wiring and recording": b["exchange"] + b["record"]
+                 + b["record_sd"]}
+        tot = sum(parts.values())
+        shares.append(f"{r}: {tot:.0f} us = " + ", ".join(
+            f"{k} {x / tot * 100:.0f} %" for k, x in parts.items()))
+        floor = v["bare_us_per_step"] * 100                 # the floor per 0.1 s
+        budget.append(f"{r} at most {0.3 * floor:.0f} us, while the plant FMU's `doStep` "
+                      f"alone takes {b['plant_doStep']:.0f} us ({b['plant_doStep'] / floor:.2f} "
+                      f"x the floor) and the estimator's `report()` "
+                      f"{b['estimator_report']:.0f} us")
+    L.append("\nThe plant advances a whole communication step in one compiled call "
+             "(`spacerobot/plant/kernels.py` `advance`): per 1 ms RK4 step the rigid-body terms "
+             "(`spacerobot/plant/rigid_body.py` `terms`: M, non-linear effects, centroidal "
+             "momentum) and the control kernel, whose inverse dynamics give the first stage's "
+             "accelerations, then three compiled articulated-body (`aba`) calls, each followed "
+             "by the stage kernel; Python is entered once per 0.1 s. Plant core per RK4 step "
+             f"(this breakdown, against the floor of the table above): {per_step}; of it, one "
+             "`terms` and three `aba` calls as in the rows above, the rest the control and "
+             f"stage kernels. Sum of the measured parts per communication step: "
+             f"{'; '.join(shares)}. The estimator FMU's `doStep` is its update plus the "
+             "identifier's `report()` (physical projection of both bodies and standard "
+             "deviations with the prior's pull: eigen-decompositions and small NumPy products "
+             "on 8x8 and 12x12 matrices, every step, since the excitation request and the "
+             "identified flags depend on them). The master reads and writes every connected "
+             "variable and every recorded output with one FMI call per component and type "
+             "through preallocated arrays (`spacerobot/system/instance.py` `ArrayIO`). For "
+             f"the ratio target 0.3 the whole communication step would have to cost "
+             f"{'; '.join(budget)}.\n")
+    L.append("### Profile of a spatial run_ssp run (10 s)\n" if not quick else
+             "### Profile of a spatial run_ssp run\n")
     L.append(prof + "\n")
 
     # 2
@@ -692,9 +813,9 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              "momentum, regressors of both bodies) and the compiled modified RLS step, plus its "
              "safety net (a snapshot of what the update changes, to undo an update that "
              "overflows; a few us). The FMU's `doStep` adds the gathering of the 45 scalar "
-             "inputs into arrays and the refresh of the outputs; the excitation diagnostics and "
-             "the standard deviations are computed only when read (section 1 shows that cost "
-             "when `run_ssp` records every output). Targets of issue #6: core <= 50 us "
+             "inputs into arrays and the refresh of the outputs with the identifier's `report()` "
+             "(standard deviations, physical projection, identified flags: section 1 shows "
+             "its cost); the excitation diagnostics are computed only when read. Targets of issue #6: core <= 50 us "
              "(spatial), FMU `doStep` <= 150 us.\n")
     L.append("\n### One-step RLS against a batch re-solve\n")
     L.append("The batch alternative re-solves over all N samples at every new sample: stack the "

@@ -21,10 +21,12 @@ compiled again and one that cannot be written is skipped. Each of these gives a
 :class:`RuntimeWarning` and is listed in :data:`NOTICES` (the FMUs log them through the FMI
 logger).
 
-A kernel module must be self-contained (only NumPy, Numba and its own functions): Numba keys a
-cached function by its own source file and does not notice a change in a compiled callee that
-lives in another file, and here the content hash of the one file names the cache. That is why
-the plant's and the estimator's kernel modules each carry their own small Cholesky solve.
+A kernel module must be self-contained (only NumPy, Numba and its own functions), or name the
+sibling kernel modules it calls in ``load(..., deps=...)``: Numba keys a cached function by its
+own source file and does not notice a change in a compiled callee that lives in another file,
+so the sources of those callees are hashed into the cache folder's name as well. (The plant's
+and the estimator's kernel modules, in different FMUs, each carry their own small Cholesky
+solve.)
 """
 from __future__ import annotations
 
@@ -65,10 +67,11 @@ def cache_folder(full_name: str, code: bytes, root: Path | None = None) -> Path:
     return (cache_root() if root is None else root) / f"{full_name.rsplit('.', 1)[-1]}-{key}"
 
 
-def _stable_copy(full_name: str, src: Path) -> Path:
-    """The path of the copy of ``src`` in its :func:`cache_folder`, written if needed."""
+def _stable_copy(full_name: str, src: Path, deps: bytes = b"") -> Path:
+    """The path of the copy of ``src`` in its :func:`cache_folder`, written if needed; ``deps``
+    (the sources of the kernel modules it calls) is part of the folder's key."""
     code = src.read_bytes()
-    folder = cache_folder(full_name, code)
+    folder = cache_folder(full_name, code + deps)
     dst = folder / src.name
     if not (dst.is_file() and dst.read_bytes() == code):
         folder.mkdir(parents=True, exist_ok=True)
@@ -126,18 +129,22 @@ def _exec(full: str, path: Path) -> ModuleType:
     return module
 
 
-def load(package: str, name: str) -> ModuleType:
+def load(package: str, name: str, deps: tuple = ()) -> ModuleType:
     """Import the kernel module ``package.name`` (see the module docstring); idempotent.
 
     The module is registered under its ordinary name, so ``from .name import f`` in the
     package finds it; relative imports inside it resolve against ``package`` as usual.
+    ``deps`` names the sibling kernel modules whose compiled functions it calls (load them
+    first): their sources are part of its cache key, since Numba's cache of a caller does not
+    notice a change in a callee of another file.
     """
     full = f"{package}.{name}"
     if full in sys.modules:
         return sys.modules[full]
     src = Path(sys.modules[package].__file__).with_name(f"{name}.py")
     try:
-        path = _stable_copy(full, src)
+        path = _stable_copy(full, src, b"".join(src.with_name(f"{d}.py").read_bytes()
+                                                 for d in deps))
     except (OSError, RuntimeError) as e:    # unwritable cache, or no home directory
         _notice(f"kernel cache {cache_root()} cannot be written ({e}); {full} is imported "
                 f"from {src.parent} and its compiled code cached by Numba beside it if possible")

@@ -138,7 +138,9 @@ def _kernel_folders(cache: Path, package: str) -> list:
     """Cache folders of the plant's and the estimator's kernel modules as ``package`` (the
     library or an FMU's bundle) imports them."""
     lib = Path(jit.__file__).parent
-    return [jit.cache_folder(f"{package}.{sub}.kernels", (lib / sub / "kernels.py").read_bytes(),
+    deps = {"plant": ("rigid_body",), "estimator": ()}     # as the packages' jit.load calls
+    return [jit.cache_folder(f"{package}.{sub}.kernels", (lib / sub / "kernels.py").read_bytes()
+                             + b"".join((lib / sub / f"{d}.py").read_bytes() for d in deps[sub]),
                              cache) for sub in ("plant", "estimator")]
 
 

@@ -11,7 +11,7 @@ import pinocchio as pin
 import pytest
 
 from spacerobot import jit
-from spacerobot.plant import Plant, kernels
+from spacerobot.plant import Plant, kernels, rigid_body
 from spacerobot.robots import scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -55,12 +55,12 @@ def test_cholesky_solve_and_failure():
     B = rng.normal(size=(6, 6))
     S = B @ B.T + 6 * np.eye(6)
     L = np.empty((6, 6))
-    assert kernels._cholesky(S, L)
+    assert rigid_body.cholesky(S, L)
     X = rng.normal(size=(6, 3))
     Y = X.copy()
-    kernels._cho_solve(L, Y)
+    rigid_body.cho_solve(L, Y)
     np.testing.assert_allclose(Y, np.linalg.solve(S, X), rtol=1e-12, atol=1e-12)
-    assert not kernels._cholesky(-S, L)                          # not positive definite
+    assert not rigid_body.cholesky(-S, L)                          # not positive definite
 
 
 # -- the controllers, against the law written out with NumPy and Pinocchio -----------------------
@@ -275,13 +275,15 @@ def test_compiled_kernels_are_reused_by_a_new_process(tmp_path):
     """First process: compiles into the cache. Second process: loads from it (no compilation)."""
     code = (
         "import json, numpy as np\n"
-        "from spacerobot.plant import Plant, kernels\n"
+        "from spacerobot.plant import Plant, kernels, rigid_body\n"
         "from spacerobot.robots import scenario\n"
         "sc = scenario('planar')\n"
         "p = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)\n"
         "p.advance(0.01)\n"
+        "p.outputs()\n"
         "st = {k: [sum(getattr(f.stats, 'cache_' + w).values()) for w in ('hits', 'misses')]\n"
-        "      for k, f in (('control', kernels.control), ('stage', kernels.stage))}\n"
+        "      for k, f in (('control', kernels.control), ('advance', kernels.advance),\n"
+        "                   ('terms', rigid_body.terms))}\n"
         "print(json.dumps({'file': kernels.__file__, 'stats': st, 'x': p.q.tolist()}))\n")
     env = dict(os.environ, SPACEROBOT_CACHE_DIR=str(tmp_path))
     runs = [json.loads(subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, check=True,
@@ -289,8 +291,9 @@ def test_compiled_kernels_are_reused_by_a_new_process(tmp_path):
             for _ in range(2)]
     assert all(Path(r["file"]).is_relative_to(tmp_path) for r in runs)
     assert runs[0]["stats"]["control"][1] >= 1                 # compiled (cache miss)
-    for name in ("control", "stage"):
+    for name in ("control", "advance", "terms"):
         hits, misses = runs[1]["stats"][name]
         assert hits >= 1 and misses == 0
     assert list((tmp_path).glob("kernels-*/__pycache__/*.nbi"))
+    assert list((tmp_path).glob("rigid_body-*/__pycache__/*.nbi"))
     assert runs[0]["x"] == runs[1]["x"]                        # same machine code, same result

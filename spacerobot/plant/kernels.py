@@ -1,12 +1,12 @@
-"""Compiled (Numba) kernels of the plant's hot path: the controllers and the RK4 bookkeeping.
+"""Compiled (Numba) kernels of the plant's hot path: the controllers, the RK4 bookkeeping and
+the loop over a whole communication step.
 
-The plant runs its controllers once per 1 ms internal step and evaluates the RK4 stages in
-between Pinocchio calls; in NumPy that is some sixty small-array operations per step, whose
-call overhead (not arithmetic) was twice the cost of the dynamics itself. Here the same
-equations run as plain loops compiled by Numba, so that one step is a handful of Python-level
-calls: Pinocchio's ``computeAllTerms`` (M, non-linear effects, centroidal momentum), the
-control kernel, and three times ``aba`` + the stage kernel (the first stage's accelerations
-come from the controller's inverse dynamics).
+The plant runs its controllers once per 1 ms internal step and evaluates four RK4 stages per
+step. :func:`advance` runs all the internal steps of one communication step in one call: per
+step the rigid-body terms of :mod:`.rigid_body` (``M``, non-linear effects, centroidal
+momentum) feed :func:`control`, whose inverse dynamics give the first stage's accelerations,
+and the compiled articulated-body algorithm gives those of the three other stages, each
+followed by :func:`stage`. Python is entered once per communication step.
 
 The equations are the paper's (docs/models.md, "Controllers") and those of :mod:`.dynamics`:
 
@@ -24,8 +24,9 @@ kernel returns 0, or a positive code for a singular matrix (see :data:`ERRORS`).
 state propagates as NaN (the plant reports it after the step) and is not mistaken for a
 singular matrix.
 
-Compiled on first use and cached on disk (see :mod:`spacerobot.jit`, which is also why this
-module is self-contained).
+Compiled on first use and cached on disk (see :mod:`spacerobot.jit`): this module uses only
+NumPy, Numba and :mod:`.rigid_body` (another kernel module, whose source is part of this
+module's cache key).
 """
 from __future__ import annotations
 
@@ -34,12 +35,14 @@ import math
 import numpy as np
 from numba import njit
 
+from .rigid_body import aba, cho_solve, cholesky, terms
+
 #: eigenvalue ratio below which the attitude solve is damped (singularity robustness)
 DLS_RATIO = 1e-2
 
 #: kernel return codes
 ERRORS = {1: "singular base inertia", 2: "singular arm inertia",
-          3: "singular attitude coupling"}
+          3: "singular attitude coupling", 4: "singular articulated base inertia"}
 
 #: order of the controller parameters in the ``par`` array of :func:`control`
 PARAMS = ("K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn", "K_Dn",
@@ -77,46 +80,6 @@ def quat_dcm(x, y, z, w):
     return (1.0 - s * (yy + zz), s * (xy - zw), s * (xz + yw),
             s * (xy + zw), 1.0 - s * (xx + zz), s * (yz - xw),
             s * (xz - yw), s * (yz + xw), 1.0 - s * (xx + yy))
-
-
-@njit(**_NB)
-def _cholesky(S, L):
-    """Lower Cholesky factor of the SPD matrix ``S`` into ``L``; False if a pivot is <= 0
-    (a NaN pivot passes, so that NaN propagates)."""
-    k = S.shape[0]
-    for j in range(k):
-        d = S[j, j]
-        for p in range(j):
-            d -= L[j, p] * L[j, p]
-        if d <= 0.0:
-            return False
-        d = math.sqrt(d)
-        L[j, j] = d
-        for i in range(j + 1, k):
-            s = S[i, j]
-            for p in range(j):
-                s -= L[i, p] * L[j, p]
-            L[i, j] = s / d
-        for i in range(j):
-            L[i, j] = 0.0
-    return True
-
-
-@njit(**_NB)
-def _cho_solve(L, B):
-    """Solve ``L L^T X = B`` in place of ``B`` (k, c)."""
-    k, c = B.shape
-    for col in range(c):
-        for i in range(k):
-            s = B[i, col]
-            for p in range(i):
-                s -= L[i, p] * B[p, col]
-            B[i, col] = s / L[i, i]
-        for i in range(k - 1, -1, -1):
-            s = B[i, col]
-            for p in range(i + 1, k):
-                s -= L[p, i] * B[p, col]
-            B[i, col] = s / L[i, i]
 
 
 @njit(**_NB)
@@ -289,23 +252,23 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
         e[0], e[1], e[2] = kk * x, kk * y, kk * z
     # base rows: M_bb dv_b + M_bm qdd = f_b - c_b  ->  dv_b = y0 - X qdd
     Lb = np.empty((nb, nb))
-    if not _cholesky(M[:nb, :nb], Lb):
+    if not cholesky(M[:nb, :nb], Lb):
         return 1
     sol = np.empty((nb, n + 1))
     for i in range(nb):
         for j in range(n):
             sol[i, j] = M[i, nb + j]
         sol[i, n] = gen[i] - nle[i]
-    _cho_solve(Lb, sol)                  # [X, y0]
+    cho_solve(Lb, sol)                  # [X, y0]
     # attitude rows: G qdd = y0_rot - alpha_des with G = X_rot; W = M_mm weights the solve
     Lm = np.empty((n, n))
-    if not _cholesky(M[nb:, nb:], Lm):
+    if not cholesky(M[nb:, nb:], Lm):
         return 2
     WiGt = np.empty((n, r))
     for i in range(n):
         for j in range(r):
             WiGt[i, j] = sol[r0 + j, i]
-    _cho_solve(Lm, WiGt)                 # W^-1 G^T
+    cho_solve(Lm, WiGt)                 # W^-1 G^T
     GWG = np.zeros((r, r))
     for i in range(r):
         for j in range(r):
@@ -346,10 +309,10 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
     z = np.empty(r)                      # z = (GWG)^+ rhs
     if lo / lmax >= 1.01 * DLS_RATIO:
         Lg = np.empty((r, r))
-        if not _cholesky(GWG, Lg):
+        if not cholesky(GWG, Lg):
             return 3
         zz = rhs.reshape(r, 1).copy()
-        _cho_solve(Lg, zz)
+        cho_solve(Lg, zz)
         for j in range(r):
             z[j] = zz[j, 0]
     else:
@@ -513,3 +476,61 @@ def load(planar, x, qn, vs):
         for j in range(3, 7):
             qn[j] /= nrm
     return 0
+
+
+@njit(**_NB)
+def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, K, xs, qn, vs,
+            gen, acc, FM, M, nle, hg, ddq, xa, xout):
+    """``n_steps`` RK4 steps of length ``h``, then one of length ``rest`` if ``rest > 0``, from
+    the state ``x`` at time ``t``: the plant's whole communication step in one call.
+
+    Each step holds the controls of its start (zero-order hold): the rigid-body terms
+    (:func:`.rigid_body.terms`: ``M``, non-linear effects, centroidal momentum) feed
+    :func:`control`, whose accelerations are the first stage's; stages 2-4 call
+    :func:`.rigid_body.aba` on the stage state :func:`stage` prepared.
+
+    Parameters
+    ----------
+    planar : bool
+    mdl : tuple ``(R, p, axis, I6, mc)`` of :func:`.rigid_body.chain_arrays`
+    ws : tuple, the work arrays of :class:`.rigid_body.Workspace`
+    x : (nx,) state ``[J, H, q, v]``; ``qn``, ``vs`` must hold its normalised configuration
+    and velocity (:func:`load`)
+    par, q_home, ramp, tab : as in :func:`control`
+    K, xs, qn, vs, gen, acc, FM, M, nle, hg, ddq, xa : work arrays (the plant's buffers; on
+    return ``qn``, ``vs`` hold the configuration of the state reached)
+    xout : (nx,) the state reached
+
+    Returns ``(status, t_reached)``: status 0, or the code (:data:`ERRORS`) of the step that
+    could not be taken; ``xout`` and ``t_reached`` are then the state and time at its start.
+    """
+    R, p, axis, I6, mc = mdl
+    X, oR, op, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    nx = x.shape[0]
+    for j in range(nx):
+        xa[j] = x[j]
+    total = n_steps + (1 if rest > 0.0 else 0)
+    for k in range(total):
+        dt = h if k < n_steps else rest
+        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, X, oR, op, vel, cb, IA, pA, accb, U,
+              Du, M6, v6)
+        err = control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM)
+        if err:
+            for j in range(nx):
+                xout[j] = xa[j]
+            return err, t
+        stage(planar, 0, xa, xa, acc, K, FM, dt, xs, qn, vs, gen, xout)
+        for i in range(1, 4):
+            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, X, oR, op, vel, cb, IA, pA, accb, U,
+                   Du, M6, v6):
+                for j in range(nx):
+                    xout[j] = xa[j]
+                load(planar, xa, qn, vs)
+                return 4, t
+            stage(planar, i, xa, xs, ddq, K, FM, dt, xs, qn, vs, gen, xout)
+        for j in range(nx):            # the stage kernel left xout's configuration in qn, vs
+            xa[j] = xout[j]
+        t += dt
+    for j in range(nx):
+        xout[j] = xa[j]
+    return 0, t

@@ -7,11 +7,13 @@ Implementation notes (performance; the equations are those of :mod:`.dynamics` a
   ``q``, ``v``, ``J``, ``H`` are views of it. Every step makes a new ``x`` (the arrays a caller
   kept are never changed behind its back); a caller that assigns e.g. ``plant.q = ...`` is
   noticed at the next step.
-* One RK4 step is a handful of Python-level calls: Pinocchio's ``computeAllTerms`` (M,
-  non-linear effects, centroidal momentum) and the compiled control kernel at the start of the
-  step (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
-  times ``pin.aba`` followed by the compiled stage kernel, which also forms the next stage state
-  and the combination of the four stages.
+* A communication step is one compiled call (:func:`.kernels.advance`): per 1 ms RK4 step the
+  rigid-body terms (:func:`.rigid_body.terms`) and the control kernel at the start of the step
+  (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
+  times the compiled articulated-body algorithm (:func:`.rigid_body.aba`) followed by the stage
+  kernel, which also forms the next stage state and the combination of the four stages. The
+  compiled model's arrays are read from the Pinocchio model (:func:`.rigid_body.chain_arrays`);
+  Pinocchio still gives the momentum outputs once per communication step.
 """
 from __future__ import annotations
 
@@ -19,10 +21,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from ..robots import Controller, Excitation, RigidBody, Robot
-from . import kernels
+from . import kernels, rigid_body
 from .dynamics import (PlantModel, base_acceleration, base_generalised_velocity, base_position,
                        base_rotation, base_velocity, build_model, initial_configuration, momentum)
 
@@ -88,6 +89,14 @@ class Plant:
         self._acc = np.zeros(self._nv)                       # dv/dt under the held controls
         self._FM = np.zeros(6)                               # thrust [F, M], inertial
         self._par = np.array([getattr(controller, k) for k in kernels.PARAMS], float)
+        # compiled rigid-body model (from the Pinocchio model) and its work space
+        self._mdl = rigid_body.chain_arrays(pm.model)[1:]   # (R, p, axis, I6, mc)
+        self._ws = rigid_body.Workspace(pm.model.njoints - 2).arrays()
+        self._M = np.zeros((self._nv, self._nv))
+        self._nle = np.zeros(self._nv)
+        self._hg = np.zeros(6)
+        self._buf = (self._K, self._xs, self._qn, self._vs, self._gen, self._acc, self._FM,
+                     self._M, self._nle, self._hg, np.empty(self._nv), np.empty(nx))
         # excitation: reference channels (attitude axes, then joints) and the level ramp
         # [s0, u, t0, T] (kernels.ramp_level); level 0 until set_excitation asks for more
         self._ex_tab = excitation.channels(1 if robot.planar else 3, self.pm.n)
@@ -98,7 +107,6 @@ class Plant:
         self._u: Controls | None = None
         self._loaded = None        # the state vector whose configuration is in _qn, _vs
         self._ctrl_x = None        # the state vector the control buffers were computed for
-        self._step = self._make_step()
 
     # -- copies (the integrator's closures refer to this instance's buffers) -------------------
     def __deepcopy__(self, memo):
@@ -202,12 +210,13 @@ class Plant:
         The accelerations come from the inverse dynamics of the attitude law
         (``M a + c = [f_b, tau]`` by construction), so no forward-dynamics call is needed.
         """
-        model, data, qn, vs = self.pm.model, self.data, self._qn, self._vs
+        qn, vs = self._qn, self._vs
         if self._loaded is not x:
             kernels.load(self.pm.planar, x, qn, vs)
             self._loaded = x
-        pin.computeAllTerms(model, data, qn, vs)
-        err = kernels.control(self.pm.planar, qn, vs, data.M, data.nle, data.hg.vector,
+        rigid_body.terms(self.pm.planar, *self._mdl, qn, vs, self._M, self._nle, self._hg,
+                         *self._ws)
+        err = kernels.control(self.pm.planar, qn, vs, self._M, self._nle, self._hg,
                               self._par, self.q_home, self.t, self._ramp, self._ex_tab,
                               self._gen, self._acc, self._FM)
         if err:
@@ -215,40 +224,26 @@ class Plant:
         self._ctrl_x = x
 
     # -- integration -------------------------------------------------------------------------
-    def _make_step(self):
-        """The RK4 step ``step(x, dt) -> x_new`` as a closure (no attribute lookups in the loop).
-
-        Stage 1 uses the accelerations of the controls; stages 2-4 call ``pin.aba`` on the stage
-        state that the stage kernel prepared (thrust rotated into that stage's base frame, joint
-        torques held).
-        """
-        model, data, aba, stage, empty = self.pm.model, self.data, pin.aba, kernels.stage, np.empty
-        K, xs, qn, vs, gen, acc, FM = (self._K, self._xs, self._qn, self._vs, self._gen,
-                                       self._acc, self._FM)
-        planar = self.pm.planar
-        nx = len(xs)
-
-        def step(x, dt):
-            if self._ctrl_x is not x:
-                self._control_at(x)
-            xn = empty(nx)
-            stage(planar, 0, x, x, acc, K, FM, dt, xs, qn, vs, gen, xn)
-            stage(planar, 1, x, xs, aba(model, data, qn, vs, gen), K, FM, dt, xs, qn, vs, gen, xn)
-            stage(planar, 2, x, xs, aba(model, data, qn, vs, gen), K, FM, dt, xs, qn, vs, gen, xn)
-            stage(planar, 3, x, xs, aba(model, data, qn, vs, gen), K, FM, dt, xs, qn, vs, gen, xn)
-            self._loaded = xn             # the stage kernel left xn's configuration in qn, vs
-            self._ctrl_x = None
-            self._u = None
-            return xn
-
-        return step
+    def _run(self, n: int, h: float, rest: float) -> None:
+        """``n`` RK4 steps of ``h`` then one of ``rest`` (if > 0) in one compiled call
+        (:func:`.kernels.advance`); the controls of each step are held over it."""
+        x = self._collect()
+        if self._loaded is not x:
+            kernels.load(self.pm.planar, x, self._qn, self._vs)
+        xn = np.empty_like(x)
+        err, t = kernels.advance(self.pm.planar, self._mdl, self._ws, x, n, h, rest, self.t,
+                                 self._par, self.q_home, self._ramp, self._ex_tab, *self._buf, xn)
+        self._x, self.t = xn, t
+        self._loaded = xn                 # the kernel left xn's configuration in _qn, _vs
+        self._ctrl_x = None
+        self._u = None
+        self._publish()
+        if err:
+            raise np.linalg.LinAlgError(kernels.ERRORS[err])
 
     def rk4_step(self, dt: float) -> None:
         """One classic RK4 step of length ``dt`` with the controls held (zero-order hold)."""
-        x = self._collect()
-        self._x = self._step(x, dt)
-        self.t += dt
-        self._publish()
+        self._run(1, float(dt), 0.0)
 
     def advance(self, dt: float) -> None:
         """Integrate over ``dt``: whole internal steps ``h``, then one shorter step if needed."""
@@ -258,21 +253,8 @@ class Plant:
         rest = dt - n * self.h
         if rest < 1e-9 * self.h:
             rest = 0.0
-        x = self._collect()
-        h, step = self.h, self._step
-        try:
-            # a diverging state is detected below and reported; numpy need not warn as well
-            with np.errstate(over="ignore", invalid="ignore"):
-                for _ in range(n):
-                    x = step(x, h)
-                    self.t += h
-                if rest > 0.0:
-                    x = step(x, rest)
-                    self.t += rest
-        finally:
-            self._x = x
-            self._publish()
-        if not np.all(np.isfinite(x)):
+        self._run(n, self.h, rest)
+        if not np.all(np.isfinite(self._x)):
             raise FloatingPointError(f"state became non-finite at t = {self.t:.6g} s")
 
     # -- measurements ------------------------------------------------------------------------

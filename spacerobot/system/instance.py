@@ -3,7 +3,8 @@
 The one instance wrapper of the project: the co-simulation master (:mod:`.master`), the SSP
 runner, the cross-check writer, the benchmarks and the tests all use :class:`FMUInstance`.
 :class:`FMULog` collects the messages of every instance of a run through
-:func:`logger_callbacks`.
+:func:`logger_callbacks`. :class:`ArrayIO` reads or writes a fixed set of variables of one
+type through one preallocated array (what the master and the recorder do at every step).
 """
 from __future__ import annotations
 
@@ -76,6 +77,68 @@ class FMULog:
         if not msgs:
             return "  (the FMU logged no messages)"
         return "\n".join(f"  [{s}] {c}: {m}" for _, s, c, m in msgs)
+
+
+class ArrayIO:
+    """``fmi2Get<type>`` / ``fmi2Set<type>`` of fixed value references through one preallocated
+    NumPy array :attr:`values` (float64 for Real, int32 for Integer and Boolean).
+
+    fmpy's ``getReal(vrs)`` builds a ctypes array of the value references and one of the values,
+    and a list of the result, at every call; here both arrays are built once, so a call at every
+    communication step costs the FMI call alone. A status worse than Warning raises fmpy's
+    ``FMICallException``, as fmpy's own call does (:func:`.errors.fmi_errors` translates it).
+    An ``fmu`` that is not fmpy's ``FMU2Slave`` (e.g. a test double) is called through its
+    ``get<type>`` / ``set<type>`` methods.
+
+    Parameters
+    ----------
+    fmu : fmpy ``FMU2Slave`` (instantiated before :meth:`get` / :meth:`set` are called)
+    typ : ``'Real'``, ``'Integer'`` or ``'Boolean'``
+    vrs : value references (k,)
+    values : (k,) array to use as :attr:`values` (e.g. another ArrayIO's, so that a set sends
+        what a get read), default a new zero array
+    """
+
+    _TYPES = {"Real": np.float64, "Integer": np.int32, "Boolean": np.int32}
+
+    def __init__(self, fmu, typ: str, vrs: Sequence[int], values: Optional[np.ndarray] = None):
+        import ctypes
+        from fmpy.fmi2 import FMU2Slave, fmi2Integer, fmi2Real, fmi2ValueReference
+
+        dtype = self._TYPES[typ]
+        self.fmu, self.typ, self.n = fmu, typ, len(vrs)
+        self.values = np.zeros(self.n, dtype) if values is None else values
+        if self.values.dtype != dtype or self.values.shape != (self.n,):
+            raise ValueError(f"ArrayIO {typ}: values must be ({self.n},) {np.dtype(dtype)}")
+        self._raw = isinstance(fmu, FMU2Slave)
+        if self._raw:
+            ctype = fmi2Real if typ == "Real" else fmi2Integer       # fmi2Boolean is an int
+            self._vr = (fmi2ValueReference * self.n)(*vrs)
+            self._ptr = self.values.ctypes.data_as(ctypes.POINTER(ctype))
+            self._get_c = getattr(fmu.dll, f"fmi2Get{typ}")          # argtypes set by fmpy
+            self._set_c = getattr(fmu.dll, f"fmi2Set{typ}")
+        else:
+            self._vrs = list(vrs)
+
+    def get(self) -> np.ndarray:
+        """Read the variables into :attr:`values` (returned)."""
+        if self._raw:
+            self._check(self._get_c(self.fmu.component, self._vr, self.n, self._ptr), "Get")
+        else:
+            self.values[:] = getattr(self.fmu, f"get{self.typ}")(self._vrs)
+        return self.values
+
+    def set(self) -> None:
+        """Write :attr:`values` to the variables."""
+        if self._raw:
+            self._check(self._set_c(self.fmu.component, self._vr, self.n, self._ptr), "Set")
+        else:
+            getattr(self.fmu, f"set{self.typ}")(self._vrs, self.values.tolist())
+
+    def _check(self, status: int, what: str) -> None:
+        if status > 1:                                   # worse than fmi2Warning, as fmpy
+            from fmpy.fmi1 import FMICallException
+            raise FMICallException(function=f"fmi2{what}{self.typ}", status=status)
 
 
 class FMUInstance:

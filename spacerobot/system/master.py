@@ -18,6 +18,7 @@ import threading
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 from .errors import Calls, SimulationError
+from .instance import ArrayIO
 
 #: (start component, start connector, end component, end connector)
 Connection = Tuple[str, str, str, str]
@@ -78,18 +79,22 @@ class Master:
             typ = {"Real": "Real", "Boolean": "Boolean"}.get(va.type, "Integer")
             wires[(a, b, typ)][0].append(va.valueReference)
             wires[(a, b, typ)][1].append(vb.valueReference)
-        self._wires = [(a, b, typ, src, dst) for (a, b, typ), (src, dst) in wires.items()]
+        # one array per wire: the destination's set sends what the source's get read into it
+        self._wires = []
+        for (a, b, typ), (src, dst) in wires.items():
+            get = ArrayIO(self.instances[a].fmu, typ, src)
+            self._wires.append((a, b, typ, get, ArrayIO(self.instances[b].fmu, typ, dst,
+                                                        values=get.values)))
 
     def exchange(self) -> None:
         """Read every connected output, then set every connected input."""
-        calls, insts = self.calls, self.instances
-        values = []
-        for a, _, typ, src, _ in self._wires:
+        calls = self.calls
+        for a, _, typ, get, _ in self._wires:
             calls(a, f"fmi2Get{typ}")
-            values.append(list(getattr(insts[a].fmu, f"get{typ}")(src)))
-        for (_, b, typ, _, dst), vals in zip(self._wires, values):
+            get.get()
+        for _, b, typ, _, put in self._wires:
             calls(b, f"fmi2Set{typ}")
-            getattr(insts[b].fmu, f"set{typ}")(dst, vals)
+            put.set()
 
     def do_step(self, t: float, dt: float) -> None:
         """fmi2DoStep(t, dt) of every component, in the order of ``instances``."""

@@ -11,6 +11,7 @@ from typing import Dict, List, Mapping, Sequence
 import numpy as np
 
 from .errors import Calls
+from .instance import ArrayIO
 
 _TYPES = ("Real", "Integer", "Boolean")          # String variables are not recorded
 
@@ -28,6 +29,8 @@ class Recorder:
         self.calls = calls or Calls()
         self.groups: Dict[str, Dict[str, tuple]] = {}
         self.columns: List[str] = ["time"]
+        #: per (component, type) with variables: (component, ArrayIO, first column, end column)
+        self._reads: List[tuple] = []
         for comp, vnames in names.items():
             g = {typ: ([], []) for typ in _TYPES}
             for n in vnames:
@@ -38,20 +41,20 @@ class Recorder:
                     g[typ][1].append(v.valueReference)
             self.groups[comp] = g
             for typ in _TYPES:
+                if g[typ][1]:
+                    j = len(self.columns)
+                    self._reads.append((comp, ArrayIO(instances[comp].fmu, typ, g[typ][1]),
+                                        j, j + len(g[typ][1])))
                 self.columns += [f"{comp}.{v}" for v in g[typ][0]]
         self.buf = np.empty((n_rows, len(self.columns)))
 
     def record(self, k: int, t: float) -> None:
         """Row ``k``: the time ``t`` and the current values."""
-        row = [t]
-        for comp, g in self.groups.items():
-            fmu = self.instances[comp].fmu
-            for typ in _TYPES:
-                vrs = g[typ][1]
-                if vrs:
-                    self.calls(comp, f"fmi2Get{typ}")
-                    row += [float(x) for x in getattr(fmu, f"get{typ}")(vrs)]
-        self.buf[k] = row
+        row = self.buf[k]
+        row[0] = t
+        for comp, io, j0, j1 in self._reads:
+            self.calls(comp, f"fmi2Get{io.typ}")
+            row[j0:j1] = io.get()
 
     def data(self) -> Dict[str, np.ndarray]:
         """Column name -> (N,) array."""

@@ -1,0 +1,81 @@
+"""ArrayIO (spacerobot/system/instance.py): the master's and the recorder's FMI reads and writes
+through preallocated arrays give what fmpy's own getReal/getInteger/setReal give, and a
+refused call raises fmpy's FMICallException (which the runner turns into a SimulationError)."""
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+
+from spacerobot import FMUInstance, Master
+from spacerobot.system.errors import Calls, SimulationError, fmi_errors
+from spacerobot.system.instance import ArrayIO, FMULog
+
+
+@pytest.fixture()
+def pair(planar_fmus):
+    plant = FMUInstance(planar_fmus["plant"], "plant").init()
+    est = FMUInstance(planar_fmus["estimator"], "estimator").init()
+    master = Master({"plant": plant, "estimator": est},
+                    [("plant", n, "estimator", n) for n in est.names("input")])
+    for k in range(3):
+        master.step(0.1 * k, 0.1)
+    yield plant, est
+    plant.free()
+    est.free()
+
+
+def _vrs(inst, causality, typ):
+    return [v.valueReference for v in inst.vars.values()
+            if v.causality == causality and v.type == typ]
+
+
+def test_reads_equal_fmpy(pair):
+    plant, est = pair
+    for inst, typ, get in ((plant, "Real", plant.fmu.getReal), (est, "Real", est.fmu.getReal),
+                           (est, "Integer", est.fmu.getInteger)):
+        vrs = _vrs(inst, "output", typ)
+        assert vrs
+        io = ArrayIO(inst.fmu, typ, vrs)
+        np.testing.assert_array_equal(io.get(), np.array(get(vrs)))
+        assert io.values.dtype == (np.float64 if typ == "Real" else np.int32)
+
+
+def test_write_reaches_the_inputs_and_a_shared_array_wires(pair):
+    plant, est = pair
+    vrs = _vrs(est, "input", "Real")
+    put = ArrayIO(est.fmu, "Real", vrs)
+    put.values[:] = np.linspace(-1.0, 1.0, len(vrs))
+    put.set()
+    np.testing.assert_array_equal(est.fmu.getReal(vrs), put.values)
+    # a get and a set on one array: the set sends what the get read (the master's wiring)
+    src = plant.vrs(est.names("input"))
+    get = ArrayIO(plant.fmu, "Real", src)
+    wire = ArrayIO(est.fmu, "Real", est.vrs(est.names("input")), values=get.values)
+    get.get()
+    wire.set()
+    np.testing.assert_array_equal(est.fmu.getReal(est.vrs(est.names("input"))),
+                                  plant.fmu.getReal(src))
+
+
+def test_refused_call_raises_like_fmpy(pair):
+    plant, _ = pair
+    with pytest.raises(FMICallException) as e:
+        ArrayIO(plant.fmu, "Real", [99999]).get()
+    assert e.value.status >= 3
+    out = _vrs(plant, "output", "Real")[:1]
+    with pytest.raises(FMICallException) as e:
+        ArrayIO(plant.fmu, "Real", out).set()            # an output cannot be set
+    assert e.value.status >= 3
+    calls = Calls()
+    calls("plant", "fmi2GetReal")
+    with pytest.raises(SimulationError, match="'plant' returned .* from fmi2GetReal"):
+        with fmi_errors(calls, FMULog(), {"plant": plant}):
+            ArrayIO(plant.fmu, "Real", [99999]).get()
+
+
+def test_values_of_the_wrong_shape_or_type_are_refused(pair):
+    plant, _ = pair
+    vrs = _vrs(plant, "output", "Real")[:3]
+    with pytest.raises(ValueError, match="values must be"):
+        ArrayIO(plant.fmu, "Real", vrs, values=np.zeros(2))
+    with pytest.raises(ValueError, match="values must be"):
+        ArrayIO(plant.fmu, "Integer", vrs, values=np.zeros(3))
