@@ -618,8 +618,8 @@ NO_EXCITATION = Excitation(att_max=0.0, q_max=0.0)
 class ParameterSet:
     """A named parameter set of the generated SSP: a target and whether the plant excites;
     optionally a propellant, a stop time, and the estimator settings the set is meant for
-    (the ``.ssv`` binds plant parameters only: pass those as ``estimator.<name>=<value>``
-    overrides, ``spacerobot run --set``)."""
+    (``(name, value)`` pairs; the ``.ssv`` binds plant parameters only, so ``spacerobot run
+    --target <set>`` applies them as ``estimator.<name>`` overrides, before ``--set``)."""
 
     target: str
     excited: bool
@@ -629,13 +629,13 @@ class ParameterSet:
     estimator: Tuple[Tuple[str, float], ...] = ()
 
 
-#: the ``depletion`` set's propellant: 100 kg of hydrazine (about 1000 kg/m3: a 0.29 m sphere)
+#: the ``depletion`` set's propellant: 80 kg of hydrazine (about 1000 kg/m3: a 0.27 m sphere)
 #: off the base's centre, Isp 220 s (issue #17: about 0.28 kg per minute per 10 N)
-DEPLETION_PROPELLANT = Propellant(m0=100.0, Isp=220.0, r=(0.3, 0.2, -0.2), R=0.3, arm=1.0)
+DEPLETION_PROPELLANT = Propellant(m0=80.0, Isp=220.0, r=(0.3, 0.2, -0.2), R=0.27, arm=1.0)
 
 #: the estimator settings of the ``depletion`` set: tracking (excitation always on, forgetting
-#: factor below 1; the choice is in benchmarks/DEPLETION.md)
-DEPLETION_ESTIMATOR = (("ident.excite_mode", 2), ("lambda", 0.995), ("method", 2))
+#: factor below 1; the choice, and why the force-based method, in benchmarks/DEPLETION.md)
+DEPLETION_ESTIMATOR = (("ident.excite_mode", 2), ("lambda", 0.98))
 
 
 #: The parameter sets of each robot's SSP (one ``.ssv`` each). The paper's scenarios keep the
@@ -656,11 +656,11 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
         "default": ParameterSet("default", True, "the paper's spatial robot and target, "
                                                  "excitation on request of the estimator"),
         "depletion": ParameterSet("default", True, "the paper's spatial robot and target with "
-                                                   "100 kg of propellant used by the thrusters "
-                                                   "(5 min); meant for tracking: estimator "
-                                                   "ident.excite_mode=2, lambda=0.995, "
-                                                   "method=2", DEPLETION_PROPELLANT, 300.0,
-                                  DEPLETION_ESTIMATOR),
+                                                   "80 kg of propellant used by the thrusters "
+                                                   "(5 min); meant for tracking with the "
+                                                   "force-based method: estimator "
+                                                   "ident.excite_mode=2, lambda=0.98",
+                                  DEPLETION_PROPELLANT, 300.0, DEPLETION_ESTIMATOR),
     },
 }
 

@@ -234,3 +234,29 @@ def test_state_round_trip_keeps_the_propellant():
     got = q.outputs()
     for k in ("m_p", "P_x", "L_x", "base_now", "P", "J"):
         assert np.array_equal(got[k], ref[k]), k
+
+
+# -- the parameter set ---------------------------------------------------------------------------
+
+def test_depletion_parameter_set_is_a_tracking_set():
+    """Spatial, propellant on, excitation on, several minutes; its estimator settings are
+    estimator parameters of the interface (always excite, forgetting factor below 1), and the
+    command line applies them before --set."""
+    from spacerobot.interface import ExciteMode, estimator_vars
+    from spacerobot.robots import NO_EXCITATION, PARAMETER_SETS, parameter_set_scenario
+    from spacerobot.system.cli import set_estimator_overrides
+
+    assert "depletion" not in PARAMETER_SETS["planar"]
+    sc = parameter_set_scenario("spatial", "depletion")
+    assert sc.propellant.active and sc.excitation != NO_EXCITATION and sc.stop_time >= 180.0
+    names = {v.name: v for v in estimator_vars(sc.robot, sc)}
+    settings = dict(PARAMETER_SETS["spatial"]["depletion"].estimator)
+    assert set(settings) <= set(names)
+    assert settings["ident.excite_mode"] == ExciteMode.ALWAYS
+    assert 0.0 < settings["lambda"] < 1.0
+    assert set_estimator_overrides("spatial", "depletion") == {
+        f"estimator.{k}": v for k, v in settings.items()}
+    assert set_estimator_overrides("spatial", "default") == {}
+    # thrust for the whole run: the initial drift is not damped within the stop time
+    P0 = np.linalg.norm(np.array(sc.v0)) * (sc.robot.base.mass + sc.propellant.m0)
+    assert P0 / (math.sqrt(3.0) * sc.controller.F_max) > sc.stop_time
