@@ -183,6 +183,19 @@ def report(sc, rec, table, chosen, wall) -> str:
                      f"{100 * s['final_mass']:.3f} | {share(s['identified'])} | "
                      f"{share(s['covered'])} |")
     s = table[chosen]
+    never = [k for k, v in table.items() if math.isnan(v["t_id"])]
+    if never and all(m == "momentum" for m, _ in never):
+        lines += ["", "The momentum-based equations refer every sample to the first one and assume "
+                  "constant parameters (docs/models.md, \"Propellant\"): with a base that changes "
+                  "they never settle, and the base is never reported identified. The force-based "
+                  "equations hold at every instant with the current base; forgetting bounds the "
+                  "lag behind it."]
+    cov = [v["covered"] for v in table.values() if not math.isnan(v["covered"])]
+    if cov and max(cov) < 0.5:
+        lines += ["", "The reported standard deviations do not include the lag behind a moving "
+                  "truth: after the first identification the base errors are within three "
+                  f"reported standard deviations at {100 * max(cov):.0f} % of the samples at "
+                  "best, and `diag.identified.base` stays 1 even where the error exceeds 0.1 %."]
     lines += [
         "",
         f"Chosen for the `depletion` set: method {chosen[0]}, lambda = {chosen[1]:g} "
@@ -192,6 +205,8 @@ def report(sc, rec, table, chosen, wall) -> str:
         "`DEPLETION.csv`: propellant mass, the base's current truth and the chosen estimator's "
         "base estimates every 0.1 s. `DEPLETION.png`: estimate and truth of the ten base "
         "parameters against time, the chosen lambda beside lambda = 1 (no forgetting).",
+        "",
+        "![estimate and truth of the base against time](DEPLETION.png)",
         "",
     ]
     return "\n".join(lines)
