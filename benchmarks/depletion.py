@@ -36,6 +36,7 @@ from spacerobot.plant import Plant
 from spacerobot.robots import DEPLETION_ESTIMATOR, parameter_set_scenario
 
 SAMPLE = 0.1
+CSV_EVERY = 10          # samples per CSV row (1 s)
 LAMBDAS = (1.0, 0.999, 0.995, 0.99, 0.98, 0.95)
 METHODS = ("force", "momentum")
 BASE = LAYOUT.base
@@ -107,10 +108,10 @@ def write_csv(path: Path, times, est, tru, m_p) -> None:
     with path.open("w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["time", "prop.m"] + [f"truth.{n}" for n in names] + names)
-        for k, t in enumerate(times):
-            w.writerow([f"{t:.1f}", repr(float(m_p[k]))]
-                       + [repr(float(x)) for x in tru[k, BASE.vec]]
-                       + [repr(float(x)) for x in est[k, BASE.vec]])
+        for k in range(0, len(times), CSV_EVERY):
+            w.writerow([f"{times[k]:.1f}", f"{m_p[k]:.12g}"]
+                       + [f"{x:.12g}" for x in tru[k, BASE.vec]]
+                       + [f"{x:.12g}" for x in est[k, BASE.vec]])
 
 
 def plot(path: Path, times, runs: dict, chosen) -> None:
@@ -203,7 +204,7 @@ def report(sc, rec, table, chosen, wall) -> str:
         f"current truth after the first identification (issue #17 asks for 0.1 %).",
         "",
         "`DEPLETION.csv`: propellant mass, the base's current truth and the chosen estimator's "
-        "base estimates every 0.1 s. `DEPLETION.png`: estimate and truth of the ten base "
+        f"base estimates every {CSV_EVERY * SAMPLE:g} s. `DEPLETION.png`: estimate and truth of the ten base "
         "parameters against time, the chosen lambda beside lambda = 1 (no forgetting).",
         "",
         "![estimate and truth of the base against time](DEPLETION.png)",
