@@ -204,7 +204,8 @@ def report(sc, rec, table, chosen, wall) -> str:
         f"current truth after the first identification (issue #17 asks for 0.1 %).",
         "",
         "`DEPLETION.csv`: propellant mass, the base's current truth and the chosen estimator's "
-        f"base estimates every {CSV_EVERY * SAMPLE:g} s. `DEPLETION.png`: estimate and truth of the ten base "
+        f"base estimates every {CSV_EVERY * SAMPLE:g} s. `DEPLETION.png`: estimate and truth "
+        "of the ten base "
         "parameters against time, the chosen lambda beside lambda = 1 (no forgetting).",
         "",
         "![estimate and truth of the base against time](DEPLETION.png)",

@@ -547,10 +547,6 @@ class Propellant:
                          tuple(float(x) for x in (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2],
                                                   I[1, 2])))
 
-    def mass_flow(self, F, M) -> float:
-        """Mass flow [kg/s] of the thrust ``F`` [N] and torque ``M`` [N.m] (inertial axes)."""
-        return (float(np.abs(F).sum()) + float(np.abs(M).sum()) / self.arm) / (self.Isp * G0)
-
 
 @dataclass(frozen=True)
 class Guess:

@@ -26,6 +26,7 @@ import pinocchio as pin
 import pytest
 
 from spacerobot.plant import Plant, kernels
+from spacerobot.plant.simulator import propellant_array, unit_sphere_inertia
 from spacerobot.plant import rigid_body as rb
 from spacerobot.plant.dynamics import build_model
 from spacerobot.robots import G0, Propellant, RigidBody, scenario
@@ -183,10 +184,10 @@ def test_compiled_dynamics_with_the_updated_base_inertia_equals_pinocchio(robot)
     body (the oracle above), at random states and propellant masses."""
     sc = scenario(robot)
     prop = propellant(robot, 100.0)
-    pp = kernels.propellant_array(prop)
+    pp = propellant_array(prop)
     dry_model = build_model(sc.robot, sc.robot.base, sc.target).model
     planar, R, p, axis, I6, mc = rb.chain_arrays(dry_model)
-    I6d, mcd, I6u = I6[0].copy(), mc[0].copy(), kernels.unit_sphere_inertia(pp)
+    I6d, mcd, I6u = I6[0].copy(), mc[0].copy(), unit_sphere_inertia(pp)
     ws = rb.Workspace(dry_model.njoints - 2).arrays()
     rng = np.random.default_rng(17)
     for m_p in (100.0, 42.0, 3.0):

@@ -362,32 +362,9 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
     return 0
 
 
-#: layout of the propellant array ``pp`` (:func:`propellant_array`): 1/(Isp g0) [s/m] (0: no
-#: propellant model), 1/arm [1/m], (2/5) R^2 [m2], tank centre r (base frame) [m]
+#: layout of the propellant array ``pp`` (:func:`.simulator.propellant_array`): 1/(Isp g0)
+#: [s/m] (0: no propellant model), 1/arm [1/m], (2/5) R^2 [m2], tank centre r (base frame) [m]
 PROP_FIELDS = ("k_flow", "inv_arm", "k_sphere", "rx", "ry", "rz")
-
-
-def propellant_array(prop) -> np.ndarray:
-    """The ``pp`` array (:data:`PROP_FIELDS`) of a :class:`spacerobot.robots.Propellant`
-    (all zero when its model is off, ``m0 = 0``)."""
-    if not prop.active:
-        return np.zeros(len(PROP_FIELDS))
-    return np.array([1.0 / (prop.Isp * 9.80665), 1.0 / prop.arm, 0.4 * prop.R * prop.R,
-                     *prop.r], float)
-
-
-def unit_sphere_inertia(pp) -> np.ndarray:
-    """(6, 6) spatial inertia at the base frame origin of 1 kg of propellant (Pinocchio's
-    ``[[m 1, -m [c]x], [m [c]x, I_c - m [c]x [c]x]]`` with ``m = 1``, ``c = r``,
-    ``I_c = (2/5) R^2 1``): spatial inertias add, so the base's is ``I_dry + m_p`` times it."""
-    r = np.asarray(pp[3:6], float)
-    cx = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
-    out = np.zeros((6, 6))
-    out[:3, :3] = np.eye(3)
-    out[:3, 3:] = -cx
-    out[3:, :3] = cx
-    out[3:, 3:] = pp[2] * np.eye(3) - cx @ cx
-    return out
 
 
 @njit(**_NB)
@@ -395,7 +372,8 @@ def base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc):
     """Body 0 (the base) of the compiled model with ``m_p`` [kg] of propellant:
     ``I6[0] = I6d + m_p I6u`` (spatial inertias add), mass ``mc[0, 0] = m_d + m_p`` and CoM
     ``b = b_d + (m_p / m)(r - b_d)``. ``I6d``, ``mcd``: the dry base; ``I6u``:
-    :func:`unit_sphere_inertia`. With ``m_p = 0`` the dry arrays are reproduced exactly."""
+    :func:`.simulator.unit_sphere_inertia`. With ``m_p = 0`` the dry arrays are reproduced
+    exactly."""
     for i in range(6):
         for j in range(6):
             I6[0, i, j] = I6d[i, j] + m_p * I6u[i, j]
@@ -639,8 +617,8 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
     par, q_home, ramp, tab : as in :func:`control`
     prop : tuple ``(pp, I6d, I6u, mcd, parw)``: the propellant (:data:`PROP_FIELDS`; the model
     is off when ``pp[0] = 0``), the dry base's ``I6[0]`` and ``mc[0]``,
-    :func:`unit_sphere_inertia` and a scratch copy of ``par``; with the model on, body 0 of
-    ``mdl`` follows the propellant mass of each stage state (:func:`base_inertia`)
+    :func:`.simulator.unit_sphere_inertia` and a scratch copy of ``par``; with the model on,
+    body 0 of ``mdl`` follows the propellant mass of each stage state (:func:`base_inertia`)
     K, xs, qn, vs, gen, acc, FM, M, nle, hg, ddq, xa : work arrays (the plant's buffers; on
     return ``qn``, ``vs`` hold the configuration of the state reached)
     xout : (nx,) the state reached

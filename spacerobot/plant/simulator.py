@@ -5,9 +5,9 @@ Implementation notes (performance; the equations are those of :mod:`.dynamics` a
 
 * The state lives in one vector ``x = [J (3), H (3), q (nq), v (nv), m_p, P_x (3), L_x (3)]``
   (the last seven: propellant mass and the momentum the expelled propellant carried away,
-  :mod:`.kernels`); the public attributes ``q``, ``v``, ``J``, ``H`` are views of it. Every step makes a new ``x`` (the arrays a caller
-  kept are never changed behind its back); a caller that assigns e.g. ``plant.q = ...`` is
-  noticed at the next step.
+  :mod:`.kernels`); the public attributes ``q``, ``v``, ``J``, ``H`` are views of it. Every
+  step makes a new ``x`` (the arrays a caller kept are never changed behind its back); a
+  caller that assigns e.g. ``plant.q = ...`` is noticed at the next step.
 * A communication step is one compiled call (:func:`.kernels.advance`): per 1 ms RK4 step the
   rigid-body terms (:func:`.rigid_body.terms`) and the control kernel at the start of the step
   (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
@@ -28,7 +28,7 @@ import numpy as np
 
 import pinocchio as pin
 
-from ..robots import Controller, Excitation, Propellant, RigidBody, Robot
+from ..robots import G0, Controller, Excitation, Propellant, RigidBody, Robot
 from . import kernels, rigid_body
 from .dynamics import (PlantModel, base_acceleration, base_generalised_velocity, base_position,
                        base_rotation, base_velocity, build_model, initial_configuration, momentum)
@@ -105,8 +105,8 @@ class Plant:
         # compiled rigid-body model (from the Pinocchio model) and its work space
         self._mdl = rigid_body.chain_arrays(pm.model)[1:]   # (R, p, axis, I6, mc)
         # propellant: its array, the dry base (body 0), 1 kg of propellant, a scratch par
-        pp = kernels.propellant_array(propellant)
-        self._prop = (pp, self._mdl[3][0].copy(), kernels.unit_sphere_inertia(pp),
+        pp = propellant_array(propellant)
+        self._prop = (pp, self._mdl[3][0].copy(), unit_sphere_inertia(pp),
                       self._mdl[4][0].copy(), np.empty_like(self._par))
         self._pin_mp = 0.0         # propellant mass of Pinocchio's base inertia
         self._ws = rigid_body.Workspace(pm.model.njoints - 2).arrays()
@@ -342,6 +342,29 @@ class Plant:
         ref = self.references()
         att[3 - len(ref["att"]):] = ref["att"]
         return {"att_ref": att, "qd_ref": ref["q_d"]}
+
+
+def propellant_array(prop) -> np.ndarray:
+    """The ``pp`` array (:data:`.kernels.PROP_FIELDS`) of a :class:`spacerobot.robots.Propellant`
+    (all zero when its model is off, ``m0 = 0``)."""
+    if not prop.active:
+        return np.zeros(len(kernels.PROP_FIELDS))
+    return np.array([1.0 / (prop.Isp * G0), 1.0 / prop.arm, 0.4 * prop.R * prop.R,
+                     *prop.r], float)
+
+
+def unit_sphere_inertia(pp) -> np.ndarray:
+    """(6, 6) spatial inertia at the base frame origin of 1 kg of propellant (Pinocchio's
+    ``[[m 1, -m [c]x], [m [c]x, I_c - m [c]x [c]x]]`` with ``m = 1``, ``c = r``,
+    ``I_c = (2/5) R^2 1``): spatial inertias add, so the base's is ``I_dry + m_p`` times it."""
+    r = np.asarray(pp[3:6], float)
+    cx = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    out = np.zeros((6, 6))
+    out[:3, :3] = np.eye(3)
+    out[:3, 3:] = -cx
+    out[3:, :3] = cx
+    out[3:, 3:] = pp[2] * np.eye(3) - cx @ cx
+    return out
 
 
 def _restore_plant(args, state) -> Plant:
