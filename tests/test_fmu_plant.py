@@ -166,6 +166,9 @@ BAD_PARAMETERS = [
     ({"base.v0[2]": math.nan}, ["base.v0[2]", "nan"]),
     ({"excite.period": 0.0}, ["excite.period", "> 0"]),
     ({"excite.qd_max": -0.1}, ["excite.qd_max", ">= 0"]),
+    ({"prop.m0": -1.0}, ["prop.m0", ">= 0"]),
+    ({"prop.m0": 10.0, "prop.Isp": 0.0}, ["prop.Isp", "> 0"]),
+    ({"prop.R": -0.1}, ["prop.R", ">= 0"]),
 ]
 
 
