@@ -10,7 +10,7 @@ import numpy as np
 from _spacerobot_plant.fmi.slave import InterfaceSlave, _escape
 from _spacerobot_plant.interface import plant_vars
 from _spacerobot_plant.plant import Plant
-from _spacerobot_plant.robots import Controller, Excitation
+from _spacerobot_plant.robots import Controller, Excitation, Propellant
 from pythonfmu.enums import Fmi2Status
 
 #: longest accepted communication step [s] (1e5 internal steps at the default h)
@@ -42,8 +42,11 @@ class SpaceRobotPlant(InterfaceSlave):
             ex = Excitation(**{k: float(v[f"excite.{k}"]) for k in Excitation.__dataclass_fields__})
             v0 = [float(v[f"base.v0[{i}]"]) for i in (1, 2, 3)]
             w0 = [float(v[f"base.omega0[{i}]"]) for i in (1, 2, 3)]
-            # the core checks the bodies, the controller and excitation bounds and h
-            self.plant = Plant(self.robot, base, target, ctrl, v0, w0, float(v["h"]), ex)
+            prop = Propellant(m0=float(v["prop.m0"]), Isp=float(v["prop.Isp"]),
+                              r=tuple(float(v[f"prop.r[{i}]"]) for i in (1, 2, 3)),
+                              R=float(v["prop.R"]), arm=float(v["prop.arm"]))
+            # the core checks the bodies, the controller, excitation and propellant bounds, h
+            self.plant = Plant(self.robot, base, target, ctrl, v0, w0, float(v["h"]), ex, prop)
         except ValueError as e:
             self._fail(f"invalid plant parameters: {e}")
         self._refresh()

@@ -164,6 +164,43 @@ def plant_vars(robot: Robot, sc: Scenario) -> List[Var]:
                      ("ctrl", name)))
     v.append(Var("h", "parameter", "fixed", "Real", "s", "Internal RK4 step", sc.h, ("h",)))
     v += plant_excitation_vars(sc)
+    v += propellant_vars(sc)
+    return v
+
+
+#: propellant parameters (``prop.<field>`` of robots.Propellant; ``prop.r[1..3]`` the tank
+#: position): unit, description
+PROPELLANT_DOC = {
+    "m0": ("kg", "Initial propellant mass (0 = no propellant model: constant base, "
+                 "unmodelled supply)"),
+    "Isp": ("s", "Specific impulse of the thrusters (mass flow = thrust / (Isp g0))"),
+    "R": ("m", "Radius of the spherical tank (the propellant is a rigid sphere of liquid, "
+               "inertia (2/5) m R^2 about its centre; 0 = point mass)"),
+    "arm": ("m", "Distance between the two thrusters of a torque couple (a torque M_i "
+                 "about an inertial axis costs the thrust abs(M_i) / arm)"),
+}
+
+
+def propellant_vars(sc: Scenario) -> List[Var]:
+    """The plant's propellant parameters and outputs (issue #17): ``prop.*`` and the base's
+    current truth ``truth.base.*`` (the ``base.*`` parameters are the dry base)."""
+    pr = sc.propellant
+    v = [Var(f"prop.{k}", "parameter", "fixed", "Real", unit, doc, float(getattr(pr, k)),
+             ("prop_par", k)) for k, (unit, doc) in PROPELLANT_DOC.items()]
+    v += _vec("prop.r", "prop_r", "m", "Centre of the propellant tank, base frame B (origin S)",
+              "parameter", "fixed", pr.r)
+    v.append(Var("prop.m", "output", "continuous", "Real", "kg", "Propellant mass left (truth)",
+                 None, ("m_p", 0)))
+    v += _vec("prop.P", "P_x", "N.s", "Linear momentum carried away by the expelled propellant "
+              "since t = 0 (it leaves the tank with the tank's motion), inertial frame; "
+              "system.P + prop.P - system.P(0) = thrust.J", "output")
+    v += _vec("prop.L", "L_x", "N.m.s", "Angular momentum about the inertial origin carried "
+              "away by the expelled propellant since t = 0, inertial frame; "
+              "system.L + prop.L - system.L(0) = thrust.H", "output")
+    now = body_param_vars("truth.base", RigidBody(1.0, (0.0, 0.0, 0.0), (1.0,) * 3 + (0.0,) * 3),
+                          "output", "Base now (truth: dry base + propellant left)", "base_now")
+    v += [Var(x.name, "output", "continuous", "Real", x.unit, x.description, None,
+              ("base_now", k)) for k, x in enumerate(now)]
     return v
 
 

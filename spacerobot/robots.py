@@ -476,6 +476,78 @@ class Excitation:
         return tab
 
 
+#: standard gravity [m/s2]: converts a specific impulse [s] into an exhaust velocity
+G0 = 9.80665
+
+
+@dataclass(frozen=True)
+class Propellant:
+    """The base's propellant: one spherical tank whose content is used by the thrusters.
+
+    Model (docs/models.md, "Propellant"): the propellant is a rigid sphere of liquid of mass
+    ``m_p`` centred at ``r`` in the base frame, radius ``R`` (``R = 0``: a point mass), inertia
+    ``(2/5) m_p R^2`` about its centre; it empties uniformly (its centre stays at ``r``). The
+    base is the dry base (the ``base.*`` truth parameters) plus the propellant. The thrusters
+    use ``dm_p/dt = -(|F_x| + |F_y| + |F_z| + (|M_x| + |M_y| + |M_z|) / arm) / (Isp g0)``:
+    one thruster per inertial force axis, and per torque axis a couple of two thrusters
+    ``arm`` apart (together ``|M_i| / arm`` of thrust). When the tank cannot feed a whole
+    internal step the thrust of that step is scaled down so that the tank empties at its end;
+    afterwards the thrusters are silent.
+
+    ``m0 = 0`` switches the model off: the thrusters have an unmodelled supply and the base is
+    constant (the paper's plant, bit for bit).
+
+    Attributes
+    ----------
+    m0 : float     initial propellant mass [kg]
+    Isp : float    specific impulse [s]
+    r : (3,)       tank centre, base frame [m]
+    R : float      tank radius [m]
+    arm : float    distance between the two thrusters of a torque couple [m]
+    """
+
+    m0: float = 0.0
+    Isp: float = 220.0
+    r: Vec3 = (0.0, 0.0, 0.0)
+    R: float = 0.0
+    arm: float = 1.0
+
+    @property
+    def active(self) -> bool:
+        return self.m0 > 0.0
+
+    def check(self) -> None:
+        """Raise ``ValueError`` naming the first parameter out of range."""
+        if not (math.isfinite(self.m0) and self.m0 >= 0.0):
+            raise ValueError(f"prop.m0 must be a finite number >= 0 kg, got {self.m0}")
+        for k in ("Isp", "arm"):
+            val = getattr(self, k)
+            if not (math.isfinite(val) and val > 0.0):
+                raise ValueError(f"prop.{k} must be a finite number > 0, got {val}")
+        if not (math.isfinite(self.R) and self.R >= 0.0):
+            raise ValueError(f"prop.R must be a finite number >= 0 m, got {self.R}")
+        if not all(math.isfinite(float(x)) for x in self.r) or len(self.r) != 3:
+            raise ValueError(f"prop.r must be 3 finite numbers [m], got {list(self.r)}")
+
+    def base(self, dry: RigidBody, m_p: float) -> RigidBody:
+        """The base with ``m_p`` [kg] of propellant: mass, CoM and CoM inertia (base frame).
+
+        ``m = m_d + m_p``; ``b = b_d + (m_p / m)(r - b_d)``;
+        ``I = I_d + m_d S(b_d - b) + (2/5) m_p R^2 1 + m_p S(r - b)``, ``S(d) = |d|^2 1 - d d^T``
+        (parallel axes). With ``m_p = 0`` the result is ``dry`` exactly.
+        """
+        m_p = float(m_p)
+        m = dry.mass + m_p
+        bd, r = np.asarray(dry.com, float), np.asarray(self.r, float)
+        b = bd + (m_p / m) * (r - bd)
+        dd, dp = bd - b, r - b
+        I = (dry.inertia_matrix() + dry.mass * (dd @ dd * np.eye(3) - np.outer(dd, dd))
+             + m_p * ((0.4 * self.R * self.R + dp @ dp) * np.eye(3) - np.outer(dp, dp)))
+        return RigidBody(m, tuple(float(x) for x in b),
+                         tuple(float(x) for x in (I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2],
+                                                  I[1, 2])))
+
+
 @dataclass(frozen=True)
 class Guess:
     """Initial guesses and initial covariances of the estimator (paper §V defaults)."""
@@ -509,6 +581,7 @@ class Scenario:
     h: float = 1e-3
     sample_time: float = 0.1
     stop_time: float = 30.0
+    propellant: Propellant = field(default_factory=Propellant)
 
 
 def scenario_to_dict(sc: Scenario) -> dict:
@@ -524,7 +597,12 @@ def scenario_from_dict(d: dict) -> Scenario:
                     controller=Controller(**d["controller"]),
                     guess=Guess(_body(g["base"]), _body(g["target"]), g["P0_mu"], g["P0_theta"]),
                     h=d["h"], sample_time=d["sample_time"], stop_time=d["stop_time"],
-                    excitation=Excitation(**d.get("excitation", {})))
+                    excitation=Excitation(**d.get("excitation", {})),
+                    propellant=_propellant(d.get("propellant", {})))
+
+
+def _propellant(d: dict) -> Propellant:
+    return Propellant(**{**d, **({"r": tuple(d["r"])} if "r" in d else {})})
 
 
 #: An excitation with zero amplitudes: whatever level is requested, the plant moves as the
@@ -534,11 +612,26 @@ NO_EXCITATION = Excitation(att_max=0.0, q_max=0.0)
 
 @dataclass(frozen=True)
 class ParameterSet:
-    """A named parameter set of the generated SSP: a target and whether the plant excites."""
+    """A named parameter set of the generated SSP: a target and whether the plant excites;
+    optionally a propellant, a stop time, and the estimator settings the set is meant for
+    (``(name, value)`` pairs; the ``.ssv`` binds plant parameters only, so ``spacerobot run
+    --target <set>`` applies them as ``estimator.<name>`` overrides, before ``--set``)."""
 
     target: str
     excited: bool
     description: str
+    propellant: Propellant = field(default_factory=Propellant)
+    stop_time: Optional[float] = None
+    estimator: Tuple[Tuple[str, float], ...] = ()
+
+
+#: the ``depletion`` set's propellant: 80 kg of hydrazine (about 1000 kg/m3: a 0.27 m sphere)
+#: off the base's centre, Isp 220 s (issue #17: about 0.28 kg per minute per 10 N)
+DEPLETION_PROPELLANT = Propellant(m0=80.0, Isp=220.0, r=(0.3, 0.2, -0.2), R=0.27, arm=1.0)
+
+#: the estimator settings of the ``depletion`` set: tracking (excitation always on, forgetting
+#: factor below 1; the choice, and why the force-based method, in benchmarks/DEPLETION.md)
+DEPLETION_ESTIMATOR = (("ident.excite_mode", 2), ("lambda", 0.98))
 
 
 #: The parameter sets of each robot's SSP (one ``.ssv`` each). The paper's scenarios keep the
@@ -558,6 +651,12 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
         "paper": ParameterSet("default", False, "the paper's spatial scenario, no excitation"),
         "default": ParameterSet("default", True, "the paper's spatial robot and target, "
                                                  "excitation on request of the estimator"),
+        "depletion": ParameterSet("default", True, "the paper's spatial robot and target with "
+                                                   "80 kg of propellant used by the thrusters "
+                                                   "(5 min); meant for tracking with the "
+                                                   "force-based method: estimator "
+                                                   "ident.excite_mode=2, lambda=0.98",
+                                  DEPLETION_PROPELLANT, 300.0, DEPLETION_ESTIMATOR),
     },
 }
 
@@ -572,7 +671,8 @@ def parameter_set_scenario(robot: str, name: str) -> Scenario:
     ps = sets[name]
     sc = scenario(robot, ps.target)
     return replace(sc, name=f"{robot_label(robot)}-{name}",
-                   excitation=sc.excitation if ps.excited else NO_EXCITATION)
+                   excitation=sc.excitation if ps.excited else NO_EXCITATION,
+                   propellant=ps.propellant, stop_time=ps.stop_time or sc.stop_time)
 
 
 def excitation_within_limits(robot: Robot, excitation: Excitation = Excitation()) -> Excitation:

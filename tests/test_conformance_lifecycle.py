@@ -97,6 +97,14 @@ def test_plant_lifecycle_and_outputs_equal_the_core(robot_fmus):
     expected["excite.level"] = out["excite_level"][0]     # issue #12 (excitation off: 0)
     for i in range(3):
         expected[f"excite.att_ref[{i + 1}]"] = out["att_ref"][i]
+    # issue #17 (no propellant model: m = 0, nothing expelled, the base is the dry base)
+    expected["prop.m"] = out["m_p"][0]
+    for i in range(3):
+        expected[f"prop.P[{i + 1}]"] = out["P_x"][i]
+        expected[f"prop.L[{i + 1}]"] = out["L_x"][i]
+    for k, nm in enumerate(("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz",
+                            "Iyz")):
+        expected[f"truth.base.{nm}"] = out["base_now"][k]
     assert set(expected) == set(fmu_out)
     assert_same({k: fmu_out[k] for k in expected}, {k: float(v) for k, v in expected.items()},
                 "FMU vs core")

@@ -22,7 +22,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from conftest import assert_initialisation_fails, started_slave
 from spacerobot.plant import Plant
-from spacerobot.robots import RigidBody, inertia_matrix, scenario
+from spacerobot.robots import Propellant, RigidBody, inertia_matrix, scenario
 
 FMI_DISCARD, FMI_WARNING = 2, 1
 
@@ -37,12 +37,19 @@ OUTPUT_KEYS = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "o
                "base.a": "a_S", "base.alpha": "alpha_B", "arm.q": "q", "arm.qd": "qd",
                "arm.qdd": "qdd", "thrust.F": "F", "thrust.M": "M", "thrust.J": "J",
                "thrust.H": "H", "system.P": "P", "system.L": "L", "arm.tau": "tau",
-               "excite.att_ref": "att_ref", "excite.qd_ref": "qd_ref"}
+               "excite.att_ref": "att_ref", "excite.qd_ref": "qd_ref", "prop.P": "P_x",
+               "prop.L": "L_x"}
+#: the base's current truth (issue #17): core ``base_now`` = [m, b (3), Ixx .. Iyz]
+TRUTH_BASE = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 
 def core_value(out: dict, name: str) -> float:
     if name == "excite.level":
         return float(out["excite_level"][0])
+    if name == "prop.m":
+        return float(out["m_p"][0])
+    if name.startswith("truth.base."):
+        return float(out["base_now"][TRUTH_BASE.index(name[len("truth.base."):])])
     m = re.fullmatch(r"([a-z]+\.[A-Za-z_]+)\[(\d+)(?:,(\d+))?\]", name)
     assert m, name
     arr = out[OUTPUT_KEYS[m.group(1)]]
@@ -58,7 +65,8 @@ def _spatial_case():
     target = RigidBody(320.0, (0.12, -0.07, 0.31), (30.0, 25.0, 20.0, 1.5, -2.0, 0.8))
     base = RigidBody(480.0, (0.05, 0.02, -0.04), (80.0, 90.0, 85.0, -1.0, 0.5, 2.0))
     return dict(base=base, target=target, v0=(1.0, -2.0, 0.5), omega0=(0.05, -0.1, 0.2),
-                F_max=7.0, M_max=6.0, K_D=0.8, K_P=0.3)
+                F_max=7.0, M_max=6.0, K_D=0.8, K_P=0.3,
+                prop=Propellant(m0=40.0, Isp=200.0, r=(0.25, -0.1, 0.3), R=0.2, arm=0.8))
 
 
 def _params(case) -> dict:
@@ -75,6 +83,10 @@ def _params(case) -> dict:
         p[f"base.omega0[{i + 1}]"] = case["omega0"][i]
     for k in ("F_max", "M_max", "K_D", "K_P"):
         p[k] = case[k]
+    if "prop" in case:
+        pr = case["prop"]
+        p.update({"prop.m0": pr.m0, "prop.Isp": pr.Isp, "prop.R": pr.R, "prop.arm": pr.arm})
+        p.update({f"prop.r[{i + 1}]": pr.r[i] for i in range(3)})
     return p
 
 
@@ -85,12 +97,13 @@ def test_fmu_outputs_equal_core(spatial_fmus):
     sc = scenario("spatial")
     ctrl = dataclasses.replace(sc.controller, F_max=case["F_max"], M_max=case["M_max"],
                                K_D=case["K_D"], K_P=case["K_P"])
-    core = Plant(sc.robot, case["base"], case["target"], ctrl, case["v0"], case["omega0"], sc.h)
+    core = Plant(sc.robot, case["base"], case["target"], ctrl, case["v0"], case["omega0"], sc.h,
+                 propellant=case["prop"])
     s = started_slave(spatial_fmus["plant"], _params(case), "plant")
     outs = s.names("output")
-    # 12 three-vectors (r v omega a alpha F M J H P L att_ref), the DCM, q qd qdd tau qd_ref,
-    # excite.level
-    assert len(outs) == 12 * 3 + 9 + 5 * sc.robot.n_joints + 1
+    # 14 three-vectors (r v omega a alpha F M J H P L att_ref, prop.P prop.L), the DCM,
+    # q qd qdd tau qd_ref, excite.level, prop.m, the 10 truth.base parameters
+    assert len(outs) == 14 * 3 + 9 + 5 * sc.robot.n_joints + 1 + 1 + 10
     t = 0.0
     try:
         for dt in (None, 0.1005, 0.2995, 0.1):
@@ -106,6 +119,7 @@ def test_fmu_outputs_equal_core(spatial_fmus):
                                            n for n, a, b in zip(outs, got, want)
                                            if not np.isclose(a, b, rtol=1e-12, atol=1e-12)))
         assert abs(core.t - 0.5) < 1e-12
+        assert s.get("prop.m") < case["prop"].m0 - 0.01       # the propellant was used
         # the non-default parameters did reach the core: the default run differs
         default = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)
         assert np.abs(default.outputs()["P"] - o["P"]).max() > 1.0
@@ -152,6 +166,9 @@ BAD_PARAMETERS = [
     ({"base.v0[2]": math.nan}, ["base.v0[2]", "nan"]),
     ({"excite.period": 0.0}, ["excite.period", "> 0"]),
     ({"excite.qd_max": -0.1}, ["excite.qd_max", ">= 0"]),
+    ({"prop.m0": -1.0}, ["prop.m0", ">= 0"]),
+    ({"prop.m0": 10.0, "prop.Isp": 0.0}, ["prop.Isp", "> 0"]),
+    ({"prop.R": -0.1}, ["prop.R", ">= 0"]),
 ]
 
 

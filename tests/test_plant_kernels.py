@@ -282,7 +282,8 @@ def test_compiled_kernels_are_reused_by_a_new_process(tmp_path):
         "p.advance(0.01)\n"
         "p.outputs()\n"
         "st = {k: [sum(getattr(f.stats, 'cache_' + w).values()) for w in ('hits', 'misses')]\n"
-        "      for k, f in (('control', kernels.control), ('advance', kernels.advance),\n"
+        "      for k, f in (('thrust_control', kernels.thrust_control),\n"
+        "                   ('advance', kernels.advance),\n"
         "                   ('terms', rigid_body.terms))}\n"
         "print(json.dumps({'file': kernels.__file__, 'stats': st, 'x': p.q.tolist()}))\n")
     env = dict(os.environ, SPACEROBOT_CACHE_DIR=str(tmp_path))
@@ -290,8 +291,8 @@ def test_compiled_kernels_are_reused_by_a_new_process(tmp_path):
                                       capture_output=True, text=True).stdout.splitlines()[-1])
             for _ in range(2)]
     assert all(Path(r["file"]).is_relative_to(tmp_path) for r in runs)
-    assert runs[0]["stats"]["control"][1] >= 1                 # compiled (cache miss)
-    for name in ("control", "advance", "terms"):
+    assert runs[0]["stats"]["thrust_control"][1] >= 1          # compiled (cache miss)
+    for name in ("thrust_control", "advance", "terms"):
         hits, misses = runs[1]["stats"][name]
         assert hits >= 1 and misses == 0
     assert list((tmp_path).glob("kernels-*/__pycache__/*.nbi"))

@@ -338,6 +338,21 @@ def test_named_parameter_set_replaces_the_bound_one(systems, planar_baseline):
         run_ssp(systems["planar"]["ssp"], parameter_set="huge", stop_time=0.5)
 
 
+def test_depletion_set_runs_and_its_truth_is_the_current_base(systems):
+    """Spatial set ``depletion`` (issue #17) through the SSP: the plant uses propellant, and the
+    run's truth of a base parameter is the plant's current ``truth.base.*`` output, not the
+    dry-base parameter of the same name."""
+    res = run_ssp(systems["spatial"]["ssp"], parameter_set="depletion", stop_time=1.0,
+                  progress=False)
+    d = res.data
+    dry = ROBOTS["spatial"].base.mass
+    assert d["plant.prop.m"][0] == 80.0 and d["plant.prop.m"][-1] < 80.0 - 0.01
+    assert d["plant.truth.base.m"][-1] == pytest.approx(dry + d["plant.prop.m"][-1], rel=1e-15)
+    assert res.truth["base.m"] == d["plant.truth.base.m"][-1] != dry
+    assert res.truth["base.b[1]"] == d["plant.truth.base.b[1]"][-1]
+    assert res.truth["target.m"] == TARGETS["spatial"]["default"].mass
+
+
 def test_overrides_reach_both_components(systems, planar_baseline):
     res = run_ssp(systems["planar"]["ssp"], stop_time=1.0, progress=False,
                   overrides={"plant.base.v0[1]": 5.0, "estimator.method": 2})

@@ -16,8 +16,13 @@ The equations are the paper's (docs/models.md, "Controllers") and those of :mod:
 * the optional excitation (issue #12): eq. 39 about a multi-sine attitude reference and the
   posture term about a multi-sine joint reference, scaled by a ramped level
   (:func:`ramp_level`, :func:`channel`, :func:`reference`; design in ``docs/models.md``);
-* state derivative ``[dJ = F, dH = M + r_S x F, dq/dt, dv/dt]`` with ``dq/dt`` of the root
-  joint written out (quaternion / (cos, sin) kinematics), so classic RK4 applies unchanged.
+* state derivative ``[dJ = F, dH = M + r_S x F, dq/dt, dv/dt, dm_p/dt, dP_x/dt, dL_x/dt]``
+  with ``dq/dt`` of the root joint written out (quaternion / (cos, sin) kinematics), so
+  classic RK4 applies unchanged;
+* the propellant (issue #17, :class:`spacerobot.robots.Propellant`): the base's spatial
+  inertia follows the propellant mass ``m_p`` (:func:`base_inertia`, at every stage), the
+  thrust uses propellant (:func:`thrust_control`), and the expelled mass carries away the
+  momentum ``P_x``, ``L_x`` of the tank's rigid motion (:func:`stage`).
 
 Parameters that are arrays are written in place (the plant's preallocated buffers); every
 kernel returns 0, or a positive code for a singular matrix (see :data:`ERRORS`). A non-finite
@@ -357,8 +362,116 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
     return 0
 
 
+#: layout of the propellant array ``pp`` (:func:`.simulator.propellant_array`): 1/(Isp g0)
+#: [s/m] (0: no propellant model), 1/arm [1/m], (2/5) R^2 [m2], tank centre r (base frame) [m]
+PROP_FIELDS = ("k_flow", "inv_arm", "k_sphere", "rx", "ry", "rz")
+
+
 @njit(**_NB)
-def stage(planar, i, x, xa, a, K, FM, dt, xs, qn, vs, gen, xn):
+def base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc):
+    """Body 0 (the base) of the compiled model with ``m_p`` [kg] of propellant:
+    ``I6[0] = I6d + m_p I6u`` (spatial inertias add), mass ``mc[0, 0] = m_d + m_p`` and CoM
+    ``b = b_d + (m_p / m)(r - b_d)``. ``I6d``, ``mcd``: the dry base; ``I6u``:
+    :func:`.simulator.unit_sphere_inertia`. With ``m_p = 0`` the dry arrays are reproduced
+    exactly."""
+    for i in range(6):
+        for j in range(6):
+            I6[0, i, j] = I6d[i, j] + m_p * I6u[i, j]
+    m = mcd[0] + m_p
+    mc[0, 0] = m
+    f = m_p / m
+    for i in range(3):
+        mc[0, 1 + i] = mcd[1 + i] + f * (pp[3 + i] - mcd[1 + i])
+
+
+@njit(**_NB)
+def mass_flow(FM, pp):
+    """Propellant mass flow [kg/s] of the thrust ``FM = [F, M]``:
+    ``(|F_x| + |F_y| + |F_z| + (|M_x| + |M_y| + |M_z|) / arm) / (Isp g0)``."""
+    return (abs(FM[0]) + abs(FM[1]) + abs(FM[2])
+            + (abs(FM[3]) + abs(FM[4]) + abs(FM[5])) * pp[1]) * pp[0]
+
+
+@njit(**_NB)
+def thrust_control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp, m_p,
+                   dt, parw):
+    """:func:`control` limited by the propellant ``m_p`` [kg] available for a step of ``dt``.
+
+    Writes ``FM[6]`` = the mass flow of the thrust applied [kg/s] (0 without propellant model,
+    ``pp[0] = 0``). When the flow would need more than ``m_p`` in ``dt``, the thrust is scaled
+    by ``s = m_p / (flow dt)`` (the tank empties at the end of the step; ``s = 0`` once empty):
+    :func:`control` runs again with the gains and bounds of the two thruster laws scaled by
+    ``s`` (``bounded_law`` is then ``s`` times the unscaled one), so that the accelerations
+    and joint torques are those of the scaled thrust. ``parw`` (11,) scratch.
+    """
+    err = control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM)
+    if err or pp[0] == 0.0:
+        FM[6] = 0.0
+        return err
+    flow = mass_flow(FM, pp)
+    need = flow * dt
+    if need > m_p:
+        s = max(m_p, 0.0) / need
+        for i in range(par.shape[0]):
+            parw[i] = par[i]
+        for i in (0, 2, 3, 5):           # K_F, F_max, K_M, M_max
+            parw[i] *= s
+        err = control(planar, q, v, M, nle, hg, parw, q_home, t, ramp, tab, gen, acc, FM)
+        flow = mass_flow(FM, pp)
+    FM[6] = flow
+    return err
+
+
+@njit(**_NB)
+def _propellant_rates(planar, xa, flow, pp, ov, nv, row):
+    """Rows ``[dm_p, dP_x (3), dL_x (3)]`` of the state derivative at the stage state ``xa``
+    (after ``J, H, q, v``), for the mass flow ``flow`` [kg/s] (see :func:`stage`)."""
+    o = ov + nv
+    row[o] = -flow                       # dm_p/dt
+    if flow == 0.0:
+        for j in range(1, 7):
+            row[o + j] = 0.0
+        return
+    oq = 6
+    rtx, rty, rtz = pp[3], pp[4], pp[5]
+    if planar:
+        c, s = xa[oq + 2], xa[oq + 3]
+        k = 1.0 / math.hypot(c, s)
+        a00, a01, a02, a10, a11, a12, a20, a21, a22 = c * k, -s * k, 0.0, s * k, c * k, 0.0, \
+            0.0, 0.0, 1.0
+        rx, ry, rz = xa[oq], xa[oq + 1], 0.0
+        vx, vy, vz, wx, wy, wz = xa[ov], xa[ov + 1], 0.0, 0.0, 0.0, xa[ov + 2]
+    else:
+        a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(xa[oq + 3], xa[oq + 4],
+                                                               xa[oq + 5], xa[oq + 6])
+        rx, ry, rz = xa[oq], xa[oq + 1], xa[oq + 2]
+        vx, vy, vz, wx, wy, wz = (xa[ov], xa[ov + 1], xa[ov + 2], xa[ov + 3], xa[ov + 4],
+                                  xa[ov + 5])
+    # tank centre velocity, base frame: u = v_l + omega_B x r_t; inertial v_c = A u
+    ux = vx + (wy * rtz - wz * rty)
+    uy = vy + (wz * rtx - wx * rtz)
+    uz = vz + (wx * rty - wy * rtx)
+    vcx = a00 * ux + a01 * uy + a02 * uz
+    vcy = a10 * ux + a11 * uy + a12 * uz
+    vcz = a20 * ux + a21 * uy + a22 * uz
+    # tank centre r_c = r_S + A r_t; omega_I = A omega_B
+    cx = rx + a00 * rtx + a01 * rty + a02 * rtz
+    cy = ry + a10 * rtx + a11 * rty + a12 * rtz
+    cz = rz + a20 * rtx + a21 * rty + a22 * rtz
+    k2 = pp[2]
+    wix = a00 * wx + a01 * wy + a02 * wz
+    wiy = a10 * wx + a11 * wy + a12 * wz
+    wiz = a20 * wx + a21 * wy + a22 * wz
+    row[o + 1] = flow * vcx              # dP_x = flow v_c
+    row[o + 2] = flow * vcy
+    row[o + 3] = flow * vcz
+    row[o + 4] = flow * (cy * vcz - cz * vcy + k2 * wix)   # dL_x = flow (r_c x v_c + k2 w_I)
+    row[o + 5] = flow * (cz * vcx - cx * vcz + k2 * wiy)
+    row[o + 6] = flow * (cx * vcy - cy * vcx + k2 * wiz)
+
+
+@njit(**_NB)
+def stage(planar, i, x, xa, a, K, FM, dt, xs, qn, vs, gen, xn, pp):
     """RK4 stage ``i`` (0..3) of a step of length ``dt`` from ``x``.
 
     ``xa`` is the stage state at which ``a`` (= dv/dt) was evaluated (``x`` itself for stage
@@ -368,7 +481,11 @@ def stage(planar, i, x, xa, a, K, FM, dt, xs, qn, vs, gen, xn):
     ``gen[:nb]`` (the joint torques in ``gen[nb:]`` are held). For ``i = 3`` it writes the new
     state into ``xn`` (unit quaternion / (cos, sin) restored) and ``qn``, ``vs`` of it.
 
-    State layout: ``x = [J (3), H (3), q (nq), v (nv)]``.
+    State layout: ``x = [J (3), H (3), q (nq), v (nv), m_p, P_x (3), L_x (3)]``: the
+    propellant mass and the momentum the expelled propellant carried away (inertial, about
+    the inertial origin): it leaves the tank with the tank's rigid motion, so
+    ``dP_x = flow v_c``, ``dL_x = flow (r_c x v_c + (2/5) R^2 omega)`` (``r_c``, ``v_c``:
+    tank centre; ``flow = FM[6]``, ``pp``: :data:`PROP_FIELDS`).
     """
     nq = qn.shape[0]
     nv = vs.shape[0]
@@ -412,6 +529,7 @@ def stage(planar, i, x, xa, a, K, FM, dt, xs, qn, vs, gen, xn):
         row[j] = xa[ov + nb + j - nsc]
     for j in range(nv):                  # dv/dt
         row[ov + j] = a[j]
+    _propellant_rates(planar, xa, FM[6], pp, ov, nv, row)
     nx = x.shape[0]
     if i < 3:
         f = dt if i == 2 else 0.5 * dt
@@ -479,8 +597,8 @@ def load(planar, x, qn, vs):
 
 
 @njit(**_NB)
-def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, K, xs, qn, vs,
-            gen, acc, FM, M, nle, hg, ddq, xa, xout):
+def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, prop, K, xs, qn,
+            vs, gen, acc, FM, M, nle, hg, ddq, xa, xout):
     """``n_steps`` RK4 steps of length ``h``, then one of length ``rest`` if ``rest > 0``, from
     the state ``x`` at time ``t``: the plant's whole communication step in one call.
 
@@ -494,9 +612,13 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, K, 
     planar : bool
     mdl : tuple ``(R, p, axis, I6, mc)`` of :func:`.rigid_body.chain_arrays`
     ws : tuple, the work arrays of :class:`.rigid_body.Workspace`
-    x : (nx,) state ``[J, H, q, v]``; ``qn``, ``vs`` must hold its normalised configuration
-    and velocity (:func:`load`)
+    x : (nx,) state ``[J, H, q, v, m_p, P_x, L_x]`` (:func:`stage`); ``qn``, ``vs`` must hold
+    its normalised configuration and velocity (:func:`load`)
     par, q_home, ramp, tab : as in :func:`control`
+    prop : tuple ``(pp, I6d, I6u, mcd, parw)``: the propellant (:data:`PROP_FIELDS`; the model
+    is off when ``pp[0] = 0``), the dry base's ``I6[0]`` and ``mc[0]``,
+    :func:`.simulator.unit_sphere_inertia` and a scratch copy of ``par``; with the model on,
+    body 0 of ``mdl`` follows the propellant mass of each stage state (:func:`base_inertia`)
     K, xs, qn, vs, gen, acc, FM, M, nle, hg, ddq, xa : work arrays (the plant's buffers; on
     return ``qn``, ``vs`` hold the configuration of the state reached)
     xout : (nx,) the state reached
@@ -506,28 +628,36 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, K, 
     """
     R, p, axis, I6, mc = mdl
     X, oR, op, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    pp, I6d, I6u, mcd, parw = prop
     nx = x.shape[0]
+    om = 6 + qn.shape[0] + vs.shape[0]   # m_p in the state
+    on = pp[0] != 0.0
     for j in range(nx):
         xa[j] = x[j]
     total = n_steps + (1 if rest > 0.0 else 0)
     for k in range(total):
         dt = h if k < n_steps else rest
+        if on:
+            base_inertia(xa[om], pp, I6d, I6u, mcd, I6, mc)
         terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, X, oR, op, vel, cb, IA, pA, accb, U,
               Du, M6, v6)
-        err = control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM)
+        err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM,
+                             pp, xa[om], dt, parw)
         if err:
             for j in range(nx):
                 xout[j] = xa[j]
             return err, t
-        stage(planar, 0, xa, xa, acc, K, FM, dt, xs, qn, vs, gen, xout)
+        stage(planar, 0, xa, xa, acc, K, FM, dt, xs, qn, vs, gen, xout, pp)
         for i in range(1, 4):
+            if on:
+                base_inertia(xs[om], pp, I6d, I6u, mcd, I6, mc)
             if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, X, oR, op, vel, cb, IA, pA, accb, U,
                    Du, M6, v6):
                 for j in range(nx):
                     xout[j] = xa[j]
                 load(planar, xa, qn, vs)
                 return 4, t
-            stage(planar, i, xa, xs, ddq, K, FM, dt, xs, qn, vs, gen, xout)
+            stage(planar, i, xa, xs, ddq, K, FM, dt, xs, qn, vs, gen, xout, pp)
         for j in range(nx):            # the stage kernel left xout's configuration in qn, vs
             xa[j] = xout[j]
         t += dt

@@ -3,17 +3,21 @@
 Implementation notes (performance; the equations are those of :mod:`.dynamics` and
 :mod:`.kernels`):
 
-* The state lives in one vector ``x = [J (3), H (3), q (nq), v (nv)]``; the public attributes
-  ``q``, ``v``, ``J``, ``H`` are views of it. Every step makes a new ``x`` (the arrays a caller
-  kept are never changed behind its back); a caller that assigns e.g. ``plant.q = ...`` is
-  noticed at the next step.
+* The state lives in one vector ``x = [J (3), H (3), q (nq), v (nv), m_p, P_x (3), L_x (3)]``
+  (the last seven: propellant mass and the momentum the expelled propellant carried away,
+  :mod:`.kernels`); the public attributes ``q``, ``v``, ``J``, ``H`` are views of it. Every
+  step makes a new ``x`` (the arrays a caller kept are never changed behind its back); a
+  caller that assigns e.g. ``plant.q = ...`` is noticed at the next step.
 * A communication step is one compiled call (:func:`.kernels.advance`): per 1 ms RK4 step the
   rigid-body terms (:func:`.rigid_body.terms`) and the control kernel at the start of the step
   (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
   times the compiled articulated-body algorithm (:func:`.rigid_body.aba`) followed by the stage
   kernel, which also forms the next stage state and the combination of the four stages. The
   compiled model's arrays are read from the Pinocchio model (:func:`.rigid_body.chain_arrays`);
-  Pinocchio still gives the momentum outputs once per communication step.
+  Pinocchio still gives the momentum outputs once per communication step. With a propellant
+  model (:class:`~spacerobot.robots.Propellant`, ``m0 > 0``) the compiled base inertia
+  follows the propellant mass inside the compiled call, and Pinocchio's base inertia is set to
+  the current one before the momentum outputs.
 """
 from __future__ import annotations
 
@@ -22,7 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..robots import Controller, Excitation, RigidBody, Robot
+import pinocchio as pin
+
+from ..robots import G0, Controller, Excitation, Propellant, RigidBody, Robot
 from . import kernels, rigid_body
 from .dynamics import (PlantModel, base_acceleration, base_generalised_velocity, base_position,
                        base_rotation, base_velocity, build_model, initial_configuration, momentum)
@@ -52,18 +58,24 @@ class Plant:
     excitation : Excitation
         bounds and frequencies of the excitation motion; its level starts at 0 (the paper's
         behaviour) and follows :meth:`set_excitation`
+    propellant : Propellant
+        the base's propellant; ``base`` is then the dry base. The default (``m0 = 0``) is the
+        paper's constant base.
     """
 
     def __init__(self, robot: Robot, base: RigidBody, target: RigidBody, controller: Controller,
-                 v0, omega0, h: float = 1e-3, excitation: Excitation = Excitation()):
+                 v0, omega0, h: float = 1e-3, excitation: Excitation = Excitation(),
+                 propellant: Propellant = Propellant()):
         if not (0.0 < h <= 1.0):
             raise ValueError(f"h must be in (0, 1] s, got {h}")
         base.check("base")
         target.check("target")
         controller.check()
         excitation.check()
+        propellant.check()
         self._init_args = (robot, base, target, controller, tuple(v0), tuple(omega0), h,
-                           excitation)
+                           excitation, propellant)
+        self.propellant = propellant
         self.excitation = excitation
         self.pm: PlantModel = build_model(robot, base, target)
         self.data = self.pm.model.createData()
@@ -80,17 +92,23 @@ class Plant:
         pm = self.pm
         self._nq, self._nv = pm.model.nq, pm.model.nv
         self._oq, self._ov = 6, 6 + self._nq                 # offsets of q and v in x
-        nx = self._ov + self._nv
+        self._om = self._ov + self._nv                       # offset of [m_p, P_x, L_x]
+        nx = self._om + 7
         self._K = np.empty((4, nx))                          # the four stage derivatives
         self._xs = np.empty(nx)                              # stage state
         self._qn = np.empty(self._nq)                        # stage configuration (unit quat.)
         self._vs = np.empty(self._nv)                        # stage velocity
         self._gen = np.zeros(self._nv)                       # generalised force [f_b, tau]
         self._acc = np.zeros(self._nv)                       # dv/dt under the held controls
-        self._FM = np.zeros(6)                               # thrust [F, M], inertial
+        self._FM = np.zeros(7)                     # thrust [F, M], inertial; mass flow [kg/s]
         self._par = np.array([getattr(controller, k) for k in kernels.PARAMS], float)
         # compiled rigid-body model (from the Pinocchio model) and its work space
         self._mdl = rigid_body.chain_arrays(pm.model)[1:]   # (R, p, axis, I6, mc)
+        # propellant: its array, the dry base (body 0), 1 kg of propellant, a scratch par
+        pp = propellant_array(propellant)
+        self._prop = (pp, self._mdl[3][0].copy(), unit_sphere_inertia(pp),
+                      self._mdl[4][0].copy(), np.empty_like(self._par))
+        self._pin_mp = 0.0         # propellant mass of Pinocchio's base inertia
         self._ws = rigid_body.Workspace(pm.model.njoints - 2).arrays()
         self._M = np.zeros((self._nv, self._nv))
         self._nle = np.zeros(self._nv)
@@ -102,7 +120,7 @@ class Plant:
         self._ex_tab = excitation.channels(1 if robot.planar else 3, self.pm.n)
         self._ramp = np.array([0.0, 0.0, 0.0, excitation.ramp])
         self.t = 0.0
-        self._x = np.concatenate([np.zeros(6), q, v])
+        self._x = np.concatenate([np.zeros(6), q, v, [propellant.m0], np.zeros(6)])
         self._publish()
         self._u: Controls | None = None
         self._loaded = None        # the state vector whose configuration is in _qn, _vs
@@ -121,9 +139,14 @@ class Plant:
     # -- state -----------------------------------------------------------------------------
     def _publish(self) -> None:
         """Make the public state attributes views of the current state vector."""
-        x, oq, ov = self._x, self._oq, self._ov
-        self.J, self.H, self.q, self.v = x[0:3], x[3:6], x[oq:ov], x[ov:]
+        x, oq, ov, om = self._x, self._oq, self._ov, self._om
+        self.J, self.H, self.q, self.v = x[0:3], x[3:6], x[oq:ov], x[ov:om]
         self._pub = (self.J, self.H, self.q, self.v)
+
+    @property
+    def m_p(self) -> float:
+        """Propellant mass now [kg] (0 without propellant model)."""
+        return float(self._x[self._om])
 
     def _collect(self) -> np.ndarray:
         """The state vector, rebuilt if a caller replaced one of the public attributes."""
@@ -131,7 +154,8 @@ class Plant:
         if (self.J is not pub[0] or self.H is not pub[1] or self.q is not pub[2]
                 or self.v is not pub[3]):
             self._x = np.concatenate([np.asarray(self.J, float), np.asarray(self.H, float),
-                                      np.asarray(self.q, float), np.asarray(self.v, float)])
+                                      np.asarray(self.q, float), np.asarray(self.v, float),
+                                      self._x[self._om:]])
             self._publish()
         return self._x
 
@@ -139,7 +163,8 @@ class Plant:
         """A deep copy of everything that determines the future (controls are derived)."""
         self._collect()
         return {"t": self.t, "q": self.q.copy(), "v": self.v.copy(), "J": self.J.copy(),
-                "H": self.H.copy(), "excite_ramp": self._ramp.copy()}
+                "H": self.H.copy(), "excite_ramp": self._ramp.copy(),
+                "prop": self._x[self._om:].copy()}
 
     def set_state(self, s: dict) -> None:
         self.t = float(s["t"])
@@ -148,6 +173,10 @@ class Plant:
         J = np.array(s["J"], float)
         H = np.array(s["H"], float)
         ramp = np.array(s.get("excite_ramp", [0.0, 0.0, 0.0, self.excitation.ramp]), float)
+        prop = np.array(s.get("prop", [self.propellant.m0, 0, 0, 0, 0, 0, 0]), float)
+        if prop.shape != (7,) or not np.all(np.isfinite(prop)):
+            raise ValueError(f"propellant state must be 7 finite numbers [m_p, P_x, L_x], "
+                             f"got {prop}")
         if q.shape != (self._nq,) or v.shape != (self._nv,) or J.shape != (3,) or H.shape != (3,):
             raise ValueError(f"state shapes q {q.shape}, v {v.shape}, J {J.shape}, H {H.shape} "
                              f"do not fit this plant (nq = {self._nq}, nv = {self._nv})")
@@ -155,7 +184,7 @@ class Plant:
             raise ValueError(f"excitation ramp state must be 4 finite numbers [s0, u, t0, T > 0], "
                              f"got {ramp}")
         self._ramp = ramp
-        self._x = np.concatenate([J, H, q, v])
+        self._x = np.concatenate([J, H, q, v, prop])
         self._publish()
         self._u = None
         self._loaded = self._ctrl_x = None
@@ -214,11 +243,16 @@ class Plant:
         if self._loaded is not x:
             kernels.load(self.pm.planar, x, qn, vs)
             self._loaded = x
+        pp, I6d, I6u, mcd, parw = self._prop
+        if pp[0] != 0.0:
+            kernels.base_inertia(x[self._om], pp, I6d, I6u, mcd, self._mdl[3], self._mdl[4])
         rigid_body.terms(self.pm.planar, *self._mdl, qn, vs, self._M, self._nle, self._hg,
                          *self._ws)
-        err = kernels.control(self.pm.planar, qn, vs, self._M, self._nle, self._hg,
-                              self._par, self.q_home, self.t, self._ramp, self._ex_tab,
-                              self._gen, self._acc, self._FM)
+        # the thrust held over the next internal step (a step of h)
+        err = kernels.thrust_control(self.pm.planar, qn, vs, self._M, self._nle, self._hg,
+                                     self._par, self.q_home, self.t, self._ramp, self._ex_tab,
+                                     self._gen, self._acc, self._FM, pp, x[self._om], self.h,
+                                     parw)
         if err:
             raise np.linalg.LinAlgError(kernels.ERRORS[err])
         self._ctrl_x = x
@@ -232,7 +266,8 @@ class Plant:
             kernels.load(self.pm.planar, x, self._qn, self._vs)
         xn = np.empty_like(x)
         err, t = kernels.advance(self.pm.planar, self._mdl, self._ws, x, n, h, rest, self.t,
-                                 self._par, self.q_home, self._ramp, self._ex_tab, *self._buf, xn)
+                                 self._par, self.q_home, self._ramp, self._ex_tab, self._prop,
+                                 *self._buf, xn)
         self._x, self.t = xn, t
         self._loaded = xn                 # the kernel left xn's configuration in _qn, _vs
         self._ctrl_x = None
@@ -262,10 +297,18 @@ class Plant:
         """What the sensors measure at the current instant, plus truth momentum.
 
         Keys follow the interface contract: ``r_S, v_S, A, omega_B, a_S, alpha_B, q, qd, qdd,
-        F, M, J, H, P, L, tau``, and ``excite_level`` (1,): the excitation level in effect.
+        F, M, J, H, P, L, tau``, and ``excite_level`` (1,): the excitation level in effect;
+        the propellant: ``m_p`` (1,) [kg], ``P_x``, ``L_x`` (3,): the momentum the expelled
+        propellant carried away (so ``P + P_x - P(0) = J`` and ``L + L_x - L(0) = H``), and
+        ``base_now`` (10,): the base's current truth ``[m, b, I]`` (:meth:`base_now`).
         """
         u = self.controls()
         pm, q, v = self.pm, self.q, self.v
+        base_now = self.base_now()
+        if self.propellant.active and self._pin_mp != self.m_p:
+            pm.model.inertias[1] = pin.Inertia(base_now.mass, np.array(base_now.com, float),
+                                               base_now.inertia_matrix())
+            self._pin_mp = self.m_p
         v_S, omega_B = base_velocity(pm, q, v)
         a_S, alpha_B = base_acceleration(pm, q, v, u.a)
         P, _, L_O, _ = momentum(pm, self.data, q, v)
@@ -278,7 +321,17 @@ class Plant:
             "P": P, "L": L_O, "tau": u.tau.copy(),
             "excite_level": np.array([kernels.ramp_level(self.t, self._ramp)[0]]),
             **self._reference_outputs(),
+            "m_p": self._x[self._om:self._om + 1].copy(),
+            "P_x": self._x[self._om + 1:self._om + 4].copy(),
+            "L_x": self._x[self._om + 4:self._om + 7].copy(),
+            "base_now": np.array([base_now.mass, *base_now.com, *base_now.inertia]),
         }
+
+    def base_now(self) -> RigidBody:
+        """The base's truth now: the dry base plus the propellant left
+        (:meth:`~spacerobot.robots.Propellant.base`); the dry base without propellant model."""
+        base = self.pm.base
+        return self.propellant.base(base, self.m_p) if self.propellant.active else base
 
     def _reference_outputs(self) -> dict:
         """``att_ref`` (3,) [rad] and ``qd_ref`` (n,) [rad/s]: the excitation references now
@@ -289,6 +342,29 @@ class Plant:
         ref = self.references()
         att[3 - len(ref["att"]):] = ref["att"]
         return {"att_ref": att, "qd_ref": ref["q_d"]}
+
+
+def propellant_array(prop) -> np.ndarray:
+    """The ``pp`` array (:data:`.kernels.PROP_FIELDS`) of a :class:`spacerobot.robots.Propellant`
+    (all zero when its model is off, ``m0 = 0``)."""
+    if not prop.active:
+        return np.zeros(len(kernels.PROP_FIELDS))
+    return np.array([1.0 / (prop.Isp * G0), 1.0 / prop.arm, 0.4 * prop.R * prop.R,
+                     *prop.r], float)
+
+
+def unit_sphere_inertia(pp) -> np.ndarray:
+    """(6, 6) spatial inertia at the base frame origin of 1 kg of propellant (Pinocchio's
+    ``[[m 1, -m [c]x], [m [c]x, I_c - m [c]x [c]x]]`` with ``m = 1``, ``c = r``,
+    ``I_c = (2/5) R^2 1``): spatial inertias add, so the base's is ``I_dry + m_p`` times it."""
+    r = np.asarray(pp[3:6], float)
+    cx = np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
+    out = np.zeros((6, 6))
+    out[:3, :3] = np.eye(3)
+    out[:3, 3:] = -cx
+    out[3:, :3] = cx
+    out[3:, 3:] = pp[2] * np.eye(3) - cx @ cx
+    return out
 
 
 def _restore_plant(args, state) -> Plant:

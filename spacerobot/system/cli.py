@@ -23,7 +23,8 @@ from typing import Optional, Sequence
 
 from .. import __version__
 from ..interface import identified_estimates
-from ..robots import PAPER_PLANAR_MEDIUM, ROBOTS, get_robot, robot_label, robot_spec
+from ..robots import (PAPER_PLANAR_MEDIUM, PARAMETER_SETS, ROBOTS, get_robot, robot_kind,
+                      robot_label, robot_spec)
 from .codes import ACCEL_CODES, METHOD_CODES, SOLVER_CODES, estimator_overrides
 
 
@@ -107,6 +108,16 @@ def result_name(robot: Optional[str], ssp: Path, target: Optional[str], args) ->
                               f"{args.accel}-{args.solver}.csv")
 
 
+def set_estimator_overrides(robot: Optional[str], target: Optional[str]) -> dict:
+    """``{"estimator.<name>": value}`` of the estimator settings of parameter set ``target``
+    of ``robot`` (empty for another set, or without a robot or set)."""
+    from .ssd import ESTIMATOR
+    if not (robot and target):
+        return {}
+    ps = PARAMETER_SETS[robot_kind(robot)].get(target)
+    return {f"{ESTIMATOR}.{k}": v for k, v in (ps.estimator if ps else ())}
+
+
 @fail_on_errors("run")
 def cmd_run(args) -> int:
     from .bindings import parse_assignments
@@ -128,6 +139,8 @@ def cmd_run(args) -> int:
         robot = key or "planar"
         ssp = None
     target = args.target or (default_parameter_set(robot) if robot else None)
+    # the estimator settings a parameter set is meant for (robots.ParameterSet.estimator)
+    overrides = {**set_estimator_overrides(robot, args.target), **overrides}
     csv_path = Path(args.out) if args.out else result_name(robot, ssp or Path(robot), target,
                                                              args)
     check_writable(csv_path)              # before the build and the run: results never lost
@@ -188,8 +201,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "run instead of --robot")
     add_robot_arguments(p)
     p.add_argument("--target", help="parameter set: small|medium|large|paper|excited (planar "
-                                    "robots), paper|default (spatial robots); default: the one "
-                                    "bound in the SSD")
+                                    "robots), paper|default|depletion (spatial robots); "
+                                    "default: the one bound in the SSD")
     p.add_argument("--method", choices=list(METHOD_CODES), default="momentum")
     p.add_argument("--accel", choices=list(ACCEL_CODES), default="measured",
                    help="force method: measured accelerations or differenced velocities")

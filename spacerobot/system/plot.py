@@ -2,7 +2,9 @@
 
 Reads the CSV written by :func:`spacerobot.system.runner.run_ssp` (columns ``time``,
 ``plant.<name>``, ``estimator.<name>``). The truth of each parameter is the plant's parameter
-connector of the same name (``plant.target.m`` ...), recorded by the runner.
+connector of the same name (``plant.target.m`` ...), recorded by the runner, or, where the plant
+outputs one, its current truth ``plant.truth.<name>`` at every sample (a base that uses
+propellant, issue #17).
 """
 from __future__ import annotations
 
@@ -39,6 +41,14 @@ def _truth(data: Dict[str, np.ndarray], name: str) -> Optional[float]:
     if col is None or col.dtype.kind != "f" or not len(col):
         return None
     return float(col[-1])
+
+
+def _truth_now(data: Dict[str, np.ndarray], name: str) -> Optional[np.ndarray]:
+    """The plant's current truth ``plant.truth.<name>`` against time, if recorded."""
+    col = data.get("plant.truth." + name)
+    if col is None or col.dtype.kind != "f" or not len(col):
+        return None
+    return col
 
 
 def _zero_truth_scale(data: Dict[str, np.ndarray], name: str) -> Tuple[float, str]:
@@ -100,13 +110,15 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
     half = slice(len(t) // 2, None)
     for ax, n in zip(axes.flat, names):
         est = data["estimator." + n]
-        truth = _truth(data, n)
+        now = _truth_now(data, n)
+        truth = _truth(data, n) if now is None else float(now[-1])
+        ref = truth if now is None else now           # a truth that changes: sample by sample
         if truth is None:
             ax.plot(t, est, lw=1.2)
             ax.set_title(f"{n} (no truth in CSV)", fontsize=9)
             ax.set_ylabel("estimate")
         elif truth == 0.0:
-            err = est - truth
+            err = est - ref
             ax.plot(t, err, lw=1.2)
             ax.axhline(0.0, color="k", lw=0.6)
             scale, scale_txt = _zero_truth_scale(data, n)
@@ -118,7 +130,7 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
             d = max(d, 5 * BAND * scale)
             ax.set_ylim(-1.3 * d, 1.3 * d)
         else:
-            ratio = est / truth
+            ratio = est / ref
             ax.plot(t, ratio, lw=1.2)
             ax.axhspan(1 - BAND, 1 + BAND, color="tab:green", alpha=0.25, lw=0,
                        label="±0.1 %")
@@ -126,7 +138,8 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
             d = float(np.max(np.abs(ratio[half] - 1.0))) if len(ratio[half]) else 0.5
             d = min(0.5, max(5 * BAND, 1.3 * d))
             ax.set_ylim(1 - d, 1 + d)
-            ax.set_title(f"{n} / truth ({truth:g})", fontsize=9)
+            ax.set_title(f"{n} / truth ({truth:g})" if now is None else
+                         f"{n} / current truth ({truth:g} at the end)", fontsize=9)
             ax.set_ylabel("estimate / truth")
         ax.grid(alpha=0.3)
         ax.tick_params(labelsize=8)

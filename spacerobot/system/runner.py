@@ -26,7 +26,9 @@ during the step that starts at ``t``).
 
 The runner knows no model: :attr:`RunResult.truth` and :attr:`RunResult.final` pair, by name,
 every Real output of one component with the Real parameter of the same name of another (the
-estimator's ``target.m`` output estimates the plant's ``target.m`` parameter).
+estimator's ``target.m`` output estimates the plant's ``target.m`` parameter); when that
+component also outputs ``truth.<name>`` (a truth that changes during the run, e.g. the base as
+propellant is used), the truth is that output's final value.
 """
 from __future__ import annotations
 
@@ -113,7 +115,8 @@ def _estimates(instances: Mapping[str, FMUInstance],
             if (v.causality == "output" and v.type == "Real" and n in params
                     and params[n][0] != name and n not in final
                     and f"{name}.{n}" in data):
-                truth[n] = float(params[n][1].get(n))
+                now = f"{params[n][0]}.truth.{n}"
+                truth[n] = float(data[now][-1]) if now in data else float(params[n][1].get(n))
                 final[n] = float(data[f"{name}.{n}"][-1])
     return truth, final
 

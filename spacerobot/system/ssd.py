@@ -28,8 +28,8 @@ from pathlib import Path
 from typing import Dict, List, Optional, Tuple
 from xml.sax.saxutils import quoteattr
 
-from ..interface import (ESTIMATE_NAMES, EXCITATION_DOC, UNITS, Var, connections,
-                         estimator_vars, feedback_connections, plant_vars)
+from ..interface import (ESTIMATE_NAMES, EXCITATION_DOC, PROPELLANT_DOC, UNITS, Var,
+                         connections, estimator_vars, feedback_connections, plant_vars)
 from ..robots import (DEFAULT_TARGET, PARAMETER_SETS, ROBOTS, check_robot, get_robot,
                       parameter_set_scenario, robot_files, robot_kind, robot_label, scenario)
 
@@ -49,12 +49,13 @@ SOURCES = {PLANT: "resources/SpaceRobotPlant.fmu", ESTIMATOR: "resources/SpaceRo
 SSD_NAME = "SystemStructure.ssd"
 GENERATOR = "spacerobot.system.ssd"
 
-#: the plant parameters a parameter set binds (the scenario's truth, initial velocities and
-#: excitation bounds)
+#: the plant parameters a parameter set binds (the scenario's truth, initial velocities,
+#: excitation bounds and propellant)
 SET_PARAMETERS: Tuple[str, ...] = (
     ESTIMATE_NAMES + tuple(f"base.v0[{i}]" for i in (1, 2, 3))
     + tuple(f"base.omega0[{i}]" for i in (1, 2, 3))
-    + tuple(f"excite.{k}" for k in EXCITATION_DOC))
+    + tuple(f"excite.{k}" for k in EXCITATION_DOC)
+    + tuple(f"prop.{k}" for k in PROPELLANT_DOC) + tuple(f"prop.r[{i}]" for i in (1, 2, 3)))
 
 
 def _check_robot(robot: str) -> None:
