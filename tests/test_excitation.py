@@ -216,6 +216,21 @@ def test_state_restore_mid_ramp_continues_identically():
     assert twin.excitation_level() == (0.0, 0.0, 0.0)
 
 
+def test_a_state_that_does_not_fit_is_refused_and_changes_nothing():
+    p = make(scenario("planar"))
+    p.set_excitation(1.0)
+    p.advance(0.5)
+    before = p.get_state()
+    for bad in ({"q": np.zeros(2)}, {"excite_ramp": [0.0, 0.0, 0.0, 0.0]},
+                {"prop": [math.nan] * 7}, {"t": math.nan}):
+        with pytest.raises(ValueError):
+            p.set_state({**before, "t": 99.0, **bad})
+        after = p.get_state()
+        assert p.t == before["t"] == after["t"]
+        for key in before:
+            assert np.array_equal(np.asarray(after[key]), np.asarray(before[key])), key
+
+
 def test_bad_levels_and_parameters_are_refused():
     sc = scenario("planar")
     p = make(sc)

@@ -167,7 +167,11 @@ class Plant:
                 "prop": self._x[self._om:].copy()}
 
     def set_state(self, s: dict) -> None:
-        self.t = float(s["t"])
+        """Restore a state of :meth:`get_state`; raises ``ValueError`` (the plant unchanged)
+        if it does not fit this plant."""
+        t = float(s["t"])
+        if not math.isfinite(t):
+            raise ValueError(f"state time must be finite, got {t}")
         q = np.array(s["q"], float)
         v = np.array(s["v"], float)
         J = np.array(s["J"], float)
@@ -183,6 +187,7 @@ class Plant:
         if ramp.shape != (4,) or not np.all(np.isfinite(ramp)) or not ramp[3] > 0.0:
             raise ValueError(f"excitation ramp state must be 4 finite numbers [s0, u, t0, T > 0], "
                              f"got {ramp}")
+        self.t = t
         self._ramp = ramp
         self._x = np.concatenate([J, H, q, v, prop])
         self._publish()
