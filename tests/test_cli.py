@@ -200,6 +200,35 @@ def test_out_is_checked_before_the_run(built, tmp_path, capsys, monkeypatch):
     assert status == 1 and len(err) == 1 and str(blocker / "r.csv") in err[0], err
 
 
+def test_out_must_be_a_csv_file(built, tmp_path, capsys, monkeypatch):
+    """A typo such as --out README.md is refused before the run; the file is untouched."""
+    from spacerobot.system import runner
+    monkeypatch.setattr(runner, "open_system", lambda *a: pytest.fail("the run started"))
+    keep = tmp_path / "README.md"
+    keep.write_text("keep me")
+    status, err = _main(["run", built["ssp"], "--out", keep], capsys)
+    assert (status, err) == (1, [f"spacerobot run: error: --out {keep}: the result file must "
+                                 "end in .csv"])
+    assert keep.read_text() == "keep me"
+
+
+def test_paper_values_only_beside_the_papers_scenario(built, workdir):
+    p = _run(["run", built["ssp"], "--stop-time", "0.5", "--set", "plant.target.m=300",
+              "--out", workdir / "changed.csv"], cwd=workdir)
+    table = _table(p.stdout)
+    assert table["target.m"][1] == 300.0
+    assert all(pv is None for _, _, pv in table.values())
+    assert "identified (sd below ident.sd_rel): base " in p.stdout
+
+
+def test_plot_of_a_file_that_is_not_a_result_csv(tmp_path, capsys):
+    text = tmp_path / "notes.md"
+    text.write_text("# title\n\nsome, words, here\nand more\n")
+    status, err = _main(["plot", text], capsys)
+    assert status == 1 and len(err) == 1 and str(text) in err[0], err
+    assert "not a result CSV" in err[0], err
+
+
 def test_ctrl_c_stops_cleanly(built, tmp_path, capsys, monkeypatch):
     """SIGINT during the stepping loop: the loop stops at the next communication point, every
     FMU instance is freed, exit status 130 with one line."""

@@ -103,6 +103,28 @@ def test_reported_bodies_are_real_and_equal_the_least_squares_estimate_when_it_i
     assert projected > 10 and unchanged > 10
 
 
+@pytest.mark.parametrize("solver", ["paper", "joint"])
+def test_planar_report_keeps_the_identified_estimates(solver):
+    """Planar robot (paper scenario, medium target, 30 s): whatever the solver leaves in the
+    unidentified entries, the report is a real body whose identified entries (m, b_x, b_y,
+    Izz) are the least-squares ones, within 0.1 % of the truth, and the flags are honest."""
+    from spacerobot.robots import scenario
+    sc = scenario("planar", "medium")
+    ident = Identifier(sc.robot, sc.guess, "momentum", solver=solver)
+    for t, o in record(sc, 30.0):
+        ident.update(t, o)
+    rep, ls, truth = ident.report(), ident.vector(), truth_of(sc)
+    ids = ident.layout.identified
+    assert np.array_equal(rep.vector[ids], ls[ids])
+    rel = interface.relative_errors(rep.vector, truth)
+    assert rel[ids].max() <= 1e-3, rel[ids].max()
+    for b in ident.layout.bodies:
+        x = rep.vector[b.vec]
+        assert is_physical(x[0], x[1:4], x[4:])
+        if rep.identified[b.name]:
+            assert rel[b.vec][ids[b.vec]].max() <= 1.25e-3
+
+
 @pytest.mark.parametrize("method", ["momentum", "force"])
 def test_excitation_identifies_the_case_and_raises_both_flags(method):
     """The same kind of case with the plant's excitation on: both bodies identified, every

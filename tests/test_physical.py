@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from spacerobot.estimator.physical import (inertia_from_second_moment, is_physical,
-                                           project_body, pseudo_inertia, second_moment)
+                                           project_body, project_planar_body, pseudo_inertia,
+                                           second_moment)
 from spacerobot.robots import check_body
 
 
@@ -132,6 +133,27 @@ def test_planar_out_of_plane_adjustment_keeps_identified_izz():
     assert I2[2] == pytest.approx(25.0, rel=1e-12)
     assert I2[0] + I2[1] > I2[2] and I2[0] > 10.0 and I2[1] > 10.0
     assert physical_by_check_body(m2, [0.25, 0.1, 0.0], I2)
+
+
+def test_planar_projection_keeps_the_identified_entries():
+    """Random planar estimates whose unidentified entries make them unreal (any values): the
+    output is real, m, b and Izz are kept exactly, and a real input is returned unchanged."""
+    rng = np.random.default_rng(20261124)
+    moved = 0
+    for _ in range(300):
+        m, b, I6 = random_body(rng)
+        bad = I6.copy()
+        bad[[0, 1, 3, 4, 5]] = rng.normal(scale=I6[2], size=5)     # unidentified entries
+        m2, b2, I2, projected = project_planar_body(m, b, bad, m_scale=m)
+        assert physical_by_check_body(m2, b2, I2)
+        assert m2 == m and np.array_equal(b2, b)
+        assert I2[2] == bad[2]
+        moved += projected
+        if not projected:
+            assert np.array_equal(I2, bad)
+    assert moved > 100
+    m, b, I6 = random_body(rng)
+    assert np.array_equal(project_planar_body(m, b, I6)[2], I6)
 
 
 def test_negative_mass_is_clipped_to_the_mass_floor():

@@ -18,7 +18,7 @@ from ..interface import AccelSource, ExciteMode, Method, ParameterLayout, Solver
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import kernels
-from .physical import project_body
+from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
 
 #: measurement keys and their shapes (n = number of arm joints)
@@ -47,10 +47,12 @@ class Report:
     Attributes
     ----------
     vector : (20,) the estimates, each body a real rigid body: the least-squares estimate,
-        projected onto real bodies where it is not one (:func:`.physical.project_body`)
+        projected onto real bodies where it is not one (:func:`.physical.project_body`; for a
+        planar robot :func:`.physical.project_planar_body`, which keeps the identified entries)
     std : (20,) standard deviations of the least-squares estimate (:meth:`Identifier.std`)
     identified : {'base': bool, 'target': bool}, every identified estimate of the body has
-        ``std <= sd_rel * error scale`` (and at least one sample was used)
+        ``std <= sd_rel * error scale`` and is reported within that much of the least-squares
+        estimate (and at least one sample was used)
     physical : {'base': bool, 'target': bool}, the least-squares estimate of the body was a
         real body already (False: ``vector`` holds its projection)
     """
@@ -371,12 +373,15 @@ class Identifier:
         """
         ls, sd = self.vector(), self.std()
         out, identified, physical = ls.copy(), {}, {}
+        project = project_planar_body if self.robot.planar else project_body
         for b, g in zip(self.layout.bodies, (self.guess.base, self.guess.target)):
-            m, com, I6, projected = project_body(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
+            m, com, I6, projected = project(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
             out[b.m], out[b.first], out[b.inertia] = m, com, I6
             physical[b.name] = not projected
         scale = self.layout.error_scale(out)
-        ok = sd <= self.sd_rel * scale
+        # identified: small standard deviation, and the reported value is the estimate's
+        tol = self.sd_rel * scale
+        ok = (sd <= tol) & (np.abs(out - ls) <= tol)
         for b in self.layout.bodies:
             ids = self.layout.identified[b.vec]
             identified[b.name] = bool(self.samples > 0 and ok[b.vec][ids].all())

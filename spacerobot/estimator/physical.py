@@ -25,10 +25,12 @@ The estimator applies it to what it reports only; its least-squares state is nev
 the estimates stay the exact least-squares ones and converge to the truth as before, and the
 projection stops acting as soon as the least-squares estimate is physical.
 
-For a planar robot the out-of-plane components are not identified (they stay at the guesses);
-since ``Izz = Sigma_xx + Sigma_yy``, clipping a negative out-of-plane second moment
-``Sigma_zz`` (an identified ``Izz`` larger than the guessed ``Ixx + Iyy``) keeps the identified
-``Izz`` and raises the unidentified ``Ixx``, ``Iyy`` (exactly so for a diagonal tensor).
+For a planar robot only ``m``, ``b_x``, ``b_y`` and ``Izz`` are identified; the other entries
+are whatever the solver's prior left there (for the joint RLS, whose prior is about the body
+frame origin, not even the guesses about the CoM). :func:`project_planar_body` keeps the
+identified entries and moves only the others: since ``Izz = Sigma_xx + Sigma_yy`` is the trace
+of the in-plane block of ``Sigma_c``, it clips that block's eigenvalues with their sum kept,
+drops the out-of-plane couplings ``Sigma_xz``, ``Sigma_yz`` and clips ``Sigma_zz``.
 """
 from __future__ import annotations
 
@@ -37,7 +39,7 @@ from typing import Tuple
 import numpy as np
 
 __all__ = ["second_moment", "inertia_from_second_moment", "pseudo_inertia", "is_physical",
-           "project_body"]
+           "project_body", "project_planar_body"]
 
 #: smallest eigenvalue of Sigma_c kept by the projection, relative to the largest |eigenvalue|
 #: (a body this flat is still a real one: its inertia satisfies the strict triangle inequality)
@@ -131,3 +133,37 @@ def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarr
     s_min = REL_SIGMA_MIN * max(float(np.max(np.abs(lam))), np.finfo(float).tiny)
     S = (V * np.maximum(lam, s_min)) @ V.T
     return m_out, b, inertia_from_second_moment(0.5 * (S + S.T)), True
+
+
+def project_planar_body(m: float, b, I6, m_scale: float = 1.0
+                        ) -> Tuple[float, np.ndarray, np.ndarray, bool]:
+    """A real rigid body with the identified entries of a planar estimate kept.
+
+    Keeps ``m`` (unless below the mass floor of :func:`project_body`), ``b`` and ``Izz``; sets
+    the unidentified ``Ixx``, ``Iyy``, ``Ixy``, ``Ixz``, ``Iyz`` so that ``Sigma_c > 0``: the
+    in-plane block of ``Sigma_c`` gets its eigenvalues clipped at ``s_min`` with their sum
+    (``Izz``) kept, ``Sigma_xz = Sigma_yz = 0``, ``Sigma_zz`` clipped at ``s_min``. An ``Izz`` too
+    small for any real body (``Izz <= 2 s_min``) cannot be kept: :func:`project_body` then.
+
+    Parameters and returns as :func:`project_body`.
+    """
+    b = np.array(b, dtype=float)
+    I6 = np.array(I6, dtype=float)
+    if is_physical(m, b, I6):
+        return float(m), b, I6, False
+    S = second_moment(I6)
+    lam, V = np.linalg.eigh(S[:2, :2])
+    izz = float(I6[2])                                       # = trace of the in-plane block
+    s_min = REL_SIGMA_MIN * max(float(np.max(np.abs(np.linalg.eigvalsh(S)))),
+                                np.finfo(float).tiny)
+    if not izz > 2.0 * s_min:
+        return project_body(m, b, I6, m_scale)
+    if lam[0] < s_min:                                       # clip with the sum kept
+        lam = np.array([s_min, izz - s_min])
+    P = np.zeros((3, 3))
+    P[:2, :2] = (V * lam) @ V.T
+    P[2, 2] = max(float(S[2, 2]), s_min)
+    m_min = REL_MASS_MIN * abs(m_scale)
+    I_out = inertia_from_second_moment(0.5 * (P + P.T))
+    I_out[2] = izz                                           # exact, not re-rounded
+    return (float(m) if m >= m_min else m_min), b, I_out, True

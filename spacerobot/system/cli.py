@@ -144,13 +144,17 @@ def cmd_run(args) -> int:
     csv_path = Path(args.out) if args.out else result_name(robot, ssp or Path(robot), target,
                                                              args)
     check_writable(csv_path)              # before the build and the run: results never lost
+    if csv_path.suffix.lower() != ".csv":  # a typo must not overwrite e.g. README.md
+        raise CommandError(f"--out {csv_path}: the result file must end in .csv")
     if ssp is None:
         ssp = ensure_ssp(robot, args.build_dir)
     res = run_ssp(ssp, parameter_set=args.target, stop_time=args.stop_time,
                   overrides=overrides, csv_path=csv_path,
                   progress=False if args.no_progress else None)
-    paper = (PAPER_PLANAR_MEDIUM.get(args.method) if robot == "planar" and target == "medium"
-             else None)
+    # the paper's values only beside the paper's scenario (no plant parameter changed)
+    changed = any(k.startswith("plant.") for k in parse_assignments(args.set))
+    paper = (PAPER_PLANAR_MEDIUM.get(args.method)
+             if robot == "planar" and target == "medium" and not changed else None)
     print(f"{ssp}: robot {robot_label(robot) if robot else '?'}, parameter set "
           f"{target or '(as bound)'}, method "
           f"{args.method}, solver {args.solver}, accelerations {args.accel}; "

@@ -105,7 +105,12 @@ def read_csv(path: str | Path) -> Dict[str, np.ndarray]:
         rows = list(csv.reader(f))
     if not rows:
         raise ValueError(f"{path}: empty CSV file")
-    header, body = rows[0], rows[1:]
+    header = rows[0]
+    for k, r in enumerate(rows[1:]):
+        if r and len(r) != len(header):
+            raise ValueError(f"{path}: line {k + 2} has {len(r)} fields, the header "
+                             f"{len(header)}; not a result CSV")
+    body = [r for r in rows[1:] if r]
     out = {}
     for j, n in enumerate(header):
         col = [r[j] for r in body]

@@ -285,6 +285,19 @@ def format_results(result: RunResult, paper: Optional[Mapping[str, float]] = Non
         pv = f"{paper[n]:.2f}" if n in paper else ""
         note = ""
         if identified_only is not None and n not in identified_only:
-            note = "not identified (initial guess)"
+            note = "not identified"
         lines.append(f"{n:<12} {est:>14.6f} {tru:>12.6g} {err:>16} {pv:>9}  {note}".rstrip())
+    lines += _flag_lines(result.data)
     return "\n".join(lines)
+
+
+def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
+    """The estimator's verdict at the end: ``diag.identified.*`` and ``diag.physical.*``."""
+    out = []
+    for flag, text in (("identified", "identified (sd below ident.sd_rel)"),
+                       ("physical", "real body as estimated (no projection)")):
+        cols = [(b, data.get(f"estimator.diag.{flag}.{b}")) for b in ("base", "target")]
+        if all(c is not None and len(c) for _, c in cols):
+            out.append(f"{text}: " + ", ".join(f"{b} {'yes' if c[-1] > 0.5 else 'no'}"
+                                               for b, c in cols))
+    return out
