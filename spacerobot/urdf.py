@@ -163,12 +163,29 @@ class _Reader:
                 j["limits"] = (lo, hi)
         return j
 
+    @property
+    def root_link(self) -> Optional[str]:
+        """The link that is no joint's child (None if there is not exactly one)."""
+        children = {j["child"] for j in self.joints}
+        roots = [n for n in self.links if n not in children]
+        return roots[0] if len(roots) == 1 else None
+
+    def _fixed_child(self, link: str) -> Optional[str]:
+        """The child of a fixed joint hanging on ``link`` (None if there is none)."""
+        return next((j["child"] for j in self.joints
+                     if j["parent"] == link and j["type"] == "fixed"), None)
+
     def inertial(self, link: str, required: bool) -> Optional[RigidBody]:
         """The link's ``<inertial>`` as a body in the link frame (None if absent and allowed,
         or massless on a fixed joint)."""
         what = f"link {link!r}"
         el = self.links[link].find("inertial")
         if el is None:
+            if required and link == self.root_link and self._fixed_child(link):
+                self.fail(f"{what} is the root link, has no <inertial> and is fixed to "
+                          f"{self._fixed_child(link)!r}: a link fixed to a 'world' cannot "
+                          f"float; remove it and its joint (the base floats by itself, no "
+                          f"joint to a world link)")
             if required:
                 self.fail(f"{what} has no <inertial> (mass, CoM and inertia are needed for "
                           f"the base and for every link a joint moves)")

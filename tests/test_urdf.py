@@ -361,6 +361,10 @@ BAD = {
     "unsupported_joint": (
         _urdf(_BASE + _joint("slide", "base", "a", jtype="prismatic") + _link("a")),
         None, r"joint 'slide' has type 'prismatic': unsupported"),
+    "fixed_to_world": (
+        _urdf('<link name="world"/>' + _joint("anchor", "world", "base", jtype="fixed")
+              + _BASE + _joint("j1", "base", "a") + _link("a")),
+        None, r"link 'world' is the root link, has no <inertial> and is fixed to 'base'"),
     "missing_ee": (
         _urdf(_BASE + _joint("j1", "base", "a") + _link("a")),
         "gripper", r"end-effector link 'gripper' not found"),

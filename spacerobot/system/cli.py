@@ -65,8 +65,9 @@ ROBOT_HELP = (f"robot: {' or '.join(sorted(ROBOTS))} (aliases of the shipped URD
 def add_robot_arguments(p: argparse.ArgumentParser, required: bool = False,
                         default: Optional[str] = None) -> None:
     """``--robot NAME|FILE.urdf``, ``--ee LINK`` and ``--motion auto|planar|spatial``."""
+    shown = issubclass(p.formatter_class, argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--robot", metavar="ROBOT", required=required, default=default,
-                   help=ROBOT_HELP + (f" (default {default})" if default else ""))
+                   help=ROBOT_HELP + (f" (default: {default})" if default and not shown else ""))
     p.add_argument("--ee", metavar="LINK", help="URDF: the end-effector link (grasp point E, "
                    "target frame T); default: the last link of the chain")
     p.add_argument("--motion", choices=("auto", "planar", "spatial"), default="auto",

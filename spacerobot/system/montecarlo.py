@@ -270,7 +270,7 @@ def register(subparsers):
         "montecarlo", help="identification on random real bases and targets, on Dask",
         description="Draw random real bases, targets and initial states, run each case through "
                     "the SSP system on a Dask cluster (local by default) and write one row per "
-                    "case (worst error, times to 1 %% and 0.1 %%, identified flags, physical "
+                    "case (worst error, times to 1 % and 0.1 %, identified flags, physical "
                     "flag, excitation used) to a resumable CSV, a summary table and a plot of "
                     "the worst-error distribution.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
