@@ -458,11 +458,15 @@ class ParameterSet:
     target: str
     excited: bool
     description: str
+    #: ``noise.scale`` of the sensors FMU (docs/sensors.md); None: not a sensors set (the set
+    #: belongs to the plant + estimator system only)
+    noise: float | None = None
 
 
 #: The parameter sets of each robot's SSP (one ``.ssv`` each). The paper's scenarios keep the
 #: excitation off (:data:`NO_EXCITATION`), so they reproduce the paper's figures with the
-#: excitation loop wired; the others let the estimator's request move the plant.
+#: excitation loop wired; the others let the estimator's request move the plant. The sets with
+#: a ``noise`` level (``ideal``, ``realistic``) belong to the system with the sensors FMU only.
 PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
     "planar": {
         "small": ParameterSet("small", False, "the paper's planar scenario, small target"),
@@ -472,11 +476,20 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
                                                "no excitation"),
         "excited": ParameterSet("medium", True, "medium target, excitation on request of the "
                                                 "estimator"),
+        "ideal": ParameterSet("medium", True, "medium target, excitation on request, ideal "
+                                              "sensors", noise=0.0),
+        "realistic": ParameterSet("medium", True, "medium target, excitation on request, "
+                                                  "realistic sensor noise", noise=1.0),
     },
     "spatial": {
         "paper": ParameterSet("default", False, "the paper's spatial scenario, no excitation"),
         "default": ParameterSet("default", True, "the paper's spatial robot and target, "
                                                  "excitation on request of the estimator"),
+        "ideal": ParameterSet("default", True, "the paper's spatial robot and target, "
+                                               "excitation on request, ideal sensors", noise=0.0),
+        "realistic": ParameterSet("default", True, "the paper's spatial robot and target, "
+                                                   "excitation on request, realistic sensor "
+                                                   "noise", noise=1.0),
     },
 }
 

@@ -2,10 +2,12 @@
 
 ::
 
-    spacerobot build --robot planar|spatial [--out DIR]
+    spacerobot build --robot planar|spatial [--out DIR] [--sensors]
     spacerobot run [--robot planar|spatial | SSP_FILE] [--target small|medium|large]
                    [--method momentum|force] [--accel measured|differenced]
                    [--solver paper|joint] [--stop-time T] [--out CSV] [--set NAME=VALUE ...]
+                   [--sensors]
+    spacerobot identify TELEMETRY.csv --robot planar|spatial [--method ...] [--out CSV]
     spacerobot plot CSV [--out PNG]
     spacerobot sweep ...        (spacerobot.system.sweep, if installed)
     spacerobot montecarlo ...   (spacerobot.system.montecarlo)
@@ -61,7 +63,7 @@ def fail_on_errors(command: str):
 def cmd_build(args) -> int:
     from .ssd import build_system
     out = Path(args.out) if args.out else Path("build") / args.robot
-    for key, path in build_system(args.robot, out).items():
+    for key, path in build_system(args.robot, out, sensors=args.sensors).items():
         print(f"{key:<12} {path}")
     return 0
 
@@ -92,12 +94,13 @@ def cmd_run(args) -> int:
     else:
         robot = args.robot or "planar"
         ssp = None
-    target = args.target or (default_parameter_set(robot) if robot else None)
-    csv_path = Path(args.out) if args.out else result_name(robot, ssp or Path(robot), target,
+    target = args.target or (default_parameter_set(robot, args.sensors) if robot else None)
+    name = f"{robot}_sensors" if robot and args.sensors and not args.ssp else robot
+    csv_path = Path(args.out) if args.out else result_name(name, ssp or Path(robot), target,
                                                              args)
     check_writable(csv_path)              # before the build and the run: results never lost
     if ssp is None:
-        ssp = ensure_ssp(robot, args.build_dir)
+        ssp = ensure_ssp(robot, args.build_dir, sensors=args.sensors)
     res = run_ssp(ssp, parameter_set=args.target, stop_time=args.stop_time,
                   overrides=overrides, csv_path=csv_path,
                   progress=False if args.no_progress else None)
@@ -141,6 +144,8 @@ def build_parser() -> argparse.ArgumentParser:
                                    "SystemStructure.ssd, the parameter sets and <robot>.ssp.")
     p.add_argument("--robot", choices=sorted(ROBOTS), required=True)
     p.add_argument("--out", metavar="DIR", help="output folder (default build/<robot>/)")
+    p.add_argument("--sensors", action="store_true", help="the system with the sensors FMU "
+                   "between plant and estimator (<robot>_sensors.ssp, docs/sensors.md)")
     p.set_defaults(func=cmd_build)
 
     p = sub.add_parser("run", help="run the co-simulation and print the final estimates",
@@ -166,6 +171,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--build-dir", metavar="DIR", help="where to build the .ssp for --robot "
                                                       "(default build/<robot>/)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--sensors", action="store_true", help="with --robot: run the system with "
+                   "the sensors FMU (parameter sets ideal, realistic (default) and the "
+                   "others; seed: --set sensors.seed=N)")
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("plot", help="plot a run CSV (paper Fig. 4/5 view) or a sweep table",
