@@ -43,14 +43,14 @@ class SpaceRobotSensors(InterfaceSlave):
     def _initialise(self) -> None:
         v = self.values
         params = {k[len("noise."):]: float(v[k]) for k in NOISE_PARAMETERS if k != "noise.scale"}
+        if int(v["noise.imu"]) not in (0, 1):
+            self._fail(f"noise.imu must be 0 or 1, got {v['noise.imu']!r}")
         try:
             self.suite = SensorSuite(self.robot.n_joints, params, float(v["noise.scale"]),
                                      int(v["seed"]), int(v["noise.delay"]),
                                      bool(int(v["noise.imu"])), self.scenario.sample_time)
         except ValueError as e:
             self._fail(f"invalid sensor parameters: {e}")
-        if int(v["noise.imu"]) not in (0, 1):
-            self._fail(f"noise.imu must be 0 or 1, got {v['noise.imu']!r}")
 
     def _sample(self) -> dict:
         """The true sample: the inputs as the core's arrays."""

@@ -566,18 +566,21 @@ def feedback_connections() -> List[str]:
 TRUE_PREFIX = "true."
 
 #: Real noise parameters of the sensors FMU: name -> (unit, realistic default, description).
-#: ``None`` units are noise densities (per square root of a second), which FMI unit
-#: definitions cannot express; their unit is in the description. ``noise.scale`` multiplies
-#: every error magnitude below (0 = ideal sensors).
-NOISE_PARAMETERS: Dict[str, Tuple[Optional[str], float, str]] = {
+#: White noise and random walks are given by their density, expressed as the standard
+#: deviation over 1 s (an angle random walk of d rad/sqrt(s) is a rate noise of d rad/s
+#: averaged over 1 s; sampled at dt its standard deviation is d / sqrt(dt / 1 s)), so that
+#: every parameter has an FMI unit. ``noise.scale`` multiplies every error magnitude below
+#: (0 = ideal sensors).
+NOISE_PARAMETERS: Dict[str, Tuple[str, float, str]] = {
     "noise.scale": ("1", 1.0, "Multiplies every error magnitude below: 0 = ideal sensors "
                     "(outputs equal inputs bit for bit), 1 = the realistic defaults"),
-    "noise.gyro.arw": (None, 2.0e-5, "Gyro angle random walk (white rate noise density) "
-                       "[rad/sqrt(s)]; 0.07 deg/sqrt(h), fibre-optic gyro of an LN-200S class IMU"),
+    "noise.gyro.arw": ("rad/s", 2.0e-5, "Gyro white rate noise averaged over 1 s, standard "
+                       "deviation (angle random walk 0.07 deg/sqrt(h) = 2e-5 rad/sqrt(s), "
+                       "fibre-optic gyro of an LN-200S class IMU)"),
     "noise.gyro.bias": ("rad/s", 4.8e-6, "Gyro initial bias, standard deviation per axis "
                         "(1 deg/h, fibre-optic gyro)"),
-    "noise.gyro.rrw": (None, 2.0e-7, "Gyro bias random walk (rate random walk) density "
-                       "[rad/s/sqrt(s)]"),
+    "noise.gyro.rrw": ("rad/s", 2.0e-7, "Gyro bias random walk: standard deviation of the "
+                       "bias change over 1 s (rate random walk, rad/s/sqrt(s))"),
     "noise.star.cross": ("rad", 9.7e-6, "Star tracker attitude noise about the base x and y "
                          "axes (cross-boresight), standard deviation (2 arcsec, ASTRO APS / "
                          "Hydra class)"),
@@ -587,12 +590,13 @@ NOISE_PARAMETERS: Dict[str, Tuple[Optional[str], float, str]] = {
                     "per axis (close-range lidar / vision navigation)"),
     "noise.nav.v": ("m/s", 0.001, "Relative navigation velocity noise of S, standard "
                     "deviation per axis"),
-    "noise.accel.vrw": (None, 5.0e-4, "Accelerometer velocity random walk (white "
-                        "acceleration noise density) [m/s/sqrt(s)]; 0.03 m/s/sqrt(h), LN-200S "
-                        "class"),
+    "noise.accel.vrw": ("m/s2", 5.0e-4, "Accelerometer white noise averaged over 1 s, "
+                        "standard deviation (velocity random walk 0.03 m/s/sqrt(h) = 5e-4 "
+                        "m/s/sqrt(s), LN-200S class)"),
     "noise.accel.bias": ("m/s2", 3.0e-3, "Accelerometer initial bias, standard deviation per "
                          "axis (300 micro-g, LN-200S class)"),
-    "noise.accel.brw": (None, 5.0e-6, "Accelerometer bias random walk density [m/s2/sqrt(s)]"),
+    "noise.accel.brw": ("m/s2", 5.0e-6, "Accelerometer bias random walk: standard deviation "
+                        "of the bias change over 1 s"),
     "noise.alpha": ("rad/s2", 2.0e-4, "Angular acceleration noise (derived from the gyro), "
                     "standard deviation per axis"),
     "noise.enc.resolution": ("rad", 1.1984e-5, "Joint encoder quantisation step (19-bit "

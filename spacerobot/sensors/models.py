@@ -110,8 +110,9 @@ class SensorSuite:
         return (1.0 + s) * rotation_vector_to_matrix(phi) - np.eye(3)
 
     def _draw(self, dt: float) -> Dict[str, np.ndarray]:
-        """White-noise draws of one sample; white noise of density ``d`` sampled at interval
-        ``dt`` has standard deviation ``d / sqrt(dt)``."""
+        """White-noise draws of one sample; white noise of density ``d`` (its standard
+        deviation averaged over 1 s) sampled at interval ``dt`` [s] has standard deviation
+        ``d / sqrt(dt)``."""
         p, g, n = self.p, self.rng, self.n
         rt = np.sqrt(dt)
         return {
@@ -182,7 +183,7 @@ class SensorSuite:
         dH = dt * (self.E_M @ x["M"] + np.cross(x["r_S"], self.E_F @ x["F"]))
         if np.all(np.isfinite(dH)):
             self.H_err = self.H_err + dH
-        # bias random walks: b(t + dt) = b(t) + d sqrt(dt) N(0, 1)
+        # bias random walks: b(t + dt) = b(t) + d sqrt(dt) N(0, 1), d the change over 1 s
         self.gyro_bias = self.gyro_bias + p["gyro.rrw"] * np.sqrt(dt) * g["gyro"].standard_normal(3)
         self.accel_bias = self.accel_bias + p["accel.brw"] * np.sqrt(dt) * g["imu"].standard_normal(3)
         self.draw = self._draw(dt)
