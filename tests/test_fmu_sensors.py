@@ -128,3 +128,18 @@ def test_sensors_system_parameter_sets(sensors_system, planar_fmus, tmp_path):
     # the noise level reached the sensors: realistic gyro errors of the configured size
     err = real.data["sensors.base.omega[3]"] - real.data["plant.base.omega[3]"]
     assert 0 < np.abs(err).max() < 1e-3
+
+
+def test_command_line_runs_the_sensors_system(tmp_path, capsys):
+    from spacerobot.system.cli import main
+    from spacerobot.system.recorder import read_csv
+
+    csv = tmp_path / "run.csv"
+    assert main(["run", "--robot", "planar", "--sensors", "--target", "ideal", "--stop-time",
+                 "1", "--build-dir", str(tmp_path / "build"), "--out", str(csv),
+                 "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "planar_sensors.ssp" in out and "parameter set ideal" in out
+    data = read_csv(csv)
+    assert np.array_equal(data["sensors.base.v[1]"], data["plant.base.v[1]"])   # ideal
+    assert np.array_equal(data["estimator.base.v[1]"], data["sensors.base.v[1]"])
