@@ -22,6 +22,7 @@ _API = {
     "scenario": "spacerobot.robots", "ROBOTS": "spacerobot.robots",
     "TARGETS": "spacerobot.robots", "PAPER_PLANAR_MEDIUM": "spacerobot.robots",
     "PARAMETER_SETS": "spacerobot.robots", "random_scenario": "spacerobot.robots",
+    "robot_spec": "spacerobot.robots", "load_robot": "spacerobot.urdf",
     "ESTIMATE_NAMES": "spacerobot.interface", "METHODS": "spacerobot.interface",
     "SOLVERS": "spacerobot.interface", "ACCEL_SOURCES": "spacerobot.interface",
     "estimate_vector": "spacerobot.interface", "relative_errors": "spacerobot.interface",

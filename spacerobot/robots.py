@@ -1,6 +1,9 @@
 """Robot and scenario definitions: the one description used by plant, estimator, SSP and tests.
 
-Pure data and numpy only (no Pinocchio, no FMI), so that both FMUs can bundle it.
+Pure data and numpy only (no Pinocchio, no FMI), so that both FMUs can bundle it. The robots
+themselves are URDF files (``data/robots/``) that :mod:`spacerobot.urdf` reads into the
+:class:`Robot` record, on first use of :data:`ROBOTS` (the FMUs get the record in their
+configuration and never read a URDF).
 
 Conventions (see README "Conventions"):
 
@@ -11,15 +14,20 @@ Conventions (see README "Conventions"):
   as ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` where ``Ixy`` is the tensor element (minus the
   product of inertia).
 * Joint placements are given relative to the parent link frame; each arm joint is revolute
-  about a unit ``axis`` expressed in its own (child) frame.
+  about a unit ``axis`` expressed in its own (child) frame (URDF's joint ``<origin>`` and
+  ``<axis>``).
+* A robot is named by a key: ``planar``, ``spatial`` or a URDF file (:func:`robot_spec`).
 
 Choices the paper leaves open are documented next to the numbers (``docs/models.md`` too).
 """
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
-from typing import Dict, Sequence, Tuple
+from functools import lru_cache
+from pathlib import Path
+from typing import Dict, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -117,6 +125,9 @@ class ArmLink:
         Unit joint axis in the joint (child) frame.
     body : RigidBody
         Link inertial parameters in the joint frame.
+    limits : (2,) tuple or None
+        ``(lower, upper)`` joint limits [rad] when the description gives them (URDF
+        ``<limit>``); they set the home posture and bound the excitation (see :func:`scenario`).
     """
 
     name: str
@@ -124,6 +135,7 @@ class ArmLink:
     rotation: Tuple[float, ...]
     axis: Vec3
     body: RigidBody
+    limits: Optional[Tuple[float, float]] = None
 
     def R(self) -> np.ndarray:
         return np.array(self.rotation, dtype=float).reshape(3, 3)
@@ -158,7 +170,9 @@ class Robot:
     @staticmethod
     def from_dict(d: dict) -> "Robot":
         links = tuple(ArmLink(name=l["name"], xyz=tuple(l["xyz"]), rotation=tuple(l["rotation"]),
-                              axis=tuple(l["axis"]), body=_body(l["body"])) for l in d["links"])
+                              axis=tuple(l["axis"]), body=_body(l["body"]),
+                              limits=tuple(l["limits"]) if l.get("limits") else None)
+                      for l in d["links"])
         return Robot(name=d["name"], planar=bool(d["planar"]), base=_body(d["base"]), links=links,
                      ee_xyz=tuple(d["ee_xyz"]), ee_rotation=tuple(d["ee_rotation"]),
                      q0=tuple(d["q0"]), description=d.get("description", ""))
@@ -168,90 +182,157 @@ def _body(d: dict) -> RigidBody:
     return RigidBody(float(d["mass"]), tuple(d["com"]), tuple(d["inertia"]))
 
 
-def _R(M: np.ndarray) -> Tuple[float, ...]:
-    return tuple(float(x) for x in np.asarray(M).reshape(9))
-
-
-_I3 = _R(np.eye(3))
-
 # --------------------------------------------------------------------------------------------
-# Planar robot. The paper's Table 2 was lost; the base is as the paper's results fix it
-# (m = 500 kg, b = (0.10, -0.10) m, Izz = 83.61 kg.m2). The arm is ours: three revolute joints
-# about z, links as slender rods (I = m l^2 / 12), mounted on the +x face of a 1 m base.
-# Masses and lengths are typical of a 2-3 m manipulator on a 500 kg servicer; the masses are
-# large enough (80 kg in total) for the arm to stabilise the base attitude (eq. 39).
-# --------------------------------------------------------------------------------------------
-
-
-def _rod_z(mass: float, length: float) -> RigidBody:
-    """Link along its local x axis, rotating about z (slender rod, small thickness)."""
-    i_t = mass * length**2 / 12.0
-    return RigidBody(mass, (length / 2.0, 0.0, 0.0), (0.01 * i_t, i_t, 1.01 * i_t, 0.0, 0.0, 0.0))
-
-
-PLANAR_BASE = RigidBody(500.0, (0.10, -0.10, 0.0), (83.61, 83.61, 83.61, 0.0, 0.0, 0.0))
-
-PLANAR = Robot(
-    name="planar",
-    planar=True,
-    base=PLANAR_BASE,
-    links=(
-        ArmLink("joint1", (0.5, 0.0, 0.0), _I3, (0.0, 0.0, 1.0), _rod_z(40.0, 1.0)),
-        ArmLink("joint2", (1.0, 0.0, 0.0), _I3, (0.0, 0.0, 1.0), _rod_z(30.0, 1.0)),
-        ArmLink("joint3", (1.0, 0.0, 0.0), _I3, (0.0, 0.0, 1.0), _rod_z(10.0, 0.5)),
-    ),
-    ee_xyz=(0.5, 0.0, 0.0),
-    ee_rotation=_I3,
-    q0=(math.radians(30.0), math.radians(-60.0), math.radians(45.0)),
-    description="Planar free-floating robot: 500 kg base, 3-joint arm (1.0/1.0/0.5 m, "
-                "40/30/10 kg), motion in x-y, rotation about z.",
-)
-
-# --------------------------------------------------------------------------------------------
-# Spatial robot: the paper's Table 3 masses and principal inertias; geometry PUMA-like and
+# Built-in robots: the URDF files shipped in spacerobot/data/robots/ (read by spacerobot.urdf),
+# plus what a URDF does not hold: the initial posture q0 and a description.
+#
+# planar: the paper's Table 2 was lost; the base is as the paper's results fix it (m = 500 kg,
+# b = (0.10, -0.10) m, Izz = 83.61 kg.m2). The arm is ours: three revolute joints about z,
+# links as slender rods (I = m l^2 / 12, a small Ixx, Izz = 1.01 Iyy), mounted on the +x face
+# of a 1 m base; 1.0/1.0/0.5 m, 40/30/10 kg, typical of a 2-3 m manipulator on a 500 kg
+# servicer and heavy enough (80 kg) for the arm to stabilise the base attitude (eq. 39).
+#
+# spatial: the paper's Table 3 masses and principal inertias; geometry PUMA-like and
 # consistent with those inertias (slender links of 0.5, 0.72, 0.2, 0.2, 0.16 m along the axis
-# of smallest inertia). The arm is mounted on the +y face of the 1 m base cube; at q = 0 it
-# extends along +y. Base centre-of-mass offset b1 (fuel use) is our choice.
+# of smallest inertia), mounted on the +y face of the 1 m base cube; at q = 0 it extends along
+# +y. The base centre-of-mass offset b1 (fuel use) is our choice.
 # --------------------------------------------------------------------------------------------
 
-SPATIAL_BASE = RigidBody(500.0, (0.10, -0.10, 0.05), (83.33, 83.33, 83.33, 0.0, 0.0, 0.0))
+#: the folder of the shipped URDF files (planar.urdf, spatial.urdf, servicer7.urdf)
+URDF_DIR = Path(__file__).resolve().parent / "data" / "robots"
 
-_RZ90 = _R(rot("z", math.pi / 2))
-_RZm90 = _R(rot("z", -math.pi / 2))
+#: built-in robot name -> (URDF file, initial posture q0 [rad], description)
+BUILTIN_ROBOTS: Dict[str, Tuple[Path, Tuple[float, ...], str]] = {
+    "planar": (URDF_DIR / "planar.urdf",
+               (math.radians(30.0), math.radians(-60.0), math.radians(45.0)),
+               "Planar free-floating robot: 500 kg base, 3-joint arm (1.0/1.0/0.5 m, "
+               "40/30/10 kg), motion in x-y, rotation about z."),
+    "spatial": (URDF_DIR / "spatial.urdf",
+                (0.0, math.radians(-30.0), math.radians(60.0), 0.0, math.radians(-30.0), 0.0),
+                "Spatial free-floating robot: 500 kg base (1 m cube), PUMA-like 6-joint arm "
+                "with the paper's Table 3 masses and inertias."),
+}
 
-SPATIAL = Robot(
-    name="spatial",
-    planar=False,
-    base=SPATIAL_BASE,
-    links=(
-        # shoulder yaw about the mount normal
-        ArmLink("joint1", (0.0, 0.5, 0.0), _I3, (0.0, 1.0, 0.0),
-                RigidBody(22.7, (0.0, 0.10, 0.0), (3.14e-2, 8.13e-2, 5.70e-2, 0.0, 0.0, 0.0))),
-        # shoulder pitch, upper arm 0.5 m along y
-        ArmLink("joint2", (0.0, 0.2, 0.0), _I3, (0.0, 0.0, 1.0),
-                RigidBody(45.3, (0.0, 0.25, 0.0), (0.99, 5.10e-2, 1.03, 0.0, 0.0, 0.0))),
-        # elbow pitch, forearm 0.72 m along y
-        ArmLink("joint3", (0.0, 0.5, 0.0), _I3, (0.0, 0.0, 1.0),
-                RigidBody(61.1, (0.0, 0.36, 0.0), (2.67, 5.77e-2, 2.71, 0.0, 0.0, 0.0))),
-        # wrist roll about the forearm axis
-        ArmLink("joint4", (0.0, 0.72, 0.0), _I3, (0.0, 1.0, 0.0),
-                RigidBody(14.0, (0.0, 0.10, 0.0), (5.00e-2, 4.40e-3, 4.96e-2, 0.0, 0.0, 0.0))),
-        # wrist pitch; link 5 frame turned so that its long (x) axis continues the arm
-        ArmLink("joint5", (0.0, 0.2, 0.0), _RZm90, (0.0, 0.0, 1.0),
-                RigidBody(14.0, (0.10, 0.0, 0.0), (4.40e-3, 5.00e-2, 4.96e-2, 0.0, 0.0, 0.0))),
-        # tool roll about the arm axis (y of link 6)
-        ArmLink("joint6", (0.2, 0.0, 0.0), _RZ90, (0.0, 1.0, 0.0),
-                RigidBody(10.1, (0.0, 0.08, 0.0), (2.22e-2, 3.16e-3, 2.21e-2, 0.0, 0.0, 0.0))),
-    ),
-    # tool plate 0.2 m along link 6; E frame z axis = approach direction (= link 6 y axis)
-    ee_xyz=(0.0, 0.2, 0.0),
-    ee_rotation=_R(rot("x", -math.pi / 2)),
-    q0=(0.0, math.radians(-30.0), math.radians(60.0), 0.0, math.radians(-30.0), 0.0),
-    description="Spatial free-floating robot: 500 kg base (1 m cube), PUMA-like 6-joint arm "
-                "with the paper's Table 3 masses and inertias.",
-)
 
-ROBOTS: Dict[str, Robot] = {"planar": PLANAR, "spatial": SPATIAL}
+class _BuiltinRobots(Mapping):
+    """``ROBOTS[name]``: the built-in robots, each read from its URDF on first use (so that
+    importing this module, as the FMUs do, reads no file)."""
+
+    def __init__(self):
+        self._cache: Dict[str, Robot] = {}
+
+    def __getitem__(self, name: str) -> Robot:
+        if name not in self._cache:
+            from .urdf import load_robot
+            path, q0, description = BUILTIN_ROBOTS[name]
+            self._cache[name] = replace(load_robot(path), name=name, q0=q0,
+                                        description=description)
+        return self._cache[name]
+
+    def __iter__(self):
+        return iter(BUILTIN_ROBOTS)
+
+    def __len__(self) -> int:
+        return len(BUILTIN_ROBOTS)
+
+
+#: the built-in robots by name (``planar``, ``spatial``): aliases of their shipped URDF files
+ROBOTS: Mapping[str, Robot] = _BuiltinRobots()
+
+
+def __getattr__(name: str):
+    """``PLANAR`` and ``SPATIAL``: ``ROBOTS["planar"]``, ``ROBOTS["spatial"]`` (read lazily)."""
+    if name in ("PLANAR", "SPATIAL"):
+        return ROBOTS[name.lower()]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+# --------------------------------------------------------------------------------------------
+# Robot keys: what the command line, the SSP builder, sweeps and Monte Carlo studies pass
+# around. A key is a built-in name or a URDF file, optionally with the end-effector link and
+# the motion model after '#': "arm.urdf", "arm.urdf#ee=tool0", "arm.urdf#ee=tool0&motion=planar".
+# --------------------------------------------------------------------------------------------
+
+
+def robot_spec(robot: str, ee: str | None = None, motion: str | None = None) -> str:
+    """The key of ``robot`` (a built-in name or a URDF path) with the options of
+    :func:`spacerobot.urdf.load_robot`; a path becomes absolute (keys travel to workers)."""
+    if robot in BUILTIN_ROBOTS:
+        if ee is not None or motion not in (None, "auto"):
+            raise ValueError(f"--ee and --motion apply to a URDF file, not to the built-in "
+                             f"robot {robot!r}")
+        return robot
+    path, opts = _split_spec(robot)
+    if not path.endswith(".urdf") and not Path(path).is_file():
+        raise ValueError(f"unknown robot {robot!r}: give {' or '.join(sorted(ROBOTS))} or a "
+                         f".urdf file")
+    if ee is not None:
+        opts["ee"] = ee
+    if motion not in (None, "auto"):
+        opts["motion"] = motion
+    key = str(Path(path).resolve())
+    return key + ("#" + "&".join(f"{k}={v}" for k, v in sorted(opts.items())) if opts else "")
+
+
+def _split_spec(key: str) -> Tuple[str, Dict[str, str]]:
+    path, _, frag = key.partition("#")
+    opts = {}
+    for item in filter(None, frag.split("&")):
+        k, eq, v = item.partition("=")
+        if not eq or k not in ("ee", "motion"):
+            raise ValueError(f"robot {key!r}: after '#' expected ee=LINK and/or motion=MODEL "
+                             f"separated by '&', got {item!r}")
+        opts[k] = v
+    return path, opts
+
+
+def get_robot(key: str) -> Robot:
+    """The robot record of a key (built-in name, or URDF file with options, see
+    :func:`robot_spec`); raises ``ValueError`` (a :class:`spacerobot.urdf.URDFError` for a bad
+    URDF) naming what is wrong."""
+    if key in BUILTIN_ROBOTS:
+        return ROBOTS[key]
+    path, opts = _split_spec(key)
+    if not path.endswith(".urdf") and not Path(path).is_file():
+        raise ValueError(f"unknown robot {key!r}: give {' or '.join(sorted(ROBOTS))} or a "
+                         f".urdf file")
+    p = Path(path)
+    try:
+        stamp = p.stat().st_mtime_ns
+    except OSError as e:
+        raise ValueError(f"robot {path}: {e.strerror or e}") from None
+    return _load_urdf(str(p.resolve()), stamp, opts.get("ee"), opts.get("motion", "auto"))
+
+
+@lru_cache(maxsize=32)
+def _load_urdf(path: str, stamp: int, ee: str | None, motion: str) -> Robot:
+    from .urdf import load_robot
+    return load_robot(path, ee=ee, motion=motion)
+
+
+def check_robot(key: str) -> None:
+    """Raise ``ValueError`` if ``key`` names no usable robot (see :func:`get_robot`)."""
+    get_robot(key)
+
+
+def robot_kind(key: str) -> str:
+    """``'planar'`` or ``'spatial'``: the table of defaults (targets, guesses, velocities,
+    parameter sets) a robot takes. A built-in robot's own; a URDF robot's by its motion."""
+    if key in BUILTIN_ROBOTS:
+        return key
+    return "planar" if get_robot(key).planar else "spatial"
+
+
+def robot_label(key: str) -> str:
+    """A short name for files and the SSD: the built-in name, or the URDF's robot name."""
+    return key if key in BUILTIN_ROBOTS else get_robot(key).name
+
+
+def robot_files(key: str) -> Tuple[Path, ...]:
+    """The URDF file(s) a robot is read from (to know when a build is stale)."""
+    if key in BUILTIN_ROBOTS:
+        return (BUILTIN_ROBOTS[key][0],)
+    return (Path(_split_spec(key)[0]),)
 
 # --------------------------------------------------------------------------------------------
 # Targets (rigidly grasped at E; parameters in the E frame).
@@ -495,39 +576,56 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
 
 
 def parameter_set_scenario(robot: str, name: str) -> Scenario:
-    """The scenario of parameter set ``name`` of ``robot`` (:data:`PARAMETER_SETS`)."""
-    if robot not in PARAMETER_SETS:
-        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(PARAMETER_SETS)}")
-    sets = PARAMETER_SETS[robot]
+    """The scenario of parameter set ``name`` of ``robot`` (:data:`PARAMETER_SETS` of its
+    :func:`robot_kind`)."""
+    sets = PARAMETER_SETS[robot_kind(robot)]
     if name not in sets:
-        raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
+        raise ValueError(f"unknown parameter set {name!r} for robot {robot_label(robot)!r}; "
                          f"choose from {sorted(sets)}")
     ps = sets[name]
     sc = scenario(robot, ps.target)
-    return replace(sc, name=f"{robot}-{name}",
+    return replace(sc, name=f"{robot_label(robot)}-{name}",
                    excitation=sc.excitation if ps.excited else NO_EXCITATION)
+
+
+def excitation_within_limits(robot: Robot, excitation: Excitation = Excitation()) -> Excitation:
+    """``excitation`` with its joint amplitude ``q_max`` reduced so that the excitation keeps
+    every joint within its limits about the home posture ``q0`` (``ArmLink.limits``; joints
+    without limits do not bound it)."""
+    margin = [min(q - l.limits[0], l.limits[1] - q)
+              for q, l in zip(robot.q0, robot.links) if l.limits is not None]
+    if not margin:
+        return excitation
+    return replace(excitation, q_max=max(0.0, min(excitation.q_max, *margin)))
 
 
 def scenario(robot: str = "planar", target: str | None = None, **overrides) -> Scenario:
     """The paper's scenario for ``robot`` with the named target; keyword overrides replace fields.
+
+    ``robot`` is a built-in name or a URDF robot key (:func:`robot_spec`). A URDF robot takes
+    the defaults of its kind (:func:`robot_kind`: the planar or the spatial robot's targets,
+    guesses, initial velocities, controller and stop time), its home posture from the URDF
+    (the middle of the joint limits, 0 without limits) and an excitation whose joint amplitude
+    keeps the joints within their limits (:func:`excitation_within_limits`).
 
     Examples
     --------
     >>> scenario("planar", "medium").target.mass
     250.0
     """
-    if robot not in ROBOTS:
-        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(ROBOTS)}")
-    target = target or DEFAULT_TARGET[robot]
-    if target not in TARGETS[robot]:
-        raise ValueError(f"unknown target {target!r} for robot {robot!r}; "
-                         f"choose from {sorted(TARGETS[robot])}")
-    if robot == "planar":
+    kind, rb = robot_kind(robot), get_robot(robot)
+    target = target or DEFAULT_TARGET[kind]
+    if target not in TARGETS[kind]:
+        raise ValueError(f"unknown target {target!r} for robot {robot_label(robot)!r}; "
+                         f"choose from {sorted(TARGETS[kind])}")
+    if kind == "planar":
         base = dict(v0=(1.0, 2.0, 0.0), omega0=(0.0, 0.0, 0.1), stop_time=30.0)
     else:
         base = dict(v0=(10.0, 20.0, 30.0), omega0=(0.1, 0.2, 0.3), stop_time=60.0)
-    base.update(name=f"{robot}-{target}", robot=ROBOTS[robot], target=TARGETS[robot][target],
-                guess=PAPER_GUESS[robot])
+    base.update(name=f"{robot_label(robot)}-{target}", robot=rb, target=TARGETS[kind][target],
+                guess=PAPER_GUESS[kind])
+    if robot not in BUILTIN_ROBOTS:
+        base.update(excitation=excitation_within_limits(rb))
     base.update(overrides)
     return Scenario(**base)
 
@@ -586,18 +684,19 @@ def random_scenario(robot: str, rng: np.random.Generator, name: str | None = Non
     robot, offsets lie in x-y, inertia tensors are turned about z only, and the initial motion
     is a z rotation and an x-y drift.
     """
-    if robot not in ROBOTS:
-        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(ROBOTS)}")
-    rb, planar, rr = ROBOTS[robot], ROBOTS[robot].planar, RANDOM_RANGES
+    rb = get_robot(robot)
+    planar, rr = rb.planar, RANDOM_RANGES
     base = random_body(rng, rr["base_mass"], rr["base_edge"], planar)
     target = random_body(rng, rr["target_mass"], rr["target_edge"], planar)
     omega0 = _random_direction(rng, planar) * rng.uniform(*rr["omega0"])
     if planar:
         omega0 = np.array([0.0, 0.0, omega0[0]])   # signed rate about z
     v0 = _random_direction(rng, planar) * rng.uniform(*rr["v0"])
-    return Scenario(name=name or f"{robot}-random", robot=replace(rb, base=base), target=target,
-                    v0=tuple(float(x) for x in v0), omega0=tuple(float(x) for x in omega0),
-                    guess=PAPER_GUESS[robot], stop_time=60.0)
+    return Scenario(name=name or f"{robot_label(robot)}-random", robot=replace(rb, base=base),
+                    target=target, v0=tuple(float(x) for x in v0),
+                    omega0=tuple(float(x) for x in omega0), guess=PAPER_GUESS[robot_kind(robot)],
+                    stop_time=60.0, **({} if robot in BUILTIN_ROBOTS
+                                       else dict(excitation=excitation_within_limits(rb))))
 
 
 #: The values the paper prints for the planar medium target (Section V.A.1), CoM inertia Izz.

@@ -200,13 +200,13 @@ def test_run_pairs_estimates_with_truths_by_name(planar_baseline):
     for n in est_out:
         assert res.final[n] == res.data[f"estimator.{n}"][-1]
         assert res.truth[n] == res.data[f"plant.{n}"][-1]
-    # relative errors: finite everywhere, also where the truth is zero (scale 1 m for b)
+    # relative errors: finite everywhere, also where the truth is zero (scale COM_SCALE_MIN for b)
     rel = res.relative_errors()
     assert list(rel) == est_out and all(np.isfinite(list(rel.values())))
     zero = [n for n in est_out if res.truth[n] == 0.0 and ".b[" in n]
     assert zero, "the planar scenario has a zero CoM component"
     for n in zero:
-        assert rel[n] == abs(res.final[n])
+        assert rel[n] == abs(res.final[n]) / interface.COM_SCALE_MIN
     assert rel["target.m"] == abs(res.final["target.m"] - 250.0) / 250.0
 
 

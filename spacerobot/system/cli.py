@@ -2,12 +2,13 @@
 
 ::
 
-    spacerobot build --robot planar|spatial [--out DIR] [--sensors]
-    spacerobot run [--robot planar|spatial | SSP_FILE] [--target small|medium|large]
+    spacerobot build --robot planar|spatial|ROBOT.urdf [--ee LINK] [--motion M] [--out DIR]
+                     [--sensors]
+    spacerobot run [--robot planar|spatial|ROBOT.urdf [--ee LINK] | SSP_FILE] [--target NAME]
                    [--method momentum|force] [--accel measured|differenced]
                    [--solver paper|joint] [--stop-time T] [--out CSV] [--set NAME=VALUE ...]
                    [--sensors]
-    spacerobot identify TELEMETRY.csv --robot planar|spatial [--method ...] [--out CSV]
+    spacerobot identify TELEMETRY.csv --robot planar|spatial|ROBOT.urdf [--method ...] [--out CSV]
     spacerobot plot CSV [--out PNG]
     spacerobot sweep ...        (spacerobot.system.sweep, if installed)
     spacerobot montecarlo ...   (spacerobot.system.montecarlo)
@@ -25,7 +26,7 @@ from typing import Optional, Sequence
 
 from .. import __version__
 from ..interface import identified_estimates
-from ..robots import PAPER_PLANAR_MEDIUM, ROBOTS
+from ..robots import PAPER_PLANAR_MEDIUM, ROBOTS, get_robot, robot_label, robot_spec
 from .codes import ACCEL_CODES, METHOD_CODES, SOLVER_CODES, estimator_overrides
 
 
@@ -56,22 +57,57 @@ def fail_on_errors(command: str):
 
 
 # ----------------------------------------------------------------------------------------------
+# the robot argument (build, run, montecarlo)
+# ----------------------------------------------------------------------------------------------
+
+ROBOT_HELP = (f"robot: {' or '.join(sorted(ROBOTS))} (aliases of the shipped URDF files) or a "
+              f"URDF file")
+
+
+def add_robot_arguments(p: argparse.ArgumentParser, required: bool = False,
+                        default: Optional[str] = None) -> None:
+    """``--robot NAME|FILE.urdf``, ``--ee LINK`` and ``--motion auto|planar|spatial``."""
+    p.add_argument("--robot", metavar="ROBOT", required=required, default=default,
+                   help=ROBOT_HELP + (f" (default {default})" if default else ""))
+    p.add_argument("--ee", metavar="LINK", help="URDF: the end-effector link (grasp point E, "
+                   "target frame T); default: the last link of the chain")
+    p.add_argument("--motion", choices=("auto", "planar", "spatial"), default="auto",
+                   help="URDF: planar model (8 parameters) if every joint axis is parallel to "
+                        "the base z axis (auto, the default), or forced")
+
+
+def robot_key(args) -> Optional[str]:
+    """The robot key (:func:`spacerobot.robots.robot_spec`) of the parsed ``--robot``,
+    ``--ee``, ``--motion``, checked (a bad URDF raises ``ValueError`` naming the element)."""
+    if args.robot is None:
+        if args.ee is not None or args.motion != "auto":
+            raise CommandError("--ee and --motion need --robot ROBOT.urdf")
+        return None
+    key = robot_spec(args.robot, args.ee, args.motion)
+    get_robot(key)
+    return key
+
+
+# ----------------------------------------------------------------------------------------------
 # sub-commands
 # ----------------------------------------------------------------------------------------------
 
 @fail_on_errors("build")
 def cmd_build(args) -> int:
     from .ssd import build_system
-    out = Path(args.out) if args.out else Path("build") / args.robot
-    for key, path in build_system(args.robot, out, sensors=args.sensors).items():
+    robot = robot_key(args)
+    out = Path(args.out) if args.out else Path("build") / robot_label(robot)
+    for key, path in build_system(robot, out, sensors=args.sensors).items():
         print(f"{key:<12} {path}")
     return 0
 
 
 def result_name(robot: Optional[str], ssp: Path, target: Optional[str], args) -> Path:
-    """Default results CSV: ``results/<robot>-<target>-<method>-<accel>-<solver>.csv``, so that
-    runs that differ in any of them do not overwrite each other."""
-    return Path("results") / (f"{robot or ssp.stem}-{target or 'bound'}-{args.method}-"
+    """Default results CSV: ``results/<robot>[_sensors]-<target>-<method>-<accel>-<solver>.csv``,
+    so that runs that differ in any of them do not overwrite each other."""
+    sensors = "_sensors" if robot and args.sensors and not args.ssp else ""
+    name = robot_label(robot) + sensors if robot else ssp.stem
+    return Path("results") / (f"{name}-{target or 'bound'}-{args.method}-"
                               f"{args.accel}-{args.solver}.csv")
 
 
@@ -84,6 +120,7 @@ def cmd_run(args) -> int:
 
     if args.ssp and args.robot:
         raise CommandError("give either --robot or SSP_FILE, not both")
+    key = robot_key(args)
     overrides = estimator_overrides(args.method, args.accel, args.solver)
     overrides.update(parse_assignments(args.set))
     if args.ssp:
@@ -92,11 +129,10 @@ def cmd_run(args) -> int:
             raise CommandError(f"{ssp} does not exist")
         robot = robot_of(ssp)
     else:
-        robot = args.robot or "planar"
+        robot = key or "planar"
         ssp = None
     target = args.target or (default_parameter_set(robot, args.sensors) if robot else None)
-    name = f"{robot}_sensors" if robot and args.sensors and not args.ssp else robot
-    csv_path = Path(args.out) if args.out else result_name(name, ssp or Path(robot), target,
+    csv_path = Path(args.out) if args.out else result_name(robot, ssp or Path(robot), target,
                                                              args)
     check_writable(csv_path)              # before the build and the run: results never lost
     if ssp is None:
@@ -106,10 +142,11 @@ def cmd_run(args) -> int:
                   progress=False if args.no_progress else None)
     paper = (PAPER_PLANAR_MEDIUM.get(args.method) if robot == "planar" and target == "medium"
              else None)
-    print(f"{ssp}: robot {robot or '?'}, parameter set {target or '(as bound)'}, method "
+    print(f"{ssp}: robot {robot_label(robot) if robot else '?'}, parameter set "
+          f"{target or '(as bound)'}, method "
           f"{args.method}, solver {args.solver}, accelerations {args.accel}; "
           f"t = {res.start_time:g} .. {res.stop_time:g} s, step {res.step_size:g} s")
-    print(format_results(res, paper, identified_estimates(ROBOTS[robot]) if robot else None))
+    print(format_results(res, paper, identified_estimates(get_robot(robot)) if robot else None))
     if paper:
         print("paper: Zhang, Yue, Yuan (2020), planar medium target, final estimates "
               f"({args.method}-based)")
@@ -142,8 +179,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("build", help="build the plant and estimator FMUs and the .ssp",
                        description="Build SpaceRobotPlant.fmu, SpaceRobotEstimator.fmu, "
                                    "SystemStructure.ssd, the parameter sets and <robot>.ssp.")
-    p.add_argument("--robot", choices=sorted(ROBOTS), required=True)
-    p.add_argument("--out", metavar="DIR", help="output folder (default build/<robot>/)")
+    add_robot_arguments(p, required=True)
+    p.add_argument("--out", metavar="DIR", help="output folder (default build/<robot>/, "
+                                                "<robot> the URDF's robot name)")
     p.add_argument("--sensors", action="store_true", help="the system with the sensors FMU "
                    "between plant and estimator (<robot>_sensors.ssp, docs/sensors.md)")
     p.set_defaults(func=cmd_build)
@@ -154,9 +192,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "planar medium target, the paper's values.")
     p.add_argument("ssp", nargs="?", metavar="SSP_FILE", help="a .ssp archive (or folder) to "
                    "run instead of --robot")
-    p.add_argument("--robot", choices=sorted(ROBOTS), help="robot (default planar)")
-    p.add_argument("--target", help="parameter set: small|medium|large (planar), default "
-                                    "(spatial); default: the one bound in the SSD")
+    add_robot_arguments(p)
+    p.add_argument("--target", help="parameter set: small|medium|large|paper|excited (planar "
+                                    "robots), paper|default (spatial robots); default: the one "
+                                    "bound in the SSD")
     p.add_argument("--method", choices=list(METHOD_CODES), default="momentum")
     p.add_argument("--accel", choices=list(ACCEL_CODES), default="measured",
                    help="force method: measured accelerations or differenced velocities")

@@ -32,7 +32,8 @@ import numpy as np
 from ..estimator import ExcitationRequest, Identifier
 from ..interface import (ESTIMATE_NAMES, AccelSource, Method, Solver, Var, estimator_vars,
                          identified_estimates, measurement_vars)
-from ..robots import INERTIA_NAMES, ROBOTS, Guess, RigidBody, scenario
+from ..robots import (INERTIA_NAMES, Guess, RigidBody, check_robot, get_robot, robot_label,
+                      scenario)
 from .recorder import read_csv, write_csv
 from .runner import RunResult, format_results
 
@@ -133,7 +134,7 @@ def identifier_of(robot: str, values: Mapping[str, float]) -> Tuple[Identifier, 
     v = values
     guess = Guess(_body(v, "guess.base"), _body(v, "guess.target"), float(v["P0_mu"]),
                   float(v["P0_theta"]))
-    ident = Identifier(ROBOTS[robot], guess, Method.parse(int(v["method"]), "method"),
+    ident = Identifier(get_robot(robot), guess, Method.parse(int(v["method"]), "method"),
                        Solver.parse(int(v["solver"]), "solver"),
                        AccelSource.parse(int(v["accel_source"]), "accel_source"),
                        float(v["lambda"]), sd_rel=float(v["ident.sd_rel"]))
@@ -176,7 +177,8 @@ def identify(time: np.ndarray, groups: Mapping[str, np.ndarray], robot: str,
     ----------
     time : (N,) sample times [s]
     groups : {group: (N, ...)} the samples (:func:`read_telemetry`)
-    robot : robot name
+    robot : str
+        A built-in name or a URDF robot key (:func:`spacerobot.robots.robot_spec`).
     parameters : the estimator's parameters (:func:`estimator_parameters`; default: its
         defaults)
 
@@ -203,12 +205,11 @@ def identify_csv(telemetry: str | Path, robot: str, out: Optional[str | Path] = 
     """Read a telemetry CSV, identify, write the result CSV (default
     ``<telemetry stem>-identified.csv`` beside it); a :class:`RunResult` whose ``final`` are
     the last estimates and ``truth`` the telemetry's truth columns, if any."""
-    if robot not in ROBOTS:
-        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(ROBOTS)}")
+    check_robot(robot)
     telemetry = Path(telemetry)
     parameters = estimator_parameters(robot, overrides)
     raw = read_csv(telemetry)
-    time, groups = read_telemetry(telemetry, ROBOTS[robot].n_joints)
+    time, groups = read_telemetry(telemetry, get_robot(robot).n_joints)
     data = identify(time, groups, robot, parameters)
     out = Path(out) if out else telemetry.with_name(telemetry.stem + "-identified.csv")
     truth = read_truth(raw)
@@ -223,7 +224,7 @@ def identify_csv(telemetry: str | Path, robot: str, out: Optional[str | Path] = 
 def register(subparsers):
     """Add the ``identify`` subcommand to an argparse ``subparsers`` object."""
     from .bindings import parse_assignments
-    from .cli import fail_on_errors
+    from .cli import add_robot_arguments, fail_on_errors, robot_key
     from .codes import ACCEL_CODES, METHOD_CODES, SOLVER_CODES
 
     p = subparsers.add_parser(
@@ -233,7 +234,7 @@ def register(subparsers):
                     "--out' writes); writes the estimates, standard deviations and "
                     "diagnostics at every sample as CSV and prints the final estimates.")
     p.add_argument("telemetry", metavar="TELEMETRY.csv")
-    p.add_argument("--robot", choices=sorted(ROBOTS), required=True)
+    add_robot_arguments(p, required=True)
     p.add_argument("--method", choices=list(METHOD_CODES), default="momentum")
     p.add_argument("--accel", choices=list(ACCEL_CODES), default="measured")
     p.add_argument("--solver", choices=list(SOLVER_CODES), default="paper")
@@ -248,11 +249,12 @@ def register(subparsers):
         overrides = {"method": METHOD_CODES[args.method], "accel_source": ACCEL_CODES[args.accel],
                      "solver": SOLVER_CODES[args.solver]}
         overrides.update(parse_assignments(args.set))
-        res = identify_csv(args.telemetry, args.robot, args.out, overrides)
-        print(f"{args.telemetry}: robot {args.robot}, method {args.method}, solver "
+        robot = robot_key(args)
+        res = identify_csv(args.telemetry, robot, args.out, overrides)
+        print(f"{args.telemetry}: robot {robot_label(robot)}, method {args.method}, solver "
               f"{args.solver}, accelerations {args.accel}; {len(res.time)} samples, "
               f"t = {res.start_time:g} .. {res.stop_time:g} s")
-        print(format_results(res, None, identified_estimates(ROBOTS[args.robot])))
+        print(format_results(res, None, identified_estimates(get_robot(robot))))
         print(f"CSV: {res.csv_path}")
         return 0
 

@@ -34,7 +34,8 @@ import numpy as np
 
 from .. import interface
 from ..interface import ESTIMATE_NAMES, ExciteMode, ParameterLayout
-from ..robots import ROBOTS, Scenario, random_scenario
+from ..robots import (Scenario, check_robot, get_robot, random_scenario, robot_label,
+                      robot_spec)
 from .codes import estimator_overrides
 from .mc_metrics import run_metrics
 from .sweep.execute import Study, run_sweep
@@ -75,8 +76,8 @@ class Case:
     solver: str = "paper"
 
     def __post_init__(self):
-        if self.robot not in ROBOTS:
-            raise ValueError(f"robot must be one of {sorted(ROBOTS)}, got {self.robot!r}")
+        check_robot(self.robot)          # a built-in name or a URDF robot key (made absolute)
+        object.__setattr__(self, "robot", robot_spec(self.robot))
         if self.excite not in EXCITE:
             raise ValueError(f"excite must be one of {sorted(EXCITE)}, got {self.excite!r}")
         if not (self.stop_time > 0.0 and math.isfinite(self.stop_time)):
@@ -93,7 +94,7 @@ class Case:
     def scenario(self) -> Scenario:
         """The drawn bodies and initial state (the same for every method and excitation)."""
         return random_scenario(self.robot, np.random.default_rng([self.seed, self.index]),
-                               name=f"{self.robot}-random-{self.seed}-{self.index}")
+                               name=f"{robot_label(self.robot)}-random-{self.seed}-{self.index}")
 
     def fmi_overrides(self) -> Dict[str, float]:
         """SSP runner overrides: the drawn plant parameters and the estimator set-up."""
@@ -137,7 +138,7 @@ def case_row(case: Case, res) -> Dict[str, object]:
     """The metric columns of one finished run (:class:`~spacerobot.system.runner.RunResult`)."""
     from ..estimator.physical import is_physical
 
-    robot = ROBOTS[case.robot]
+    robot = get_robot(case.robot)
     layout = ParameterLayout.for_robot(robot)
     est = _series(res, ESTIMATE_NAMES, "estimator")
     truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
@@ -220,7 +221,8 @@ def summary_table(rows: Sequence[Dict[str, str]]) -> str:
         bad = sum(r["physical"] != "1" for r in rs)
         n = len(rs)
 
-        def med(t):
+        def med(t):   # NaN = never settled, i.e. later than the end
+            t = np.where(np.isnan(t), np.inf, t)
             return f"{np.median(t):.1f}" if np.isfinite(t).sum() * 2 > n else "> end"
         lines.append(f"| {robot} | {method} | {excite} | {n} | {(w < 1e-2).sum()}/{n} | "
                      f"{(w < 1e-3).sum()}/{n} | {100 * np.median(w):.3g} % | "
@@ -274,7 +276,7 @@ def register(subparsers):
     """Add the ``montecarlo`` subcommand to an argparse ``subparsers`` object."""
     import argparse
 
-    from .cli import fail_on_errors
+    from .cli import add_robot_arguments, fail_on_errors
 
     p = subparsers.add_parser(
         "montecarlo", help="identification on random real bases and targets, on Dask",
@@ -284,7 +286,7 @@ def register(subparsers):
                     "flag, excitation used) to a resumable CSV, a summary table and a plot of "
                     "the worst-error distribution.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--robot", choices=sorted(ROBOTS), default="spatial")
+    add_robot_arguments(p, default="spatial")
     p.add_argument("--cases", type=int, default=20, help="number of random cases")
     p.add_argument("--seed", type=int, default=0, help="seed of the draws")
     p.add_argument("--method", nargs="+", default=["momentum", "force"],
@@ -309,17 +311,19 @@ def register(subparsers):
 
 def cli_montecarlo(args) -> int:
     """The ``spacerobot montecarlo`` command; exit status 1 if a case failed."""
+    from .cli import robot_key
     from .recorder import check_writable
     from .sweep.table import SweepLocked
 
-    out = Path(args.out or f"results/montecarlo-{args.robot}-seed{args.seed}.csv")
+    robot = robot_key(args)
+    out = Path(args.out or f"results/montecarlo-{robot_label(robot)}-seed{args.seed}.csv")
     check_writable(out)
     ssp = None
     if args.ssp:
         if not Path(args.ssp).exists():
             raise ValueError(f"{args.ssp} does not exist")
-        ssp = {args.robot: str(Path(args.ssp).resolve())}
-    cases = make_cases(args.robot, args.cases, args.seed, args.method, args.excite,
+        ssp = {robot: str(Path(args.ssp).resolve())}
+    cases = make_cases(robot, args.cases, args.seed, args.method, args.excite,
                        args.stop_time)
     try:
         summary = run_montecarlo(cases, out, workers=args.workers, scheduler=args.scheduler,

@@ -14,6 +14,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from .. import interface
 from ..interface import ESTIMATE_NAMES
 from .recorder import read_csv
 
@@ -61,11 +62,12 @@ def _truth(data: Dict[str, np.ndarray], name: str) -> Optional[float]:
 
 
 def _zero_truth_scale(data: Dict[str, np.ndarray], name: str) -> Tuple[float, str]:
-    """Scale for the band of a zero-truth parameter: 1 m for a centre-of-mass component, the
-    body's largest principal moment (diagonal truth) for an inertia element."""
+    """Scale for the band of a zero-truth parameter, as in :func:`interface.error_scale`:
+    ``COM_SCALE_MIN`` for a centre-of-mass component, the body's largest principal moment
+    (diagonal truth) for an inertia element."""
     body, par = name.split(".", 1)
     if par.startswith("b["):
-        return 1.0, "1 m"
+        return interface.COM_SCALE_MIN, f"{interface.COM_SCALE_MIN:g} m"
     diag = [_truth(data, f"{body}.{d}") for d in ("Ixx", "Iyy", "Izz")]
     diag = [abs(x) for x in diag if x is not None]
     scale = max(diag) if diag else 1.0

@@ -47,6 +47,7 @@ from .instance import FMUInstance, FMULog
 from .master import Master, initialize, time_grid
 from .reader import ComponentInfo, SystemInfo, open_system
 from .recorder import Recorder, check_writable, read_csv, write_csv  # noqa: F401
+from .. import interface
 
 __all__ = ["run_ssp", "simulate", "RunResult", "SimulationError", "format_results",
            "read_csv", "write_csv"]
@@ -89,11 +90,9 @@ class RunResult:
 
     def relative_errors(self) -> Dict[str, float]:
         """Estimate name -> ``|final - truth| / scale``
-        (:func:`spacerobot.interface.relative_errors`: ``scale = |truth|``, or where the truth
-        is zero 1 m for ``b`` and the body's largest principal moment for inertia elements)."""
-        from .results import relative_errors
-
-        return relative_errors(self.final, self.truth)
+        (:func:`spacerobot.interface.relative_errors_by_name`, scales of
+        :func:`spacerobot.interface.error_scale`)."""
+        return interface.relative_errors_by_name(self.final, self.truth)
 
     def to_csv(self, path: str | Path) -> Path:
         """Write ``data`` as CSV (header: column names; quoted where they contain commas)."""

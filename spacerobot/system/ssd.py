@@ -39,7 +39,8 @@ from xml.sax.saxutils import quoteattr
 from ..interface import (ESTIMATE_NAMES, EXCITATION_DOC, UNITS, Var, connections,
                          estimator_vars, feedback_connections, plant_vars, sensor_connections,
                          sensors_vars)
-from ..robots import DEFAULT_TARGET, PARAMETER_SETS, ROBOTS, parameter_set_scenario, scenario
+from ..robots import (DEFAULT_TARGET, PARAMETER_SETS, ROBOTS, check_robot, get_robot,
+                      parameter_set_scenario, robot_files, robot_kind, robot_label, scenario)
 
 #: XML namespaces (prefixes are part of the contract: some tools match on them)
 NS = {
@@ -72,8 +73,8 @@ SET_PARAMETERS: Tuple[str, ...] = (
 
 
 def _check_robot(robot: str) -> None:
-    if robot not in ROBOTS:
-        raise ValueError(f"unknown robot {robot!r}; choose from {sorted(ROBOTS)}")
+    """``robot``: a built-in name or a URDF robot key (:func:`spacerobot.robots.robot_spec`)."""
+    check_robot(robot)
 
 
 def parameter_set_names(robot: str, sensors: bool = False) -> List[str]:
@@ -81,19 +82,20 @@ def parameter_set_names(robot: str, sensors: bool = False) -> List[str]:
     (:data:`spacerobot.robots.PARAMETER_SETS`); the sets with a noise level (``ideal``,
     ``realistic``) only for the system with the sensors FMU."""
     _check_robot(robot)
-    return [n for n, ps in PARAMETER_SETS[robot].items() if sensors or ps.noise is None]
+    sets = PARAMETER_SETS[robot_kind(robot)]
+    return [n for n, ps in sets.items() if sensors or ps.noise is None]
 
 
 def default_parameter_set(robot: str, sensors: bool = False) -> str:
     """The parameter set bound in the SSD: the robot's default target (e.g. planar: medium);
     with the sensors FMU ``realistic``."""
     _check_robot(robot)
-    return SENSORS_DEFAULT_SET if sensors else DEFAULT_TARGET[robot]
+    return SENSORS_DEFAULT_SET if sensors else DEFAULT_TARGET[robot_kind(robot)]
 
 
 def system_name(robot: str, sensors: bool = False) -> str:
     """File stem of the packaged system: ``<robot>`` or ``<robot>_sensors``."""
-    return f"{robot}_sensors" if sensors else robot
+    return f"{robot_label(robot)}_sensors" if sensors else robot_label(robot)
 
 
 def _num(x: float) -> str:
@@ -111,7 +113,7 @@ def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
     sc = parameter_set_scenario(robot, name)
     var = {v.name: v for v in plant_vars(sc.robot, sc)}   # starts = the scenario's values
     out = [(n, float(var[n].start), var[n].unit) for n in SET_PARAMETERS]
-    noise = PARAMETER_SETS[robot][name].noise
+    noise = PARAMETER_SETS[robot_kind(robot)][name].noise
     if noise is not None:
         out.append(("noise.scale", float(noise), "1"))
     return out
@@ -132,9 +134,10 @@ def _units_xml(units, indent: str, prefix: str) -> List[str]:
 def ssv_xml(robot: str, name: str) -> str:
     """Text of the SSP 1.0 parameter values file ``resources/<name>.ssv``."""
     params = parameter_set(robot, name)
-    desc = (f"{robot}-{name}: {PARAMETER_SETS[robot][name].description}; plant truth (base, "
+    pset = PARAMETER_SETS[robot_kind(robot)][name]
+    desc = (f"{robot_label(robot)}-{name}: {pset.description}; plant truth (base, "
             f"target), initial velocities and excitation bounds"
-            + ("; sensors noise.scale" if PARAMETER_SETS[robot][name].noise is not None else ""))
+            + ("; sensors noise.scale" if pset.noise is not None else ""))
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<ssv:ParameterSet xmlns:ssv="{NS["ssv"]}" xmlns:ssc="{NS["ssc"]}"',
              f'    version="1.0" name={quoteattr(name)} generationTool="{GENERATOR}"',
@@ -191,7 +194,7 @@ def system_connections(robot: str, sensors: bool = False) -> List[Tuple[str, str
     estimator: the sensors are a direct feedthrough), then the excitation loop estimator ->
     plant."""
     _check_robot(robot)
-    rb = ROBOTS[robot]
+    rb = get_robot(robot)
     if sensors:
         out = [(PLANT, a, SENSORS, b) for a, b in sensor_connections(rb)]
         out += [(SENSORS, n, ESTIMATOR, n) for n in connections(rb)]
@@ -206,7 +209,8 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None, sensors: bool = False) 
 
     Parameters
     ----------
-    robot : {'planar', 'spatial'}
+    robot : str
+        'planar', 'spatial' or a URDF robot key (:func:`spacerobot.robots.robot_spec`)
     bound_set : str, optional
         Parameter set bound to the plant component (and to the sensors component) (default:
         :func:`default_parameter_set`).
@@ -222,11 +226,11 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None, sensors: bool = False) 
     step = _num(sc.sample_time)
     conns = component_connectors(robot, sensors)
     units = {v.unit for c in conns.values() for _, _, v in c if v.type == "Real" and v.unit}
-    robot_desc = ROBOTS[robot].description
+    robot_desc = get_robot(robot).description
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              "<ssd:SystemStructureDescription"
              + "".join(f'\n    xmlns:{p}="{u}"' for p, u in NS.items()),
-             f'    version="1.0" name="SpaceRobot_{system_name(robot, sensors)}" '
+             f'    version="1.0" name={quoteattr("SpaceRobot_" + system_name(robot, sensors))} '
              f'generationTool="{GENERATOR}"',
              f"    description={quoteattr(_SYSTEM_DESC[sensors] + robot_desc)}>",
              f'  <ssd:System name="root" description={quoteattr(_ROOT_DESC[sensors])}>',
@@ -323,7 +327,8 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
 
     Parameters
     ----------
-    robot : {'planar', 'spatial'}
+    robot : str
+        'planar', 'spatial' or a URDF robot key (:func:`spacerobot.robots.robot_spec`)
     out_dir : path
         Output folder (created).
     fmus : dict, optional
@@ -337,7 +342,8 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     -------
     dict
         ``{'plant': .fmu, 'estimator': .fmu[, 'sensors': .fmu], 'ssd': SystemStructure.ssd,
-        'ssv:<set>': .ssv ..., 'ssp': <robot>[_sensors].ssp}``.
+        'ssv:<set>': .ssv ..., 'ssp': <robot>[_sensors].ssp}`` (``<robot>``:
+        :func:`spacerobot.robots.robot_label`).
     """
     from ..fmi.build import build_fmu
 
@@ -391,11 +397,12 @@ def robot_of(ssp: str | Path) -> Optional[str]:
     return robot if robot in ROBOTS else None
 
 
-def _newest_source_mtime() -> float:
-    """Newest modification time of the files the FMUs and the SSD are built from."""
+def _newest_source_mtime(robot: Optional[str] = None) -> float:
+    """Newest modification time of the files the FMUs and the SSD are built from (with the
+    URDF of ``robot``)."""
     from ..fmi.build import BUNDLES, LIB, _script
 
-    paths = [Path(__file__)]
+    paths = [Path(__file__), *(robot_files(robot) if robot else ())]
     for kind, items in BUNDLES.items():
         script = _script(kind)
         paths += [script, script.parent / "README.md"]
@@ -410,13 +417,14 @@ def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None, sensors: bool =
     is missing, older than any library source it is built from, or its SSD differs from the
     generator's.
 
-    ``out_dir`` defaults to ``build/<robot>/`` in the current directory.
+    ``out_dir`` defaults to ``build/<robot>/`` in the current directory (``<robot>``: the
+    built-in name or the URDF's robot name, :func:`spacerobot.robots.robot_label`).
     """
     _check_robot(robot)
-    out = Path(out_dir) if out_dir is not None else Path("build") / robot
+    out = Path(out_dir) if out_dir is not None else Path("build") / robot_label(robot)
     ssp = out / f"{system_name(robot, sensors)}.ssp"
     fresh = False
-    if ssp.exists() and ssp.stat().st_mtime >= _newest_source_mtime():
+    if ssp.exists() and ssp.stat().st_mtime >= _newest_source_mtime(robot):
         try:
             with zipfile.ZipFile(ssp) as zf:
                 fresh = zf.read(SSD_NAME).decode("utf-8") == ssd_xml(robot, sensors=sensors)

@@ -32,9 +32,10 @@ Results table (CSV, one row per point, appended and flushed as each point finish
 ``est.<p>, true.<p>, relerr.<p>``
     for every estimated parameter ``<p>`` of the interface (``base.m``, ``base.b[1]`` ...
     ``target.Iyz``): the final estimate, the truth, and the relative error
-    ``|est - true| / scale`` with ``scale = |true|``, or, where the truth is zero (a CoM
-    component, a product of inertia), 1 m for ``b`` and the body's largest principal moment
-    for the inertia tensor elements.
+    ``|est - true| / scale`` with the body-scaled ``scale`` of
+    :func:`spacerobot.interface.error_scale` (the mass for ``m``, max(|b_i|, 5 cm) for a CoM
+    component, the moment itself for a principal moment, the body's largest moment for a
+    product of inertia).
 
 The planar model identifies only ``m``, ``b[1]``, ``b[2]`` and ``Izz`` of each body; the other
 columns then hold the untouched initial guesses and are not plotted.

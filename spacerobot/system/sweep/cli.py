@@ -90,8 +90,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     S = argparse.SUPPRESS
     p.add_argument("--config", metavar="FILE.toml", help="TOML file with any of the options "
                    "below; options given on the command line take precedence")
-    p.add_argument("--robot", type=_csv_list(), default=S, help="robot(s): planar,spatial "
-                   "(default planar)")
+    p.add_argument("--robot", type=_csv_list(), default=S, help="robot(s): planar,spatial or "
+                   "URDF files (FILE.urdf, FILE.urdf#ee=LINK) (default planar)")
     p.add_argument("--target", type=_csv_list(), default=S,
                    help="target size(s): small,medium,large (default: the robot's default)")
     p.add_argument("--method", type=_csv_list(), default=S,

@@ -8,6 +8,8 @@ The same machinery runs any study whose items are co-simulations of one robot's 
 """
 from __future__ import annotations
 
+import hashlib
+
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -174,6 +176,15 @@ def _points_to_run(points: Sequence[Point], out: Path, summary: SweepSummary,
     return todo
 
 
+def _folder_name(robot: str) -> str:
+    """Build folder of a robot: the built-in name, or for a URDF robot key (a path) the
+    URDF's robot name and a hash of the key (two files may name their robot alike)."""
+    from ...robots import BUILTIN_ROBOTS, robot_label
+    if robot in BUILTIN_ROBOTS:
+        return robot
+    return f"{robot_label(robot)}-{hashlib.sha256(robot.encode()).hexdigest()[:8]}"
+
+
 def _build_systems(todo: Sequence[Point], out: Path, ssp: Optional[Mapping[str, str]],
                    build_dir, builder: str) -> Dict[str, str]:
     """``{robot: absolute .ssp path}`` for every robot of ``todo``: given in ``ssp``, or built
@@ -184,7 +195,7 @@ def _build_systems(todo: Sequence[Point], out: Path, ssp: Optional[Mapping[str, 
         build = _resolve(builder)
         bdir = Path(build_dir) if build_dir else out.with_name(out.name + ".build")
         for rb in robots:
-            built = build(rb, bdir / rb)
+            built = build(rb, bdir / _folder_name(rb))
             if isinstance(built, Mapping):       # build_system returns {'ssp': path, ...}
                 built = built["ssp"]
             ssp_paths[rb] = str(Path(built).resolve())

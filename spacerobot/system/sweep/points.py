@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 from typing import Dict, List, Mapping, Optional, Tuple
 
 from ...interface import ESTIMATE_NAMES, estimate_vector, identified_estimates
-from ...robots import DEFAULT_TARGET, INERTIA_NAMES, ROBOTS, TARGETS, scenario
+from ...robots import (BUILTIN_ROBOTS, DEFAULT_TARGET, INERTIA_NAMES, ROBOTS, TARGETS,
+                       get_robot, robot_kind, robot_spec, scenario)
 from ..codes import ACCEL_CODES, METHOD_CODES, estimator_overrides
 
 #: every estimated parameter, in the order of ``Identifier.vector()``
@@ -34,8 +35,11 @@ class Point:
     overrides: Tuple[Tuple[str, float], ...] = field(default_factory=tuple)
 
     def __post_init__(self):
-        if self.target is None and self.robot in DEFAULT_TARGET:
-            object.__setattr__(self, "target", DEFAULT_TARGET[self.robot])
+        if self.robot not in BUILTIN_ROBOTS:      # a URDF file: its absolute key, checked
+            object.__setattr__(self, "robot", robot_spec(self.robot))
+            get_robot(self.robot)
+        if self.target is None:
+            object.__setattr__(self, "target", DEFAULT_TARGET[robot_kind(self.robot)])
         v = tuple(float(x) for x in self.v0)
         if len(v) == 2:
             v = v + (0.0,)
@@ -52,11 +56,9 @@ class Point:
         if self.accel_source not in ACCEL_CODES:
             raise ValueError(f"accel source must be one of {sorted(ACCEL_CODES)}, "
                              f"got {self.accel_source!r}")
-        if self.robot not in ROBOTS:
-            raise ValueError(f"robot must be one of {sorted(ROBOTS)}, got {self.robot!r}")
-        if self.target not in TARGETS[self.robot]:
-            raise ValueError(f"target must be one of {sorted(TARGETS[self.robot])} for robot "
-                             f"{self.robot!r}, got {self.target!r}")
+        if self.target not in TARGETS[robot_kind(self.robot)]:
+            raise ValueError(f"target must be one of {sorted(TARGETS[robot_kind(self.robot)])} "
+                             f"for robot {self.robot!r}, got {self.target!r}")
 
     def canonical(self) -> dict:
         """The parameters that identify the point (what :func:`point_id` hashes)."""
@@ -71,7 +73,7 @@ class Point:
 
     def fmi_overrides(self) -> Dict[str, float]:
         """The SSP runner overrides of this point (component-prefixed FMI names)."""
-        body = TARGETS[self.robot][self.target]
+        body = TARGETS[robot_kind(self.robot)][self.target]
         ov: Dict[str, float] = {"plant.target.m": body.mass}
         ov.update({f"plant.target.b[{i + 1}]": float(body.com[i]) for i in range(3)})
         ov.update({f"plant.target.{n}": float(body.inertia[k])
@@ -128,7 +130,7 @@ def make_points(robot="planar", target=None, method=("momentum", "force"),
         v0s = list(v0) if v0 is not None else [sc.v0]
         if v0s and not isinstance(v0s[0], (list, tuple)):
             v0s = [v0s]
-        targets = _as_list(target) or [DEFAULT_TARGET[rb]]
+        targets = _as_list(target) or [DEFAULT_TARGET[robot_kind(rb)]]
         fms = _as_list(F_max) or [sc.controller.F_max]
         sts = _as_list(stop_time) or [sc.stop_time]
         for tg, me, ac, v, fm, st in itertools.product(
@@ -145,9 +147,9 @@ def make_points(robot="planar", target=None, method=("momentum", "force"),
 
 def expected_truth(point: Point) -> Dict[str, float]:
     """Truth of the point from the robot, the target and the point's overrides."""
-    robot = ROBOTS[point.robot]
-    truth = dict(zip(PARAMS, estimate_vector(robot.base,
-                                             TARGETS[point.robot][point.target]).tolist()))
+    robot = get_robot(point.robot)
+    target = TARGETS[robot_kind(point.robot)][point.target]
+    truth = dict(zip(PARAMS, estimate_vector(robot.base, target).tolist()))
     for k, x in point.overrides:
         if k.startswith("plant.") and k[6:] in truth:
             truth[k[6:]] = float(x)

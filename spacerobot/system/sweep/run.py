@@ -8,7 +8,7 @@ import time
 import traceback
 from typing import Dict
 
-from ..results import relative_errors
+from ...interface import relative_errors_by_name as relative_errors
 from .points import PARAMS, Point, expected_truth
 from .table import DIAG
 
