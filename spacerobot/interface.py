@@ -354,7 +354,45 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
                   f"1 when the least-squares estimate of the {who} is a real rigid body; 0 when "
                   f"the reported {who} estimate is its projection onto real bodies", None,
                   ("physical", who))]
+    v += noise_model_vars()
     return v
+
+
+#: the estimator's noise model (docs/identification.md, "Under noise"): row standard
+#: deviation parameters per method and equation, (name suffix, method, unit, equation)
+ROW_SD_PARAMETERS = (("momentum_lin", Method.MOMENTUM, "N.s", "linear momentum (eq. 11)"),
+                     ("momentum_ang", Method.MOMENTUM, "N.m.s", "angular momentum (eq. 16)"),
+                     ("force_lin", Method.FORCE, "N", "force (eq. 28)"),
+                     ("force_ang", Method.FORCE, "N.m", "moment (eq. 31)"))
+
+
+def noise_model_vars() -> List[Var]:
+    """The estimator's noise-model parameters: the row standard deviations of each method's
+    equations (0 = unit weight), the differencing window and the residual correlation lags;
+    the defaults are the estimator without a noise model."""
+    v = [Var(f"ident.sd_row.{suffix}", "parameter", "fixed", "Real", unit,
+             f"Standard deviation of one row of the {what} equation's error from the "
+             f"measurement noise ({method.name.lower()} method); the rows are weighted by "
+             f"its inverse. 0 = unit weight", 0.0, ("sd_row", suffix))
+         for suffix, method, unit, what in ROW_SD_PARAMETERS]
+    v += [Var("ident.diff_half_window", "parameter", "fixed", "Integer", None,
+              "Differenced accelerations: derivative at the centre of 2m+1 samples, m >= 1 "
+              "(1 = 3-point central difference; more = Savitzky-Golay, less noise); the "
+              "equations are evaluated at the centre (the estimate lags m samples)", 1,
+              ("diff_half_window",)),
+          Var("ident.corr_lags", "parameter", "fixed", "Integer", None,
+              "Lags (>= 0) of the residual autocorrelation that inflates the standard "
+              "deviations for correlated equation errors (0 = rows independent)", 0,
+              ("corr_lags",))]
+    return v
+
+
+def row_sd(values: Mapping[str, float], method: "Method") -> Tuple[float, float]:
+    """``(linear, angular)`` row standard deviations of ``method`` from the estimator's
+    parameter values (:func:`noise_model_vars`)."""
+    method = Method.parse(method, "method")
+    return tuple(float(values[f"ident.sd_row.{suffix}"])
+                 for suffix, m, _, _ in ROW_SD_PARAMETERS if m is method)
 
 
 #: The 20 estimates (and truth parameters), in the order of ``Identifier.vector()``.

@@ -33,27 +33,36 @@ def _assert_replay_equals_live(live, replay):
         assert np.all(np.abs(a - b) <= 1e-12 * np.maximum(1.0, np.abs(a))), n
 
 
-@pytest.mark.parametrize("system,pset,method,accel", [
-    ("two", "excited", "momentum", "measured"),
-    ("two", "excited", "force", "differenced"),
-    ("sensors", "realistic", "force", "measured"),
-    ("sensors", "realistic", "momentum", "measured"),
+#: the estimator's noise model (docs/identification.md, section 6), not its defaults
+NOISE_MODEL = {"ident.sd_row.force_lin": 5.0, "ident.sd_row.force_ang": 3.0,
+               "ident.diff_half_window": 2, "ident.corr_lags": 20}
+
+
+@pytest.mark.parametrize("system,pset,method,accel,model", [
+    ("two", "excited", "momentum", "measured", {}),
+    ("two", "excited", "force", "differenced", {}),
+    ("sensors", "realistic", "force", "measured", {}),
+    ("sensors", "realistic", "momentum", "measured", {}),
+    ("sensors", "realistic", "force", "differenced", NOISE_MODEL),
 ])
 def test_recorded_run_replayed_gives_the_live_estimates(planar_systems, tmp_path, system, pset,
-                                                        method, accel, capsys):
+                                                        method, accel, model, capsys):
     csv = tmp_path / "run.csv"
     codes = {"momentum": 1, "force": 2, "measured": 1, "differenced": 2}
+    overrides = {"estimator.method": codes[method], "estimator.accel_source": codes[accel]}
+    overrides.update({f"estimator.{k}": v for k, v in model.items()})
     run_ssp(planar_systems[system]["ssp"], parameter_set=pset, stop_time=3.0, csv_path=csv,
-            overrides={"estimator.method": codes[method], "estimator.accel_source": codes[accel]},
-            progress=False)
+            overrides=overrides, progress=False)
     out = tmp_path / "est.csv"
+    sets = [a for k, v in model.items() for a in ("--set", f"{k}={v}")]
     assert main(["identify", str(csv), "--robot", "planar", "--method", method, "--accel",
-                 accel, "--out", str(out)]) == 0
+                 accel, "--out", str(out)] + sets) == 0
     printed = capsys.readouterr().out
     assert "target.m" in printed and "CSV: " in printed
     live, replay = read_csv(csv), read_csv(out)
     _assert_replay_equals_live(live, replay)
-    assert replay["diag.samples"][-1] >= len(replay["time"]) - 2      # every sample used
+    lag = 2 * model.get("ident.diff_half_window", 1)     # reference / differencing window
+    assert replay["diag.samples"][-1] >= len(replay["time"]) - lag    # every sample used
     # the truth columns of the recorded run make the table's truth
     assert f"{live['plant.target.m'][0]:.6g}" in printed
 

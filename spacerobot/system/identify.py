@@ -31,7 +31,7 @@ import numpy as np
 
 from ..estimator import ExcitationRequest, Identifier
 from ..interface import (ESTIMATE_NAMES, AccelSource, Method, Solver, Var, estimator_vars,
-                         identified_estimates, measurement_vars)
+                         identified_estimates, measurement_vars, row_sd)
 from ..robots import (INERTIA_NAMES, Guess, RigidBody, check_robot, get_robot, robot_label,
                       scenario)
 from .recorder import read_csv, write_csv
@@ -134,10 +134,12 @@ def identifier_of(robot: str, values: Mapping[str, float]) -> Tuple[Identifier, 
     v = values
     guess = Guess(_body(v, "guess.base"), _body(v, "guess.target"), float(v["P0_mu"]),
                   float(v["P0_theta"]))
-    ident = Identifier(get_robot(robot), guess, Method.parse(int(v["method"]), "method"),
-                       Solver.parse(int(v["solver"]), "solver"),
+    method = Method.parse(int(v["method"]), "method")
+    ident = Identifier(get_robot(robot), guess, method, Solver.parse(int(v["solver"]), "solver"),
                        AccelSource.parse(int(v["accel_source"]), "accel_source"),
-                       float(v["lambda"]), sd_rel=float(v["ident.sd_rel"]))
+                       float(v["lambda"]), sd_rel=float(v["ident.sd_rel"]),
+                       row_sd=row_sd(v, method), diff_half_window=int(v["ident.diff_half_window"]),
+                       corr_lags=int(v["ident.corr_lags"]))
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))
 
 
