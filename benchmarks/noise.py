@@ -6,8 +6,14 @@ through plant -> sensors -> estimator (``<robot>_sensors.ssp``, parameter set ``
 the sensors' realistic defaults, docs/sensors.md; sensors ``seed`` = the case index), the
 excitation loop closed, for 300 s: the momentum method, and the force method with measured and
 with differenced accelerations (the momentum method reads no acceleration, so its two
-acceleration sources are one run). Every case uses the estimator's defaults: no noise-aware
-weighting or filtering exists yet.
+acceleration sources are one run).
+
+The estimator runs with its noise model (docs/identification.md, "Under noise"): the row
+standard deviations ``ident.sd_row.*`` measured once on a pilot run (the default spatial
+scenario, sensors seed :data:`PILOT_SEED`, not a case seed) with
+``spacerobot.estimator.noise_model.equation_error_sd``, and ``ident.corr_lags`` =
+:data:`CORR_LAGS` for the correlated equation errors; ``--defaults`` runs the estimator's
+defaults instead (no noise model).
 
 Per run, besides spacerobot.system.montecarlo's columns (at 300 s): the worst relative error
 of the 20 estimates at 60 s and at 300 s, and the fraction of the 20 estimates within 2
@@ -15,7 +21,7 @@ reported standard deviations of the truth at 60 s and at 300 s (the calibration 
 to lie in [0.90, 0.99]). Nothing is asserted here.
 
 Usage: ``python benchmarks/noise.py [--cases 20] [--seed 2026] [--workers 2]
-[--stop-time 300] [--out benchmarks/NOISE.md]``
+[--stop-time 300] [--defaults] [--out benchmarks/NOISE.md]``
 """
 from __future__ import annotations
 
@@ -41,7 +47,13 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from spacerobot import __version__  # noqa: E402
+from spacerobot.estimator.identifier import KEYS  # noqa: E402
+from spacerobot.estimator.noise_model import equation_error_sd  # noqa: E402
 from spacerobot.interface import ESTIMATE_NAMES, relative_errors  # noqa: E402
+from spacerobot.robots import get_robot  # noqa: E402
+from spacerobot.system.identify import _body, read_telemetry, read_truth  # noqa: E402
+from spacerobot.system.recorder import read_csv  # noqa: E402
+from spacerobot.system.runner import run_ssp  # noqa: E402
 from spacerobot.system.montecarlo import COLUMNS, Case, case_row  # noqa: E402
 from spacerobot.system.ssd import build_system  # noqa: E402
 from spacerobot.system.sweep.execute import Study, run_sweep  # noqa: E402
@@ -53,19 +65,57 @@ CHECKPOINTS = (60.0, 300.0)
 NOISE_COLUMNS = tuple(f"{what}_{int(t)}" for t in CHECKPOINTS
                       for what in ("worst", "within2sd"))
 
+#: sensors seed of the pilot run that measures the row standard deviations (no case has it)
+PILOT_SEED = 999_999
+#: residual correlation lags of the noise model: 200 samples = 20 s at the 0.1 s step, the
+#: order of the sensors' slow errors (bias walks, integrated thrust error) seen in a run
+CORR_LAGS = 200
+#: the three estimator set-ups (method, acceleration source)
+COMBOS = (("momentum", "measured"), ("force", "measured"), ("force", "differenced"))
+
 
 @dataclass(frozen=True)
 class NoiseCase(Case):
-    """A Monte Carlo case with the sensors FMU: its seed is the case index."""
+    """A Monte Carlo case with the sensors FMU: its seed is the case index; ``estimator``
+    holds extra estimator parameters as ``(name, value)`` pairs (the noise model)."""
+
+    estimator: tuple = ()
 
     @property
     def id(self) -> str:
-        return hashlib.sha256(json.dumps(["noise", super().id]).encode()).hexdigest()[:16]
+        return hashlib.sha256(json.dumps(["noise", super().id, list(self.estimator)]
+                                         ).encode()).hexdigest()[:16]
 
     def fmi_overrides(self):
         ov = super().fmi_overrides()
         ov["sensors.seed"] = int(self.index)
+        ov.update({f"estimator.{n}": v for n, v in self.estimator})
         return ov
+
+
+def pilot_row_sd(ssp_path: Path, stop_time: float, tmp: Path):
+    """``{(method, accel): (sd_lin, sd_ang)}``: the row standard deviations of the equations
+    at the truth on one pilot run (default spatial scenario, realistic sensors, sensors seed
+    :data:`PILOT_SEED`, excitation loop closed), recorded and read back as telemetry."""
+    csv = tmp / "pilot.csv"
+    run_ssp(ssp_path, stop_time=stop_time, overrides={"sensors.seed": PILOT_SEED},
+            csv_path=csv, progress=False)
+    robot = get_robot("spatial")
+    t, groups = read_telemetry(csv, robot.n_joints)
+    truth = read_truth(read_csv(csv))
+    base, target = _body(truth, "base"), _body(truth, "target")
+    out = {}
+    for method, accel in COMBOS:
+        samples = ((t[k], {key: groups[key][k] for key in KEYS}) for k in range(len(t)))
+        out[(method, accel)] = equation_error_sd(robot, base, target, samples, method, accel)
+    return out
+
+
+def noise_model(method: str, sd, lags: int = CORR_LAGS) -> tuple:
+    """The estimator parameters of the noise model for ``method``: its row standard
+    deviations ``sd`` = (linear, angular) and the residual correlation lags."""
+    return ((f"ident.sd_row.{method}_lin", float(sd[0])),
+            (f"ident.sd_row.{method}_ang", float(sd[1])), ("ident.corr_lags", int(lags)))
 
 
 def noise_row(res):
@@ -126,6 +176,31 @@ def summary(rows) -> str:
     return "\n".join(lines)
 
 
+def verdict(rows) -> str:
+    """The paper's claim (momentum less sensitive to noise than force with differenced
+    accelerations) against the runs: per checkpoint, the median worst errors and in how many
+    cases (same case index) the momentum method's worst error is the smaller one."""
+    by = {}
+    for r in rows:
+        if r["status"] == "ok":
+            by.setdefault((r["method"], r["accel_source"]), {})[int(r["case"])] = r
+    mom = by.get(("momentum", "measured"), {})
+    out = []
+    for t in CHECKPOINTS:
+        col = f"worst_{int(t)}"
+        for accel in ("differenced", "measured"):
+            force = by.get(("force", accel), {})
+            common = sorted(set(mom) & set(force))
+            if not common:
+                continue
+            wm = np.array([float(mom[i][col]) for i in common])
+            wf = np.array([float(force[i][col]) for i in common])
+            out.append(f"- {t:g} s, momentum vs force ({accel} accelerations): median worst "
+                       f"error {100 * np.median(wm):.3g} % vs {100 * np.median(wf):.3g} %; "
+                       f"momentum smaller in {(wm < wf).sum()} of {len(common)} cases.")
+    return "\n".join(out)
+
+
 def plot(rows, out_png: Path) -> Path:
     """Distribution of the worst error at each checkpoint per method and acceleration source."""
     import matplotlib
@@ -162,6 +237,10 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=2026)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--stop-time", type=float, default=300.0)
+    ap.add_argument("--corr-lags", type=int, default=CORR_LAGS,
+                    help=f"ident.corr_lags of the noise model (default {CORR_LAGS})")
+    ap.add_argument("--defaults", action="store_true",
+                    help="the estimator's defaults (no noise model)")
     ap.add_argument("--out", default=str(HERE / "NOISE.md"))
     args = ap.parse_args(argv)
 
@@ -171,21 +250,38 @@ def main(argv=None) -> int:
         csv.unlink()                              # measure the tree as it is, every case
     t0 = time.time()
     load0 = os.getloadavg()
-    combos = (("momentum", "measured"), ("force", "measured"), ("force", "differenced"))
-    cases = [NoiseCase("spatial", i, args.seed, m, "closed", args.stop_time, a)
-             for i in range(args.cases) for m, a in combos]
     with tempfile.TemporaryDirectory() as tmp:
         ssp = build_system("spatial", Path(tmp) / "spatial", sensors=True)["ssp"]
+        t_pilot = time.time()
+        row_sd = {} if args.defaults else pilot_row_sd(ssp, args.stop_time, Path(tmp))
+        t_pilot = time.time() - t_pilot
+        cases = [NoiseCase("spatial", i, args.seed, m, "closed", args.stop_time, a,
+                           estimator=() if args.defaults else noise_model(m, row_sd[(m, a)],
+                                                                        args.corr_lags))
+                 for i in range(args.cases) for m, a in COMBOS]
         res = run_sweep(cases, csv, workers=args.workers, ssp={"spatial": str(ssp)},
                         progress=False, study=STUDY)
     wall = time.time() - t0
+    if args.defaults:
+        model = "the estimator's defaults (no noise model: unit row weights, independent rows)"
+    else:
+        model = ("the estimator's noise model: row standard deviations from a pilot run "
+                 f"(default spatial scenario, sensors seed {PILOT_SEED}, {args.stop_time:g} s, "
+                 f"{t_pilot:.0f} s of the wall time), `ident.corr_lags` = {args.corr_lags}:\n\n"
+                 "| method | accelerations | ident.sd_row lin | ang |\n|---|---|---|---|\n"
+                 + "\n".join(f"| {m} | {'-' if m == 'momentum' else a} | {sd[0]:.4g} "
+                              f"{'N.s' if m == 'momentum' else 'N'} | {sd[1]:.4g} "
+                              f"{'N.m.s' if m == 'momentum' else 'N.m'} |"
+                              for (m, a), sd in row_sd.items()))
     rows = read_table(csv, STUDY.key)
     png = plot(rows, out.with_suffix(".png"))
     text = [
         "# Monte Carlo: identification under realistic sensor noise",
         "",
         f"Generated by `python benchmarks/noise.py --cases {args.cases} --seed {args.seed} "
-        f"--stop-time {args.stop_time:g}` on {_dt.date.today()} (spacerobot {__version__}, "
+        f"--stop-time {args.stop_time:g}"
+        + (" --defaults" if args.defaults else f" --corr-lags {args.corr_lags}")
+        + f"` on {_dt.date.today()} (spacerobot {__version__}, "
         f"{platform.machine()}, {os.cpu_count()} cores, {args.workers} Dask workers, load "
         f"average {load0[0]:.2f} at start); {len(rows)} runs in {wall / 60:.1f} min. Table: "
         f"[{csv.name}]({csv.name}); plot (worst error at each checkpoint): "
@@ -194,11 +290,16 @@ def main(argv=None) -> int:
         f"{args.cases} random spatial cases (`spacerobot.robots.random_scenario`, generator "
         f"`default_rng([{args.seed}, index])`), plant -> sensors -> estimator with the sensors' "
         "realistic defaults (docs/sensors.md, sensors seed = case index), excitation loop "
-        "closed, the estimator's defaults. Errors: `interface.relative_errors`, worst of the "
+        f"closed; {model}\n\nErrors: `interface.relative_errors`, worst of the "
         "20 estimates; calibration: the fraction of the 20 estimates within 2 reported "
         "standard deviations of the truth (calibrated: between 0.90 and 0.99).",
         "",
         summary(rows),
+        "",
+        "The paper's claim, momentum-based less sensitive to noise than force-based with "
+        "differenced accelerations, case by case:",
+        "",
+        verdict(rows),
         "",
         f"Failed runs: {res.failed}." + "".join(f"\n- {i}: {e}" for i, e in res.failures),
         "",
