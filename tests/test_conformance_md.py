@@ -163,6 +163,9 @@ CONTRACT_UNITS = [
     (r"excite\.qd_max", "rad/s"), (r"excite\.qdd_max", "rad/s2"), (r"excite\.(period|ramp)", "s"),
     (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta)", "1"),
     (r"ident\.(sd_rel|excite_level)", "1"), (r"excite\.att_ref\[\d\]", "rad"),
+    # estimator noise model: row standard deviations in the units of each method's equations
+    (r"ident\.sd_row\.momentum_lin", "N.s"), (r"ident\.sd_row\.momentum_ang", "N.m.s"),
+    (r"ident\.sd_row\.force_lin", "N"), (r"ident\.sd_row\.force_ang", "N.m"),
     (r"excite\.qd_ref\[\d\]", "rad/s"),
     # sensors FMU: white noise and random walks as their standard deviation over 1 s
     (r"noise\.(scale|thrust\.scale)", "1"), (r"noise\.gyro\.(arw|bias|rrw)", "rad/s"),
