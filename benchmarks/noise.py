@@ -67,8 +67,8 @@ NOISE_COLUMNS = tuple(f"{what}_{int(t)}" for t in CHECKPOINTS
 
 #: sensors seed of the pilot run that measures the row standard deviations (no case has it)
 PILOT_SEED = 999_999
-#: residual correlation lags of the noise model: 200 samples = 20 s at the 0.1 s step, the
-#: order of the sensors' slow errors (bias walks, integrated thrust error) seen in a run
+#: default residual correlation lags of the noise model: 200 samples = 20 s at the 0.1 s step;
+#: measured: 600 (60 s) calibrates the 300 s estimates too (docs/identification.md, section 6)
 CORR_LAGS = 200
 #: the three estimator set-ups (method, acceleration source)
 COMBOS = (("momentum", "measured"), ("force", "measured"), ("force", "differenced"))
