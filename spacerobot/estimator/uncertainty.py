@@ -106,61 +106,6 @@ class Autocorrelation(NamedTuple):
     imply (module docstring, correlated equation errors).
 
     ``c[j] = sum_t lam^(N-t) e_t . e_(t-j)`` for lags ``j = 0..L`` over the residual vectors
-    ``e_t`` (the rows of one sample pooled, the same number every sample); ``recent`` (<= L, k)
-    holds the last ``L`` of them, newest first. Immutable (:meth:`add` returns the updated one).
-    """
-
-    c: np.ndarray
-    recent: np.ndarray
-    lam: float = 1.0
-
-    @classmethod
-    def empty(cls, lags: int, lam: float = 1.0) -> "Autocorrelation":
-        """No residual yet; lags ``0..lags``."""
-        if int(lags) != lags or lags < 0:
-            raise ValueError(f"the number of correlation lags must be an integer >= 0, "
-                             f"got {lags}")
-        return cls(np.zeros(int(lags) + 1), np.zeros((0, 0)), float(lam))
-
-    @property
-    def lags(self) -> int:
-        return len(self.c) - 1
-
-    def add(self, e: np.ndarray) -> "Autocorrelation":
-        """With the residual vector ``e`` (k,) of one more sample (no-op without lags)."""
-        L = self.lags
-        if L == 0:
-            return self
-        e = np.array(e, dtype=float).ravel()
-        R = self.recent if self.recent.shape[1:] == e.shape else np.zeros((0, len(e)))
-        c = self.c * self.lam if self.lam != 1.0 else self.c.copy()
-        c[0] += e @ e                                  # c_0 += e_t . e_t
-        c[1:len(R) + 1] += R @ e                       # c_j += e_t . e_(t-j), R[j-1] = e_(t-j)
-        return Autocorrelation(c, np.vstack([e[None, :], R[:L - 1]]), self.lam)
-
-    def inflation(self) -> float:
-        """``max(1, 1 + 2 sum_j (1 - j/(L+1)) c_j / c_0)``: the factor by which correlated
-        residuals make the independent-rows variance of an estimate too small; 1 without lags
-        or data (a negative sum, e.g. from central differences, is not used to shrink it)."""
-        L = self.lags
-        if L == 0 or not self.c[0] > 0.0:
-            return 1.0
-        j = np.arange(1, L + 1)
-        f = 1.0 + 2.0 * float(np.sum((1.0 - j / (L + 1.0)) * self.c[1:]) / self.c[0])
-        return f if f > 1.0 else 1.0
-
-
-def residual_variance(self, z: np.ndarray, p: int) -> float:
-        """:func:`residual_variance` of the combination ``z`` with these rows' degrees of
-        freedom (:meth:`dof`)."""
-        return residual_variance(self.S, z, self.dof(p), 0)
-
-
-class Autocorrelation(NamedTuple):
-    """Weighted autocorrelation sums of a residual sequence and the variance inflation they
-    imply (module docstring, correlated equation errors).
-
-    ``c[j] = sum_t lam^(N-t) e_t . e_(t-j)`` for lags ``j = 0..L`` over the residual vectors
     ``e_t`` (the rows of one sample pooled); ``recent`` holds the last ``L`` of them. Immutable
     (:meth:`add` returns the updated one).
     """
