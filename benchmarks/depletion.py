@@ -121,7 +121,7 @@ def plot(path: Path, times, runs: dict, chosen) -> None:
 
     names = [n for n in ESTIMATE_NAMES if n.startswith("base.")]
     fig, axes = plt.subplots(2, 5, figsize=(17, 6.5), sharex=True)
-    est0, tru0 = runs[chosen][0], runs[chosen][1]
+    tru0 = runs[chosen][1]
     for j, (ax, n) in enumerate(zip(axes.flat, names)):
         k = BASE.vec.start + j
         ax.plot(times, tru0[:, k], "k-", lw=2.0, label="truth (plant)")

@@ -12,7 +12,7 @@ from _spacerobot_estimator.estimator import ExcitationRequest, Identifier
 from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT
 from _spacerobot_estimator.fmi.slave import InterfaceSlave, _escape
 from _spacerobot_estimator.interface import (LAYOUT, STATUS, AccelSource, Method, Solver,
-                                             estimator_vars)
+                                             estimator_vars, row_sd)
 from _spacerobot_estimator.robots import Guess
 from pythonfmu.enums import Fmi2Status
 
@@ -55,7 +55,10 @@ class SpaceRobotEstimator(InterfaceSlave):
             guess = Guess(self._body("guess.base"), self._body("guess.target"),
                           float(v["P0_mu"]), float(v["P0_theta"]))
             self.ident = Identifier(self.robot, guess, *codes, float(v["lambda"]),
-                                    sd_rel=float(v["ident.sd_rel"]))
+                                    sd_rel=float(v["ident.sd_rel"]),
+                                    row_sd=row_sd(v, codes[0]),
+                                    diff_half_window=int(v["ident.diff_half_window"]),
+                                    corr_lags=int(v["ident.corr_lags"]))
             self.request = ExcitationRequest(int(v["ident.excite_mode"]),
                                              float(v["ident.excite_level"]))
         except ValueError as e:

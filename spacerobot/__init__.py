@@ -11,6 +11,7 @@ nor fmpy until a name that needs them is used)::
     res.final, res.truth, res.relative_errors()
 
     from spacerobot import Identifier, Plant          # the numerical cores, without FMI
+    from spacerobot import SensorSuite                # the sensor models, without FMI
 """
 
 __version__ = "0.1.0"
@@ -30,6 +31,7 @@ _API = {
     "Identifier": "spacerobot.estimator", "Plant": "spacerobot.plant",
     "ExcitationRequest": "spacerobot.estimator", "project_body": "spacerobot.estimator",
     "is_physical": "spacerobot.estimator",
+    "SensorSuite": "spacerobot.sensors", "identify_csv": "spacerobot.system.identify",
     # FMUs, the system and its co-simulation (fmpy, lxml)
     "build_fmu": "spacerobot.fmi.build", "build_system": "spacerobot.system.ssd",
     "run_ssp": "spacerobot.system.runner", "RunResult": "spacerobot.system.runner",

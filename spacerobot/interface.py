@@ -391,7 +391,45 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
                   f"1 when the least-squares estimate of the {who} is a real rigid body; 0 when "
                   f"the reported {who} estimate is its projection onto real bodies", None,
                   ("physical", who))]
+    v += noise_model_vars()
     return v
+
+
+#: the estimator's noise model (docs/identification.md, "Under noise"): row standard
+#: deviation parameters per method and equation, (name suffix, method, unit, equation)
+ROW_SD_PARAMETERS = (("momentum_lin", Method.MOMENTUM, "N.s", "linear momentum (eq. 11)"),
+                     ("momentum_ang", Method.MOMENTUM, "N.m.s", "angular momentum (eq. 16)"),
+                     ("force_lin", Method.FORCE, "N", "force (eq. 28)"),
+                     ("force_ang", Method.FORCE, "N.m", "moment (eq. 31)"))
+
+
+def noise_model_vars() -> List[Var]:
+    """The estimator's noise-model parameters: the row standard deviations of each method's
+    equations (0 = unit weight), the differencing window and the residual correlation lags;
+    the defaults are the estimator without a noise model."""
+    v = [Var(f"ident.sd_row.{suffix}", "parameter", "fixed", "Real", unit,
+             f"Standard deviation of one row of the {what} equation's error from the "
+             f"measurement noise ({method.name.lower()} method); the rows are weighted by "
+             f"its inverse. 0 = unit weight", 0.0, ("sd_row", suffix))
+         for suffix, method, unit, what in ROW_SD_PARAMETERS]
+    v += [Var("ident.diff_half_window", "parameter", "fixed", "Integer", None,
+              "Differenced accelerations: derivative at the centre of 2m+1 samples, m >= 1 "
+              "(1 = 3-point central difference; more = Savitzky-Golay, less noise); the "
+              "equations are evaluated at the centre (the estimate lags m samples)", 1,
+              ("diff_half_window",)),
+          Var("ident.corr_lags", "parameter", "fixed", "Integer", None,
+              "Lags (>= 0) of the residual autocorrelation that inflates the standard "
+              "deviations for correlated equation errors (0 = rows independent)", 0,
+              ("corr_lags",))]
+    return v
+
+
+def row_sd(values: Mapping[str, float], method: "Method") -> Tuple[float, float]:
+    """``(linear, angular)`` row standard deviations of ``method`` from the estimator's
+    parameter values (:func:`noise_model_vars`)."""
+    method = Method.parse(method, "method")
+    return tuple(float(values[f"ident.sd_row.{suffix}"])
+                 for suffix, m, _, _ in ROW_SD_PARAMETERS if m is method)
 
 
 #: The 20 estimates (and truth parameters), in the order of ``Identifier.vector()``.
@@ -592,3 +630,88 @@ def connections(robot: Robot) -> List[str]:
 def feedback_connections() -> List[str]:
     """Names wired estimator output -> plant input of the same name (the excitation loop)."""
     return ["ident.excite"]
+
+
+# ---------------------------------------------------------------------------------------------
+# the sensors FMU (optional, between plant and estimator): docs/sensors.md
+# ---------------------------------------------------------------------------------------------
+
+#: prefix of the sensors FMU's inputs: ``true.<name>`` for each plant output ``<name>`` the
+#: estimator reads
+TRUE_PREFIX = "true."
+
+#: Real noise parameters of the sensors FMU: name -> (unit, realistic default, description).
+#: White noise and random walks are given by their density, expressed as the standard
+#: deviation over 1 s (an angle random walk of d rad/sqrt(s) is a rate noise of d rad/s
+#: averaged over 1 s; sampled at dt its standard deviation is d / sqrt(dt / 1 s)), so that
+#: every parameter has an FMI unit. ``noise.scale`` multiplies every error magnitude below
+#: (0 = ideal sensors).
+NOISE_PARAMETERS: Dict[str, Tuple[str, float, str]] = {
+    "noise.scale": ("1", 1.0, "Multiplies every error magnitude below: 0 = ideal sensors "
+                    "(outputs equal inputs bit for bit), 1 = the realistic defaults"),
+    "noise.gyro.arw": ("rad/s", 2.0e-5, "Gyro white rate noise averaged over 1 s, standard "
+                       "deviation (angle random walk 0.07 deg/sqrt(h) = 2e-5 rad/sqrt(s), "
+                       "fibre-optic gyro of an LN-200S class IMU)"),
+    "noise.gyro.bias": ("rad/s", 4.8e-6, "Gyro initial bias, standard deviation per axis "
+                        "(1 deg/h, fibre-optic gyro)"),
+    "noise.gyro.rrw": ("rad/s", 2.0e-7, "Gyro bias random walk: standard deviation of the "
+                       "bias change over 1 s (rate random walk, rad/s/sqrt(s))"),
+    "noise.star.cross": ("rad", 9.7e-6, "Star tracker attitude noise about the base x and y "
+                         "axes (cross-boresight), standard deviation (2 arcsec, ASTRO APS / "
+                         "Hydra class)"),
+    "noise.star.roll": ("rad", 4.8e-5, "Star tracker attitude noise about the base z axis "
+                        "(boresight), standard deviation (10 arcsec)"),
+    "noise.nav.r": ("m", 0.01, "Relative navigation position noise of S, standard deviation "
+                    "per axis (close-range lidar / vision navigation)"),
+    "noise.nav.v": ("m/s", 0.001, "Relative navigation velocity noise of S, standard "
+                    "deviation per axis"),
+    "noise.accel.vrw": ("m/s2", 5.0e-4, "Accelerometer white noise averaged over 1 s, "
+                        "standard deviation (velocity random walk 0.03 m/s/sqrt(h) = 5e-4 "
+                        "m/s/sqrt(s), LN-200S class)"),
+    "noise.accel.bias": ("m/s2", 3.0e-3, "Accelerometer initial bias, standard deviation per "
+                         "axis (300 micro-g, LN-200S class)"),
+    "noise.accel.brw": ("m/s2", 5.0e-6, "Accelerometer bias random walk: standard deviation "
+                        "of the bias change over 1 s"),
+    "noise.alpha": ("rad/s2", 2.0e-4, "Angular acceleration noise (derived from the gyro), "
+                    "standard deviation per axis"),
+    "noise.enc.resolution": ("rad", 1.1984e-5, "Joint encoder quantisation step (19-bit "
+                             "absolute encoder: 2 pi / 2^19)"),
+    "noise.enc.q": ("rad", 5.0e-6, "Joint angle noise before quantisation, standard deviation"),
+    "noise.enc.qd": ("rad/s", 1.0e-4, "Joint rate noise, standard deviation"),
+    "noise.enc.qdd": ("rad/s2", 1.0e-3, "Joint acceleration noise, standard deviation"),
+    "noise.thrust.scale": ("1", 0.02, "Thrust (force and torque) scale factor error, standard "
+                           "deviation, drawn once per run (2 %, hydrazine / cold-gas thrusters)"),
+    "noise.thrust.misalign": ("rad", 8.7e-3, "Thrust direction misalignment, standard "
+                              "deviation per axis, drawn once per run (0.5 deg)"),
+}
+
+#: Integer parameters of the sensors FMU: name -> (default, description)
+SENSOR_INTEGER_PARAMETERS: Dict[str, Tuple[int, str]] = {
+    "seed": (0, "Seed of the random generators (the same seed gives the same run)"),
+    "noise.delay": (0, "Sample delay: the outputs at t are the measurements of t - delay x "
+                       "the communication step (0 = none; applies whatever noise.scale)"),
+    "noise.imu": (1, "1 = an accelerometer / IMU measures base.a and base.alpha; 0 = absent: "
+                     "both output 0 (use the momentum method, or accel_source = differenced)"),
+}
+
+
+def sensors_vars(robot: Robot, sc: Scenario) -> List[Var]:
+    """All variables of the sensors FMU: inputs ``true.<name>`` for each measurement, outputs
+    ``<name>`` (what the estimator reads), the noise parameters."""
+    n = robot.n_joints
+    v = [Var(TRUE_PREFIX + x.name, "input", "continuous", x.type, x.unit,
+             "True value: " + x.description, x.start, x.key)
+         for x in measurement_vars(n, "input")]
+    v += [Var(x.name, "output", "continuous", x.type, x.unit, "Measured: " + x.description,
+              None, x.key) for x in measurement_vars(n, "output")]
+    v += [Var(name, "parameter", "fixed", "Real", unit, doc, default, ("noise", name))
+          for name, (unit, default, doc) in NOISE_PARAMETERS.items()]
+    v += [Var(name, "parameter", "fixed", "Integer", None, doc, default, ("noise", name))
+          for name, (default, doc) in SENSOR_INTEGER_PARAMETERS.items()]
+    return v
+
+
+def sensor_connections(robot: Robot) -> List[Tuple[str, str]]:
+    """``[(plant output, sensors input)]``: plant ``<name>`` -> sensors ``true.<name>``; the
+    sensors output ``<name>`` goes to the estimator input of the same name."""
+    return [(name, TRUE_PREFIX + name) for name in connections(robot)]

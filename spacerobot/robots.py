@@ -623,6 +623,9 @@ class ParameterSet:
     propellant: Propellant = field(default_factory=Propellant)
     stop_time: Optional[float] = None
     estimator: Tuple[Tuple[str, float], ...] = ()
+    #: ``noise.scale`` of the sensors FMU (docs/sensors.md); None: not a sensors set (the set
+    #: belongs to the plant + estimator system only)
+    noise: float | None = None
 
 
 #: the ``depletion`` set's propellant: 80 kg of hydrazine (about 1000 kg/m3: a 0.27 m sphere)
@@ -636,7 +639,8 @@ DEPLETION_ESTIMATOR = (("ident.excite_mode", 2), ("lambda", 0.98))
 
 #: The parameter sets of each robot's SSP (one ``.ssv`` each). The paper's scenarios keep the
 #: excitation off (:data:`NO_EXCITATION`), so they reproduce the paper's figures with the
-#: excitation loop wired; the others let the estimator's request move the plant.
+#: excitation loop wired; the others let the estimator's request move the plant. The sets with
+#: a ``noise`` level (``ideal``, ``realistic``) belong to the system with the sensors FMU only.
 PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
     "planar": {
         "small": ParameterSet("small", False, "the paper's planar scenario, small target"),
@@ -646,6 +650,10 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
                                                "no excitation"),
         "excited": ParameterSet("medium", True, "medium target, excitation on request of the "
                                                 "estimator"),
+        "ideal": ParameterSet("medium", True, "medium target, excitation on request, ideal "
+                                              "sensors", noise=0.0),
+        "realistic": ParameterSet("medium", True, "medium target, excitation on request, "
+                                                  "realistic sensor noise", noise=1.0),
     },
     "spatial": {
         "paper": ParameterSet("default", False, "the paper's spatial scenario, no excitation"),
@@ -657,6 +665,11 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
                                                    "force-based method: estimator "
                                                    "ident.excite_mode=2, lambda=0.98",
                                   DEPLETION_PROPELLANT, 300.0, DEPLETION_ESTIMATOR),
+        "ideal": ParameterSet("default", True, "the paper's spatial robot and target, "
+                                               "excitation on request, ideal sensors", noise=0.0),
+        "realistic": ParameterSet("default", True, "the paper's spatial robot and target, "
+                                                   "excitation on request, realistic sensor "
+                                                   "noise", noise=1.0),
     },
 }
 

@@ -28,11 +28,12 @@ _BUILT: dict = {}
 
 
 def built_fmus(robot: str, out: Path) -> dict:
-    """``{'plant': Path, 'estimator': Path}`` for ``robot``, built once per session."""
+    """``{'plant': Path, 'estimator': Path, 'sensors': Path}`` for ``robot``, built once per
+    session."""
     if robot not in _BUILT:
         sc = scenario(robot)
         d = out / robot
-        _BUILT[robot] = {"plant": build_fmu("plant", sc, d), "estimator": build_fmu("estimator", sc, d)}
+        _BUILT[robot] = {kind: build_fmu(kind, sc, d) for kind in ("plant", "estimator", "sensors")}
     return _BUILT[robot]
 
 

@@ -31,7 +31,7 @@ import pytest
 
 from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
 from test_conformance_util import (DISCARD, DT, ERROR, FATAL, OK, ROBOTS, WARNING, Inst,
-                                   assert_same, fmus_for, plant_samples)
+                                   assert_same, fed_inputs, fmus_for, plant_samples)
 
 N, K = 8, 4          # runs of 8 steps of 0.1 s; the bad input comes at step K
 NAN, INF = float("nan"), float("inf")
@@ -40,7 +40,7 @@ NAN, INF = float("nan"), float("inf")
 @dataclass(frozen=True)
 class Bad:
     id: str
-    kind: str                    # plant | estimator
+    kind: str                    # plant | estimator | sensors
     stage: str                   # param | sample | step | order
     arg: object                  # see the runners below
     status: int                  # FMI status of the offending call
@@ -124,13 +124,21 @@ CATALOGUE = [
         r"method = 0 is not one of", ERROR),
     Bad("unknown-solver", "estimator", "param", {"solver": 7}, ERROR,
         r"solver = 7 is not one of 1 \(paper\), 2 \(joint\)", ERROR),
+    Bad("negative-noise", "sensors", "param", {"noise.gyro.arw": -1.0}, ERROR,
+        r"noise parameters must be finite and >= 0: gyro\.arw = -1\.0", ERROR),
+    Bad("nan-noise-scale", "sensors", "param", {"noise.scale": NAN}, ERROR,
+        r"non-finite parameter value\(s\): noise\.scale = nan", ERROR),
+    Bad("negative-delay", "sensors", "param", {"noise.delay": -1}, ERROR,
+        r"noise\.delay must be an integer >= 0, got -1", ERROR),
+    Bad("imu-flag-not-0-or-1", "sensors", "param", {"noise.imu": 2}, ERROR,
+        r"noise\.imu must be 0 or 1, got 2", ERROR),
     Bad("unknown-accel-source", "estimator", "param", {"accel_source": -1}, ERROR,
         r"accel_source = -1 is not one of 1 \(measured\), 2 \(differenced\)", ERROR),
     # -- communication steps ------------------------------------------------------------------
     *[Bad(f"{kind}-step-{label}", kind, "step", (0.0, dt), DISCARD,
           r"communication step .* rejected: it must be finite and in \(0, "
           + ("100" if kind == "plant" else "inf") + r"\] s", DISCARD)
-      for kind in ("plant", "estimator")
+      for kind in ("plant", "estimator", "sensors")
       for label, dt in (("zero", 0.0), ("negative", -DT), ("nan", NAN), ("inf", INF))],
     Bad("plant-step-longer-than-100s", "plant", "step", (0.0, 100.001), DISCARD,
         r"communication step 100\.001 s .* rejected: .*\(0, 100\] s", DISCARD),
@@ -148,16 +156,16 @@ CATALOGUE = [
     # -- lifecycle order ----------------------------------------------------------------------
     *[Bad(f"{kind}-doStep-before-initialisation", kind, "order", _order_before_init, DISCARD,
           r"doStep called in phase 'instantiated'; call fmi2ExitInitializationMode first")
-      for kind in ("plant", "estimator")],
+      for kind in ("plant", "estimator", "sensors")],
     *[Bad(f"{kind}-doStep-in-initialisation-mode", kind, "order", _order_in_init_mode, DISCARD,
           r"doStep called in phase 'initialization'")
-      for kind in ("plant", "estimator")],
+      for kind in ("plant", "estimator", "sensors")],
     *[Bad(f"{kind}-exit-without-enter", kind, "order", _order_exit_without_enter, ERROR,
           r"fmi2ExitInitializationMode called in phase 'instantiated'; call "
           r"fmi2EnterInitializationMode first", ERROR)
-      for kind in ("plant", "estimator")],
+      for kind in ("plant", "estimator", "sensors")],
     *[Bad(f"{kind}-{what}", kind, "running", what, status, msg, log)
-      for kind in ("plant", "estimator")
+      for kind in ("plant", "estimator", "sensors")
       for what, status, msg, log in (
           ("enter-initialisation-while-stepping", ERROR,
            r"fmi2EnterInitializationMode called in phase 'stepping'; it is only allowed once", ERROR),
@@ -187,9 +195,10 @@ def _matching(messages, pattern, log_status):
 def _reference(fmus, kind, names, samples, n=N, skip=None):
     """Outputs of an undisturbed FMU run of ``n`` steps (optionally skipping sample ``skip``)."""
     inst = Inst(fmus[kind], "reference").init()
+    fed = fed_inputs(kind, names)
     for k in range(n):
-        if kind == "estimator":
-            inst.set_many(names, samples[k])
+        if fed is not None:
+            inst.set_many(fed, samples[k])
         assert inst.step(k * DT, DT) == OK
     out = inst.outputs()
     inst.free()
@@ -233,10 +242,12 @@ def test_bad_input(request, robot, bad):
     kind = bad.kind
     inst = Inst(fmus[kind], "bad")
 
+    fed = fed_inputs(kind, names)
+
     def advance(k0, k1):
         for k in range(k0, k1):
-            if kind == "estimator":
-                inst.set_many(names, samples[k])
+            if fed is not None:
+                inst.set_many(fed, samples[k])
             assert inst.step(k * DT, DT) == OK
 
     if bad.stage == "param":
@@ -292,8 +303,9 @@ def test_bad_input(request, robot, bad):
     if bad.stage == "step":
         t_off, dt = bad.arg
         t = K * DT if t_off == 0.0 else t_off
-        if kind == "estimator":
-            inst.set_many(names, samples[K])
+        if fed is not None:
+            inst.set_many(fed, samples[K])
+            before = inst.outputs()      # a direct feedthrough (sensors) follows its inputs
         status, msgs = inst.call(inst.step, t, dt)
         _check(bad, status, msgs)
         if status == DISCARD:
@@ -308,7 +320,7 @@ def test_bad_input(request, robot, bad):
 
     assert bad.stage == "running"
     what = bad.arg
-    name = "base.r[1]" if kind == "plant" else "base.m"     # outputs of each
+    name = "base.m" if kind == "estimator" else "base.r[1]"     # outputs of each
     if what == "enter-initialisation-while-stepping":
         status, msgs = inst.call(inst.fmu.fmi2EnterInitializationMode, inst.fmu.component)
     elif what == "set-an-output":

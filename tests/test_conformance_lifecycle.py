@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
-from test_conformance_util import (DT, ERROR, OK, ROBOTS, Inst, as_array, assert_same, feed,
-                                   fmus_for, plant_samples)
+from test_conformance_util import (DT, ERROR, OK, OTHER_PARAMETERS, ROBOTS, Inst, as_array,
+                                   assert_same, fed_inputs, feed, fmus_for, plant_samples)
 
 N = 10          # communication steps of 0.1 s per run (1 s simulated)
 
@@ -128,19 +128,20 @@ def test_estimator_lifecycle(robot_fmus):
 
 
 # -- reset ----------------------------------------------------------------------------------------
-@pytest.mark.parametrize("kind", ["plant", "estimator"])
+@pytest.mark.parametrize("kind", ["plant", "estimator", "sensors"])
 def test_reset_then_rerun_is_identical(robot_fmus, kind):
     robot, fmus = robot_fmus
     names, samples = plant_samples(fmus, N)
-    other = {"target.m": 400.0} if kind == "plant" else {"guess.target.m": 300.0}
+    other = OTHER_PARAMETERS[kind]
+    fed = fed_inputs(kind, names)
 
     def run(inst, params):
         inst.init(params)
-        if kind == "plant":
+        if fed is None:
             for k in range(N):
                 assert inst.step(k * DT, DT) == OK
         else:
-            feed(inst, names, samples[:N])
+            feed(inst, fed, samples[:N])
         return inst.values()            # every variable: parameters too
 
     fresh = Inst(fmus[kind], "fresh")

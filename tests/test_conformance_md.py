@@ -29,7 +29,8 @@ from test_conformance_util import KINDS, ROBOTS, fmus_for
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs" / "fmus.md"
-MODEL = {"plant": "SpaceRobotPlant", "estimator": "SpaceRobotEstimator"}
+MODEL = {"plant": "SpaceRobotPlant", "estimator": "SpaceRobotEstimator",
+         "sensors": "SpaceRobotSensors"}
 
 
 def _xml(path: Path) -> ET.Element:
@@ -165,7 +166,16 @@ CONTRACT_UNITS = [
     (r"excite\.qd_max", "rad/s"), (r"excite\.qdd_max", "rad/s2"), (r"excite\.(period|ramp)", "s"),
     (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta)", "1"),
     (r"ident\.(sd_rel|excite_level)", "1"), (r"excite\.att_ref\[\d\]", "rad"),
+    # estimator noise model: row standard deviations in the units of each method's equations
+    (r"ident\.sd_row\.momentum_lin", "N.s"), (r"ident\.sd_row\.momentum_ang", "N.m.s"),
+    (r"ident\.sd_row\.force_lin", "N"), (r"ident\.sd_row\.force_ang", "N.m"),
     (r"excite\.qd_ref\[\d\]", "rad/s"),
+    # sensors FMU: white noise and random walks as their standard deviation over 1 s
+    (r"noise\.(scale|thrust\.scale)", "1"), (r"noise\.gyro\.(arw|bias|rrw)", "rad/s"),
+    (r"noise\.(star\.(cross|roll)|enc\.(resolution|q)|thrust\.misalign)", "rad"),
+    (r"noise\.nav\.r", "m"), (r"noise\.nav\.v", "m/s"),
+    (r"noise\.accel\.(vrw|bias|brw)", "m/s2"), (r"noise\.alpha", "rad/s2"),
+    (r"noise\.enc\.qd", "rad/s"), (r"noise\.enc\.qdd", "rad/s2"),
 ]
 
 
@@ -176,7 +186,8 @@ def test_units_follow_the_interface_contract(fmu):
     for v in read_model_description(str(path)).modelVariables:
         if v.type != "Real":
             continue
-        expected = [u for pat, u in CONTRACT_UNITS if u and re.fullmatch(pat, v.name)]
+        name = v.name.removeprefix("true.")          # sensors inputs: the true signals
+        expected = [u for pat, u in CONTRACT_UNITS if u and re.fullmatch(pat, name)]
         assert expected, f"{v.name}: no unit in the contract table"
         assert v.unit == expected[0], f"{v.name}: unit {v.unit!r}, contract {expected[0]!r}"
 
@@ -197,12 +208,11 @@ def test_variables_equal_the_interface_table(fmu):
     description, and nothing else, in the FMU that was built."""
     from fmpy import read_model_description
 
-    from spacerobot.interface import estimator_vars, plant_vars
     from spacerobot.robots import scenario
 
     robot, kind, path = fmu
     sc = scenario(robot)
-    table = (plant_vars if kind == "plant" else estimator_vars)(sc.robot, sc)
+    table = _table_of(kind)(sc.robot, sc)
     md = {v.name: v for v in read_model_description(str(path)).modelVariables}
     assert list(md) == [v.name for v in table]
     for v in table:
@@ -297,7 +307,7 @@ def test_docs_capability_table_matches_the_model_description(planar_fmus, spatia
 # -- generator of the docs tables (run this file as a script) -------------------------------------
 def _group(name: str) -> str:
     name = re.sub(r"\[\d+,\d+\]$", "[1..3,1..3]", name)
-    name = re.sub(r"^(arm\.\w+|excite\.qd_ref)\[\d+\]$", r"\1[1..n]", name)
+    name = re.sub(r"^((?:true\.)?arm\.\w+|excite\.qd_ref)\[\d+\]$", r"\1[1..n]", name)
     name = re.sub(r"\[\d\]$", "[1..3]", name)
     return re.sub(r"\.(Ixx|Iyy|Izz|Ixy|Ixz|Iyz)$", ".{Ixx,Iyy,Izz,Ixy,Ixz,Iyz}", name)
 
@@ -310,12 +320,17 @@ def _short(desc: str) -> str:
     return desc.replace("|", "/")
 
 
+def _table_of(kind: str):
+    from spacerobot.interface import estimator_vars, plant_vars, sensors_vars
+
+    return {"plant": plant_vars, "estimator": estimator_vars, "sensors": sensors_vars}[kind]
+
+
 def docs_table(kind: str) -> str:
-    from spacerobot.interface import estimator_vars, plant_vars
     from spacerobot.robots import scenario
 
     sc = scenario("spatial")
-    table = (plant_vars if kind == "plant" else estimator_vars)(sc.robot, sc)
+    table = _table_of(kind)(sc.robot, sc)
     rows, seen = [], set()
     for v in table:
         g = _group(v.name)

@@ -1,6 +1,6 @@
 """Interface conformance (issue #5), part 3: FMU state.
 
-For both FMUs of both robots: save the state at t, continue to t_end, restore, continue again:
+For every FMU (plant, estimator, sensors) of both robots: save the state at t, continue to t_end, restore, continue again:
 every output (estimates, standard deviations, diagnostics) is identical bit for bit. Through
 fmi2GetFMUstate/fmi2SetFMUstate, and through fmi2SerializeFMUstate/fmi2DeSerializeFMUstate,
 including restoring the bytes into a second instance that has run something else. A negative
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
-from test_conformance_util import (DT, KINDS, ROBOTS, Inst, as_array, assert_same, fmus_for,
-                                   plant_samples)
+from test_conformance_util import (DT, KINDS, OTHER_PARAMETERS, ROBOTS, Inst, as_array,
+                                   assert_same, fed_inputs, fmus_for, plant_samples)
 
 N, K = 12, 5        # run 12 steps of 0.1 s, save after step 5
 
@@ -23,12 +23,12 @@ def case(request):
     robot, kind = request.param
     fmus = fmus_for(request, robot)
     names, samples = plant_samples(fmus, N)
-    return kind, fmus[kind], names, samples
+    return kind, fmus[kind], fed_inputs(kind, names), samples
 
 
 def advance(inst, kind, names, samples, k0, k1):
     for k in range(k0, k1):
-        if kind == "estimator":
+        if names is not None:
             inst.set_many(names, samples[k])
         assert inst.step(k * DT, DT) == 0
 
@@ -74,7 +74,7 @@ def test_serialized_state_round_trip_into_another_instance(case):
     a.free()
 
     # another instance that ran with other parameters takes over from the bytes
-    other = {"target.m": 123.0} if kind == "plant" else {"guess.target.m": 42.0, "method": 2}
+    other = dict(OTHER_PARAMETERS[kind], **({"method": 2} if kind == "estimator" else {}))
     b = Inst(path, "b").init(other)
     advance(b, kind, names, samples, 0, 3)
     s = b.fmu.deSerializeFMUstate(data)
@@ -98,7 +98,7 @@ def test_state_matters_negative_control(case):
     advance(a, kind, names, samples, 0, N)
     reference = as_array(a.outputs())
     a.free()
-    other = {"target.m": 123.0} if kind == "plant" else {"guess.target.m": 42.0}
+    other = OTHER_PARAMETERS[kind]
     b = Inst(path, "b").init(other)
     advance(b, kind, names, samples, 0, K)
     s = b.fmu.getFMUstate()

@@ -19,8 +19,18 @@ OK, WARNING, DISCARD, ERROR, FATAL = 0, 1, 2, 3, 4
 STATUS_NAMES = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal"}
 
 ROBOTS = ("planar", "spatial")
-KINDS = ("plant", "estimator")
+KINDS = ("plant", "estimator", "sensors")
 DT = 0.1
+#: per kind, parameters other than the defaults (for the tests that need two different runs)
+OTHER_PARAMETERS = {"plant": {"target.m": 123.0}, "estimator": {"guess.target.m": 42.0},
+                    "sensors": {"seed": 7, "noise.gyro.arw": 1e-3}}
+
+
+def fed_inputs(kind: str, names):
+    """The names under which ``kind`` takes the plant samples (estimator inputs ``names``):
+    the estimator's own, the sensors' ``true.<name>``, none for the plant."""
+    return {"plant": None, "estimator": list(names),
+            "sensors": ["true." + n for n in names]}[kind]
 
 
 def fmus_for(request, robot: str) -> dict:

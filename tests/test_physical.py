@@ -126,7 +126,6 @@ def test_projection_is_the_nearest_real_body():
 def test_planar_out_of_plane_adjustment_keeps_identified_izz():
     """A planar estimate whose identified Izz exceeds the guessed Ixx + Iyy: the projection
     keeps Izz and raises the unidentified Ixx, Iyy (diagonal tensor)."""
-    RNG = np.random.default_rng(20261123)
     I6 = np.array([10.0, 10.0, 25.0, 0.0, 0.0, 0.0])
     m2, _, I2, projected = project_body(250.0, [0.25, 0.1, 0.0], I6)
     assert projected and m2 == 250.0

@@ -243,8 +243,8 @@ class _Fake:
 
 
 def test_master_wires_connections_in_both_directions():
-    """a.y -> b.u and b.y -> a.u (a feedback loop): every output is read at t before any input
-    is set, so each input gets its source's value at t, whatever the component order."""
+    """a.y -> b.u and b.y -> a.u (a feedback loop): outputs change only in doStep, so each
+    input gets its source's value at t, whatever the component order."""
     log = []
     a, b = _Fake(10, log), _Fake(20, log)
     m = Master({"a": a, "b": b}, [("a", "y", "b", "u"), ("b", "y", "a", "u")])
@@ -252,10 +252,28 @@ def test_master_wires_connections_in_both_directions():
         m.step(0.1 * k, 0.1)
         assert b.fmu.u == [10.0 + k] and a.fmu.u == [20.0 + k]
     assert (a.fmu.k, b.fmu.k) == (3, 3)
-    assert log[:4] == [("get", 10), ("get", 20), ("set", 20), ("set", 10)]
+    assert log[:4] == [("get", 10), ("set", 20), ("get", 20), ("set", 10)]
     with pytest.raises(SimulationError, match="types differ"):
         a.vars["i"] = _FakeVar(2, "Integer")
         Master({"a": a, "b": b}, [("a", "i", "b", "u")])
+
+
+class _Feedthrough(_Fake):
+    """Output = the input set last (a direct feedthrough, like the sensors FMU)."""
+
+    def __init__(self, log):
+        super().__init__(0, log)
+        self.fmu.getReal = lambda vrs: list(self.fmu.u or [0.0]) * len(vrs)
+
+
+def test_master_passes_a_feedthrough_on_within_the_point():
+    """a.y -> f.u, f.y -> b.u in that order: b gets a's value at t at the same point."""
+    log = []
+    a, f, b = _Fake(10, log), _Feedthrough(log), _Fake(20, log)
+    m = Master({"a": a, "f": f, "b": b}, [("a", "y", "f", "u"), ("f", "y", "b", "u")])
+    for k in range(3):
+        m.step(0.1 * k, 0.1)
+        assert b.fmu.u == [10.0 + k]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -453,7 +471,7 @@ def test_fmpy_simulate_ssp_runs_the_package_with_a_parameter_set(systems):
 def test_system_of_fmus_wires_every_input_by_name(planar_fmus):
     from spacerobot.system.reader import system_of_fmus
 
-    info = system_of_fmus(planar_fmus, 0.1, 1.0)
+    info = system_of_fmus({k: planar_fmus[k] for k in ("plant", "estimator")}, 0.1, 1.0)
     assert sorted(info.connections) == sorted(
         [("plant", n, "estimator", n) for n in interface.connections(ROBOTS["planar"])]
         + [("estimator", n, "plant", n) for n in interface.feedback_connections()])

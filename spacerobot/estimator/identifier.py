@@ -18,6 +18,7 @@ from ..interface import AccelSource, ExciteMode, Method, ParameterLayout, Solver
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import kernels
+from .differencing import centre_derivative
 from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
 
@@ -88,13 +89,28 @@ class Identifier:
         The paper's modified RLS over (mu, theta) (:class:`.PaperSolver`), or one RLS over the
         20 standard parameters (:class:`.JointSolver`).
     accel_source : AccelSource or {'measured', 'differenced'} or FMI code
-        Force method only: measured accelerations, or central differences of the velocities
-        (the estimate then lags by one sample).
+        Force method only: measured accelerations, or derivatives of the velocities at the
+        centre of a window of ``2 diff_half_window + 1`` samples, the whole equation evaluated
+        at that centre (the estimate lags by ``diff_half_window`` samples;
+        :mod:`.differencing`).
     lam : float
         Forgetting factor, 0 < lam <= 1.
     sd_rel : float
         Relative standard deviation below which a body counts as identified (:meth:`report`),
         0 < sd_rel < 1.
+    row_sd : (float, float)
+        Standard deviations of one row of the linear (masses, first moments) and of the
+        angular (inertias) equation's error from the measurement noise, in the units of the
+        method's equations (momentum: N.s, N.m.s; force: N, N.m). Each equation's rows are
+        divided by theirs, so both equations, and the data against the prior ``P0``, weigh by
+        their noise. 0: unit weight (no noise model; the equations as they are).
+    diff_half_window : int
+        ``m`` >= 1 of the differenced accelerations: 1 = the 3-point central difference,
+        more = a Savitzky-Golay derivative over ``2m + 1`` samples (less noise).
+    corr_lags : int
+        Lags >= 0 of the residual autocorrelation that inflates the reported standard
+        deviations for correlated equation errors (:class:`.uncertainty.Autocorrelation`);
+        0 = rows taken as independent.
 
     Attributes
     ----------
@@ -110,7 +126,8 @@ class Identifier:
 
     def __init__(self, robot: Robot, guess: Guess, method: Method | str = "momentum",
                  solver: Solver | str = "paper", accel_source: AccelSource | str = "measured",
-                 lam: float = 1.0, sd_rel: float = SD_REL):
+                 lam: float = 1.0, sd_rel: float = SD_REL, row_sd=(0.0, 0.0),
+                 diff_half_window: int = 1, corr_lags: int = 0):
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
@@ -119,6 +136,14 @@ class Identifier:
         if not (0.0 < sd_rel < 1.0):
             raise ValueError(f"relative standard deviation threshold must satisfy "
                              f"0 < sd_rel < 1, got {sd_rel}")
+        row_sd = tuple(float(x) for x in row_sd)
+        if len(row_sd) != 2 or not all(x >= 0.0 and math.isfinite(x) for x in row_sd):
+            raise ValueError(f"row standard deviations must be two finite numbers >= 0 "
+                             f"(0 = unit weight), got {row_sd}")
+        for name, val, low in (("differencing half window", diff_half_window, 1),
+                               ("correlation lags", corr_lags, 0)):
+            if int(val) != val or val < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {val}")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
             body.check(name)
         for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
@@ -126,6 +151,9 @@ class Identifier:
                 raise ValueError(f"{name} must be a finite covariance > 0, got {val}")
         self.robot, self.guess = robot, guess
         self.method, self.accel_source, self.lam, self.sd_rel = method, accel_source, lam, sd_rel
+        self.row_sd, self.diff_half_window = row_sd, int(diff_half_window)
+        # row weights 1 / sd (1: unweighted, the rows untouched)
+        self._w_lin, self._w_ang = (1.0 / x if x > 0.0 else 1.0 for x in row_sd)
         self.n = robot.n_joints
         self._geom = ArmGeometry(robot).arrays()
         self._sizes = [3, 3, 9, 3, 3, 3, self.n, self.n, self.n, 3, 3, 3, 3]   # per KEYS entry
@@ -136,7 +164,7 @@ class Identifier:
                               slice(kernels.OMEGA_B, kernels.OMEGA_B + 3)),
                              (slice(q0 + 2 * n, q0 + 3 * n), slice(q0 + n, q0 + 2 * n)))
         self.layout = ParameterLayout.for_robot(robot)
-        self.solver: ParameterSolver = make_solver(kind, self.layout, guess, lam)
+        self.solver: ParameterSolver = make_solver(kind, self.layout, guess, lam, int(corr_lags))
         self.info_lin = np.zeros((len(self.layout.mu_active),) * 2)
         self.info_ang = np.zeros((len(self.layout.theta_active),) * 2)
         self.samples = 0
@@ -146,7 +174,7 @@ class Identifier:
         self.residual_lin = 0.0
         self.residual_ang = 0.0
         self.reference = None       # momentum method: terms at t0
-        self.history = []           # differenced accelerations: last samples (t, flat sample)
+        self.history = []           # differenced accelerations: the window (t, flat sample)
         self._exc = None            # cached excitation() (cleared by update / set_state)
 
     # -- equations -----------------------------------------------------------------------------
@@ -312,26 +340,27 @@ class Identifier:
         return math.isfinite(total)
 
     def _differenced(self, t: float, flat: np.ndarray):
-        """Replace the accelerations of the previous sample by 3-point central differences of
-        the velocities (flattened samples, see :meth:`_validate`).
+        """The sample at the centre of the window of the last ``2m + 1`` (flattened samples,
+        see :meth:`_validate`), its accelerations the derivatives of its velocities at its
+        time (:func:`.differencing.centre_derivative`): every row of its equations belongs to
+        one instant.
 
-        Returns the completed previous sample, or None while the history is too short.
+        Returns the completed centre sample, or None while the window is not full.
         """
-        self.history.append((t, flat))
-        if len(self.history) < 3:
+        k = 2 * self.diff_half_window + 1
+        self.history = self.history + [(t, flat)]
+        if len(self.history) < k:
             return None
-        (t0, x0), (t1, x1), (t2, x2) = self.history[-3:]
-        self.history = self.history[-2:]
-        h1, h2 = t1 - t0, t2 - t1
-        c0, c1, c2 = -h2 / (h1 * (h1 + h2)), (h2 - h1) / (h1 * h2), h1 / (h2 * (h1 + h2))
-        out = x1.copy()
-        for acc, vel in self._diff_slices:
-            out[acc] = c0 * x0[vel] + c1 * x1[vel] + c2 * x2[vel]
-        return out
+        window, self.history = self.history, self.history[1:]
+        return centre_derivative(window, self._diff_slices)[1]
 
     def _solve(self, A, b, phi, y, psi):
         """The solver's update on the identified rows, then the residuals and information."""
         L = self.layout
+        if self._w_lin != 1.0:                       # rows / their noise sd
+            A, b = A * self._w_lin, b * self._w_lin
+        if self._w_ang != 1.0:
+            phi, y, psi = phi * self._w_ang, y * self._w_ang, psi * self._w_ang
         if not L.complete:
             rl, ra = L.rows_lin, L.rows_ang
             A, b, phi, y, psi = A[rl], b[rl], phi[ra], y[ra], psi[ra]

@@ -29,7 +29,7 @@ from ..interface import ParameterLayout, Solver
 from ..robots import Guess
 from . import parameters as par
 from .rls import RLS, ModifiedRLS
-from .uncertainty import Gram, observed_solve, prior_pull, residual_variance
+from .uncertainty import Autocorrelation, Gram, observed_solve, prior_pull
 
 
 class Step(NamedTuple):
@@ -60,12 +60,15 @@ class ParameterSolver(ABC):
         moments) and ``P0_theta`` (inertias).
     lam : float
         Forgetting factor, 0 < lam <= 1.
+    lags : int
+        Lags of the residual autocorrelation that inflates the data's scatter
+        (:class:`.uncertainty.Autocorrelation`; 0 = independent rows assumed).
     """
 
     kind: Solver
 
-    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float):
-        self.layout, self.guess, self.lam = layout, guess, lam
+    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float, lags: int = 0):
+        self.layout, self.guess, self.lam, self.lags = layout, guess, lam, int(lags)
 
     @abstractmethod
     def update(self, A, b, phi, y, psi) -> Step:
@@ -164,8 +167,8 @@ class PaperSolver(ParameterSolver):
 
     kind = Solver.PAPER
 
-    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0):
-        super().__init__(layout, guess, lam)
+    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0, lags: int = 0):
+        super().__init__(layout, guess, lam, lags)
         L = layout
         mu0, th0 = par.paper_vectors(guess)
         self._mu_out = np.setdiff1d(np.arange(L.n_mu), L.mu_active)
@@ -181,6 +184,8 @@ class PaperSolver(ParameterSolver):
         # Gram matrices of the rows [A | b] and [phi | y | psi] (residuals at any mu, theta)
         self.gram_lin = Gram.empty(p + 1, lam)
         self.gram_ang = Gram.empty(r + 1 + len(self.rls.D_mu), lam)
+        # autocorrelation of the a-priori residuals of each equation
+        self.corr_lin = self.corr_ang = Autocorrelation.empty(self.lags, lam)
         # theta of each body inside z
         self._z_theta = [slice(L.n_mu + b.theta.start, L.n_mu + b.theta.stop) for b in L.bodies]
         self._ix = (np.ix_(L.mu_active, L.mu_active), np.ix_(L.theta_active, L.theta_active))
@@ -201,6 +206,8 @@ class PaperSolver(ParameterSolver):
         e_lin, e_ang, rhs_ang = rls.update(A, b, phi, y, psi)
         self.gram_lin = self.gram_lin.add(np.column_stack([A, b]))
         self.gram_ang = self.gram_ang.add(np.column_stack([phi, y, psi]))
+        if self.lags:
+            self.corr_lin, self.corr_ang = self.corr_lin.add(e_lin), self.corr_ang.add(e_ang)
         if L.complete:
             self.mu, self.theta = rls.mu, rls.theta
         else:
@@ -257,13 +264,19 @@ class PaperSolver(ParameterSolver):
         return cov
 
     def _residual_variances(self) -> Tuple[float, float]:
-        """A-posteriori residual variances of both equations at the current ``mu``, ``theta``:
-        ``|A mu - b|^2`` and ``|phi theta - y - psi D(mu)|^2`` over all samples, per degree
-        of freedom."""
+        """Scales of the two covariances ``P``: the a-posteriori residual variances of both
+        equations at the current ``mu``, ``theta`` (``|A mu - b|^2`` and
+        ``|phi theta - y - psi D(mu)|^2`` over all samples, per degree of freedom), times the
+        forgetting's and the residuals' correlation factors (:mod:`.uncertainty`)."""
         rls, gl, ga = self.rls, self.gram_lin, self.gram_ang
-        s2_lin = residual_variance(gl.S, np.append(rls.mu, -1.0), gl.rows, len(rls.mu))
-        z_ang = np.concatenate([rls.theta, [-1.0], -rls.D_mu])
-        return s2_lin, residual_variance(ga.S, z_ang, ga.rows, len(rls.theta))
+        s2_lin = gl.residual_variance(np.append(rls.mu, -1.0), len(rls.mu))
+        s2_ang = ga.residual_variance(np.concatenate([rls.theta, [-1.0], -rls.D_mu]),
+                                      len(rls.theta))
+        if self.lam != 1.0:
+            s2_lin, s2_ang = s2_lin * gl.var_scale, s2_ang * ga.var_scale
+        if self.lags:
+            s2_lin, s2_ang = s2_lin * self.corr_lin.inflation(), s2_ang * self.corr_ang.inflation()
+        return s2_lin, s2_ang
 
     def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
         """``mu``: :func:`.uncertainty.prior_pull`. ``theta``: the distance to the data-only
@@ -289,10 +302,11 @@ class PaperSolver(ParameterSolver):
         return delta, unobserved
 
     def snapshot(self) -> tuple:
-        return self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang
+        return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
+                self.corr_lin, self.corr_ang)
 
     def restore(self, snap: tuple) -> None:
-        rls, self.mu, self.theta, self.gram_lin, self.gram_ang = snap
+        rls, self.mu, self.theta, self.gram_lin, self.gram_ang, self.corr_lin, self.corr_ang = snap
         self.rls.restore(rls)
 
 
@@ -305,8 +319,8 @@ class JointSolver(ParameterSolver):
 
     kind = Solver.JOINT
 
-    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0):
-        super().__init__(layout, guess, lam)
+    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0, lags: int = 0):
+        super().__init__(layout, guess, lam, lags)
         L = layout
         self.pi = par.standard_vector((guess.base, guess.target))
         act = L.standard_active
@@ -314,6 +328,7 @@ class JointSolver(ParameterSolver):
         self.rls = RLS(self.pi[act], np.diag(self.prior()[act]), lam)
         self._pi0, self._W0 = self.pi[act], np.diag(1.0 / self.prior()[act])
         self.gram = Gram.empty(len(act) + 1, lam)        # rows [Y | y]
+        self.corr = Autocorrelation.empty(self.lags, lam)   # of the a-priori residuals
         self._ix = np.ix_(act, act)
         # the identified columns that are masses / first moments, and inertias
         self._lin_cols = np.flatnonzero(L.first_order[act])
@@ -333,6 +348,8 @@ class JointSolver(ParameterSolver):
             yy = yy - Y[:, out].dot(self.pi[out])
         e, _ = self.rls.update(Y[:, act], yy)
         self.gram = self.gram.add(np.column_stack([Y[:, act], yy]))
+        if self.lags:
+            self.corr = self.corr.add(e)
         if L.complete:
             self.pi = self.rls.x
         else:
@@ -374,7 +391,12 @@ class JointSolver(ParameterSolver):
     def covariance(self) -> np.ndarray:
         g, x = self.gram, self.rls.x
         cov = np.diag(self.prior())
-        cov[self._ix] = self.rls.P * residual_variance(g.S, np.append(x, -1.0), g.rows, len(x))
+        s2 = g.residual_variance(np.append(x, -1.0), len(x))
+        if self.lam != 1.0:
+            s2 *= g.var_scale
+        if self.lags:
+            s2 *= self.corr.inflation()
+        cov[self._ix] = self.rls.P * s2
         return cov
 
     def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
@@ -385,10 +407,10 @@ class JointSolver(ParameterSolver):
         return delta, unobserved
 
     def snapshot(self) -> tuple:
-        return self.rls.snapshot(), self.pi, self.gram
+        return self.rls.snapshot(), self.pi, self.gram, self.corr
 
     def restore(self, snap: tuple) -> None:
-        rls, self.pi, self.gram = snap
+        rls, self.pi, self.gram, self.corr = snap
         self.rls.restore(rls)
 
 
@@ -396,7 +418,7 @@ class JointSolver(ParameterSolver):
 SOLVERS = {Solver.PAPER: PaperSolver, Solver.JOINT: JointSolver}
 
 
-def make_solver(kind: Solver, layout: ParameterLayout, guess: Guess, lam: float = 1.0
-                ) -> ParameterSolver:
+def make_solver(kind: Solver, layout: ParameterLayout, guess: Guess, lam: float = 1.0,
+                lags: int = 0) -> ParameterSolver:
     """The solver of kind ``kind``."""
-    return SOLVERS[Solver.parse(kind, "solver")](layout, guess, lam)
+    return SOLVERS[Solver.parse(kind, "solver")](layout, guess, lam, lags)

@@ -16,9 +16,21 @@ Two things separate ``x`` from the truth:
   Without noise ``x_LS`` is the truth, so ``delta`` is the estimate's error itself. Directions
   in which ``G`` is singular are not observed at all: the data say nothing there.
 * the scatter of the data, ``sigma^2 P`` with ``sigma^2`` the a-posteriori residual variance
-  ``SSR(x) / (rows - p)``; ``SSR(x) = sum_k lam^(N-k) |y_k - H_k x|^2 = z^T S z`` with
+  ``SSR(x) / dof``; ``SSR(x) = sum_k lam^(N-k) |y_k - H_k x|^2 = z^T S z`` with
   ``z = [x; -1]`` and ``S`` the (weighted) Gram matrix of the augmented rows ``[H_k | y_k]``,
   kept with constant cost per sample (:class:`Gram`).
+
+  With forgetting the rows count with their weights: ``n1 = sum_k lam^(N-k) k_k`` rows of
+  weight ``w = lam^(N-k)`` and ``n2 = sum_k lam^(2(N-k)) k_k``. The weighted estimate's
+  covariance is ``sigma^2 P G2 P`` with ``G2 = sum w^2 H^T H``, about ``(n2 / n1) sigma^2 P``
+  for regressors of steady size (:attr:`Gram.var_scale`), and ``E[SSR] = sigma^2 (n1 - p
+  n2 / n1)`` (:attr:`Gram.dof`). Both are the plain ``rows - p`` and 1 without forgetting.
+* correlated equation errors: the scatter term assumes independent rows. Filtered or
+  differenced signals, integrated impulses, biases and random walks make consecutive rows'
+  errors correlated, and ``N`` correlated rows carry the information of fewer independent
+  ones. :class:`Autocorrelation` estimates the variance inflation ``1 + 2 sum_j (1 - j/(L+1))
+  rho_j`` (Bartlett weights, lags ``j <= L``) from the solver's a-priori residuals; the
+  long-run variance estimate of Newey and West (1987). ``L = 0`` is no correction.
 
 The standard deviation the estimator reports combines both, ``sd^2 = sigma^2 P_ii + delta_i^2``
 mapped to the reported parameters (see ``Identifier.std``). Without noise it is the size of the prior's pull (the true error, to first order); with noise it
@@ -30,7 +42,7 @@ from typing import NamedTuple, Tuple
 
 import numpy as np
 
-__all__ = ["Gram", "prior_pull", "residual_variance"]
+__all__ = ["Autocorrelation", "Gram", "prior_pull", "residual_variance"]
 
 #: eigenvalues of the scaled information below this fraction of the largest count as unobserved
 REL_EIG_MIN = 1e-12
@@ -38,7 +50,9 @@ REL_EIG_MIN = 1e-12
 
 class Gram(NamedTuple):
     """Weighted Gram matrix ``S = sum_k lam^(N-k) [H_k | y_k]^T [H_k | y_k]`` of a linear model,
-    the number of rows seen and the prior's remaining weight ``decay = lam^N``.
+    the number of rows seen, the prior's remaining weight ``decay = lam^N`` and the weighted
+    row counts ``n1 = sum_k lam^(N-k) k_k``, ``n2 = sum_k lam^(2(N-k)) k_k`` (``k_k`` rows in
+    sample ``k``; both equal ``rows`` without forgetting).
 
     Immutable: :meth:`add` returns the updated one (so a solver's snapshot is a reference).
     """
@@ -47,29 +61,104 @@ class Gram(NamedTuple):
     rows: int = 0
     lam: float = 1.0
     decay: float = 1.0
+    n1: float = 0.0
+    n2: float = 0.0
 
     @classmethod
     def empty(cls, n: int, lam: float = 1.0) -> "Gram":
         """No rows yet; ``n`` columns (parameters + right-hand sides)."""
-        return cls(np.zeros((n, n)), 0, float(lam), 1.0)
+        return cls(np.zeros((n, n)), 0, float(lam), 1.0, 0.0, 0.0)
 
     def add(self, rows: np.ndarray) -> "Gram":
         """With the augmented rows (k, n) of one more sample."""
         rows = np.asarray(rows, dtype=float)
+        k = rows.shape[0]
         if self.lam == 1.0:
-            return Gram(self.S + rows.T @ rows, self.rows + rows.shape[0], 1.0, 1.0)
-        return Gram(self.lam * self.S + rows.T @ rows, self.rows + rows.shape[0], self.lam,
-                    self.lam * self.decay)
+            n = self.rows + k
+            return Gram(self.S + rows.T @ rows, n, 1.0, 1.0, float(n), float(n))
+        lam = self.lam
+        return Gram(lam * self.S + rows.T @ rows, self.rows + k, lam, lam * self.decay,
+                    lam * self.n1 + k, lam * lam * self.n2 + k)
+
+    def dof(self, p: int) -> float:
+        """Degrees of freedom of the weighted residual sum for ``p`` parameters,
+        ``n1 - p n2 / n1`` (``rows - p`` without forgetting)."""
+        if self.lam == 1.0:
+            return float(self.rows - p)
+        return self.n1 - p * self.n2 / self.n1 if self.n1 > 0.0 else 0.0
+
+    @property
+    def var_scale(self) -> float:
+        """``n2 / n1``: the weighted estimate's covariance is about ``var_scale sigma^2 P``
+        (1 without forgetting)."""
+        if self.lam == 1.0 or self.n1 <= 0.0:
+            return 1.0
+        return self.n2 / self.n1
+
+    def residual_variance(self, z: np.ndarray, p: int) -> float:
+        """:func:`residual_variance` of the combination ``z`` with these rows' degrees of
+        freedom (:meth:`dof`)."""
+        return residual_variance(self.S, z, self.dof(p), 0)
 
 
-def residual_variance(S: np.ndarray, z: np.ndarray, rows: int, p: int) -> float:
+class Autocorrelation(NamedTuple):
+    """Weighted autocorrelation sums of a residual sequence and the variance inflation they
+    imply (module docstring, correlated equation errors).
+
+    ``c[j] = sum_t lam^(N-t) e_t . e_(t-j)`` for lags ``j = 0..L`` over the residual vectors
+    ``e_t`` (the rows of one sample pooled); ``recent`` holds the last ``L`` of them. Immutable
+    (:meth:`add` returns the updated one).
+    """
+
+    c: np.ndarray
+    recent: tuple = ()
+    lam: float = 1.0
+
+    @classmethod
+    def empty(cls, lags: int, lam: float = 1.0) -> "Autocorrelation":
+        """No residual yet; lags ``0..lags``."""
+        if lags < 0:
+            raise ValueError(f"the number of correlation lags must be >= 0, got {lags}")
+        return cls(np.zeros(lags + 1), (), float(lam))
+
+    @property
+    def lags(self) -> int:
+        return len(self.c) - 1
+
+    def add(self, e: np.ndarray) -> "Autocorrelation":
+        """With the residual vector ``e`` of one more sample (no-op without lags)."""
+        L = self.lags
+        if L == 0:
+            return self
+        e = np.array(e, dtype=float).ravel()
+        c = self.c * self.lam if self.lam != 1.0 else self.c.copy()
+        c[0] += e @ e
+        for j, old in enumerate(reversed(self.recent), start=1):    # newest first: lag 1, 2 ..
+            if len(old) == len(e):
+                c[j] += e @ old
+        return Autocorrelation(c, (self.recent + (e,))[-L:], self.lam)
+
+    def inflation(self) -> float:
+        """``max(1, 1 + 2 sum_j (1 - j/(L+1)) c_j / c_0)``: the factor by which correlated
+        residuals make the independent-rows variance of an estimate too small; 1 without lags
+        or data (a negative sum, e.g. from central differences, is not used to shrink it)."""
+        L = self.lags
+        if L == 0 or not self.c[0] > 0.0:
+            return 1.0
+        j = np.arange(1, L + 1)
+        f = 1.0 + 2.0 * float(np.sum((1.0 - j / (L + 1.0)) * self.c[1:]) / self.c[0])
+        return f if f > 1.0 else 1.0
+
+
+def residual_variance(S: np.ndarray, z: np.ndarray, rows: float, p: int) -> float:
     """``SSR / (rows - p)`` with ``SSR = z^T S z`` (clipped at 0: round-off), 0 before there
     is redundancy.
 
     Parameters
     ----------
     S : (n, n) Gram matrix of the augmented rows;  z : (n,) the combination whose residual is
-    wanted (e.g. ``[x, -1]``);  rows : rows seen;  p : number of parameters.
+    wanted (e.g. ``[x, -1]``);  rows : rows seen (weighted, :meth:`Gram.dof`, with
+    forgetting);  p : number of parameters.
     """
     dof = rows - p
     if dof <= 0:

@@ -29,6 +29,7 @@ ROOT = LIB.parent                                   # repository / install root
 BUNDLES = {
     "plant": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "plant"),
     "estimator": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "estimator"),
+    "sensors": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "sensors"),
 }
 
 
@@ -39,11 +40,12 @@ def _script(kind: str) -> Path:
 
 
 def build_fmu(kind: str, sc: Scenario, out_dir: str | Path) -> Path:
-    """Build one FMU (``kind`` = 'plant' or 'estimator') into ``out_dir``; returns its path."""
+    """Build one FMU (``kind`` = 'plant', 'estimator' or 'sensors') into ``out_dir``; returns
+    its path."""
     from pythonfmu.builder import FmuBuilder
 
     if kind not in BUNDLES:
-        raise ValueError(f"kind must be 'plant' or 'estimator', got {kind!r}")
+        raise ValueError(f"kind must be one of {sorted(BUNDLES)}, got {kind!r}")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     script = _script(kind)

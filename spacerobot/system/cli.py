@@ -3,9 +3,12 @@
 ::
 
     spacerobot build --robot planar|spatial|ROBOT.urdf [--ee LINK] [--motion M] [--out DIR]
+                     [--sensors]
     spacerobot run [--robot planar|spatial|ROBOT.urdf [--ee LINK] | SSP_FILE] [--target NAME]
                    [--method momentum|force] [--accel measured|differenced]
                    [--solver paper|joint] [--stop-time T] [--out CSV] [--set NAME=VALUE ...]
+                   [--sensors]
+    spacerobot identify TELEMETRY.csv --robot planar|spatial|ROBOT.urdf [--method ...] [--out CSV]
     spacerobot plot CSV [--out PNG]
     spacerobot sweep ...        (spacerobot.system.sweep, if installed)
     spacerobot montecarlo ...   (spacerobot.system.montecarlo)
@@ -96,15 +99,16 @@ def cmd_build(args) -> int:
     from .ssd import build_system
     robot = robot_key(args)
     out = Path(args.out) if args.out else Path("build") / robot_label(robot)
-    for key, path in build_system(robot, out).items():
+    for key, path in build_system(robot, out, sensors=args.sensors).items():
         print(f"{key:<12} {path}")
     return 0
 
 
 def result_name(robot: Optional[str], ssp: Path, target: Optional[str], args) -> Path:
-    """Default results CSV: ``results/<robot>-<target>-<method>-<accel>-<solver>.csv``, so that
-    runs that differ in any of them do not overwrite each other."""
-    name = robot_label(robot) if robot else ssp.stem
+    """Default results CSV: ``results/<robot>[_sensors]-<target>-<method>-<accel>-<solver>.csv``,
+    so that runs that differ in any of them do not overwrite each other."""
+    sensors = "_sensors" if robot and args.sensors and not args.ssp else ""
+    name = robot_label(robot) + sensors if robot else ssp.stem
     return Path("results") / (f"{name}-{target or 'bound'}-{args.method}-"
                               f"{args.accel}-{args.solver}.csv")
 
@@ -139,7 +143,7 @@ def cmd_run(args) -> int:
     else:
         robot = key or "planar"
         ssp = None
-    target = args.target or (default_parameter_set(robot) if robot else None)
+    target = args.target or (default_parameter_set(robot, args.sensors) if robot else None)
     # the estimator settings a parameter set is meant for (robots.ParameterSet.estimator)
     overrides = {**set_estimator_overrides(robot, args.target), **overrides}
     csv_path = Path(args.out) if args.out else result_name(robot, ssp or Path(robot), target,
@@ -148,7 +152,7 @@ def cmd_run(args) -> int:
     if csv_path.suffix.lower() != ".csv":  # a typo must not overwrite e.g. README.md
         raise CommandError(f"--out {csv_path}: the result file must end in .csv")
     if ssp is None:
-        ssp = ensure_ssp(robot, args.build_dir)
+        ssp = ensure_ssp(robot, args.build_dir, sensors=args.sensors)
     res = run_ssp(ssp, parameter_set=args.target, stop_time=args.stop_time,
                   overrides=overrides, csv_path=csv_path,
                   progress=False if args.no_progress else None)
@@ -180,8 +184,8 @@ def cmd_plot(args) -> int:
 # ----------------------------------------------------------------------------------------------
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser (with ``sweep``/``montecarlo``/``crosscheck`` if those modules are
-    installed)."""
+    """The argument parser (with ``sweep``/``montecarlo``/``crosscheck``/``identify`` if those
+    modules are installed)."""
     parser = argparse.ArgumentParser(
         prog="spacerobot",
         description="Online identification of base and target inertial parameters of a space "
@@ -196,6 +200,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_robot_arguments(p, required=True)
     p.add_argument("--out", metavar="DIR", help="output folder (default build/<robot>/, "
                                                 "<robot> the URDF's robot name)")
+    p.add_argument("--sensors", action="store_true", help="the system with the sensors FMU "
+                   "between plant and estimator (<robot>_sensors.ssp, docs/sensors.md)")
     p.set_defaults(func=cmd_build)
 
     p = sub.add_parser("run", help="run the co-simulation and print the final estimates",
@@ -222,6 +228,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--build-dir", metavar="DIR", help="where to build the .ssp for --robot "
                                                       "(default build/<robot>/)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--sensors", action="store_true", help="with --robot: run the system with "
+                   "the sensors FMU (parameter sets ideal, realistic (default) and the "
+                   "others; seed: --set sensors.seed=N)")
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("plot", help="plot a run CSV (paper Fig. 4/5 view) or a sweep table",
@@ -232,7 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="PNG", help="output PNG (default: CSV with .png suffix)")
     p.set_defaults(func=cmd_plot)
 
-    for mod in ("sweep", "montecarlo", "crosscheck"):
+    for mod in ("sweep", "montecarlo", "crosscheck", "identify"):
         name = f"{__package__}.{mod}"
         if importlib.util.find_spec(name) is not None:
             importlib.import_module(name).register(sub)

@@ -1,11 +1,13 @@
 """The co-simulation loop: fixed communication points, Jacobi exchange, one doStep per
 component and point.
 
-At every communication point ``t`` the master first reads every connected output of every
-component (all at ``t``), then sets every connected input, then steps every component from ``t``
-to the next point. Because all reads come before all writes, a connection may go either way
-between two components (plant -> estimator and estimator -> plant alike): each input gets the
-value its source had at ``t``, whatever the order of the components.
+At every communication point ``t`` the master reads the connected outputs and sets the
+connected inputs, source by source in the order of the connections, then steps every component
+from ``t`` to the next point. The plant and the estimator change their outputs only when they
+step, so a connection may go either way between them (plant -> estimator and estimator ->
+plant alike): each input gets the value its source had at ``t``. The sensors FMU is a direct
+feedthrough: listed after the plant -> sensors connections, its outputs carry the sample of
+``t`` to the estimator at ``t``.
 """
 from __future__ import annotations
 
@@ -87,12 +89,18 @@ class Master:
                                                         values=get.values)))
 
     def exchange(self) -> None:
-        """Read every connected output, then set every connected input."""
+        """For each (source, destination) pair in the order of the connections: read the
+        connected outputs, set the connected inputs.
+
+        For components whose outputs change only in fmi2DoStep this equals reading every
+        output before setting any input. A direct-feedthrough component (the sensors FMU)
+        whose outgoing connections follow its incoming ones passes on, within the same
+        communication point, the values just set.
+        """
         calls = self.calls
-        for a, _, typ, get, _ in self._wires:
+        for a, b, typ, get, put in self._wires:
             calls(a, f"fmi2Get{typ}")
             get.get()
-        for _, b, typ, _, put in self._wires:
             calls(b, f"fmi2Set{typ}")
             put.set()
 

@@ -1,10 +1,12 @@
-"""Plots of run results: the paper's Fig. 4/5 view (estimate / truth against time).
+"""Plots of run results: the paper's Fig. 4/5 view (estimate / truth against time), with the
++-2 standard deviation band the estimator reports around each estimate.
 
 Reads the CSV written by :func:`spacerobot.system.runner.run_ssp` (columns ``time``,
-``plant.<name>``, ``estimator.<name>``). The truth of each parameter is the plant's parameter
-connector of the same name (``plant.target.m`` ...), recorded by the runner, or, where the plant
-outputs one, its current truth ``plant.truth.<name>`` at every sample (a base that uses
-propellant, issue #17).
+``plant.<name>``, ``estimator.<name>``, ``estimator.sd.<name>``) or by ``spacerobot identify``
+(columns ``time``, ``<name>``, ``sd.<name>``). The truth of each parameter is the plant's
+parameter connector of the same name (``plant.target.m`` ...), recorded by the runner, or,
+where the plant outputs one, its current truth ``plant.truth.<name>`` at every sample (a base
+that uses propellant, issue #17).
 """
 from __future__ import annotations
 
@@ -20,6 +22,24 @@ from .recorder import read_csv
 
 #: the paper's accuracy band (relative)
 BAND = 1e-3
+#: the uncertainty band drawn around each estimate: +- SD_BAND standard deviations
+SD_BAND = 2.0
+
+
+def estimate_prefix(data: Dict[str, np.ndarray]) -> str:
+    """``'estimator.'`` for a run CSV, ``''`` for the output of ``spacerobot identify``."""
+    return "estimator." if any(k.startswith("estimator.") for k in data) else ""
+
+
+def sd_band(data: Dict[str, np.ndarray], name: str, prefix: str = "estimator."
+            ) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+    """``(estimate - 2 sd, estimate + 2 sd)`` of estimate ``name`` at every sample; None if
+    the CSV has no standard deviation column ``<prefix>sd.<name>``."""
+    sd = data.get(f"{prefix}sd.{name}")
+    if sd is None or sd.dtype.kind != "f":
+        return None
+    est = data[prefix + name]
+    return est - SD_BAND * sd, est + SD_BAND * sd
 
 
 def identified(data: Dict[str, np.ndarray], prefix: str = "estimator.") -> List[str]:
@@ -71,7 +91,8 @@ def _grid(n: int) -> Tuple[int, int]:
 
 def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
              title: Optional[str] = None) -> Path:
-    """Plot estimate / truth against time for every identified parameter, with the +-0.1 % band.
+    """Plot estimate / truth against time for every identified parameter, with the +-0.1 % band
+    and the +-2 sd band the estimator reports around the estimate (:func:`sd_band`).
 
     Parameters whose truth is zero (a centre-of-mass component, a product of inertia) are
     plotted as the absolute error ``estimate - truth`` instead; their panel title says so.
@@ -97,9 +118,10 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
     data = read_csv(csv_path)
     if "time" not in data:
         raise ValueError(f"{csv_path}: no 'time' column; not a run CSV")
-    names = identified(data)
+    prefix = estimate_prefix(data)
+    names = identified(data, prefix)
     if not names:
-        raise ValueError(f"{csv_path}: no estimator.<parameter> column changes over time; "
+        raise ValueError(f"{csv_path}: no {prefix}<parameter> column changes over time; "
                          f"nothing to plot (is this a run CSV with at least two samples?)")
     t = data["time"]
     rows, cols = _grid(len(names))
@@ -108,11 +130,20 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
     for ax in axes.flat[len(names):]:
         ax.set_visible(False)
     half = slice(len(t) // 2, None)
+    band_drawn = False
     for ax, n in zip(axes.flat, names):
-        est = data["estimator." + n]
+        est = data[prefix + n]
         now = _truth_now(data, n)
         truth = _truth(data, n) if now is None else float(now[-1])
         ref = truth if now is None else now           # a truth that changes: sample by sample
+        band = sd_band(data, n, prefix)
+        if band is not None:
+            # the +-2 sd band in the panel's units: estimate, error (truth 0), estimate / truth
+            lo, hi = (band if truth is None else (band[0] - ref, band[1] - ref) if truth == 0.0
+                      else (band[0] / ref, band[1] / ref))
+            ax.fill_between(t, np.minimum(lo, hi), np.maximum(lo, hi), color="tab:blue",
+                            alpha=0.2, lw=0, label="±2 sd")
+            band_drawn = True
         if truth is None:
             ax.plot(t, est, lw=1.2)
             ax.set_title(f"{n} (no truth in CSV)", fontsize=9)
@@ -150,7 +181,8 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
             ax.legend(fontsize=7, loc="upper right")
             break
     fig.suptitle(title or f"{csv_path.name}: estimates against the truth "
-                          f"(band: ±0.1 %)", fontsize=11)
+                          f"(green: ±0.1 %" + ("; blue: ±2 reported sd)" if band_drawn else ")"),
+                 fontsize=11)
     fig.tight_layout()
     out = Path(out) if out is not None else csv_path.with_suffix(".png")
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -10,9 +10,10 @@ and starts every connector at 0.0. :func:`run_ssp` composes the named parts of t
    initialisation, the ParameterBindings (component level in element order, then system level,
    which takes precedence, as SSP 1.0 specifies), or a named parameter set instead of the bound
    ``.ssv``, then explicit overrides;
-3. :class:`~.master.Master` steps all FMUs with a fixed step (Jacobi: at every communication
-   point every connected output is read, then every connected input set, the row recorded, then
-   every FMU steps), wiring every connection of the SSD whatever its direction;
+3. :class:`~.master.Master` steps all FMUs with a fixed step (at every communication point the
+   connected outputs are read and the inputs set, source by source in the order of the
+   connections, the row recorded, then every FMU steps), wiring every connection of the SSD
+   whatever its direction;
 4. :class:`~.recorder.Recorder` records every connector and every output of every component
    (columns ``time``, ``<component>.<variable>``), optionally written to CSV;
 5. :mod:`.errors` turns an FMI call that returns Discard, Error or Fatal into a

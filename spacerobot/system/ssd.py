@@ -10,9 +10,17 @@ Layout of a generated system (the same inside ``<robot>.ssp`` and under ``ssp/<r
     SystemStructure.ssd
     resources/SpaceRobotPlant.fmu          (only in the .ssp)
     resources/SpaceRobotEstimator.fmu      (only in the .ssp)
+    resources/SpaceRobotSensors.fmu        (only in <robot>_sensors.ssp)
     resources/<set>.ssv                    one parameter set per scenario
                                            (robots.PARAMETER_SETS; planar: small, medium,
                                            large, paper, excited; spatial: paper, default)
+
+The system with the sensors FMU (``sensors=True``, ``<robot>_sensors.ssp``, SSD name
+``SpaceRobot_<robot>_sensors``) wires plant ``<name>`` -> sensors ``true.<name>``, sensors
+``<name>`` -> estimator ``<name>``; its parameter sets add ``ideal`` and ``realistic`` (the
+sensors' ``noise.scale`` 0 / 1; bound: ``realistic``), bound to both the plant and the sensors
+component, each taking the names it has. The two-FMU system stays the default and the one the
+paper's parameter sets are made for. docs/sensors.md.
 
 Tool compatibility (what OMSimulator and libcosim need to load the .ssp): ``version="1.0"``; namespace prefixes exactly ``ssd:``,
 ``ssc:``, ``ssv:``; one flat root System holding the two components; every connector typed
@@ -29,7 +37,8 @@ from typing import Dict, List, Optional, Tuple
 from xml.sax.saxutils import quoteattr
 
 from ..interface import (ESTIMATE_NAMES, EXCITATION_DOC, PROPELLANT_DOC, UNITS, Var,
-                         connections, estimator_vars, feedback_connections, plant_vars)
+                         connections, estimator_vars, feedback_connections, plant_vars,
+                         sensor_connections, sensors_vars)
 from ..robots import (DEFAULT_TARGET, PARAMETER_SETS, ROBOTS, check_robot, get_robot,
                       parameter_set_scenario, robot_files, robot_kind, robot_label, scenario)
 
@@ -45,7 +54,13 @@ NS = {
 #: component names in the root System, and the FMU files they reference
 PLANT = "plant"
 ESTIMATOR = "estimator"
-SOURCES = {PLANT: "resources/SpaceRobotPlant.fmu", ESTIMATOR: "resources/SpaceRobotEstimator.fmu"}
+SENSORS = "sensors"
+SOURCES = {PLANT: "resources/SpaceRobotPlant.fmu", ESTIMATOR: "resources/SpaceRobotEstimator.fmu",
+           SENSORS: "resources/SpaceRobotSensors.fmu"}
+#: the parameter of the sensors FMU that the sensors parameter sets bind
+SENSOR_SET_PARAMETERS: Tuple[str, ...] = ("noise.scale",)
+#: the parameter set bound in the system with the sensors FMU
+SENSORS_DEFAULT_SET = "realistic"
 SSD_NAME = "SystemStructure.ssd"
 GENERATOR = "spacerobot.system.ssd"
 
@@ -63,17 +78,25 @@ def _check_robot(robot: str) -> None:
     check_robot(robot)
 
 
-def parameter_set_names(robot: str) -> List[str]:
+def parameter_set_names(robot: str, sensors: bool = False) -> List[str]:
     """Names of the parameter sets (.ssv) generated for ``robot``
-    (:data:`spacerobot.robots.PARAMETER_SETS`)."""
+    (:data:`spacerobot.robots.PARAMETER_SETS`); the sets with a noise level (``ideal``,
+    ``realistic``) only for the system with the sensors FMU."""
     _check_robot(robot)
-    return list(PARAMETER_SETS[robot_kind(robot)])
+    sets = PARAMETER_SETS[robot_kind(robot)]
+    return [n for n, ps in sets.items() if sensors or ps.noise is None]
 
 
-def default_parameter_set(robot: str) -> str:
-    """The parameter set bound in the SSD (the robot's default target, e.g. planar: medium)."""
+def default_parameter_set(robot: str, sensors: bool = False) -> str:
+    """The parameter set bound in the SSD: the robot's default target (e.g. planar: medium);
+    with the sensors FMU ``realistic``."""
     _check_robot(robot)
-    return DEFAULT_TARGET[robot_kind(robot)]
+    return SENSORS_DEFAULT_SET if sensors else DEFAULT_TARGET[robot_kind(robot)]
+
+
+def system_name(robot: str, sensors: bool = False) -> str:
+    """File stem of the packaged system: ``<robot>`` or ``<robot>_sensors``."""
+    return f"{robot_label(robot)}_sensors" if sensors else robot_label(robot)
 
 
 def _num(x: float) -> str:
@@ -82,13 +105,19 @@ def _num(x: float) -> str:
 
 
 def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
-    """``[(plant variable name, value, unit), ...]`` of parameter set ``name`` of ``robot``."""
-    if name not in parameter_set_names(robot):
+    """``[(variable name, value, unit), ...]`` of parameter set ``name`` of ``robot``: the
+    plant's, then (a sensors set) the sensors FMU's ``noise.scale``. Each FMU takes the names
+    it has (SSP: a bound parameter that a component lacks is ignored)."""
+    if name not in parameter_set_names(robot, sensors=True):
         raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
-                         f"choose from {parameter_set_names(robot)}")
+                         f"choose from {parameter_set_names(robot, sensors=True)}")
     sc = parameter_set_scenario(robot, name)
     var = {v.name: v for v in plant_vars(sc.robot, sc)}   # starts = the scenario's values
-    return [(n, float(var[n].start), var[n].unit) for n in SET_PARAMETERS]
+    out = [(n, float(var[n].start), var[n].unit) for n in SET_PARAMETERS]
+    noise = PARAMETER_SETS[robot_kind(robot)][name].noise
+    if noise is not None:
+        out.append(("noise.scale", float(noise), "1"))
+    return out
 
 
 def _units_xml(units, indent: str, prefix: str) -> List[str]:
@@ -106,9 +135,10 @@ def _units_xml(units, indent: str, prefix: str) -> List[str]:
 def ssv_xml(robot: str, name: str) -> str:
     """Text of the SSP 1.0 parameter values file ``resources/<name>.ssv``."""
     params = parameter_set(robot, name)
-    set_desc = PARAMETER_SETS[robot_kind(robot)][name].description
-    desc = (f"{robot_label(robot)}-{name}: {set_desc}; plant truth (base, "
-            f"target), initial velocities and excitation bounds")
+    pset = PARAMETER_SETS[robot_kind(robot)][name]
+    desc = (f"{robot_label(robot)}-{name}: {pset.description}; plant truth (base, "
+            f"target), initial velocities and excitation bounds"
+            + ("; sensors noise.scale" if pset.noise is not None else ""))
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<ssv:ParameterSet xmlns:ssv="{NS["ssv"]}" xmlns:ssc="{NS["ssc"]}"',
              f'    version="1.0" name={quoteattr(name)} generationTool="{GENERATOR}"',
@@ -134,12 +164,14 @@ def _connector(var: Var, kind: str, indent: str) -> List[str]:
             f"{indent}</ssd:Connector>"]
 
 
-def component_connectors(robot: str) -> Dict[str, List[Tuple[str, str, Var]]]:
+def component_connectors(robot: str, sensors: bool = False
+                         ) -> Dict[str, List[Tuple[str, str, Var]]]:
     """``{component: [(connector name, kind, Var), ...]}`` as declared in the SSD.
 
     The plant exposes every output, its input ``ident.excite`` (the excitation loop) and the
     parameters that the parameter sets bind; the estimator exposes every input (all
-    connected) and every output.
+    connected) and every output; the sensors FMU (``sensors=True``) every input and output and
+    ``noise.scale``.
     """
     _check_robot(robot)
     sc = scenario(robot)
@@ -149,44 +181,69 @@ def component_connectors(robot: str) -> Dict[str, List[Tuple[str, str, Var]]]:
     by_name = {v.name: v for v in pv}
     plant += [(n, "parameter", by_name[n]) for n in SET_PARAMETERS]
     est = [(v.name, v.causality, v) for v in ev if v.causality in ("input", "output")]
-    return {PLANT: plant, ESTIMATOR: est}
+    if not sensors:
+        return {PLANT: plant, ESTIMATOR: est}
+    sv = sensors_vars(sc.robot, sc)
+    sens = [(v.name, v.causality, v) for v in sv if v.causality in ("input", "output")]
+    sens += [(v.name, "parameter", v) for v in sv if v.name in SENSOR_SET_PARAMETERS]
+    return {PLANT: plant, SENSORS: sens, ESTIMATOR: est}
 
 
-def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
+def system_connections(robot: str, sensors: bool = False) -> List[Tuple[str, str, str, str]]:
+    """Every ``(start component, start connector, end component, end connector)`` of the
+    SSD, in the order the master serves them: plant -> estimator (or plant -> sensors ->
+    estimator: the sensors are a direct feedthrough), then the excitation loop estimator ->
+    plant."""
+    _check_robot(robot)
+    rb = get_robot(robot)
+    if sensors:
+        out = [(PLANT, a, SENSORS, b) for a, b in sensor_connections(rb)]
+        out += [(SENSORS, n, ESTIMATOR, n) for n in connections(rb)]
+    else:
+        out = [(PLANT, n, ESTIMATOR, n) for n in connections(rb)]
+    out += [(ESTIMATOR, n, PLANT, n) for n in feedback_connections()]
+    return out
+
+
+def ssd_xml(robot: str, bound_set: Optional[str] = None, sensors: bool = False) -> str:
     """Text of ``SystemStructure.ssd`` for ``robot`` with parameter set ``bound_set`` bound.
 
     Parameters
     ----------
-    robot : {'planar', 'spatial'}
+    robot : str
+        'planar', 'spatial' or a URDF robot key (:func:`spacerobot.robots.robot_spec`)
     bound_set : str, optional
-        Parameter set bound to the plant component (default: :func:`default_parameter_set`).
+        Parameter set bound to the plant component (and to the sensors component) (default:
+        :func:`default_parameter_set`).
+    sensors : bool
+        Put the sensors FMU between plant and estimator (system ``SpaceRobot_<robot>_sensors``).
     """
     _check_robot(robot)
-    bound_set = bound_set or default_parameter_set(robot)
-    if bound_set not in parameter_set_names(robot):
+    bound_set = bound_set or default_parameter_set(robot, sensors)
+    if bound_set not in parameter_set_names(robot, sensors):
         raise ValueError(f"unknown parameter set {bound_set!r} for robot {robot!r}; "
-                         f"choose from {parameter_set_names(robot)}")
+                         f"choose from {parameter_set_names(robot, sensors)}")
     sc = parameter_set_scenario(robot, bound_set)
     step = _num(sc.sample_time)
-    conns = component_connectors(robot)
+    conns = component_connectors(robot, sensors)
     units = {v.unit for c in conns.values() for _, _, v in c if v.type == "Real" and v.unit}
     robot_desc = get_robot(robot).description
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              "<ssd:SystemStructureDescription"
              + "".join(f'\n    xmlns:{p}="{u}"' for p, u in NS.items()),
-             f'    version="1.0" name={quoteattr("SpaceRobot_" + robot_label(robot))} '
+             f'    version="1.0" name={quoteattr("SpaceRobot_" + system_name(robot, sensors))} '
              f'generationTool="{GENERATOR}"',
-             f"    description={quoteattr('Space robot after capture: plant and inertial-parameter estimator. ' + robot_desc)}>",
-             '  <ssd:System name="root" description="Plant outputs wired to the estimator inputs of the same name; the estimator\'s excitation request wired back to the plant">',
+             f"    description={quoteattr(_SYSTEM_DESC[sensors] + robot_desc)}>",
+             f'  <ssd:System name="root" description={quoteattr(_ROOT_DESC[sensors])}>',
              "    <ssd:Elements>"]
-    for comp in (PLANT, ESTIMATOR):
+    for comp in conns:
         lines.append(f'      <ssd:Component name="{comp}" type="application/x-fmu-sharedlibrary" '
                      f'source="{SOURCES[comp]}">')
         lines.append("        <ssd:Connectors>")
         for _, kind, var in conns[comp]:
             lines += _connector(var, kind, "          ")
         lines.append("        </ssd:Connectors>")
-        if comp == PLANT:
+        if comp in (PLANT, SENSORS):
             lines += ["        <ssd:ParameterBindings>",
                       f'          <ssd:ParameterBinding type="application/x-ssp-parameter-set" '
                       f'source="resources/{bound_set}.ssv"/>',
@@ -194,13 +251,9 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
         lines.append("      </ssd:Component>")
     lines.append("    </ssd:Elements>")
     lines.append("    <ssd:Connections>")
-    for name in connections(get_robot(robot)):
-        lines.append(f'      <ssd:Connection startElement="{PLANT}" startConnector={quoteattr(name)} '
-                     f'endElement="{ESTIMATOR}" endConnector={quoteattr(name)}/>')
-    for name in feedback_connections():        # the excitation loop: estimator -> plant
-        lines.append(f'      <ssd:Connection startElement="{ESTIMATOR}" '
-                     f'startConnector={quoteattr(name)} endElement="{PLANT}" '
-                     f'endConnector={quoteattr(name)}/>')
+    for a, ac, b, bc in system_connections(robot, sensors):
+        lines.append(f'      <ssd:Connection startElement="{a}" startConnector={quoteattr(ac)} '
+                     f'endElement="{b}" endConnector={quoteattr(bc)}/>')
     lines.append("    </ssd:Connections>")
     lines += ["    <ssd:Annotations>",
               '      <ssc:Annotation type="org.openmodelica">',
@@ -226,10 +279,24 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None) -> str:
     return "\n".join(lines) + "\n"
 
 
-def generate(robot: str) -> Dict[str, str]:
-    """``{relative path: text}`` of every generated file of ``robot``'s system (SSD + SSVs)."""
-    files = {SSD_NAME: ssd_xml(robot)}
-    for name in parameter_set_names(robot):
+_SYSTEM_DESC = {
+    False: "Space robot after capture: plant and inertial-parameter estimator. ",
+    True: "Space robot after capture: plant, sensors and inertial-parameter estimator. ",
+}
+_ROOT_DESC = {
+    False: "Plant outputs wired to the estimator inputs of the same name; the estimator's "
+           "excitation request wired back to the plant",
+    True: "Plant outputs wired to the sensors inputs true.<name>, sensors outputs to the "
+          "estimator inputs of the same name; the estimator's excitation request wired back "
+          "to the plant",
+}
+
+
+def generate(robot: str, sensors: bool = False) -> Dict[str, str]:
+    """``{relative path: text}`` of every generated file of ``robot``'s system (SSD + SSVs);
+    ``sensors``: the system with the sensors FMU."""
+    files = {SSD_NAME: ssd_xml(robot, sensors=sensors)}
+    for name in parameter_set_names(robot, sensors):
         files[f"resources/{name}.ssv"] = ssv_xml(robot, name)
     return files
 
@@ -255,9 +322,9 @@ def write_ssp_sources(dest: str | Path = SSP_SOURCE_DIR) -> List[Path]:
     return written
 
 
-def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]] = None
-                 ) -> Dict[str, Path]:
-    """Build both FMUs, the SSD, the SSVs and the packaged ``<robot>.ssp`` into ``out_dir``.
+def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]] = None,
+                 sensors: bool = False) -> Dict[str, Path]:
+    """Build the FMUs, the SSD, the SSVs and the packaged ``<robot>.ssp`` into ``out_dir``.
 
     Parameters
     ----------
@@ -266,37 +333,44 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     out_dir : path
         Output folder (created).
     fmus : dict, optional
-        Already built ``{'plant': path, 'estimator': path}`` for this robot, to package instead
-        of building them again.
+        Already built ``{'plant': path, 'estimator': path[, 'sensors': path]}`` for this
+        robot, to package instead of building them again (a missing one is built).
+    sensors : bool
+        The system with the sensors FMU between plant and estimator: ``<robot>_sensors.ssp``
+        (its SSD and parameter sets go to ``out_dir/<robot>_sensors/``).
 
     Returns
     -------
     dict
-        ``{'plant': .fmu, 'estimator': .fmu, 'ssd': SystemStructure.ssd, 'ssv:<set>': .ssv ...,
-        'ssp': <robot>.ssp}`` (``<robot>``: :func:`spacerobot.robots.robot_label`).
+        ``{'plant': .fmu, 'estimator': .fmu[, 'sensors': .fmu], 'ssd': SystemStructure.ssd,
+        'ssv:<set>': .ssv ..., 'ssp': <robot>[_sensors].ssp}`` (``<robot>``:
+        :func:`spacerobot.robots.robot_label`).
     """
     from ..fmi.build import build_fmu
 
     _check_robot(robot)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    if fmus is None:
-        sc = scenario(robot)
-        fmus = {"plant": build_fmu("plant", sc, out), "estimator": build_fmu("estimator", sc, out)}
-    paths: Dict[str, Path] = {"plant": Path(fmus["plant"]), "estimator": Path(fmus["estimator"])}
-    files = generate(robot)
+    kinds = (PLANT, SENSORS, ESTIMATOR) if sensors else (PLANT, ESTIMATOR)
+    fmus = dict(fmus or {})
+    for kind in kinds:
+        if kind not in fmus:
+            fmus[kind] = build_fmu(kind, scenario(robot), out)
+    paths: Dict[str, Path] = {k: Path(fmus[k]) for k in kinds}
+    files = generate(robot, sensors)
+    src_dir = out / system_name(robot, True) if sensors else out
     for rel, text in files.items():
-        p = out / rel
+        p = src_dir / rel
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_text(text, encoding="utf-8")
         key = "ssd" if rel == SSD_NAME else "ssv:" + Path(rel).stem
         paths[key] = p
-    ssp = out / f"{robot_label(robot)}.ssp"
+    ssp = out / f"{system_name(robot, sensors)}.ssp"
     tmp = ssp.with_suffix(".ssp.part")
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
         zf.writestr(SSD_NAME, files[SSD_NAME])
-        zf.write(paths["plant"], SOURCES[PLANT])
-        zf.write(paths["estimator"], SOURCES[ESTIMATOR])
+        for kind in kinds:
+            zf.write(paths[kind], SOURCES[kind])
         for rel, text in files.items():
             if rel != SSD_NAME:
                 zf.writestr(rel, text)
@@ -320,7 +394,7 @@ def robot_of(ssp: str | Path) -> Optional[str]:
         name = etree.fromstring(text).get("name") or ""
     except (OSError, KeyError, zipfile.BadZipFile, etree.XMLSyntaxError):
         return None
-    robot = name.removeprefix("SpaceRobot_")
+    robot = name.removeprefix("SpaceRobot_").removesuffix("_sensors")
     return robot if robot in ROBOTS else None
 
 
@@ -339,26 +413,26 @@ def _newest_source_mtime(robot: Optional[str] = None) -> float:
     return max(p.stat().st_mtime for p in paths if p.exists())
 
 
-def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None) -> Path:
-    """Path of ``<out_dir>/<robot>.ssp``, (re)built with :func:`build_system` if it is missing,
-    older than any library source it is built from, or its SSD differs from the generator's.
+def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None, sensors: bool = False) -> Path:
+    """Path of ``<out_dir>/<robot>[_sensors].ssp``, (re)built with :func:`build_system` if it
+    is missing, older than any library source it is built from, or its SSD differs from the
+    generator's.
 
     ``out_dir`` defaults to ``build/<robot>/`` in the current directory (``<robot>``: the
     built-in name or the URDF's robot name, :func:`spacerobot.robots.robot_label`).
     """
     _check_robot(robot)
-    label = robot_label(robot)
-    out = Path(out_dir) if out_dir is not None else Path("build") / label
-    ssp = out / f"{label}.ssp"
+    out = Path(out_dir) if out_dir is not None else Path("build") / robot_label(robot)
+    ssp = out / f"{system_name(robot, sensors)}.ssp"
     fresh = False
     if ssp.exists() and ssp.stat().st_mtime >= _newest_source_mtime(robot):
         try:
             with zipfile.ZipFile(ssp) as zf:
-                fresh = zf.read(SSD_NAME).decode("utf-8") == ssd_xml(robot)
+                fresh = zf.read(SSD_NAME).decode("utf-8") == ssd_xml(robot, sensors=sensors)
         except (zipfile.BadZipFile, KeyError):
             fresh = False
     if not fresh:
-        build_system(robot, out)
+        build_system(robot, out, sensors=sensors)
     return ssp
 
 

@@ -1,0 +1,79 @@
+"""The row standard deviations of the identification equations under measurement noise.
+
+The identifier weighs each equation's rows by the inverse of the standard deviation of their
+error (``Identifier(row_sd=...)``, FMU parameters ``ident.sd_row.*``). The error of a row is
+what the measurement errors leave in it at the true parameters:
+
+    r_lin = A(x) mu - b(x),    r_ang = phi(x) theta - y(x) - psi(x) D(mu)
+
+with ``x`` the measured signals. Its size follows from the sensors' noise levels through
+equations that are nonlinear in the measurements (attitudes, lever arms, products of rates),
+so it is measured here rather than written out: run the sensors' models on a simulated run
+whose truth is known (a pilot run with another seed), evaluate the equations of each sample at
+the truth and take the root mean square of the rows of each equation. The result depends on the
+run's length for the momentum method, whose errors (integrated impulses, differences against
+the first sample) grow with time.
+"""
+from __future__ import annotations
+
+import math
+from typing import Iterable, Mapping, Tuple
+
+import numpy as np
+
+from ..interface import AccelSource, Method
+from ..robots import Guess, RigidBody, Robot
+from . import parameters as par
+from .identifier import Identifier, _split
+
+__all__ = ["equation_error_sd"]
+
+
+def equation_error_sd(robot: Robot, base: RigidBody, target: RigidBody,
+                      samples: Iterable[Tuple[float, Mapping[str, np.ndarray]]],
+                      method: Method | str = "momentum",
+                      accel_source: AccelSource | str = "measured",
+                      diff_half_window: int = 1) -> Tuple[float, float]:
+    """Root mean square of the rows of the linear and of the angular equation at the true
+    parameters, over measured samples (see the module docstring).
+
+    Parameters
+    ----------
+    robot : the robot description
+    base, target : the true bodies
+    samples : ``(t [s], measurements)`` in time order, measurements as for
+        :meth:`Identifier.update` (keys :data:`.identifier.KEYS`)
+    method, accel_source, diff_half_window : as the identifier that will use the result
+
+    Returns
+    -------
+    (sd_lin, sd_ang) : in the units of the method's equations (momentum N.s and N.m.s, force
+        N and N.m); ``ident.sd_row.<method>_lin`` / ``_ang``. NaN without a usable sample.
+    """
+    truth = Guess(base, target, 1.0, 1.0)
+    ident = Identifier(robot, truth, method, accel_source=accel_source,
+                       diff_half_window=diff_half_window)
+    mu, theta = par.paper_vectors(truth)
+    D = par.D_of_mu(mu)
+    L = ident.layout
+    sums, rows = np.zeros(2), np.zeros(2)
+    for t, meas in samples:
+        status, _, flat = ident._validate(meas)
+        if flat is None:
+            continue
+        if ident.method is Method.FORCE and ident.accel_source is AccelSource.DIFFERENCED:
+            flat = ident._differenced(t, flat)
+            if flat is None:
+                continue
+        E = ident._equations(flat)
+        if E is None:                         # the momentum method's reference sample
+            continue
+        A, b, phi, y, psi = _split(E)
+        r_lin = (A @ mu - b)[L.rows_lin]                       # A mu = b
+        r_ang = (phi @ theta - y - psi @ D)[L.rows_ang]        # phi theta = y + psi D(mu)
+        sums += (r_lin @ r_lin, r_ang @ r_ang)
+        rows += (len(r_lin), len(r_ang))
+    if not rows.all():
+        return math.nan, math.nan
+    sd = np.sqrt(sums / rows)
+    return float(sd[0]), float(sd[1])
