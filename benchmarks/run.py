@@ -877,6 +877,17 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
                 g = base[-1]["rss_MB"] - base[0]["rss_MB"]
                 L.append(f"\nRSS growth from {base[0]['t']:.0f} s to {base[-1]['t']:.0f} s: "
                          f"{g:+.1f} MB.\n")
+
+    # 5
+    L.append("## 5. Studies with their own scripts\n")
+    L.append("Not run by `run.py` (each takes minutes on Dask); their reports, tables and plots:\n")
+    L.append("- random real targets, noise-free, excitation loop closed and off "
+             "(`benchmarks/montecarlo.py`, issue 12): [MONTECARLO.md](MONTECARLO.md);\n"
+             "- identification under realistic sensor noise (`benchmarks/noise.py`, issue 14): "
+             "[NOISE.md](NOISE.md) and [NOISE_L600.md](NOISE_L600.md), discussed in "
+             "[docs/identification.md](../docs/identification.md#6-under-noise);\n"
+             "- a base that uses propellant, tracked with forgetting (`benchmarks/depletion.py`, "
+             "issue 17): [DEPLETION.md](DEPLETION.md).\n")
     return "\n".join(L) + "\n"
 
 
