@@ -6,6 +6,7 @@ connectors, and the tests check both against this table. Names are 1-based struc
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
@@ -279,7 +280,8 @@ class Solver(Code):
 
 
 class AccelSource(Code):
-    """Force method accelerations: the measured inputs, or central differences of velocities."""
+    """Force method accelerations: the measured inputs, or derivatives of the velocities
+    (:mod:`spacerobot.estimator.differencing`)."""
 
     MEASURED = 1
     DIFFERENCED = 2
@@ -310,7 +312,8 @@ STATUS = {
     1: "reference sample stored (momentum method) or waiting for differencing history",
     2: "estimating: last sample used",
     3: "last sample rejected: non-finite or out-of-range input, or an update that overflowed",
-    4: "last sample rejected: inconsistent input (base.A not a rotation matrix)",
+    4: "last sample rejected: inconsistent input (base.A not a rotation matrix, or a sample "
+       "time not after the previous one with differenced accelerations)",
 }
 
 
@@ -341,8 +344,10 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
             "joint RLS over the 20 standard parameters", int(Solver.PAPER), ("solver",)),
         Var("accel_source", "parameter", "fixed", "Integer", None,
             f"Force method accelerations: {AccelSource.MEASURED:d} = measured inputs, "
-            f"{AccelSource.DIFFERENCED:d} = central differences of the velocity inputs (one "
-            "sample delay)", int(AccelSource.MEASURED), ("accel_source",)),
+            f"{AccelSource.DIFFERENCED:d} = derivatives of the velocity inputs at the centre of "
+            "2 ident.diff_half_window + 1 samples (Savitzky-Golay; the equations use that "
+            "centre sample, ident.diff_half_window samples late)", int(AccelSource.MEASURED),
+            ("accel_source",)),
         Var("lambda", "parameter", "fixed", "Real", "1", "RLS forgetting factor (0 < lambda <= 1)",
             1.0, ("lambda",)),
         Var("P0_mu", "parameter", "fixed", "Real", "1",
@@ -428,6 +433,11 @@ def row_sd(values: Mapping[str, float], method: "Method") -> Tuple[float, float]
     """``(linear, angular)`` row standard deviations of ``method`` from the estimator's
     parameter values (:func:`noise_model_vars`)."""
     method = Method.parse(method, "method")
+    for suffix, _, _, _ in ROW_SD_PARAMETERS:     # the other method's pair is checked too
+        x = float(values[f"ident.sd_row.{suffix}"])
+        if not (math.isfinite(x) and x >= 0.0):
+            raise ValueError(f"ident.sd_row.{suffix} must be a finite number >= 0 "
+                             f"(0 = unit weight), got {x}")
     return tuple(float(values[f"ident.sd_row.{suffix}"])
                  for suffix, m, _, _ in ROW_SD_PARAMETERS if m is method)
 

@@ -322,6 +322,46 @@ def test_inconsistent_attitude_is_rejected(planar_record):
     np.testing.assert_array_equal(a.vector(), b.vector())
 
 
+@pytest.mark.parametrize("half_window", [1, 3])
+def test_differencing_refuses_a_time_that_does_not_advance(planar_record, half_window):
+    """Differenced accelerations: a sample at or before the previous time is status 4 and
+    absent (the estimates equal those of a run without it)."""
+    sc, rec = planar_record
+    rec = rec[:20]
+    kw = dict(method="force", accel_source="differenced", diff_half_window=half_window)
+    a, b = Identifier(sc.robot, sc.guess, **kw), Identifier(sc.robot, sc.guess, **kw)
+    for k, (t, o) in enumerate(rec):
+        a.update(t, o)
+        b.update(t, o)
+        if k in (10, 14):
+            t_bad = t if k == 10 else t - 0.05
+            assert a.update(t_bad, o) == 4 and "increasing sample times" in a.message
+    assert a.rejected == 2 and a.samples == b.samples > 0
+    np.testing.assert_array_equal(a.vector(), b.vector())
+
+
+@pytest.mark.parametrize("kw,words", [
+    ({"diff_half_window": math.nan}, "differencing half window must be an integer from 1"),
+    ({"diff_half_window": 2 ** 31 - 1}, "differencing half window must be an integer from 1"),
+    ({"corr_lags": math.inf}, "correlation lags must be an integer from 0"),
+    ({"corr_lags": 2 ** 31 - 1}, "correlation lags must be an integer from 0"),
+    ({"corr_lags": 1.5}, "correlation lags must be an integer from 0")])
+def test_bad_noise_model_settings_are_refused(kw, words):
+    sc = scenario("planar")
+    with pytest.raises(ValueError, match=words):
+        Identifier(sc.robot, sc.guess, **kw)
+
+
+def test_row_sd_of_either_method_is_checked():
+    from spacerobot.interface import Method, ROW_SD_PARAMETERS, row_sd
+    values = {f"ident.sd_row.{suffix}": 0.0 for suffix, _, _, _ in ROW_SD_PARAMETERS}
+    assert row_sd(values, Method.FORCE) == (0.0, 0.0)
+    other = next(s for s, m, _, _ in ROW_SD_PARAMETERS if m is Method.MOMENTUM)
+    for bad in (math.nan, -1.0):
+        with pytest.raises(ValueError, match=f"ident.sd_row.{other}"):
+            row_sd({**values, f"ident.sd_row.{other}": bad}, Method.FORCE)
+
+
 @pytest.mark.parametrize("method,unused", [("momentum", ("a_S", "alpha_B", "qdd", "F", "M")),
                                            ("force", ("J", "H"))])
 def test_each_method_reads_only_its_signals(planar_record, method, unused):

@@ -221,8 +221,13 @@ def test_a_state_that_does_not_fit_is_refused_and_changes_nothing():
     p.set_excitation(1.0)
     p.advance(0.5)
     before = p.get_state()
+    q_unnormal = np.array(before["q"], float)
+    q_unnormal[2:4] *= 2.0                               # the planar (cos, sin) pair
+    v_nan = np.array(before["v"], float)
+    v_nan[0] = math.nan
     for bad in ({"q": np.zeros(2)}, {"excite_ramp": [0.0, 0.0, 0.0, 0.0]},
-                {"prop": [math.nan] * 7}, {"t": math.nan}):
+                {"prop": [math.nan] * 7}, {"t": math.nan}, {"q": q_unnormal}, {"v": v_nan},
+                {"prop": [5.0] + [0.0] * 6}, {"prop": [-1.0] + [0.0] * 6}):
         with pytest.raises(ValueError):
             p.set_state({**before, "t": 99.0, **bad})
         after = p.get_state()

@@ -98,3 +98,14 @@ def test_bad_telemetry_is_refused_with_a_clear_message(tmp_path, capsys):
     assert "spacerobot identify: error:" in capsys.readouterr().err
     with pytest.raises(KeyError, match="not an estimator parameter"):
         identify_csv(bad, "planar", overrides={"guess.target.mass": 1.0})
+
+
+def test_truth_is_the_current_one_at_the_end():
+    """A run of a base that uses propellant records the dry-base parameter (plant.base.m) and
+    the current base (plant.truth.base.m): the truth compared is the current one at the end,
+    as the runner compares."""
+    from spacerobot.system.identify import read_truth
+    data = {"time": np.array([0.0, 0.1]), "plant.base.m": np.array([500.0, 500.0]),
+            "plant.truth.base.m": np.array([510.0, 505.0]),
+            "plant.target.m": np.array([250.0, 250.0])}
+    assert read_truth(data, ["base.m", "target.m"]) == {"base.m": 505.0, "target.m": 250.0}

@@ -140,10 +140,11 @@ class Identifier:
         if len(row_sd) != 2 or not all(x >= 0.0 and math.isfinite(x) for x in row_sd):
             raise ValueError(f"row standard deviations must be two finite numbers >= 0 "
                              f"(0 = unit weight), got {row_sd}")
-        for name, val, low in (("differencing half window", diff_half_window, 1),
-                               ("correlation lags", corr_lags, 0)):
-            if int(val) != val or val < low:
-                raise ValueError(f"{name} must be an integer >= {low}, got {val}")
+        for name, val, low, high in (("differencing half window", diff_half_window, 1,
+                                      MAX_HALF_WINDOW),
+                                     ("correlation lags", corr_lags, 0, MAX_CORR_LAGS)):
+            if not (math.isfinite(val) and int(val) == val and low <= val <= high):
+                raise ValueError(f"{name} must be an integer from {low} to {high}, got {val}")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
             body.check(name)
         for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
@@ -271,6 +272,13 @@ class Identifier:
             self.status = status if status != ESTIMATING else REJECT_NONFINITE
             if not math.isfinite(t):
                 self.message = f"non-finite sample time {t}"
+            self.rejected += 1
+            return self.status
+        if (self.method is Method.FORCE and self.accel_source is AccelSource.DIFFERENCED
+                and self.history and not t > self.history[-1][0]):
+            self.status, self.message = REJECT_INCONSISTENT, (
+                f"differenced accelerations need increasing sample times: t = {t:g} s after "
+                f"{self.history[-1][0]:g} s")
             self.rejected += 1
             return self.status
         # finite but huge inputs can still overflow inside the equations or the RLS: the update
@@ -446,6 +454,11 @@ class Identifier:
             setattr(self, k, _copy(v))
         self._exc = None
 
+
+#: largest ``diff_half_window`` (samples each side of the differencing window's centre)
+MAX_HALF_WINDOW = 50
+#: largest ``corr_lags`` (lags of the residual autocorrelation kept per solver)
+MAX_CORR_LAGS = 10_000
 
 #: attributes of the identifier an update rebinds (restored by reference)
 _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",

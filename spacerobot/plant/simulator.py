@@ -187,6 +187,14 @@ class Plant:
         if ramp.shape != (4,) or not np.all(np.isfinite(ramp)) or not ramp[3] > 0.0:
             raise ValueError(f"excitation ramp state must be 4 finite numbers [s0, u, t0, T > 0], "
                              f"got {ramp}")
+        if not all(np.all(np.isfinite(x)) for x in (q, v, J, H)):
+            raise ValueError("state q, v, J, H must be finite")
+        if not pin.isNormalized(self.pm.model, q, 1e-6):
+            raise ValueError("state q: the base quaternion (or planar cos/sin pair) is not of "
+                             "unit norm")
+        m0 = self.propellant.m0
+        if not (0.0 <= prop[0] <= m0 * (1.0 + 1e-12)):
+            raise ValueError(f"propellant mass {prop[0]} kg outside [0, prop.m0 = {m0}] kg")
         self.t = t
         self._ramp = ramp
         self._x = np.concatenate([J, H, q, v, prop])

@@ -42,7 +42,7 @@ PREFIXES = ("", "estimator.", "sensors.", "plant.")
 #: signals that may be missing from a telemetry file (then 0)
 OPTIONAL_GROUPS = ("a_S", "alpha_B", "qdd")
 #: where the truth of an estimate is looked up (optional)
-TRUTH_PREFIXES = ("truth.", "plant.")
+TRUTH_PREFIXES = ("truth.", "plant.truth.", "plant.")
 
 
 def _column(data: Mapping[str, np.ndarray], name: str, prefixes) -> Optional[np.ndarray]:
@@ -96,14 +96,15 @@ def read_telemetry(path: str | Path, n_joints: int) -> Tuple[np.ndarray, Dict[st
 
 
 def read_truth(path_or_data, names=ESTIMATE_NAMES) -> Dict[str, float]:
-    """The truth of each estimate that a telemetry file carries (``truth.<name>`` or
-    ``plant.<name>``, first row); empty if none."""
+    """The truth of each estimate that a telemetry file carries (``truth.<name>``, the plant's
+    current truth ``plant.truth.<name>`` or its parameter ``plant.<name>``, at the last row, as
+    the runner compares); empty if none."""
     data = read_csv(path_or_data) if isinstance(path_or_data, (str, Path)) else path_or_data
     out = {}
     for n in names:
         col = _column(data, n, TRUTH_PREFIXES)
         if col is not None and col.dtype.kind == "f" and len(col):
-            out[n] = float(col[0])
+            out[n] = float(col[-1])
     return out
 
 
