@@ -49,7 +49,8 @@ from spacerobot.estimator.identifier import KEYS  # noqa: E402
 from spacerobot.estimator.noise_model import equation_error_sd  # noqa: E402
 from spacerobot.interface import ESTIMATE_NAMES, relative_errors  # noqa: E402
 from spacerobot.robots import get_robot  # noqa: E402
-from spacerobot.system.identify import _body, read_telemetry, read_truth  # noqa: E402
+from spacerobot.interface import body_of  # noqa: E402
+from spacerobot.system.identify import read_telemetry, read_truth  # noqa: E402
 from spacerobot.system.recorder import read_csv  # noqa: E402
 from spacerobot.system.runner import run_ssp  # noqa: E402
 from spacerobot.system.montecarlo import COLUMNS, Case, case_row  # noqa: E402
@@ -101,7 +102,7 @@ def pilot_row_sd(ssp_path: Path, stop_time: float, tmp: Path):
     robot = get_robot("spatial")
     t, groups = read_telemetry(csv, robot.n_joints)
     truth = read_truth(read_csv(csv))
-    base, target = _body(truth, "base"), _body(truth, "target")
+    base, target = body_of(truth, "base"), body_of(truth, "target")
     out = {}
     for method, accel in COMBOS:
         samples = ((t[k], {key: groups[key][k] for key in KEYS}) for k in range(len(t)))

@@ -429,6 +429,15 @@ def noise_model_vars() -> List[Var]:
     return v
 
 
+def body_of(values: Mapping[str, float], prefix: str) -> RigidBody:
+    """The rigid body held in values ``<prefix>.m``, ``<prefix>.b[1..3]``, ``<prefix>.Ixx`` ...
+    (FMU parameters or a telemetry file's truth). Not checked here: the cores check their
+    bodies (``Plant``, ``Identifier``) with the same names."""
+    return RigidBody(float(values[f"{prefix}.m"]),
+                     tuple(float(values[f"{prefix}.b[{i}]"]) for i in (1, 2, 3)),
+                     tuple(float(values[f"{prefix}.{n}"]) for n in INERTIA_NAMES))
+
+
 def row_sd(values: Mapping[str, float], method: "Method") -> Tuple[float, float]:
     """``(linear, angular)`` row standard deviations of ``method`` from the estimator's
     parameter values (:func:`noise_model_vars`)."""

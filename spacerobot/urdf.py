@@ -38,7 +38,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .robots import ArmLink, RigidBody, Robot, check_body
+from .robots import ArmLink, RigidBody, Robot, check_body, inertia_matrix
 
 #: joint types that move (revolute about an axis); ``fixed`` merges; the rest are refused
 MOVABLE = ("revolute", "continuous")
@@ -203,7 +203,7 @@ class _Reader:
             check_body(f"{self.where}: {what} <inertial>", mass, frame.p, I6)
         except ValueError as e:
             raise URDFError(str(e)) from None
-        I = _inertia_matrix(I6)
+        I = inertia_matrix(I6)
         return _body(mass, frame.p, I if frame.R is _IDENTITY_MARK else frame.R @ I @ frame.R.T)
 
     # -- the chain -----------------------------------------------------------------------------
@@ -240,10 +240,6 @@ class _Reader:
                       f"{roots[0]!r} (they form a loop)")
         return roots[0], path
 
-
-def _inertia_matrix(I6) -> np.ndarray:
-    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = I6
-    return np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]], float)
 
 
 def _body(mass: float, com, I: np.ndarray) -> RigidBody:

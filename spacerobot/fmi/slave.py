@@ -21,8 +21,8 @@ from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from xml.etree.ElementTree import Element, SubElement
 
 from .. import jit
-from ..interface import UNITS, Var
-from ..robots import INERTIA_NAMES, RigidBody, scenario_from_dict
+from ..interface import UNITS, Var, body_of
+from ..robots import RigidBody, scenario_from_dict
 from .pythonfmu_compat import binary_hooks, guard_entry_points
 
 CONFIG_FILE = "spacerobot_config.json"
@@ -62,15 +62,8 @@ class InterfaceSlave(Fmi2Slave):
 
     def _body(self, prefix: str) -> RigidBody:
         """The rigid body held in parameters ``<prefix>.m``, ``.b[1..3]``, ``.Ixx`` ...
-
-        Not checked here: the cores check their bodies (``Plant``, ``Identifier``) with the
-        same names.
-        """
-        v = self.values
-        m = float(v[f"{prefix}.m"])
-        b = tuple(float(v[f"{prefix}.b[{i}]"]) for i in (1, 2, 3))
-        I6 = tuple(float(v[f"{prefix}.{n}"]) for n in INERTIA_NAMES)
-        return RigidBody(m, b, I6)
+        (:func:`spacerobot.interface.body_of`)."""
+        return body_of(self.values, prefix)
 
     def _register_interface(self, variables: List[Var]) -> None:
         self.interface: Dict[str, Var] = {v.name: v for v in variables}

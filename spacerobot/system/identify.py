@@ -31,9 +31,8 @@ import numpy as np
 
 from ..estimator import ExcitationRequest, Identifier
 from ..interface import (ESTIMATE_NAMES, AccelSource, Method, Solver, Var, estimator_vars,
-                         identified_estimates, measurement_vars, row_sd)
-from ..robots import (INERTIA_NAMES, Guess, RigidBody, check_robot, get_robot, robot_label,
-                      scenario)
+                         body_of, identified_estimates, measurement_vars, row_sd)
+from ..robots import Guess, check_robot, get_robot, robot_label, scenario
 from .recorder import read_csv, write_csv
 from .runner import RunResult, format_results
 
@@ -123,17 +122,11 @@ def estimator_parameters(robot: str, overrides: Optional[Mapping[str, float]] = 
     return values
 
 
-def _body(values: Mapping[str, float], prefix: str) -> RigidBody:
-    return RigidBody(float(values[f"{prefix}.m"]),
-                     tuple(float(values[f"{prefix}.b[{i}]"]) for i in (1, 2, 3)),
-                     tuple(float(values[f"{prefix}.{n}"]) for n in INERTIA_NAMES))
-
-
 def identifier_of(robot: str, values: Mapping[str, float]) -> Tuple[Identifier, ExcitationRequest]:
     """The estimator core and its excitation request as the FMU builds them from its
     parameters (:func:`estimator_parameters`)."""
     v = values
-    guess = Guess(_body(v, "guess.base"), _body(v, "guess.target"), float(v["P0_mu"]),
+    guess = Guess(body_of(v, "guess.base"), body_of(v, "guess.target"), float(v["P0_mu"]),
                   float(v["P0_theta"]))
     method = Method.parse(int(v["method"]), "method")
     ident = Identifier(get_robot(robot), guess, method, Solver.parse(int(v["solver"]), "solver"),
