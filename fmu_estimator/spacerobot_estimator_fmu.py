@@ -8,12 +8,9 @@ import math
 
 import numpy as np
 
-from _spacerobot_estimator.estimator import ExcitationRequest, Identifier
-from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT
+from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT, identifier_from_values
 from _spacerobot_estimator.fmi.slave import InterfaceSlave, _escape
-from _spacerobot_estimator.interface import (LAYOUT, STATUS, AccelSource, Method, Solver,
-                                             estimator_vars, row_sd)
-from _spacerobot_estimator.robots import Guess
+from _spacerobot_estimator.interface import LAYOUT, STATUS, estimator_vars
 from pythonfmu.enums import Fmi2Status
 
 
@@ -50,17 +47,7 @@ class SpaceRobotEstimator(InterfaceSlave):
     def _initialise(self) -> None:
         v = self.values
         try:
-            codes = [code.parse(int(v[name]), name) for name, code in (
-                ("method", Method), ("solver", Solver), ("accel_source", AccelSource))]
-            guess = Guess(self._body("guess.base"), self._body("guess.target"),
-                          float(v["P0_mu"]), float(v["P0_theta"]))
-            self.ident = Identifier(self.robot, guess, *codes, float(v["lambda"]),
-                                    sd_rel=float(v["ident.sd_rel"]),
-                                    row_sd=row_sd(v, codes[0]),
-                                    diff_half_window=int(v["ident.diff_half_window"]),
-                                    corr_lags=int(v["ident.corr_lags"]))
-            self.request = ExcitationRequest(int(v["ident.excite_mode"]),
-                                             float(v["ident.excite_level"]))
+            self.ident, self.request = identifier_from_values(self.robot, v)
         except ValueError as e:
             self._fail(f"invalid estimator parameters: {e}")
         self._refresh()

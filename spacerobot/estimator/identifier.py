@@ -11,10 +11,12 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import dataclass
+from typing import Mapping, Tuple
 
 import numpy as np
 
-from ..interface import AccelSource, ExciteMode, Method, ParameterLayout, Solver
+from ..interface import (AccelSource, ExciteMode, Method, ParameterLayout, Solver, body_of,
+                         row_sd)
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import kernels
@@ -535,3 +537,21 @@ class ExcitationRequest:
                                               and not all(identified.values())):
             return float(self.level)
         return 0.0
+
+
+def identifier_from_values(robot: Robot, values: Mapping[str, float]
+                           ) -> Tuple[Identifier, ExcitationRequest]:
+    """The estimator core and its excitation request from the estimator FMU's parameter values
+    (names of :func:`spacerobot.interface.estimator_vars`): what the FMU builds at
+    initialisation, and ``spacerobot identify`` on recorded telemetry. Raises ``ValueError``
+    for an invalid value."""
+    v = values
+    codes = [code.parse(int(v[name]), name) for name, code in (
+        ("method", Method), ("solver", Solver), ("accel_source", AccelSource))]
+    guess = Guess(body_of(v, "guess.base"), body_of(v, "guess.target"), float(v["P0_mu"]),
+                  float(v["P0_theta"]))
+    ident = Identifier(robot, guess, *codes, float(v["lambda"]), sd_rel=float(v["ident.sd_rel"]),
+                       row_sd=row_sd(v, codes[0]),
+                       diff_half_window=int(v["ident.diff_half_window"]),
+                       corr_lags=int(v["ident.corr_lags"]))
+    return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))

@@ -30,9 +30,10 @@ from typing import Dict, List, Mapping, Optional, Tuple
 import numpy as np
 
 from ..estimator import ExcitationRequest, Identifier
-from ..interface import (ESTIMATE_NAMES, AccelSource, Method, Solver, Var, estimator_vars,
-                         body_of, identified_estimates, measurement_vars, row_sd)
-from ..robots import Guess, check_robot, get_robot, robot_label, scenario
+from ..estimator.identifier import identifier_from_values
+from ..interface import (ESTIMATE_NAMES, Var, estimator_vars, identified_estimates,
+                         measurement_vars)
+from ..robots import check_robot, get_robot, robot_label, scenario
 from .recorder import read_csv, write_csv
 from .runner import RunResult, format_results
 
@@ -124,17 +125,8 @@ def estimator_parameters(robot: str, overrides: Optional[Mapping[str, float]] = 
 
 def identifier_of(robot: str, values: Mapping[str, float]) -> Tuple[Identifier, ExcitationRequest]:
     """The estimator core and its excitation request as the FMU builds them from its
-    parameters (:func:`estimator_parameters`)."""
-    v = values
-    guess = Guess(body_of(v, "guess.base"), body_of(v, "guess.target"), float(v["P0_mu"]),
-                  float(v["P0_theta"]))
-    method = Method.parse(int(v["method"]), "method")
-    ident = Identifier(get_robot(robot), guess, method, Solver.parse(int(v["solver"]), "solver"),
-                       AccelSource.parse(int(v["accel_source"]), "accel_source"),
-                       float(v["lambda"]), sd_rel=float(v["ident.sd_rel"]),
-                       row_sd=row_sd(v, method), diff_half_window=int(v["ident.diff_half_window"]),
-                       corr_lags=int(v["ident.corr_lags"]))
-    return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))
+    parameters (:func:`estimator_parameters`; :func:`.estimator.identifier.identifier_from_values`)."""
+    return identifier_from_values(get_robot(robot), values)
 
 
 def _output_vars(robot: str) -> List[Var]:
