@@ -21,6 +21,7 @@ from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import kernels, report_kernels
 from .differencing import centre_derivative
+from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
 
 #: measurement keys and their shapes (n = number of arm joints)
@@ -166,8 +167,6 @@ class Identifier:
                               slice(kernels.OMEGA_B, kernels.OMEGA_B + 3)),
                              (slice(q0 + 2 * n, q0 + 3 * n), slice(q0 + n, q0 + 2 * n)))
         self.layout = ParameterLayout.for_robot(robot)
-        # mass scales of the projection (report): the guessed masses
-        self._mass_scales = np.array([guess.base.mass, guess.target.mass], dtype=float)
         self.solver: ParameterSolver = make_solver(kind, self.layout, guess, lam, int(corr_lags))
         self.info_lin = np.zeros((len(self.layout.mu_active),) * 2)
         self.info_ang = np.zeros((len(self.layout.theta_active),) * 2)
@@ -412,19 +411,23 @@ class Identifier:
         state, so the report equals :meth:`vector` as soon as that is physical.
         """
         ls, sd = self.vector(), self.std()
-        # both bodies projected in one compiled call (physical.project_planar_body for a planar
-        # robot, else physical.project_body)
-        out, projected = np.empty_like(ls), np.empty(len(self.layout.bodies), bool)
-        report_kernels.project_estimates(self.robot.planar, ls, self._mass_scales, out, projected)
+        out, physical = ls.copy(), {}
+        real = np.empty(len(self.layout.bodies), bool)
+        report_kernels.both_physical(ls, real)          # is_physical of both, one call
+        project = project_planar_body if self.robot.planar else project_body
+        for b, g in zip(self.layout.bodies, (self.guess.base, self.guess.target)):
+            physical[b.name] = bool(real[b.index])
+            if not real[b.index]:
+                m, com, I6, _ = project(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
+                out[b.m], out[b.first], out[b.inertia] = m, com, I6
         scale = self.layout.error_scale(out)
-        # identified: small standard deviation, and the reported value is the estimate's, for
-        # every identified entry of the body
-        tol = self.sd_rel * scale
-        ok = (sd <= tol) & (np.abs(out - ls) <= tol)
-        ok_body = (ok | ~self.layout.identified).reshape(len(self.layout.bodies), -1).all(axis=1)
+        # identified: small standard deviation, and the reported value is the estimate's
+        # (|sd| and |out - ls| <= sd_rel * scale), for every identified entry of the body
+        ok_body = np.empty(len(self.layout.bodies), bool)
+        report_kernels.identified_bodies(sd, out, ls, scale, self.sd_rel, self.layout.identified,
+                                         ok_body)
         identified = {b.name: bool(self.samples > 0 and ok_body[b.index])
                       for b in self.layout.bodies}
-        physical = {b.name: not projected[b.index] for b in self.layout.bodies}
         return Report(out, sd, identified, physical)
 
     def estimates(self) -> dict:
@@ -498,9 +501,15 @@ def _copy(v):
 
 
 def _rcond(info: np.ndarray) -> float:
-    """Reciprocal condition number of the information scaled by its diagonal (0 if a diagonal
-    entry is <= 0; compiled: :func:`.report_kernels.rcond`)."""
-    return float(report_kernels.rcond(np.ascontiguousarray(info, dtype=float)))
+    dg = info.diagonal()
+    if not min(dg.tolist()) > 0.0:              # a zero (or negative/NaN) diagonal entry
+        d = np.sqrt(np.clip(dg, 0.0, None))
+        if np.any(d == 0.0):
+            return 0.0
+    else:
+        d = np.sqrt(dg)
+    lam = np.linalg.eigvalsh(info / (d[:, None] * d))
+    return float(max(lam[0], 0.0) / lam[-1])
 
 
 

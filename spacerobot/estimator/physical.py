@@ -45,9 +45,9 @@ __all__ = ["second_moment", "inertia_from_second_moment", "pseudo_inertia", "is_
 
 #: smallest eigenvalue of Sigma_c kept by the projection, relative to the largest |eigenvalue|
 #: (a body this flat is still a real one: its inertia satisfies the strict triangle inequality)
-REL_SIGMA_MIN = report_kernels.REL_SIGMA_MIN
+REL_SIGMA_MIN = 1e-6
 #: smallest mass kept by the projection, relative to the caller's mass scale
-REL_MASS_MIN = report_kernels.REL_MASS_MIN
+REL_MASS_MIN = 1e-6
 
 
 def _sym(I6) -> np.ndarray:
@@ -91,16 +91,13 @@ def is_physical(m: float, b, I6) -> bool:
     factorisation of ``Sigma_c`` (no tolerance: a body on the boundary, e.g. a rod, is not
     accepted; compiled: :func:`.report_kernels.is_physical`).
     """
-    b, I6 = _vec(b, 3), _vec(I6, 6)
+    b = np.ascontiguousarray(b, dtype=float).reshape(3)
+    I6 = np.ascontiguousarray(I6, dtype=float).reshape(6)
     return bool(report_kernels.is_physical(float(m), b, I6))
 
 
 def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarray, np.ndarray, bool]:
     """The nearest real rigid body to ``(m, b, I6)`` in the ``(m, b, Sigma_c)`` coordinates.
-
-    ``m >= m_min``: projection onto a half-line; ``Sigma_c >= s_min 1``: its eigenvalues
-    clipped (the Frobenius-nearest such matrix), ``I_c = tr(S) 1 - S`` (compiled:
-    :func:`.report_kernels.project_body`).
 
     Parameters
     ----------
@@ -122,11 +119,18 @@ def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarr
     projected : bool
         False when the input was already physical; the outputs are then the inputs, exactly.
     """
-    b, I6 = np.array(b, dtype=float), _vec(I6, 6)
-    I_out = np.empty(6)
-    m_out, projected = report_kernels.project_body(float(m), _vec(b, 3), I6, float(m_scale),
-                                                   I_out)
-    return float(m_out), b, I_out, bool(projected)
+    b = np.array(b, dtype=float)
+    I6 = np.array(I6, dtype=float)
+    if is_physical(m, b, I6):
+        return float(m), b, I6, False
+    # m >= m_min: projection onto a half-line
+    m_min = REL_MASS_MIN * abs(m_scale)
+    m_out = float(m) if m >= m_min else m_min
+    # Sigma_c >= s_min 1: clip the eigenvalues (Frobenius-nearest), I_c = tr(S) 1 - S
+    lam, V = np.linalg.eigh(second_moment(I6))
+    s_min = REL_SIGMA_MIN * max(float(np.max(np.abs(lam))), np.finfo(float).tiny)
+    S = (V * np.maximum(lam, s_min)) @ V.T
+    return m_out, b, inertia_from_second_moment(0.5 * (S + S.T)), True
 
 
 def project_planar_body(m: float, b, I6, m_scale: float = 1.0
@@ -137,21 +141,27 @@ def project_planar_body(m: float, b, I6, m_scale: float = 1.0
     the unidentified ``Ixx``, ``Iyy``, ``Ixy``, ``Ixz``, ``Iyz`` so that ``Sigma_c > 0``: the
     in-plane block of ``Sigma_c`` gets its eigenvalues clipped at ``s_min`` with their sum
     (``Izz``) kept, ``Sigma_xz = Sigma_yz = 0``, ``Sigma_zz`` clipped at ``s_min``. An ``Izz`` too
-    small for any real body (``Izz <= 2 s_min``) cannot be kept: :func:`project_body` then
-    (compiled: :func:`.report_kernels.project_planar_body`).
+    small for any real body (``Izz <= 2 s_min``) cannot be kept: :func:`project_body` then.
 
     Parameters and returns as :func:`project_body`.
     """
-    b, I6 = np.array(b, dtype=float), _vec(I6, 6)
-    I_out = np.empty(6)
-    m_out, projected = report_kernels.project_planar_body(float(m), _vec(b, 3), I6,
-                                                          float(m_scale), I_out)
-    return float(m_out), b, I_out, bool(projected)
-
-
-def _vec(x, n: int) -> np.ndarray:
-    """``x`` as a contiguous float array of shape (n,) (ValueError otherwise)."""
-    x = np.ascontiguousarray(x, dtype=float)
-    if x.shape != (n,):
-        raise ValueError(f"expected {n} values, got shape {x.shape}")
-    return x
+    b = np.array(b, dtype=float)
+    I6 = np.array(I6, dtype=float)
+    if is_physical(m, b, I6):
+        return float(m), b, I6, False
+    S = second_moment(I6)
+    lam, V = np.linalg.eigh(S[:2, :2])
+    izz = float(I6[2])                                       # = trace of the in-plane block
+    s_min = REL_SIGMA_MIN * max(float(np.max(np.abs(np.linalg.eigvalsh(S)))),
+                                np.finfo(float).tiny)
+    if not izz > 2.0 * s_min:
+        return project_body(m, b, I6, m_scale)
+    if lam[0] < s_min:                                       # clip with the sum kept
+        lam = np.array([s_min, izz - s_min])
+    P = np.zeros((3, 3))
+    P[:2, :2] = (V * lam) @ V.T
+    P[2, 2] = max(float(S[2, 2]), s_min)
+    m_min = REL_MASS_MIN * abs(m_scale)
+    I_out = inertia_from_second_moment(0.5 * (P + P.T))
+    I_out[2] = izz                                           # exact, not re-rounded
+    return (float(m) if m >= m_min else m_min), b, I_out, True

@@ -1,14 +1,18 @@
 """Compiled (Numba) kernels of what the estimator reports at every sample: the prior's pull and
-the covariance of the paper solver's parameters, the Jacobian of the map to the estimates, and
-the projection of an estimated body onto real bodies.
+the covariance of the paper solver's parameters, the Jacobian of the map to the estimates, the
+physical-consistency test of an estimated body.
 
-They implement, line for line, :func:`.uncertainty.observed_solve`, the paper solver's
-``covariance``, ``prior_pull``, ``jacobian`` and ``vector_of`` (:class:`.solvers.PaperSolver`)
-and :mod:`.physical`'s projections: in NumPy some hundred and fifty small-array operations and
-four eigen-decompositions per sample, whose call overhead was most of the ~0.6 ms of
-``Identifier.report()``. The eigen-decompositions and the matrix products call the same LAPACK
-and BLAS routines as NumPy (``np.linalg.eigh``, ``np.dot``), so the results equal the NumPy
-formulation of the tests (``tests/oracles/report.py``) to round-off.
+They implement :func:`.uncertainty.observed_solve`, the paper solver's ``covariance``,
+``prior_pull``, ``jacobian``, ``vector_of`` and ``uncertainty`` (:class:`.solvers.PaperSolver`)
+and :func:`.physical.is_physical`: in NumPy some hundred and fifty small-array operations per
+sample, whose call overhead was most of the ~0.6 ms of ``Identifier.report()``. The NumPy
+formulation is the test oracle ``tests/oracles/report.py``.
+
+No ``np.linalg`` and no ``np.dot`` here: Numba implements both with SciPy's LAPACK and BLAS,
+and the FMUs need only NumPy and Numba. The eigen-decompositions of the scale-free information
+(:func:`scaled_information`) are NumPy's ``np.linalg.eigh``, called by the solver between two
+kernel calls (the same LAPACK routine as before, so the same eigenvectors); the products are
+loops, equal to NumPy's BLAS products to round-off.
 
 Positions in the vectors are those of :class:`spacerobot.interface.ParameterLayout` (checked
 against it by the tests): estimates per body ``m, b (3), I (6)`` at 0 and 10; the paper's
@@ -29,16 +33,10 @@ from .kernels import D_of_mu
 _NB = dict(cache=True, nogil=True, error_model="numpy")
 
 #: eigenvalues of the scaled information below this fraction of the largest count as
-#: unobserved (:data:`.uncertainty.REL_EIG_MIN`)
+#: unobserved (also :data:`.uncertainty.REL_EIG_MIN`)
 REL_EIG_MIN = 1e-12
 #: |eigenvector component| above which a parameter touches an unobserved direction
 UNOBSERVED_COMPONENT = 1e-6
-#: smallest eigenvalue of Sigma_c kept by the projection relative to the largest |eigenvalue|,
-#: and smallest mass relative to the mass scale (:data:`.physical.REL_SIGMA_MIN`, ``REL_MASS_MIN``)
-REL_SIGMA_MIN = 1e-6
-REL_MASS_MIN = 1e-6
-#: the smallest positive normal float64 (``np.finfo(float).tiny``)
-TINY = 2.2250738585072014e-308
 
 #: per body: position of m in the estimates and in mu, of theta in z; sizes of mu, theta
 EST0, MU0, ZTH0 = (0, 10), (0, 4), (8, 14)
@@ -48,54 +46,86 @@ SHARP_I = (0, 0, 0, 1, 1, 2)
 SHARP_J = (0, 1, 2, 1, 2, 2)
 
 
+# -- small products (no BLAS) --------------------------------------------------------------------
+@njit(**_NB)
+def _matmul(A, B):
+    """``A B`` (n, k) @ (k, m)."""
+    n, k = A.shape
+    m = B.shape[1]
+    out = np.zeros((n, m))
+    for i in range(n):
+        for l in range(k):
+            a = A[i, l]
+            for j in range(m):
+                out[i, j] += a * B[l, j]
+    return out
+
+
+@njit(**_NB)
+def _matvec(A, x):
+    """``A x`` (n, k) @ (k,)."""
+    n, k = A.shape
+    out = np.zeros(n)
+    for i in range(n):
+        s = 0.0
+        for l in range(k):
+            s += A[i, l] * x[l]
+        out[i] = s
+    return out
+
+
 # -- the prior's pull -------------------------------------------------------------------------
 @njit(**_NB)
-def observed_solve(G, r):
-    """``(x, unobserved)``: ``G^-1 r`` in the directions the information ``G`` (p, p) observes
-    and the parameters with a component along one it does not (:func:`.uncertainty.observed_solve`)."""
-    p = r.shape[0]
+def scaled_information(G):
+    """``(G_s, d, unobserved)``: the scale-free information ``G_s = G / (d d^T)``,
+    ``d = sqrt(diag G)`` (1 where ``diag G`` is not > 0, and those rows and columns of ``G_s``
+    set to 0) of the information ``G`` (p, p); ``G_s`` is what :func:`eig_solve` wants the
+    eigen-decomposition of."""
+    p = G.shape[0]
     unobserved = np.zeros(p, np.bool_)
     d = np.empty(p)
     for i in range(p):
         g = G[i, i]
         unobserved[i] = not g > 0.0
         d[i] = math.sqrt(1.0 if unobserved[i] else g)
-    Gs = np.empty((p, p))                                    # scale-free information
+    Gs = np.empty((p, p))
     for i in range(p):
         for j in range(p):
             Gs[i, j] = 0.0 if unobserved[i] or unobserved[j] else G[i, j] / (d[i] * d[j])
+    return Gs, d, unobserved
+
+
+@njit(**_NB)
+def eig_solve(lam, V, d, unobserved, r):
+    """``(x, unobserved)``: ``G^-1 r`` in the directions the information observes, from the
+    eigen-decomposition ``G_s = V diag(lam) V^T`` (ascending ``lam``) of the scaled information
+    and ``d``, ``unobserved`` of :func:`scaled_information`: ``x = V_k diag(1 / lam_k) V_k^T
+    (r / d) / d`` over the eigenvalues above ``REL_EIG_MIN`` of the largest; ``unobserved``
+    (a new array) adds the parameters with a component above ``UNOBSERVED_COMPONENT`` along
+    one of the others (:func:`.uncertainty.observed_solve`)."""
+    p = r.shape[0]
     x = np.zeros(p)
+    unobserved = unobserved.copy()
     if p == 0:
         return x, unobserved
-    lam, V = np.linalg.eigh(Gs)
     big = lam[p - 1] if lam[p - 1] > 0.0 else 0.0
     keep = lam > REL_EIG_MIN * big
-    nk = 0
-    for k in range(p):
-        nk += keep[k]
-    Vk = np.empty((p, nk))
-    Vl = np.empty((p, nk))
-    col = 0
+    c = np.zeros(p)                                          # V_k^T (r / d)
     for k in range(p):
         if keep[k]:
+            s = 0.0
             for i in range(p):
-                Vk[i, col] = V[i, k]
-                Vl[i, col] = V[i, k] / lam[k]
-            col += 1
-    rd = np.empty(p)
+                s += V[i, k] * (r[i] / d[i])
+            c[k] = s
+    for i in range(p):                                       # (V_k / lam_k) c / d
+        s = 0.0
+        for k in range(p):
+            if keep[k]:
+                s += V[i, k] / lam[k] * c[k]
+        x[i] = s / d[i]
     for i in range(p):
-        rd[i] = r[i] / d[i]
-    if nk > 0:
-        x = np.dot(Vl, np.dot(Vk.T.copy(), rd))             # (Vk / lam) @ (Vk^T (r / d))
-        for i in range(p):
-            x[i] = x[i] / d[i]
-    if nk < p:
-        for i in range(p):
-            big_i = 0.0
-            for k in range(p):
-                if not keep[k]:
-                    big_i = max(big_i, abs(V[i, k]))
-            if big_i > UNOBSERVED_COMPONENT:
+        for k in range(p):
+            if not keep[k] and abs(V[i, k]) > UNOBSERVED_COMPONENT:
                 unobserved[i] = True
     return x, unobserved
 
@@ -124,29 +154,32 @@ def D_jacobian(mu):
 
 
 @njit(**_NB)
-def paper_prior_pull(mu_full, rls_mu, rls_theta, D_mu, M, S_lin, S_ang, w_mu, w_theta, mu0, th0,
-                     mu_active, theta_active):
+def paper_prior_pull(mu_full, rls_mu, rls_theta, D_mu, M, S_ang, w_mu, w_theta, mu0, th0,
+                     mu_active, theta_active, eig_lin, eig_ang):
     """``(delta (20,), unobserved (20,) bool)`` of the paper solver's ``z = [mu, theta]``
     (:meth:`.solvers.PaperSolver.prior_pull`).
 
-    ``w_mu``, ``w_theta``: the prior's remaining weights ``decay / P0`` (``W0 = w 1``); the
-    other arguments as the solver holds them (``mu_full`` the 8 mu with the fixed ones)."""
+    ``w_mu``, ``w_theta``: the prior's remaining weights ``decay / P0`` (``W0 = w 1``);
+    ``eig_lin``, ``eig_ang``: ``(lam, V, d, unobserved)`` of the information of ``mu`` and of
+    ``theta`` (:func:`scaled_information`, then ``np.linalg.eigh``); the other arguments as
+    the solver holds them (``mu_full`` the 8 mu with the fixed ones)."""
     p, r = rls_mu.shape[0], rls_theta.shape[0]
     rhs = np.empty(p)
     for i in range(p):                                       # -W0 (x - x0)
         rhs[i] = -(w_mu * (rls_mu[i] - mu0[i]))
-    d_mu, u_mu = observed_solve(np.ascontiguousarray(S_lin[:p, :p]), rhs)
+    d_mu, u_mu = eig_solve(eig_lin[0], eig_lin[1], eig_lin[2], eig_lin[3], rhs)
     mu_ls = mu_full.copy()
     for i in range(p):
         mu_ls[mu_active[i]] -= d_mu[i]
     dD = D_mu - D_of_mu(mu_ls)
-    S_phipsi = np.ascontiguousarray(S_ang[:r, r + 1:])
-    moved = np.dot(S_phipsi, dD)
     rhs_th = np.empty(r)
-    for i in range(r):
-        rhs_th[i] = -(w_theta * (rls_theta[i] - th0[i])) + moved[i]
-    d_th, u_th = observed_solve(np.ascontiguousarray(S_ang[:r, :r]), rhs_th)
-    Tm = np.dot(M, D_jacobian(mu_full))                      # (r, 8)
+    for i in range(r):                                       # -W0 (th - th0) + S_phi,psi dD
+        s = 0.0
+        for j in range(dD.shape[0]):
+            s += S_ang[i, r + 1 + j] * dD[j]
+        rhs_th[i] = -(w_theta * (rls_theta[i] - th0[i])) + s
+    d_th, u_th = eig_solve(eig_ang[0], eig_ang[1], eig_ang[2], eig_ang[3], rhs_th)
+    Tm = _matmul(M, D_jacobian(mu_full))                     # (r, 8)
     for i in range(r):
         for j in range(p):
             if u_mu[j] and Tm[i, mu_active[j]] != 0.0:
@@ -173,7 +206,7 @@ def paper_covariance(P_lin, P_ang, M, mu_full, s2_lin, s2_ang, P0_mu, P0_theta, 
     for i in range(p):
         for j in range(p):
             Cmu[mu_active[i], mu_active[j]] = P_lin[i, j] * s2_lin
-    Tm_a = np.dot(M, D_jacobian(mu_full))                    # (r, 8)
+    Tm_a = _matmul(M, D_jacobian(mu_full))                   # (r, 8)
     Tm = np.zeros((N_THETA, N_MU))
     for i in range(r):
         Tm[theta_active[i]] = Tm_a[i]
@@ -182,8 +215,8 @@ def paper_covariance(P_lin, P_ang, M, mu_full, s2_lin, s2_ang, P0_mu, P0_theta, 
         for j in range(r):
             Cth[theta_active[i], theta_active[j]] = P_ang[i, j] * s2_ang
     cov = np.empty((N_MU + N_THETA, N_MU + N_THETA))
-    TC = np.dot(Tm, Cmu)
-    TCT = np.dot(TC, Tm.T.copy())
+    TC = _matmul(Tm, Cmu)
+    TCT = _matmul(TC, Tm.T)
     for i in range(N_MU):
         for j in range(N_MU):
             cov[i, j] = Cmu[i, j]
@@ -201,7 +234,11 @@ def _residual_variance(S, z, dof):
     """``max(z^T S z, 0) / dof``, 0 for ``dof <= 0`` (:func:`.uncertainty.residual_variance`)."""
     if dof <= 0:
         return 0.0
-    return max(np.dot(np.dot(z, S), z), 0.0) / dof
+    Sz = _matvec(S, z)
+    q = 0.0
+    for i in range(z.shape[0]):
+        q += z[i] * Sz[i]
+    return max(q, 0.0) / dof
 
 
 @njit(**_NB)
@@ -263,7 +300,7 @@ def scatter_and_pull(J, C, pull, unobserved_z):
     """``(var (20,), unobserved (20,) bool)``: ``diag(J C J^T) + pull^2`` and the estimates
     whose Jacobian row touches an unobserved parameter (:meth:`.solvers.ParameterSolver.uncertainty`)."""
     n, q = J.shape
-    JC = np.dot(J, C)
+    JC = _matmul(J, C)
     var = np.empty(n)
     unobserved = np.zeros(n, np.bool_)
     for i in range(n):
@@ -277,9 +314,9 @@ def scatter_and_pull(J, C, pull, unobserved_z):
 
 
 @njit(**_NB)
-def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_lin,
-                      S_ang, s2_lin, s2_ang, P0_mu, P0_theta, w_mu, w_theta, mu0, th0,
-                      mu_active, theta_active, sharp_to_project):
+def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_ang,
+                      s2_lin, s2_ang, P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active,
+                      theta_active, sharp_to_project, eig_lin, eig_ang):
     """``(sd (20,), unobserved (20,) bool)`` of the paper solver's estimates, the whole of
     :meth:`.solvers.ParameterSolver.uncertainty` for :class:`.solvers.PaperSolver` in one call:
     ``sd^2 = diag(J C J^T) + (v(z) - v(z - delta))^2`` (``J delta`` where ``z - delta`` has no
@@ -287,11 +324,12 @@ def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_
     :func:`paper_prior_pull` and :func:`paper_vector_of`."""
     z = np.concatenate((mu_full, theta_full))
     J = paper_jacobian(z, sharp_to_project)
-    delta, unobserved_z = paper_prior_pull(mu_full, rls_mu, rls_theta, D_mu, M, S_lin, S_ang,
-                                           w_mu, w_theta, mu0, th0, mu_active, theta_active)
+    delta, unobserved_z = paper_prior_pull(mu_full, rls_mu, rls_theta, D_mu, M, S_ang, w_mu,
+                                           w_theta, mu0, th0, mu_active, theta_active,
+                                           eig_lin, eig_ang)
     pull = paper_vector_of(z, sharp_to_project) - paper_vector_of(z - delta, sharp_to_project)
     if not np.all(np.isfinite(pull)):                        # the data-only mass <= 0
-        pull = np.dot(J, delta)
+        pull = _matvec(J, delta)
     C = paper_covariance(P_lin, P_ang, M, mu_full, s2_lin, s2_ang, P0_mu, P0_theta, mu_active,
                          theta_active)
     var, unobserved = scatter_and_pull(J, C, pull, unobserved_z)
@@ -299,25 +337,6 @@ def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_
     for i in range(var.shape[0]):
         sd[i] = math.sqrt(var[i]) if var[i] > 0.0 else 0.0
     return sd, unobserved
-
-
-@njit(**_NB)
-def rcond(info):
-    """Reciprocal condition number of the information ``info`` (p, p) scaled by its diagonal,
-    ``max(lam_min, 0) / lam_max`` of ``info / (d d^T)``, ``d = sqrt(diag info)``; 0 if a
-    diagonal entry is <= 0 (the identifier's excitation diagnostics)."""
-    p = info.shape[0]
-    d = np.empty(p)
-    for i in range(p):
-        if info[i, i] <= 0.0:
-            return 0.0
-        d[i] = math.sqrt(info[i, i])
-    Gs = np.empty((p, p))
-    for i in range(p):
-        for j in range(p):
-            Gs[i, j] = info[i, j] / (d[i] * d[j])
-    lam = np.linalg.eigvalsh(Gs)
-    return max(lam[0], 0.0) / lam[p - 1]
 
 
 # -- physical consistency ----------------------------------------------------------------------
@@ -331,19 +350,6 @@ def second_moment(I6):
     S[0, 1], S[0, 2], S[1, 2] = -Ixy, -Ixz, -Iyz
     S[1, 0], S[2, 0], S[2, 1] = -Ixy, -Ixz, -Iyz
     return S
-
-
-@njit(**_NB)
-def _inertia_from_symmetrised(S, out):
-    """``I_c = tr(Sym) 1 - Sym`` of ``Sym = (S + S^T) / 2`` into ``out`` (6,)
-    (:func:`.physical.inertia_from_second_moment`)."""
-    Y = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            Y[i, j] = 0.5 * (S[i, j] + S[j, i])
-    tr = Y[0, 0] + Y[1, 1] + Y[2, 2]
-    out[0], out[1], out[2] = tr - Y[0, 0], tr - Y[1, 1], tr - Y[2, 2]
-    out[3], out[4], out[5] = 0.0 - Y[0, 1], 0.0 - Y[0, 2], 0.0 - Y[1, 2]
 
 
 @njit(**_NB)
@@ -376,75 +382,22 @@ def is_physical(m, b, I6):
 
 
 @njit(**_NB)
-def _clip_eigen(lam, V, s_min):
-    """``V max(lam, s_min) V^T``: the Frobenius-nearest matrix with eigenvalues >= s_min."""
-    Vl = np.empty_like(V)
-    for i in range(V.shape[0]):
-        for k in range(V.shape[1]):
-            Vl[i, k] = V[i, k] * max(lam[k], s_min)
-    return np.dot(Vl, V.T.copy())
-
-
-@njit(**_NB)
-def project_body(m, b, I6, m_scale, I_out):
-    """The nearest real body in ``(m, b, Sigma_c)`` (:func:`.physical.project_body`): returns
-    ``(m, projected)`` and writes the inertia into ``I_out`` (6,); ``b`` is kept."""
-    if is_physical(m, b, I6):
-        I_out[:] = I6
-        return m, False
-    m_min = REL_MASS_MIN * abs(m_scale)
-    m_out = m if m >= m_min else m_min
-    lam, V = np.linalg.eigh(second_moment(I6))
-    big = 0.0
-    for k in range(3):
-        big = max(big, abs(lam[k]))
-    s_min = REL_SIGMA_MIN * max(big, TINY)
-    _inertia_from_symmetrised(_clip_eigen(lam, V, s_min), I_out)
-    return m_out, True
-
-
-@njit(**_NB)
-def project_planar_body(m, b, I6, m_scale, I_out):
-    """A real body with the identified entries of a planar estimate kept
-    (:func:`.physical.project_planar_body`); returns and writes as :func:`project_body`."""
-    if is_physical(m, b, I6):
-        I_out[:] = I6
-        return m, False
-    S = second_moment(I6)
-    lam, V = np.linalg.eigh(np.ascontiguousarray(S[:2, :2]))
-    izz = I6[2]                                              # = trace of the in-plane block
-    lam3 = np.linalg.eigvalsh(S)
-    big = 0.0
-    for k in range(3):
-        big = max(big, abs(lam3[k]))
-    s_min = REL_SIGMA_MIN * max(big, TINY)
-    if not izz > 2.0 * s_min:
-        return project_body(m, b, I6, m_scale, I_out)
-    if lam[0] < s_min:                                       # clip with the sum kept
-        lam = np.array([s_min, izz - s_min])
-    P = np.zeros((3, 3))
-    P[:2, :2] = np.dot(V * lam, V.T.copy())
-    P[2, 2] = max(S[2, 2], s_min)
-    m_min = REL_MASS_MIN * abs(m_scale)
-    _inertia_from_symmetrised(P, I_out)
-    I_out[2] = izz                                           # exact, not re-rounded
-    return (m if m >= m_min else m_min), True
-
-
-@njit(**_NB)
-def project_estimates(planar, ls, m_scales, out, projected):
-    """Both bodies of the estimates ``ls`` (20,) projected onto real bodies into ``out`` (20,)
-    (:func:`project_planar_body` for a planar robot, else :func:`project_body`, with the mass
-    scales ``m_scales`` (2,)); ``projected`` (2,) bool: whether each body was moved."""
-    I_out = np.empty(6)
+def both_physical(ls, physical):
+    """``physical`` (2,) bool: :func:`is_physical` of both bodies of the estimates ``ls`` (20,)."""
     for k in range(2):
         e = EST0[k]
-        b, I6 = ls[e + 1:e + 4], ls[e + 4:e + 10]
-        if planar:
-            m, moved = project_planar_body(ls[e], b, I6, m_scales[k], I_out)
-        else:
-            m, moved = project_body(ls[e], b, I6, m_scales[k], I_out)
-        out[e] = m
-        out[e + 1:e + 4] = b
-        out[e + 4:e + 10] = I_out
-        projected[k] = moved
+        physical[k] = is_physical(ls[e], ls[e + 1:e + 4], ls[e + 4:e + 10])
+
+
+@njit(**_NB)
+def identified_bodies(sd, out, ls, scale, sd_rel, identified, ok_body):
+    """``ok_body`` (2,) bool: every identified entry of the body (``identified`` (20,) bool)
+    has ``sd <= tol`` and ``|out - ls| <= tol``, ``tol = sd_rel * scale`` (the reported value
+    is the estimate's; :meth:`.identifier.Identifier.report`)."""
+    for k in range(2):
+        ok = True
+        for i in range(EST0[k], EST0[k] + 10):
+            tol = sd_rel * scale[i]
+            if identified[i] and not (sd[i] <= tol and abs(out[i] - ls[i]) <= tol):
+                ok = False
+        ok_body[k] = ok

@@ -30,7 +30,7 @@ from ..robots import Guess
 from . import parameters as par
 from . import report_kernels as rk
 from .rls import RLS, ModifiedRLS
-from .uncertainty import Autocorrelation, Gram, observed_solve, prior_pull
+from .uncertainty import Autocorrelation, Gram, eig_scaled, prior_pull
 
 
 class Step(NamedTuple):
@@ -251,13 +251,21 @@ class PaperSolver(ParameterSolver):
     def uncertainty(self) -> Tuple[np.ndarray, np.ndarray]:
         """As :meth:`ParameterSolver.uncertainty`, in one compiled call
         (:func:`.report_kernels.paper_uncertainty`)."""
-        L, rls, gl, ga, g0 = self.layout, self.rls, self.gram_lin, self.gram_ang, self.guess
+        L, rls, ga, g0 = self.layout, self.rls, self.gram_ang, self.guess
         s2_lin, s2_ang = self._residual_variances()
+        w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
         return rk.paper_uncertainty(self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M,
-                                    rls.lin.P, rls.ang.P, gl.S, ga.S, s2_lin, s2_ang, g0.P0_mu,
-                                    g0.P0_theta, gl.decay * (1.0 / g0.P0_mu),
-                                    ga.decay * (1.0 / g0.P0_theta), self._mu0, self._th0,
-                                    L.mu_active, L.theta_active, self._s2p)
+                                    rls.lin.P, rls.ang.P, ga.S, s2_lin, s2_ang, g0.P0_mu,
+                                    g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
+                                    L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang)
+
+    def _pull_inputs(self):
+        """The prior's remaining weights ``decay / P0`` of mu and theta (``W0 = w 1``) and the
+        eigen-decompositions of their scaled information (:func:`.uncertainty.eig_scaled`)."""
+        rls, gl, ga, g0 = self.rls, self.gram_lin, self.gram_ang, self.guess
+        p, r = len(rls.mu), len(rls.theta)
+        return (gl.decay * (1.0 / g0.P0_mu), ga.decay * (1.0 / g0.P0_theta),
+                eig_scaled(gl.S[:p, :p]), eig_scaled(ga.S[:r, :r]))
 
     def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
         """``mu``: :func:`.uncertainty.prior_pull`. ``theta``: the distance to the data-only
@@ -268,10 +276,11 @@ class PaperSolver(ParameterSolver):
 
         with ``S_phi,psi = sum phi^T psi`` from the Gram matrix of ``[phi | y | psi]``
         (compiled: :func:`.report_kernels.paper_prior_pull`)."""
-        L, rls, gl, ga, g0 = self.layout, self.rls, self.gram_lin, self.gram_ang, self.guess
-        return rk.paper_prior_pull(self.mu, rls.mu, rls.theta, rls.D_mu, rls.M, gl.S, ga.S,
-                                   gl.decay * (1.0 / g0.P0_mu), ga.decay * (1.0 / g0.P0_theta),
-                                   self._mu0, self._th0, L.mu_active, L.theta_active)
+        L, rls = self.layout, self.rls
+        w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
+        return rk.paper_prior_pull(self.mu, rls.mu, rls.theta, rls.D_mu, rls.M, self.gram_ang.S,
+                                   w_mu, w_theta, self._mu0, self._th0, L.mu_active,
+                                   L.theta_active, eig_lin, eig_ang)
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,

@@ -175,7 +175,8 @@ def observed_solve(G: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray
     Scale-free: with ``d = sqrt(diag G)``, ``G_s = G / (d d^T)`` (rows and columns of a zero
     diagonal entry set to 0) is eigen-decomposed, ``G_s = V diag(lam) V^T``, and
     ``x = V_k diag(1 / lam_k) V_k^T (r / d) / d`` over the eigenvalues ``lam_k`` above
-    ``REL_EIG_MIN`` times the largest (compiled: :func:`.report_kernels.observed_solve`).
+    ``REL_EIG_MIN`` times the largest (:func:`eig_scaled`, then the compiled
+    :func:`.report_kernels.eig_solve`).
 
     Parameters
     ----------
@@ -187,8 +188,17 @@ def observed_solve(G: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray
     unobserved : (p,) bool, parameters with a component along a direction whose scaled
         eigenvalue is below ``REL_EIG_MIN`` of the largest (or whose information is zero).
     """
-    return report_kernels.observed_solve(np.ascontiguousarray(G, dtype=float),
-                                         np.ascontiguousarray(r, dtype=float))
+    return report_kernels.eig_solve(*eig_scaled(G), np.ascontiguousarray(r, dtype=float))
+
+
+def eig_scaled(G: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(lam, V, d, unobserved)``: the eigen-decomposition ``G_s = V diag(lam) V^T`` (NumPy's
+    ``eigh``) of the scale-free information ``G_s = G / (d d^T)``, ``d = sqrt(diag G)``, and
+    the parameters without information (:func:`.report_kernels.scaled_information`), as
+    :func:`.report_kernels.eig_solve` takes them."""
+    Gs, d, unobserved = report_kernels.scaled_information(np.ascontiguousarray(G, dtype=float))
+    lam, V = np.linalg.eigh(Gs)
+    return lam, V, d, unobserved
 
 
 def prior_pull(W0: np.ndarray, G: np.ndarray, x: np.ndarray, x0: np.ndarray
