@@ -5,10 +5,11 @@ geometry, the kernel loader, the FMI base class and the estimator (``fmi/build.p
 ``BUNDLES``).
 """
 import math
+import operator
 
 import numpy as np
 
-from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT, identifier_from_values
+from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT, KEYS, identifier_from_values
 from _spacerobot_estimator.fmi.slave import InterfaceSlave, _escape
 from _spacerobot_estimator.interface import LAYOUT, STATUS, estimator_vars
 from pythonfmu.enums import Fmi2Status
@@ -30,7 +31,10 @@ class SpaceRobotEstimator(InterfaceSlave):
         self.ident = None
         self._inputs = [(n, v.key) for n, v in self.interface.items() if v.causality == "input"]
         self._input_names = [n for n, _ in self._inputs]
-        self._groups = _input_groups(self._inputs, self.robot.n_joints)
+        # a sample: the inputs' values in one array, in the order of the identifier's KEYS
+        # (each signal's elements row-major), and each signal a view into it
+        self._gather, self._signals = _sample_layout(self._inputs, self.robot.n_joints)
+        self._input_values = operator.itemgetter(*self._input_names)
         self.request = None
         # outputs: estimates and their standard deviations ("sd." + an estimate name), from
         # the identifier's report; scalars (attributes of the Identifier); the identified and
@@ -55,8 +59,8 @@ class SpaceRobotEstimator(InterfaceSlave):
     def _refresh(self) -> None:
         ident = self.ident
         rep = ident.report()
-        o = dict(zip(self._est_names, rep.vector[self._est_pos].tolist()))
-        o.update(zip(self._sd_names, rep.std[self._sd_pos].tolist()))
+        o = dict(zip(self._est_names, rep.vector.take(self._est_pos).tolist()))
+        o.update(zip(self._sd_names, rep.std.take(self._sd_pos).tolist()))
         for name, attr in self._scalar_outputs:
             o[name] = getattr(ident, attr)
         for name, (kind, who) in self._flag_outputs:
@@ -77,10 +81,8 @@ class SpaceRobotEstimator(InterfaceSlave):
     def do_step(self, current_time: float, step_size: float) -> bool:
         if not self._check_step(current_time, step_size, math.inf):
             return False
-        x = np.array([self.values[n] for n in self._input_names], dtype=float)
-        meas = {}
-        for group, shape, pos in self._groups:
-            meas[group] = x[pos].reshape(shape)
+        x = np.array(self._input_values(self.values), dtype=float).take(self._gather)
+        meas = {key: x[part].reshape(shape) for key, part, shape in self._signals}
         status = self.ident.update(current_time, meas)    # never raises; undoes a bad update
         self._refresh()
         if status in (3, 4):
@@ -118,14 +120,21 @@ _EXCITE = "ident.excite"
 _LAZY = ("excitation_mu", "excitation_theta")
 
 
-def _input_groups(inputs, n: int):
-    """``[(group, shape, positions)]``: where each measurement array's elements (row-major)
-    sit in the list of FMI inputs, so that a sample is gathered with one fancy index per group."""
+def _sample_layout(inputs, n: int):
+    """``(gather, signals)``: ``x[gather]`` puts the values of the FMI ``inputs`` (in their
+    order) into the order of the identifier's :data:`KEYS` (each signal's elements row-major);
+    ``signals`` = ``[(key, slice, shape)]`` of each signal in that array, so that a sample is
+    gathered with one index and its signals are views."""
     shapes = {"A": (3, 3), "q": (n,), "qd": (n,), "qdd": (n,)}
-    out = {}
+    where = {}
     for pos, (_, (group, idx)) in enumerate(inputs):
         shape = shapes.get(group, (3,))
         flat = idx[0] * shape[1] + idx[1] if group == "A" else idx
-        out.setdefault(group, (shape, {}))[1][flat] = pos
-    return [(g, shape, np.array([p[k] for k in sorted(p)])) for g, (shape, p) in out.items()]
-
+        where[(group, flat)] = pos
+    gather, signals = [], []
+    for key in KEYS:
+        shape = shapes.get(key, (3,))
+        start = len(gather)
+        gather += [where[(key, k)] for k in range(int(np.prod(shape)))]
+        signals.append((key, slice(start, len(gather)), shape))
+    return np.array(gather, dtype=np.intp), signals

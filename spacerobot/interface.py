@@ -584,17 +584,19 @@ class ParameterLayout:
           exceeds it for a real body; a product near zero would make any error look huge).
           1 kg.m2 if all moments are zero.
         """
-        truth = np.asarray(truth, float)
-        scale = np.abs(truth)
-        for b in self.bodies:
-            imax = scale[b.principal].max()
-            imax = imax if imax > 0.0 else 1.0
-            if scale[b.m] == 0.0:
-                scale[b.m] = 1.0
-            scale[b.first] = np.maximum(scale[b.first], COM_SCALE_MIN)
-            principal = scale[b.principal]                  # a view: written into scale
-            principal[principal == 0.0] = imax
-            scale[b.principal.stop:b.inertia.stop] = imax   # the products of inertia
+        scale = np.abs(np.asarray(truth, float))
+        # one row per body (10 entries each, positions as the base's): a few whole-array
+        # operations instead of a loop per body, as the estimator computes this every sample
+        per = scale.reshape(len(self.bodies), -1)            # a view: written into scale
+        b = self.base
+        principal = per[:, b.principal]
+        imax = principal.max(axis=1)
+        imax[~(imax > 0.0)] = 1.0
+        mass = per[:, b.m]                                   # a view
+        mass[mass == 0.0] = 1.0
+        per[:, b.first] = np.maximum(per[:, b.first], COM_SCALE_MIN)
+        per[:, b.principal] = np.where(principal == 0.0, imax[:, None], principal)
+        per[:, b.principal.stop:b.inertia.stop] = imax[:, None]   # the products of inertia
         return scale
 
 

@@ -5,6 +5,7 @@ between parameterisations."""
 from .. import jit
 
 jit.load(__name__, "kernels")   # compiled equations and RLS step (persistent Numba cache)
+jit.load(__name__, "report_kernels", deps=("kernels",))   # compiled standard deviations, projection
 
 from .identifier import BodyEstimate, ExcitationRequest, Identifier, Report  # noqa: E402,F401
 from .physical import is_physical, project_body  # noqa: E402,F401

@@ -19,7 +19,7 @@ from ..interface import (AccelSource, ExciteMode, Method, ParameterLayout, Solve
                          row_sd)
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
-from . import kernels
+from . import kernels, report_kernels
 from .differencing import centre_derivative
 from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
@@ -411,19 +411,23 @@ class Identifier:
         state, so the report equals :meth:`vector` as soon as that is physical.
         """
         ls, sd = self.vector(), self.std()
-        out, identified, physical = ls.copy(), {}, {}
+        out, physical = ls.copy(), {}
+        real = np.empty(len(self.layout.bodies), bool)
+        report_kernels.both_physical(ls, real)          # is_physical of both, one call
         project = project_planar_body if self.robot.planar else project_body
         for b, g in zip(self.layout.bodies, (self.guess.base, self.guess.target)):
-            m, com, I6, projected = project(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
-            out[b.m], out[b.first], out[b.inertia] = m, com, I6
-            physical[b.name] = not projected
+            physical[b.name] = bool(real[b.index])
+            if not real[b.index]:
+                m, com, I6, _ = project(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
+                out[b.m], out[b.first], out[b.inertia] = m, com, I6
         scale = self.layout.error_scale(out)
         # identified: small standard deviation, and the reported value is the estimate's
-        tol = self.sd_rel * scale
-        ok = (sd <= tol) & (np.abs(out - ls) <= tol)
-        for b in self.layout.bodies:
-            ids = self.layout.identified[b.vec]
-            identified[b.name] = bool(self.samples > 0 and ok[b.vec][ids].all())
+        # (|sd| and |out - ls| <= sd_rel * scale), for every identified entry of the body
+        ok_body = np.empty(len(self.layout.bodies), bool)
+        report_kernels.identified_bodies(sd, out, ls, scale, self.sd_rel, self.layout.identified,
+                                         ok_body)
+        identified = {b.name: bool(self.samples > 0 and ok_body[b.index])
+                      for b in self.layout.bodies}
         return Report(out, sd, identified, physical)
 
     def estimates(self) -> dict:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..interface import LAYOUT
 from ..robots import Guess
-from . import kernels
+from . import kernels, report_kernels
 
 #: ``I = I#[SHARP_TO_PROJECT]`` (the paper's order into the project's); ``I# = I[PROJECT_TO_SHARP]``
 SHARP_TO_PROJECT = LAYOUT.sharp_to_project
@@ -49,22 +49,10 @@ def D_jacobian(mu: np.ndarray) -> np.ndarray:
     """``dD/dmu`` (20, 8), used to propagate the covariance of mu into theta.
 
     Per body with ``c = m b``: ``D = [m, c, c_i c_j / m (i <= j)]``, so
-    ``d(c_i c_j / m) = -c_i c_j / m^2 dm + c_j / m dc_i + c_i / m dc_j``.
+    ``d(c_i c_j / m) = -c_i c_j / m^2 dm + c_j / m dc_i + c_i / m dc_j`` (compiled:
+    :func:`.report_kernels.D_jacobian`).
     """
-    Jac = [[0.0] * LAYOUT.n_mu for _ in LAYOUT.names]     # lists: cheaper than array writes
-    mu = np.asarray(mu, float).tolist()
-    for b in LAYOUT.bodies:
-        m, c = mu[b.mu_m], mu[b.mu_first]
-        Jac[b.m][b.mu_m] = 1.0
-        for i in range(3):
-            Jac[b.first.start + i][b.mu_first.start + i] = 1.0
-        m2 = m**2
-        for p, (i, j) in enumerate(SHARP_PAIRS):
-            row = Jac[b.inertia.start + p]
-            row[b.mu_m] = -c[i] * c[j] / m2
-            row[b.mu_first.start + i] += c[j] / m
-            row[b.mu_first.start + j] += c[i] / m
-    return np.array(Jac)
+    return report_kernels.D_jacobian(np.ascontiguousarray(mu, dtype=float))
 
 
 def paper_vectors(g: Guess):

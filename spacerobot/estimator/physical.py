@@ -38,6 +38,8 @@ from typing import Tuple
 
 import numpy as np
 
+from . import report_kernels
+
 __all__ = ["second_moment", "inertia_from_second_moment", "pseudo_inertia", "is_physical",
            "project_body", "project_planar_body"]
 
@@ -86,16 +88,12 @@ def is_physical(m: float, b, I6) -> bool:
     """True iff ``(m, b, I6)`` is a real rigid body: finite, ``m > 0``, ``Sigma_c > 0``.
 
     Equivalent to the pseudo-inertia matrix being positive definite; tested by a Cholesky
-    factorisation (no tolerance: a body on the boundary, e.g. a rod, is not accepted).
+    factorisation of ``Sigma_c`` (no tolerance: a body on the boundary, e.g. a rod, is not
+    accepted; compiled: :func:`.report_kernels.is_physical`).
     """
-    vals = np.concatenate([[m], np.ravel(b), np.ravel(I6)]).astype(float)
-    if not np.all(np.isfinite(vals)) or not m > 0.0:
-        return False
-    try:
-        np.linalg.cholesky(second_moment(I6))
-    except np.linalg.LinAlgError:
-        return False
-    return True
+    b = np.ascontiguousarray(b, dtype=float).reshape(3)
+    I6 = np.ascontiguousarray(I6, dtype=float).reshape(6)
+    return bool(report_kernels.is_physical(float(m), b, I6))
 
 
 def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarray, np.ndarray, bool]:

@@ -28,8 +28,9 @@ import numpy as np
 from ..interface import ParameterLayout, Solver
 from ..robots import Guess
 from . import parameters as par
+from . import report_kernels as rk
 from .rls import RLS, ModifiedRLS
-from .uncertainty import Autocorrelation, Gram, observed_solve, prior_pull
+from .uncertainty import Autocorrelation, Gram, eig_scaled, prior_pull
 
 
 class Step(NamedTuple):
@@ -129,8 +130,8 @@ class ParameterSolver(ABC):
             pull = self.vector_of(z) - self.vector_of(z - delta)   # the map's exact difference
         if not np.all(np.isfinite(pull)):                          # the data-only mass <= 0
             pull = J @ delta
-        var = np.einsum("ij,jk,ik->i", J, self.covariance(), J) + pull ** 2
-        unobserved = (J[:, unobserved_z] != 0.0).any(axis=1)
+        # diag(J C J^T) + pull^2, and the rows of J that touch an unobserved parameter
+        var, unobserved = rk.scatter_and_pull(J, self.covariance(), pull, unobserved_z)
         return np.sqrt(np.clip(var, 0.0, None)), unobserved
 
     def std(self) -> np.ndarray:
@@ -180,19 +181,12 @@ class PaperSolver(ParameterSolver):
         self.mu, self.theta = mu0, th0          # full vectors (rebound by each update)
         p, r = len(L.mu_active), len(L.theta_active)
         self._mu0, self._th0 = mu0[L.mu_active], th0[L.theta_active]
-        self._W0 = (np.eye(p) / guess.P0_mu, np.eye(r) / guess.P0_theta)     # P0^-1
         # Gram matrices of the rows [A | b] and [phi | y | psi] (residuals at any mu, theta)
         self.gram_lin = Gram.empty(p + 1, lam)
         self.gram_ang = Gram.empty(r + 1 + len(self.rls.D_mu), lam)
         # autocorrelation of the a-priori residuals of each equation
         self.corr_lin = self.corr_ang = Autocorrelation.empty(self.lags, lam)
-        # theta of each body inside z
-        self._z_theta = [slice(L.n_mu + b.theta.start, L.n_mu + b.theta.stop) for b in L.bodies]
-        self._ix = (np.ix_(L.mu_active, L.mu_active), np.ix_(L.theta_active, L.theta_active))
-        # d I / d theta: the permutation I = I#[SHARP_TO_PROJECT], as (rows, columns) of J
-        self._dI = tuple(np.concatenate(x) for x in zip(*[
-            (np.arange(b.inertia.start, b.inertia.stop), zt.start + par.SHARP_TO_PROJECT)
-            for b, zt in zip(L.bodies, self._z_theta)]))
+        self._s2p = np.ascontiguousarray(par.SHARP_TO_PROJECT, dtype=np.int64)
 
     def update(self, A, b, phi, y, psi) -> Step:
         L = self.layout
@@ -220,48 +214,24 @@ class PaperSolver(ParameterSolver):
         return np.concatenate([self.mu, self.theta])
 
     def vector_of(self, z: np.ndarray) -> np.ndarray:
-        out = np.empty(len(self.layout.names))
-        for b, zt in zip(self.layout.bodies, self._z_theta):
-            m = z[b.mu_m]
-            out[b.m] = m
-            out[b.first] = z[b.mu_first] / m
-            out[b.inertia] = z[zt][par.SHARP_TO_PROJECT]
-        return out
+        """Per body ``m``, ``b = c / m``, ``I = I#`` permuted (compiled:
+        :func:`.report_kernels.paper_vector_of`)."""
+        return rk.paper_vector_of(np.ascontiguousarray(z, dtype=float), self._s2p)
 
     def jacobian(self, z: np.ndarray) -> np.ndarray:
-        """Per body: the m and b rows (:func:`_mass_rows`); the CoM inertia is a parameter
-        (permuted)."""
-        J = np.zeros((len(self.layout.names), len(z)))
-        for b in self.layout.bodies:
-            _mass_rows(J, b, z, b.mu_m, b.mu_first)
-        J[self._dI] = 1.0
-        return J
+        """Per body: the m and b rows, ``db/dc = 1 / m``, ``db/dm = -c / m^2``; the CoM
+        inertia is a parameter (permuted) (compiled: :func:`.report_kernels.paper_jacobian`)."""
+        return rk.paper_jacobian(np.ascontiguousarray(z, dtype=float), self._s2p)
 
     def covariance(self) -> np.ndarray:
         """``Cov(mu)`` from the first RLS; ``theta`` depends on ``mu`` through
         ``d theta / d mu = M dD/dmu``, so ``Cov(theta) = C_theta + T Cov(mu) T^T`` and
-        ``Cov(theta, mu) = T Cov(mu)`` with ``T = M dD/dmu``."""
+        ``Cov(theta, mu) = T Cov(mu)`` with ``T = M dD/dmu`` (compiled:
+        :func:`.report_kernels.paper_covariance`)."""
         L, g0, rls = self.layout, self.guess, self.rls
-        n_mu = L.n_mu
         s2_lin, s2_ang = self._residual_variances()
-        Cmu = rls.lin.P * s2_lin
-        Tm = rls.M.dot(par.D_jacobian(self.mu))
-        Cth = rls.ang.P * s2_ang
-        if not L.complete:
-            Cmu_full = g0.P0_mu * np.eye(n_mu)
-            Cmu_full[self._ix[0]] = Cmu
-            Tm_full = np.zeros((L.n_theta, n_mu))
-            Tm_full[L.theta_active] = Tm
-            Cth_full = g0.P0_theta * np.eye(L.n_theta)
-            Cth_full[self._ix[1]] = Cth
-            Cmu, Tm, Cth = Cmu_full, Tm_full, Cth_full
-        cov = np.empty((n_mu + L.n_theta,) * 2)
-        cov[:n_mu, :n_mu] = Cmu
-        TC = Tm.dot(Cmu)
-        cov[n_mu:, :n_mu] = TC
-        cov[:n_mu, n_mu:] = TC.T
-        cov[n_mu:, n_mu:] = Cth + TC.dot(Tm.T)
-        return cov
+        return rk.paper_covariance(rls.lin.P, rls.ang.P, rls.M, self.mu, s2_lin, s2_ang,
+                                   g0.P0_mu, g0.P0_theta, L.mu_active, L.theta_active)
 
     def _residual_variances(self) -> Tuple[float, float]:
         """Scales of the two covariances ``P``: the a-posteriori residual variances of both
@@ -269,14 +239,33 @@ class PaperSolver(ParameterSolver):
         ``|phi theta - y - psi D(mu)|^2`` over all samples, per degree of freedom), times the
         forgetting's and the residuals' correlation factors (:mod:`.uncertainty`)."""
         rls, gl, ga = self.rls, self.gram_lin, self.gram_ang
-        s2_lin = gl.residual_variance(np.append(rls.mu, -1.0), len(rls.mu))
-        s2_ang = ga.residual_variance(np.concatenate([rls.theta, [-1.0], -rls.D_mu]),
-                                      len(rls.theta))
-        if self.lam != 1.0:
-            s2_lin, s2_ang = s2_lin * gl.var_scale, s2_ang * ga.var_scale
-        if self.lags:
-            s2_lin, s2_ang = s2_lin * self.corr_lin.inflation(), s2_ang * self.corr_ang.inflation()
-        return s2_lin, s2_ang
+        one = 1.0                                   # a factor that does not apply
+        vs_lin, vs_ang = (gl.var_scale, ga.var_scale) if self.lam != 1.0 else (one, one)
+        inf_lin, inf_ang = ((self.corr_lin.inflation(), self.corr_ang.inflation())
+                            if self.lags else (one, one))
+        # z^T S z with z = [mu, -1] and [theta, -1, -D(mu)] (compiled)
+        return rk.paper_residual_variances(rls.mu, rls.theta, rls.D_mu, gl.S, ga.S,
+                                           gl.dof(len(rls.mu)), ga.dof(len(rls.theta)),
+                                           vs_lin, inf_lin, vs_ang, inf_ang)
+
+    def uncertainty(self) -> Tuple[np.ndarray, np.ndarray]:
+        """As :meth:`ParameterSolver.uncertainty`, in one compiled call
+        (:func:`.report_kernels.paper_uncertainty`)."""
+        L, rls, ga, g0 = self.layout, self.rls, self.gram_ang, self.guess
+        s2_lin, s2_ang = self._residual_variances()
+        w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
+        return rk.paper_uncertainty(self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M,
+                                    rls.lin.P, rls.ang.P, ga.S, s2_lin, s2_ang, g0.P0_mu,
+                                    g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
+                                    L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang)
+
+    def _pull_inputs(self):
+        """The prior's remaining weights ``decay / P0`` of mu and theta (``W0 = w 1``) and the
+        eigen-decompositions of their scaled information (:func:`.uncertainty.eig_scaled`)."""
+        rls, gl, ga, g0 = self.rls, self.gram_lin, self.gram_ang, self.guess
+        p, r = len(rls.mu), len(rls.theta)
+        return (gl.decay * (1.0 / g0.P0_mu), ga.decay * (1.0 / g0.P0_theta),
+                eig_scaled(gl.S[:p, :p]), eig_scaled(ga.S[:r, :r]))
 
     def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
         """``mu``: :func:`.uncertainty.prior_pull`. ``theta``: the distance to the data-only
@@ -285,21 +274,13 @@ class PaperSolver(ParameterSolver):
 
             theta - theta_LS = G^-1 [-W0 (theta - theta0) + S_phi,psi (D(mu) - D(mu_LS))]
 
-        with ``S_phi,psi = sum phi^T psi`` from the Gram matrix of ``[phi | y | psi]``."""
-        L, rls, gl, ga = self.layout, self.rls, self.gram_lin, self.gram_ang
-        p, r = len(rls.mu), len(rls.theta)
-        d_mu, u_mu = prior_pull(gl.decay * self._W0[0], gl.S[:p, :p], rls.mu, self._mu0)
-        mu_ls = self.mu.copy()
-        mu_ls[L.mu_active] -= d_mu
-        rhs = (-(ga.decay * self._W0[1]) @ (rls.theta - self._th0)
-               + ga.S[:r, r + 1:] @ (rls.D_mu - par.D_of_mu(mu_ls)))
-        d_th, u_th = observed_solve(ga.S[:r, :r], rhs)
-        Tm = rls.M.dot(par.D_jacobian(self.mu))[:, L.mu_active]       # (r, p)
-        u_th = u_th | (Tm[:, u_mu] != 0.0).any(axis=1)
-        delta, unobserved = np.zeros(L.n_mu + L.n_theta), np.zeros(L.n_mu + L.n_theta, bool)
-        delta[L.mu_active], unobserved[L.mu_active] = d_mu, u_mu
-        delta[L.n_mu + L.theta_active], unobserved[L.n_mu + L.theta_active] = d_th, u_th
-        return delta, unobserved
+        with ``S_phi,psi = sum phi^T psi`` from the Gram matrix of ``[phi | y | psi]``
+        (compiled: :func:`.report_kernels.paper_prior_pull`)."""
+        L, rls = self.layout, self.rls
+        w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
+        return rk.paper_prior_pull(self.mu, rls.mu, rls.theta, rls.D_mu, rls.M, self.gram_ang.S,
+                                   w_mu, w_theta, self._mu0, self._th0, L.mu_active,
+                                   L.theta_active, eig_lin, eig_ang)
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,

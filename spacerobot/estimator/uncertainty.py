@@ -42,10 +42,12 @@ from typing import NamedTuple, Tuple
 
 import numpy as np
 
+from . import report_kernels
+
 __all__ = ["Autocorrelation", "Gram", "prior_pull", "residual_variance"]
 
 #: eigenvalues of the scaled information below this fraction of the largest count as unobserved
-REL_EIG_MIN = 1e-12
+REL_EIG_MIN = report_kernels.REL_EIG_MIN
 
 
 class Gram(NamedTuple):
@@ -170,6 +172,12 @@ def observed_solve(G: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray
     """``G^-1 r`` in the directions the information ``G`` observes, and which parameters have
     a component along one it does not.
 
+    Scale-free: with ``d = sqrt(diag G)``, ``G_s = G / (d d^T)`` (rows and columns of a zero
+    diagonal entry set to 0) is eigen-decomposed, ``G_s = V diag(lam) V^T``, and
+    ``x = V_k diag(1 / lam_k) V_k^T (r / d) / d`` over the eigenvalues ``lam_k`` above
+    ``REL_EIG_MIN`` times the largest (:func:`eig_scaled`, then the compiled
+    :func:`.report_kernels.eig_solve`).
+
     Parameters
     ----------
     G : (p, p) information (symmetric, positive semi-definite);  r : (p,) right-hand side.
@@ -180,21 +188,17 @@ def observed_solve(G: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray
     unobserved : (p,) bool, parameters with a component along a direction whose scaled
         eigenvalue is below ``REL_EIG_MIN`` of the largest (or whose information is zero).
     """
-    p = len(r)
-    dg = np.diag(G).copy()
-    unobserved = ~(dg > 0.0)
-    d = np.sqrt(np.where(unobserved, 1.0, dg))
-    Gs = G / np.outer(d, d)                                  # scale-free information
-    Gs[unobserved, :] = 0.0
-    Gs[:, unobserved] = 0.0
+    return report_kernels.eig_solve(*eig_scaled(G), np.ascontiguousarray(r, dtype=float))
+
+
+def eig_scaled(G: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(lam, V, d, unobserved)``: the eigen-decomposition ``G_s = V diag(lam) V^T`` (NumPy's
+    ``eigh``) of the scale-free information ``G_s = G / (d d^T)``, ``d = sqrt(diag G)``, and
+    the parameters without information (:func:`.report_kernels.scaled_information`), as
+    :func:`.report_kernels.eig_solve` takes them."""
+    Gs, d, unobserved = report_kernels.scaled_information(np.ascontiguousarray(G, dtype=float))
     lam, V = np.linalg.eigh(Gs)
-    big = lam[-1] if p and lam[-1] > 0.0 else 0.0
-    keep = lam > REL_EIG_MIN * big
-    Vk = V[:, keep]
-    x = (Vk / lam[keep]) @ (Vk.T @ (np.asarray(r, float) / d)) / d
-    if not np.all(keep):
-        unobserved = unobserved | (np.abs(V[:, ~keep]).max(axis=1) > 1e-6)
-    return x, unobserved
+    return lam, V, d, unobserved
 
 
 def prior_pull(W0: np.ndarray, G: np.ndarray, x: np.ndarray, x0: np.ndarray

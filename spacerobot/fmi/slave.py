@@ -12,6 +12,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import operator
 import os
 import pickle
 from typing import Dict, List
@@ -26,6 +27,8 @@ from ..robots import RigidBody, scenario_from_dict
 from .pythonfmu_compat import binary_hooks, guard_entry_points
 
 CONFIG_FILE = "spacerobot_config.json"
+#: largest number of cached value-reference lists of get_real / set_real (InterfaceSlave._plan)
+_MAX_PLANS = 256
 
 
 def _escape(msg: str) -> str:
@@ -91,18 +94,31 @@ class InterfaceSlave(Fmi2Slave):
                          if isinstance(v, Real)}
         self._input_vr = {vr: n for vr, n in self._real_vr.items()
                           if self.interface[n].causality == "input"}
+        self._plans: Dict[tuple, object] = {}     # fast paths of get_real / set_real
 
     # -- fast paths: pythonfmu calls a getter/setter closure per variable; a master reads and
-    # writes every connector and output at every step, so the common cases are served from the
-    # dictionaries directly (same values, same checks for parameters and outputs) -------------
+    # writes the same connectors and outputs at every step, so for each list of value
+    # references seen, the names are looked up once and the values then moved between the
+    # dictionaries and the FMI call with C-level operations (same values, same checks) ---------
     def get_real(self, vrs):
         self._ensure_current()
+        plan = self._plans.get(("get", *vrs))
+        if plan is None:
+            plan = self._plan("get", vrs)
+        if plan:                                  # every one an output
+            get, names = plan
+            try:
+                vals = get(self._outputs)
+            except KeyError:                      # not (yet) among the outputs
+                vals = None
+            if vals is not None:
+                if None in vals:                  # outputs computed when read
+                    vals = [self._get_output(n) if x is None else x for n, x in zip(names, vals)]
+                return list(map(float, vals))
         names, outs, values = self._real_vr, self._outputs, self.values
         res = []
         for vr in vrs:
-            name = names.get(vr)
-            if name is None:                      # not a Real
-                self._check_refs("getReal", vrs, Real)
+            name = names[vr]
             x = outs.get(name)
             if x is None:                         # input/parameter, or computed when read
                 x = values[name] if name in values else self._get_output(name)
@@ -110,6 +126,12 @@ class InterfaceSlave(Fmi2Slave):
         return res
 
     def set_real(self, vrs, values):
+        plan = self._plans.get(("set", *vrs))
+        if plan is None:
+            plan = self._plan("set", vrs)
+        if plan:                                  # every one an input: stored as it comes
+            self.values.update(zip(plan, values))
+            return
         inputs, store = self._input_vr, self.values
         for vr, x in zip(vrs, values):
             name = inputs.get(vr)
@@ -118,6 +140,26 @@ class InterfaceSlave(Fmi2Slave):
                 super().set_real([vr], [x])
             else:
                 store[name] = x
+
+    def _plan(self, kind: str, vrs):
+        """The fast path of ``get_real`` / ``set_real`` for this list of value references
+        (cached): for ``get``, an ``operator.itemgetter`` of the names (a tuple of values
+        from ``_outputs``) and the names when every one is an output, for ``set`` the tuple of names when
+        every one is an input; ``()`` when the per-variable path must be taken. Refuses
+        (fmi2Error) unknown value references and variables of another type."""
+        self._check_refs("getReal" if kind == "get" else "setReal", vrs, Real)
+        names = tuple(self._real_vr[vr] for vr in vrs)
+        plan = ()
+        if kind == "get" and names and all(self.interface[n].causality == "output"
+                                           for n in names):
+            get = operator.itemgetter(*names)
+            plan = (get if len(names) > 1 else (lambda d, _get=get: (_get(d),)), names)
+        elif kind == "set" and names and all(vr in self._input_vr for vr in vrs):
+            plan = names
+        if len(self._plans) >= _MAX_PLANS:      # a host that keeps asking for new lists
+            self._plans.clear()
+        self._plans[(kind, *vrs)] = plan
+        return plan
 
     def _check_refs(self, call: str, vrs, cls) -> None:
         """Refuse (fmi2Error) unknown value references and variables of another type."""

@@ -1,0 +1,157 @@
+"""The compiled report (spacerobot.estimator.report_kernels: standard deviations with the
+prior's pull, physical test, identified flags) against the NumPy formulation of the test oracle
+tests/oracles/report.py, on identification runs and on random input.
+
+The eigen-decompositions are NumPy's in both; the matrix products sum in another order, so the two agree to round-off, amplified by the conditioning of the information
+matrices: during the first seconds of a run, when they are nearly singular (scaled eigenvalues
+down to 1e-12 of the largest, just above the cut of REL_EIG_MIN), a one-ulp difference in the
+mass pull moves the inertia pull by up to ~1e-5 relative, in either formulation. From the
+time the information is well conditioned on, they agree to ~1e-12.
+"""
+import numpy as np
+import pytest
+
+from oracles import report as orc
+from spacerobot import interface, scenario
+from spacerobot.estimator import Identifier, physical
+from spacerobot.estimator import report_kernels as rk
+from spacerobot.estimator.uncertainty import observed_solve
+from spacerobot.plant import Plant
+
+#: samples after which the run's information matrices are well conditioned (4 s at 0.1 s)
+WELL_CONDITIONED = 40
+
+
+@pytest.fixture(scope="module")
+def runs():
+    """Plant outputs every 0.1 s for 8 s, per robot."""
+    out = {}
+    for robot in ("planar", "spatial"):
+        sc = scenario(robot)
+        p = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h)
+        outs = [p.outputs()]
+        for _ in range(80):
+            p.advance(0.1)
+            outs.append(p.outputs())
+        out[robot] = (sc, outs)
+    return out
+
+
+def oracle_report(ident, sd):
+    """What Identifier.report() computes, from the oracle's projection and ``sd``."""
+    L, ls = ident.layout, ident.vector()
+    out, identified, physical_ = ls.copy(), {}, {}
+    project = orc.project_planar_body if ident.robot.planar else orc.project_body
+    for b, g in zip(L.bodies, (ident.guess.base, ident.guess.target)):
+        m, com, I6, projected = project(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
+        out[b.m], out[b.first], out[b.inertia] = m, com, I6
+        physical_[b.name] = not projected
+    tol = ident.sd_rel * L.error_scale(out)
+    ok = (sd <= tol) & (np.abs(out - ls) <= tol)
+    for b in L.bodies:
+        identified[b.name] = bool(ident.samples > 0 and ok[b.vec][L.identified[b.vec]].all())
+    return out, identified, physical_
+
+
+def joint_std(solver):
+    """The joint solver's standard deviations, with the oracle's prior pull."""
+    g, x, act = solver.gram, solver.rls.x, solver.layout.standard_active
+    d, u = orc.prior_pull(g.decay * solver._W0, g.S[:len(x), :len(x)], x, solver._pi0)
+    delta, unobs_z = np.zeros(20), np.zeros(20, bool)
+    delta[act], unobs_z[act] = d, u
+    z = solver.z()
+    J = solver.jacobian(z)
+    with np.errstate(all="ignore"):
+        pull = solver.vector_of(z) - solver.vector_of(z - delta)
+    if not np.all(np.isfinite(pull)):
+        pull = J @ delta
+    var = np.einsum("ij,jk,ik->i", J, solver.covariance(), J) + pull ** 2
+    sd = np.sqrt(np.clip(var, 0.0, None))
+    unobserved = (J[:, unobs_z] != 0.0).any(axis=1)
+    if unobserved.any():
+        floor = solver.layout.error_scale(solver.vector())
+        sd[unobserved] = np.maximum(sd[unobserved], floor[unobserved])
+    return sd
+
+
+@pytest.mark.parametrize("robot", ["planar", "spatial"])
+@pytest.mark.parametrize("solver,lam,lags", [("paper", 1.0, 0), ("paper", 0.995, 3),
+                                             ("joint", 1.0, 0)])
+def test_report_equals_the_numpy_oracle(runs, robot, solver, lam, lags):
+    sc, outs = runs[robot]
+    ident = Identifier(sc.robot, sc.guess, "momentum", solver, lam=lam, corr_lags=lags)
+    early = late = 0.0
+    for k, o in enumerate(outs):
+        ident.update(0.1 * k, o)
+        rep = ident.report()
+        sd = orc.paper_std(ident.solver) if solver == "paper" else joint_std(ident.solver)
+        rel = np.max(np.abs(rep.std - sd) / np.abs(sd))
+        if ident.samples >= WELL_CONDITIONED:
+            late = max(late, rel)
+        else:
+            early = max(early, rel)
+        out, identified, physical_ = oracle_report(ident, rep.std)
+        assert np.array_equal(rep.vector == ident.vector(), out == ident.vector())
+        scale = np.abs(out).reshape(2, -1).max(axis=1).repeat(10)
+        assert np.all(np.abs(rep.vector - out) <= 1e-13 * scale), k
+        assert rep.physical == physical_ and rep.identified == identified, k
+    assert late <= 1e-11, late
+    assert early <= 1e-4, early
+
+
+def test_paper_parts_equal_the_oracle(runs):
+    sc, outs = runs["spatial"]
+    ident = Identifier(sc.robot, sc.guess, "momentum")
+    for k, o in enumerate(outs[:WELL_CONDITIONED + 10]):
+        ident.update(0.1 * k, o)
+    s = ident.solver
+    z = s.z()
+    assert np.array_equal(s.jacobian(z), orc.paper_jacobian(s, z))
+    assert np.array_equal(s.vector_of(z), orc.paper_vector_of(s, z))
+    C, C0 = s.covariance(), orc.paper_covariance(s)
+    assert np.allclose(C, C0, rtol=1e-12, atol=1e-12 * np.abs(C0).max())
+    (d, u), (d0, u0) = s.prior_pull(), orc.paper_prior_pull(s)
+    assert np.array_equal(u, u0)
+    assert np.allclose(d, d0, rtol=1e-9, atol=1e-12 * np.abs(d0).max())
+
+
+def test_layout_constants_of_the_kernels():
+    L = interface.LAYOUT
+    for k, b in enumerate(L.bodies):
+        assert (rk.EST0[k], rk.MU0[k], rk.ZTH0[k]) == (b.m, b.mu_m, L.n_mu + b.theta.start)
+        assert b.first.start == b.m + 1 and b.inertia == slice(b.m + 4, b.m + 10)
+    assert (rk.N_MU, rk.N_THETA) == (L.n_mu, L.n_theta)
+    from spacerobot.estimator.parameters import SHARP_PAIRS
+    assert list(zip(rk.SHARP_I, rk.SHARP_J)) == list(SHARP_PAIRS)
+
+
+def test_observed_solve_equals_the_oracle_on_rank_deficient_information():
+    rng = np.random.default_rng(3)
+    for p in (3, 8, 12):
+        for _ in range(50):
+            H = rng.normal(size=(rng.integers(1, 2 * p), p)) * np.geomspace(1, 1e-2, p)
+            if rng.random() < 0.3:
+                H[:, rng.integers(p)] = 0.0                  # a parameter never seen
+            G, r = H.T @ H, rng.normal(size=p)
+            (x, u), (x0, u0) = observed_solve(G, r), orc.observed_solve(G, r)
+            assert np.array_equal(u, u0)
+            assert np.allclose(x, x0, rtol=0, atol=1e-10 * np.abs(x0).max())
+
+
+@pytest.mark.parametrize("planar", [False, True])
+def test_projection_equals_the_oracle(planar):
+    rng = np.random.default_rng(4)
+    ours = physical.project_planar_body if planar else physical.project_body
+    theirs = orc.project_planar_body if planar else orc.project_body
+    moved = 0
+    for _ in range(500):
+        m = rng.uniform(-10, 100)
+        b = rng.normal(size=3)
+        I6 = np.concatenate([rng.uniform(-5, 50, 3), rng.normal(size=3) * 5])
+        got, want = ours(m, b, I6, 50.0), theirs(m, b, I6, 50.0)
+        assert got[3] == want[3] and got[0] == want[0]
+        assert np.array_equal(got[1], want[1])
+        assert np.allclose(got[2], want[2], rtol=0, atol=1e-13 * np.abs(want[2]).max())
+        assert physical.is_physical(m, b, I6) == orc.is_physical(m, b, I6)
+        moved += got[3]
+    assert 50 < moved < 500                     # both kinds of body were met
