@@ -23,6 +23,7 @@ from . import kernels
 from .differencing import centre_derivative
 from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
+from .tracking import DriftTracker, total_sd
 
 #: measurement keys and their shapes (n = number of arm joints)
 KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
@@ -179,6 +180,7 @@ class Identifier:
         self.reference = None       # momentum method: terms at t0
         self.history = []           # differenced accelerations: the window (t, flat sample)
         self._exc = None            # cached excitation() (cleared by update / set_state)
+        self.tracking = DriftTracker.empty(lam)   # the estimates' lag (:mod:`.tracking`)
 
     # -- equations -----------------------------------------------------------------------------
     def _equations(self, flat: np.ndarray):
@@ -328,6 +330,7 @@ class Identifier:
             self.status = REFERENCE
             return self.status
         self._solve(*_split(E))
+        self.tracking = self.tracking.add(t, *self.solver.std_and_data_only()[::-1])
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING
@@ -396,12 +399,14 @@ class Identifier:
         ``sd^2`` = the data's scatter (solver covariance times the a-posteriori residual
         variance) + the square of the prior's pull (the distance from the estimate to the
         data-only least-squares answer), both through the delta-method Jacobian of the map from
-        the solver's parameters to :meth:`vector`. Without noise the pull is the estimate's
-        error itself (to first order). An estimate the data do not determine yet reports at
-        least its error scale (100 %). Parameters that are not identified (planar out-of-plane
-        ones) report the square root of their prior covariance.
+        the solver's parameters to :meth:`vector`, + the part of the estimates' lag behind
+        moving parameters that these do not explain (:func:`.tracking.total_sd`). Without
+        noise the pull is the estimate's error itself (to first order). An estimate the data
+        do not determine yet reports at least its error scale (100 %). Parameters that are not
+        identified (planar out-of-plane ones) report the square root of their prior
+        covariance.
         """
-        return self.solver.std()
+        return self.tracking.total_sd() if self.samples else self.solver.std()
 
     def report(self) -> Report:
         """The estimates as reported: physically consistent, with their standard deviations,
@@ -464,7 +469,7 @@ MAX_CORR_LAGS = 10_000
 
 #: attributes of the identifier an update rebinds (restored by reference)
 _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",
-            "reference")
+            "reference", "tracking")
 
 
 def _relative_norm(e: np.ndarray, rhs: np.ndarray) -> float:

@@ -122,25 +122,38 @@ class ParameterSolver(ABC):
         positive mass). ``unobserved``: estimates that
         depend on a direction the data have not observed (their ``sd`` bounds nothing).
         """
+        sd, unobserved, _ = self.uncertainty_and_data_only()
+        return sd, unobserved
+
+    def uncertainty_and_data_only(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`uncertainty` and the data-only answer ``v(z - delta)`` (20,) (the estimate
+        without the prior's pull; its first-order image where ``z - delta`` has no positive
+        mass)."""
         z = self.z()
         J = self.jacobian(z)
         delta, unobserved_z = self.prior_pull()
+        x = self.vector_of(z)
         with np.errstate(all="ignore"):
-            pull = self.vector_of(z) - self.vector_of(z - delta)   # the map's exact difference
+            pull = x - self.vector_of(z - delta)                   # the map's exact difference
         if not np.all(np.isfinite(pull)):                          # the data-only mass <= 0
             pull = J @ delta
         var = np.einsum("ij,jk,ik->i", J, self.covariance(), J) + pull ** 2
         unobserved = (J[:, unobserved_z] != 0.0).any(axis=1)
-        return np.sqrt(np.clip(var, 0.0, None)), unobserved
+        return np.sqrt(np.clip(var, 0.0, None)), unobserved, x - pull
 
     def std(self) -> np.ndarray:
         """Standard deviations (20,) of :meth:`vector` (:meth:`uncertainty`); an unobserved
         estimate reports at least its error scale (a relative standard deviation of 100 %)."""
-        sd, unobserved = self.uncertainty()
+        return self.std_and_data_only()[0]
+
+    def std_and_data_only(self) -> Tuple[np.ndarray, np.ndarray]:
+        """``(std (20,), data-only answer (20,))`` (:meth:`std`,
+        :meth:`uncertainty_and_data_only`)."""
+        sd, unobserved, x_ls = self.uncertainty_and_data_only()
         if unobserved.any():
             floor = self.layout.error_scale(self.vector())
             sd[unobserved] = np.maximum(sd[unobserved], floor[unobserved])
-        return sd
+        return sd, x_ls
 
     def prior(self) -> np.ndarray:
         """Diagonal (20,) of the initial covariance of a 20-vector in the layout's order."""

@@ -1,0 +1,139 @@
+"""The lag of a forgetting estimator behind parameters that move, as a term of the reported
+standard deviation.
+
+A least-squares estimator with forgetting factor ``lam`` weighs the sample of age ``j``
+(in samples) by ``w = lam^j``. Where a parameter moves at a steady rate ``r`` and the
+regressors carry no trend of their own, its estimate is the weighted mean of the parameter's
+past values, so it lags the current truth by
+
+    lag = r a_bar,        a_bar = sum_k w_k (t - t_k) / sum_k w_k      (the data's mean age)
+
+and itself moves at ``r_est = r (1 - d a_bar / dt)``: at ``r`` with forgetting in steady state
+(``a_bar`` constant, ``lam / (1 - lam)`` samples), at ``r / 2`` without (``a_bar = (t - t_0)
+/ 2``). The truth's rate is not known, the estimate's is observed, so
+
+    lag = r_est a_bar / (1 - d a_bar / dt).                                   (1)
+
+``r_est`` is the slope of an exponentially weighted least-squares line through the recent
+estimates (:class:`DriftTracker`), with a memory :data:`RATE_MEMORY` times the estimator's
+(``1 - lam_r = (1 - lam) / RATE_MEMORY``; without forgetting the memory grows with the data,
+``1 - lam_r = 1 / (RATE_MEMORY N)``, so that what happened before the estimates settled
+fades).
+
+An estimate moves for two other reasons: it converges (the prior's pull shrinks) and it
+scatters with the measurement noise. Both are already in the reported standard deviation
+``sd`` (:meth:`.ParameterSolver.std`), and both make (1) non-zero for a constant parameter. A
+movement of the estimate within what ``sd`` explains is no evidence of a moving truth, so only
+the part beyond it counts (:func:`total_sd`)::
+
+    sd_total^2 = sd^2 + max(0, lag^2 - NOISE_LAG^2 sd^2)
+
+For a constant parameter ``sd_total = sd`` as long as (1) stays below ``NOISE_LAG sd``; for a
+moving one whose lag dominates, ``sd_total`` is the lag. The measured consequences (how much
+later flags rise on constant parameters, the share of a depletion run within 2 and 3 sd) are in
+docs/identification.md, "Tracking".
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = ["DriftTracker", "RATE_MEMORY", "NOISE_LAG", "total_sd"]
+
+#: memory of the rate regression, in multiples of the estimator's memory
+RATE_MEMORY = 2.0
+#: a lag estimate up to this many reported standard deviations is taken as the estimate's own
+#: movement (convergence, noise), not as a moving truth
+NOISE_LAG = 1.0
+
+
+class DriftTracker(NamedTuple):
+    """Mean age of the estimator's data and the rate of its estimates, one sample at a time.
+
+    Immutable: :meth:`add` returns the updated tracker (a snapshot is a reference).
+
+    Attributes
+    ----------
+    lam : forgetting factor of the estimator
+    s0 : ``sum_k lam^(N-k)`` (the data's weight; ``N`` without forgetting)
+    s1 : ``sum_k lam^(N-k) (t_k - t_ref)``  [s]
+    t_ref : time of the first sample [s] (keeps ``s1`` small)
+    t : time of the latest sample [s]
+    a_bar : mean age of the data at ``t`` [s]
+    da_dt : ``d a_bar / dt`` over the latest step
+    w, mt, mx, ctt, ctx : the exponentially weighted line through ``(t_k, x_k)``: weight,
+        weighted means of t [s] and x (p,), centred sums ``sum w (t - mt)^2`` and
+        ``sum w (t - mt)(x - mx)`` (p,)
+    """
+
+    lam: float
+    s0: float = 0.0
+    s1: float = 0.0
+    t_ref: float = math.nan
+    t: float = math.nan
+    a_bar: float = 0.0
+    da_dt: float = 0.0
+    w: float = 0.0
+    mt: float = 0.0
+    mx: np.ndarray | float = 0.0
+    ctt: float = 0.0
+    ctx: np.ndarray | float = 0.0
+    sd: np.ndarray | float = 0.0
+
+    @classmethod
+    def empty(cls, lam: float) -> "DriftTracker":
+        """No sample yet, for an estimator with forgetting factor ``lam``."""
+        return cls(float(lam))
+
+    def add(self, t: float, x: np.ndarray, sd: np.ndarray) -> "DriftTracker":
+        """With the estimate ``x`` (p,) and its standard deviation ``sd`` (p,) (without the
+        lag) after the sample of time ``t`` [s]."""
+        lam = self.lam
+        t_ref = t if self.s0 == 0.0 else self.t_ref
+        s0 = lam * self.s0 + 1.0                      # sum w,  w = lam^(N-k)
+        s1 = lam * self.s1 + (t - t_ref)              # sum w (t_k - t_ref)
+        a_bar = (t - t_ref) - s1 / s0                 # sum w (t - t_k) / sum w
+        step = t - self.t
+        da_dt = (a_bar - self.a_bar) / step if self.s0 > 0.0 and step > 0.0 else 0.0
+        # rate regression: forgetting lam_r, memory RATE_MEMORY x the estimator's (s0 samples);
+        # each point weighs 1 / sd^2, so that answers the data did not determine yet (large sd)
+        # do not count as movement
+        lam_r = 1.0 - 1.0 / (RATE_MEMORY * s0)
+        v = 1.0 / np.maximum(sd * sd, 1e-300)
+        w_old = lam_r * self.w
+        w = w_old + v
+        d_t, d_x = t - self.mt, x - self.mx
+        f = v * w_old / w                             # weighted Welford update
+        return DriftTracker(lam, s0, s1, t_ref, t, a_bar, da_dt, w,
+                            self.mt + v * d_t / w, self.mx + v * d_x / w,
+                            lam_r * self.ctt + f * d_t * d_t, lam_r * self.ctx + f * d_t * d_x,
+                            sd)
+
+    def rate(self) -> np.ndarray | float:
+        """Slope of the estimates' weighted lines, ``r_est`` (p,) [unit / s] (0 before two
+        samples)."""
+        with np.errstate(all="ignore"):
+            r = self.ctx / self.ctt
+        return np.where(self.ctt > 0.0, r, 0.0)
+
+    def lag(self) -> np.ndarray | float:
+        """Expected lag of the estimates behind the truth (p,), eq. (1) of the module
+        docstring; 0 before two samples."""
+        # (1): lag = r_est a_bar / (1 - d a_bar / dt); d a_bar/dt < 1 always (0 steady, 1/2
+        # without forgetting), floored against an irregular step
+        return self.rate() * (self.a_bar / max(1.0 - self.da_dt, 0.1))
+
+    def total_sd(self) -> np.ndarray:
+        """The latest ``sd`` with the part of the lag it does not explain (module
+        docstring)."""
+        return total_sd(self.sd, self.lag())
+
+
+def total_sd(sd: np.ndarray, lag: np.ndarray | float) -> np.ndarray:
+    """``sqrt(sd^2 + max(0, lag^2 - NOISE_LAG^2 sd^2))`` (module docstring): the standard
+    deviation ``sd`` (p,) with the part of the lag (p,) it does not already explain."""
+    sd2 = np.square(sd)
+    excess = np.maximum(np.square(lag) - (NOISE_LAG * NOISE_LAG) * sd2, 0.0)
+    return np.sqrt(sd2 + excess)
