@@ -614,8 +614,8 @@ NO_EXCITATION = Excitation(att_max=0.0, q_max=0.0)
 class ParameterSet:
     """A named parameter set of the generated SSP: a target and whether the plant excites;
     optionally a propellant, a stop time, and the estimator settings the set is meant for
-    (``(name, value)`` pairs; the ``.ssv`` binds plant parameters only, so ``spacerobot run
-    --target <set>`` applies them as ``estimator.<name>`` overrides, before ``--set``)."""
+    (``(name, value)`` pairs, bound to the estimator component from the set's
+    ``resources/estimator/<set>.ssv``, :mod:`spacerobot.system.ssd`)."""
 
     target: str
     excited: bool

@@ -261,3 +261,39 @@ def test_depletion_parameter_set_is_a_tracking_set():
     # thrust for the whole run: the initial drift is not damped within the stop time
     P0 = np.linalg.norm(np.array(sc.v0)) * (sc.robot.base.mass + sc.propellant.m0)
     assert P0 / (math.sqrt(3.0) * sc.controller.F_max) > sc.stop_time
+
+
+# -- the depletion set in the SSP: plant and estimator settings ---------------------------------
+
+@pytest.fixture(scope="module")
+def spatial_system(tmp_path_factory, spatial_fmus):
+    from spacerobot.system import ssd
+    return ssd.build_system("spatial", tmp_path_factory.mktemp("sys17"), fmus=spatial_fmus)
+
+
+def test_depletion_set_binds_the_estimator_settings_in_the_ssp(spatial_system):
+    """The set's estimator settings (robots.DEPLETION_ESTIMATOR) come with the SSP: the .ssp
+    binds resources/estimator/<set>.ssv to the estimator component; a named set replaces it
+    with its own, another set brings back the FMU's defaults. fmpy's reader validates the
+    package against the SSP 1.0 schemas and sees both bindings."""
+    import fmpy.ssp.ssd
+    from spacerobot import run_ssp
+    from spacerobot.robots import DEPLETION_ESTIMATOR
+
+    desc = fmpy.ssp.ssd.read_ssd(str(spatial_system["ssp"]), validate=True)
+    est = next(e for e in desc.system.elements if e.name == "estimator")
+    assert [b.source for b in est.parameterBindings] == ["resources/estimator/default.ssv"]
+    want = dict(DEPLETION_ESTIMATOR)
+    assert want == {"ident.excite_mode": 2, "lambda": 0.98}
+    dep = run_ssp(spatial_system["ssp"], parameter_set="depletion", stop_time=0.3,
+                  progress=False)
+    assert dep.data["estimator.lambda"][0] == 0.98
+    assert dep.data["estimator.ident.excite_mode"][0] == 2
+    assert dep.data["plant.prop.m"][0] == 80.0
+    bound = run_ssp(spatial_system["ssp"], stop_time=0.3, progress=False)
+    assert bound.data["estimator.lambda"][0] == 1.0
+    assert bound.data["estimator.ident.excite_mode"][0] == 1
+    # an explicit override still wins over the set
+    over = run_ssp(spatial_system["ssp"], parameter_set="depletion", stop_time=0.3,
+                   progress=False, overrides={"estimator.lambda": 0.99})
+    assert over.data["estimator.lambda"][0] == 0.99
