@@ -118,22 +118,37 @@ class DriftTracker(NamedTuple):
             r = self.ctx / self.ctt
         return np.where(self.ctt > 0.0, r, 0.0)
 
+    def lag_factor(self) -> float:
+        """``a_bar / (1 - d a_bar / dt)`` [s], the factor of eq. (1); ``d a_bar/dt < 1`` always
+        (0 steady, 1/2 without forgetting), floored against an irregular step."""
+        return self.a_bar / max(1.0 - self.da_dt, 0.1)
+
     def lag(self) -> np.ndarray | float:
         """Expected lag of the estimates behind the truth (p,), eq. (1) of the module
         docstring; 0 before two samples."""
-        # (1): lag = r_est a_bar / (1 - d a_bar / dt); d a_bar/dt < 1 always (0 steady, 1/2
-        # without forgetting), floored against an irregular step
-        return self.rate() * (self.a_bar / max(1.0 - self.da_dt, 0.1))
+        return self.rate() * self.lag_factor()
+
+    def noise_gain(self) -> np.ndarray | float:
+        """``max(1, lag_factor / T_r)`` (p,): how many of the estimate's standard deviations
+        of movement eq. (1) turns into lag, ``T_r = sqrt(ctt / w)`` the time spread of the
+        rate regression (an estimate that scatters by ``sd`` has a slope that scatters by
+        about ``sd / T_r``). About 1 with forgetting in steady state, about 3.5 without."""
+        with np.errstate(all="ignore"):
+            spread = np.sqrt(self.ctt / self.w)
+            gain = self.lag_factor() / spread
+        return np.where(spread > 0.0, np.maximum(gain, 1.0), 1.0)
 
     def total_sd(self) -> np.ndarray:
         """The latest ``sd`` with the part of the lag it does not explain (module
         docstring)."""
-        return total_sd(self.sd, self.lag())
+        return total_sd(self.sd, self.lag(), self.noise_gain())
 
 
-def total_sd(sd: np.ndarray, lag: np.ndarray | float) -> np.ndarray:
-    """``sqrt(sd^2 + max(0, lag^2 - NOISE_LAG^2 sd^2))`` (module docstring): the standard
-    deviation ``sd`` (p,) with the part of the lag (p,) it does not already explain."""
+def total_sd(sd: np.ndarray, lag: np.ndarray | float, gain: np.ndarray | float = 1.0
+             ) -> np.ndarray:
+    """``sqrt(sd^2 + max(0, lag^2 - (NOISE_LAG gain sd)^2))`` (module docstring): the standard
+    deviation ``sd`` (p,) with the part of the lag (p,) that the estimate's own movement
+    (``gain`` sd, :meth:`DriftTracker.noise_gain`) does not explain."""
     sd2 = np.square(sd)
-    excess = np.maximum(np.square(lag) - (NOISE_LAG * NOISE_LAG) * sd2, 0.0)
+    excess = np.maximum(np.square(lag) - np.square(NOISE_LAG * gain) * sd2, 0.0)
     return np.sqrt(sd2 + excess)
