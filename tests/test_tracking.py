@@ -69,30 +69,30 @@ def test_total_sd_adds_only_the_lag_the_sd_does_not_explain():
 
 @pytest.mark.parametrize("lam", [0.98, 1.0])
 def test_constant_parameter_through_noise_gets_little_lag(lam):
-    """A constant parameter, estimated by a weighted mean of white noise: the tracker sees the
-    estimate and its (correct) standard deviation; the lag term leaves the total within a few
-    per cent of the statistical sd on average, and the estimate within 3 total sd about as
-    often as within 3 sd."""
+    """A constant parameter, estimated by a weighted mean of white noise (20 runs): the tracker
+    sees the estimate and its (correct) standard deviation; the lag term leaves the total close
+    to the statistical sd on average, and the estimate within 3 total sd at least as often as
+    the statistical sd promises."""
     rng = np.random.default_rng(7)
-    n, sigma = 3000, 0.5
+    n, sigma = 1000, 0.5
     t = DT * np.arange(n)
-    y = 10.0 + sigma * rng.standard_normal(n)
-    est = weighted_means(lam, y)
-    tr = DriftTracker.empty(lam)
     ratio, inside = [], []
-    for k in range(n):
-        j = np.arange(k, -1, -1, dtype=float)
-        w = lam ** j
-        sd = sigma * np.sqrt((w * w).sum()) / w.sum()      # sd of the weighted mean
-        tr = tr.add(t[k], np.array([est[k]]), np.array([sd]))
-        if k >= 200:
-            tot = float(tr.total_sd()[0])
-            ratio.append(tot / sd)
-            inside.append(abs(est[k] - 10.0) <= 3.0 * tot)
-    # measured: 1.34 without forgetting (the lag is the rate times the whole span there, so
+    for run in range(20):
+        y = 10.0 + sigma * rng.standard_normal(n)
+        tr = DriftTracker.empty(lam)
+        s0 = s1 = s2 = 0.0
+        for k in range(n):
+            s0, s1, s2 = lam * s0 + 1.0, lam * s1 + y[k], lam * lam * s2 + 1.0
+            est, sd = s1 / s0, sigma * np.sqrt(s2) / s0      # weighted mean and its sd
+            tr = tr.add(t[k], np.array([est]), np.array([sd]))
+            if k >= 200:
+                tot = float(tr.total_sd()[0])
+                ratio.append(tot / sd)
+                inside.append(abs(est - 10.0) <= 3.0 * tot)
+    # measured: 1.3 without forgetting (the lag is the rate times the whole span there, so
     # the estimate's own scatter weighs more), about 1.0 with lam = 0.98
-    assert np.mean(ratio) < (1.5 if lam == 1.0 else 1.15)
-    assert np.mean(inside) > 0.98
+    assert np.mean(ratio) < (1.5 if lam == 1.0 else 1.15), np.mean(ratio)
+    assert np.mean(inside) > 0.98            # 3 sd: 0.997 in expectation; paths are correlated
 
 
 # -- on the depletion set ---------------------------------------------------------------------
