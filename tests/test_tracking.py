@@ -57,6 +57,46 @@ def test_lag_of_a_ramp_equals_the_weighted_means_lag(lam):
         np.testing.assert_allclose(lags[late], rate * t[late] / 2, rtol=2e-3)
 
 
+@pytest.mark.parametrize("lam", [0.98, 1.0])
+def test_lag_of_a_weighted_least_squares_fit_with_varying_regressors(lam):
+    """Two parameters drifting at different rates, seen through rows whose size and mixing
+    vary in time (as an excitation's): the least-squares answer's lag is not the scalar
+    ``r a_bar`` per parameter (the rows weigh the past unevenly and mix the parameters); the
+    tracker's information-weighted lag (eq. 2) equals the true lag, computed here from the
+    direct weighted least-squares fit."""
+    rng = np.random.default_rng(3)
+    n = 2000
+    t = DT * np.arange(n)
+    rate = np.array([-0.02, 0.005])
+    z_true = np.array([580.0, 30.0]) + np.outer(t, rate)
+    H = np.stack([np.column_stack([1.0 + 0.8 * np.sin(0.7 * t) + 0.1 * rng.standard_normal(n),
+                                   0.5 * np.cos(0.3 * t)]),
+                  np.column_stack([0.3 * np.sin(1.1 * t), 1.0 + 0.6 * np.cos(0.5 * t)])],
+                 axis=1)                               # (n, 2 rows, 2 parameters)
+    y = np.einsum("nij,nj->ni", H, z_true)
+    G = np.zeros((2, 2))
+    b = np.zeros(2)
+    tr = DriftTracker.empty(lam)
+    lags, true = [], []
+    for k in range(n):
+        before = G.copy()
+        G = lam * G + H[k].T @ H[k]
+        b = lam * b + H[k].T @ y[k]
+        z_ls = np.linalg.solve(G, b) if k else z_true[0]
+        tr = tr.add(t[k], z_ls, np.full(2, 1e-9), ((np.arange(2), before),),
+                    ((np.arange(2), G),), np.eye(2))
+        lags.append(tr.lag())
+        true.append(z_true[k] - z_ls)
+    late = slice(2 * n // 3, None)
+    lags, true = np.array(lags)[late], np.array(true)[late]
+    size = np.abs(true).max(axis=0)                  # per parameter
+    scalar = rate * tr.lag_factor()                  # eq. (1)
+    err_scalar = (np.abs(scalar - true) / size).max(axis=0)
+    err = (np.abs(lags - true) / size).max(axis=0)
+    assert err_scalar.max() > 0.3                    # the scalar lag is far off here
+    assert err.max() < 0.1
+
+
 def test_total_sd_adds_only_the_lag_the_sd_does_not_explain():
     sd = np.array([1.0, 1.0, 1.0])
     lag = np.array([0.5, 1.0, 3.0])

@@ -329,8 +329,11 @@ class Identifier:
         if E is None:
             self.status = REFERENCE
             return self.status
+        info = self.solver.information()
         self._solve(*_split(E))
-        self.tracking = self.tracking.add(t, *self.solver.std_and_data_only()[::-1])
+        sd, x_ls = self.solver.std_and_data_only()
+        self.tracking = self.tracking.add(t, x_ls, sd, info, self.solver.information(),
+                                          self.solver.jacobian(self.solver.z()))
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING

@@ -101,6 +101,12 @@ class ParameterSolver(ABC):
         """``d vector_of / d z`` (20, 20), written out (the delta method's Jacobian)."""
 
     @abstractmethod
+    def information(self) -> Tuple[Tuple[np.ndarray, np.ndarray], ...]:
+        """``((z indices (p,), information (p, p)), ...)``: the weighted Gram matrices
+        ``sum_k lam^(N-k) H_k^T H_k`` of the identified parameters of :meth:`z`, one block per
+        independent least-squares problem (:mod:`.tracking`)."""
+
+    @abstractmethod
     def snapshot(self) -> tuple:
         """The state an update changes, for :meth:`restore` (cheap: references)."""
 
@@ -314,6 +320,12 @@ class PaperSolver(ParameterSolver):
         delta[L.n_mu + L.theta_active], unobserved[L.n_mu + L.theta_active] = d_th, u_th
         return delta, unobserved
 
+    def information(self):
+        L = self.layout
+        p, r = len(L.mu_active), len(L.theta_active)
+        return ((L.mu_active, self.gram_lin.S[:p, :p]),
+                (L.n_mu + L.theta_active, self.gram_ang.S[:r, :r]))
+
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
                 self.corr_lin, self.corr_ang)
@@ -418,6 +430,10 @@ class JointSolver(ParameterSolver):
         delta, unobserved = np.zeros(len(self.pi)), np.zeros(len(self.pi), bool)
         delta[act], unobserved[act] = d, u
         return delta, unobserved
+
+    def information(self):
+        act = self.layout.standard_active
+        return ((act, self.gram.S[:len(act), :len(act)]),)
 
     def snapshot(self) -> tuple:
         return self.rls.snapshot(), self.pi, self.gram, self.corr

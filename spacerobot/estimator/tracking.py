@@ -81,15 +81,21 @@ class DriftTracker(NamedTuple):
     ctt: float = 0.0
     ctx: np.ndarray | float = 0.0
     sd: np.ndarray | float = 0.0
+    ages: tuple = ()
+    mat_lag: np.ndarray | None = None
 
     @classmethod
     def empty(cls, lam: float) -> "DriftTracker":
         """No sample yet, for an estimator with forgetting factor ``lam``."""
         return cls(float(lam))
 
-    def add(self, t: float, x: np.ndarray, sd: np.ndarray) -> "DriftTracker":
+    def add(self, t: float, x: np.ndarray, sd: np.ndarray, info_before=(), info_after=(),
+            jac: np.ndarray | None = None) -> "DriftTracker":
         """With the estimate ``x`` (p,) and its standard deviation ``sd`` (p,) (without the
-        lag) after the sample of time ``t`` [s]."""
+        lag) after the sample of time ``t`` [s]; optionally the solver's information blocks
+        before and after the sample (:meth:`.ParameterSolver.information`) and the Jacobian
+        ``d x / d z`` (p, p) of the estimates in the solver's parameters ``z``, for the lag
+        through the information-weighted mean age (module docstring, eq. 2)."""
         lam = self.lam
         t_ref = t if self.s0 == 0.0 else self.t_ref
         s0 = lam * self.s0 + 1.0                      # sum w,  w = lam^(N-k)
@@ -106,10 +112,19 @@ class DriftTracker(NamedTuple):
         w = w_old + v
         d_t, d_x = t - self.mt, x - self.mx
         f = v * w_old / w                             # weighted Welford update
+        ctt, ctx = lam_r * self.ctt + f * d_t * d_t, lam_r * self.ctx + f * d_t * d_x
+        # eq. (2): M_age = sum w (t - t_k) H^T H, one block per least-squares problem;
+        # after a step dt every old row is dt older: M_age <- lam (M_age + dt G_before)
+        dt = step if self.s0 > 0.0 and step > 0.0 else 0.0
+        ages = tuple(lam * (M + dt * G) for M, (_, G) in
+                     zip(self.ages or [np.zeros_like(G) for _, G in info_before], info_before))
+        mat_lag = None
+        if jac is not None and ages and ctt.shape == np.shape(x) and np.all(ctt > 0.0):
+            growth = da_dt / a_bar if a_bar > 0.0 else 0.0
+            mat_lag = _matrix_lag(ctx / ctt, growth, ages, info_after, jac)
         return DriftTracker(lam, s0, s1, t_ref, t, a_bar, da_dt, w,
-                            self.mt + v * d_t / w, self.mx + v * d_x / w,
-                            lam_r * self.ctt + f * d_t * d_t, lam_r * self.ctx + f * d_t * d_x,
-                            sd)
+                            self.mt + v * d_t / w, self.mx + v * d_x / w, ctt, ctx, sd, ages,
+                            mat_lag)
 
     def rate(self) -> np.ndarray | float:
         """Slope of the estimates' weighted lines, ``r_est`` (p,) [unit / s] (0 before two
@@ -124,8 +139,11 @@ class DriftTracker(NamedTuple):
         return self.a_bar / max(1.0 - self.da_dt, 0.1)
 
     def lag(self) -> np.ndarray | float:
-        """Expected lag of the estimates behind the truth (p,), eq. (1) of the module
-        docstring; 0 before two samples."""
+        """Expected lag of the estimates behind the truth (p,): eq. (2) of the module
+        docstring where the information is known and regular, else eq. (1); 0 before two
+        samples."""
+        if self.mat_lag is not None:
+            return self.mat_lag
         return self.rate() * self.lag_factor()
 
     def noise_gain(self) -> np.ndarray | float:
@@ -152,3 +170,22 @@ def total_sd(sd: np.ndarray, lag: np.ndarray | float, gain: np.ndarray | float =
     sd2 = np.square(sd)
     excess = np.maximum(np.square(lag) - np.square(NOISE_LAG * gain) * sd2, 0.0)
     return np.sqrt(sd2 + excess)
+
+
+def _matrix_lag(rate_x: np.ndarray, growth: float, ages, info, jac: np.ndarray
+                ) -> np.ndarray | None:
+    """Eq. (2): ``lag_x = J A r_z`` per block, ``A = G^-1 M_age``, the truth's rate ``r_z``
+    from the estimate's, ``dz/dt = (1 - dA/dt) r_z`` with ``dA/dt = A (d a_bar/dt) / a_bar``
+    (``growth``; 0 with forgetting in steady state, ``A / t`` without); None where a block is
+    singular (then eq. 1)."""
+    try:
+        rate_z = np.linalg.solve(jac, rate_x)
+        lag_z = np.zeros_like(rate_z)
+        for M, (idx, G) in zip(ages, info):
+            A = np.linalg.solve(G, M)
+            r = np.linalg.solve(np.eye(len(idx)) - growth * A, rate_z[idx])
+            lag_z[idx] = A @ r
+    except np.linalg.LinAlgError:
+        return None
+    lag = jac @ lag_z
+    return lag if np.all(np.isfinite(lag)) else None
