@@ -440,7 +440,11 @@ def noise_model_vars() -> List[Var]:
               "Force method: each sample's equations differenced against the newest sample "
               "at least this much older (a high-pass: removes constant errors such as an "
               "accelerometer bias). 0 = the paper's (each sample alone)", 0.0,
-              ("window", "force"))]
+              ("window", "force")),
+          Var("ident.accel_bias", "parameter", "fixed", "Integer", None,
+              "Force method, measured accelerations: 1 = subtract the accelerometer bias "
+              "estimated online from the navigation velocity (the slope of v - integral a), "
+              "0 = the accelerations as measured", 0, ("accel_bias",))]
     return v
 
 

@@ -20,6 +20,7 @@ from ..interface import (AccelSource, ExciteMode, Method, ParameterLayout, Solve
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import kernels
+from .accel_bias import BiasFit
 from .differencing import centre_derivative
 from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
@@ -120,6 +121,10 @@ class Identifier:
         equation errors, an accelerometer bias). 0 = the paper's equations (momentum: against
         the first sample; force: each sample alone). Any difference of two samples' valid
         equations is a valid equation: noise-free estimates stay exact.
+    accel_bias : bool
+        Force method with measured accelerations: subtract the accelerometer's bias,
+        estimated online from the navigation velocity (:mod:`.accel_bias`). False = the
+        accelerations as measured.
     moving_point : bool
         Momentum method: the angular rows about the base's position ``r_S`` at the newer
         sample of each difference (the same point for both samples: the rows minus
@@ -143,7 +148,7 @@ class Identifier:
                  solver: Solver | str = "paper", accel_source: AccelSource | str = "measured",
                  lam: float = 1.0, sd_rel: float = SD_REL, row_sd=(0.0, 0.0),
                  diff_half_window: int = 1, corr_lags: int = 0, window: float = 0.0,
-                 moving_point: bool = False):
+                 moving_point: bool = False, accel_bias: bool = False):
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
@@ -174,6 +179,8 @@ class Identifier:
         self.row_sd, self.diff_half_window = row_sd, int(diff_half_window)
         self.window = float(window)
         self.moving_point = bool(moving_point) and method is Method.MOMENTUM
+        self.accel_bias = bool(accel_bias) and method is Method.FORCE and (
+            accel_source is AccelSource.MEASURED)
         # row weights 1 / sd (1: unweighted, the rows untouched)
         self._w_lin, self._w_ang = (1.0 / x if x > 0.0 else 1.0 for x in row_sd)
         self.n = robot.n_joints
@@ -197,6 +204,7 @@ class Identifier:
         self.residual_ang = 0.0
         self.reference = None       # momentum method: terms at t0
         self.ring = ()              # window > 0: the (t, E) of the last `window` seconds
+        self.bias_fit = BiasFit()   # accel_bias: the accelerometer bias's running fit
         self.history = []           # differenced accelerations: the window (t, flat sample)
         self._exc = None            # cached excitation() (cleared by update / set_state)
 
@@ -377,6 +385,11 @@ class Identifier:
     def _sample_equations(self, t: float, flat: np.ndarray):
         """The equation array of a validated sample (differenced accelerations: of the
         window's centre), or None while a reference or window is being stored."""
+        if self.accel_bias:                          # a_S - the bias estimated so far
+            k = kernels
+            self.bias_fit = self.bias_fit.add(t, flat[k.V_S:k.V_S + 3], flat[k.A_S:k.A_S + 3])
+            flat = flat.copy()
+            flat[k.A_S:k.A_S + 3] -= self.bias_fit.bias()
         if self.method is Method.FORCE and self.accel_source is AccelSource.DIFFERENCED:
             centre = self._differenced(t, flat)
             if centre is None:
@@ -531,7 +544,7 @@ MAX_WINDOW = 1e6
 
 #: attributes of the identifier an update rebinds (restored by reference)
 _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",
-            "reference", "ring")
+            "reference", "ring", "bias_fit")
 
 
 def about_point(dE: np.ndarray, p: np.ndarray) -> None:
@@ -643,5 +656,6 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float]
                        diff_half_window=int(v["ident.diff_half_window"]),
                        corr_lags=int(v["ident.corr_lags"]),
                        window=float(v[f"ident.{codes[0].name.lower()}_window"]),
-                       moving_point=_flag(v["ident.momentum_point"], "ident.momentum_point"))
+                       moving_point=_flag(v["ident.momentum_point"], "ident.momentum_point"),
+                       accel_bias=_flag(v["ident.accel_bias"], "ident.accel_bias"))
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))
