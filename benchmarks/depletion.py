@@ -20,6 +20,10 @@ The same samples feed one estimator core (:class:`spacerobot.estimator.Identifie
 method, forgetting factor and noise model. Noisy runs use the estimator's noise model
 (docs/identification.md, "Under noise"): the force method's row standard deviations of the
 noise benchmark (:data:`ROW_SD_FORCE`) and ``ident.corr_lags`` = :data:`NOISY_LAGS`.
+The momentum method runs as the paper's (differences against the first sample, which assume a
+constant base) and with a reference window of :data:`WINDOW` s about the base
+(``ident.momentum_window``, ``ident.momentum_point`` = 1), whose equations hold with the
+current base up to its change over the window.
 
 Error of a parameter at time t: ``|estimate(t) - truth(t)| / scale`` with the project's error
 scale (:func:`spacerobot.interface.error_scale`: mass relative to the mass, CoM relative to
@@ -67,8 +71,14 @@ FREE_LAGS = (0, 50)
 #: force method, measured accelerations: row standard deviations [N, N.m] of the equation
 #: errors under the realistic sensors (benchmarks/NOISE.md's pilot run)
 ROW_SD_FORCE = (4.19, 3.11)
+#: momentum method (windowed): unit row weights; under the paper solver's weak prior the weights
+#: hardly move the estimates (docs/identification.md, "Under noise")
+ROW_SD_MOMENTUM = (0.0, 0.0)
 #: correlation lags of the noisy runs
 NOISY_LAGS = 200
+#: momentum method: reference window [s] (``ident.momentum_window``; angular rows about the
+#: base, ``ident.momentum_point`` = 1), so that its equations hold with the current base
+WINDOW = 5.0
 #: start of the evaluation window of runs whose base is never identified [s]
 T_WARM = 30.0
 #: sensors seed of the noisy run
@@ -130,10 +140,10 @@ def truth_vector(sc, base_now) -> np.ndarray:
 
 
 def track(sc, samples, times, truth, method: str, lam: float, lags: int = 0,
-          row_sd=(0.0, 0.0)):
+          window: float = 0.0, row_sd=(0.0, 0.0)):
     """Estimates, reported standard deviations (N, 20) and the base's identified flag (N,)."""
     ident = Identifier(sc.robot, sc.guess, method=method, lam=lam, corr_lags=lags,
-                       row_sd=row_sd)
+                       row_sd=row_sd, window=window, moving_point=window > 0.0)
     est, sd, ok = [], [], []
     for t, o in zip(times.tolist(), samples):
         ident.update(t, o)
@@ -213,12 +223,12 @@ def plot(path: Path, times, truth, runs: dict, keys, title: str) -> None:
 def _table(table: dict, window: str) -> list:
     pct = lambda x: f"{100 * x:.3f}"  # noqa: E731
     share = lambda x: f"{100 * x:.0f} %"  # noqa: E731
-    lines = [f"| method | lambda | lags | t_id [s] | mass [%] | CoM [%] | inertia [%] | "
+    lines = [f"| method | window [s] | lambda | lags | t_id [s] | mass [%] | CoM [%] | inertia [%] | "
              f"mass at the end [%] | identified | flag up though > 0.1 % | all within 2 sd | "
              f"all within 3 sd | per parameter within 2 sd |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for (method, lam, lags), s in table.items():
-        lines.append(f"| {method} | {lam:g} | {lags} | "
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for (method, lam, lags, window), s in table.items():
+        lines.append(f"| {method} | {window:g} | {lam:g} | {lags} | "
                      f"{'-' if math.isnan(s['t_id']) else format(s['t_id'], '.1f')} | "
                      f"{pct(s['mass'])} | {pct(s['CoM'])} | {pct(s['inertia'])} | "
                      f"{pct(s['final_mass'])} | {share(s['identified'])} | "
@@ -270,8 +280,8 @@ def report(sc, free, noisy, chosen, wall) -> str:
             f"`realistic` set, `sensors.seed` = {SEED}), replayed through the estimator core "
             f"with its noise model: force method, measured accelerations, row standard "
             f"deviations {ROW_SD_FORCE[0]:g} N / {ROW_SD_FORCE[1]:g} N.m (the noise "
-            f"benchmark's pilot run), `ident.corr_lags` = {NOISY_LAGS}. The momentum method is "
-            "not run: its equations refer to the first sample and assume a constant base.",
+            f"benchmark's pilot run), `ident.corr_lags` = {NOISY_LAGS}; the momentum method "
+            f"with a {WINDOW:g} s reference window about the base, unit row weights.",
             "",
         ]
         lines += _table(noisy["table"], "30 s")
@@ -296,11 +306,12 @@ def report(sc, free, noisy, chosen, wall) -> str:
     return "\n".join(lines)
 
 
-def sweep(sc, times, samples, truth, combos, row_sd=(0.0, 0.0)):
+def sweep(sc, times, samples, truth, combos, row_sds=None):
     runs, table = {}, {}
     for key in combos:
-        method, lam, lags = key
-        est, sd, ok = track(sc, samples, times, truth, method, lam, lags, row_sd)
+        method, lam, lags, window = key
+        row_sd = (row_sds or {}).get(method, (0.0, 0.0))
+        est, sd, ok = track(sc, samples, times, truth, method, lam, lags, window, row_sd)
         runs[key] = (est, sd)
         table[key] = summary(times, est, sd, truth, ok)
         print(key, {k: round(v, 5) for k, v in table[key].items()}, flush=True)
@@ -319,26 +330,28 @@ def main(argv=None) -> None:
     t0 = time.time()
     sc0 = parameter_set_scenario("spatial", "depletion")
     stop = args.stop_time or sc0.stop_time
-    chosen = ("force", float(dict(DEPLETION_ESTIMATOR)["lambda"]), 0)
+    chosen = ("force", float(dict(DEPLETION_ESTIMATOR)["lambda"]), 0, 0.0)
     sc, times, samples, truth, m_p = simulate(stop)
-    combos = [(m, lam, lags) for m in METHODS for lags in FREE_LAGS for lam in LAMBDAS
-              if m == "force" or lags == 0]
+    combos = [("force", lam, lags, 0.0) for lags in FREE_LAGS for lam in LAMBDAS]
+    combos += [("momentum", lam, 0, w) for w in (0.0, WINDOW) for lam in LAMBDAS]
     runs, table = sweep(sc, times, samples, truth, combos)
     free = {"times": times, "m_p": m_p, "truth": truth, "table": table}
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_csv(out / "DEPLETION.csv", times, runs[chosen][0], truth, m_p)
-    plot(out / "DEPLETION.png", times, truth, runs, [chosen, ("force", 1.0, 0)],
+    plot(out / "DEPLETION.png", times, truth, runs, [chosen, ("force", 1.0, 0, 0.0)],
          "Spatial parameter set 'depletion': base estimate against the current truth "
          "(noise-free)")
     noisy = None
     if not args.no_noisy:
         scn, tn, sn, trn, mpn = simulate_noisy(stop, Path(args.build_dir))
-        combos = [("force", lam, NOISY_LAGS) for lam in NOISY_LAMBDAS]
-        nruns, ntable = sweep(scn, tn, sn, trn, combos, ROW_SD_FORCE)
+        combos = [("force", lam, NOISY_LAGS, 0.0) for lam in NOISY_LAMBDAS]
+        combos += [("momentum", lam, NOISY_LAGS, WINDOW) for lam in NOISY_LAMBDAS]
+        nruns, ntable = sweep(scn, tn, sn, trn, combos,
+                              {"force": ROW_SD_FORCE, "momentum": ROW_SD_MOMENTUM})
         noisy = {"table": ntable}
         plot(out / "DEPLETION_NOISY.png", tn, trn, nruns,
-             [("force", chosen[1], NOISY_LAGS), ("force", 1.0, NOISY_LAGS)],
+             [("force", chosen[1], NOISY_LAGS, 0.0), ("force", 1.0, NOISY_LAGS, 0.0)],
              "Spatial parameter set 'depletion': base estimate against the current truth "
              "(realistic sensors)")
     (out / "DEPLETION.md").write_text(report(sc, free, noisy, chosen, time.time() - t0))
