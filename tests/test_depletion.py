@@ -284,15 +284,17 @@ def test_depletion_set_binds_the_estimator_settings_in_the_ssp(spatial_system):
     est = next(e for e in desc.system.elements if e.name == "estimator")
     assert [b.source for b in est.parameterBindings] == ["resources/estimator/default.ssv"]
     want = dict(DEPLETION_ESTIMATOR)
-    assert want == {"ident.excite_mode": 2, "lambda": 0.98}
+    assert want == {"ident.excite_mode": 2, "lambda": 0.98, "ident.corr_lags": 50}
     dep = run_ssp(spatial_system["ssp"], parameter_set="depletion", stop_time=0.3,
                   progress=False)
     assert dep.data["estimator.lambda"][0] == 0.98
     assert dep.data["estimator.ident.excite_mode"][0] == 2
+    assert dep.data["estimator.ident.corr_lags"][0] == 50
     assert dep.data["plant.prop.m"][0] == 80.0
     bound = run_ssp(spatial_system["ssp"], stop_time=0.3, progress=False)
     assert bound.data["estimator.lambda"][0] == 1.0
     assert bound.data["estimator.ident.excite_mode"][0] == 1
+    assert bound.data["estimator.ident.corr_lags"][0] == 0
     # an explicit override still wins over the set
     over = run_ssp(spatial_system["ssp"], parameter_set="depletion", stop_time=0.3,
                    progress=False, overrides={"estimator.lambda": 0.99})
