@@ -1,37 +1,43 @@
 """The lag of a forgetting estimator behind parameters that move, as a term of the reported
-standard deviation.
+standard deviation (docs/identification.md, section 7).
 
 A least-squares estimator with forgetting factor ``lam`` weighs the sample of age ``j``
-(in samples) by ``w = lam^j``. Where a parameter moves at a steady rate ``r`` and the
-regressors carry no trend of their own, its estimate is the weighted mean of the parameter's
-past values, so it lags the current truth by
-
-    lag = r a_bar,        a_bar = sum_k w_k (t - t_k) / sum_k w_k      (the data's mean age)
-
-and itself moves at ``r_est = r (1 - d a_bar / dt)``: at ``r`` with forgetting in steady state
-(``a_bar`` constant, ``lam / (1 - lam)`` samples), at ``r / 2`` without (``a_bar = (t - t_0)
-/ 2``). The truth's rate is not known, the estimate's is observed, so
+(in samples) by ``w = lam^j``. Where a parameter moves at a steady rate ``r`` and the rows keep
+a steady size, its estimate is the weighted mean of the parameter's past values, so it lags the
+current truth by ``r a_bar``, ``a_bar = sum_k w_k (t - t_k) / sum_k w_k`` (the data's mean
+age), and itself moves at ``r (1 - d a_bar / dt)``: at ``r`` with forgetting in steady state
+(``a_bar = lam / (1 - lam)`` samples), at ``r / 2`` without (``a_bar = (t - t_0) / 2``). The
+truth's rate is not known, the estimate's ``r_est`` is observed, so
 
     lag = r_est a_bar / (1 - d a_bar / dt).                                   (1)
 
-``r_est`` is the slope of an exponentially weighted least-squares line through the recent
-estimates (:class:`DriftTracker`), with a memory :data:`RATE_MEMORY` times the estimator's
-(``1 - lam_r = (1 - lam) / RATE_MEMORY``; without forgetting the memory grows with the data,
-``1 - lam_r = 1 / (RATE_MEMORY N)``, so that what happened before the estimates settled
-fades).
+Rows that vary in size and mix the parameters (an excitation) weigh the past unevenly. For
+the linear model ``H_k z = y_k`` with ``z`` moving at ``r_z`` the least-squares answer is
+``z - A r_z`` with the information-weighted mean age
 
-An estimate moves for two other reasons: it converges (the prior's pull shrinks) and it
-scatters with the measurement noise. Both are already in the reported standard deviation
-``sd`` (:meth:`.ParameterSolver.std`), and both make (1) non-zero for a constant parameter. A
-movement of the estimate within what ``sd`` explains is no evidence of a moving truth, so only
-the part beyond it counts (:func:`total_sd`)::
+    A = G^-1 M,   G = sum_k w_k H_k^T H_k,   M = sum_k w_k (t - t_k) H_k^T H_k,
+    lag = J A r_z,   r_z = (1 - dA/dt)^-1 dz/dt,   dA/dt ~ A (d a_bar / dt) / a_bar   (2)
 
-    sd_total^2 = sd^2 + max(0, lag^2 - NOISE_LAG^2 sd^2)
+per independent least-squares problem of the solver (:meth:`.ParameterSolver.information`),
+``J`` the Jacobian of the reported estimates in the solver's parameters ``z``. ``M`` needs no
+rows: after a step ``dt`` every old row is ``dt`` older, ``M <- lam (M + dt G_before)``. Eq. (1)
+serves where a block is singular.
 
-For a constant parameter ``sd_total = sd`` as long as (1) stays below ``NOISE_LAG sd``; for a
-moving one whose lag dominates, ``sd_total`` is the lag. The measured consequences (how much
-later flags rise on constant parameters, the share of a depletion run within 2 and 3 sd) are in
-docs/identification.md, "Tracking".
+The rate is the slope of an exponentially weighted least-squares line through the recent
+*data-only* answers (the estimate without the prior's pull, which would make a converging
+estimate look like a moving truth), each weighted by ``1 / sd^2`` (answers the data have not
+determined yet do not count as movement), with a memory :data:`RATE_MEMORY` times the
+estimator's (``1 - lam_r = (1 - lam) / RATE_MEMORY``; without forgetting it grows with the
+data, ``1 - lam_r = 1 / (RATE_MEMORY N)``).
+
+An estimate also moves by its own scatter, which the reported standard deviation ``sd``
+(:meth:`.ParameterSolver.std`) already describes. Only the part of the lag beyond what that
+movement explains counts (:func:`total_sd`)::
+
+    sd_total^2 = sd^2 + max(0, lag^2 - (NOISE_LAG g sd)^2)
+
+with ``g`` (:meth:`DriftTracker.noise_gain`) the factor by which the slope turns a scatter of
+``sd`` into lag: about 1 with forgetting, about 3.5 without.
 """
 from __future__ import annotations
 
@@ -66,6 +72,9 @@ class DriftTracker(NamedTuple):
     w, mt, mx, ctt, ctx : the exponentially weighted line through ``(t_k, x_k)``: weight,
         weighted means of t [s] and x (p,), centred sums ``sum w (t - mt)^2`` and
         ``sum w (t - mt)(x - mx)`` (p,)
+    sd : (p,) the latest standard deviations without the lag
+    ages : ``M = sum w (t - t_k) H^T H`` per information block (eq. 2)
+    mat_lag : (p,) the latest lag by eq. (2), or None (then eq. 1)
     """
 
     lam: float
