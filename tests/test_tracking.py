@@ -17,6 +17,7 @@ import pytest
 
 from spacerobot.estimator import Identifier
 from spacerobot.estimator import tracking
+from spacerobot.estimator.solvers import block_lag
 from spacerobot.estimator.tracking import DriftTracker, total_sd
 from spacerobot.interface import LAYOUT, relative_errors
 from spacerobot.plant import Plant
@@ -83,8 +84,8 @@ def test_lag_of_a_weighted_least_squares_fit_with_varying_regressors(lam):
         G = lam * G + H[k].T @ H[k]
         b = lam * b + H[k].T @ y[k]
         z_ls = np.linalg.solve(G, b) if k else z_true[0]
-        tr = tr.add(t[k], z_ls, np.full(2, 1e-9), ((np.arange(2), before),),
-                    ((np.arange(2), G),), np.eye(2))
+        tr = tr.add(t[k], z_ls, np.full(2, 1e-9), (before,), np.eye(2),
+                    lambda rate, growth, ages: block_lag(G, ages[0], rate, growth)[0])
         lags.append(tr.lag())
         true.append(z_true[k] - z_ls)
     late = slice(2 * n // 3, None)

@@ -408,8 +408,8 @@ class Identifier:
         info = self.solver.information()
         self._solve(*_split(E))
         sd, x_ls = self.solver.std_and_data_only()
-        self.tracking = self.tracking.add(t, x_ls, sd, info, self.solver.information(),
-                                          self.solver.jacobian(self.solver.z()))
+        self.tracking = self.tracking.add(t, x_ls, sd, info, self.solver.jacobian(
+            self.solver.z()), self.solver.drift_lag)
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING

@@ -101,10 +101,19 @@ class ParameterSolver(ABC):
         """``d vector_of / d z`` (20, 20), written out (the delta method's Jacobian)."""
 
     @abstractmethod
-    def information(self) -> Tuple[Tuple[np.ndarray, np.ndarray], ...]:
-        """``((z indices (p,), information (p, p)), ...)``: the weighted Gram matrices
-        ``sum_k lam^(N-k) H_k^T H_k`` of the identified parameters of :meth:`z`, one block per
-        independent least-squares problem (:mod:`.tracking`)."""
+    def information(self) -> Tuple[np.ndarray, ...]:
+        """The weighted Gram matrices ``sum_k lam^(N-k) [H_k | y_k ...]^T [H_k | y_k ...]`` of
+        the augmented rows, one per least-squares problem (:class:`.uncertainty.Gram`; for
+        :mod:`.tracking`)."""
+
+    @abstractmethod
+    def drift_lag(self, rate_z: np.ndarray, growth: float, ages: Tuple[np.ndarray, ...]
+                  ) -> np.ndarray:
+        """The lag (20,) of :meth:`z` behind parameters moving at the rate the estimate shows,
+        ``rate_z`` (20,) (:mod:`.tracking`, eq. 2): ``A r`` per least-squares problem, ``A =
+        G^-1 M`` with ``M = sum w (t - t_k) H^T H`` the age-weighted Gram matrices ``ages``
+        (same layout as :meth:`information`) and ``r = (1 - growth A)^-1 rate``. Raises
+        ``LinAlgError`` where an information block is singular."""
 
     @abstractmethod
     def snapshot(self) -> tuple:
@@ -165,6 +174,15 @@ class ParameterSolver(ABC):
         """Diagonal (20,) of the initial covariance of a 20-vector in the layout's order."""
         g = self.guess
         return np.where(self.layout.first_order, g.P0_mu, g.P0_theta).astype(float)
+
+
+def block_lag(G: np.ndarray, M: np.ndarray, rate: np.ndarray, growth: float
+              ) -> Tuple[np.ndarray, np.ndarray]:
+    """``(A r, r)`` of one least-squares problem: ``A = G^-1 M`` (the information-weighted mean
+    age), ``r = (1 - growth A)^-1 rate`` (the truth's rate from the estimate's)."""
+    A = np.linalg.solve(G, M)
+    r = np.linalg.solve(np.eye(len(rate)) - growth * A, rate)
+    return A @ r, r
 
 
 def _mass_rows(J: np.ndarray, body, z: np.ndarray, zm: int, zc: slice) -> Tuple[float, np.ndarray]:
@@ -321,10 +339,29 @@ class PaperSolver(ParameterSolver):
         return delta, unobserved
 
     def information(self):
+        return self.gram_lin.S, self.gram_ang.S
+
+    def drift_lag(self, rate_z, growth, ages):
+        """Masses and first moments: eq. (2) of :mod:`.tracking`. Inertias: theta is the batch
+        answer at the latest mu (eq. 35), ``theta = G^-1 sum w phi^T (y + psi D(mu))``; with
+        rows ``y_k = phi_k theta_k - psi_k D_k`` of a truth moving at ``r_theta``, ``dD/dt =
+        dD/dmu r_mu`` and ``mu`` lagging by ``lag_mu``::
+
+            lag_theta = A r_theta + G^-1 (S_phi,psi dD/dmu lag_mu - M_phi,psi dD/dmu r_mu)
+
+        (``S``, ``M``: the Gram and age-weighted Gram blocks of phi against psi)."""
         L = self.layout
         p, r = len(L.mu_active), len(L.theta_active)
-        return ((L.mu_active, self.gram_lin.S[:p, :p]),
-                (L.n_mu + L.theta_active, self.gram_ang.S[:r, :r]))
+        (Sl, Sa), (Ml, Ma) = self.information(), ages
+        lag = np.zeros(L.n_mu + L.n_theta)
+        th = L.n_mu + L.theta_active
+        lag_mu, r_mu = block_lag(Sl[:p, :p], Ml[:p, :p], rate_z[L.mu_active], growth)
+        lag_th, _ = block_lag(Sa[:r, :r], Ma[:r, :r], rate_z[th], growth)
+        dD = par.D_jacobian(self.mu)[:, L.mu_active]                  # (20, p)
+        lag_th = lag_th + np.linalg.solve(
+            Sa[:r, :r], Sa[:r, r + 1:] @ (dD @ lag_mu) - Ma[:r, r + 1:] @ (dD @ r_mu))
+        lag[L.mu_active], lag[th] = lag_mu, lag_th
+        return lag
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
@@ -432,8 +469,14 @@ class JointSolver(ParameterSolver):
         return delta, unobserved
 
     def information(self):
+        return (self.gram.S,)
+
+    def drift_lag(self, rate_z, growth, ages):
         act = self.layout.standard_active
-        return ((act, self.gram.S[:len(act), :len(act)]),)
+        p = len(act)
+        lag = np.zeros(len(self.pi))
+        lag[act] = block_lag(self.gram.S[:p, :p], ages[0][:p, :p], rate_z[act], growth)[0]
+        return lag
 
     def snapshot(self) -> tuple:
         return self.rls.snapshot(), self.pi, self.gram, self.corr

@@ -98,13 +98,14 @@ class DriftTracker(NamedTuple):
         """No sample yet, for an estimator with forgetting factor ``lam``."""
         return cls(float(lam))
 
-    def add(self, t: float, x: np.ndarray, sd: np.ndarray, info_before=(), info_after=(),
-            jac: np.ndarray | None = None) -> "DriftTracker":
+    def add(self, t: float, x: np.ndarray, sd: np.ndarray, info_before=(),
+            jac: np.ndarray | None = None, lag_of=None) -> "DriftTracker":
         """With the estimate ``x`` (p,) and its standard deviation ``sd`` (p,) (without the
-        lag) after the sample of time ``t`` [s]; optionally the solver's information blocks
-        before and after the sample (:meth:`.ParameterSolver.information`) and the Jacobian
-        ``d x / d z`` (p, p) of the estimates in the solver's parameters ``z``, for the lag
-        through the information-weighted mean age (module docstring, eq. 2)."""
+        lag) after the sample of time ``t`` [s]. For the lag through the information-weighted
+        mean age (module docstring, eq. 2), optionally: the solver's Gram matrices before the
+        sample (:meth:`.ParameterSolver.information`), the Jacobian ``d x / d z`` (p, p) of the
+        estimates in the solver's parameters ``z``, and ``lag_of(rate_z, growth, ages)`` (the
+        solver's :meth:`.ParameterSolver.drift_lag`)."""
         lam = self.lam
         t_ref = t if self.s0 == 0.0 else self.t_ref
         s0 = lam * self.s0 + 1.0                      # sum w,  w = lam^(N-k)
@@ -125,12 +126,12 @@ class DriftTracker(NamedTuple):
         # eq. (2): M_age = sum w (t - t_k) H^T H, one block per least-squares problem;
         # after a step dt every old row is dt older: M_age <- lam (M_age + dt G_before)
         dt = step if self.s0 > 0.0 and step > 0.0 else 0.0
-        ages = tuple(lam * (M + dt * G) for M, (_, G) in
-                     zip(self.ages or [np.zeros_like(G) for _, G in info_before], info_before))
+        ages = tuple(lam * (M + dt * G) for M, G in
+                     zip(self.ages or [np.zeros_like(G) for G in info_before], info_before))
         mat_lag = None
-        if jac is not None and ages and ctt.shape == np.shape(x) and np.all(ctt > 0.0):
+        if lag_of is not None and ages and ctt.shape == np.shape(x) and np.all(ctt > 0.0):
             growth = da_dt / a_bar if a_bar > 0.0 else 0.0
-            mat_lag = _matrix_lag(ctx / ctt, growth, ages, info_after, jac)
+            mat_lag = _matrix_lag(ctx / ctt, growth, ages, jac, lag_of)
         return DriftTracker(lam, s0, s1, t_ref, t, a_bar, da_dt, w,
                             self.mt + v * d_t / w, self.mx + v * d_x / w, ctt, ctx, sd, ages,
                             mat_lag)
@@ -181,20 +182,13 @@ def total_sd(sd: np.ndarray, lag: np.ndarray | float, gain: np.ndarray | float =
     return np.sqrt(sd2 + excess)
 
 
-def _matrix_lag(rate_x: np.ndarray, growth: float, ages, info, jac: np.ndarray
+def _matrix_lag(rate_x: np.ndarray, growth: float, ages, jac: np.ndarray, lag_of
                 ) -> np.ndarray | None:
-    """Eq. (2): ``lag_x = J A r_z`` per block, ``A = G^-1 M_age``, the truth's rate ``r_z``
-    from the estimate's, ``dz/dt = (1 - dA/dt) r_z`` with ``dA/dt = A (d a_bar/dt) / a_bar``
-    (``growth``; 0 with forgetting in steady state, ``A / t`` without); None where a block is
-    singular (then eq. 1)."""
+    """Eq. (2): ``lag_x = J lag_of(J^-1 rate_x, growth, ages)``; None where an information
+    block is singular (then eq. 1)."""
     try:
-        rate_z = np.linalg.solve(jac, rate_x)
-        lag_z = np.zeros_like(rate_z)
-        for M, (idx, G) in zip(ages, info):
-            A = np.linalg.solve(G, M)
-            r = np.linalg.solve(np.eye(len(idx)) - growth * A, rate_z[idx])
-            lag_z[idx] = A @ r
+        with np.errstate(all="ignore"):
+            lag = jac @ lag_of(np.linalg.solve(jac, rate_x), growth, ages)
     except np.linalg.LinAlgError:
         return None
-    lag = jac @ lag_z
     return lag if np.all(np.isfinite(lag)) else None
