@@ -202,7 +202,8 @@ def plot(path: Path, times, truth, runs: dict, keys, title: str) -> None:
         for i, (key, style) in enumerate(zip(keys, ("C0-", "C3:"))):
             est, sd = runs[key][0][:, k], runs[key][1][:, k]
             ax.plot(times, est, style, lw=1.1, label=f"{key[0]}, lambda = {key[1]:g}"
-                    + (f", lags {key[2]}" if key[2] else ""))
+                    + (f", lags {key[2]}" if key[2] else "")
+                    + (f", window {key[3]:g} s" if key[3] else ""))
             if i == 0:
                 ax.fill_between(times, est - 2 * sd, est + 2 * sd, color="C0", alpha=0.2,
                                 lw=0, label="+- 2 reported sd")
@@ -301,7 +302,9 @@ def report(sc, free, noisy, chosen, wall) -> str:
         f"base estimates every {CSV_EVERY * SAMPLE:g} s (noise-free). `DEPLETION.png`: "
         "estimate (with its 2 sd band) and truth of the ten base parameters against time, "
         "noise-free, the chosen lambda beside lambda = 1 (no forgetting). "
-        "`DEPLETION_NOISY.png`: the same with the realistic sensors.",
+        "`DEPLETION_NOISY.png`: with the realistic sensors, the momentum method with a "
+        f"{WINDOW:g} s window (with its 2 sd band) beside the force method, both without "
+        "forgetting (under this noise forgetting only adds error).",
         "",
         "![estimate and truth of the base against time](DEPLETION.png)",
         "",
@@ -357,7 +360,7 @@ def main(argv=None) -> None:
                               {"force": ROW_SD_FORCE, "momentum": ROW_SD_MOMENTUM})
         noisy = {"table": ntable}
         plot(out / "DEPLETION_NOISY.png", tn, trn, nruns,
-             [("force", chosen[1], NOISY_LAGS, 0.0), ("force", 1.0, NOISY_LAGS, 0.0)],
+             [("momentum", 1.0, NOISY_LAGS, WINDOW), ("force", 1.0, NOISY_LAGS, 0.0)],
              "Spatial parameter set 'depletion': base estimate against the current truth "
              "(realistic sensors)")
     (out / "DEPLETION.md").write_text(report(sc, free, noisy, chosen, time.time() - t0))

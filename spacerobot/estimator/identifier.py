@@ -408,8 +408,11 @@ class Identifier:
         info = self.solver.information()
         self._solve(*_split(E))
         sd, x_ls = self.solver.std_and_data_only()
-        self.tracking = self.tracking.add(t, x_ls, sd, info, self.solver.jacobian(
-            self.solver.z()), self.solver.drift_lag)
+        # the tracker's clock is the sample count: the estimates depend on the samples, not on
+        # the step sizes between them (a rate per sample times an age in samples)
+        self.tracking = self.tracking.add(float(self.samples), x_ls, sd, info,
+                                          self.solver.jacobian(self.solver.z()),
+                                          self.solver.drift_lag)
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING

@@ -58,6 +58,10 @@ NOISE_LAG = 1.0
 class DriftTracker(NamedTuple):
     """Mean age of the estimator's data and the rate of its estimates, one sample at a time.
 
+    Any clock: the identifier uses the sample count (ages in samples, rates per sample), so
+    that the standard deviations, like the estimates, depend on the samples and not on the
+    step sizes between them.
+
     Immutable: :meth:`add` returns the updated tracker (a snapshot is a reference).
 
     Attributes
