@@ -241,11 +241,11 @@ def test_state_round_trip_keeps_the_propellant():
 
 def test_depletion_parameter_set_is_a_tracking_set():
     """Spatial, propellant on, excitation on, several minutes; its estimator settings are
-    estimator parameters of the interface (always excite, forgetting factor below 1), and the
-    command line applies them before --set."""
+    estimator parameters of the interface (always excite, forgetting factor below 1), written
+    to the set's estimator file of the SSP (the others: the estimator's defaults)."""
     from spacerobot.interface import ExciteMode, estimator_vars
     from spacerobot.robots import NO_EXCITATION, PARAMETER_SETS, parameter_set_scenario
-    from spacerobot.system.cli import set_estimator_overrides
+    from spacerobot.system.ssd import estimator_parameter_set
 
     assert "depletion" not in PARAMETER_SETS["planar"]
     sc = parameter_set_scenario("spatial", "depletion")
@@ -255,9 +255,9 @@ def test_depletion_parameter_set_is_a_tracking_set():
     assert set(settings) <= set(names)
     assert settings["ident.excite_mode"] == ExciteMode.ALWAYS
     assert 0.0 < settings["lambda"] < 1.0
-    assert set_estimator_overrides("spatial", "depletion") == {
-        f"estimator.{k}": v for k, v in settings.items()}
-    assert set_estimator_overrides("spatial", "default") == {}
+    assert {n: v for n, _, v, _ in estimator_parameter_set("spatial", "depletion")} == settings
+    assert {n: v for n, _, v, _ in estimator_parameter_set("spatial", "default")} == {
+        n: names[n].start for n in settings}
     # thrust for the whole run: the initial drift is not damped within the stop time
     P0 = np.linalg.norm(np.array(sc.v0)) * (sc.robot.base.mass + sc.propellant.m0)
     assert P0 / (math.sqrt(3.0) * sc.controller.F_max) > sc.stop_time
