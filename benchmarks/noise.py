@@ -66,11 +66,26 @@ NOISE_COLUMNS = tuple(f"{what}_{int(t)}" for t in CHECKPOINTS
 
 #: sensors seed of the pilot run that measures the row standard deviations (no case has it)
 PILOT_SEED = 999_999
-#: default residual correlation lags of the noise model: 200 samples = 20 s at the 0.1 s step;
+#: default residual correlation lags of the noise model: 600 samples = 60 s at the 0.1 s step;
 #: measured: 600 (60 s) calibrates the 300 s estimates too (docs/identification.md, section 6)
-CORR_LAGS = 200
+CORR_LAGS = 600
 #: the three estimator set-ups (method, acceleration source)
 COMBOS = (("momentum", "measured"), ("force", "measured"), ("force", "differenced"))
+#: the noise model's equation settings per set-up (docs/identification.md, section 6):
+#: momentum differenced over 5 s with the angular rows about the base, the accelerometer bias
+#: estimated from the navigation velocity, the Savitzky-Golay derivative over 5 samples
+SETTINGS = {("momentum", "measured"): {"ident.momentum_window": 5.0, "ident.momentum_point": 1},
+            ("force", "measured"): {"ident.accel_bias": 1},
+            ("force", "differenced"): {"ident.diff_half_window": 2}}
+#: the Identifier option of each equation setting (for the pilot run's noise_model)
+_OPTION = {"ident.momentum_window": ("window", float), "ident.momentum_point": ("moving_point", bool),
+           "ident.accel_bias": ("accel_bias", bool),
+           "ident.diff_half_window": ("diff_half_window", int)}
+
+
+def identifier_options(settings) -> dict:
+    """:class:`spacerobot.estimator.identifier.Identifier` keywords of estimator settings."""
+    return {_OPTION[k][0]: _OPTION[k][1](v) for k, v in settings.items()}
 
 
 @dataclass(frozen=True)
@@ -92,10 +107,11 @@ class NoiseCase(Case):
         return ov
 
 
-def pilot_row_sd(ssp_path: Path, stop_time: float, tmp: Path):
+def pilot_row_sd(ssp_path: Path, stop_time: float, tmp: Path, settings):
     """``{(method, accel): (sd_lin, sd_ang)}``: the row standard deviations of the equations
     at the truth on one pilot run (default spatial scenario, realistic sensors, sensors seed
-    :data:`PILOT_SEED`, excitation loop closed), recorded and read back as telemetry."""
+    :data:`PILOT_SEED`, excitation loop closed), recorded and read back as telemetry, with the
+    equation ``settings`` of each set-up (:data:`SETTINGS`, or none)."""
     csv = tmp / "pilot.csv"
     run_ssp(ssp_path, stop_time=stop_time, overrides={"sensors.seed": PILOT_SEED},
             csv_path=csv, progress=False)
@@ -106,15 +122,19 @@ def pilot_row_sd(ssp_path: Path, stop_time: float, tmp: Path):
     out = {}
     for method, accel in COMBOS:
         samples = ((t[k], {key: groups[key][k] for key in KEYS}) for k in range(len(t)))
-        out[(method, accel)] = equation_error_sd(robot, base, target, samples, method, accel)
+        out[(method, accel)] = equation_error_sd(
+            robot, base, target, samples, method, accel,
+            **identifier_options(settings.get((method, accel), {})))
     return out
 
 
-def noise_model(method: str, sd, lags: int = CORR_LAGS) -> tuple:
+def noise_model(method: str, sd, lags: int = CORR_LAGS, settings=None) -> tuple:
     """The estimator parameters of the noise model for ``method``: its row standard
-    deviations ``sd`` = (linear, angular) and the residual correlation lags."""
+    deviations ``sd`` = (linear, angular), the residual correlation lags and the equation
+    ``settings`` (name -> value)."""
     return ((f"ident.sd_row.{method}_lin", float(sd[0])),
-            (f"ident.sd_row.{method}_ang", float(sd[1])), ("ident.corr_lags", int(lags)))
+            (f"ident.sd_row.{method}_ang", float(sd[1])), ("ident.corr_lags", int(lags))
+            ) + tuple(sorted((settings or {}).items()))
 
 
 def noise_row(res):
@@ -232,6 +252,8 @@ def main(argv=None) -> int:
                     help=f"ident.corr_lags of the noise model (default {CORR_LAGS})")
     ap.add_argument("--defaults", action="store_true",
                     help="the estimator's defaults (no noise model)")
+    ap.add_argument("--paper-equations", action="store_true",
+                    help="the noise model with the paper's equations (no SETTINGS)")
     ap.add_argument("--out", default=str(HERE / "NOISE.md"))
     args = ap.parse_args(argv)
 
@@ -244,11 +266,12 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         ssp = build_system("spatial", Path(tmp) / "spatial", sensors=True)["ssp"]
         t_pilot = time.time()
-        row_sd = {} if args.defaults else pilot_row_sd(ssp, args.stop_time, Path(tmp))
+        settings = {} if args.paper_equations else SETTINGS
+        row_sd = {} if args.defaults else pilot_row_sd(ssp, args.stop_time, Path(tmp), settings)
         t_pilot = time.time() - t_pilot
         cases = [NoiseCase("spatial", i, args.seed, m, "closed", args.stop_time, a,
-                           estimator=() if args.defaults else noise_model(m, row_sd[(m, a)],
-                                                                        args.corr_lags))
+                           estimator=() if args.defaults else noise_model(
+                               m, row_sd[(m, a)], args.corr_lags, settings.get((m, a))))
                  for i in range(args.cases) for m, a in COMBOS]
         res = run_sweep(cases, csv, workers=args.workers, ssp={"spatial": str(ssp)},
                         progress=False, study=STUDY)
@@ -258,9 +281,14 @@ def main(argv=None) -> int:
     else:
         model = ("the estimator's noise model: row standard deviations from a pilot run "
                  f"(default spatial scenario, sensors seed {PILOT_SEED}, {args.stop_time:g} s, "
-                 f"{t_pilot:.0f} s of the wall time), `ident.corr_lags` = {args.corr_lags}:\n\n"
-                 "| method | accelerations | ident.sd_row lin | ang |\n|---|---|---|---|\n"
-                 + "\n".join(f"| {m} | {'-' if m == 'momentum' else a} | {sd[0]:.4g} "
+                 f"{t_pilot:.0f} s of the wall time), `ident.corr_lags` = {args.corr_lags}, "
+                 "and the equation settings of each set-up:\n\n"
+                 "| method | accelerations | settings | ident.sd_row lin | ang |\n"
+                 "|---|---|---|---|---|\n"
+                 + "\n".join(f"| {m} | {'-' if m == 'momentum' else a} | "
+                              + (", ".join(f"`{k}` = {v:g}" for k, v in
+                                           settings.get((m, a), {}).items()) or "paper's")
+                              + f" | {sd[0]:.4g} "
                               f"{'N.s' if m == 'momentum' else 'N'} | {sd[1]:.4g} "
                               f"{'N.m.s' if m == 'momentum' else 'N.m'} |"
                               for (m, a), sd in row_sd.items()))
@@ -272,6 +300,7 @@ def main(argv=None) -> int:
         f"Generated by `python benchmarks/noise.py --cases {args.cases} --seed {args.seed} "
         f"--stop-time {args.stop_time:g}"
         + (" --defaults" if args.defaults else f" --corr-lags {args.corr_lags}")
+        + (" --paper-equations" if args.paper_equations else "")
         + f"` on {_dt.date.today()} (spacerobot {__version__}, "
         f"{platform.machine()}, {os.cpu_count()} cores, {args.workers} Dask workers, load "
         f"average {load0[0]:.2f} at start); {len(rows)} runs in {wall / 60:.1f} min. Table: "

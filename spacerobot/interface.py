@@ -425,7 +425,26 @@ def noise_model_vars() -> List[Var]:
           Var("ident.corr_lags", "parameter", "fixed", "Integer", None,
               "Lags (>= 0) of the residual autocorrelation that inflates the standard "
               "deviations for correlated equation errors (0 = rows independent)", 0,
-              ("corr_lags",))]
+              ("corr_lags",)),
+          Var("ident.momentum_window", "parameter", "fixed", "Real", "s",
+              "Momentum method: each sample's equations differenced against the newest sample "
+              "at least this much older (the first sample until then) instead of the first "
+              "sample; tracks slow changes and keeps noise from accumulating. 0 = the paper's "
+              "(against the first sample)", 0.0, ("window", "momentum")),
+          Var("ident.momentum_point", "parameter", "fixed", "Integer", None,
+              "Momentum method: angular equations about 0 = the inertial origin (the paper's), "
+              "1 = the base's position at the newer sample of each difference (position, "
+              "velocity and thrust errors not multiplied by the base's distance from the "
+              "origin)", 0, ("momentum_point",)),
+          Var("ident.force_window", "parameter", "fixed", "Real", "s",
+              "Force method: each sample's equations differenced against the newest sample "
+              "at least this much older (a high-pass: removes constant errors such as an "
+              "accelerometer bias). 0 = the paper's (each sample alone)", 0.0,
+              ("window", "force")),
+          Var("ident.accel_bias", "parameter", "fixed", "Integer", None,
+              "Force method, measured accelerations: 1 = subtract the accelerometer bias "
+              "estimated online from the navigation velocity (the slope of v - integral a), "
+              "0 = the accelerations as measured", 0, ("accel_bias",))]
     return v
 
 

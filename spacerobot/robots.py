@@ -614,8 +614,8 @@ NO_EXCITATION = Excitation(att_max=0.0, q_max=0.0)
 class ParameterSet:
     """A named parameter set of the generated SSP: a target and whether the plant excites;
     optionally a propellant, a stop time, and the estimator settings the set is meant for
-    (``(name, value)`` pairs; the ``.ssv`` binds plant parameters only, so ``spacerobot run
-    --target <set>`` applies them as ``estimator.<name>`` overrides, before ``--set``)."""
+    (``(name, value)`` pairs, bound to the estimator component from the set's
+    ``resources/estimator/<set>.ssv``, :mod:`spacerobot.system.ssd`)."""
 
     target: str
     excited: bool
@@ -633,8 +633,10 @@ class ParameterSet:
 DEPLETION_PROPELLANT = Propellant(m0=80.0, Isp=220.0, r=(0.3, 0.2, -0.2), R=0.27, arm=1.0)
 
 #: the estimator settings of the ``depletion`` set: tracking (excitation always on, forgetting
-#: factor below 1; the choice, and why the force-based method, in benchmarks/DEPLETION.md)
-DEPLETION_ESTIMATOR = (("ident.excite_mode", 2), ("lambda", 0.98))
+#: factor below 1, the residual-correlation correction over the estimator's memory of 50
+#: samples; the choice, and why the force-based method, in benchmarks/DEPLETION.md and
+#: docs/identification.md section 7)
+DEPLETION_ESTIMATOR = (("ident.excite_mode", 2), ("lambda", 0.98), ("ident.corr_lags", 50))
 
 
 #: The parameter sets of each robot's SSP (one ``.ssv`` each). The paper's scenarios keep the
@@ -663,7 +665,8 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
                                                    "80 kg of propellant used by the thrusters "
                                                    "(5 min); meant for tracking with the "
                                                    "force-based method: estimator "
-                                                   "ident.excite_mode=2, lambda=0.98",
+                                                   "ident.excite_mode=2, lambda=0.98, "
+                                                   "ident.corr_lags=50",
                                   DEPLETION_PROPELLANT, 300.0, DEPLETION_ESTIMATOR),
         "ideal": ParameterSet("default", True, "the paper's spatial robot and target, "
                                                "excitation on request, ideal sensors", noise=0.0),

@@ -176,6 +176,7 @@ CONTRACT_UNITS = [
     (r"noise\.nav\.r", "m"), (r"noise\.nav\.v", "m/s"),
     (r"noise\.accel\.(vrw|bias|brw)", "m/s2"), (r"noise\.alpha", "rad/s2"),
     (r"noise\.enc\.qd", "rad/s"), (r"noise\.enc\.qdd", "rad/s2"),
+    (r"ident\.(momentum|force)_window", "s"),      # reference windows (branch s14)
 ]
 
 

@@ -241,11 +241,11 @@ def test_state_round_trip_keeps_the_propellant():
 
 def test_depletion_parameter_set_is_a_tracking_set():
     """Spatial, propellant on, excitation on, several minutes; its estimator settings are
-    estimator parameters of the interface (always excite, forgetting factor below 1), and the
-    command line applies them before --set."""
+    estimator parameters of the interface (always excite, forgetting factor below 1), written
+    to the set's estimator file of the SSP (the others: the estimator's defaults)."""
     from spacerobot.interface import ExciteMode, estimator_vars
     from spacerobot.robots import NO_EXCITATION, PARAMETER_SETS, parameter_set_scenario
-    from spacerobot.system.cli import set_estimator_overrides
+    from spacerobot.system.ssd import estimator_parameter_set
 
     assert "depletion" not in PARAMETER_SETS["planar"]
     sc = parameter_set_scenario("spatial", "depletion")
@@ -255,9 +255,47 @@ def test_depletion_parameter_set_is_a_tracking_set():
     assert set(settings) <= set(names)
     assert settings["ident.excite_mode"] == ExciteMode.ALWAYS
     assert 0.0 < settings["lambda"] < 1.0
-    assert set_estimator_overrides("spatial", "depletion") == {
-        f"estimator.{k}": v for k, v in settings.items()}
-    assert set_estimator_overrides("spatial", "default") == {}
+    assert {n: v for n, _, v, _ in estimator_parameter_set("spatial", "depletion")} == settings
+    assert {n: v for n, _, v, _ in estimator_parameter_set("spatial", "default")} == {
+        n: names[n].start for n in settings}
     # thrust for the whole run: the initial drift is not damped within the stop time
     P0 = np.linalg.norm(np.array(sc.v0)) * (sc.robot.base.mass + sc.propellant.m0)
     assert P0 / (math.sqrt(3.0) * sc.controller.F_max) > sc.stop_time
+
+
+# -- the depletion set in the SSP: plant and estimator settings ---------------------------------
+
+@pytest.fixture(scope="module")
+def spatial_system(tmp_path_factory, spatial_fmus):
+    from spacerobot.system import ssd
+    return ssd.build_system("spatial", tmp_path_factory.mktemp("sys17"), fmus=spatial_fmus)
+
+
+def test_depletion_set_binds_the_estimator_settings_in_the_ssp(spatial_system):
+    """The set's estimator settings (robots.DEPLETION_ESTIMATOR) come with the SSP: the .ssp
+    binds resources/estimator/<set>.ssv to the estimator component; a named set replaces it
+    with its own, another set brings back the FMU's defaults. fmpy's reader validates the
+    package against the SSP 1.0 schemas and sees both bindings."""
+    import fmpy.ssp.ssd
+    from spacerobot import run_ssp
+    from spacerobot.robots import DEPLETION_ESTIMATOR
+
+    desc = fmpy.ssp.ssd.read_ssd(str(spatial_system["ssp"]), validate=True)
+    est = next(e for e in desc.system.elements if e.name == "estimator")
+    assert [b.source for b in est.parameterBindings] == ["resources/estimator/default.ssv"]
+    want = dict(DEPLETION_ESTIMATOR)
+    assert want == {"ident.excite_mode": 2, "lambda": 0.98, "ident.corr_lags": 50}
+    dep = run_ssp(spatial_system["ssp"], parameter_set="depletion", stop_time=0.3,
+                  progress=False)
+    assert dep.data["estimator.lambda"][0] == 0.98
+    assert dep.data["estimator.ident.excite_mode"][0] == 2
+    assert dep.data["estimator.ident.corr_lags"][0] == 50
+    assert dep.data["plant.prop.m"][0] == 80.0
+    bound = run_ssp(spatial_system["ssp"], stop_time=0.3, progress=False)
+    assert bound.data["estimator.lambda"][0] == 1.0
+    assert bound.data["estimator.ident.excite_mode"][0] == 1
+    assert bound.data["estimator.ident.corr_lags"][0] == 0
+    # an explicit override still wins over the set
+    over = run_ssp(spatial_system["ssp"], parameter_set="depletion", stop_time=0.3,
+                   progress=False, overrides={"estimator.lambda": 0.99})
+    assert over.data["estimator.lambda"][0] == 0.99

@@ -20,9 +20,11 @@ from ..interface import (AccelSource, ExciteMode, Method, ParameterLayout, Solve
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import kernels, report_kernels
+from .accel_bias import BiasFit
 from .differencing import centre_derivative
 from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
+from .tracking import DriftTracker, total_sd
 
 #: measurement keys and their shapes (n = number of arm joints)
 KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
@@ -113,6 +115,23 @@ class Identifier:
         Lags >= 0 of the residual autocorrelation that inflates the reported standard
         deviations for correlated equation errors (:class:`.uncertainty.Autocorrelation`);
         0 = rows taken as independent.
+    window : float
+        Moving reference [s] >= 0. Momentum: each sample's equations are differenced against
+        the newest sample at least ``window`` seconds older (the first sample until then)
+        instead of the first sample; force: likewise (a high-pass that removes constant
+        equation errors, an accelerometer bias). 0 = the paper's equations (momentum: against
+        the first sample; force: each sample alone). Any difference of two samples' valid
+        equations is a valid equation: noise-free estimates stay exact.
+    accel_bias : bool
+        Force method with measured accelerations: subtract the accelerometer's bias,
+        estimated online from the navigation velocity (:mod:`.accel_bias`). False = the
+        accelerations as measured.
+    moving_point : bool
+        Momentum method: the angular rows about the base's position ``r_S`` at the newer
+        sample of each difference (the same point for both samples: the rows minus
+        ``[r_S]x`` times the linear rows) instead of the inertial origin, so that position,
+        velocity and thrust errors do not enter multiplied by the distance the base drifted
+        from the origin. False = the paper's (about the origin).
 
     Attributes
     ----------
@@ -129,7 +148,8 @@ class Identifier:
     def __init__(self, robot: Robot, guess: Guess, method: Method | str = "momentum",
                  solver: Solver | str = "paper", accel_source: AccelSource | str = "measured",
                  lam: float = 1.0, sd_rel: float = SD_REL, row_sd=(0.0, 0.0),
-                 diff_half_window: int = 1, corr_lags: int = 0):
+                 diff_half_window: int = 1, corr_lags: int = 0, window: float = 0.0,
+                 moving_point: bool = False, accel_bias: bool = False):
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
@@ -147,6 +167,9 @@ class Identifier:
                                      ("correlation lags", corr_lags, 0, MAX_CORR_LAGS)):
             if not (math.isfinite(val) and int(val) == val and low <= val <= high):
                 raise ValueError(f"{name} must be an integer from {low} to {high}, got {val}")
+        if not (math.isfinite(window) and 0.0 <= window <= MAX_WINDOW):
+            raise ValueError(f"reference window must be a number of seconds from 0 to "
+                             f"{MAX_WINDOW:g}, got {window}")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
             body.check(name)
         for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
@@ -155,6 +178,10 @@ class Identifier:
         self.robot, self.guess = robot, guess
         self.method, self.accel_source, self.lam, self.sd_rel = method, accel_source, lam, sd_rel
         self.row_sd, self.diff_half_window = row_sd, int(diff_half_window)
+        self.window = float(window)
+        self.moving_point = bool(moving_point) and method is Method.MOMENTUM
+        self.accel_bias = bool(accel_bias) and method is Method.FORCE and (
+            accel_source is AccelSource.MEASURED)
         # row weights 1 / sd (1: unweighted, the rows untouched)
         self._w_lin, self._w_ang = (1.0 / x if x > 0.0 else 1.0 for x in row_sd)
         self.n = robot.n_joints
@@ -177,23 +204,45 @@ class Identifier:
         self.residual_lin = 0.0
         self.residual_ang = 0.0
         self.reference = None       # momentum method: terms at t0
+        self.ring = ()              # window > 0: the (t, E) of the last `window` seconds
+        self.bias_fit = BiasFit()   # accel_bias: the accelerometer bias's running fit
         self.history = []           # differenced accelerations: the window (t, flat sample)
         self._exc = None            # cached excitation() (cleared by update / set_state)
+        self.tracking = DriftTracker.empty(lam)   # the estimates' lag (:mod:`.tracking`)
 
     # -- equations -----------------------------------------------------------------------------
-    def _equations(self, flat: np.ndarray):
-        """The (3, 42) equation array ``[A | b | phi | y | psi]`` of one sample (full 3D rows;
-        see :mod:`.kernels`), from the flattened measurements; momentum form: differenced
-        against the reference sample t0 (eqs. 11, 16), None for the reference itself."""
+    def _equations(self, flat: np.ndarray, t: float = 0.0):
+        """The (3, 42) equation array ``[A | b | phi | y | psi]`` of one sample taken at ``t``
+        (full 3D rows; see :mod:`.kernels`), from the flattened measurements: momentum form
+        differenced against the reference sample (eqs. 11, 16), None for the first sample;
+        with a window, differenced against the sample ``window`` earlier (:meth:`_windowed`)."""
         E = np.empty((3, kernels.N_COLS))
         force = self.method is Method.FORCE
         kernels.equations(force, flat, self.n, *self._geom, E)
+        if self.window > 0.0:
+            return self._windowed(t, E, flat)
         if force:
             return E
         if self.reference is None:
             self.reference = E
             return None
         return E - self.reference
+
+    def _windowed(self, t: float, E: np.ndarray, flat: np.ndarray):
+        """``E - E_ref``, ``E_ref`` the newest stored sample at least ``window`` seconds before
+        ``t`` (the oldest while the run is shorter); None for the first sample. Moving point:
+        the angular rows then about ``r_S(t)`` (:func:`about_point`)."""
+        ring = self.ring + ((t, E),)
+        k = 0
+        while k + 1 < len(ring) - 1 and ring[k + 1][0] <= t - self.window:
+            k += 1
+        self.ring = ring[k:]
+        if len(self.ring) == 1:
+            return None
+        dE = E - self.ring[0][1]
+        if self.moving_point:
+            about_point(dE, flat[kernels.R_S:kernels.R_S + 3])
+        return dE
 
     def equations(self, s: dict):
         """``(A, b, phi, y, psi)`` for one sample, full 3D rows (before planar selection):
@@ -203,6 +252,18 @@ class Identifier:
         the reference sample itself.
         """
         E = self._equations(np.concatenate([np.asarray(s[k], float).ravel() for k in KEYS]))
+        return None if E is None else _split(E)
+
+    def rows(self, t: float, meas: dict):
+        """``(A, b, phi, y, psi)`` this sample contributes, as :meth:`update` would use them
+        (full 3D rows, before the row weights and the planar selection), or None (a rejected
+        sample, the momentum reference, a filling differencing window). Advances the
+        references and histories as :meth:`update` does, but not the solver: for evaluating
+        the equations at known parameters (:mod:`.noise_model`)."""
+        status, _, flat = self._validate(meas)
+        if flat is None or not math.isfinite(t) or not self._time_ok(t):
+            return None
+        E = self._sample_equations(t, flat)
         return None if E is None else _split(E)
 
     # -- the update ------------------------------------------------------------------------------
@@ -276,11 +337,11 @@ class Identifier:
                 self.message = f"non-finite sample time {t}"
             self.rejected += 1
             return self.status
-        if (self.method is Method.FORCE and self.accel_source is AccelSource.DIFFERENCED
-                and self.history and not t > self.history[-1][0]):
+        if not self._time_ok(t):
+            last = self.history[-1][0] if self.history else self.ring[-1][0]
             self.status, self.message = REJECT_INCONSISTENT, (
-                f"differenced accelerations need increasing sample times: t = {t:g} s after "
-                f"{self.history[-1][0]:g} s")
+                f"differenced accelerations and the moving reference need increasing sample "
+                f"times: t = {t:g} s after {last:g} s")
             self.rejected += 1
             return self.status
         # finite but huge inputs can still overflow inside the equations or the RLS: the update
@@ -316,18 +377,42 @@ class Identifier:
         self.history = history
         self._exc = None
 
+    def _time_ok(self, t: float) -> bool:
+        """False if ``t`` does not advance past the last stored sample (differencing history,
+        window ring), which both need."""
+        if self.history and not t > self.history[-1][0]:
+            return False
+        return not (self.ring and not t > self.ring[-1][0])
+
+    def _sample_equations(self, t: float, flat: np.ndarray):
+        """The equation array of a validated sample (differenced accelerations: of the
+        window's centre), or None while a reference or window is being stored."""
+        if self.accel_bias:                          # a_S - the bias estimated so far
+            k = kernels
+            self.bias_fit = self.bias_fit.add(t, flat[k.V_S:k.V_S + 3], flat[k.A_S:k.A_S + 3])
+            flat = flat.copy()
+            flat[k.A_S:k.A_S + 3] -= self.bias_fit.bias()
+        if self.method is Method.FORCE and self.accel_source is AccelSource.DIFFERENCED:
+            centre = self._differenced(t, flat)
+            if centre is None:
+                return None
+            t, flat = centre
+        return self._equations(flat, t)
+
     def _accept(self, t: float, flat: np.ndarray) -> int:
         """The update proper, for a validated sample (see :meth:`update`)."""
-        if self.method is Method.FORCE and self.accel_source is AccelSource.DIFFERENCED:
-            flat = self._differenced(t, flat)
-            if flat is None:
-                self.status = REFERENCE
-                return self.status
-        E = self._equations(flat)
+        E = self._sample_equations(t, flat)
         if E is None:
             self.status = REFERENCE
             return self.status
+        info = self.solver.information()
         self._solve(*_split(E))
+        sd, x_ls = self.solver.std_and_data_only()
+        # the tracker's clock is the sample count: the estimates depend on the samples, not on
+        # the step sizes between them (a rate per sample times an age in samples)
+        self.tracking = self.tracking.add(float(self.samples), x_ls, sd, info,
+                                          self.solver.jacobian(self.solver.z()),
+                                          self.solver.drift_lag)
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING
@@ -347,6 +432,8 @@ class Identifier:
                 total += self.reference.sum()
             if self.history:
                 total += self.history[-1][1].sum()
+            if self.ring:
+                total += self.ring[-1][1].sum()
         return math.isfinite(total)
 
     def _differenced(self, t: float, flat: np.ndarray):
@@ -355,14 +442,14 @@ class Identifier:
         time (:func:`.differencing.centre_derivative`): every row of its equations belongs to
         one instant.
 
-        Returns the completed centre sample, or None while the window is not full.
+        Returns ``(t_c, completed centre sample)``, or None while the window is not full.
         """
         k = 2 * self.diff_half_window + 1
         self.history = self.history + [(t, flat)]
         if len(self.history) < k:
             return None
         window, self.history = self.history, self.history[1:]
-        return centre_derivative(window, self._diff_slices)[1]
+        return centre_derivative(window, self._diff_slices)
 
     def _solve(self, A, b, phi, y, psi):
         """The solver's update on the identified rows, then the residuals and information."""
@@ -396,12 +483,14 @@ class Identifier:
         ``sd^2`` = the data's scatter (solver covariance times the a-posteriori residual
         variance) + the square of the prior's pull (the distance from the estimate to the
         data-only least-squares answer), both through the delta-method Jacobian of the map from
-        the solver's parameters to :meth:`vector`. Without noise the pull is the estimate's
-        error itself (to first order). An estimate the data do not determine yet reports at
-        least its error scale (100 %). Parameters that are not identified (planar out-of-plane
-        ones) report the square root of their prior covariance.
+        the solver's parameters to :meth:`vector`, + the part of the estimates' lag behind
+        moving parameters that these do not explain (:func:`.tracking.total_sd`). Without
+        noise the pull is the estimate's error itself (to first order). An estimate the data
+        do not determine yet reports at least its error scale (100 %). Parameters that are not
+        identified (planar out-of-plane ones) report the square root of their prior
+        covariance.
         """
-        return self.solver.std()
+        return self.tracking.total_sd() if self.samples else self.solver.std()
 
     def report(self) -> Report:
         """The estimates as reported: physically consistent, with their standard deviations,
@@ -465,10 +554,26 @@ class Identifier:
 MAX_HALF_WINDOW = 50
 #: largest ``corr_lags`` (lags of the residual autocorrelation kept per solver)
 MAX_CORR_LAGS = 10_000
+#: largest reference window [s]
+MAX_WINDOW = 1e6
 
 #: attributes of the identifier an update rebinds (restored by reference)
 _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",
-            "reference")
+            "reference", "ring", "bias_fit", "tracking")
+
+
+def about_point(dE: np.ndarray, p: np.ndarray) -> None:
+    """The angular rows of a momentum difference ``dE`` (3, 42) about the point ``p`` (3,)
+    instead of the origin, in place: ``L_p = L_O - p x P`` and ``H_p = H_O - p x J``, so the
+    angular residual becomes ``r_ang - [p]x r_lin`` with ``r_lin = A mu - b``,
+    ``r_ang = phi theta - y - psi D(mu)``: ``y -= [p]x b`` and, ``mu`` being the entries
+    ``m, m b`` of ``D(mu)`` of each body, ``psi[:, D index of mu] += [p]x A``."""
+    k = kernels
+    P = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])   # [p]x
+    lin = P @ dE[:, k.COL_A:k.COL_B + 1]
+    dE[:, k.COL_Y] -= lin[:, 8]                          # y' = y - [p]x b
+    dE[:, k.COL_PSI:k.COL_PSI + 4] += lin[:, 0:4]        # base m, m b
+    dE[:, k.COL_PSI + 10:k.COL_PSI + 14] += lin[:, 4:8]  # target m, m b
 
 
 def _relative_norm(e: np.ndarray, rhs: np.ndarray) -> float:
@@ -498,6 +603,13 @@ def _copy(v):
     if t is dict:
         return {k: _copy(x) for k, x in v.items()}
     return copy.deepcopy(v)
+
+
+def _flag(x, name: str) -> bool:
+    """An FMI Integer switch, 0 or 1."""
+    if x not in (0, 1):
+        raise ValueError(f"{name} must be 0 or 1, got {x}")
+    return bool(x)
 
 
 def _rcond(info: np.ndarray) -> float:
@@ -557,5 +669,8 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float]
     ident = Identifier(robot, guess, *codes, float(v["lambda"]), sd_rel=float(v["ident.sd_rel"]),
                        row_sd=row_sd(v, codes[0]),
                        diff_half_window=int(v["ident.diff_half_window"]),
-                       corr_lags=int(v["ident.corr_lags"]))
+                       corr_lags=int(v["ident.corr_lags"]),
+                       window=float(v[f"ident.{codes[0].name.lower()}_window"]),
+                       moving_point=_flag(v["ident.momentum_point"], "ident.momentum_point"),
+                       accel_bias=_flag(v["ident.accel_bias"], "ident.accel_bias"))
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))

@@ -24,7 +24,7 @@ import numpy as np
 from ..interface import AccelSource, Method
 from ..robots import Guess, RigidBody, Robot
 from . import parameters as par
-from .identifier import Identifier, _split
+from .identifier import Identifier
 
 __all__ = ["equation_error_sd"]
 
@@ -33,7 +33,7 @@ def equation_error_sd(robot: Robot, base: RigidBody, target: RigidBody,
                       samples: Iterable[Tuple[float, Mapping[str, np.ndarray]]],
                       method: Method | str = "momentum",
                       accel_source: AccelSource | str = "measured",
-                      diff_half_window: int = 1) -> Tuple[float, float]:
+                      diff_half_window: int = 1, **options) -> Tuple[float, float]:
     """Root mean square of the rows of the linear and of the angular equation at the true
     parameters, over measured samples (see the module docstring).
 
@@ -44,6 +44,8 @@ def equation_error_sd(robot: Robot, base: RigidBody, target: RigidBody,
     samples : ``(t [s], measurements)`` in time order, measurements as for
         :meth:`Identifier.update` (keys :data:`.identifier.KEYS`)
     method, accel_source, diff_half_window : as the identifier that will use the result
+    options : further :class:`.Identifier` options that shape the rows (``window``,
+        ``moving_point``), as the identifier that will use the result
 
     Returns
     -------
@@ -52,28 +54,21 @@ def equation_error_sd(robot: Robot, base: RigidBody, target: RigidBody,
     """
     truth = Guess(base, target, 1.0, 1.0)
     ident = Identifier(robot, truth, method, accel_source=accel_source,
-                       diff_half_window=diff_half_window)
+                       diff_half_window=diff_half_window, **options)
     mu, theta = par.paper_vectors(truth)
     D = par.D_of_mu(mu)
     L = ident.layout
-    sums, rows = np.zeros(2), np.zeros(2)
+    sums, counts = np.zeros(2), np.zeros(2)
     for t, meas in samples:
-        status, _, flat = ident._validate(meas)
-        if flat is None:
+        eq = ident.rows(t, meas)
+        if eq is None:                        # rejected, a reference, a filling window
             continue
-        if ident.method is Method.FORCE and ident.accel_source is AccelSource.DIFFERENCED:
-            flat = ident._differenced(t, flat)
-            if flat is None:
-                continue
-        E = ident._equations(flat)
-        if E is None:                         # the momentum method's reference sample
-            continue
-        A, b, phi, y, psi = _split(E)
+        A, b, phi, y, psi = eq
         r_lin = (A @ mu - b)[L.rows_lin]                       # A mu = b
         r_ang = (phi @ theta - y - psi @ D)[L.rows_ang]        # phi theta = y + psi D(mu)
         sums += (r_lin @ r_lin, r_ang @ r_ang)
-        rows += (len(r_lin), len(r_ang))
-    if not rows.all():
+        counts += (len(r_lin), len(r_ang))
+    if not counts.all():
         return math.nan, math.nan
-    sd = np.sqrt(sums / rows)
+    sd = np.sqrt(sums / counts)
     return float(sd[0]), float(sd[1])

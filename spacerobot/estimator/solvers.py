@@ -102,6 +102,21 @@ class ParameterSolver(ABC):
         """``d vector_of / d z`` (20, 20), written out (the delta method's Jacobian)."""
 
     @abstractmethod
+    def information(self) -> Tuple[np.ndarray, ...]:
+        """The weighted Gram matrices ``sum_k lam^(N-k) [H_k | y_k ...]^T [H_k | y_k ...]`` of
+        the augmented rows, one per least-squares problem (:class:`.uncertainty.Gram`; for
+        :mod:`.tracking`)."""
+
+    @abstractmethod
+    def drift_lag(self, rate_z: np.ndarray, growth: float, ages: Tuple[np.ndarray, ...]
+                  ) -> np.ndarray:
+        """The lag (20,) of :meth:`z` behind parameters moving at the rate the estimate shows,
+        ``rate_z`` (20,) (:mod:`.tracking`, eq. 2): ``A r`` per least-squares problem, ``A =
+        G^-1 M`` with ``M = sum w (t - t_k) H^T H`` the age-weighted Gram matrices ``ages``
+        (same layout as :meth:`information`) and ``r = (1 - growth A)^-1 rate``. Raises
+        ``LinAlgError`` where an information block is singular."""
+
+    @abstractmethod
     def snapshot(self) -> tuple:
         """The state an update changes, for :meth:`restore` (cheap: references)."""
 
@@ -123,30 +138,52 @@ class ParameterSolver(ABC):
         positive mass). ``unobserved``: estimates that
         depend on a direction the data have not observed (their ``sd`` bounds nothing).
         """
+        sd, unobserved, _ = self.uncertainty_and_data_only()
+        return sd, unobserved
+
+    def uncertainty_and_data_only(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`uncertainty` and the data-only answer ``v(z - delta)`` (20,) (the estimate
+        without the prior's pull; its first-order image where ``z - delta`` has no positive
+        mass)."""
         z = self.z()
         J = self.jacobian(z)
         delta, unobserved_z = self.prior_pull()
+        x = self.vector_of(z)
         with np.errstate(all="ignore"):
-            pull = self.vector_of(z) - self.vector_of(z - delta)   # the map's exact difference
+            pull = x - self.vector_of(z - delta)                   # the map's exact difference
         if not np.all(np.isfinite(pull)):                          # the data-only mass <= 0
             pull = J @ delta
         # diag(J C J^T) + pull^2, and the rows of J that touch an unobserved parameter
         var, unobserved = rk.scatter_and_pull(J, self.covariance(), pull, unobserved_z)
-        return np.sqrt(np.clip(var, 0.0, None)), unobserved
+        return np.sqrt(np.clip(var, 0.0, None)), unobserved, x - pull
 
     def std(self) -> np.ndarray:
         """Standard deviations (20,) of :meth:`vector` (:meth:`uncertainty`); an unobserved
         estimate reports at least its error scale (a relative standard deviation of 100 %)."""
-        sd, unobserved = self.uncertainty()
+        return self.std_and_data_only()[0]
+
+    def std_and_data_only(self) -> Tuple[np.ndarray, np.ndarray]:
+        """``(std (20,), data-only answer (20,))`` (:meth:`std`,
+        :meth:`uncertainty_and_data_only`)."""
+        sd, unobserved, x_ls = self.uncertainty_and_data_only()
         if unobserved.any():
             floor = self.layout.error_scale(self.vector())
             sd[unobserved] = np.maximum(sd[unobserved], floor[unobserved])
-        return sd
+        return sd, x_ls
 
     def prior(self) -> np.ndarray:
         """Diagonal (20,) of the initial covariance of a 20-vector in the layout's order."""
         g = self.guess
         return np.where(self.layout.first_order, g.P0_mu, g.P0_theta).astype(float)
+
+
+def block_lag(G: np.ndarray, M: np.ndarray, rate: np.ndarray, growth: float
+              ) -> Tuple[np.ndarray, np.ndarray]:
+    """``(A r, r)`` of one least-squares problem: ``A = G^-1 M`` (the information-weighted mean
+    age), ``r = (1 - growth A)^-1 rate`` (the truth's rate from the estimate's)."""
+    A = np.linalg.solve(G, M)
+    r = np.linalg.solve(np.eye(len(rate)) - growth * A, rate)
+    return A @ r, r
 
 
 def _mass_rows(J: np.ndarray, body, z: np.ndarray, zm: int, zc: slice) -> Tuple[float, np.ndarray]:
@@ -248,8 +285,8 @@ class PaperSolver(ParameterSolver):
                                            gl.dof(len(rls.mu)), ga.dof(len(rls.theta)),
                                            vs_lin, inf_lin, vs_ang, inf_ang)
 
-    def uncertainty(self) -> Tuple[np.ndarray, np.ndarray]:
-        """As :meth:`ParameterSolver.uncertainty`, in one compiled call
+    def uncertainty_and_data_only(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """As :meth:`ParameterSolver.uncertainty_and_data_only`, in one compiled call
         (:func:`.report_kernels.paper_uncertainty`)."""
         L, rls, ga, g0 = self.layout, self.rls, self.gram_ang, self.guess
         s2_lin, s2_ang = self._residual_variances()
@@ -281,6 +318,31 @@ class PaperSolver(ParameterSolver):
         return rk.paper_prior_pull(self.mu, rls.mu, rls.theta, rls.D_mu, rls.M, self.gram_ang.S,
                                    w_mu, w_theta, self._mu0, self._th0, L.mu_active,
                                    L.theta_active, eig_lin, eig_ang)
+
+    def information(self):
+        return self.gram_lin.S, self.gram_ang.S
+
+    def drift_lag(self, rate_z, growth, ages):
+        """Masses and first moments: eq. (2) of :mod:`.tracking`. Inertias: theta is the batch
+        answer at the latest mu (eq. 35), ``theta = G^-1 sum w phi^T (y + psi D(mu))``; with
+        rows ``y_k = phi_k theta_k - psi_k D_k`` of a truth moving at ``r_theta``, ``dD/dt =
+        dD/dmu r_mu`` and ``mu`` lagging by ``lag_mu``::
+
+            lag_theta = A r_theta + G^-1 (S_phi,psi dD/dmu lag_mu - M_phi,psi dD/dmu r_mu)
+
+        (``S``, ``M``: the Gram and age-weighted Gram blocks of phi against psi)."""
+        L = self.layout
+        p, r = len(L.mu_active), len(L.theta_active)
+        (Sl, Sa), (Ml, Ma) = self.information(), ages
+        lag = np.zeros(L.n_mu + L.n_theta)
+        th = L.n_mu + L.theta_active
+        lag_mu, r_mu = block_lag(Sl[:p, :p], Ml[:p, :p], rate_z[L.mu_active], growth)
+        lag_th, _ = block_lag(Sa[:r, :r], Ma[:r, :r], rate_z[th], growth)
+        dD = par.D_jacobian(self.mu)[:, L.mu_active]                  # (20, p)
+        lag_th = lag_th + np.linalg.solve(
+            Sa[:r, :r], Sa[:r, r + 1:] @ (dD @ lag_mu) - Ma[:r, r + 1:] @ (dD @ r_mu))
+        lag[L.mu_active], lag[th] = lag_mu, lag_th
+        return lag
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
@@ -386,6 +448,16 @@ class JointSolver(ParameterSolver):
         delta, unobserved = np.zeros(len(self.pi)), np.zeros(len(self.pi), bool)
         delta[act], unobserved[act] = d, u
         return delta, unobserved
+
+    def information(self):
+        return (self.gram.S,)
+
+    def drift_lag(self, rate_z, growth, ages):
+        act = self.layout.standard_active
+        p = len(act)
+        lag = np.zeros(len(self.pi))
+        lag[act] = block_lag(self.gram.S[:p, :p], ages[0][:p, :p], rate_z[act], growth)[0]
+        return lag
 
     def snapshot(self) -> tuple:
         return self.rls.snapshot(), self.pi, self.gram, self.corr

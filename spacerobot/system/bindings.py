@@ -43,17 +43,31 @@ def resolve_parameter_set(info: SystemInfo, root_dir: Path,
 def chosen_values(info: SystemInfo, root_dir: Path,
                   parameter_set: Optional[str]) -> Tuple[Optional[str], Dict[str, List]]:
     """``(set name, {component: values})``: the values of ``parameter_set`` for every component
-    the SSD binds an ``.ssv`` to (``(None, {})`` without a parameter set)."""
+    the SSD binds an ``.ssv`` to (``(None, {})`` without a parameter set).
+
+    A component bound to a file in ``resources/`` gets the set's ``resources/<name>.ssv``; one
+    bound to a file in a folder of its own, ``resources/<folder>/`` (the estimator's settings
+    of a set, :data:`.ssd.ESTIMATOR_SET_DIR`), gets ``<folder>/<name>.ssv`` beside the set's
+    file, or no values if the set has none there (the FMU's defaults)."""
     if parameter_set is None:
         return None, {}
     name, path = resolve_parameter_set(info, root_dir, parameter_set)
     values = read_ssv(path)
-    targets = [c for c in info.components.values()
-               if any(b.source and b.source.endswith(".ssv") for b in c.bindings)]
-    if not targets:
+    out = {}
+    for c in info.components.values():
+        bound = [b.source for b in c.bindings if b.source and b.source.endswith(".ssv")]
+        if not bound:
+            continue
+        folder = Path(bound[0]).parent
+        if folder.name == "resources" or folder == Path("."):
+            out[c.name] = values
+        else:
+            own = path.parent / folder.name / path.name
+            out[c.name] = read_ssv(own) if own.exists() else []
+    if not out:
         raise SimulationError("the SSD binds no .ssv file to a component, so a named "
                               "parameter set has nothing to replace")
-    return name, {c.name: values for c in targets}
+    return name, out
 
 
 def split_overrides(overrides: Optional[Mapping[str, object]],

@@ -26,7 +26,7 @@ from typing import Optional, Sequence
 
 from .. import __version__
 from ..interface import identified_estimates
-from ..robots import (PAPER_PLANAR_MEDIUM, PARAMETER_SETS, ROBOTS, get_robot, robot_kind,
+from ..robots import (PAPER_PLANAR_MEDIUM, ROBOTS, get_robot,
                       robot_label, robot_spec)
 from .codes import ACCEL_CODES, METHOD_CODES, SOLVER_CODES, estimator_overrides
 
@@ -113,16 +113,6 @@ def result_name(robot: Optional[str], ssp: Path, target: Optional[str], args) ->
                               f"{args.accel}-{args.solver}.csv")
 
 
-def set_estimator_overrides(robot: Optional[str], target: Optional[str]) -> dict:
-    """``{"estimator.<name>": value}`` of the estimator settings of parameter set ``target``
-    of ``robot`` (empty for another set, or without a robot or set)."""
-    from .ssd import ESTIMATOR
-    if not (robot and target):
-        return {}
-    ps = PARAMETER_SETS[robot_kind(robot)].get(target)
-    return {f"{ESTIMATOR}.{k}": v for k, v in (ps.estimator if ps else ())}
-
-
 @fail_on_errors("run")
 def cmd_run(args) -> int:
     from .bindings import parse_assignments
@@ -144,8 +134,6 @@ def cmd_run(args) -> int:
         robot = key or "planar"
         ssp = None
     target = args.target or (default_parameter_set(robot, args.sensors) if robot else None)
-    # the estimator settings a parameter set is meant for (robots.ParameterSet.estimator)
-    overrides = {**set_estimator_overrides(robot, args.target), **overrides}
     csv_path = Path(args.out) if args.out else result_name(robot, ssp or Path(robot), target,
                                                              args)
     check_writable(csv_path)              # before the build and the run: results never lost

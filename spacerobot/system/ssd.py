@@ -13,7 +13,11 @@ Layout of a generated system (the same inside ``<robot>.ssp`` and under ``ssp/<r
     resources/SpaceRobotSensors.fmu        (only in <robot>_sensors.ssp)
     resources/<set>.ssv                    one parameter set per scenario
                                            (robots.PARAMETER_SETS; planar: small, medium,
-                                           large, paper, excited; spatial: paper, default)
+                                           large, paper, excited; spatial: paper, default,
+                                           depletion)
+    resources/estimator/<set>.ssv          the estimator settings of that set
+                                           (ESTIMATOR_SET_PARAMETERS; e.g. depletion:
+                                           lambda 0.98, ident.excite_mode 2)
 
 The system with the sensors FMU (``sensors=True``, ``<robot>_sensors.ssp``, SSD name
 ``SpaceRobot_<robot>_sensors``) wires plant ``<name>`` -> sensors ``true.<name>``, sensors
@@ -25,7 +29,8 @@ paper's parameter sets are made for. docs/sensors.md.
 Tool compatibility (what OMSimulator and libcosim need to load the .ssp): ``version="1.0"``; namespace prefixes exactly ``ssd:``,
 ``ssc:``, ``ssv:``; one flat root System holding the two components; every connector typed
 (``<ssc:Real unit="..."/>`` or ``<ssc:Integer/>``) with its unit declared in ``ssd:Units``; the
-parameter set bound at component level (a ParameterBinding on the plant component); the
+parameter set bound at component level (a ParameterBinding on the plant component, and one on
+the estimator component to the set's ``resources/estimator/<set>.ssv``); the
 communication step in the root System's ``oms:FixedStepMaster`` annotation (OMSimulator) and in
 DefaultExperiment's ``osp:FixedStepAlgorithm`` annotation (libcosim / OSP).
 """
@@ -71,6 +76,14 @@ SET_PARAMETERS: Tuple[str, ...] = (
     + tuple(f"base.omega0[{i}]" for i in (1, 2, 3))
     + tuple(f"excite.{k}" for k in EXCITATION_DOC)
     + tuple(f"prop.{k}" for k in PROPELLANT_DOC) + tuple(f"prop.r[{i}]" for i in (1, 2, 3)))
+
+#: the estimator parameters a parameter set binds (``resources/estimator/<set>.ssv``): every
+#: estimator setting any set has (:attr:`spacerobot.robots.ParameterSet.estimator`); a set
+#: without one binds the estimator's default
+ESTIMATOR_SET_PARAMETERS: Tuple[str, ...] = tuple(sorted(
+    {k for sets in PARAMETER_SETS.values() for ps in sets.values() for k, _ in ps.estimator}))
+#: folder (inside ``resources/``) of the estimator's files of the parameter sets
+ESTIMATOR_SET_DIR = "estimator"
 
 
 def _check_robot(robot: str) -> None:
@@ -120,6 +133,20 @@ def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
     return out
 
 
+def estimator_parameter_set(robot: str, name: str) -> List[Tuple[str, str, float, Optional[str]]]:
+    """``[(variable name, FMI type, value, unit or None), ...]`` of the estimator's file of
+    parameter set ``name`` (:data:`ESTIMATOR_SET_PARAMETERS`): the set's estimator settings,
+    the estimator FMU's defaults for the others."""
+    if name not in parameter_set_names(robot, sensors=True):
+        raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
+                         f"choose from {parameter_set_names(robot, sensors=True)}")
+    sc = parameter_set_scenario(robot, name)
+    var = {v.name: v for v in estimator_vars(sc.robot, sc)}
+    chosen = dict(PARAMETER_SETS[robot_kind(robot)][name].estimator)
+    return [(n, var[n].type, float(chosen.get(n, var[n].start)), var[n].unit)
+            for n in ESTIMATOR_SET_PARAMETERS]
+
+
 def _units_xml(units, indent: str, prefix: str) -> List[str]:
     out = [f"{indent}<{prefix}:Units>"]
     for u in sorted(units):
@@ -154,6 +181,38 @@ def ssv_xml(robot: str, name: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def estimator_ssv_xml(robot: str, name: str) -> str:
+    """Text of ``resources/estimator/<name>.ssv``: the estimator settings of parameter set
+    ``name`` (:func:`estimator_parameter_set`), bound to the estimator component."""
+    params = estimator_parameter_set(robot, name)
+    desc = (f"{robot_label(robot)}-{name}: estimator settings of the set "
+            f"({', '.join(n for n, _, _, _ in params)})")
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
+             f'<ssv:ParameterSet xmlns:ssv="{NS["ssv"]}" xmlns:ssc="{NS["ssc"]}"',
+             f'    version="1.0" name={quoteattr(name)} generationTool="{GENERATOR}"',
+             f'    description={quoteattr(desc)}>',
+             "  <ssv:Parameters>"]
+    for pname, typ, value, unit in params:
+        lines.append(f"    <ssv:Parameter name={quoteattr(pname)}>")
+        if typ == "Integer":
+            lines.append(f"      <ssv:Integer value=\"{int(value)}\"/>")
+        else:
+            u = f" unit={quoteattr(unit)}" if unit else ""
+            lines.append(f"      <ssv:Real value=\"{_num(value)}\"{u}/>")
+        lines.append("    </ssv:Parameter>")
+    lines.append("  </ssv:Parameters>")
+    units = {u for _, typ, _, u in params if typ == "Real" and u}
+    if units:
+        lines += _units_xml(units, "  ", "ssv")
+    lines.append("</ssv:ParameterSet>")
+    return "\n".join(lines) + "\n"
+
+
+def estimator_ssv_path(name: str) -> str:
+    """Path inside the system of the estimator's file of parameter set ``name``."""
+    return f"resources/{ESTIMATOR_SET_DIR}/{name}.ssv"
+
+
 def _connector(var: Var, kind: str, indent: str) -> List[str]:
     if var.type == "Real":
         typ = f"<ssc:Real unit={quoteattr(var.unit)}/>" if var.unit else "<ssc:Real/>"
@@ -170,7 +229,8 @@ def component_connectors(robot: str, sensors: bool = False
 
     The plant exposes every output, its input ``ident.excite`` (the excitation loop) and the
     parameters that the parameter sets bind; the estimator exposes every input (all
-    connected) and every output; the sensors FMU (``sensors=True``) every input and output and
+    connected), every output and the parameters the sets bind
+    (:data:`ESTIMATOR_SET_PARAMETERS`); the sensors FMU (``sensors=True``) every input and output and
     ``noise.scale``.
     """
     _check_robot(robot)
@@ -181,6 +241,8 @@ def component_connectors(robot: str, sensors: bool = False
     by_name = {v.name: v for v in pv}
     plant += [(n, "parameter", by_name[n]) for n in SET_PARAMETERS]
     est = [(v.name, v.causality, v) for v in ev if v.causality in ("input", "output")]
+    by_name = {v.name: v for v in ev}
+    est += [(n, "parameter", by_name[n]) for n in ESTIMATOR_SET_PARAMETERS]
     if not sensors:
         return {PLANT: plant, ESTIMATOR: est}
     sv = sensors_vars(sc.robot, sc)
@@ -243,10 +305,12 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None, sensors: bool = False) 
         for _, kind, var in conns[comp]:
             lines += _connector(var, kind, "          ")
         lines.append("        </ssd:Connectors>")
-        if comp in (PLANT, SENSORS):
+        source = (f"resources/{bound_set}.ssv" if comp in (PLANT, SENSORS)
+                  else estimator_ssv_path(bound_set) if ESTIMATOR_SET_PARAMETERS else None)
+        if source:
             lines += ["        <ssd:ParameterBindings>",
                       f'          <ssd:ParameterBinding type="application/x-ssp-parameter-set" '
-                      f'source="resources/{bound_set}.ssv"/>',
+                      f'source="{source}"/>',
                       "        </ssd:ParameterBindings>"]
         lines.append("      </ssd:Component>")
     lines.append("    </ssd:Elements>")
@@ -298,6 +362,8 @@ def generate(robot: str, sensors: bool = False) -> Dict[str, str]:
     files = {SSD_NAME: ssd_xml(robot, sensors=sensors)}
     for name in parameter_set_names(robot, sensors):
         files[f"resources/{name}.ssv"] = ssv_xml(robot, name)
+        if ESTIMATOR_SET_PARAMETERS:
+            files[estimator_ssv_path(name)] = estimator_ssv_xml(robot, name)
     return files
 
 
@@ -363,7 +429,8 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
         p = src_dir / rel
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_text(text, encoding="utf-8")
-        key = "ssd" if rel == SSD_NAME else "ssv:" + Path(rel).stem
+        key = ("ssd" if rel == SSD_NAME else "ssv:" + Path(rel).stem if Path(rel).parent.name
+               != ESTIMATOR_SET_DIR else f"ssv:{ESTIMATOR}:" + Path(rel).stem)
         paths[key] = p
     ssp = out / f"{system_name(robot, sensors)}.ssp"
     tmp = ssp.with_suffix(".ssp.part")
