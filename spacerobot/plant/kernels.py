@@ -627,7 +627,7 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
     could not be taken; ``xout`` and ``t_reached`` are then the state and time at its start.
     """
     R, p, axis, I6, mc = mdl
-    X, oR, op, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    bR, bp, S, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
     nx = x.shape[0]
     om = 6 + qn.shape[0] + vs.shape[0]   # m_p in the state
@@ -639,7 +639,7 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
         dt = h if k < n_steps else rest
         if on:
             base_inertia(xa[om], pp, I6d, I6u, mcd, I6, mc)
-        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, X, oR, op, vel, cb, IA, pA, accb, U,
+        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bR, bp, S, vel, cb, IA, pA, accb, U,
               Du, M6, v6)
         err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM,
                              pp, xa[om], dt, parw)
@@ -651,7 +651,7 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
         for i in range(1, 4):
             if on:
                 base_inertia(xs[om], pp, I6d, I6u, mcd, I6, mc)
-            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, X, oR, op, vel, cb, IA, pA, accb, U,
+            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, bR, bp, S, vel, cb, IA, pA, accb, U,
                    Du, M6, v6):
                 for j in range(nx):
                     xout[j] = xa[j]
