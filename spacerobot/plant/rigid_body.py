@@ -119,19 +119,27 @@ def cholesky(S, L):
 
 @njit(**_NB)
 def cho_solve(L, B):
-    """Solve ``L L^T X = B`` in place of ``B`` (k, c)."""
+    """Solve ``L L^T X = B`` in place of ``B`` (k, c).
+
+    Row by row with the columns innermost (independent, so they pipeline), each entry summed
+    in the same order as a column-by-column substitution."""
     k, c = B.shape
-    for col in range(c):
-        for i in range(k):
-            s = B[i, col]
-            for p in range(i):
-                s -= L[i, p] * B[p, col]
-            B[i, col] = s / L[i, i]
-        for i in range(k - 1, -1, -1):
-            s = B[i, col]
-            for p in range(i + 1, k):
-                s -= L[p, i] * B[p, col]
-            B[i, col] = s / L[i, i]
+    for i in range(k):                   # L Y = B
+        for p in range(i):
+            lip = L[i, p]
+            for col in range(c):
+                B[i, col] -= lip * B[p, col]
+        d = L[i, i]
+        for col in range(c):
+            B[i, col] /= d
+    for i in range(k - 1, -1, -1):       # L^T X = Y
+        for p in range(i + 1, k):
+            lpi = L[p, i]
+            for col in range(c):
+                B[i, col] -= lpi * B[p, col]
+        d = L[i, i]
+        for col in range(c):
+            B[i, col] /= d
 
 
 # -- spatial algebra ----------------------------------------------------------------------------
