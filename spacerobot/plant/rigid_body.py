@@ -510,16 +510,18 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
         D = U[k, 3] * s0 + U[k, 4] * s1 + U[k, 5] * s2
         u = tau[nr + k - 1] - (pA[k, 3] * s0 + pA[k, 4] * s1 + pA[k, 5] * s2)
         Du[k, 0], Du[k, 1] = D, u
-        # Ia = IA - U U^T / D ;  pa = pA + Ia c + U u / D
+        # Ia = IA - U U^T / D (upper triangle: all _shift_add reads);
+        # pa = pA + Ia c + U u / D = pA + IA c + U (u - U^T c) / D
+        f = (u - (U[k, 0] * cb[k, 0] + U[k, 1] * cb[k, 1] + U[k, 2] * cb[k, 2]
+                  + U[k, 3] * cb[k, 3] + U[k, 4] * cb[k, 4] + U[k, 5] * cb[k, 5])) / D
         for i in range(6):
             Ui = U[k, i] / D
+            s = pA[k, i] + U[k, i] * f
             for j in range(6):
-                Ia[i, j] = IA[k, i, j] - Ui * U[k, j]
-        for i in range(6):
-            s = pA[k, i] + U[k, i] * (u / D)
-            for j in range(6):
-                s += Ia[i, j] * cb[k, j]
+                s += IA[k, i, j] * cb[k, j]
             pa[i] = s
+            for j in range(i, 6):
+                Ia[i, j] = IA[k, i, j] - Ui * U[k, j]
         d0, d1, d2 = bp[k, 0] - bp[k - 1, 0], bp[k, 1] - bp[k - 1, 1], bp[k, 2] - bp[k - 1, 2]
         _shift_add(d0, d1, d2, Ia, T, IA[k - 1])
         # force to the parent's origin: f_l, f_n + d x f_l
