@@ -380,16 +380,7 @@ def _inertia_to_base(I6, k, Rk, ox, oy, oz, out):
     out[3, 4], out[4, 3] = e01, e01
     out[3, 5], out[5, 3] = e02, e02
     out[4, 5], out[5, 4] = e12, e12
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = m if i == j else 0.0
-    # [[m 1, -[g]x], [[g]x, I_O]]
-    out[0, 3], out[0, 4], out[0, 5] = 0.0, g2, -g1
-    out[1, 3], out[1, 4], out[1, 5] = -g2, 0.0, g0
-    out[2, 3], out[2, 4], out[2, 5] = g1, -g0, 0.0
-    out[3, 0], out[3, 1], out[3, 2] = 0.0, -g2, g1
-    out[4, 0], out[4, 1], out[4, 2] = g2, 0.0, -g0
-    out[5, 0], out[5, 1], out[5, 2] = -g1, g0, 0.0
+    _mass_blocks(m, g0, g1, g2, out)          # [[m 1, -[g]x], [[g]x, I_O]]
 
 
 @njit(**_NB)
