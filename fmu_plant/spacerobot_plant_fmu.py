@@ -52,12 +52,11 @@ class SpaceRobotPlant(InterfaceSlave):
         self._refresh()
 
     def _refresh(self) -> None:
-        out = self.plant.outputs()
+        y = self.plant.output_vector()
         if self._out_pos is None:
-            self._out_pos = _output_positions(self.interface, out)
-        names, groups, pos = self._out_pos
-        flat = np.concatenate([np.ravel(out[g]) for g in groups])
-        self._outputs = dict(zip(names, flat[pos].tolist()))
+            self._out_pos = _output_positions(self.interface, self.plant.output_slices())
+        names, pos = self._out_pos
+        self._outputs = dict(zip(names, y[pos].tolist()))
 
     # -- stepping --------------------------------------------------------------------------------
     def do_step(self, current_time: float, step_size: float) -> bool:
@@ -112,17 +111,12 @@ class SpaceRobotPlant(InterfaceSlave):
         self._refresh()
 
 
-def _output_positions(interface, out: dict):
-    """``(names, groups, positions)``: the output variables, the core output arrays in the
-    order they are concatenated (flattened row-major), and each variable's index in that
-    concatenation, so that a refresh is one concatenation and one fancy index."""
+def _output_positions(interface, slices: dict):
+    """``(names, positions)``: the output variables and each one's index in the core's flat
+    output vector (``Plant.output_vector``, whose ``slices`` are ``{key: (start, stop,
+    shape)}``), so that a refresh is one fancy index."""
     outputs = [(n, v.key) for n, v in interface.items() if v.causality == "output"]
-    groups = list(dict.fromkeys(key[0] for _, key in outputs))
-    offset, start = 0, {}
-    for g in groups:
-        start[g] = offset
-        offset += np.size(out[g])
-    pos = [start[g] + int(np.ravel_multi_index(idx if isinstance(idx, tuple) else (idx,),
-                                               np.shape(out[g])))
+    pos = [slices[g][0] + int(np.ravel_multi_index(idx if isinstance(idx, tuple) else (idx,),
+                                                   slices[g][2]))
            for _, (g, idx) in outputs]
-    return [n for n, _ in outputs], groups, np.array(pos)
+    return [n for n, _ in outputs], np.array(pos)

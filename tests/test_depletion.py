@@ -223,6 +223,25 @@ def test_bad_propellant_parameters_are_rejected():
             make("planar", Propellant(**{"m0": 10.0, **bad}))
 
 
+@pytest.mark.parametrize("robot", ["planar", "spatial"])
+def test_base_truth_output_is_the_propellant_base(robot):
+    """The compiled output ``base_now`` (kernels.measure) against Propellant.base (NumPy) as the
+    tank empties; and the dry base exactly without propellant model."""
+    prop = propellant(robot, 30.0)
+    p = make(robot, prop, excite=1.0)
+    dry = scenario(robot).robot.base
+    for _ in range(4):
+        p.advance(0.5)
+        ref = prop.base(dry, p.m_p)
+        got = p.outputs()["base_now"]
+        want = np.array([ref.mass, *ref.com, *ref.inertia])
+        np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-13 * np.abs(want).max())
+    assert p.m_p < 30.0 and got[0] != dry.mass                  # the tank really emptied
+    q = make(robot, None, excite=1.0)
+    q.advance(0.5)
+    assert np.array_equal(q.outputs()["base_now"], [dry.mass, *dry.com, *dry.inertia])
+
+
 def test_state_round_trip_keeps_the_propellant():
     p = make("spatial", propellant("spatial", 20.0), excite=1.0)
     p.advance(0.5)

@@ -121,7 +121,7 @@ def _run_kernel(planar, q, v, M, nle, hg, c, q_home, t=0.0, ramp=NO_RAMP, tab=NO
     nv = len(v)
     gen, acc, FM = np.zeros(nv), np.zeros(nv), np.zeros(6)
     err = kernels.control(planar, q, v, M, nle, hg, par, np.asarray(q_home, float), t, ramp, tab,
-                          gen, acc, FM)
+                          gen, acc, FM, kernels.control_work(planar, nv))
     assert err == 0
     return FM, gen, acc
 
@@ -232,7 +232,7 @@ def test_control_kernel_reports_singular_inertia():
     par = np.array([getattr(sc.controller, k) for k in kernels.PARAMS], float)
     q = np.array([0.0, 0.0, 1.0, 0.0, 0.1, 0.2, 0.3])
     args = (q, np.zeros(nv))
-    bufs = (np.zeros(nv), np.zeros(nv), np.zeros(6))
+    bufs = (np.zeros(nv), np.zeros(nv), np.zeros(6), kernels.control_work(True, nv))
     M = np.zeros((nv, nv))
     ex = (0.0, NO_RAMP, NO_TAB)
     assert kernels.control(True, *args, M, np.zeros(nv), np.zeros(6), par, np.zeros(3), *ex,
@@ -282,17 +282,15 @@ def test_compiled_kernels_are_reused_by_a_new_process(tmp_path):
         "p.advance(0.01)\n"
         "p.outputs()\n"
         "st = {k: [sum(getattr(f.stats, 'cache_' + w).values()) for w in ('hits', 'misses')]\n"
-        "      for k, f in (('thrust_control', kernels.thrust_control),\n"
-        "                   ('advance', kernels.advance),\n"
-        "                   ('terms', rigid_body.terms))}\n"
+        "      for k, f in (('measure', kernels.measure), ('advance', kernels.advance))}\n"
         "print(json.dumps({'file': kernels.__file__, 'stats': st, 'x': p.q.tolist()}))\n")
     env = dict(os.environ, SPACEROBOT_CACHE_DIR=str(tmp_path))
     runs = [json.loads(subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, check=True,
                                       capture_output=True, text=True).stdout.splitlines()[-1])
             for _ in range(2)]
     assert all(Path(r["file"]).is_relative_to(tmp_path) for r in runs)
-    assert runs[0]["stats"]["thrust_control"][1] >= 1          # compiled (cache miss)
-    for name in ("thrust_control", "advance", "terms"):
+    assert runs[0]["stats"]["measure"][1] >= 1                 # compiled (cache miss)
+    for name in ("measure", "advance"):
         hits, misses = runs[1]["stats"][name]
         assert hits >= 1 and misses == 0
     assert list((tmp_path).glob("kernels-*/__pycache__/*.nbi"))

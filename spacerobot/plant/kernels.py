@@ -189,12 +189,18 @@ def reference(t, ramp, tab, c):
     """Scaled reference ``s(t) f_c(t)`` of channel ``c`` and its first two time derivatives
     (product rule; ``s`` from :func:`ramp_level`). Callable from Python (tests, docs)."""
     s, ds, dds = ramp_level(t, ramp)
+    return _scaled(s, ds, dds, tab, c, t)
+
+
+@njit(**_NB)
+def _scaled(s, ds, dds, tab, c, t):
+    """``s f_c(t)`` and its first two time derivatives, for the level ``(s, s', s'')``."""
     f, df, ddf = channel(tab, c, t)
     return s * f, ds * f + s * df, dds * f + 2.0 * ds * df + s * ddf
 
 
 @njit(**_NB)
-def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
+def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, cw):
     """Thruster and arm commands at the state ``(q, v)``, held over the next internal step.
 
     Parameters
@@ -209,6 +215,7 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
     ramp : (4,)              excitation level ramp ``[s0, u, t0, T]`` (:func:`ramp_level`)
     tab : (r + n, 5)         excitation channels: ``r`` attitude axes (1 planar, 3 spatial),
                              then the joints (:func:`channel`)
+    cw : tuple               scratch arrays of :func:`control_work`
 
     With the excitation level and its derivatives all zero, the references are not evaluated
     at all (the law is then exactly the paper's, bit for bit). Otherwise eq. 39 becomes the
@@ -230,8 +237,10 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
     for i in range(3):
         FM[i] = bounded_law(hg[i], par[0], par[1], par[2])
         FM[3 + i] = bounded_law(hg[3 + i], par[3], par[4], par[5])
+    Lb, sol, Lm, WiGt, GWG, Lg, zz, vec = cw
+    e, post, rhs, zv = vec[0, :3], vec[1, :n], vec[2, :r], vec[3, :r]
     # thrust in base coordinates, and the attitude error e (rotation vector; theta_z planar)
-    e = np.zeros(3)
+    e[0] = e[1] = e[2] = 0.0
     if planar:
         c, s = q[2], q[3]
         k = 1.0 / math.hypot(c, s)
@@ -256,25 +265,20 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
         kk = 2.0 * math.atan2(nvec, w) / nvec if nvec > 1e-8 * w else 2.0 / w
         e[0], e[1], e[2] = kk * x, kk * y, kk * z
     # base rows: M_bb dv_b + M_bm qdd = f_b - c_b  ->  dv_b = y0 - X qdd
-    Lb = np.empty((nb, nb))
     if not cholesky(M[:nb, :nb], Lb):
         return 1
-    sol = np.empty((nb, n + 1))
     for i in range(nb):
         for j in range(n):
             sol[i, j] = M[i, nb + j]
         sol[i, n] = gen[i] - nle[i]
     cho_solve(Lb, sol)                  # [X, y0]
     # attitude rows: G qdd = y0_rot - alpha_des with G = X_rot; W = M_mm weights the solve
-    Lm = np.empty((n, n))
     if not cholesky(M[nb:, nb:], Lm):
         return 2
-    WiGt = np.empty((n, r))
     for i in range(n):
         for j in range(r):
             WiGt[i, j] = sol[r0 + j, i]
     cho_solve(Lm, WiGt)                 # W^-1 G^T
-    GWG = np.zeros((r, r))
     for i in range(r):
         for j in range(r):
             s = 0.0
@@ -282,12 +286,10 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
                 s += sol[r0 + i, p] * WiGt[p, j]
             GWG[i, j] = s
     # posture: -K_Pn (q - q_home) - K_Dn qd
-    post = np.empty(n)
     nq = q.shape[0]
     for i in range(n):
         post[i] = -KPn * (q[nq - n + i] - q_home[i]) - KDn * v[nb + i]
     # rhs_att = y0_rot - alpha_des - G post, alpha_des = -K_D omega - K_P e
-    rhs = np.empty(r)
     for j in range(r):
         s = sol[r0 + j, n] + KD * v[r0 + j] + KP * e[3 - r + j]
         rhs[j] = s
@@ -295,10 +297,10 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
     if lev != 0.0 or dlev != 0.0 or ddlev != 0.0:
         # excitation: posture about q_home + q_r, attitude error about e_r
         for i in range(n):
-            qr, dqr, ddqr = reference(t, ramp, tab, r + i)
+            qr, dqr, ddqr = _scaled(lev, dlev, ddlev, tab, r + i, t)
             post[i] += ddqr + KPn * qr + KDn * dqr
         for j in range(r):
-            er, der, dder = reference(t, ramp, tab, j)
+            er, der, dder = _scaled(lev, dlev, ddlev, tab, j, t)
             rhs[j] -= dder + KD * der + KP * er
     for j in range(r):
         s = rhs[j]
@@ -311,22 +313,21 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
         lo, hi = _sym3_eigenvalues(GWG[0, 0], GWG[0, 1], GWG[0, 2], GWG[1, 1], GWG[1, 2],
                                    GWG[2, 2])
     lmax = max(hi, 1e-300)
-    z = np.empty(r)                      # z = (GWG)^+ rhs
-    if lo / lmax >= 1.01 * DLS_RATIO:
-        Lg = np.empty((r, r))
+    if lo / lmax >= 1.01 * DLS_RATIO:     # z = (GWG)^+ rhs
         if not cholesky(GWG, Lg):
             return 3
-        zz = rhs.reshape(r, 1).copy()
+        for j in range(r):
+            zz[j, 0] = rhs[j]
         cho_solve(Lg, zz)
         for j in range(r):
-            z[j] = zz[j, 0]
+            zv[j] = zz[j, 0]
     else:
         lam = np.empty(r)
         U = np.empty((r, r))
         _jacobi_eigh(GWG, lam, U)
         lmax = max(lam[r - 1], 1e-300)
         for j in range(r):
-            z[j] = 0.0
+            zv[j] = 0.0
         for k in range(r):
             rr = max(lam[k] / lmax, 0.0)
             damp = DLS_RATIO * lmax * (1.0 - rr / DLS_RATIO) ** 2 if rr < DLS_RATIO else 0.0
@@ -335,13 +336,13 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
                 uk += U[j, k] * rhs[j]
             uk /= lam[k] + damp
             for j in range(r):
-                z[j] += U[j, k] * uk
+                zv[j] += U[j, k] * uk
     # qdd = W^-1 G^T z + post, scaled down (direction kept) to |qdd| <= qdd_max
     peak = 0.0
     for i in range(n):
         s = post[i]
         for j in range(r):
-            s += WiGt[i, j] * z[j]
+            s += WiGt[i, j] * zv[j]
         acc[nb + i] = s
         if abs(s) > peak:
             peak = abs(s)
@@ -360,6 +361,15 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM):
             s += M[nb + i, p] * acc[p]
         gen[nb + i] = s
     return 0
+
+
+def control_work(planar: bool, nv: int) -> tuple:
+    """Scratch arrays of :func:`control` for a robot with ``nv`` velocities (allocated once by
+    the plant, so that the kernel allocates nothing per call)."""
+    nb = 3 if planar else 6
+    n, r = nv - nb, 1 if planar else 3
+    return (np.empty((nb, nb)), np.empty((nb, n + 1)), np.empty((n, n)), np.empty((n, r)),
+            np.empty((r, r)), np.empty((r, r)), np.empty((r, 1)), np.empty((4, max(n, 3))))
 
 
 #: layout of the propellant array ``pp`` (:func:`.simulator.propellant_array`): 1/(Isp g0)
@@ -394,7 +404,7 @@ def mass_flow(FM, pp):
 
 @njit(**_NB)
 def thrust_control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp, m_p,
-                   dt, parw):
+                   dt, parw, cw):
     """:func:`control` limited by the propellant ``m_p`` [kg] available for a step of ``dt``.
 
     Writes ``FM[6]`` = the mass flow of the thrust applied [kg/s] (0 without propellant model,
@@ -402,9 +412,10 @@ def thrust_control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc
     by ``s = m_p / (flow dt)`` (the tank empties at the end of the step; ``s = 0`` once empty):
     :func:`control` runs again with the gains and bounds of the two thruster laws scaled by
     ``s`` (``bounded_law`` is then ``s`` times the unscaled one), so that the accelerations
-    and joint torques are those of the scaled thrust. ``parw`` (11,) scratch.
+    and joint torques are those of the scaled thrust. ``parw`` (11,) scratch, ``cw``: as in
+    :func:`control`.
     """
-    err = control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM)
+    err = control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, cw)
     if err or pp[0] == 0.0:
         FM[6] = 0.0
         return err
@@ -416,7 +427,7 @@ def thrust_control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc
             parw[i] = par[i]
         for i in (0, 2, 3, 5):           # K_F, F_max, K_M, M_max
             parw[i] *= s
-        err = control(planar, q, v, M, nle, hg, parw, q_home, t, ramp, tab, gen, acc, FM)
+        err = control(planar, q, v, M, nle, hg, parw, q_home, t, ramp, tab, gen, acc, FM, cw)
         flow = mass_flow(FM, pp)
     FM[6] = flow
     return err
@@ -597,7 +608,7 @@ def load(planar, x, qn, vs):
 
 
 @njit(**_NB)
-def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, prop, K, xs, qn,
+def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab, prop, K, xs, qn,
             vs, gen, acc, FM, M, nle, hg, ddq, xa, xout):
     """``n_steps`` RK4 steps of length ``h``, then one of length ``rest`` if ``rest > 0``, from
     the state ``x`` at time ``t``: the plant's whole communication step in one call.
@@ -612,6 +623,7 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
     planar : bool
     mdl : tuple ``(R, p, axis, I6, mc)`` of :func:`.rigid_body.chain_arrays`
     ws : tuple, the work arrays of :class:`.rigid_body.Workspace`
+    cw : tuple, the scratch arrays of :func:`control_work`
     x : (nx,) state ``[J, H, q, v, m_p, P_x, L_x]`` (:func:`stage`); ``qn``, ``vs`` must hold
     its normalised configuration and velocity (:func:`load`)
     par, q_home, ramp, tab : as in :func:`control`
@@ -627,7 +639,7 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
     could not be taken; ``xout`` and ``t_reached`` are then the state and time at its start.
     """
     R, p, axis, I6, mc = mdl
-    X, oR, op, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    bR, bp, S, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
     nx = x.shape[0]
     om = 6 + qn.shape[0] + vs.shape[0]   # m_p in the state
@@ -639,10 +651,10 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
         dt = h if k < n_steps else rest
         if on:
             base_inertia(xa[om], pp, I6d, I6u, mcd, I6, mc)
-        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, X, oR, op, vel, cb, IA, pA, accb, U,
+        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bR, bp, S, vel, cb, IA, pA, accb, U,
               Du, M6, v6)
         err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM,
-                             pp, xa[om], dt, parw)
+                             pp, xa[om], dt, parw, cw)
         if err:
             for j in range(nx):
                 xout[j] = xa[j]
@@ -651,7 +663,7 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
         for i in range(1, 4):
             if on:
                 base_inertia(xs[om], pp, I6d, I6u, mcd, I6, mc)
-            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, X, oR, op, vel, cb, IA, pA, accb, U,
+            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, bR, bp, S, vel, cb, IA, pA, accb, U,
                    Du, M6, v6):
                 for j in range(nx):
                     xout[j] = xa[j]
@@ -664,3 +676,149 @@ def advance(planar, mdl, ws, x, n_steps, h, rest, t, par, q_home, ramp, tab, pro
     for j in range(nx):
         xout[j] = xa[j]
     return 0, t
+
+
+def output_layout(n: int) -> tuple:
+    """``(name, shape)`` of every plant output in the order :func:`measure` writes them into its
+    flat output vector, for a robot with ``n`` joints (keys of ``Plant.outputs``)."""
+    return (("r_S", (3,)), ("v_S", (3,)), ("A", (3, 3)), ("omega_B", (3,)), ("a_S", (3,)),
+            ("alpha_B", (3,)), ("q", (n,)), ("qd", (n,)), ("qdd", (n,)), ("F", (3,)),
+            ("M", (3,)), ("J", (3,)), ("H", (3,)), ("P", (3,)), ("L", (3,)), ("tau", (n,)),
+            ("excite_level", (1,)), ("att_ref", (3,)), ("qd_ref", (n,)), ("m_p", (1,)),
+            ("P_x", (3,)), ("L_x", (3,)), ("base_now", (10,)))
+
+
+@njit(**_NB)
+def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn, vs, gen, acc,
+            FM, M, nle, hg, y):
+    """The controls at the state ``x`` (time ``t``) for the next internal step of ``h`` (as
+    :func:`advance` computes them) and every output of the plant there, in one call.
+
+    Writes the control buffers ``gen``, ``acc``, ``FM`` (:func:`thrust_control`), ``M``,
+    ``nle``, ``hg`` (:func:`.rigid_body.terms`), ``qn``, ``vs`` (:func:`load`) and the output
+    vector ``y`` in the order of :func:`output_layout`: base position ``r_S``, velocity
+    ``v_S = A v_l`` (inertial), DCM ``A`` (row-major), ``omega_B``, the classical acceleration
+    of S ``a_S = A (dv_l/dt + omega_B x v_l)`` (inertial), ``alpha_B``; ``q``, ``qd``, ``qdd``
+    of the arm; thrust ``F``, ``M`` and impulses ``J``, ``H``; the system momentum ``P`` and
+    ``L`` about the inertial origin (``L_c + c x P``); joint torques; the excitation level and
+    references (``att_ref`` (3,), ``qd_ref`` (n,); zero when no excitation was asked for);
+    the propellant ``m_p``, ``P_x``, ``L_x``; the base's current truth ``[m, b, Ixx, Iyy, Izz,
+    Ixy, Ixz, Iyz]`` (the dry base ``dry`` (10,) plus the propellant left, by
+    ``spacerobot.robots.Propellant.base``'s parallel-axis formula).
+    ``mdl``, ``ws``, ``cw``, ``par``, ``q_home``, ``ramp``, ``tab``, ``prop``: as in
+    :func:`advance`. Returns 0 or the code (:data:`ERRORS`) of a singular matrix.
+    """
+    R, p, axis, I6, mc = mdl
+    bR, bp, S, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    pp, I6d, I6u, mcd, parw = prop
+    nq, nv = qn.shape[0], vs.shape[0]
+    nb = 3 if planar else 6
+    n = nv - nb
+    om = 6 + nq + nv
+    m_p = x[om]
+    load(planar, x, qn, vs)
+    if pp[0] != 0.0:
+        base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc)
+    c0, c1, c2 = terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bR, bp, S, vel, cb, IA,
+                       pA, accb, U, Du, M6, v6)
+    err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp,
+                         m_p, h, parw, cw)
+    if err:
+        return err
+    q, v = x[6:6 + nq], x[6 + nq:om]
+    # base pose and motion: A, v_l, omega_B, dv_l/dt, alpha_B (planar: in the plane)
+    if planar:
+        c, s = q[2], q[3]
+        k = 1.0 / math.hypot(c, s)
+        a00, a01, a02, a10, a11, a12, a20, a21, a22 = c * k, -s * k, 0.0, s * k, c * k, 0.0, \
+            0.0, 0.0, 1.0
+        r0, r1, r2 = q[0], q[1], 0.0
+        vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], 0.0, 0.0, 0.0, v[2]
+        dl0, dl1, dl2, al0, al1, al2 = acc[0], acc[1], 0.0, 0.0, 0.0, acc[2]
+    else:
+        a00, a01, a02, a10, a11, a12, a20, a21, a22 = quat_dcm(q[3], q[4], q[5], q[6])
+        r0, r1, r2 = q[0], q[1], q[2]
+        vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
+        dl0, dl1, dl2, al0, al1, al2 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5]
+    # classical acceleration of S in base axes: dv_l/dt + omega x v_l
+    e0 = dl0 + (w1 * vl2 - w2 * vl1)
+    e1 = dl1 + (w2 * vl0 - w0 * vl2)
+    e2 = dl2 + (w0 * vl1 - w1 * vl0)
+    y[0], y[1], y[2] = r0, r1, r2
+    y[3] = a00 * vl0 + a01 * vl1 + a02 * vl2
+    y[4] = a10 * vl0 + a11 * vl1 + a12 * vl2
+    y[5] = a20 * vl0 + a21 * vl1 + a22 * vl2
+    y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13], y[14] = (a00, a01, a02, a10, a11, a12,
+                                                                 a20, a21, a22)
+    y[15], y[16], y[17] = w0, w1, w2
+    y[18] = a00 * e0 + a01 * e1 + a02 * e2
+    y[19] = a10 * e0 + a11 * e1 + a12 * e2
+    y[20] = a20 * e0 + a21 * e1 + a22 * e2
+    y[21], y[22], y[23] = al0, al1, al2
+    o = 24
+    for i in range(n):
+        y[o + i] = q[nq - n + i]
+        y[o + n + i] = v[nb + i]
+        y[o + 2 * n + i] = acc[nb + i]
+    o += 3 * n
+    for i in range(6):                   # F, M, J, H
+        y[o + i] = FM[i]
+        y[o + 6 + i] = x[i]
+    o += 12
+    # P and L about the inertial origin: L_c + c x P
+    P0, P1, P2 = hg[0], hg[1], hg[2]
+    y[o], y[o + 1], y[o + 2] = P0, P1, P2
+    y[o + 3] = hg[3] + (c1 * P2 - c2 * P1)
+    y[o + 4] = hg[4] + (c2 * P0 - c0 * P2)
+    y[o + 5] = hg[5] + (c0 * P1 - c1 * P0)
+    o += 6
+    for i in range(n):
+        y[o + i] = gen[nb + i]
+    o += n
+    lev = ramp_level(t, ramp)[0]
+    y[o] = lev
+    o += 1
+    r = 1 if planar else 3
+    for i in range(3 + n):               # att_ref (3,), qd_ref (n,)
+        y[o + i] = 0.0
+    if ramp[0] != 0.0 or ramp[1] != 0.0:
+        s, ds, dds = ramp_level(t, ramp)
+        for j in range(r):
+            y[o + 3 - r + j] = _scaled(s, ds, dds, tab, j, t)[0]
+        for i in range(n):
+            y[o + 3 + i] = _scaled(s, ds, dds, tab, r + i, t)[1]
+    o += 3 + n
+    for i in range(7):                   # m_p, P_x, L_x
+        y[o + i] = x[om + i]
+    o += 7
+    _base_now(dry, pp, m_p, y[o:o + 10])
+    return 0
+
+
+@njit(**_NB)
+def _base_now(dry, pp, m_p, out):
+    """``[m, b, Ixx, Iyy, Izz, Ixy, Ixz, Iyz]`` of the base with ``m_p`` of propellant
+    (``spacerobot.robots.Propellant.base``): ``m = m_d + m_p``, ``b = b_d + (m_p / m)(r - b_d)``,
+    ``I = I_d + m_d S(b_d - b) + (2/5) m_p R^2 1 + m_p S(r - b)``, ``S(d) = |d|^2 1 - d d^T``;
+    the dry base ``dry`` itself without propellant model (``pp[0] = 0``)."""
+    for i in range(10):
+        out[i] = dry[i]
+    if pp[0] == 0.0:
+        return
+    md = dry[0]
+    m = md + m_p
+    f = m_p / m
+    b0 = dry[1] + f * (pp[3] - dry[1])
+    b1 = dry[2] + f * (pp[4] - dry[2])
+    b2 = dry[3] + f * (pp[5] - dry[3])
+    d0, d1, d2 = dry[1] - b0, dry[2] - b1, dry[3] - b2
+    e0, e1, e2 = pp[3] - b0, pp[4] - b1, pp[5] - b2
+    dd = d0 * d0 + d1 * d1 + d2 * d2
+    ee = e0 * e0 + e1 * e1 + e2 * e2
+    out[0], out[1], out[2], out[3] = m, b0, b1, b2
+    out[4] = dry[4] + md * (dd - d0 * d0) + m_p * ((pp[2] + ee) - e0 * e0)
+    out[5] = dry[5] + md * (dd - d1 * d1) + m_p * ((pp[2] + ee) - e1 * e1)
+    out[6] = dry[6] + md * (dd - d2 * d2) + m_p * ((pp[2] + ee) - e2 * e2)
+    out[7] = dry[7] + md * (-d0 * d1) + m_p * (-e0 * e1)
+    out[8] = dry[8] + md * (-d0 * d2) + m_p * (-e0 * e2)
+    out[9] = dry[9] + md * (-d1 * d2) + m_p * (-e1 * e2)

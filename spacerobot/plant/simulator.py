@@ -13,11 +13,13 @@ Implementation notes (performance; the equations are those of :mod:`.dynamics` a
   (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
   times the compiled articulated-body algorithm (:func:`.rigid_body.aba`) followed by the stage
   kernel, which also forms the next stage state and the combination of the four stages. The
-  compiled model's arrays are read from the Pinocchio model (:func:`.rigid_body.chain_arrays`);
-  Pinocchio still gives the momentum outputs once per communication step. With a propellant
-  model (:class:`~spacerobot.robots.Propellant`, ``m0 > 0``) the compiled base inertia
-  follows the propellant mass inside the compiled call, and Pinocchio's base inertia is set to
-  the current one before the momentum outputs.
+  compiled model's arrays are read from the Pinocchio model (:func:`.rigid_body.chain_arrays`),
+  which is otherwise not used while stepping. With a propellant model
+  (:class:`~spacerobot.robots.Propellant`, ``m0 > 0``) the compiled base inertia follows the
+  propellant mass inside the compiled call.
+* The outputs are one more compiled call (:func:`.kernels.measure`): the rigid-body terms and
+  the controls at the current state (those the next step holds) and every output, written
+  into one flat vector (:meth:`Plant.output_vector`, layout :func:`.kernels.output_layout`).
 """
 from __future__ import annotations
 
@@ -30,8 +32,7 @@ import pinocchio as pin
 
 from ..robots import G0, Controller, Excitation, Propellant, RigidBody, Robot
 from . import kernels, rigid_body
-from .dynamics import (PlantModel, base_acceleration, base_generalised_velocity, base_position,
-                       base_rotation, base_velocity, build_model, initial_configuration, momentum)
+from .dynamics import PlantModel, base_generalised_velocity, build_model, initial_configuration
 
 
 @dataclass
@@ -78,7 +79,6 @@ class Plant:
         self.propellant = propellant
         self.excitation = excitation
         self.pm: PlantModel = build_model(robot, base, target)
-        self.data = self.pm.model.createData()
         self.controller = controller
         self.h = float(h)
         self.q_home = np.asarray(robot.q0, float)
@@ -108,13 +108,21 @@ class Plant:
         pp = propellant_array(propellant)
         self._prop = (pp, self._mdl[3][0].copy(), unit_sphere_inertia(pp),
                       self._mdl[4][0].copy(), np.empty_like(self._par))
-        self._pin_mp = 0.0         # propellant mass of Pinocchio's base inertia
         self._ws = rigid_body.Workspace(pm.model.njoints - 2).arrays()
+        self._cw = kernels.control_work(robot.planar, self._nv)
         self._M = np.zeros((self._nv, self._nv))
         self._nle = np.zeros(self._nv)
         self._hg = np.zeros(6)
         self._buf = (self._K, self._xs, self._qn, self._vs, self._gen, self._acc, self._FM,
                      self._M, self._nle, self._hg, np.empty(self._nv), np.empty(nx))
+        # outputs: one flat vector (kernels.output_layout) and the dry base's truth
+        self._dry = np.array([base.mass, *base.com, *base.inertia], float)
+        self._layout, start = [], 0
+        for key, shape in kernels.output_layout(self.pm.n):
+            size = int(np.prod(shape))
+            self._layout.append((key, start, start + size, shape))
+            start += size
+        self._y = np.empty(start)
         # excitation: reference channels (attitude axes, then joints) and the level ramp
         # [s0, u, t0, T] (kernels.ramp_level); level 0 until set_excitation asks for more
         self._ex_tab = excitation.channels(1 if robot.planar else 3, self.pm.n)
@@ -265,7 +273,7 @@ class Plant:
         err = kernels.thrust_control(self.pm.planar, qn, vs, self._M, self._nle, self._hg,
                                      self._par, self.q_home, self.t, self._ramp, self._ex_tab,
                                      self._gen, self._acc, self._FM, pp, x[self._om], self.h,
-                                     parw)
+                                     parw, self._cw)
         if err:
             raise np.linalg.LinAlgError(kernels.ERRORS[err])
         self._ctrl_x = x
@@ -278,7 +286,8 @@ class Plant:
         if self._loaded is not x:
             kernels.load(self.pm.planar, x, self._qn, self._vs)
         xn = np.empty_like(x)
-        err, t = kernels.advance(self.pm.planar, self._mdl, self._ws, x, n, h, rest, self.t,
+        err, t = kernels.advance(self.pm.planar, self._mdl, self._ws, self._cw, x, n, h, rest,
+                                 self.t,
                                  self._par, self.q_home, self._ramp, self._ex_tab, self._prop,
                                  *self._buf, xn)
         self._x, self.t = xn, t
@@ -311,50 +320,41 @@ class Plant:
 
         Keys follow the interface contract: ``r_S, v_S, A, omega_B, a_S, alpha_B, q, qd, qdd,
         F, M, J, H, P, L, tau``, and ``excite_level`` (1,): the excitation level in effect;
+        ``att_ref`` (3,), ``qd_ref`` (n,): the excitation references;
         the propellant: ``m_p`` (1,) [kg], ``P_x``, ``L_x`` (3,): the momentum the expelled
         propellant carried away (so ``P + P_x - P(0) = J`` and ``L + L_x - L(0) = H``), and
         ``base_now`` (10,): the base's current truth ``[m, b, I]`` (:meth:`base_now`).
+        Each value is a new array (:meth:`output_vector` gives them all at once).
         """
-        u = self.controls()
-        pm, q, v = self.pm, self.q, self.v
-        base_now = self.base_now()
-        if self.propellant.active and self._pin_mp != self.m_p:
-            pm.model.inertias[1] = pin.Inertia(base_now.mass, np.array(base_now.com, float),
-                                               base_now.inertia_matrix())
-            self._pin_mp = self.m_p
-        v_S, omega_B = base_velocity(pm, q, v)
-        a_S, alpha_B = base_acceleration(pm, q, v, u.a)
-        P, _, L_O, _ = momentum(pm, self.data, q, v)
-        n = pm.n
-        return {
-            "r_S": base_position(pm, q), "v_S": v_S, "A": base_rotation(pm, q),
-            "omega_B": omega_B, "a_S": a_S, "alpha_B": alpha_B,
-            "q": q[-n:].copy(), "qd": v[-n:].copy(), "qdd": u.a[-n:].copy(),
-            "F": u.F.copy(), "M": u.M.copy(), "J": self.J.copy(), "H": self.H.copy(),
-            "P": P, "L": L_O, "tau": u.tau.copy(),
-            "excite_level": np.array([kernels.ramp_level(self.t, self._ramp)[0]]),
-            **self._reference_outputs(),
-            "m_p": self._x[self._om:self._om + 1].copy(),
-            "P_x": self._x[self._om + 1:self._om + 4].copy(),
-            "L_x": self._x[self._om + 4:self._om + 7].copy(),
-            "base_now": np.array([base_now.mass, *base_now.com, *base_now.inertia]),
-        }
+        y = self.output_vector()
+        return {key: y[a:b].reshape(shape) for key, a, b, shape in self._layout}
+
+    def output_vector(self) -> np.ndarray:
+        """Every output of :meth:`outputs` in one new flat array, in the order of
+        :meth:`output_slices`, computed in one compiled call (:func:`.kernels.measure`: the
+        controls held from this instant and the rigid-body terms at the current state)."""
+        x = self._collect()
+        err = kernels.measure(self.pm.planar, self._mdl, self._ws, self._cw, x, self.t, self.h,
+                              self._par, self.q_home, self._ramp, self._ex_tab, self._prop,
+                              self._dry, self._qn, self._vs, self._gen, self._acc, self._FM,
+                              self._M, self._nle, self._hg, self._y)
+        self._loaded = x                  # the kernel left x's configuration in _qn, _vs
+        if err:
+            self._ctrl_x = None
+            raise np.linalg.LinAlgError(kernels.ERRORS[err])
+        self._ctrl_x = x                  # and the controls for x in _FM, _gen, _acc
+        self._u = None
+        return self._y.copy()
+
+    def output_slices(self) -> dict:
+        """``{key: (start, stop, shape)}``: where each output sits in :meth:`output_vector`."""
+        return {key: (a, b, shape) for key, a, b, shape in self._layout}
 
     def base_now(self) -> RigidBody:
         """The base's truth now: the dry base plus the propellant left
         (:meth:`~spacerobot.robots.Propellant.base`); the dry base without propellant model."""
         base = self.pm.base
         return self.propellant.base(base, self.m_p) if self.propellant.active else base
-
-    def _reference_outputs(self) -> dict:
-        """``att_ref`` (3,) [rad] and ``qd_ref`` (n,) [rad/s]: the excitation references now
-        (zeros while the level is 0; the planar robot's attitude reference is about z)."""
-        att = np.zeros(3)
-        if self._ramp[0] == 0.0 and self._ramp[1] == 0.0:
-            return {"att_ref": att, "qd_ref": np.zeros(self.pm.n)}
-        ref = self.references()
-        att[3 - len(ref["att"]):] = ref["att"]
-        return {"att_ref": att, "qd_ref": ref["q_d"]}
 
 
 def propellant_array(prop) -> np.ndarray:
