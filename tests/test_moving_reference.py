@@ -188,6 +188,8 @@ def test_a_time_that_does_not_advance_is_refused_with_a_window(spatial):
     assert ident.update(rec[4][0], rec[5][1]) == 4
     assert "increasing sample times" in ident.message
     np.testing.assert_array_equal(ident.vector(), before)
+    with pytest.raises(ValueError, match="rows"):               # no sample time: refused
+        ident.equations(rec[6][1])
 
 
 def test_state_round_trip_with_the_window_and_the_bias_fit(spatial):

@@ -250,8 +250,10 @@ class Identifier:
         ``A mu = b`` and ``phi theta = y + psi D(mu)``.
 
         Momentum: differences against the reference sample t0 (eqs. 11, 16). Returns None for
-        the reference sample itself.
+        the reference sample itself. Without a sample time: with a window use :meth:`rows`.
         """
+        if self.window > 0.0:
+            raise ValueError("equations() has no sample time; with a window use rows(t, s)")
         E = self._equations(np.concatenate([np.asarray(s[k], float).ravel() for k in KEYS]))
         return None if E is None else _split(E)
 
@@ -428,6 +430,7 @@ class Identifier:
                 total += self.history[-1][1].sum()
             if self.ring:
                 total += self.ring[-1][1].sum()
+            total += self.bias_fit.sx.sum()
         return math.isfinite(total)
 
     def _differenced(self, t: float, flat: np.ndarray):
