@@ -71,7 +71,8 @@ NOISE_COLUMNS = tuple(f"{what}_{int(t)}" for t in CHECKPOINTS
 #: sensors seed of the pilot run that measures the row standard deviations (no case has it)
 PILOT_SEED = 999_999
 #: default residual correlation lags of the noise model: 600 samples = 60 s at the 0.1 s step;
-#: measured: 600 (60 s) calibrates the 300 s estimates too (docs/identification.md, section 6)
+#: with the paper's equations 600 calibrated the momentum and measured-force estimates at 300 s;
+#: with the equation settings it does not (docs/identification.md, section 6)
 CORR_LAGS = 600
 #: the three estimator set-ups (method, acceleration source)
 COMBOS = (("momentum", "measured"), ("force", "measured"), ("force", "differenced"))
