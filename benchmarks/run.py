@@ -891,7 +891,7 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     L.append("- random real targets, noise-free, excitation loop closed and off "
              "(`benchmarks/montecarlo.py`, issue 12): [MONTECARLO.md](MONTECARLO.md);\n"
              "- identification under realistic sensor noise (`benchmarks/noise.py`, issue 14): "
-             "[NOISE.md](NOISE.md) and [NOISE_L600.md](NOISE_L600.md), discussed in "
+             "[NOISE.md](NOISE.md), discussed in "
              "[docs/identification.md](../docs/identification.md#6-under-noise);\n"
              "- a base that uses propellant, tracked with forgetting (`benchmarks/depletion.py`, "
              "issue 17): [DEPLETION.md](DEPLETION.md).\n")

@@ -169,6 +169,7 @@ CONTRACT_UNITS = [
     # estimator noise model: row standard deviations in the units of each method's equations
     (r"ident\.sd_row\.momentum_lin", "N.s"), (r"ident\.sd_row\.momentum_ang", "N.m.s"),
     (r"ident\.sd_row\.force_lin", "N"), (r"ident\.sd_row\.force_ang", "N.m"),
+    (r"ident\.(momentum|force)_window", "s"),
     (r"excite\.qd_ref\[\d\]", "rad/s"),
     # sensors FMU: white noise and random walks as their standard deviation over 1 s
     (r"noise\.(scale|thrust\.scale)", "1"), (r"noise\.gyro\.(arw|bias|rrw)", "rad/s"),

@@ -215,42 +215,47 @@ class Identifier:
         """The (3, 42) equation array ``[A | b | phi | y | psi]`` of one sample taken at ``t``
         (full 3D rows; see :mod:`.kernels`), from the flattened measurements: momentum form
         differenced against the reference sample (eqs. 11, 16), None for the first sample;
-        with a window, differenced against the sample ``window`` earlier (:meth:`_windowed`)."""
+        with a window, differenced against the sample ``window`` earlier (:meth:`_windowed`);
+        moving point: the angular rows about ``r_S`` of this sample (:func:`about_point`)."""
         E = np.empty((3, kernels.N_COLS))
         force = self.method is Method.FORCE
         kernels.equations(force, flat, self.n, *self._geom, E)
         if self.window > 0.0:
-            return self._windowed(t, E, flat)
-        if force:
+            dE = self._windowed(t, E)
+        elif force:
             return E
-        if self.reference is None:
+        elif self.reference is None:
             self.reference = E
             return None
-        return E - self.reference
+        else:
+            dE = E - self.reference
+        if self.moving_point and dE is not None:
+            about_point(dE, flat[kernels.R_S:kernels.R_S + 3])
+        return dE
 
-    def _windowed(self, t: float, E: np.ndarray, flat: np.ndarray):
+    def _windowed(self, t: float, E: np.ndarray):
         """``E - E_ref``, ``E_ref`` the newest stored sample at least ``window`` seconds before
-        ``t`` (the oldest while the run is shorter); None for the first sample. Moving point:
-        the angular rows then about ``r_S(t)`` (:func:`about_point`)."""
+        ``t`` (the oldest while the run is shorter); None for the first sample. "At least"
+        to within 1e-9 s per second of ``t``: sample times ``k h`` carry round-off."""
         ring = self.ring + ((t, E),)
         k = 0
-        while k + 1 < len(ring) - 1 and ring[k + 1][0] <= t - self.window:
+        limit = t - self.window + 1e-9 * max(1.0, abs(t))
+        while k + 1 < len(ring) - 1 and ring[k + 1][0] <= limit:
             k += 1
         self.ring = ring[k:]
         if len(self.ring) == 1:
             return None
-        dE = E - self.ring[0][1]
-        if self.moving_point:
-            about_point(dE, flat[kernels.R_S:kernels.R_S + 3])
-        return dE
+        return E - self.ring[0][1]
 
     def equations(self, s: dict):
         """``(A, b, phi, y, psi)`` for one sample, full 3D rows (before planar selection):
         ``A mu = b`` and ``phi theta = y + psi D(mu)``.
 
         Momentum: differences against the reference sample t0 (eqs. 11, 16). Returns None for
-        the reference sample itself.
+        the reference sample itself. Without a sample time: with a window use :meth:`rows`.
         """
+        if self.window > 0.0:
+            raise ValueError("equations() has no sample time; with a window use rows(t, s)")
         E = self._equations(np.concatenate([np.asarray(s[k], float).ravel() for k in KEYS]))
         return None if E is None else _split(E)
 
@@ -434,6 +439,7 @@ class Identifier:
                 total += self.history[-1][1].sum()
             if self.ring:
                 total += self.ring[-1][1].sum()
+            total += self.bias_fit.sx.sum()
         return math.isfinite(total)
 
     def _differenced(self, t: float, flat: np.ndarray):
@@ -605,6 +611,20 @@ def _copy(v):
     return copy.deepcopy(v)
 
 
+def _windows(values: Mapping[str, float]) -> dict:
+    """``{Method: window [s]}`` from ``ident.momentum_window`` and ``ident.force_window`` (both
+    checked, as the row standard deviations of both methods are)."""
+    out = {}
+    for m in Method:
+        name = f"ident.{m.name.lower()}_window"
+        x = float(values[name])
+        if not (math.isfinite(x) and 0.0 <= x <= MAX_WINDOW):
+            raise ValueError(f"{name} must be a number of seconds from 0 to {MAX_WINDOW:g}, "
+                             f"got {x}")
+        out[m] = x
+    return out
+
+
 def _flag(x, name: str) -> bool:
     """An FMI Integer switch, 0 or 1."""
     if x not in (0, 1):
@@ -670,7 +690,7 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float]
                        row_sd=row_sd(v, codes[0]),
                        diff_half_window=int(v["ident.diff_half_window"]),
                        corr_lags=int(v["ident.corr_lags"]),
-                       window=float(v[f"ident.{codes[0].name.lower()}_window"]),
+                       window=_windows(v)[codes[0]],
                        moving_point=_flag(v["ident.momentum_point"], "ident.momentum_point"),
                        accel_bias=_flag(v["ident.accel_bias"], "ident.accel_bias"))
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))

@@ -10,9 +10,11 @@ with ``x`` the measured signals. Its size follows from the sensors' noise levels
 equations that are nonlinear in the measurements (attitudes, lever arms, products of rates),
 so it is measured here rather than written out: run the sensors' models on a simulated run
 whose truth is known (a pilot run with another seed), evaluate the equations of each sample at
-the truth and take the root mean square of the rows of each equation. The result depends on the
-run's length for the momentum method, whose errors (integrated impulses, differences against
-the first sample) grow with time.
+the truth and take the root mean square of the rows of each equation, with the rows as the
+identifier builds them (:meth:`.Identifier.rows`, so with its equation settings: the momentum
+window and point, the accelerometer bias, the differencing window). The result depends on the
+run's length for the momentum method with the paper's reference (its errors, integrated
+impulses differenced against the first sample, grow with time), not with a momentum window.
 """
 from __future__ import annotations
 
