@@ -313,7 +313,7 @@ STATUS = {
     2: "estimating: last sample used",
     3: "last sample rejected: non-finite or out-of-range input, or an update that overflowed",
     4: "last sample rejected: inconsistent input (base.A not a rotation matrix, or a sample "
-       "time not after the previous one with differenced accelerations)",
+       "time not after the previous one with differenced accelerations or a reference window)",
 }
 
 

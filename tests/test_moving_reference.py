@@ -207,6 +207,9 @@ def test_state_round_trip_with_the_window_and_the_bias_fit(spatial):
         for t, o in rec[30:]:
             c.update(t, o)
         np.testing.assert_array_equal(c.vector(), a.vector())
+        np.testing.assert_array_equal(c.std(), a.std())          # the tracker's state too
+        if kw.get("accel_bias"):
+            np.testing.assert_array_equal(c.bias_fit.bias(), a.bias_fit.bias())
         fresh = Identifier(sc.robot, sc.guess, **kw)             # negative control
         for t, o in rec[30:]:
             fresh.update(t, o)
@@ -277,3 +280,30 @@ def test_momentum_window_is_accurate_and_calibrated_on_a_short_noisy_run():
                      np.mean(np.abs(ident.vector() - truth) <= 2 * ident.std()))
     assert res["window"][1] >= 0.9, res
     assert res["window"][0] < 0.1 * res["paper"][0], res
+
+
+@pytest.mark.parametrize("kw", [dict(window=None), dict(window="5"), dict(window=float("nan")),
+                                dict(window=-1.0), dict(moving_point="no"), dict(accel_bias=2)])
+def test_bad_equation_settings_are_refused(spatial, kw):
+    sc, _ = spatial
+    with pytest.raises(ValueError, match="window|moving_point|accel_bias"):
+        Identifier(sc.robot, sc.guess, "momentum", **kw)
+
+
+def test_rows_leave_the_identifier_as_it_was_when_the_equations_fail(spatial, monkeypatch):
+    sc, rec = spatial
+    ident = Identifier(sc.robot, sc.guess, "momentum", window=0.5, moving_point=True)
+    for t, o in rec[:10]:
+        ident.rows(t, o)
+    ring = ident.ring
+    real = ident._equations
+
+    def broken(flat, t=0.0):
+        real(flat, t)                                # advances the ring, then fails
+        raise FloatingPointError("overflow")
+
+    monkeypatch.setattr(ident, "_equations", broken)
+    assert ident.rows(*rec[10]) is None
+    assert ident.ring is ring                         # restored
+    monkeypatch.undo()
+    assert ident.rows(*rec[10]) is not None           # and the sample still usable

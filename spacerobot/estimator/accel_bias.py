@@ -21,6 +21,11 @@ a 3e-3 m/s2 bias, vrw 5e-4 m/s2 over 1 s): the estimate within 1e-4 to 3e-4 m/s2
 from 5 s on. Without noise the trapezoid's error where the acceleration changes within a step
 remains (2e-4 m/s2 on the paper's spatial run, whose base accelerates at 0.4 m/s2): the option
 is for noisy sensors.
+
+Assumption: ``b`` is constant in the frame of ``a_S``, the inertial frame, as the sensors
+model (:mod:`spacerobot.sensors.models`) draws it. A strapdown accelerometer's bias is fixed in
+the base, ``A(t) b_B`` inertial; on a base that rotates much during the fit this line fit does
+not describe it (the regressor would be ``integral A dt`` instead of ``t``).
 """
 from __future__ import annotations
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import math
+import numbers
 from dataclasses import dataclass
 from typing import Mapping, Tuple
 
@@ -24,7 +25,7 @@ from .accel_bias import BiasFit
 from .differencing import centre_derivative
 from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
-from .tracking import DriftTracker, total_sd
+from .tracking import DriftTracker
 
 #: measurement keys and their shapes (n = number of arm joints)
 KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
@@ -167,9 +168,12 @@ class Identifier:
                                      ("correlation lags", corr_lags, 0, MAX_CORR_LAGS)):
             if not (math.isfinite(val) and int(val) == val and low <= val <= high):
                 raise ValueError(f"{name} must be an integer from {low} to {high}, got {val}")
-        if not (math.isfinite(window) and 0.0 <= window <= MAX_WINDOW):
+        if not (isinstance(window, numbers.Real) and math.isfinite(window)
+                and 0.0 <= window <= MAX_WINDOW):
             raise ValueError(f"reference window must be a number of seconds from 0 to "
-                             f"{MAX_WINDOW:g}, got {window}")
+                             f"{MAX_WINDOW:g}, got {window!r}")
+        moving_point = _flag(moving_point, "moving_point")
+        accel_bias = _flag(accel_bias, "accel_bias")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
             body.check(name)
         for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
@@ -179,8 +183,8 @@ class Identifier:
         self.method, self.accel_source, self.lam, self.sd_rel = method, accel_source, lam, sd_rel
         self.row_sd, self.diff_half_window = row_sd, int(diff_half_window)
         self.window = float(window)
-        self.moving_point = bool(moving_point) and method is Method.MOMENTUM
-        self.accel_bias = bool(accel_bias) and method is Method.FORCE and (
+        self.moving_point = moving_point and method is Method.MOMENTUM
+        self.accel_bias = accel_bias and method is Method.FORCE and (
             accel_source is AccelSource.MEASURED)
         # row weights 1 / sd (1: unweighted, the rows untouched)
         self._w_lin, self._w_ang = (1.0 / x if x > 0.0 else 1.0 for x in row_sd)
@@ -264,11 +268,21 @@ class Identifier:
         (full 3D rows, before the row weights and the planar selection), or None (a rejected
         sample, the momentum reference, a filling differencing window). Advances the
         references and histories as :meth:`update` does, but not the solver: for evaluating
-        the equations at known parameters (:mod:`.noise_model`)."""
+        the equations at known parameters (:mod:`.noise_model`). A sample whose equations
+        fail leaves the identifier as it was (as :meth:`update` does) and gives None."""
         status, _, flat = self._validate(meas)
         if flat is None or not math.isfinite(t) or not self._time_ok(t):
             return None
-        E = self._sample_equations(t, flat)
+        before = self._snapshot()
+        try:
+            with np.errstate(all="ignore"):
+                E = self._sample_equations(t, flat)
+            failed = E is not None and not np.all(np.isfinite(E))
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
+            failed = True
+        if failed:
+            self._restore(before)
+            return None
         return None if E is None else _split(E)
 
     # -- the update ------------------------------------------------------------------------------

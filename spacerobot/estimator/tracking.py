@@ -64,17 +64,20 @@ class DriftTracker(NamedTuple):
 
     Immutable: :meth:`add` returns the updated tracker (a snapshot is a reference).
 
+    Times below are in the clock the caller uses (``[clock]``: samples in
+    :class:`.Identifier`, seconds if the caller passes seconds); rates are per clock unit.
+
     Attributes
     ----------
     lam : forgetting factor of the estimator
     s0 : ``sum_k lam^(N-k)`` (the data's weight; ``N`` without forgetting)
-    s1 : ``sum_k lam^(N-k) (t_k - t_ref)``  [s]
-    t_ref : time of the first sample [s] (keeps ``s1`` small)
-    t : time of the latest sample [s]
-    a_bar : mean age of the data at ``t`` [s]
+    s1 : ``sum_k lam^(N-k) (t_k - t_ref)``  [clock]
+    t_ref : time of the first sample [clock] (keeps ``s1`` small)
+    t : time of the latest sample [clock]
+    a_bar : mean age of the data at ``t`` [clock]
     da_dt : ``d a_bar / dt`` over the latest step
     w, mt, mx, ctt, ctx : the exponentially weighted line through ``(t_k, x_k)``: weight,
-        weighted means of t [s] and x (p,), centred sums ``sum w (t - mt)^2`` and
+        weighted means of t [clock] and x (p,), centred sums ``sum w (t - mt)^2`` and
         ``sum w (t - mt)(x - mx)`` (p,)
     sd : (p,) the latest standard deviations without the lag
     ages : ``M = sum w (t - t_k) H^T H`` per information block (eq. 2)
@@ -105,7 +108,7 @@ class DriftTracker(NamedTuple):
     def add(self, t: float, x: np.ndarray, sd: np.ndarray, info_before=(),
             jac: np.ndarray | None = None, lag_of=None) -> "DriftTracker":
         """With the estimate ``x`` (p,) and its standard deviation ``sd`` (p,) (without the
-        lag) after the sample of time ``t`` [s]. For the lag through the information-weighted
+        lag) after the sample of time ``t`` [clock]. For the lag through the information-weighted
         mean age (module docstring, eq. 2), optionally: the solver's Gram matrices before the
         sample (:meth:`.ParameterSolver.information`), the Jacobian ``d x / d z`` (p, p) of the
         estimates in the solver's parameters ``z``, and ``lag_of(rate_z, growth, ages)`` (the
@@ -141,14 +144,14 @@ class DriftTracker(NamedTuple):
                             mat_lag)
 
     def rate(self) -> np.ndarray | float:
-        """Slope of the estimates' weighted lines, ``r_est`` (p,) [unit / s] (0 before two
+        """Slope of the estimates' weighted lines, ``r_est`` (p,) [unit / clock] (0 before two
         samples)."""
         with np.errstate(all="ignore"):
             r = self.ctx / self.ctt
         return np.where(self.ctt > 0.0, r, 0.0)
 
     def lag_factor(self) -> float:
-        """``a_bar / (1 - d a_bar / dt)`` [s], the factor of eq. (1); ``d a_bar/dt < 1`` always
+        """``a_bar / (1 - d a_bar / dt)`` [clock], the factor of eq. (1); ``d a_bar/dt < 1`` always
         (0 steady, 1/2 without forgetting), floored against an irregular step."""
         return self.a_bar / max(1.0 - self.da_dt, 0.1)
 

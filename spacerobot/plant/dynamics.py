@@ -1,9 +1,10 @@
-"""Free-floating multibody dynamics on Pinocchio: model building, base conventions, momentum,
-and the classic RK4 step.
+"""Free-floating multibody model on Pinocchio: model building and the base conventions.
 
 Model (description) and data (work space) are kept apart as in Pinocchio: :class:`PlantModel`
-is built once from a :class:`~spacerobot.robots.Robot` plus the base and target truth, and the
-algorithms are free functions taking it.
+is built once from a :class:`~spacerobot.robots.Robot` plus the base and target truth. The
+dynamics that run while stepping (ABA, mass matrix, momentum, the RK4 stages) are the compiled
+kernels of :mod:`.rigid_body` and :mod:`.kernels`, built from this model's arrays and tested
+against Pinocchio.
 
 Generalised coordinates (Pinocchio's):
 
@@ -13,8 +14,8 @@ Generalised coordinates (Pinocchio's):
   omega_z, qd]``.
 
 The ODE is written in these coordinates as an ordinary vector ODE (``dq/dt`` from ``v``
-including the quaternion / (cos, sin) kinematics), so classic RK4 applies unchanged and is
-fourth-order; the unit-norm constraint is restored after each step.
+including the quaternion / (cos, sin) kinematics), so classic RK4 (:mod:`.kernels`) applies
+unchanged and is fourth-order; the unit-norm constraint is restored after each step.
 """
 from __future__ import annotations
 
@@ -23,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..kinematics import cross3
 from ..robots import RigidBody, Robot
 from .kernels import quat_dcm
 
@@ -108,20 +108,9 @@ def base_rotation(pm: PlantModel, q: np.ndarray) -> np.ndarray:
     return quat_to_R(*q[3:7])
 
 
-def base_position(pm: PlantModel, q: np.ndarray) -> np.ndarray:
-    return np.array([q[0], q[1], 0.0]) if pm.planar else q[0:3].copy()
-
-
-def base_velocity(pm: PlantModel, q, v):
-    """``(v_S inertial (3,), omega_B base frame (3,))`` from generalised velocities."""
-    A = base_rotation(pm, q)
-    if pm.planar:
-        return A @ np.array([v[0], v[1], 0.0]), np.array([0.0, 0.0, v[2]])
-    return A @ v[0:3], v[3:6].copy()
-
-
 def base_generalised_velocity(pm: PlantModel, q, v_S, omega_B) -> np.ndarray:
-    """Inverse of :func:`base_velocity`: the base part of ``v`` (length ``nb``)."""
+    """The base part of ``v`` (length ``nb``: local linear velocity and ``omega_B``, planar
+    ``(v_x, v_y, omega_z)``) from the inertial velocity ``v_S`` (3,) and ``omega_B`` (3,)."""
     A = base_rotation(pm, q)
     vl = A.T @ np.asarray(v_S, float)
     if pm.planar:
@@ -129,38 +118,8 @@ def base_generalised_velocity(pm: PlantModel, q, v_S, omega_B) -> np.ndarray:
     return np.concatenate([vl, omega_B])
 
 
-def base_acceleration(pm: PlantModel, q, v, a):
-    """``(a_S inertial, alpha_B base frame)`` from Pinocchio's ``a = dv/dt`` (local frame).
-
-    a_S = A (dv_l/dt + omega_B x v_l), the classical acceleration of the sensor point S.
-    """
-    A = base_rotation(pm, q)
-    if pm.planar:
-        # omega_B x v_l with omega_B = (0, 0, wz), v_l = (vx, vy, 0)
-        wz = v[2]
-        return A @ np.array([a[0] - wz * v[1], a[1] + wz * v[0], 0.0]), np.array([0.0, 0.0, a[2]])
-    return A @ (a[0:3] + cross3(v[3:6], v[0:3])), a[3:6].copy()
-
-
 def initial_configuration(pm: PlantModel, q_arm=None) -> np.ndarray:
     """Base at the inertial origin with identity attitude; arm at ``q_arm`` (default robot.q0)."""
     q_arm = np.asarray(pm.robot.q0 if q_arm is None else q_arm, float)
     head = np.array([0.0, 0.0, 1.0, 0.0]) if pm.planar else np.array([0, 0, 0, 0, 0, 0, 1.0])
     return np.concatenate([head, q_arm])
-
-
-# -- momentum -------------------------------------------------------------------------------------
-
-
-def momentum(pm: PlantModel, data: pin.Data, q, v):
-    """Total linear momentum P, angular momentum about the CoM L_c and about the inertial origin.
-
-    Returns
-    -------
-    P, L_c, L_O : (3,) arrays (inertial frame);  com : (3,) system centre of mass
-    """
-    pin.computeCentroidalMomentum(pm.model, data, q, v)
-    P = data.hg.linear.copy()
-    L_c = data.hg.angular.copy()
-    com = data.com[0].copy()
-    return P, L_c, L_c + cross3(com, P), com

@@ -8,8 +8,10 @@ The model arrays come from a Pinocchio model (:func:`chain_arrays`: joint placem
 inertias, joint axes), so any robot Pinocchio builds (from code or URDF) whose root joint is a
 free-flyer or a planar joint, followed by a serial chain of one-axis revolute joints, runs here.
 
-Conventions (Pinocchio's): spatial motion ``[linear; angular]`` and force ``[linear; angular]``
-expressed in the body (joint) frame at its origin; body ``k = 0`` is the base (root joint),
+Conventions (Pinocchio's): spatial motion ``[linear; angular]`` and force ``[linear; angular]``;
+the algorithms express them in base axes (the "spatial algebra" comment below: ``terms`` at the
+base origin, ``aba`` at each joint's origin), and their results (``ddq``, ``M``, ``nle``, ``hg``)
+are Pinocchio's. Body ``k = 0`` is the base (root joint),
 ``k = 1..n`` the links. ``R[k], p[k]`` is the placement of joint ``k`` in its parent's frame
 (``x_parent = R x_k + p``; for ``k = 0`` the identity); a revolute joint turns about
 ``axis[k]`` (unit, in its own frame). The planar root joint is the free-flyer restricted to
