@@ -321,3 +321,27 @@ def test_help_lists_commands():
     if exe:                                   # the installed console script is the same CLI
         q = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=120)
         assert q.returncode == 0 and q.stdout == p.stdout
+
+
+@pytest.mark.parametrize("argv,expected", [
+    (["--target", "depletion"], 300.0),                   # the set's own duration
+    (["--target", "depletion", "--stop-time", "12"], 12.0),
+    (["--target", "default"], None),                      # the SSD's default experiment
+    ([], None)])
+def test_run_uses_the_parameter_sets_duration(monkeypatch, capsys, tmp_path, argv, expected):
+    """`run --target depletion` runs the 300 s the set is made for (robots.PARAMETER_SETS), an
+    explicit --stop-time wins, other sets keep the SSD's default experiment."""
+    from spacerobot.robots import PARAMETER_SETS
+    from spacerobot.system import runner, ssd
+    assert PARAMETER_SETS["spatial"]["depletion"].stop_time == 300.0
+    seen = {}
+
+    def fake_run(ssp, **kw):
+        seen.update(kw)
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(ssd, "ensure_ssp", lambda *a, **k: tmp_path / "spatial.ssp")
+    monkeypatch.setattr(runner, "run_ssp", fake_run)
+    with pytest.raises(RuntimeError, match="stop here"):
+        cli.main(["run", "--robot", "spatial", "--out", str(tmp_path / "r.csv"), *argv])
+    assert seen["stop_time"] == expected

@@ -26,7 +26,7 @@ from typing import Optional, Sequence
 
 from .. import __version__
 from ..interface import identified_estimates
-from ..robots import (PAPER_PLANAR_MEDIUM, ROBOTS, get_robot,
+from ..robots import (PAPER_PLANAR_MEDIUM, PARAMETER_SETS, ROBOTS, get_robot, robot_kind,
                       robot_label, robot_spec)
 from .codes import ACCEL_CODES, METHOD_CODES, SOLVER_CODES, estimator_overrides
 
@@ -113,6 +113,17 @@ def result_name(robot: Optional[str], ssp: Path, target: Optional[str], args) ->
                               f"{args.accel}-{args.solver}.csv")
 
 
+def set_stop_time(robot: Optional[str], target: Optional[str]) -> Optional[float]:
+    """The duration [s] parameter set ``target`` of ``robot`` is made for (the ``depletion``
+    set's 300 s), or None (the SSD's default experiment) for another set, an unknown one or
+    without a robot. An SSP has one default experiment for all its sets, so the command line
+    applies a set's own duration; other tools take a stop time from their user."""
+    if not (robot and target):
+        return None
+    ps = PARAMETER_SETS[robot_kind(robot)].get(target)
+    return ps.stop_time if ps else None
+
+
 @fail_on_errors("run")
 def cmd_run(args) -> int:
     from .bindings import parse_assignments
@@ -141,7 +152,8 @@ def cmd_run(args) -> int:
         raise CommandError(f"--out {csv_path}: the result file must end in .csv")
     if ssp is None:
         ssp = ensure_ssp(robot, args.build_dir, sensors=args.sensors)
-    res = run_ssp(ssp, parameter_set=args.target, stop_time=args.stop_time,
+    stop_time = args.stop_time if args.stop_time is not None else set_stop_time(robot, target)
+    res = run_ssp(ssp, parameter_set=args.target, stop_time=stop_time,
                   overrides=overrides, csv_path=csv_path,
                   progress=False if args.no_progress else None)
     # the paper's values only beside the paper's scenario (no plant parameter changed)
@@ -207,7 +219,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="force method: measured accelerations or differenced velocities")
     p.add_argument("--solver", choices=list(SOLVER_CODES), default="paper")
     p.add_argument("--stop-time", type=float, metavar="T",
-                   help="stop time [s] (default: the SSD's DefaultExperiment)")
+                   help="stop time [s] (default: the parameter set's own duration, e.g. "
+                        "300 s for depletion, else the SSD's DefaultExperiment)")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="FMU parameter override, e.g. plant.base.v0[1]=5 (repeatable)")
     p.add_argument("--out", metavar="CSV",
