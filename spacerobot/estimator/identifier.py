@@ -168,10 +168,7 @@ class Identifier:
                                      ("correlation lags", corr_lags, 0, MAX_CORR_LAGS)):
             if not (math.isfinite(val) and int(val) == val and low <= val <= high):
                 raise ValueError(f"{name} must be an integer from {low} to {high}, got {val}")
-        if not (isinstance(window, numbers.Real) and math.isfinite(window)
-                and 0.0 <= window <= MAX_WINDOW):
-            raise ValueError(f"reference window must be a number of seconds from 0 to "
-                             f"{MAX_WINDOW:g}, got {window!r}")
+        window = _seconds(window, "reference window")
         moving_point = _flag(moving_point, "moving_point")
         accel_bias = _flag(accel_bias, "accel_bias")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
@@ -182,7 +179,7 @@ class Identifier:
         self.robot, self.guess = robot, guess
         self.method, self.accel_source, self.lam, self.sd_rel = method, accel_source, lam, sd_rel
         self.row_sd, self.diff_half_window = row_sd, int(diff_half_window)
-        self.window = float(window)
+        self.window = window
         self.moving_point = moving_point and method is Method.MOMENTUM
         self.accel_bias = accel_bias and method is Method.FORCE and (
             accel_source is AccelSource.MEASURED)
@@ -426,12 +423,11 @@ class Identifier:
             return self.status
         info = self.solver.information()
         self._solve(*_split(E))
-        sd, x_ls = self.solver.std_and_data_only()
+        u = self.solver.std_parts()
         # the tracker's clock is the sample count: the estimates depend on the samples, not on
         # the step sizes between them (a rate per sample times an age in samples)
-        self.tracking = self.tracking.add(float(self.samples), x_ls, sd, info,
-                                          self.solver.jacobian(self.solver.z()),
-                                          self.solver.drift_lag)
+        self.tracking = self.tracking.add(float(self.samples), u.data_only, u.sd, info,
+                                          u.jacobian, self.solver.drift_lag)
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING
@@ -628,15 +624,17 @@ def _copy(v):
 def _windows(values: Mapping[str, float]) -> dict:
     """``{Method: window [s]}`` from ``ident.momentum_window`` and ``ident.force_window`` (both
     checked, as the row standard deviations of both methods are)."""
-    out = {}
-    for m in Method:
-        name = f"ident.{m.name.lower()}_window"
-        x = float(values[name])
-        if not (math.isfinite(x) and 0.0 <= x <= MAX_WINDOW):
-            raise ValueError(f"{name} must be a number of seconds from 0 to {MAX_WINDOW:g}, "
-                             f"got {x}")
-        out[m] = x
-    return out
+    names = {m: f"ident.{m.name.lower()}_window" for m in Method}
+    return {m: _seconds(values[n], n) for m, n in names.items()}
+
+
+def _seconds(x, name: str) -> float:
+    """A reference window [s] from 0 to :data:`MAX_WINDOW`, as a float."""
+    real = isinstance(x, numbers.Real)
+    if not (real and math.isfinite(x) and 0.0 <= x <= MAX_WINDOW):
+        raise ValueError(f"{name} must be a number of seconds from 0 to {MAX_WINDOW:g}, "
+                         f"got {x if real else repr(x)}")
+    return float(x)
 
 
 def _flag(x, name: str) -> bool:

@@ -317,8 +317,8 @@ def scatter_and_pull(J, C, pull, unobserved_z):
 def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_ang,
                       s2_lin, s2_ang, P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active,
                       theta_active, sharp_to_project, eig_lin, eig_ang):
-    """``(sd (20,), unobserved (20,) bool, data-only answer (20,))`` of the paper solver's
-    estimates, the whole of :meth:`.solvers.ParameterSolver.uncertainty_and_data_only` for
+    """``(sd (20,), unobserved (20,) bool, data-only answer (20,), J (20, 20))`` of the paper
+    solver's estimates, the whole of :meth:`.solvers.ParameterSolver.uncertainty_parts` for
     :class:`.solvers.PaperSolver` in one call:
     ``sd^2 = diag(J C J^T) + (v(z) - v(z - delta))^2`` (``J delta`` where ``z - delta`` has no
     positive mass), with :func:`paper_jacobian`, :func:`paper_covariance`,
@@ -338,7 +338,7 @@ def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_
     sd = np.empty(var.shape[0])
     for i in range(var.shape[0]):
         sd[i] = math.sqrt(var[i]) if var[i] > 0.0 else 0.0
-    return sd, unobserved, x - pull
+    return sd, unobserved, x - pull, J
 
 
 # -- physical consistency ----------------------------------------------------------------------

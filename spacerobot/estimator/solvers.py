@@ -33,6 +33,21 @@ from .rls import RLS, ModifiedRLS
 from .uncertainty import Autocorrelation, Gram, eig_scaled, prior_pull
 
 
+class Uncertainty(NamedTuple):
+    """What :meth:`ParameterSolver.uncertainty_parts` computes for the 20 estimates.
+
+    sd (20,): standard deviations;  unobserved (20,) bool: estimates that depend on a direction
+    the data have not observed;  data_only (20,): the data-only answer ``v(z - delta)`` (the
+    estimate without the prior's pull; its first-order image where ``z - delta`` has no
+    positive mass);  jacobian (20, 20): ``d vector_of / d z`` at the estimate.
+    """
+
+    sd: np.ndarray
+    unobserved: np.ndarray
+    data_only: np.ndarray
+    jacobian: np.ndarray
+
+
 class Step(NamedTuple):
     """What one solver update reports to the identifier (k1, k2 = linear, angular rows).
 
@@ -138,13 +153,12 @@ class ParameterSolver(ABC):
         positive mass). ``unobserved``: estimates that
         depend on a direction the data have not observed (their ``sd`` bounds nothing).
         """
-        sd, unobserved, _ = self.uncertainty_and_data_only()
-        return sd, unobserved
+        u = self.uncertainty_parts()
+        return u.sd, u.unobserved
 
-    def uncertainty_and_data_only(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`uncertainty` and the data-only answer ``v(z - delta)`` (20,) (the estimate
-        without the prior's pull; its first-order image where ``z - delta`` has no positive
-        mass)."""
+    def uncertainty_parts(self) -> "Uncertainty":
+        """:meth:`uncertainty` with what it computes on the way: the data-only answer and the
+        Jacobian (:class:`Uncertainty`)."""
         z = self.z()
         J = self.jacobian(z)
         delta, unobserved_z = self.prior_pull()
@@ -155,21 +169,20 @@ class ParameterSolver(ABC):
             pull = J @ delta
         # diag(J C J^T) + pull^2, and the rows of J that touch an unobserved parameter
         var, unobserved = rk.scatter_and_pull(J, self.covariance(), pull, unobserved_z)
-        return np.sqrt(np.clip(var, 0.0, None)), unobserved, x - pull
+        return Uncertainty(np.sqrt(np.clip(var, 0.0, None)), unobserved, x - pull, J)
 
     def std(self) -> np.ndarray:
         """Standard deviations (20,) of :meth:`vector` (:meth:`uncertainty`); an unobserved
         estimate reports at least its error scale (a relative standard deviation of 100 %)."""
-        return self.std_and_data_only()[0]
+        return self.std_parts().sd
 
-    def std_and_data_only(self) -> Tuple[np.ndarray, np.ndarray]:
-        """``(std (20,), data-only answer (20,))`` (:meth:`std`,
-        :meth:`uncertainty_and_data_only`)."""
-        sd, unobserved, x_ls = self.uncertainty_and_data_only()
-        if unobserved.any():
+    def std_parts(self) -> "Uncertainty":
+        """:meth:`uncertainty_parts` with ``sd`` = :meth:`std`."""
+        u = self.uncertainty_parts()
+        if u.unobserved.any():
             floor = self.layout.error_scale(self.vector())
-            sd[unobserved] = np.maximum(sd[unobserved], floor[unobserved])
-        return sd, x_ls
+            u.sd[u.unobserved] = np.maximum(u.sd[u.unobserved], floor[u.unobserved])
+        return u
 
     def prior(self) -> np.ndarray:
         """Diagonal (20,) of the initial covariance of a 20-vector in the layout's order."""
@@ -285,16 +298,16 @@ class PaperSolver(ParameterSolver):
                                            gl.dof(len(rls.mu)), ga.dof(len(rls.theta)),
                                            vs_lin, inf_lin, vs_ang, inf_ang)
 
-    def uncertainty_and_data_only(self) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """As :meth:`ParameterSolver.uncertainty_and_data_only`, in one compiled call
+    def uncertainty_parts(self) -> "Uncertainty":
+        """As :meth:`ParameterSolver.uncertainty_parts`, in one compiled call
         (:func:`.report_kernels.paper_uncertainty`)."""
         L, rls, ga, g0 = self.layout, self.rls, self.gram_ang, self.guess
         s2_lin, s2_ang = self._residual_variances()
         w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
-        return rk.paper_uncertainty(self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M,
-                                    rls.lin.P, rls.ang.P, ga.S, s2_lin, s2_ang, g0.P0_mu,
-                                    g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
-                                    L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang)
+        return Uncertainty(*rk.paper_uncertainty(
+            self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, rls.lin.P, rls.ang.P, ga.S,
+            s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
+            L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang))
 
     def _pull_inputs(self):
         """The prior's remaining weights ``decay / P0`` of mu and theta (``W0 = w 1``) and the
