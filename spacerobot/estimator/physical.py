@@ -50,11 +50,6 @@ REL_SIGMA_MIN = 1e-6
 REL_MASS_MIN = 1e-6
 
 
-def _sym(I6) -> np.ndarray:
-    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = I6
-    return np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]], dtype=float)
-
-
 def _six(M: np.ndarray) -> np.ndarray:
     return np.array([M[0, 0], M[1, 1], M[2, 2], M[0, 1], M[0, 2], M[1, 2]])
 
@@ -62,10 +57,10 @@ def _six(M: np.ndarray) -> np.ndarray:
 def second_moment(I6) -> np.ndarray:
     """``Sigma_c = tr(I_c)/2 * 1 - I_c`` (3, 3) from ``I6 = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``.
 
-    ``Sigma_c = integral of x x^T dm`` about the centre of mass [kg.m2].
+    ``Sigma_c = integral of x x^T dm`` about the centre of mass [kg.m2] (compiled:
+    :func:`.report_kernels.second_moment`).
     """
-    I = _sym(I6)
-    return 0.5 * np.trace(I) * np.eye(3) - I
+    return report_kernels.second_moment(np.ascontiguousarray(I6, dtype=float).reshape(6))
 
 
 def inertia_from_second_moment(S: np.ndarray) -> np.ndarray:
