@@ -116,6 +116,70 @@ def test_paper_parts_equal_the_oracle(runs):
     assert np.allclose(d, d0, rtol=1e-9, atol=1e-12 * np.abs(d0).max())
 
 
+def test_joint_map_and_jacobian_equal_the_oracle(runs):
+    """The compiled map of the joint solver gives the estimates themselves: the same bit for
+    bit as the NumPy formulation (same operations, same order); its Jacobian to round-off."""
+    sc, outs = runs["spatial"]
+    ident = Identifier(sc.robot, sc.guess, "momentum", "joint")
+    rng = np.random.default_rng(5)
+    zs = []
+    for k, o in enumerate(outs):
+        ident.update(0.1 * k, o)
+        zs.append(ident.solver.z().copy())
+    zs += [zs[-1] * (1.0 + 0.3 * rng.normal(size=20)) + rng.normal(size=20) for _ in range(500)]
+    for z in zs:
+        assert np.array_equal(ident.solver.vector_of(z), orc.joint_vector_of(z))
+        J, J0 = ident.solver.jacobian(z), orc.joint_jacobian(z)
+        assert np.allclose(J, J0, rtol=1e-14, atol=0.0)
+        assert np.array_equal(J != 0.0, J0 != 0.0)
+
+
+@pytest.mark.parametrize("n", [1, 3, 8, 12, 20])
+def test_lu_solve_equals_lapack(n):
+    scipy_linalg = pytest.importorskip("scipy.linalg")
+    rng = np.random.default_rng(n)
+    for trial in range(40):
+        A = rng.normal(size=(n, n)) * np.geomspace(1.0, 1e-3, n)   # column scales 1 .. 1e-3
+        if trial % 4 == 0 and n > 1:
+            A[0, 0] = 0.0                                   # needs a row exchange
+        B = rng.normal(size=(n, 1 + trial % 5))
+        X, X0 = rk.lu_solve(A, B), scipy_linalg.solve(A, B)
+        cond = np.linalg.cond(A)
+        assert np.allclose(X, X0, rtol=0, atol=1e-14 * cond * np.abs(X0).max()), cond
+        assert np.allclose(rk.lu_solve_vec(A, B[:, 0]), X0[:, 0], rtol=0,
+                           atol=1e-14 * cond * np.abs(X0).max())
+    S = rng.normal(size=(n, n))
+    S[:, n // 2] = 0.0                                      # singular: LAPACK refuses, NaN here
+    with pytest.raises(np.linalg.LinAlgError):
+        np.linalg.solve(S, B[:, :1])
+    assert np.isnan(rk.lu_solve(S, B)).all()
+
+
+@pytest.mark.parametrize("solver", ["paper", "joint"])
+def test_drift_lag_equals_the_oracle(runs, solver):
+    """The compiled lag of eq. (2) (spacerobot.estimator.tracking) equals the NumPy/LAPACK
+    formulation, once the information is well conditioned, at the identifier's own ages and at
+    random rates."""
+    sc, outs = runs["spatial"]
+    ident = Identifier(sc.robot, sc.guess, "momentum", solver, lam=0.995)
+    rng = np.random.default_rng(6)
+    worst = 0.0
+    for k, o in enumerate(outs):
+        ident.update(0.1 * k, o)
+        if ident.samples < WELL_CONDITIONED:
+            continue
+        s, ages = ident.solver, ident.tracking.ages
+        rate, growth = rng.normal(size=20) * np.abs(s.z()), rng.uniform(0.0, 0.02)
+        lag = s.drift_lag(rate, growth, ages)
+        if solver == "paper":
+            lag0 = orc.paper_drift_lag(s, rate, growth, ages)
+        else:
+            lag0 = orc.block_lag(s.information()[0][:20, :20], ages[0][:20, :20], rate,
+                                 growth)[0]
+        worst = max(worst, np.max(np.abs(lag - lag0)) / np.max(np.abs(lag0)))
+    assert worst <= 1e-10, worst
+
+
 def test_layout_constants_of_the_kernels():
     L = interface.LAYOUT
     for k, b in enumerate(L.bodies):

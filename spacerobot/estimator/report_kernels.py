@@ -62,7 +62,7 @@ def _matmul(A, B):
 
 
 @njit(**_NB)
-def _matvec(A, x):
+def matvec(A, x):
     """``A x`` (n, k) @ (k,)."""
     n, k = A.shape
     out = np.zeros(n)
@@ -234,7 +234,7 @@ def _residual_variance(S, z, dof):
     """``max(z^T S z, 0) / dof``, 0 for ``dof <= 0`` (:func:`.uncertainty.residual_variance`)."""
     if dof <= 0:
         return 0.0
-    Sz = _matvec(S, z)
+    Sz = matvec(S, z)
     q = 0.0
     for i in range(z.shape[0]):
         q += z[i] * Sz[i]
@@ -296,6 +296,64 @@ def paper_jacobian(z, sharp_to_project):
 
 
 @njit(**_NB)
+def joint_vector_of(z, sharp_to_project):
+    """The 20 estimates from the joint solver's standard parameters ``z = [m, c = m b, I_O#]``
+    per body (:meth:`.solvers.JointSolver.vector_of`): ``b = c / m``,
+    ``I_c = I_O - m (|b|^2 1 - b b^T)`` (the parallel-axis theorem), ``I = I_c#[sharp_to_project]``
+    (:func:`.parameters.physical_from_standard`, the same operations in the same order)."""
+    out = np.empty(20)
+    b = np.empty(3)
+    for k in range(2):
+        e = EST0[k]
+        m = z[e]
+        out[e] = m
+        for i in range(3):
+            b[i] = z[e + 1 + i] / m
+            out[e + 1 + i] = b[i]
+        bb = 0.0
+        for i in range(3):
+            bb += b[i] * b[i]
+        for jp in range(6):
+            p = sharp_to_project[jp]
+            i, j = SHARP_I[p], SHARP_J[p]
+            eye = 1.0 if i == j else 0.0
+            out[e + 4 + jp] = z[e + 4 + p] - m * (bb * eye - b[i] * b[j])
+    return out
+
+
+@njit(**_NB)
+def joint_jacobian(z, sharp_to_project):
+    """``d joint_vector_of / d z`` (20, 20) (:meth:`.solvers.JointSolver.jacobian`): per body
+    ``db/dc = 1 / m``, ``db/dm = -c / m^2``; ``I_c = I_O - S(c) / m`` with
+    ``S(c) = |c|^2 1 - c c^T``: ``dI_c/dI_O = 1``, ``dI_c/dm = S / m^2``,
+    ``dI_c,ij/dc_k = -(2 c_k d_ij - d_ik c_j - c_i d_jk) / m``."""
+    J = np.zeros((20, 20))
+    for k in range(2):
+        e = EST0[k]
+        m = z[e]
+        J[e, e] = 1.0
+        for i in range(3):
+            J[e + 1 + i, e + 1 + i] = 1.0 / m
+            J[e + 1 + i, e] = -z[e + 1 + i] / m**2
+        cc = 0.0
+        for i in range(3):
+            cc += z[e + 1 + i] * z[e + 1 + i]
+        for jp in range(6):
+            p = sharp_to_project[jp]
+            row = e + 4 + jp
+            J[row, e + 4 + p] = 1.0
+            i, j = SHARP_I[p], SHARP_J[p]
+            ci, cj = z[e + 1 + i], z[e + 1 + j]
+            S_ij = (cc if i == j else 0.0) - ci * cj
+            J[row, e] = S_ij / m**2
+            for kk in range(3):
+                dS = (2.0 * z[e + 1 + kk] if i == j else 0.0) - (cj if kk == i else 0.0) \
+                    - (ci if kk == j else 0.0)
+                J[row, e + 1 + kk] = -dS / m
+    return J
+
+
+@njit(**_NB)
 def scatter_and_pull(J, C, pull, unobserved_z):
     """``(var (20,), unobserved (20,) bool)``: ``diag(J C J^T) + pull^2`` and the estimates
     whose Jacobian row touches an unobserved parameter (:meth:`.solvers.ParameterSolver.uncertainty`)."""
@@ -331,7 +389,7 @@ def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_
     x = paper_vector_of(z, sharp_to_project)
     pull = x - paper_vector_of(z - delta, sharp_to_project)
     if not np.all(np.isfinite(pull)):                        # the data-only mass <= 0
-        pull = _matvec(J, delta)
+        pull = matvec(J, delta)
     C = paper_covariance(P_lin, P_ang, M, mu_full, s2_lin, s2_ang, P0_mu, P0_theta, mu_active,
                          theta_active)
     var, unobserved = scatter_and_pull(J, C, pull, unobserved_z)
@@ -339,6 +397,207 @@ def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_
     for i in range(var.shape[0]):
         sd[i] = math.sqrt(var[i]) if var[i] > 0.0 else 0.0
     return sd, unobserved, x - pull, J
+
+
+# -- small dense solves (no LAPACK in the FMUs) -------------------------------------------------
+@njit(**_NB)
+def lu_solve(A, B):
+    """``A^-1 B`` for ``A`` (n, n) and ``B`` (n, k): LU factorisation with partial (row)
+    pivoting, as LAPACK's ``gesv`` (``np.linalg.solve``), to round-off. All NaN where a pivot is
+    exactly 0 (where ``np.linalg.solve`` raises ``LinAlgError``); inputs kept."""
+    n, k = B.shape
+    LU = A.copy()
+    X = B.copy()
+    for j in range(n):
+        piv, big = j, abs(LU[j, j])                          # the largest |entry| of column j
+        for i in range(j + 1, n):
+            if abs(LU[i, j]) > big:
+                piv, big = i, abs(LU[i, j])
+        if big == 0.0 or big != big:
+            X[:, :] = np.nan
+            return X
+        if piv != j:                                         # swap rows of LU and of X
+            for c in range(n):
+                LU[j, c], LU[piv, c] = LU[piv, c], LU[j, c]
+            for c in range(k):
+                X[j, c], X[piv, c] = X[piv, c], X[j, c]
+        for i in range(j + 1, n):                            # eliminate below the pivot
+            f = LU[i, j] / LU[j, j]
+            LU[i, j] = f
+            for c in range(j + 1, n):
+                LU[i, c] -= f * LU[j, c]
+            for c in range(k):
+                X[i, c] -= f * X[j, c]
+    for j in range(n - 1, -1, -1):                           # back substitution, U X = L^-1 B
+        for c in range(k):
+            s = X[j, c]
+            for l in range(j + 1, n):
+                s -= LU[j, l] * X[l, c]
+            X[j, c] = s / LU[j, j]
+    return X
+
+
+@njit(**_NB)
+def lu_solve_vec(A, b):
+    """``A^-1 b`` (n,) for ``A`` (n, n), ``b`` (n,) (:func:`lu_solve`; all NaN if singular)."""
+    B = np.empty((b.shape[0], 1))
+    B[:, 0] = b
+    return lu_solve(A, B)[:, 0].copy()
+
+
+# -- the estimates' lag behind moving parameters (:mod:`.tracking`) --------------------------------
+@njit(**_NB)
+def block_lag(G, M, rate, growth):
+    """``(A r, r)`` of one least-squares problem (:mod:`.tracking`, eq. 2): ``A = G^-1 M``
+    (the information-weighted mean age), ``r = (1 - growth A)^-1 rate`` (the truth's rate from
+    the estimate's); ``G``, ``M`` (p, p), ``rate`` (p,). NaN where ``G`` or ``1 - growth A`` is
+    singular (:func:`lu_solve`)."""
+    p = rate.shape[0]
+    A = lu_solve(G, M)
+    R = np.empty((p, p))                                     # 1 - growth A
+    for i in range(p):
+        for j in range(p):
+            R[i, j] = (1.0 if i == j else 0.0) - growth * A[i, j]
+    r = lu_solve_vec(R, rate)
+    return matvec(A, r), r
+
+
+@njit(**_NB)
+def paper_drift_lag(S_lin, S_ang, M_lin, M_ang, rate_z, growth, mu_full, mu_active,
+                    theta_active):
+    """The lag (20,) of the paper solver's ``z = [mu, theta]`` behind parameters moving at
+    ``rate_z`` (20,) (:meth:`.solvers.PaperSolver.drift_lag`): :func:`block_lag` of ``mu`` and
+    of ``theta`` in the Gram matrices ``S`` and age-weighted Gram matrices ``M`` of the rows
+    ``[A | b]`` and ``[phi | y | psi]``, and ``theta``'s response to ``mu``'s lag and rate,
+    ``G^-1 (S_phi,psi dD/dmu lag_mu - M_phi,psi dD/dmu r_mu)``. NaN where a block is
+    singular."""
+    p, r = mu_active.shape[0], theta_active.shape[0]
+    rate_mu, rate_th = np.empty(p), np.empty(r)
+    for i in range(p):
+        rate_mu[i] = rate_z[mu_active[i]]
+    for i in range(r):
+        rate_th[i] = rate_z[N_MU + theta_active[i]]
+    lag_mu, r_mu = block_lag(S_lin[:p, :p].copy(), M_lin[:p, :p].copy(), rate_mu, growth)
+    G = S_ang[:r, :r].copy()
+    lag_th, _ = block_lag(G, M_ang[:r, :r].copy(), rate_th, growth)
+    dD_full = D_jacobian(mu_full)                             # (20, 8)
+    nD = dD_full.shape[0]
+    dD_lag, dD_r = np.zeros(nD), np.zeros(nD)                # dD/dmu lag_mu, dD/dmu r_mu
+    for a in range(nD):
+        for i in range(p):
+            dD_lag[a] += dD_full[a, mu_active[i]] * lag_mu[i]
+            dD_r[a] += dD_full[a, mu_active[i]] * r_mu[i]
+    rhs = np.empty(r)
+    for i in range(r):
+        s1, s2 = 0.0, 0.0
+        for a in range(nD):
+            s1 += S_ang[i, r + 1 + a] * dD_lag[a]
+            s2 += M_ang[i, r + 1 + a] * dD_r[a]
+        rhs[i] = s1 - s2
+    lag_th = lag_th + lu_solve_vec(G, rhs)
+    lag = np.zeros(N_MU + N_THETA)
+    for i in range(p):
+        lag[mu_active[i]] = lag_mu[i]
+    for i in range(r):
+        lag[N_MU + theta_active[i]] = lag_th[i]
+    return lag
+
+
+@njit(**_NB)
+def age_step(M, G, lam, dt):
+    """``lam (M + dt G)`` (a new array): the age-weighted Gram matrix after a step ``dt``, every
+    old row ``dt`` older (:mod:`.tracking`, eq. 2)."""
+    out = np.empty_like(M)
+    n, m = M.shape
+    for i in range(n):
+        for j in range(m):
+            out[i, j] = lam * (M[i, j] + dt * G[i, j])
+    return out
+
+
+@njit(**_NB)
+def drift_regression(lam, s0, s1, t_ref, t_prev, a_bar_prev, w, mt, mx, ctt, ctx, t, x, sd,
+                     rate_memory):
+    """One sample of :meth:`.tracking.DriftTracker.add` without the matrix lag: the data's
+    weight ``s0``, ``s1``, mean age ``a_bar`` and its rate ``da_dt``, and the weighted
+    exponentially forgetting line through ``(t, x)`` (weights ``1 / sd^2``, forgetting
+    ``lam_r = 1 - 1 / (rate_memory s0)``; ``w``, ``mt``, ``mx``, ``ctt``, ``ctx`` (p,)).
+
+    Returns ``(s0, s1, t_ref, a_bar, da_dt, step, w, mt, mx, ctt, ctx, rate, gain)`` with
+    ``step`` the clock step to age the Gram matrices by (0 at the first sample), ``rate`` the
+    slope ``ctx / ctt`` (0 where ``ctt`` is not > 0) and ``gain`` the noise gain
+    (:meth:`.tracking.DriftTracker.noise_gain`); new arrays.
+    """
+    first = s0 == 0.0
+    if first:
+        t_ref = t
+    s0 = lam * s0 + 1.0                                      # sum w,  w = lam^(N-k)
+    s1 = lam * s1 + (t - t_ref)                              # sum w (t_k - t_ref)
+    a_bar = (t - t_ref) - s1 / s0                            # sum w (t - t_k) / sum w
+    step = t - t_prev
+    da_dt = (a_bar - a_bar_prev) / step if not first and step > 0.0 else 0.0
+    lam_r = 1.0 - 1.0 / (rate_memory * s0)
+    p = x.shape[0]
+    w_n, mt_n, mx_n = np.empty(p), np.empty(p), np.empty(p)
+    ctt_n, ctx_n, rate, gain = np.empty(p), np.empty(p), np.empty(p), np.empty(p)
+    lag_factor = a_bar / max(1.0 - da_dt, 0.1)
+    for i in range(p):
+        v = 1.0 / max(sd[i] * sd[i], 1e-300)
+        w_old = lam_r * w[i]
+        wi = w_old + v
+        d_t, d_x = t - mt[i], x[i] - mx[i]
+        f = v * w_old / wi                                   # weighted Welford update
+        ctt_n[i] = lam_r * ctt[i] + f * d_t * d_t
+        ctx_n[i] = lam_r * ctx[i] + f * d_t * d_x
+        w_n[i] = wi
+        mt_n[i] = mt[i] + v * d_t / wi
+        mx_n[i] = mx[i] + v * d_x / wi
+        rate[i] = ctx_n[i] / ctt_n[i] if ctt_n[i] > 0.0 else 0.0
+        spread = math.sqrt(ctt_n[i] / wi)
+        gain[i] = max(lag_factor / spread, 1.0) if spread > 0.0 else 1.0
+    step = step if not first and step > 0.0 else 0.0
+    return s0, s1, t_ref, a_bar, da_dt, step, w_n, mt_n, mx_n, ctt_n, ctx_n, rate, gain
+
+
+@njit(**_NB)
+def total_sd(sd, lag, gain, noise_lag):
+    """``sqrt(sd^2 + max(0, lag^2 - (noise_lag gain sd)^2))`` (p,) (:func:`.tracking.total_sd`)."""
+    p = sd.shape[0]
+    out = np.empty(p)
+    for i in range(p):
+        sd2 = sd[i] * sd[i]
+        g = noise_lag * gain[i]
+        excess = max(lag[i] * lag[i] - (g * g) * sd2, 0.0)
+        out[i] = math.sqrt(sd2 + excess)
+    return out
+
+
+# -- residual autocorrelation (:class:`.uncertainty.Autocorrelation`) ------------------------------
+@njit(**_NB)
+def autocorrelation_add(c, lam, ring, sizes, head, count, e):
+    """``(c, ring, sizes)`` after the residual vector ``e`` (k,) (new arrays; inputs kept):
+    ``c[j] <- lam c[j] + e . e_(t-j)`` for the stored residuals of the same size, ``j = 0..L``,
+    and ``e`` stored in the ring ``ring`` (L, width) at row ``head`` (``sizes`` (L,) the stored
+    lengths; ``count`` rows stored, the newest at ``head - 1``)."""
+    L, k = c.shape[0] - 1, e.shape[0]
+    c = c * lam if lam != 1.0 else c.copy()
+    s = 0.0
+    for a in range(k):
+        s += e[a] * e[a]
+    c[0] += s
+    for j in range(1, count + 1):                            # lag j: the row j back
+        row = (head - j) % L
+        if sizes[row] == k:
+            s = 0.0
+            for a in range(k):
+                s += e[a] * ring[row, a]
+            c[j] += s
+    ring = ring.copy()
+    sizes = sizes.copy()
+    for a in range(k):
+        ring[head, a] = e[a]
+    sizes[head] = k
+    return c, ring, sizes
 
 
 # -- physical consistency ----------------------------------------------------------------------

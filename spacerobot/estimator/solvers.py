@@ -192,23 +192,12 @@ class ParameterSolver(ABC):
 
 def block_lag(G: np.ndarray, M: np.ndarray, rate: np.ndarray, growth: float
               ) -> Tuple[np.ndarray, np.ndarray]:
-    """``(A r, r)`` of one least-squares problem: ``A = G^-1 M`` (the information-weighted mean
-    age), ``r = (1 - growth A)^-1 rate`` (the truth's rate from the estimate's)."""
-    A = np.linalg.solve(G, M)
-    r = np.linalg.solve(np.eye(len(rate)) - growth * A, rate)
-    return A @ r, r
-
-
-def _mass_rows(J: np.ndarray, body, z: np.ndarray, zm: int, zc: slice) -> Tuple[float, np.ndarray]:
-    """Rows m and b of a Jacobian d vector / d z for a body whose mass is ``z[zm]`` and first
-    moment ``c = z[zc]``: ``b = c / m``, ``db/dc = I / m``, ``db/dm = -c / m^2``. Returns
-    ``(m, c)``."""
-    m, c = z[zm], z[zc]
-    J[body.m, zm] = 1.0
-    for i in range(3):
-        J[body.first.start + i, zc.start + i] = 1.0 / m
-        J[body.first.start + i, zm] = -c[i] / m**2
-    return m, c
+    """``(A r, r)`` (p,) of one least-squares problem: ``A = G^-1 M`` (the information-weighted
+    mean age; ``G``, ``M`` (p, p)), ``r = (1 - growth A)^-1 rate`` (the truth's rate from the
+    estimate's, ``rate`` (p,)); NaN where a matrix is singular (compiled:
+    :func:`.report_kernels.block_lag`)."""
+    return rk.block_lag(*(np.ascontiguousarray(a, dtype=float) for a in (G, M, rate)),
+                        float(growth))
 
 
 class PaperSolver(ParameterSolver):
@@ -343,19 +332,11 @@ class PaperSolver(ParameterSolver):
 
             lag_theta = A r_theta + G^-1 (S_phi,psi dD/dmu lag_mu - M_phi,psi dD/dmu r_mu)
 
-        (``S``, ``M``: the Gram and age-weighted Gram blocks of phi against psi)."""
-        L = self.layout
-        p, r = len(L.mu_active), len(L.theta_active)
-        (Sl, Sa), (Ml, Ma) = self.information(), ages
-        lag = np.zeros(L.n_mu + L.n_theta)
-        th = L.n_mu + L.theta_active
-        lag_mu, r_mu = block_lag(Sl[:p, :p], Ml[:p, :p], rate_z[L.mu_active], growth)
-        lag_th, _ = block_lag(Sa[:r, :r], Ma[:r, :r], rate_z[th], growth)
-        dD = par.D_jacobian(self.mu)[:, L.mu_active]                  # (20, p)
-        lag_th = lag_th + np.linalg.solve(
-            Sa[:r, :r], Sa[:r, r + 1:] @ (dD @ lag_mu) - Ma[:r, r + 1:] @ (dD @ r_mu))
-        lag[L.mu_active], lag[th] = lag_mu, lag_th
-        return lag
+        (``S``, ``M``: the Gram and age-weighted Gram blocks of phi against psi)
+        (compiled: :func:`.report_kernels.paper_drift_lag`)."""
+        L, (S_lin, S_ang), (M_lin, M_ang) = self.layout, self.information(), ages
+        return rk.paper_drift_lag(S_lin, S_ang, M_lin, M_ang, rate_z, float(growth), self.mu,
+                                  L.mu_active, L.theta_active)
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
@@ -389,6 +370,7 @@ class JointSolver(ParameterSolver):
         # the identified columns that are masses / first moments, and inertias
         self._lin_cols = np.flatnonzero(L.first_order[act])
         self._ang_cols = np.flatnonzero(~L.first_order[act])
+        self._s2p = np.ascontiguousarray(par.SHARP_TO_PROJECT, dtype=np.int64)
 
     def update(self, A, b, phi, y, psi) -> Step:
         L = self.layout
@@ -418,31 +400,17 @@ class JointSolver(ParameterSolver):
         return self.pi
 
     def vector_of(self, z: np.ndarray) -> np.ndarray:
-        out = np.empty(len(self.layout.names))
-        for b in self.layout.bodies:
-            m, com, I_c = par.physical_from_standard(z[b.vec])
-            out[b.m], out[b.first] = m, com
-            out[b.inertia] = par.sharp_vector(I_c)[par.SHARP_TO_PROJECT]
-        return out
+        """Per body ``m``, ``b = c / m``, ``I_c = I_O - m (|b|^2 1 - b b^T)`` permuted
+        (:func:`.parameters.physical_from_standard`; compiled:
+        :func:`.report_kernels.joint_vector_of`)."""
+        return rk.joint_vector_of(np.ascontiguousarray(z, dtype=float), self._s2p)
 
     def jacobian(self, z: np.ndarray) -> np.ndarray:
-        """Per body: the m and b rows (:func:`_mass_rows`); ``I_c = I_O - S(c) / m`` with
+        """Per body: ``db/dc = 1 / m``, ``db/dm = -c / m^2``; ``I_c = I_O - S(c) / m`` with
         ``S(c) = |c|^2 I - c c^T``, so ``dI_c/dI_O = I``, ``dI_c/dm = S / m^2`` and
-        ``dI_c,ij/dc_k = -(2 c_k d_ij - d_ik c_j - c_i d_jk) / m``."""
-        J = np.zeros((len(self.layout.names), len(z)))
-        for b in self.layout.bodies:
-            m, c = _mass_rows(J, b, z, b.m, b.first)
-            for jp, p in enumerate(par.SHARP_TO_PROJECT):     # output jp <- I# entry p
-                row = b.inertia.start + jp
-                J[row, b.inertia.start + p] = 1.0
-                i, j = par.SHARP_PAIRS[p]
-                S_ij = (c @ c if i == j else 0.0) - c[i] * c[j]
-                J[row, b.m] = S_ij / m**2
-                for kk in range(3):
-                    dS = (2.0 * c[kk] if i == j else 0.0) - (c[j] if kk == i else 0.0) \
-                        - (c[i] if kk == j else 0.0)
-                    J[row, b.first.start + kk] = -dS / m
-        return J
+        ``dI_c,ij/dc_k = -(2 c_k d_ij - d_ik c_j - c_i d_jk) / m`` (compiled:
+        :func:`.report_kernels.joint_jacobian`)."""
+        return rk.joint_jacobian(np.ascontiguousarray(z, dtype=float), self._s2p)
 
     def covariance(self) -> np.ndarray:
         g, x = self.gram, self.rls.x

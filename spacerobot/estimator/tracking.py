@@ -46,6 +46,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from . import report_kernels as rk
+
 __all__ = ["DriftTracker", "RATE_MEMORY", "NOISE_LAG", "total_sd"]
 
 #: memory of the rate regression, in multiples of the estimator's memory
@@ -62,7 +64,9 @@ class DriftTracker(NamedTuple):
     that the standard deviations, like the estimates, depend on the samples and not on the
     step sizes between them.
 
-    Immutable: :meth:`add` returns the updated tracker (a snapshot is a reference).
+    Immutable: :meth:`add` returns the updated tracker (a snapshot is a reference). Its
+    arithmetic is compiled (:func:`.report_kernels.drift_regression`, ``age_step``,
+    ``lu_solve``, ``total_sd``).
 
     Times below are in the clock the caller uses (``[clock]``: samples in
     :class:`.Identifier`, seconds if the caller passes seconds); rates are per clock unit.
@@ -76,12 +80,14 @@ class DriftTracker(NamedTuple):
     t : time of the latest sample [clock]
     a_bar : mean age of the data at ``t`` [clock]
     da_dt : ``d a_bar / dt`` over the latest step
-    w, mt, mx, ctt, ctx : the exponentially weighted line through ``(t_k, x_k)``: weight,
-        weighted means of t [clock] and x (p,), centred sums ``sum w (t - mt)^2`` and
-        ``sum w (t - mt)(x - mx)`` (p,)
+    w, mt, mx, ctt, ctx : (p,) the exponentially weighted lines through ``(t_k, x_k)``: weight,
+        weighted means of t [clock] and x, centred sums ``sum w (t - mt)^2`` and
+        ``sum w (t - mt)(x - mx)`` (0.0 before the first sample)
     sd : (p,) the latest standard deviations without the lag
     ages : ``M = sum w (t - t_k) H^T H`` per information block (eq. 2)
     mat_lag : (p,) the latest lag by eq. (2), or None (then eq. 1)
+    slope : (p,) :meth:`rate` at the latest sample
+    gain : (p,) :meth:`noise_gain` at the latest sample
     """
 
     lam: float
@@ -91,14 +97,16 @@ class DriftTracker(NamedTuple):
     t: float = math.nan
     a_bar: float = 0.0
     da_dt: float = 0.0
-    w: float = 0.0
-    mt: float = 0.0
+    w: np.ndarray | float = 0.0
+    mt: np.ndarray | float = 0.0
     mx: np.ndarray | float = 0.0
-    ctt: float = 0.0
+    ctt: np.ndarray | float = 0.0
     ctx: np.ndarray | float = 0.0
     sd: np.ndarray | float = 0.0
     ages: tuple = ()
     mat_lag: np.ndarray | None = None
+    slope: np.ndarray | float = 0.0
+    gain: np.ndarray | float = 1.0
 
     @classmethod
     def empty(cls, lam: float) -> "DriftTracker":
@@ -113,42 +121,34 @@ class DriftTracker(NamedTuple):
         sample (:meth:`.ParameterSolver.information`), the Jacobian ``d x / d z`` (p, p) of the
         estimates in the solver's parameters ``z``, and ``lag_of(rate_z, growth, ages)`` (the
         solver's :meth:`.ParameterSolver.drift_lag`)."""
-        lam = self.lam
-        t_ref = t if self.s0 == 0.0 else self.t_ref
-        s0 = lam * self.s0 + 1.0                      # sum w,  w = lam^(N-k)
-        s1 = lam * self.s1 + (t - t_ref)              # sum w (t_k - t_ref)
-        a_bar = (t - t_ref) - s1 / s0                 # sum w (t - t_k) / sum w
-        step = t - self.t
-        da_dt = (a_bar - self.a_bar) / step if self.s0 > 0.0 and step > 0.0 else 0.0
-        # rate regression: forgetting lam_r, memory RATE_MEMORY x the estimator's (s0 samples);
-        # each point weighs 1 / sd^2, so that answers the data did not determine yet (large sd)
-        # do not count as movement
-        lam_r = 1.0 - 1.0 / (RATE_MEMORY * s0)
-        v = 1.0 / np.maximum(sd * sd, 1e-300)
-        w_old = lam_r * self.w
-        w = w_old + v
-        d_t, d_x = t - self.mt, x - self.mx
-        f = v * w_old / w                             # weighted Welford update
-        ctt, ctx = lam_r * self.ctt + f * d_t * d_t, lam_r * self.ctx + f * d_t * d_x
+        x = np.ascontiguousarray(x, dtype=float)
+        sd = np.ascontiguousarray(sd, dtype=float)
+        if self.s0 == 0.0:                            # the lines start from 0
+            zero = np.zeros(len(x))
+            w = mt = mx = ctt = ctx = zero
+        else:
+            w, mt, mx, ctt, ctx = self.w, self.mt, self.mx, self.ctt, self.ctx
+        # the data's mean age, and the rate regression: forgetting lam_r, memory RATE_MEMORY x
+        # the estimator's (s0 samples); each point weighs 1 / sd^2, so that answers the data did
+        # not determine yet (large sd) do not count as movement
+        (s0, s1, t_ref, a_bar, da_dt, dt, w, mt, mx, ctt, ctx, slope, gain
+         ) = rk.drift_regression(self.lam, self.s0, self.s1, self.t_ref, self.t, self.a_bar,
+                                 w, mt, mx, ctt, ctx, float(t), x, sd, RATE_MEMORY)
         # eq. (2): M_age = sum w (t - t_k) H^T H, one block per least-squares problem;
         # after a step dt every old row is dt older: M_age <- lam (M_age + dt G_before)
-        dt = step if self.s0 > 0.0 and step > 0.0 else 0.0
-        ages = tuple(lam * (M + dt * G) for M, G in
+        ages = tuple(rk.age_step(M, G, self.lam, dt) for M, G in
                      zip(self.ages or [np.zeros_like(G) for G in info_before], info_before))
         mat_lag = None
-        if lag_of is not None and ages and ctt.shape == np.shape(x) and np.all(ctt > 0.0):
+        if lag_of is not None and ages and np.all(ctt > 0.0):
             growth = da_dt / a_bar if a_bar > 0.0 else 0.0
-            mat_lag = _matrix_lag(ctx / ctt, growth, ages, jac, lag_of)
-        return DriftTracker(lam, s0, s1, t_ref, t, a_bar, da_dt, w,
-                            self.mt + v * d_t / w, self.mx + v * d_x / w, ctt, ctx, sd, ages,
-                            mat_lag)
+            mat_lag = _matrix_lag(slope, growth, ages, jac, lag_of)
+        return DriftTracker(self.lam, s0, s1, t_ref, float(t), a_bar, da_dt, w, mt, mx, ctt,
+                            ctx, sd, ages, mat_lag, slope, gain)
 
     def rate(self) -> np.ndarray | float:
-        """Slope of the estimates' weighted lines, ``r_est`` (p,) [unit / clock] (0 before two
-        samples)."""
-        with np.errstate(all="ignore"):
-            r = self.ctx / self.ctt
-        return np.where(self.ctt > 0.0, r, 0.0)
+        """Slope of the estimates' weighted lines, ``r_est = ctx / ctt`` (p,) [unit / clock]
+        (0 before two samples)."""
+        return self.slope
 
     def lag_factor(self) -> float:
         """``a_bar / (1 - d a_bar / dt)`` [clock], the factor of eq. (1); ``d a_bar/dt < 1`` always
@@ -167,11 +167,9 @@ class DriftTracker(NamedTuple):
         """``max(1, lag_factor / T_r)`` (p,): how many of the estimate's standard deviations
         of movement eq. (1) turns into lag, ``T_r = sqrt(ctt / w)`` the time spread of the
         rate regression (an estimate that scatters by ``sd`` has a slope that scatters by
-        about ``sd / T_r``). About 1 with forgetting in steady state, about 3.5 without."""
-        with np.errstate(all="ignore"):
-            spread = np.sqrt(self.ctt / self.w)
-            gain = self.lag_factor() / spread
-        return np.where(spread > 0.0, np.maximum(gain, 1.0), 1.0)
+        about ``sd / T_r``); 1 where ``T_r`` is 0. About 1 with forgetting in steady state,
+        about 3.5 without."""
+        return self.gain
 
     def total_sd(self) -> np.ndarray:
         """The latest ``sd`` with the part of the lag it does not explain (module
@@ -183,19 +181,24 @@ def total_sd(sd: np.ndarray, lag: np.ndarray | float, gain: np.ndarray | float =
              ) -> np.ndarray:
     """``sqrt(sd^2 + max(0, lag^2 - (NOISE_LAG gain sd)^2))`` (module docstring): the standard
     deviation ``sd`` (p,) with the part of the lag (p,) that the estimate's own movement
-    (``gain`` sd, :meth:`DriftTracker.noise_gain`) does not explain."""
-    sd2 = np.square(sd)
-    excess = np.maximum(np.square(lag) - np.square(NOISE_LAG * gain) * sd2, 0.0)
-    return np.sqrt(sd2 + excess)
+    (``gain`` sd, :meth:`DriftTracker.noise_gain`) does not explain (compiled:
+    :func:`.report_kernels.total_sd`; ``lag`` and ``gain`` may be scalars)."""
+    sd = np.ascontiguousarray(sd, dtype=float)
+    shape = sd.shape
+    sd = sd.reshape(-1)
+
+    def vec(a):
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=float), shape)
+                                    ).reshape(-1)
+
+    return rk.total_sd(sd, vec(lag), vec(gain), NOISE_LAG).reshape(shape)
 
 
 def _matrix_lag(rate_x: np.ndarray, growth: float, ages, jac: np.ndarray, lag_of
                 ) -> np.ndarray | None:
     """Eq. (2): ``lag_x = J lag_of(J^-1 rate_x, growth, ages)``; None where an information
     block is singular (then eq. 1)."""
-    try:
-        with np.errstate(all="ignore"):
-            lag = jac @ lag_of(np.linalg.solve(jac, rate_x), growth, ages)
-    except np.linalg.LinAlgError:
-        return None
+    jac = np.ascontiguousarray(jac, dtype=float)
+    lag = lag_of(rk.lu_solve_vec(jac, rate_x), growth, ages)
+    lag = rk.matvec(jac, np.ascontiguousarray(lag, dtype=float))
     return lag if np.all(np.isfinite(lag)) else None

@@ -108,12 +108,19 @@ class Autocorrelation(NamedTuple):
     imply (module docstring, correlated equation errors).
 
     ``c[j] = sum_t lam^(N-t) e_t . e_(t-j)`` for lags ``j = 0..L`` over the residual vectors
-    ``e_t`` (the rows of one sample pooled); ``recent`` holds the last ``L`` of them. Immutable
-    (:meth:`add` returns the updated one).
+    ``e_t`` (the rows of one sample pooled; a pair of different lengths does not count). The
+    last ``L`` of them are kept in a ring: ``ring`` (L, width) holds ``e_t`` in row ``t mod L``,
+    its length in ``sizes`` (L,); ``head`` is the row the next one goes to, ``count`` how many
+    are stored (<= L). Immutable (:meth:`add` returns the updated one, its arrays new: a
+    snapshot is a reference); the sums are one compiled call per sample
+    (:func:`.report_kernels.autocorrelation_add`).
     """
 
     c: np.ndarray
-    recent: tuple = ()
+    ring: np.ndarray
+    sizes: np.ndarray
+    head: int = 0
+    count: int = 0
     lam: float = 1.0
 
     @classmethod
@@ -121,7 +128,8 @@ class Autocorrelation(NamedTuple):
         """No residual yet; lags ``0..lags``."""
         if lags < 0:
             raise ValueError(f"the number of correlation lags must be >= 0, got {lags}")
-        return cls(np.zeros(lags + 1), (), float(lam))
+        return cls(np.zeros(lags + 1), np.zeros((lags, 0)), np.zeros(lags, np.int64), 0, 0,
+                   float(lam))
 
     @property
     def lags(self) -> int:
@@ -132,13 +140,15 @@ class Autocorrelation(NamedTuple):
         L = self.lags
         if L == 0:
             return self
-        e = np.array(e, dtype=float).ravel()
-        c = self.c * self.lam if self.lam != 1.0 else self.c.copy()
-        c[0] += e @ e
-        for j, old in enumerate(reversed(self.recent), start=1):    # newest first: lag 1, 2 ..
-            if len(old) == len(e):
-                c[j] += e @ old
-        return Autocorrelation(c, (self.recent + (e,))[-L:], self.lam)
+        e = np.ascontiguousarray(e, dtype=float).ravel()
+        ring = self.ring
+        if ring.shape[1] < len(e):                   # wider rows than stored so far
+            ring = np.zeros((L, len(e)))
+            ring[:, :self.ring.shape[1]] = self.ring
+        c, ring, sizes = report_kernels.autocorrelation_add(self.c, self.lam, ring, self.sizes,
+                                                            self.head, self.count, e)
+        return Autocorrelation(c, ring, sizes, (self.head + 1) % L, min(self.count + 1, L),
+                               self.lam)
 
     def inflation(self) -> float:
         """``max(1, 1 + 2 sum_j (1 - j/(L+1)) c_j / c_0)``: the factor by which correlated

@@ -199,3 +199,59 @@ def project_planar_body(m, b, I6, m_scale=1.0):
     I_out = inertia_from_second_moment(0.5 * (P + P.T))
     I_out[2] = izz
     return (float(m) if m >= m_min else m_min), b, I_out, True
+
+
+# -- the joint solver's map and Jacobian ------------------------------------------------------------
+def joint_vector_of(z):
+    """The 20 estimates from the standard parameters ``z`` (per body ``[m, m b, I_O#]``)."""
+    out = np.empty(20)
+    for b in par.LAYOUT.bodies:
+        m, com, I_c = par.physical_from_standard(z[b.vec])
+        out[b.m], out[b.first] = m, com
+        out[b.inertia] = par.sharp_vector(I_c)[par.SHARP_TO_PROJECT]
+    return out
+
+
+def joint_jacobian(z):
+    """``d joint_vector_of / d z`` (20, 20), entry by entry."""
+    J = np.zeros((20, 20))
+    for b in par.LAYOUT.bodies:
+        m, c = z[b.m], z[b.first]
+        J[b.m, b.m] = 1.0
+        for i in range(3):
+            J[b.first.start + i, b.first.start + i] = 1.0 / m
+            J[b.first.start + i, b.m] = -c[i] / m**2
+        for jp, p in enumerate(par.SHARP_TO_PROJECT):
+            row = b.inertia.start + jp
+            J[row, b.inertia.start + p] = 1.0
+            i, j = par.SHARP_PAIRS[p]
+            J[row, b.m] = ((c @ c if i == j else 0.0) - c[i] * c[j]) / m**2
+            for k in range(3):
+                dS = (2.0 * c[k] if i == j else 0.0) - (c[j] if k == i else 0.0) \
+                    - (c[i] if k == j else 0.0)
+                J[row, b.first.start + k] = -dS / m
+    return J
+
+
+# -- the tracker's lag (spacerobot.estimator.tracking, eq. 2) -------------------------------------
+def block_lag(G, M, rate, growth):
+    """``(A r, r)``, ``A = G^-1 M``, ``r = (1 - growth A)^-1 rate`` (LAPACK solves)."""
+    A = np.linalg.solve(G, M)
+    r = np.linalg.solve(np.eye(len(rate)) - growth * A, rate)
+    return A @ r, r
+
+
+def paper_drift_lag(solver, rate_z, growth, ages):
+    """The paper solver's lag (20,): both blocks, and theta's response to mu's lag and rate."""
+    L = solver.layout
+    p, r = len(L.mu_active), len(L.theta_active)
+    (Sl, Sa), (Ml, Ma) = solver.information(), ages
+    lag = np.zeros(L.n_mu + L.n_theta)
+    th = L.n_mu + L.theta_active
+    lag_mu, r_mu = block_lag(Sl[:p, :p], Ml[:p, :p], rate_z[L.mu_active], growth)
+    lag_th, _ = block_lag(Sa[:r, :r], Ma[:r, :r], rate_z[th], growth)
+    dD = D_jacobian(solver.mu)[:, L.mu_active]
+    lag_th = lag_th + np.linalg.solve(
+        Sa[:r, :r], Sa[:r, r + 1:] @ (dD @ lag_mu) - Ma[:r, r + 1:] @ (dD @ r_mu))
+    lag[L.mu_active], lag[th] = lag_mu, lag_th
+    return lag
