@@ -263,6 +263,28 @@ def _inflation(e, lags):
     return a.inflation()
 
 
+@pytest.mark.parametrize("lam", [1.0, 0.97])
+def test_autocorrelation_sums_equal_the_direct_sums(lam):
+    """The ring's sums ``c[j] = sum_t lam^(N-t) e_t . e_(t-j)`` equal the direct sums over the
+    whole sequence (pairs of different lengths left out), after every sample; an update leaves
+    the one it started from unchanged (snapshots are references)."""
+    rng = np.random.default_rng(8)
+    L, N = 7, 40
+    es = [rng.normal(size=2 if t in (0, 5, 17) else 3) for t in range(N)]   # the ring widens
+    a = Autocorrelation.empty(L, lam)
+    for n in range(N):
+        before, c_before, ring_before = a, a.c.copy(), a.ring.copy()
+        a = a.add(es[n])
+        np.testing.assert_array_equal(before.c, c_before)
+        np.testing.assert_array_equal(before.ring, ring_before)
+        want = np.zeros(L + 1)
+        for t in range(n + 1):
+            for j in range(min(L, t) + 1):
+                if len(es[t]) == len(es[t - j]):
+                    want[j] += lam ** (n - t) * (es[t] @ es[t - j])
+        np.testing.assert_allclose(a.c, want, rtol=1e-13, atol=1e-13 * want[0])
+
+
 def test_autocorrelation_inflation_is_the_long_run_variance_ratio():
     """Bartlett-weighted sums: ``1 + 2 sum_j (1 - j/(L+1)) rho_j`` (tolerances ~ 3 standard
     errors of the estimate, ``sqrt(4 L / 3 N)`` relative)."""

@@ -1,18 +1,25 @@
 """Compiled (Numba) kernels of what the estimator reports at every sample: the prior's pull and
-the covariance of the paper solver's parameters, the Jacobian of the map to the estimates, the
-physical-consistency test of an estimated body.
+the covariance of the paper solver's parameters, the Jacobians of the maps to the estimates, the
+lag of the estimates behind moving parameters (:mod:`.tracking`), the residual autocorrelation
+(:class:`.uncertainty.Autocorrelation`), the physical-consistency test of an estimated body.
 
-They implement :func:`.uncertainty.observed_solve`, the paper solver's ``covariance``,
-``prior_pull``, ``jacobian``, ``vector_of`` and ``uncertainty`` (:class:`.solvers.PaperSolver`)
-and :func:`.physical.is_physical`: in NumPy some hundred and fifty small-array operations per
-sample, whose call overhead was most of the ~0.6 ms of ``Identifier.report()``. The NumPy
-formulation is the test oracle ``tests/oracles/report.py``.
+They implement :func:`.uncertainty.observed_solve` and :func:`.uncertainty.eig_scaled`, the
+paper solver's ``covariance``, ``prior_pull``, ``jacobian``, ``vector_of``, ``uncertainty`` and
+``drift_lag`` (:class:`.solvers.PaperSolver`), the joint solver's ``vector_of`` and ``jacobian``,
+the arithmetic of :class:`.tracking.DriftTracker` and :func:`.physical.is_physical`: in NumPy
+some hundreds of small-array operations per sample, whose call overhead was most of the cost of
+``Identifier.update`` and ``Identifier.report()``. The NumPy formulation is the test oracle
+``tests/oracles/report.py``.
 
 No ``np.linalg`` and no ``np.dot`` here: Numba implements both with SciPy's LAPACK and BLAS,
-and the FMUs need only NumPy and Numba. The eigen-decompositions of the scale-free information
-(:func:`scaled_information`) are NumPy's ``np.linalg.eigh``, called by the solver between two
-kernel calls (the same LAPACK routine as before, so the same eigenvectors); the products are
-loops, equal to NumPy's BLAS products to round-off.
+and the FMUs need only NumPy and Numba. The small dense problems are written out instead: the
+eigen-decompositions of the scale-free information (:func:`eigh`: Householder
+tridiagonalisation and implicit QL, EISPACK's ``tred2`` / ``tql2``), the solves of the tracker
+(:func:`lu_solve`: LU with partial pivoting) and the products (loops). They equal LAPACK's and
+BLAS's results to round-off; where a matrix is nearly singular (the information of the first
+seconds of a run) that round-off is amplified by its condition number, in either version.
+The map of the joint solver's parameters to the estimates (:func:`joint_vector_of`) repeats
+NumPy's operations in NumPy's order: the estimates are the same bit for bit.
 
 Positions in the vectors are those of :class:`spacerobot.interface.ParameterLayout` (checked
 against it by the tests): estimates per body ``m, b (3), I (6)`` at 0 and 10; the paper's
@@ -96,6 +103,174 @@ def scaled_information(G):
 
 
 @njit(**_NB)
+def _tridiagonalize(V, d, e):
+    """Householder reduction of the symmetric ``V`` (n, n) to tridiagonal form, in place:
+    ``d`` the diagonal, ``e`` the sub-diagonal (``e[0] = 0``), ``V`` the accumulated
+    orthogonal transformation (EISPACK ``tred2``, as in JAMA)."""
+    n = V.shape[0]
+    for j in range(n):
+        d[j] = V[n - 1, j]
+    for i in range(n - 1, 0, -1):
+        scale, h = 0.0, 0.0
+        for k in range(i):
+            scale += abs(d[k])
+        if scale == 0.0:
+            e[i] = d[i - 1]
+            for j in range(i):
+                d[j] = V[i - 1, j]
+                V[i, j] = 0.0
+                V[j, i] = 0.0
+        else:
+            for k in range(i):                               # the Householder vector
+                d[k] /= scale
+                h += d[k] * d[k]
+            f = d[i - 1]
+            g = math.sqrt(h)
+            if f > 0.0:
+                g = -g
+            e[i] = scale * g
+            h -= f * g
+            d[i - 1] = f - g
+            for j in range(i):
+                e[j] = 0.0
+            for j in range(i):                               # the similarity transformation
+                f = d[j]
+                V[j, i] = f
+                g = e[j] + V[j, j] * f
+                for k in range(j + 1, i):
+                    g += V[k, j] * d[k]
+                    e[k] += V[k, j] * f
+                e[j] = g
+            f = 0.0
+            for j in range(i):
+                e[j] /= h
+                f += e[j] * d[j]
+            hh = f / (h + h)
+            for j in range(i):
+                e[j] -= hh * d[j]
+            for j in range(i):
+                f, g = d[j], e[j]
+                for k in range(j, i):
+                    V[k, j] -= f * e[k] + g * d[k]
+                d[j] = V[i - 1, j]
+                V[i, j] = 0.0
+        d[i] = h
+    for i in range(n - 1):                                   # accumulate the transformations
+        V[n - 1, i] = V[i, i]
+        V[i, i] = 1.0
+        h = d[i + 1]
+        if h != 0.0:
+            for k in range(i + 1):
+                d[k] = V[k, i + 1] / h
+            for j in range(i + 1):
+                g = 0.0
+                for k in range(i + 1):
+                    g += V[k, i + 1] * V[k, j]
+                for k in range(i + 1):
+                    V[k, j] -= g * d[k]
+        for k in range(i + 1):
+            V[k, i + 1] = 0.0
+    for j in range(n):
+        d[j] = V[n - 1, j]
+        V[n - 1, j] = 0.0
+    if n > 0:
+        V[n - 1, n - 1] = 1.0
+        e[0] = 0.0
+
+
+@njit(**_NB)
+def _tridiagonal_ql(V, d, e):
+    """Eigenvalues ``d`` and eigenvectors (columns of ``V``) of the tridiagonal form of
+    :func:`_tridiagonalize` by the implicit QL method, in place (EISPACK ``tql2``, as in
+    JAMA). False if an eigenvalue did not converge in 100 iterations (non-finite input)."""
+    n = d.shape[0]
+    for i in range(1, n):
+        e[i - 1] = e[i]
+    if n > 0:
+        e[n - 1] = 0.0
+    f, tst1, eps = 0.0, 0.0, 2.0 ** -52
+    for l in range(n):
+        tst1 = max(tst1, abs(d[l]) + abs(e[l]))
+        m = l
+        while m < n - 1 and not abs(e[m]) <= eps * tst1:     # a negligible sub-diagonal
+            m += 1
+        if m > l:
+            for _it in range(101):
+                if _it == 100:
+                    return False
+                g = d[l]                                     # the implicit shift
+                p = (d[l + 1] - g) / (2.0 * e[l])
+                r = math.hypot(p, 1.0)
+                if p < 0.0:
+                    r = -r
+                d[l] = e[l] / (p + r)
+                d[l + 1] = e[l] * (p + r)
+                dl1 = d[l + 1]
+                h = g - d[l]
+                for i in range(l + 2, n):
+                    d[i] -= h
+                f += h
+                p = d[m]                                     # the QL sweep
+                c = c2 = c3 = 1.0
+                el1 = e[l + 1]
+                s = s2 = 0.0
+                for i in range(m - 1, l - 1, -1):
+                    c3, c2, s2 = c2, c, s
+                    g = c * e[i]
+                    h = c * p
+                    r = math.hypot(p, e[i])
+                    e[i + 1] = s * r
+                    s = e[i] / r
+                    c = p / r
+                    p = c * d[i] - s * g
+                    d[i + 1] = h + s * (c * g + s * d[i])
+                    for k in range(n):
+                        h = V[k, i + 1]
+                        V[k, i + 1] = s * V[k, i] + c * h
+                        V[k, i] = c * V[k, i] - s * h
+                p = -s * s2 * c3 * el1 * e[l] / dl1
+                e[l] = s * p
+                d[l] = c * p
+                if not abs(e[l]) > eps * tst1:
+                    break
+        d[l] += f
+        e[l] = 0.0
+    return True
+
+
+@njit(**_NB)
+def eigh(A):
+    """``(lam, V, ok)``: the eigen-decomposition ``A = V diag(lam) V^T`` of the symmetric ``A``
+    (p, p) with ``lam`` ascending and orthonormal eigenvectors ``V``, in place of
+    ``np.linalg.eigh`` (whose LAPACK the FMUs do not have in compiled code): Householder
+    tridiagonalisation, then the implicit QL method (EISPACK ``tred2`` / ``tql2``; absolute
+    accuracy ``~eps |A|``, as LAPACK's). Eigenvectors of equal eigenvalues are an orthonormal
+    basis of their space (as LAPACK's). ``ok`` False: no convergence (non-finite input)."""
+    p = A.shape[0]
+    V = A.copy()
+    d, e = np.empty(p), np.empty(p)
+    _tridiagonalize(V, d, e)
+    ok = _tridiagonal_ql(V, d, e)
+    order = np.argsort(d)
+    lam, W = np.empty(p), np.empty((p, p))
+    for k in range(p):
+        lam[k] = d[order[k]]
+        for i in range(p):
+            W[i, k] = V[i, order[k]]
+    return lam, W, ok
+
+
+@njit(**_NB)
+def eig_scaled(G):
+    """``(lam, V, d, unobserved, ok)``: :func:`scaled_information` of ``G`` (p, p) and the
+    eigen-decomposition ``G_s = V diag(lam) V^T`` (:func:`eigh`), as :func:`eig_solve` takes
+    them; ``ok`` False if it did not converge."""
+    Gs, d, unobserved = scaled_information(G)
+    lam, V, ok = eigh(Gs)
+    return lam, V, d, unobserved, ok
+
+
+@njit(**_NB)
 def eig_solve(lam, V, d, unobserved, r):
     """``(x, unobserved)``: ``G^-1 r`` in the directions the information observes, from the
     eigen-decomposition ``G_s = V diag(lam) V^T`` (ascending ``lam``) of the scaled information
@@ -161,7 +336,7 @@ def paper_prior_pull(mu_full, rls_mu, rls_theta, D_mu, M, S_ang, w_mu, w_theta, 
 
     ``w_mu``, ``w_theta``: the prior's remaining weights ``decay / P0`` (``W0 = w 1``);
     ``eig_lin``, ``eig_ang``: ``(lam, V, d, unobserved)`` of the information of ``mu`` and of
-    ``theta`` (:func:`scaled_information`, then ``np.linalg.eigh``); the other arguments as
+    ``theta`` (:func:`eig_scaled`); the other arguments as
     the solver holds them (``mu_full`` the 8 mu with the fixed ones)."""
     p, r = rls_mu.shape[0], rls_theta.shape[0]
     rhs = np.empty(p)

@@ -174,7 +174,11 @@ class DriftTracker(NamedTuple):
     def total_sd(self) -> np.ndarray:
         """The latest ``sd`` with the part of the lag it does not explain (module
         docstring)."""
-        return total_sd(self.sd, self.lag(), self.noise_gain())
+        sd, lag, gain = self.sd, self.lag(), self.noise_gain()
+        arrays = type(sd) is type(lag) is type(gain) is np.ndarray
+        if arrays and sd.shape == lag.shape == gain.shape:        # the identifier's case
+            return rk.total_sd(sd, lag, gain, NOISE_LAG)
+        return total_sd(sd, lag, gain)
 
 
 def total_sd(sd: np.ndarray, lag: np.ndarray | float, gain: np.ndarray | float = 1.0

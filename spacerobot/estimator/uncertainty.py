@@ -185,8 +185,8 @@ def observed_solve(G: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray
     Scale-free: with ``d = sqrt(diag G)``, ``G_s = G / (d d^T)`` (rows and columns of a zero
     diagonal entry set to 0) is eigen-decomposed, ``G_s = V diag(lam) V^T``, and
     ``x = V_k diag(1 / lam_k) V_k^T (r / d) / d`` over the eigenvalues ``lam_k`` above
-    ``REL_EIG_MIN`` times the largest (:func:`eig_scaled`, then the compiled
-    :func:`.report_kernels.eig_solve`).
+    ``REL_EIG_MIN`` times the largest (:func:`eig_scaled`, then :func:`.report_kernels.eig_solve`;
+    all compiled).
 
     Parameters
     ----------
@@ -202,12 +202,15 @@ def observed_solve(G: np.ndarray, r: np.ndarray) -> Tuple[np.ndarray, np.ndarray
 
 
 def eig_scaled(G: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(lam, V, d, unobserved)``: the eigen-decomposition ``G_s = V diag(lam) V^T`` (NumPy's
-    ``eigh``) of the scale-free information ``G_s = G / (d d^T)``, ``d = sqrt(diag G)``, and
-    the parameters without information (:func:`.report_kernels.scaled_information`), as
-    :func:`.report_kernels.eig_solve` takes them."""
-    Gs, d, unobserved = report_kernels.scaled_information(np.ascontiguousarray(G, dtype=float))
-    lam, V = np.linalg.eigh(Gs)
+    """``(lam, V, d, unobserved)``: the eigen-decomposition ``G_s = V diag(lam) V^T`` (``lam``
+    (p,) ascending, ``V`` (p, p)) of the scale-free information ``G_s = G / (d d^T)``,
+    ``d = sqrt(diag G)`` (p,), and the parameters without information (p,) bool, as
+    :func:`.report_kernels.eig_solve` takes them (compiled: :func:`.report_kernels.eig_scaled`,
+    Householder and QL iterations, equal to LAPACK's ``np.linalg.eigh`` to round-off). Raises
+    ``LinAlgError`` if the eigenvalues do not converge (as ``np.linalg.eigh``)."""
+    lam, V, d, unobserved, ok = report_kernels.eig_scaled(np.ascontiguousarray(G, dtype=float))
+    if not ok:
+        raise np.linalg.LinAlgError("Eigenvalues did not converge")
     return lam, V, d, unobserved
 
 
