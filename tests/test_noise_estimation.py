@@ -267,7 +267,8 @@ def _inflation(e, lags):
 def test_autocorrelation_sums_equal_the_direct_sums(lam):
     """The ring's sums ``c[j] = sum_t lam^(N-t) e_t . e_(t-j)`` equal the direct sums over the
     whole sequence (pairs of different lengths left out), after every sample; an update leaves
-    the one it started from unchanged (snapshots are references)."""
+    the one it started from unchanged (snapshots are references); the inflation is the
+    Bartlett-weighted ratio of the direct sums."""
     rng = np.random.default_rng(8)
     L, N = 7, 40
     es = [rng.normal(size=2 if t in (0, 5, 17) else 3) for t in range(N)]   # the ring widens
@@ -283,6 +284,9 @@ def test_autocorrelation_sums_equal_the_direct_sums(lam):
                 if len(es[t]) == len(es[t - j]):
                     want[j] += lam ** (n - t) * (es[t] @ es[t - j])
         np.testing.assert_allclose(a.c, want, rtol=1e-13, atol=1e-13 * want[0])
+        j = np.arange(1, L + 1)
+        f = 1.0 + 2.0 * np.sum((1.0 - j / (L + 1.0)) * want[1:]) / want[0]
+        assert a.inflation() == pytest.approx(max(f, 1.0), rel=1e-12)
 
 
 def test_autocorrelation_inflation_is_the_long_run_variance_ratio():

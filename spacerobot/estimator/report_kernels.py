@@ -750,18 +750,21 @@ def total_sd(sd, lag, gain, noise_lag):
 # -- residual autocorrelation (:class:`.uncertainty.Autocorrelation`) ------------------------------
 @njit(**_NB)
 def autocorrelation_add(c, lam, ring, sizes, head, count, e):
-    """``(c, ring, sizes)`` after the residual vector ``e`` (k,) (new arrays; inputs kept):
-    ``c[j] <- lam c[j] + e . e_(t-j)`` for the stored residuals of the same size, ``j = 0..L``,
-    and ``e`` stored in the ring ``ring`` (L, width) at row ``head`` (``sizes`` (L,) the stored
-    lengths; ``count`` rows stored, the newest at ``head - 1``)."""
+    """``(c, ring, sizes, inflation)`` after the residual vector ``e`` (k,) (new arrays; inputs
+    kept): ``c[j] <- lam c[j] + e . e_(t-j)`` for the stored residuals of the same size,
+    ``j = 0..L``, and ``e`` stored in the ring ``ring`` (L, width) at row ``head`` (``sizes``
+    (L,) the stored lengths; ``count`` rows stored, the newest at ``head - 1``);
+    ``inflation = max(1, 1 + 2 sum_j (1 - j/(L+1)) c_j / c_0)`` of the new sums (1 while
+    ``c_0`` is not > 0; :meth:`.uncertainty.Autocorrelation.inflation`)."""
     L, k = c.shape[0] - 1, e.shape[0]
     c = c * lam if lam != 1.0 else c.copy()
     s = 0.0
     for a in range(k):
         s += e[a] * e[a]
     c[0] += s
+    row = head
     for j in range(1, count + 1):                            # lag j: the row j back
-        row = (head - j) % L
+        row = row - 1 if row > 0 else L - 1
         if sizes[row] == k:
             s = 0.0
             for a in range(k):
@@ -772,7 +775,14 @@ def autocorrelation_add(c, lam, ring, sizes, head, count, e):
     for a in range(k):
         ring[head, a] = e[a]
     sizes[head] = k
-    return c, ring, sizes
+    inflation = 1.0
+    if c[0] > 0.0:
+        s = 0.0
+        for j in range(1, L + 1):
+            s += (1.0 - j / (L + 1.0)) * c[j]
+        f = 1.0 + 2.0 * (s / c[0])
+        inflation = f if f > 1.0 else 1.0
+    return c, ring, sizes, inflation
 
 
 # -- physical consistency ----------------------------------------------------------------------

@@ -111,9 +111,9 @@ class Autocorrelation(NamedTuple):
     ``e_t`` (the rows of one sample pooled; a pair of different lengths does not count). The
     last ``L`` of them are kept in a ring: ``ring`` (L, width) holds ``e_t`` in row ``t mod L``,
     its length in ``sizes`` (L,); ``head`` is the row the next one goes to, ``count`` how many
-    are stored (<= L). Immutable (:meth:`add` returns the updated one, its arrays new: a
-    snapshot is a reference); the sums are one compiled call per sample
-    (:func:`.report_kernels.autocorrelation_add`).
+    are stored (<= L); ``factor`` is :meth:`inflation`. Immutable (:meth:`add` returns the
+    updated one, its arrays new: a snapshot is a reference); the sums and the factor are one
+    compiled call per sample (:func:`.report_kernels.autocorrelation_add`).
     """
 
     c: np.ndarray
@@ -122,6 +122,7 @@ class Autocorrelation(NamedTuple):
     head: int = 0
     count: int = 0
     lam: float = 1.0
+    factor: float = 1.0
 
     @classmethod
     def empty(cls, lags: int, lam: float = 1.0) -> "Autocorrelation":
@@ -129,7 +130,7 @@ class Autocorrelation(NamedTuple):
         if lags < 0:
             raise ValueError(f"the number of correlation lags must be >= 0, got {lags}")
         return cls(np.zeros(lags + 1), np.zeros((lags, 0)), np.zeros(lags, np.int64), 0, 0,
-                   float(lam))
+                   float(lam), 1.0)
 
     @property
     def lags(self) -> int:
@@ -145,10 +146,72 @@ class Autocorrelation(NamedTuple):
         if ring.shape[1] < len(e):                   # wider rows than stored so far
             ring = np.zeros((L, len(e)))
             ring[:, :self.ring.shape[1]] = self.ring
-        c, ring, sizes = report_kernels.autocorrelation_add(self.c, self.lam, ring, self.sizes,
-                                                            self.head, self.count, e)
+        c, ring, sizes, factor = report_kernels.autocorrelation_add(
+            self.c, self.lam, ring, self.sizes, self.head, self.count, e)
         return Autocorrelation(c, ring, sizes, (self.head + 1) % L, min(self.count + 1, L),
-                               self.lam)
+                               self.lam, factor)
+
+    def inflation(self) -> float:
+        """``max(1, 1 + 2 sum_j (1 - j/(L+1)) c_j / c_0)``: the factor by which correlated
+        residuals make the independent-rows variance of an estimate too small; 1 without lags
+        or data (a negative sum, e.g. from central differences, is not used to shrink it).
+        Computed by :meth:`add`."""
+        return self.factor
+
+
+def residual_variance(self, z: np.ndarray, p: int) -> float:
+        """:func:`residual_variance` of the combination ``z`` with these rows' degrees of
+        freedom (:meth:`dof`)."""
+        return residual_variance(self.S, z, self.dof(p), 0)
+
+
+class Autocorrelation(NamedTuple):
+    """Weighted autocorrelation sums of a residual sequence and the variance inflation they
+    imply (module docstring, correlated equation errors).
+
+    ``c[j] = sum_t lam^(N-t) e_t . e_(t-j)`` for lags ``j = 0..L`` over the residual vectors
+    ``e_t`` (the rows of one sample pooled; a pair of different lengths does not count). The
+    last ``L`` of them are kept in a ring: ``ring`` (L, width) holds ``e_t`` in row ``t mod L``,
+    its length in ``sizes`` (L,); ``head`` is the row the next one goes to, ``count`` how many
+    are stored (<= L); ``factor`` is :meth:`inflation`. Immutable (:meth:`add` returns the
+    updated one, its arrays new: a snapshot is a reference); the sums and the factor are one
+    compiled call per sample (:func:`.report_kernels.autocorrelation_add`).
+    """
+
+    c: np.ndarray
+    ring: np.ndarray
+    sizes: np.ndarray
+    head: int = 0
+    count: int = 0
+    lam: float = 1.0
+    factor: float = 1.0
+
+    @classmethod
+    def empty(cls, lags: int, lam: float = 1.0) -> "Autocorrelation":
+        """No residual yet; lags ``0..lags``."""
+        if lags < 0:
+            raise ValueError(f"the number of correlation lags must be >= 0, got {lags}")
+        return cls(np.zeros(lags + 1), np.zeros((lags, 0)), np.zeros(lags, np.int64), 0, 0,
+                   float(lam), 1.0)
+
+    @property
+    def lags(self) -> int:
+        return len(self.c) - 1
+
+    def add(self, e: np.ndarray) -> "Autocorrelation":
+        """With the residual vector ``e`` of one more sample (no-op without lags)."""
+        L = self.lags
+        if L == 0:
+            return self
+        e = np.ascontiguousarray(e, dtype=float).ravel()
+        ring = self.ring
+        if ring.shape[1] < len(e):                   # wider rows than stored so far
+            ring = np.zeros((L, len(e)))
+            ring[:, :self.ring.shape[1]] = self.ring
+        c, ring, sizes, factor = report_kernels.autocorrelation_add(
+            self.c, self.lam, ring, self.sizes, self.head, self.count, e)
+        return Autocorrelation(c, ring, sizes, (self.head + 1) % L, min(self.count + 1, L),
+                               self.lam, factor)
 
     def inflation(self) -> float:
         """``max(1, 1 + 2 sum_j (1 - j/(L+1)) c_j / c_0)``: the factor by which correlated
