@@ -53,6 +53,7 @@ from spacerobot.estimator.identifier import KEYS  # noqa: E402
 from spacerobot.estimator.noise_model import equation_error_sd  # noqa: E402
 from spacerobot.interface import ESTIMATE_NAMES, relative_errors  # noqa: E402
 from spacerobot.robots import get_robot  # noqa: E402
+from spacerobot.sensors import estimator_noise_settings  # noqa: E402
 from spacerobot.interface import body_of  # noqa: E402
 from spacerobot.system.identify import read_telemetry, read_truth  # noqa: E402
 from spacerobot.system.recorder import read_csv  # noqa: E402
@@ -79,9 +80,18 @@ COMBOS = (("momentum", "measured"), ("force", "measured"), ("force", "difference
 #: the noise model's equation settings per set-up (docs/identification.md, section 6):
 #: momentum differenced over 5 s with the angular rows about the base, the accelerometer bias
 #: estimated from the navigation velocity, the Savitzky-Golay derivative over 5 samples
-SETTINGS = {("momentum", "measured"): {"ident.momentum_window": 5.0, "ident.momentum_point": 1},
-            ("force", "measured"): {"ident.accel_bias": 1},
-            ("force", "differenced"): {"ident.diff_half_window": 2}}
+#: and each set-up's share of the sensors' error description (the thrust errors' consider
+#: covariance; the accelerations' noise, compensated), from the sensors' realistic defaults
+_SENSORS = estimator_noise_settings()
+_THRUST = {k: v for k, v in _SENSORS.items() if k.startswith("ident.sd_thrust.")}
+SETTINGS = {("momentum", "measured"): {"ident.momentum_window": 5.0, "ident.momentum_point": 1,
+                                       **_THRUST},
+            ("force", "measured"): {"ident.accel_bias": 1, **_THRUST,
+                                    **{f"ident.noise.{k}": _SENSORS[f"ident.noise.{k}"]
+                                       for k in ("base.a", "base.alpha", "arm.qdd")}},
+            ("force", "differenced"): {"ident.diff_half_window": 1, **_THRUST,
+                                       **{f"ident.noise.{k}": _SENSORS[f"ident.noise.{k}"]
+                                          for k in ("base.v", "base.omega", "arm.qd")}}}
 #: the Identifier option of each equation setting (for the pilot run's noise_model)
 _OPTION = {"ident.momentum_window": ("window", float), "ident.momentum_point": ("moving_point", bool),
            "ident.accel_bias": ("accel_bias", bool),
@@ -89,8 +99,10 @@ _OPTION = {"ident.momentum_window": ("window", float), "ident.momentum_point": (
 
 
 def identifier_options(settings) -> dict:
-    """:class:`spacerobot.estimator.identifier.Identifier` keywords of estimator settings."""
-    return {_OPTION[k][0]: _OPTION[k][1](v) for k, v in settings.items()}
+    """:class:`spacerobot.estimator.identifier.Identifier` keywords of the estimator settings
+    that shape the equations' rows (the pilot run's row standard deviations depend on those
+    only; the thrust consider term and the noise compensation do not change the rows)."""
+    return {_OPTION[k][0]: _OPTION[k][1](v) for k, v in settings.items() if k in _OPTION}
 
 
 @dataclass(frozen=True)

@@ -444,8 +444,33 @@ def noise_model_vars() -> List[Var]:
           Var("ident.accel_bias", "parameter", "fixed", "Integer", None,
               "Force method, measured accelerations: 1 = subtract the accelerometer bias "
               "estimated online from the navigation velocity (the slope of v - integral a), "
-              "0 = the accelerations as measured", 0, ("accel_bias",))]
+              "0 = the accelerations as measured", 0, ("accel_bias",)),
+          Var("ident.sd_thrust.scale", "parameter", "fixed", "Real", "1",
+              "Standard deviation of the thrust's scale-factor error (force and moment; "
+              "constant over the run): a consider term adds what it leaves in the estimates "
+              "to their standard deviations. 0 = the measured thrust is exact", 0.0,
+              ("sd_thrust", "scale")),
+          Var("ident.sd_thrust.misalign", "parameter", "fixed", "Real", "rad",
+              "Standard deviation of the thrust's misalignment about each axis (force and "
+              "moment; constant over the run), a consider term as ident.sd_thrust.scale. "
+              "0 = the measured thrust direction is exact", 0.0, ("sd_thrust", "misalign"))]
+    v += [Var(f"ident.noise.{name}", "parameter", "fixed", "Real", unit,
+              f"Force method, {source} accelerations: white-noise standard deviation per "
+              f"sample of {name}; with any of these > 0 the estimates are compensated for the "
+              f"bias that noisy accelerations cause (errors in variables). 0 = no noise",
+              0.0, ("signal_sd", key))
+          for key, name, unit, source in SIGNAL_NOISE_PARAMETERS]
     return v
+
+
+#: the estimator's accelerations' noise parameters (errors in variables): (measurement key,
+#: interface name, unit, acceleration source that uses it)
+SIGNAL_NOISE_PARAMETERS = (("a_S", "base.a", "m/s2", "measured"),
+                           ("alpha_B", "base.alpha", "rad/s2", "measured"),
+                           ("qdd", "arm.qdd", "rad/s2", "measured"),
+                           ("v_S", "base.v", "m/s", "differenced"),
+                           ("omega_B", "base.omega", "rad/s", "differenced"),
+                           ("qd", "arm.qd", "rad/s", "differenced"))
 
 
 def body_of(values: Mapping[str, float], prefix: str) -> RigidBody:

@@ -178,6 +178,10 @@ CONTRACT_UNITS = [
     (r"noise\.accel\.(vrw|bias|brw)", "m/s2"), (r"noise\.alpha", "rad/s2"),
     (r"noise\.enc\.qd", "rad/s"), (r"noise\.enc\.qdd", "rad/s2"),
     (r"ident\.(momentum|force)_window", "s"),      # reference windows (branch s14)
+    # the thrust errors' consider term and the accelerations' noise (errors in variables)
+    (r"ident\.sd_thrust\.scale", "1"), (r"ident\.sd_thrust\.misalign", "rad"),
+    (r"ident\.noise\.base\.a", "m/s2"), (r"ident\.noise\.(base\.alpha|arm\.qdd)", "rad/s2"),
+    (r"ident\.noise\.base\.v", "m/s"), (r"ident\.noise\.(base\.omega|arm\.qd)", "rad/s"),
 ]
 
 

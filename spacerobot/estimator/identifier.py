@@ -16,13 +16,13 @@ from typing import Mapping, Tuple
 
 import numpy as np
 
-from ..interface import (AccelSource, ExciteMode, Method, ParameterLayout, Solver, body_of,
-                         row_sd)
+from ..interface import (SIGNAL_NOISE_PARAMETERS, AccelSource, ExciteMode, Method,
+                         ParameterLayout, Solver, body_of, row_sd)
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
-from . import kernels, report_kernels
+from . import consider, eiv, kernels, report_kernels
 from .accel_bias import BiasFit
-from .differencing import centre_derivative
+from .differencing import centre_derivative, derivative_weights
 from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
 from .tracking import DriftTracker
@@ -133,6 +133,19 @@ class Identifier:
         ``[r_S]x`` times the linear rows) instead of the inertial origin, so that position,
         velocity and thrust errors do not enter multiplied by the distance the base drifted
         from the origin. False = the paper's (about the origin).
+    thrust_sd : (float, float)
+        Standard deviations of the thrust's scale factor error [1] and of its misalignment
+        per axis [rad], constant over the run, the same for force and moment: a consider
+        covariance (:mod:`.consider`) adds what they leave in the estimates to the reported
+        standard deviations (the estimates are unchanged). (0, 0) = the thrust as measured
+        is exact.
+    signal_sd : mapping
+        Force method: white-noise standard deviations per sample of the signals the
+        accelerations come from, by measurement key: measured accelerations ``a_S``
+        [m/s2], ``alpha_B`` [rad/s2], ``qdd`` [rad/s2]; differenced accelerations the
+        velocities ``v_S`` [m/s], ``omega_B`` [rad/s], ``qd`` [rad/s] (the derivative's noise
+        follows from its weights). With any > 0 the estimates are bias-compensated for the
+        accelerations' noise (:mod:`.eiv`). Empty / 0 = the plain least-squares answers.
 
     Attributes
     ----------
@@ -150,7 +163,8 @@ class Identifier:
                  solver: Solver | str = "paper", accel_source: AccelSource | str = "measured",
                  lam: float = 1.0, sd_rel: float = SD_REL, row_sd=(0.0, 0.0),
                  diff_half_window: int = 1, corr_lags: int = 0, window: float = 0.0,
-                 moving_point: bool = False, accel_bias: bool = False):
+                 moving_point: bool = False, accel_bias: bool = False, thrust_sd=(0.0, 0.0),
+                 signal_sd: Mapping[str, float] | None = None):
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
@@ -169,6 +183,10 @@ class Identifier:
             if not (math.isfinite(val) and int(val) == val and low <= val <= high):
                 raise ValueError(f"{name} must be an integer from {low} to {high}, got {val}")
         window = _seconds(window, "reference window")
+        thrust_sd = tuple(float(x) for x in thrust_sd)
+        if len(thrust_sd) != 2 or not all(0.0 <= x <= MAX_THRUST_SD for x in thrust_sd):
+            raise ValueError(f"thrust standard deviations (scale factor, misalignment [rad]) "
+                             f"must be two numbers from 0 to {MAX_THRUST_SD:g}, got {thrust_sd}")
         moving_point = _flag(moving_point, "moving_point")
         accel_bias = _flag(accel_bias, "accel_bias")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
@@ -180,6 +198,11 @@ class Identifier:
         self.method, self.accel_source, self.lam, self.sd_rel = method, accel_source, lam, sd_rel
         self.row_sd, self.diff_half_window = row_sd, int(diff_half_window)
         self.window = window
+        self.thrust_sd = thrust_sd
+        # consider parameters' prior sd (8,); with any > 0 the equation array carries their
+        # right-hand-side sensitivities as 16 more columns (:mod:`.consider`)
+        self._sd_c, self._consider = consider.thrust_sd(*thrust_sd)
+        self.signal_sd = _signal_sd(signal_sd, method, accel_source, window)
         self.moving_point = moving_point and method is Method.MOMENTUM
         self.accel_bias = accel_bias and method is Method.FORCE and (
             accel_source is AccelSource.MEASURED)
@@ -195,6 +218,10 @@ class Identifier:
                               slice(kernels.OMEGA_B, kernels.OMEGA_B + 3)),
                              (slice(q0 + 2 * n, q0 + 3 * n), slice(q0 + n, q0 + 2 * n)))
         self.layout = ParameterLayout.for_robot(robot)
+        # the accelerations' noise sd per channel (.eiv), or None: no compensation
+        self._accel_sd = (_channel_sd(self.signal_sd, accel_source, self.n)
+                          if method is Method.FORCE else None)
+        self._channels = eiv.accel_channels(self.n)
         self.solver: ParameterSolver = make_solver(kind, self.layout, guess, lam, int(corr_lags))
         self.info_lin = np.zeros((len(self.layout.mu_active),) * 2)
         self.info_ang = np.zeros((len(self.layout.theta_active),) * 2)
@@ -210,6 +237,7 @@ class Identifier:
         self.history = []           # differenced accelerations: the window (t, flat sample)
         self._exc = None            # cached excitation() (cleared by update / set_state)
         self.tracking = DriftTracker.empty(lam)   # the estimates' lag (:mod:`.tracking`)
+        self.thrust = consider.ThrustIntegrals()   # momentum form with thrust_sd: int F, M
 
     # -- equations -----------------------------------------------------------------------------
     def _equations(self, flat: np.ndarray, t: float = 0.0):
@@ -218,9 +246,16 @@ class Identifier:
         differenced against the reference sample (eqs. 11, 16), None for the first sample;
         with a window, differenced against the sample ``window`` earlier (:meth:`_windowed`);
         moving point: the angular rows about ``r_S`` of this sample (:func:`about_point`)."""
-        E = np.empty((3, kernels.N_COLS))
         force = self.method is Method.FORCE
-        kernels.equations(force, flat, self.n, *self._geom, E)
+        if self._consider:
+            E = np.empty((3, kernels.N_COLS + 2 * consider.N_CONSIDER))
+            kernels.equations(force, flat, self.n, *self._geom, E)
+            o = kernels.Q0 + 3 * self.n                          # F, M, J, H
+            consider.thrust_sensitivity(force, flat[o:o + 3], flat[o + 3:o + 6],
+                                        flat[o + 6:o + 9], self.thrust, E[:, kernels.N_COLS:])
+        else:
+            E = np.empty((3, kernels.N_COLS))
+            kernels.equations(force, flat, self.n, *self._geom, E)
         if self.window > 0.0:
             dE = self._windowed(t, E)
         elif force:
@@ -273,7 +308,7 @@ class Identifier:
         before = self._snapshot()
         try:
             with np.errstate(all="ignore"):
-                E = self._sample_equations(t, flat)
+                E, _ = self._sample_equations(t, flat)
             failed = E is not None and not np.all(np.isfinite(E))
         except (ArithmeticError, ValueError, np.linalg.LinAlgError):
             failed = True
@@ -401,28 +436,40 @@ class Identifier:
         return not (self.ring and not t > self.ring[-1][0])
 
     def _sample_equations(self, t: float, flat: np.ndarray):
-        """The equation array of a validated sample (differenced accelerations: of the
-        window's centre), or None while a reference or window is being stored."""
+        """``(E, noise)``: the equation array of a validated sample (differenced
+        accelerations: of the window's centre), or None while a reference or window is being
+        stored; and the noise rows of its accelerations (:mod:`.eiv`), or None."""
         if self.accel_bias:                          # a_S - the bias estimated so far
             k = kernels
             self.bias_fit = self.bias_fit.add(t, flat[k.V_S:k.V_S + 3], flat[k.A_S:k.A_S + 3])
             flat = flat.copy()
             flat[k.A_S:k.A_S + 3] -= self.bias_fit.bias()
+        if self._consider and self.method is Method.MOMENTUM:
+            o = kernels.Q0 + 3 * self.n
+            self.thrust = self.thrust.add(t, flat[kernels.R_S:kernels.R_S + 3], flat[o:o + 3],
+                                          flat[o + 3:o + 6])
+        sd = self._accel_sd
         if self.method is Method.FORCE and self.accel_source is AccelSource.DIFFERENCED:
             centre = self._differenced(t, flat)
             if centre is None:
-                return None
-            t, flat = centre
-        return self._equations(flat, t)
+                return None, None
+            t, flat, gain = centre
+            sd = None if sd is None else sd * gain             # the derivative's noise
+        E = self._equations(flat, t)
+        if sd is None or E is None:
+            return E, None
+        equations = lambda x, out: kernels.equations(True, x, self.n, *self._geom, out)  # noqa: E731
+        return E, _split(eiv.noise_rows(equations, flat, E, self._channels, sd))
 
     def _accept(self, t: float, flat: np.ndarray) -> int:
         """The update proper, for a validated sample (see :meth:`update`)."""
-        E = self._sample_equations(t, flat)
+        E, noise = self._sample_equations(t, flat)
         if E is None:
             self.status = REFERENCE
             return self.status
         info = self.solver.information()
-        self._solve(*_split(E))
+        b_c, y_c = _split_consider(E) if self._consider else (None, None)
+        self._solve(*_split(E), b_c, y_c, noise)
         u = self.solver.std_parts()
         # the tracker's clock is the sample count: the estimates depend on the samples, not on
         # the step sizes between them (a rate per sample times an age in samples)
@@ -458,26 +505,31 @@ class Identifier:
         time (:func:`.differencing.centre_derivative`): every row of its equations belongs to
         one instant.
 
-        Returns ``(t_c, completed centre sample)``, or None while the window is not full.
+        Returns ``(t_c, completed centre sample, |w|)``, ``|w|`` [1/s] the norm of the
+        derivative's weights (white velocity noise ``sigma`` gives a derivative noise
+        ``sigma |w|``), or None while the window is not full.
         """
         k = 2 * self.diff_half_window + 1
         self.history = self.history + [(t, flat)]
         if len(self.history) < k:
             return None
         window, self.history = self.history, self.history[1:]
-        return centre_derivative(window, self._diff_slices)
+        t_c, flat_c = centre_derivative(window, self._diff_slices)
+        times = np.array([tk for tk, _ in window])
+        gain = float(np.linalg.norm(derivative_weights(times, self.diff_half_window)))
+        return t_c, flat_c, gain
 
-    def _solve(self, A, b, phi, y, psi):
-        """The solver's update on the identified rows, then the residuals and information."""
-        L = self.layout
-        if self._w_lin != 1.0:                       # rows / their noise sd
-            A, b = A * self._w_lin, b * self._w_lin
-        if self._w_ang != 1.0:
-            phi, y, psi = phi * self._w_ang, y * self._w_ang, psi * self._w_ang
-        if not L.complete:
-            rl, ra = L.rows_lin, L.rows_ang
-            A, b, phi, y, psi = A[rl], b[rl], phi[ra], y[ra], psi[ra]
-        st = self.solver.update(A, b, phi, y, psi)
+    def _solve(self, A, b, phi, y, psi, b_c=None, y_c=None, noise=None):
+        """The solver's update on the identified rows, then the residuals and information;
+        ``b_c``, ``y_c`` (3, 8): the right-hand sides' consider sensitivities, or None;
+        ``noise``: the accelerations' noise rows ``(A, b, phi, y, psi)`` (3 per noisy
+        channel), or None."""
+        A, b, phi, y, psi = self._identified_rows(A, b, phi, y, psi)
+        if b_c is not None:
+            b_c, y_c = self._identified_rows(b_c, y_c)
+        if noise is not None:
+            noise = self._identified_rows(*noise)
+        st = self.solver.update(A, b, phi, y, psi, b_c, y_c, noise)
         self.residual_lin = _relative_norm(st.e_lin, st.rhs_lin)
         self.residual_ang = _relative_norm(st.e_ang, st.rhs_ang)
         if self.lam == 1.0:
@@ -486,6 +538,21 @@ class Identifier:
         else:
             self.info_lin = self.lam * self.info_lin + st.H_lin.T.dot(st.H_lin)
             self.info_ang = self.lam * self.info_ang + st.H_ang.T.dot(st.H_ang)
+
+    def _identified_rows(self, *rows):
+        """Rows ``(A, b, phi, y, psi)``, or right-hand sides ``(b, y)``, weighted by their
+        noise (``1 / row_sd``) and reduced to the identified rows (planar robots); every
+        block of 3 rows is one sample's x, y, z rows."""
+        L = self.layout
+        lin, ang = (rows[:2], rows[2:]) if len(rows) == 5 else (rows[:1], rows[1:])
+        if self._w_lin != 1.0:
+            lin = tuple(r * self._w_lin for r in lin)
+        if self._w_ang != 1.0:
+            ang = tuple(r * self._w_ang for r in ang)
+        if not L.complete:
+            lin = tuple(_rows_of(r, L.rows_lin) for r in lin)
+            ang = tuple(_rows_of(r, L.rows_ang) for r in ang)
+        return lin + ang
 
     # -- results --------------------------------------------------------------------------------
     def vector(self) -> np.ndarray:
@@ -500,13 +567,21 @@ class Identifier:
         variance) + the square of the prior's pull (the distance from the estimate to the
         data-only least-squares answer), both through the delta-method Jacobian of the map from
         the solver's parameters to :meth:`vector`, + the part of the estimates' lag behind
-        moving parameters that these do not explain (:func:`.tracking.total_sd`). Without
+        moving parameters that these do not explain (:func:`.tracking.total_sd`), + with
+        ``thrust_sd`` the thrust errors' consider variance (:mod:`.consider`). Without
         noise the pull is the estimate's error itself (to first order). An estimate the data
         do not determine yet reports at least its error scale (100 %). Parameters that are not
         identified (planar out-of-plane ones) report the square root of their prior
         covariance.
         """
-        return self.tracking.total_sd() if self.samples else self.solver.std()
+        if not self.samples:
+            return self.solver.std()
+        sd = self.tracking.total_sd()
+        if self._consider:                           # + the thrust errors' share (.consider)
+            s = self.solver
+            sd_c = consider.consider_sd(s.jacobian(s.z()), s.consider_shift(), self._sd_c)
+            sd = np.sqrt(sd * sd + sd_c * sd_c)
+        return sd
 
     def report(self) -> Report:
         """The estimates as reported: physically consistent, with their standard deviations,
@@ -572,14 +647,16 @@ MAX_HALF_WINDOW = 50
 MAX_CORR_LAGS = 10_000
 #: largest reference window [s]
 MAX_WINDOW = 1e6
+#: largest thrust scale-factor / misalignment standard deviation (1, rad)
+MAX_THRUST_SD = 1.0
 
 #: attributes of the identifier an update rebinds (restored by reference)
 _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",
-            "reference", "ring", "bias_fit", "tracking")
+            "reference", "ring", "bias_fit", "tracking", "thrust")
 
 
 def about_point(dE: np.ndarray, p: np.ndarray) -> None:
-    """The angular rows of a momentum difference ``dE`` (3, 42) about the point ``p`` (3,)
+    """The angular rows of a momentum difference ``dE`` (3, 42 [+ 16]) about the point ``p`` (3,)
     instead of the origin, in place: ``L_p = L_O - p x P`` and ``H_p = H_O - p x J``, so the
     angular residual becomes ``r_ang - [p]x r_lin`` with ``r_lin = A mu - b``,
     ``r_ang = phi theta - y - psi D(mu)``: ``y -= [p]x b`` and, ``mu`` being the entries
@@ -590,6 +667,9 @@ def about_point(dE: np.ndarray, p: np.ndarray) -> None:
     dE[:, k.COL_Y] -= lin[:, 8]                          # y' = y - [p]x b
     dE[:, k.COL_PSI:k.COL_PSI + 4] += lin[:, 0:4]        # base m, m b
     dE[:, k.COL_PSI + 10:k.COL_PSI + 14] += lin[:, 4:8]  # target m, m b
+    if dE.shape[1] > k.N_COLS:                           # consider columns: y_c -= [p]x b_c
+        b_c, y_c = _split_consider(dE)
+        y_c -= P @ b_c
 
 
 def _relative_norm(e: np.ndarray, rhs: np.ndarray) -> float:
@@ -602,6 +682,20 @@ def _split(E: np.ndarray):
     k = kernels
     return (E[:, k.COL_A:k.COL_B], E[:, k.COL_B], E[:, k.COL_PHI:k.COL_Y], E[:, k.COL_Y],
             E[:, k.COL_PSI:k.N_COLS])
+
+
+def _rows_of(r: np.ndarray, keep: np.ndarray) -> np.ndarray:
+    """The rows ``keep`` (of 0, 1, 2) of every block of 3 rows of ``r``."""
+    if len(r) == 3:
+        return r[keep]
+    return r.reshape(len(r) // 3, 3, *r.shape[1:])[:, keep].reshape(-1, *r.shape[1:])
+
+
+def _split_consider(E: np.ndarray):
+    """``(b_c, y_c)`` (3, 8) views of the consider columns of an equation array that has
+    them (:mod:`.consider`)."""
+    n, c = kernels.N_COLS, consider.N_CONSIDER
+    return E[:, n:n + c], E[:, n + c:n + 2 * c]
 
 
 def _copy(v):
@@ -635,6 +729,52 @@ def _seconds(x, name: str) -> float:
         raise ValueError(f"{name} must be a number of seconds from 0 to {MAX_WINDOW:g}, "
                          f"got {x if real else repr(x)}")
     return float(x)
+
+
+#: signals whose noise the errors-in-variables compensation takes (.eiv), per acceleration
+#: source: the accelerations as measured, or the velocities they are differenced from
+SIGNAL_SD_KEYS = {src: tuple(k for k, _, _, s in SIGNAL_NOISE_PARAMETERS if s == src.name.lower())
+                  for src in AccelSource}
+
+
+def _signal_sd(signal_sd, method: Method, source: AccelSource, window: float) -> dict:
+    """The checked ``signal_sd`` option: ``{key: sd}`` (floats >= 0) for keys of
+    :data:`SIGNAL_SD_KEYS`; only the force method uses it, and not with a force window."""
+    out = {}
+    known = {k for keys in SIGNAL_SD_KEYS.values() for k in keys}
+    for key, x in dict(signal_sd or {}).items():
+        if key not in known:
+            raise ValueError(f"signal_sd: unknown signal {key!r}; known: {sorted(known)}")
+        if not (isinstance(x, numbers.Real) and math.isfinite(x) and x >= 0.0):
+            name = dict((k, n) for k, n, _, _ in SIGNAL_NOISE_PARAMETERS)[key]
+            raise ValueError(f"ident.noise.{name} (signal_sd[{key!r}]) must be a finite number "
+                             f">= 0, got {x!r}")
+        out[key] = float(x)
+    if any(out.values()) and method is Method.FORCE and window > 0.0:
+        raise ValueError("the accelerations' noise compensation (signal_sd) does not apply to "
+                         "force-window differences (ident.force_window > 0)")
+    return out
+
+
+def _channel_sd(signal_sd: dict, source: AccelSource, n: int):
+    """Noise sd (6 + n,) of ``a_S``, ``alpha_B``, ``qdd`` (for differenced accelerations:
+    of the velocities, times the derivative's gain later), or None if all are 0."""
+    a, alpha, arm = (signal_sd.get(k, 0.0) for k in SIGNAL_SD_KEYS[source])
+    if not (a or alpha or arm):
+        return None
+    return np.array([a] * 3 + [alpha] * 3 + [arm] * n)
+
+
+def _thrust_sd(values: Mapping[str, float]) -> Tuple[float, float]:
+    """``(scale, misalignment)`` from ``ident.sd_thrust.*``, each a number from 0 to
+    :data:`MAX_THRUST_SD`."""
+    out = []
+    for name in ("ident.sd_thrust.scale", "ident.sd_thrust.misalign"):
+        x = values[name]
+        if not (isinstance(x, numbers.Real) and 0.0 <= x <= MAX_THRUST_SD):
+            raise ValueError(f"{name} must be a number from 0 to {MAX_THRUST_SD:g}, got {x!r}")
+        out.append(float(x))
+    return out[0], out[1]
 
 
 def _flag(x, name: str) -> bool:
@@ -704,5 +844,8 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float]
                        corr_lags=int(v["ident.corr_lags"]),
                        window=_windows(v)[codes[0]],
                        moving_point=_flag(v["ident.momentum_point"], "ident.momentum_point"),
-                       accel_bias=_flag(v["ident.accel_bias"], "ident.accel_bias"))
+                       accel_bias=_flag(v["ident.accel_bias"], "ident.accel_bias"),
+                       thrust_sd=_thrust_sd(v),
+                       signal_sd={key: v[f"ident.noise.{name}"]
+                                  for key, name, _, _ in SIGNAL_NOISE_PARAMETERS})
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..interface import ParameterLayout, Solver
 from ..robots import Guess
+from . import eiv
 from . import parameters as par
 from . import report_kernels as rk
 from .rls import RLS, ModifiedRLS
@@ -87,10 +88,21 @@ class ParameterSolver(ABC):
         self.layout, self.guess, self.lam, self.lags = layout, guess, lam, int(lags)
 
     @abstractmethod
-    def update(self, A, b, phi, y, psi) -> Step:
+    def update(self, A, b, phi, y, psi, b_c=None, y_c=None, noise=None) -> Step:
         """One sample: ``A`` (k1, 8), ``b`` (k1,), ``phi`` (k2, 12), ``y`` (k2,), ``psi``
-        (k2, 20). Raises (``LinAlgError``, ``FloatingPointError``) with the solver unchanged
-        if the update cannot be completed with finite numbers."""
+        (k2, 20); optionally the right-hand sides' sensitivities to the consider parameters,
+        ``b_c`` (k1, c) and ``y_c`` (k2, c) (:mod:`.consider`), accumulated for
+        :meth:`consider_shift`; and ``noise = (A, b, phi, y, psi)`` with rows whose Gram
+        matrix is the expected noise part of this sample's (:mod:`.eiv`): the estimates are
+        then the bias-compensated answers. Raises (``LinAlgError``, ``FloatingPointError``) with the
+        solver unchanged if the update cannot be completed with finite numbers."""
+
+    @abstractmethod
+    def consider_shift(self) -> np.ndarray:
+        """``d z / d c`` (20, c): how the least-squares answer moves per unit of each
+        consider parameter, ``G^-1 sum_k w_k H_k^T R_k`` per least-squares problem
+        (:mod:`.consider`), in the directions the data observe (0 along the others); zeros
+        before any sensitivity was given."""
 
     @abstractmethod
     def z(self) -> np.ndarray:
@@ -190,6 +202,27 @@ class ParameterSolver(ABC):
         return np.where(self.layout.first_order, g.P0_mu, g.P0_theta).astype(float)
 
 
+def _noise_gram(g, lam: float, rows: np.ndarray) -> Gram:
+    """``g`` (an expected-noise Gram matrix, :mod:`.eiv`) with ``rows`` added; sized by the
+    rows the first time (``g`` None)."""
+    return (g if g is not None else Gram.empty(rows.shape[1], lam)).add(rows)
+
+
+def _accumulate(total, lam: float, term: np.ndarray) -> np.ndarray:
+    """``lam total + term`` (a new array; ``term`` alone the first time)."""
+    return term.copy() if total is None else lam * total + term
+
+
+def _observed_solve_columns(G: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """``G^-1 R`` (p, c) column by column in the directions ``G`` observes
+    (:func:`.uncertainty.observed_solve`, one eigen-decomposition)."""
+    eig = eig_scaled(G)
+    out = np.empty_like(R)
+    for j in range(R.shape[1]):
+        out[:, j] = rk.eig_solve(*eig, np.ascontiguousarray(R[:, j]))[0]
+    return out
+
+
 def block_lag(G: np.ndarray, M: np.ndarray, rate: np.ndarray, growth: float
               ) -> Tuple[np.ndarray, np.ndarray]:
     """``(A r, r)`` (p,) of one least-squares problem: ``A = G^-1 M`` (the information-weighted
@@ -226,28 +259,60 @@ class PaperSolver(ParameterSolver):
         # autocorrelation of the a-priori residuals of each equation
         self.corr_lin = self.corr_ang = Autocorrelation.empty(self.lags, lam)
         self._s2p = np.ascontiguousarray(par.SHARP_TO_PROJECT, dtype=np.int64)
+        # consider sums sum w A^T b_c (p, c) and sum w phi^T y_c (r, c), or None
+        self.cons_lin = self.cons_ang = None
+        # expected noise parts of gram_lin, gram_ang (errors in variables, .eiv), or None
+        self.eiv_lin = self.eiv_ang = None
 
-    def update(self, A, b, phi, y, psi) -> Step:
+    def _active(self, A, b, phi, y):
+        """The rows with the fixed parameters' columns moved to the right-hand sides."""
         L = self.layout
-        if len(self._mu_out):                  # fixed parameters to the right-hand side
+        if len(self._mu_out):
             b = b - A[:, self._mu_out].dot(self.mu[self._mu_out])
             A = A[:, L.mu_active]
         if len(self._th_out):
             y = y - phi[:, self._th_out].dot(self.theta[self._th_out])
             phi = phi[:, L.theta_active]
+        return A, b, phi, y
+
+    def update(self, A, b, phi, y, psi, b_c=None, y_c=None, noise=None) -> Step:
+        L = self.layout
+        A, b, phi, y = self._active(A, b, phi, y)
         rls = self.rls
         e_lin, e_ang, rhs_ang = rls.update(A, b, phi, y, psi)
         self.gram_lin = self.gram_lin.add(np.column_stack([A, b]))
         self.gram_ang = self.gram_ang.add(np.column_stack([phi, y, psi]))
         if self.lags:
             self.corr_lin, self.corr_ang = self.corr_lin.add(e_lin), self.corr_ang.add(e_ang)
+        if b_c is not None:
+            self.cons_lin = _accumulate(self.cons_lin, self.lam, A.T @ b_c)
+            self.cons_ang = _accumulate(self.cons_ang, self.lam, phi.T @ y_c)
+        mu, theta = rls.mu, rls.theta
+        if noise is not None:
+            An, bn, phin, yn = self._active(*noise[:4])
+            self.eiv_lin = _noise_gram(self.eiv_lin, self.lam, np.column_stack([An, bn]))
+            self.eiv_ang = _noise_gram(self.eiv_ang, self.lam,
+                                       np.column_stack([phin, yn, noise[4]]))
+            mu, theta = self._compensated(mu, theta)
         if L.complete:
-            self.mu, self.theta = rls.mu, rls.theta
+            self.mu, self.theta = mu, theta
         else:
             self.mu, self.theta = self.mu.copy(), self.theta.copy()
-            self.mu[L.mu_active] = rls.mu
-            self.theta[L.theta_active] = rls.theta
+            self.mu[L.mu_active] = mu
+            self.theta[L.theta_active] = theta
         return Step(e_lin, e_ang, b, rhs_ang, A, phi)
+
+    def _compensated(self, mu_r: np.ndarray, th_r: np.ndarray):
+        """The bias-compensated answers (:mod:`.eiv`) from the RLS's ``mu_r``, ``th_r``."""
+        L = self.layout
+        mu = mu_r + eiv.compensation(self.gram_lin.S, self.eiv_lin.S, mu_r)
+        full = self.mu.copy()
+        full[L.mu_active] = mu
+        D_c, D_r = par.D_of_mu(full), self.rls.D_mu
+        Sa, Na, r = self.gram_ang.S, self.eiv_ang.S, len(th_r)
+        # -N_ppsi D(mu_c) + S_ppsi (D(mu_c) - D(mu_r)), the psi D(mu) part of the rhs
+        extra = Sa[:r, r + 1:] @ (D_c - D_r) - Na[:r, r + 1:] @ D_c
+        return mu, th_r + eiv.compensation(Sa, Na, th_r, extra)
 
     def z(self) -> np.ndarray:
         return np.concatenate([self.mu, self.theta])
@@ -324,6 +389,22 @@ class PaperSolver(ParameterSolver):
     def information(self):
         return self.gram_lin.S, self.gram_ang.S
 
+    def consider_shift(self) -> np.ndarray:
+        """``mu = G_lin^-1 sum A^T b`` and ``theta = G_ang^-1 sum phi^T (y + psi D(mu))``, so
+        ``dmu/dc = G_lin^-1 C_lin`` and ``dtheta/dc = G_ang^-1 (C_ang + S_phi,psi dD/dmu
+        dmu/dc)`` (``C``: the consider sums, ``S_phi,psi`` from the Gram matrix)."""
+        L = self.layout
+        if self.cons_lin is None:
+            return np.zeros((L.n_mu + L.n_theta, 0))
+        p, r = len(L.mu_active), len(L.theta_active)
+        Sl, Sa = self.information()
+        d_mu = _observed_solve_columns(Sl[:p, :p], self.cons_lin)
+        dD = par.D_jacobian(self.mu)[:, L.mu_active]                  # (20, p)
+        d_th = _observed_solve_columns(Sa[:r, :r], self.cons_ang + Sa[:r, r + 1:] @ (dD @ d_mu))
+        out = np.zeros((L.n_mu + L.n_theta, d_mu.shape[1]))
+        out[L.mu_active], out[L.n_mu + L.theta_active] = d_mu, d_th
+        return out
+
     def drift_lag(self, rate_z, growth, ages):
         """Masses and first moments: eq. (2) of :mod:`.tracking`. Inertias: theta is the batch
         answer at the latest mu (eq. 35), ``theta = G^-1 sum w phi^T (y + psi D(mu))``; with
@@ -340,10 +421,12 @@ class PaperSolver(ParameterSolver):
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
-                self.corr_lin, self.corr_ang)
+                self.corr_lin, self.corr_ang, self.cons_lin, self.cons_ang, self.eiv_lin,
+                self.eiv_ang)
 
     def restore(self, snap: tuple) -> None:
-        rls, self.mu, self.theta, self.gram_lin, self.gram_ang, self.corr_lin, self.corr_ang = snap
+        (rls, self.mu, self.theta, self.gram_lin, self.gram_ang, self.corr_lin, self.corr_ang,
+         self.cons_lin, self.cons_ang, self.eiv_lin, self.eiv_ang) = snap
         self.rls.restore(rls)
 
 
@@ -371,8 +454,12 @@ class JointSolver(ParameterSolver):
         self._lin_cols = np.flatnonzero(L.first_order[act])
         self._ang_cols = np.flatnonzero(~L.first_order[act])
         self._s2p = np.ascontiguousarray(par.SHARP_TO_PROJECT, dtype=np.int64)
+        self.cons = None                                  # sum w Y^T [b_c; y_c] (p, c)
+        self.eiv = None                                   # noise part of gram (.eiv), or None
 
-    def update(self, A, b, phi, y, psi) -> Step:
+    def _stack(self, A, b, phi, y, psi):
+        """``(Y (k1 + k2, 20), yy)``: both equations' rows over the standard parameters, the
+        fixed parameters' columns moved to the right-hand side."""
         L = self.layout
         nl = len(b)
         Y = np.zeros((nl + len(y), len(L.names)))
@@ -381,18 +468,31 @@ class JointSolver(ParameterSolver):
             Y[nl:, body.mass_first] = -psi[:, body.mass_first]      # [Psi[:, :4], D]
             Y[nl:, body.inertia] = phi[:, body.theta]
         yy = np.concatenate([b, y])
-        act, out = L.standard_active, self._out
-        if len(out):
-            yy = yy - Y[:, out].dot(self.pi[out])
+        if len(self._out):
+            yy = yy - Y[:, self._out].dot(self.pi[self._out])
+        return Y, yy
+
+    def update(self, A, b, phi, y, psi, b_c=None, y_c=None, noise=None) -> Step:
+        L = self.layout
+        nl = len(b)
+        Y, yy = self._stack(A, b, phi, y, psi)
+        act = L.standard_active
         e, _ = self.rls.update(Y[:, act], yy)
         self.gram = self.gram.add(np.column_stack([Y[:, act], yy]))
         if self.lags:
             self.corr = self.corr.add(e)
+        if b_c is not None:                               # fixed entries: no consider part
+            self.cons = _accumulate(self.cons, self.lam, Y[:, act].T @ np.vstack([b_c, y_c]))
+        x = self.rls.x
+        if noise is not None:                             # bias-compensated (.eiv, eq. 2)
+            Yn, yn = self._stack(*noise)
+            self.eiv = _noise_gram(self.eiv, self.lam, np.column_stack([Yn[:, act], yn]))
+            x = x + eiv.compensation(self.gram.S, self.eiv.S, x)
         if L.complete:
-            self.pi = self.rls.x
+            self.pi = x
         else:
             self.pi = self.pi.copy()
-            self.pi[act] = self.rls.x
+            self.pi[act] = x
         Ya = Y[:, act]
         return Step(e[:nl], e[nl:], b, yy[nl:], Ya[:nl, self._lin_cols], Ya[nl:, self._ang_cols])
 
@@ -433,6 +533,15 @@ class JointSolver(ParameterSolver):
     def information(self):
         return (self.gram.S,)
 
+    def consider_shift(self) -> np.ndarray:
+        """``d pi / d c = G^-1 C`` (``C``: the consider sums)."""
+        act = self.layout.standard_active
+        if self.cons is None:
+            return np.zeros((len(self.pi), 0))
+        out = np.zeros((len(self.pi), self.cons.shape[1]))
+        out[act] = _observed_solve_columns(self.gram.S[:len(act), :len(act)], self.cons)
+        return out
+
     def drift_lag(self, rate_z, growth, ages):
         act = self.layout.standard_active
         p = len(act)
@@ -441,10 +550,10 @@ class JointSolver(ParameterSolver):
         return lag
 
     def snapshot(self) -> tuple:
-        return self.rls.snapshot(), self.pi, self.gram, self.corr
+        return self.rls.snapshot(), self.pi, self.gram, self.corr, self.cons, self.eiv
 
     def restore(self, snap: tuple) -> None:
-        rls, self.pi, self.gram, self.corr = snap
+        rls, self.pi, self.gram, self.corr, self.cons, self.eiv = snap
         self.rls.restore(rls)
 
 

@@ -5,6 +5,8 @@ Importable and testable without FMI; ``fmu_sensors/`` wraps :class:`SensorSuite`
 ``SpaceRobotSensors.fmu``. Parameters and their realistic defaults:
 :data:`spacerobot.interface.NOISE_PARAMETERS`; models: docs/sensors.md.
 """
-from .models import SIGNALS, SensorSuite, default_parameters, rotation_vector_to_matrix
+from .models import (SIGNALS, SensorSuite, default_parameters, estimator_noise_settings,
+                     rotation_vector_to_matrix)
 
-__all__ = ["SIGNALS", "SensorSuite", "default_parameters", "rotation_vector_to_matrix"]
+__all__ = ["SIGNALS", "SensorSuite", "default_parameters", "estimator_noise_settings",
+           "rotation_vector_to_matrix"]

@@ -13,6 +13,7 @@ angular impulse error, the delay line). A co-simulation reads the measurement of
 from __future__ import annotations
 
 import collections
+import math
 import copy
 from typing import Dict, Mapping, Optional
 
@@ -210,3 +211,31 @@ class SensorSuite:
         self.gyro_bias, self.accel_bias, self.H_err = s["gyro_bias"], s["accel_bias"], s["H_err"]
         self.E_F, self.E_M, self.draw = s["E_F"], s["E_M"], s["draw"]
         self.line = collections.deque(s["line"], maxlen=self.delay)
+
+
+def estimator_noise_settings(params: Optional[Mapping[str, float]] = None, scale: float = 1.0,
+                             dt: float = 0.1) -> Dict[str, float]:
+    """The estimator parameters that describe these sensors' errors to it
+    (docs/identification.md, section 6): the thrust errors' consider covariance
+    (``ident.sd_thrust.*``) and the per-sample white noise of the signals the force method's
+    accelerations come from (``ident.noise.*``: measured ``base.a``, ``base.alpha``,
+    ``arm.qdd``; for differenced accelerations ``base.v``, ``base.omega``, ``arm.qd``).
+
+    Parameters
+    ----------
+    params : sensor parameters (names without ``noise.``) over :func:`default_parameters`
+    scale : ``noise.scale``;  dt : the sample interval [s] (densities ``d`` give ``d /
+        sqrt(dt)`` per sample, as :class:`SensorSuite` draws them)
+    """
+    p = default_parameters()
+    p.update({k: float(v) for k, v in (params or {}).items()})
+    p = {k: scale * v for k, v in p.items()}
+    rt = math.sqrt(dt)
+    return {"ident.sd_thrust.scale": p["thrust.scale"],
+            "ident.sd_thrust.misalign": p["thrust.misalign"],
+            "ident.noise.base.a": p["accel.vrw"] / rt,
+            "ident.noise.base.alpha": p["alpha"],
+            "ident.noise.arm.qdd": p["enc.qdd"],
+            "ident.noise.base.v": p["nav.v"],
+            "ident.noise.base.omega": p["gyro.arw"] / rt,
+            "ident.noise.arm.qd": p["enc.qd"]}
