@@ -162,3 +162,21 @@ def test_bad_fmu_noise_parameter_is_refused():
     robot = get_robot("spatial")
     with pytest.raises(ValueError, match=r"ident\.noise\.base\.a"):
         identifier_from_values(robot, estimator_parameters("spatial", {"ident.noise.base.a": -2.0}))
+
+
+@pytest.mark.parametrize("sensor,key,setting", [("accel.vrw", "a_S", "base.a"),
+                                                ("alpha", "alpha_B", "base.alpha"),
+                                                ("enc.qdd", "qdd", "arm.qdd"),
+                                                ("nav.v", "v_S", "base.v"),
+                                                ("gyro.arw", "omega_B", "base.omega"),
+                                                ("enc.qd", "qd", "arm.qd")])
+def test_noise_settings_are_the_sensors_per_sample_noise(excited, sensor, key, setting):
+    """``estimator_noise_settings`` against the standard deviation of the sensors' own draws."""
+    sc, data = excited
+    p = {k: 0.0 for k in default_parameters()}
+    p[sensor] = default_parameters()[sensor]
+    suite = SensorSuite(sc.robot.n_joints, p, seed=11)
+    t, x = data[0]
+    err = np.array([suite.update(x, 0.1)[key] - x[key] for _ in range(4000)]).ravel()
+    expected = estimator_noise_settings()[f"ident.noise.{setting}"]
+    assert abs(err.std() / expected - 1.0) < 0.05                 # 4000+ draws: ~1 % error
