@@ -54,9 +54,12 @@ PARAMS = ("K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn"
           "qdd_max")
 
 _NB = dict(cache=True, nogil=True)
+# inlined into their callers (Numba IR): small kernels called per RK4 stage, where passing the
+# arrays would cost about as much as their arithmetic
+_NI = dict(_NB, inline="always")
 
 
-@njit(**_NB)
+@njit(**_NI)
 def bounded_law(x, K, x_max, u_max):
     """Paper eqs. 40/41 for one axis: ``u = K x`` inside ``|x| < x_max`` (saturated at
     ``u_max``), ``u = sign(K x) u_max`` outside it. NaN passes through."""
@@ -74,7 +77,7 @@ def bounded_law(x, K, x_max, u_max):
     return kx
 
 
-@njit(**_NB)
+@njit(**_NI)
 def quat_dcm(x, y, z, w):
     """DCM entries (body -> inertial, row-major, 9 floats) of a not necessarily unit
     quaternion ``(x, y, z, w)``. Callable from Python too."""
@@ -150,7 +153,7 @@ def _sym3_eigenvalues(a00, a01, a02, a11, a12, a22):
     return qm + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0), qm + 2.0 * p * math.cos(phi)
 
 
-@njit(**_NB)
+@njit(**_NI)
 def ramp_level(t, ramp):
     """Excitation level ``s`` and its derivatives at time ``t`` [s].
 
@@ -173,7 +176,7 @@ def ramp_level(t, ramp):
             d * 60.0 * x * xm * (1.0 - 2.0 * x) / (T * T))
 
 
-@njit(**_NB)
+@njit(**_NI)
 def channel(tab, c, t):
     """Reference channel ``c`` of the excitation table at ``t``: ``(f, f', f'')`` of
     ``f = a/2 [sin(w1 t + p1) + sin(w2 t + p2)]`` (table rows ``(a, w1, p1, w2, p2)``)."""
@@ -192,14 +195,14 @@ def reference(t, ramp, tab, c):
     return _scaled(s, ds, dds, tab, c, t)
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _scaled(s, ds, dds, tab, c, t):
     """``s f_c(t)`` and its first two time derivatives, for the level ``(s, s', s'')``."""
     f, df, ddf = channel(tab, c, t)
     return s * f, ds * f + s * df, dds * f + 2.0 * ds * df + s * ddf
 
 
-@njit(**_NB)
+@njit(**_NI)
 def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, cw):
     """Thruster and arm commands at the state ``(q, v)``, held over the next internal step.
 
@@ -377,7 +380,7 @@ def control_work(planar: bool, nv: int) -> tuple:
 PROP_FIELDS = ("k_flow", "inv_arm", "k_sphere", "rx", "ry", "rz")
 
 
-@njit(**_NB)
+@njit(**_NI)
 def base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc):
     """Body 0 (the base) of the compiled model with ``m_p`` [kg] of propellant:
     ``I6[0] = I6d + m_p I6u`` (spatial inertias add), mass ``mc[0, 0] = m_d + m_p`` and CoM
@@ -394,7 +397,7 @@ def base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc):
         mc[0, 1 + i] = mcd[1 + i] + f * (pp[3 + i] - mcd[1 + i])
 
 
-@njit(**_NB)
+@njit(**_NI)
 def mass_flow(FM, pp):
     """Propellant mass flow [kg/s] of the thrust ``FM = [F, M]``:
     ``(|F_x| + |F_y| + |F_z| + (|M_x| + |M_y| + |M_z|) / arm) / (Isp g0)``."""
@@ -402,7 +405,7 @@ def mass_flow(FM, pp):
             + (abs(FM[3]) + abs(FM[4]) + abs(FM[5])) * pp[1]) * pp[0]
 
 
-@njit(**_NB)
+@njit(**_NI)
 def thrust_control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp, m_p,
                    dt, parw, cw):
     """:func:`control` limited by the propellant ``m_p`` [kg] available for a step of ``dt``.
@@ -415,25 +418,28 @@ def thrust_control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc
     and joint torques are those of the scaled thrust. ``parw`` (11,) scratch, ``cw``: as in
     :func:`control`.
     """
-    err = control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, cw)
-    if err or pp[0] == 0.0:
-        FM[6] = 0.0
-        return err
-    flow = mass_flow(FM, pp)
-    need = flow * dt
-    if need > m_p:
+    pw = par
+    flow = 0.0
+    for attempt in range(2):             # one call site of control (it is inlined here)
+        err = control(planar, q, v, M, nle, hg, pw, q_home, t, ramp, tab, gen, acc, FM, cw)
+        if attempt == 0 and (err or pp[0] == 0.0):
+            FM[6] = 0.0
+            return err
+        flow = mass_flow(FM, pp)
+        need = flow * dt
+        if attempt == 1 or need <= m_p:
+            break
         s = max(m_p, 0.0) / need
         for i in range(par.shape[0]):
             parw[i] = par[i]
         for i in (0, 2, 3, 5):           # K_F, F_max, K_M, M_max
             parw[i] *= s
-        err = control(planar, q, v, M, nle, hg, parw, q_home, t, ramp, tab, gen, acc, FM, cw)
-        flow = mass_flow(FM, pp)
+        pw = parw
     FM[6] = flow
     return err
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _propellant_rates(planar, xa, flow, pp, ov, nv, row):
     """Rows ``[dm_p, dP_x (3), dL_x (3)]`` of the state derivative at the stage state ``xa``
     (after ``J, H, q, v``), for the mass flow ``flow`` [kg/s] (see :func:`stage`)."""
@@ -481,7 +487,7 @@ def _propellant_rates(planar, xa, flow, pp, ov, nv, row):
     row[o + 6] = flow * (cx * vcy - cy * vcx + k2 * wiz)
 
 
-@njit(**_NB)
+@njit(**_NI)
 def stage(planar, i, x, xa, a, K, FM, dt, xs, qn, vs, gen, xn, pp):
     """RK4 stage ``i`` (0..3) of a step of length ``dt`` from ``x``.
 
@@ -587,7 +593,7 @@ def stage(planar, i, x, xa, a, K, FM, dt, xs, qn, vs, gen, xn, pp):
     return 0
 
 
-@njit(**_NB)
+@njit(**_NI)
 def load(planar, x, qn, vs):
     """Configuration (unit quaternion / (cos, sin) pair) and velocity of the state ``x`` into
     the Pinocchio buffers ``qn``, ``vs``."""

@@ -31,6 +31,9 @@ from numba import njit
 
 # error_model='numpy': a division by zero gives inf/NaN (no Python exception check per division)
 _NB = dict(cache=True, nogil=True, error_model="numpy")
+# inlined into their callers (Numba IR): a call that passes arrays costs about as much as a
+# joint's arithmetic (every array is passed as its fields, and reference-counted)
+_NI = dict(_NB, inline="always")
 
 
 def chain_arrays(model) -> tuple:
@@ -156,7 +159,7 @@ def cho_solve(L, B):
 # WORLD convention of its ABA, with the base frame as the world).
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _rot_sym(Rk, a00, a01, a02, a11, a12, a22):
     """Upper triangle of ``Rk A Rk^T`` for the symmetric ``A`` given by its upper triangle."""
     w00 = Rk[0, 0] * a00 + Rk[0, 1] * a01 + Rk[0, 2] * a02          # W = Rk A
@@ -176,7 +179,7 @@ def _rot_sym(Rk, a00, a01, a02, a11, a12, a22):
             w20 * Rk[2, 0] + w21 * Rk[2, 1] + w22 * Rk[2, 2])
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _placements(planar, R, p, axis, q, bR, bp, S):
     """Placement of every body in the base frame, ``bR[k]`` (3, 3), ``bp[k]`` (3,)
     (``x_base = bR x_k + bp``), and the axis of joint ``k`` in the base frame,
@@ -211,7 +214,7 @@ def _placements(planar, R, p, axis, q, bR, bp, S):
             S[k, 3 + i] = a0 * ax + a1 * ay + a2 * az
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _kinematics(planar, R, p, axis, I6, q, v, bR, bp, S, vel, cb, Ib):
     """Placements, joint motions, velocities and inertias of every body in the base frame at
     the base origin (the frame of :func:`terms`).
@@ -255,11 +258,12 @@ def _kinematics(planar, R, p, axis, I6, q, v, bR, bp, S, vel, cb, Ib):
         _inertia_to_base(I6, k, bR[k], ox, oy, oz, Ib[k])
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _inertia_rotated(I6, k, Rk, out):
     """Spatial inertia (6, 6) of body ``k`` at its own origin in the axes of ``Rk`` (its
     rotation in the base frame), from ``I6[k] = [[m 1, -[h]x], [[h]x, I_o]]`` (``h = m c``):
-    ``[[m 1, -[h']x], [[h']x, I_o']]`` with ``h' = Rk h``, ``I_o' = Rk I_o Rk^T``."""
+    ``[[m 1, -[h']x], [[h']x, I_o']]`` with ``h' = Rk h``, ``I_o' = Rk I_o Rk^T``.
+    Returns ``m``, ``h'`` (3 floats) and the upper triangle of ``I_o'`` (6 floats)."""
     m = I6[k, 0, 0]
     hx, hy, hz = I6[k, 5, 1], I6[k, 3, 2], I6[k, 4, 0]          # [h]x = m [c]x
     g0 = Rk[0, 0] * hx + Rk[0, 1] * hy + Rk[0, 2] * hz
@@ -272,9 +276,10 @@ def _inertia_rotated(I6, k, Rk, out):
     out[3, 5], out[5, 3] = i02, i02
     out[4, 5], out[5, 4] = i12, i12
     _mass_blocks(m, g0, g1, g2, out)
+    return m, g0, g1, g2, i00, i01, i02, i11, i12, i22
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _mass_blocks(m, g0, g1, g2, out):
     """The blocks ``[[m 1, -[g]x], [[g]x, .]]`` of a spatial inertia of first moment ``g``."""
     for i in range(3):
@@ -288,7 +293,7 @@ def _mass_blocks(m, g0, g1, g2, out):
     out[5, 0], out[5, 1], out[5, 2] = -g1, g0, 0.0
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _shift_add(px, py, pz, Ia, T, out):
     """``out += X^T Ia X`` (inertia to the parent's origin) for the pure translation
     ``X = [[1, -P], [0, 1]]``, ``P = [d]x``, ``d = (px, py, pz)`` the child's origin seen from
@@ -355,7 +360,7 @@ def _shift_add(px, py, pz, Ia, T, out):
     out[5, 4] += d12
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _inertia_to_base(I6, k, Rk, ox, oy, oz, out):
     """Spatial inertia (6, 6) at the base origin of body ``k``, whose frame sits at ``Rk``,
     ``o`` in the base frame, from ``I6[k] = [[m 1, -[h]x], [[h]x, I_o]]`` at its own origin
@@ -385,7 +390,7 @@ def _inertia_to_base(I6, k, Rk, ox, oy, oz, out):
     _mass_blocks(m, g0, g1, g2, out)          # [[m 1, -[g]x], [[g]x, I_O]]
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _crf_add(v, f, out):
     """Force cross product ``out += v x* f`` = ``[w x f_l; w x f_n + v_l x f_l]``."""
     vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
@@ -398,11 +403,57 @@ def _crf_add(v, f, out):
     out[5] += w0 * fn1 - w1 * fn0 + vl0 * fl1 - vl1 * fl0
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _row(planar, i):
     """Row of the base spatial velocity ``[v; omega]`` that is the base's generalised velocity
     ``i``: all six for the free-flyer, rows 0, 1, 5 (``v_x, v_y, omega_z``) planar."""
     return 5 if planar and i == 2 else i
+
+
+@njit(**_NI)
+def _base_solve(planar, IA0, pA0, tau, L, d, w, x):
+    """The base's acceleration of the articulated-body algorithm: ``x[:nr]`` from
+    ``(S^T IA0 S) x = tau[:nr] - S^T pA0`` (``S`` the rows :func:`_row`; ``nr`` = 3 planar,
+    6 free-flyer) by ``L D L^T`` (no square roots; one division per pivot).
+
+    ``IA0`` (6, 6) articulated inertia of the base, ``pA0`` (6,) its bias force, ``tau``
+    (nr + n,); ``L`` (6, 6), ``d``, ``w`` (6,) scratch. Returns False if a pivot is <= 0 (not
+    positive definite; a NaN pivot passes, so that NaN propagates).
+    """
+    nr = 3 if planar else 6
+    for i in range(nr):
+        ri = _row(planar, i)
+        x[i] = tau[i] - pA0[ri]
+        for j in range(i + 1):
+            L[i, j] = IA0[ri, _row(planar, j)]
+    for j in range(nr):
+        # w_p = L_jp d_p;  d_j = A_jj - sum_p L_jp w_p;  L_ij = (A_ij - sum_p L_ip w_p) / d_j
+        dj = L[j, j]
+        for p in range(j):
+            w[p] = L[j, p] * d[p]
+            dj -= L[j, p] * w[p]
+        if dj <= 0.0:
+            return False
+        d[j] = dj
+        r = 1.0 / dj
+        for i in range(j + 1, nr):
+            s = L[i, j]
+            for p in range(j):
+                s -= L[i, p] * w[p]
+            L[i, j] = s * r
+    for i in range(nr):                  # L z = b
+        s = x[i]
+        for p in range(i):
+            s -= L[i, p] * x[p]
+        x[i] = s
+    for i in range(nr):                  # D y = z
+        x[i] /= d[i]
+    for i in range(nr - 1, -1, -1):      # L^T x = y
+        s = x[i]
+        for p in range(i + 1, nr):
+            s -= L[p, i] * x[p]
+        x[i] = s
+    return True
 
 
 # -- algorithms -------------------------------------------------------------------------------
@@ -432,7 +483,7 @@ class Workspace:
                 self.Du, self.M6, self.v6)
 
 
-@njit(**_NB)
+@njit(**_NI)
 def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc, U, Du, M6,
         v6):
     """Forward dynamics ``ddq = M^-1 (tau - c(q, v))`` by the articulated-body algorithm.
@@ -483,16 +534,29 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
         cb[k, 3] = w1 * z2 - w2 * z1
         cb[k, 4] = w2 * z0 - w0 * z2
         cb[k, 5] = w0 * z1 - w1 * z0
-        _inertia_rotated(I6, k, bR[k], IA[k])
-    hv = v6[0]
-    for k in range(nb):
-        for i in range(6):
-            s = 0.0
-            for j in range(6):
-                s += IA[k, i, j] * vel[k, j]
-            hv[i] = s
-            pA[k, i] = 0.0
-        _crf_add(vel[k], hv, pA[k])
+        m, h0, h1, h2, i00, i01, i02, i11, i12, i22 = _inertia_rotated(I6, k, bR[k], IA[k])
+        # pA_k = v_k x* (I_k v_k), I_k v_k = [m v_l + w x h; h x v_l + I_o w] (w = w_p + z)
+        w0, w1, w2 = w0 + z0, w1 + z1, w2 + z2
+        fl0 = m * vl0 + (w1 * h2 - w2 * h1)
+        fl1 = m * vl1 + (w2 * h0 - w0 * h2)
+        fl2 = m * vl2 + (w0 * h1 - w1 * h0)
+        fn0 = (h1 * vl2 - h2 * vl1) + (i00 * w0 + i01 * w1 + i02 * w2)
+        fn1 = (h2 * vl0 - h0 * vl2) + (i01 * w0 + i11 * w1 + i12 * w2)
+        fn2 = (h0 * vl1 - h1 * vl0) + (i02 * w0 + i12 * w1 + i22 * w2)
+        pA[k, 0] = w1 * fl2 - w2 * fl1                       # [w x f_l; w x f_n + v_l x f_l]
+        pA[k, 1] = w2 * fl0 - w0 * fl2
+        pA[k, 2] = w0 * fl1 - w1 * fl0
+        pA[k, 3] = w1 * fn2 - w2 * fn1 + vl1 * fl2 - vl2 * fl1
+        pA[k, 4] = w2 * fn0 - w0 * fn2 + vl2 * fl0 - vl0 * fl2
+        pA[k, 5] = w0 * fn1 - w1 * fn0 + vl0 * fl1 - vl1 * fl0
+    hv = v6[0]                            # the base: pA_0 = v_0 x* (I_0 v_0)
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += IA[0, i, j] * vel[0, j]
+        hv[i] = s
+        pA[0, i] = 0.0
+    _crf_add(vel[0], hv, pA[0])
     # pass 2 (tip to base): U = IA S, D = S^T U, u = tau - S^T pA, articulated inertia to parent
     Ia, T = M6[0], M6[1]
     pa = v6[0]
@@ -525,19 +589,12 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
         pA[k - 1, 4] += pa[4] + (d2 * pa[0] - d0 * pa[2])
         pA[k - 1, 5] += pa[5] + (d0 * pa[1] - d1 * pa[0])
     # base: (S^T IA_0 S) dv_b = tau_b - S^T pA_0
-    Sb, Lb, rhs = M6[0, :nr, :nr], M6[1, :nr, :nr], v6[1:2, :nr].T
-    for i in range(nr):
-        for j in range(nr):
-            Sb[i, j] = IA[0, _row(planar, i), _row(planar, j)]
-        rhs[i, 0] = tau[i] - pA[0, _row(planar, i)]
-    if not cholesky(Sb, Lb):
+    if not _base_solve(planar, IA[0], pA[0], tau, M6[0], v6[1], v6[2], ddq):
         return 1
-    cho_solve(Lb, rhs)
     for i in range(6):
         acc[0, i] = 0.0
     for i in range(nr):
-        ddq[i] = rhs[i, 0]
-        acc[0, _row(planar, i)] = rhs[i, 0]
+        acc[0, _row(planar, i)] = ddq[i]
     # pass 3 (base to tip): a = shift(a_p) + c_k, qdd_k = (u_k - U_k^T a) / D_k, a_k = a + S qdd
     for k in range(1, nb):
         d0, d1, d2 = bp[k, 0] - bp[k - 1, 0], bp[k, 1] - bp[k - 1, 1], bp[k, 2] - bp[k - 1, 2]
@@ -559,7 +616,7 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
     return 0
 
 
-@njit(**_NB)
+@njit(**_NI)
 def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, bR, bp, S, vel, cb, IA, pA, acc, U, Du,
           M6, v6):
     """Joint-space inertia (CRBA), non-linear effects (RNEA at zero acceleration) and the
