@@ -85,7 +85,7 @@ CORR_LAGS = 0
 COMBOS = (("momentum", "measured"), ("force", "measured"), ("force", "differenced"))
 #: the noise model's equation settings per set-up (docs/identification.md, section 6):
 #: momentum differenced over 5 s with the angular rows about the base, the accelerometer bias
-#: estimated from the navigation velocity, the Savitzky-Golay derivative over 5 samples
+#: estimated from the navigation velocity, the 3-point derivative (the noise compensated)
 #: and each set-up's share of the sensors' error description (the thrust errors' consider
 #: covariance; the accelerations' noise, compensated), from the sensors' realistic defaults
 _SENSORS = estimator_noise_settings()

@@ -180,3 +180,28 @@ def test_noise_settings_are_the_sensors_per_sample_noise(excited, sensor, key, s
     err = np.array([suite.update(x, 0.1)[key] - x[key] for _ in range(4000)]).ravel()
     expected = estimator_noise_settings()[f"ident.noise.{setting}"]
     assert abs(err.std() / expected - 1.0) < 0.05                 # 4000+ draws: ~1 % error
+
+
+def test_the_prior_pull_is_the_rls_own_with_compensation(excited):
+    """The compensated estimate moves ``mu``; the prior's pull (part of the sd) stays the RLS's
+    distance to its data-only answer, not that shift."""
+    sc, data = excited
+    noisy = with_noise(sc, data[:200], 1, MEASURED)
+    plain = identify(sc, noisy).solver.prior_pull()[0]
+    fixed = identify(sc, noisy, signal_sd=signal_sd("measured")).solver
+    pull = fixed.prior_pull()[0]
+    shift = np.abs(fixed.mu - identify(sc, noisy).solver.mu).max()
+    assert shift > 1e-3                                          # the compensation moved mu
+    assert np.abs(pull).max() <= 10.0 * np.abs(plain).max() + 1e-9, (pull, plain)
+
+
+def test_non_increasing_times_are_refused_with_the_thrust_integrals(excited):
+    sc, data = excited
+    ident = Identifier(sc.robot, sc.guess, "momentum", thrust_sd=(0.02, 8.7e-3))
+    for t, o in data[:5]:
+        ident.update(t, o)
+    before = ident.std().copy()
+    from spacerobot.estimator.identifier import REJECT_INCONSISTENT
+    assert ident.update(data[3][0], data[5][1]) == REJECT_INCONSISTENT
+    assert "increasing sample times" in ident.message
+    np.testing.assert_array_equal(ident.std(), before)

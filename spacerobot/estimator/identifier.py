@@ -389,10 +389,9 @@ class Identifier:
             self.rejected += 1
             return self.status
         if not self._time_ok(t):
-            last = self.history[-1][0] if self.history else self.ring[-1][0]
             self.status, self.message = REJECT_INCONSISTENT, (
-                f"differenced accelerations and the moving reference need increasing sample "
-                f"times: t = {t:g} s after {last:g} s")
+                f"differenced accelerations, the moving reference and the thrust integrals "
+                f"need increasing sample times: t = {t:g} s after {self._last_time():g} s")
             self.rejected += 1
             return self.status
         # finite but huge inputs can still overflow inside the equations or the RLS: the update
@@ -430,10 +429,19 @@ class Identifier:
 
     def _time_ok(self, t: float) -> bool:
         """False if ``t`` does not advance past the last stored sample (differencing history,
-        window ring), which both need."""
-        if self.history and not t > self.history[-1][0]:
-            return False
-        return not (self.ring and not t > self.ring[-1][0])
+        window ring, the thrust integrals of the consider term), which they need."""
+        return not (t <= self._last_time())
+
+    def _last_time(self) -> float:
+        """The time of the newest sample the time-dependent state holds (-inf: none)."""
+        last = -math.inf
+        if self.history:
+            last = self.history[-1][0]
+        if self.ring:
+            last = max(last, self.ring[-1][0])
+        if self.thrust.t == self.thrust.t:            # not NaN: integrals started
+            last = max(last, self.thrust.t)
+        return last
 
     def _sample_equations(self, t: float, flat: np.ndarray):
         """``(E, noise)``: the equation array of a validated sample (differenced

@@ -549,16 +549,18 @@ def scatter_and_pull(J, C, pull, unobserved_z):
 @njit(**_NB)
 def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_ang,
                       s2_lin, s2_ang, P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active,
-                      theta_active, sharp_to_project, eig_lin, eig_ang):
+                      theta_active, sharp_to_project, eig_lin, eig_ang, mu_rls_full):
     """``(sd (20,), unobserved (20,) bool, data-only answer (20,), J (20, 20))`` of the paper
     solver's estimates, the whole of :meth:`.solvers.ParameterSolver.uncertainty_parts` for
     :class:`.solvers.PaperSolver` in one call:
     ``sd^2 = diag(J C J^T) + (v(z) - v(z - delta))^2`` (``J delta`` where ``z - delta`` has no
     positive mass), with :func:`paper_jacobian`, :func:`paper_covariance`,
-    :func:`paper_prior_pull` and :func:`paper_vector_of`."""
+    :func:`paper_prior_pull` and :func:`paper_vector_of`. ``mu_full``, ``theta_full``: the
+    reported ``z`` (bias-compensated where the solver compensates, :mod:`.eiv`);
+    ``mu_rls_full``: the 8 mu of the RLS itself, whose prior pull ``delta`` is."""
     z = np.concatenate((mu_full, theta_full))
     J = paper_jacobian(z, sharp_to_project)
-    delta, unobserved_z = paper_prior_pull(mu_full, rls_mu, rls_theta, D_mu, M, S_ang, w_mu,
+    delta, unobserved_z = paper_prior_pull(mu_rls_full, rls_mu, rls_theta, D_mu, M, S_ang, w_mu,
                                            w_theta, mu0, th0, mu_active, theta_active,
                                            eig_lin, eig_ang)
     x = paper_vector_of(z, sharp_to_project)

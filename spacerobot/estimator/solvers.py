@@ -361,7 +361,16 @@ class PaperSolver(ParameterSolver):
         return Uncertainty(*rk.paper_uncertainty(
             self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, rls.lin.P, rls.ang.P, ga.S,
             s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
-            L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang))
+            L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang, self._mu_rls_full()))
+
+    def _mu_rls_full(self) -> np.ndarray:
+        """The 8 mu of the RLS itself (``self.mu`` holds the bias-compensated ones where the
+        accelerations' noise is compensated, :mod:`.eiv`): the prior's pull is the RLS's."""
+        if self.eiv_lin is None:
+            return self.mu
+        full = self.mu.copy()
+        full[self.layout.mu_active] = self.rls.mu
+        return full
 
     def _pull_inputs(self):
         """The prior's remaining weights ``decay / P0`` of mu and theta (``W0 = w 1``) and the
@@ -382,7 +391,8 @@ class PaperSolver(ParameterSolver):
         (compiled: :func:`.report_kernels.paper_prior_pull`)."""
         L, rls = self.layout, self.rls
         w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
-        return rk.paper_prior_pull(self.mu, rls.mu, rls.theta, rls.D_mu, rls.M, self.gram_ang.S,
+        return rk.paper_prior_pull(self._mu_rls_full(), rls.mu, rls.theta, rls.D_mu, rls.M,
+                                   self.gram_ang.S,
                                    w_mu, w_theta, self._mu0, self._th0, L.mu_active,
                                    L.theta_active, eig_lin, eig_ang)
 
