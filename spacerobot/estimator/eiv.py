@@ -81,9 +81,10 @@ def compensation(S: np.ndarray, N: np.ndarray, x: np.ndarray, rhs: np.ndarray | 
 
     Parameters
     ----------
-    S, N : (p + k, p + k);  x : (p,) the uncompensated answer;  rhs : (p,) extra terms (the
-    inertias' ``-N_ppsi D + S_ppsi dD``), or None. The ``r`` columns are ``[y]`` or
-    ``[y, psi D]``: the caller folds them into one right-hand-side column (see ``N_Hr``).
+    S, N : (p + k, p + k), the augmented rows ``[H | r | ...]``: column ``p`` is the
+    right-hand side ``r`` (``N_Hr = N[:p, p]``); further columns (the inertias' ``psi``) enter
+    only through ``rhs``;  x : (p,) the uncompensated answer;  rhs : (p,) extra terms (the
+    inertias' ``-N_ppsi D + S_ppsi dD``), or None.
     """
     p = len(x)
     r = N[:p, :p] @ x - N[:p, p]

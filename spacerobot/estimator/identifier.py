@@ -183,10 +183,7 @@ class Identifier:
             if not (math.isfinite(val) and int(val) == val and low <= val <= high):
                 raise ValueError(f"{name} must be an integer from {low} to {high}, got {val}")
         window = _seconds(window, "reference window")
-        thrust_sd = tuple(float(x) for x in thrust_sd)
-        if len(thrust_sd) != 2 or not all(0.0 <= x <= MAX_THRUST_SD for x in thrust_sd):
-            raise ValueError(f"thrust standard deviations (scale factor, misalignment [rad]) "
-                             f"must be two numbers from 0 to {MAX_THRUST_SD:g}, got {thrust_sd}")
+        thrust_sd = _thrust_sd(thrust_sd)
         moving_point = _flag(moving_point, "moving_point")
         accel_bias = _flag(accel_bias, "accel_bias")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
@@ -670,7 +667,7 @@ def about_point(dE: np.ndarray, p: np.ndarray) -> None:
     ``r_ang = phi theta - y - psi D(mu)``: ``y -= [p]x b`` and, ``mu`` being the entries
     ``m, m b`` of ``D(mu)`` of each body, ``psi[:, D index of mu] += [p]x A``."""
     k = kernels
-    P = np.array([[0.0, -p[2], p[1]], [p[2], 0.0, -p[0]], [-p[1], p[0], 0.0]])   # [p]x
+    P = consider.skew(p)                                 # [p]x
     lin = P @ dE[:, k.COL_A:k.COL_B + 1]
     dE[:, k.COL_Y] -= lin[:, 8]                          # y' = y - [p]x b
     dE[:, k.COL_PSI:k.COL_PSI + 4] += lin[:, 0:4]        # base m, m b
@@ -773,16 +770,22 @@ def _channel_sd(signal_sd: dict, source: AccelSource, n: int):
     return np.array([a] * 3 + [alpha] * 3 + [arm] * n)
 
 
-def _thrust_sd(values: Mapping[str, float]) -> Tuple[float, float]:
-    """``(scale, misalignment)`` from ``ident.sd_thrust.*``, each a number from 0 to
-    :data:`MAX_THRUST_SD`."""
-    out = []
-    for name in ("ident.sd_thrust.scale", "ident.sd_thrust.misalign"):
-        x = values[name]
+#: the thrust's standard deviations (scale factor, misalignment) as FMU parameters
+THRUST_SD_NAMES = ("ident.sd_thrust.scale", "ident.sd_thrust.misalign")
+
+
+def _thrust_sd(pair, names=("thrust_sd scale factor", "thrust_sd misalignment [rad]")
+               ) -> Tuple[float, float]:
+    """``(scale, misalignment)``, each a number from 0 to :data:`MAX_THRUST_SD` (``names``
+    for the error message: the constructor's option or the FMU parameters)."""
+    pair = tuple(pair)
+    if len(pair) != 2:
+        raise ValueError(f"thrust standard deviations must be two numbers (scale factor, "
+                         f"misalignment [rad]), got {pair!r}")
+    for x, name in zip(pair, names):
         if not (isinstance(x, numbers.Real) and 0.0 <= x <= MAX_THRUST_SD):
             raise ValueError(f"{name} must be a number from 0 to {MAX_THRUST_SD:g}, got {x!r}")
-        out.append(float(x))
-    return out[0], out[1]
+    return float(pair[0]), float(pair[1])
 
 
 def _flag(x, name: str) -> bool:
@@ -853,7 +856,7 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float]
                        window=_windows(v)[codes[0]],
                        moving_point=_flag(v["ident.momentum_point"], "ident.momentum_point"),
                        accel_bias=_flag(v["ident.accel_bias"], "ident.accel_bias"),
-                       thrust_sd=_thrust_sd(v),
+                       thrust_sd=_thrust_sd([v[n] for n in THRUST_SD_NAMES], THRUST_SD_NAMES),
                        signal_sd={key: v[f"ident.noise.{name}"]
                                   for key, name, _, _ in SIGNAL_NOISE_PARAMETERS})
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))
