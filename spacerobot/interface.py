@@ -422,6 +422,12 @@ def noise_model_vars() -> List[Var]:
               "(1 = 3-point central difference; more = Savitzky-Golay, less noise); the "
               "equations are evaluated at the centre (the estimate lags m samples)", 1,
               ("diff_half_window",)),
+          Var("ident.diff_momentum", "parameter", "fixed", "Integer", None,
+              "Force method, differenced accelerations: 1 = the derivative's weights applied "
+              "to the momentum equations of the window's samples (the force equations averaged "
+              "by the same filter: no truncation error where the accelerations change between "
+              "samples), 0 = applied to the velocities (the force equations at the centre, the "
+              "paper's form)", 0, ("diff_momentum",)),
           Var("ident.corr_lags", "parameter", "fixed", "Integer", None,
               "Lags (>= 0) of the residual autocorrelation that inflates the standard "
               "deviations for correlated equation errors (0 = rows independent)", 0,

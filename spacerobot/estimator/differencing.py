@@ -22,7 +22,7 @@ from typing import Sequence, Tuple
 
 import numpy as np
 
-__all__ = ["centre_derivative", "derivative_weights"]
+__all__ = ["centre_derivative", "derivative_weights", "displacement_weights"]
 
 
 def derivative_weights(t: np.ndarray, centre: int) -> np.ndarray:
@@ -49,6 +49,31 @@ def derivative_weights(t: np.ndarray, centre: int) -> np.ndarray:
     V = np.column_stack([np.ones_like(tau), tau / s, (tau / s) ** 2])   # x = V c
     # c = (V^T V)^-1 V^T x; the slope at tau = 0 is c[1] / s
     return np.linalg.solve(V.T @ V, V.T)[1] / s
+
+
+def displacement_weights(t: np.ndarray, centre: int, w: np.ndarray) -> np.ndarray:
+    """Weights ``u`` (k,) with ``sum_j u_j v(t_j) = sum_i w_i (x(t_i) - x(t_c))`` for
+    ``v = dx/dt`` a polynomial of degree ``k - 1``: the derivative weights ``w`` applied to the
+    displacements, each the integral of the polynomial through the ``k`` velocity samples
+    (for a position known only through its velocity; ``k = 3`` at an even step: Simpson's
+    ``(1/6, 2/3, 1/6)``).
+
+    Parameters
+    ----------
+    t : (k,) distinct sample times [s];  centre : index of ``t_c``;  w : (k,) weights [1/s]
+
+    Returns
+    -------
+    u : (k,) [1] (``sum u = sum w (t - t_c)``, 1 for derivative weights)
+    """
+    t = np.asarray(t, dtype=float)
+    tau = t - t[centre]
+    s = np.abs(tau).max()
+    k = len(t)
+    powers = np.arange(k)
+    V = (tau[:, None] / s) ** powers                       # v(t_j) = sum_p c_p (tau_j / s)^p
+    W = s * (tau[:, None] / s) ** (powers + 1) / (powers + 1)   # int_0^tau_i (tau / s)^p
+    return np.linalg.solve(V.T, W.T @ w)                   # u = V^-T W^T w
 
 
 def centre_derivative(history: Sequence[Tuple[float, np.ndarray]],

@@ -38,7 +38,7 @@ import numpy as np
 from . import kernels
 from .uncertainty import observed_solve
 
-__all__ = ["accel_channels", "noise_rows", "compensation"]
+__all__ = ["accel_channels", "velocity_channels", "noise_rows", "compensation"]
 
 
 def accel_channels(n: int) -> np.ndarray:
@@ -46,6 +46,14 @@ def accel_channels(n: int) -> np.ndarray:
     k = kernels
     return np.concatenate([np.arange(k.A_S, k.A_S + 3), np.arange(k.ALPHA_B, k.ALPHA_B + 3),
                            np.arange(k.Q0 + 2 * n, k.Q0 + 3 * n)])
+
+
+def velocity_channels(n: int) -> np.ndarray:
+    """Indices (6 + n,) of ``v_S``, ``omega_B``, ``qd`` in a flat sample (``KEYS`` order), in
+    the order of :func:`accel_channels` (the velocities the accelerations are differenced from)."""
+    k = kernels
+    return np.concatenate([np.arange(k.V_S, k.V_S + 3), np.arange(k.OMEGA_B, k.OMEGA_B + 3),
+                           np.arange(k.Q0 + n, k.Q0 + 2 * n)])
 
 
 def noise_rows(equations: Callable[[np.ndarray, np.ndarray], None], flat: np.ndarray,

@@ -22,7 +22,7 @@ from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import consider, eiv, kernels, report_kernels
 from .accel_bias import BiasFit
-from .differencing import centre_derivative, derivative_weights
+from .differencing import centre_derivative, derivative_weights, displacement_weights
 from .physical import project_body, project_planar_body
 from .solvers import ParameterSolver, make_solver
 from .tracking import DriftTracker
@@ -146,6 +146,13 @@ class Identifier:
         velocities ``v_S`` [m/s], ``omega_B`` [rad/s], ``qd`` [rad/s] (the derivative's noise
         follows from its weights). With any > 0 the estimates are bias-compensated for the
         accelerations' noise (:mod:`.eiv`). Empty / 0 = the plain least-squares answers.
+    diff_momentum : bool
+        Force method with differenced accelerations: True = apply the derivative's weights to
+        the momentum equations of the window's samples instead of to the velocities (the
+        force equations averaged by the same filter, exact however fast the accelerations
+        change between samples; :meth:`_differenced_momentum`, docs/identification.md,
+        section 6). False = the force equations at the centre with the velocities'
+        derivatives (exact only where the velocities are quadratic over the window).
 
     Attributes
     ----------
@@ -164,7 +171,7 @@ class Identifier:
                  lam: float = 1.0, sd_rel: float = SD_REL, row_sd=(0.0, 0.0),
                  diff_half_window: int = 1, corr_lags: int = 0, window: float = 0.0,
                  moving_point: bool = False, accel_bias: bool = False, thrust_sd=(0.0, 0.0),
-                 signal_sd: Mapping[str, float] | None = None):
+                 signal_sd: Mapping[str, float] | None = None, diff_momentum: bool = False):
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
@@ -186,6 +193,7 @@ class Identifier:
         thrust_sd = _thrust_sd(thrust_sd)
         moving_point = _flag(moving_point, "moving_point")
         accel_bias = _flag(accel_bias, "accel_bias")
+        diff_momentum = _flag(diff_momentum, "diff_momentum")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
             body.check(name)
         for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
@@ -203,6 +211,8 @@ class Identifier:
         self.moving_point = moving_point and method is Method.MOMENTUM
         self.accel_bias = accel_bias and method is Method.FORCE and (
             accel_source is AccelSource.MEASURED)
+        self.diff_momentum = diff_momentum and method is Method.FORCE and (
+            accel_source is AccelSource.DIFFERENCED)
         # row weights 1 / sd (1: unweighted, the rows untouched)
         self._w_lin, self._w_ang = (1.0 / x if x > 0.0 else 1.0 for x in row_sd)
         self.n = robot.n_joints
@@ -219,6 +229,7 @@ class Identifier:
         self._accel_sd = (_channel_sd(self.signal_sd, accel_source, self.n)
                           if method is Method.FORCE else None)
         self._channels = eiv.accel_channels(self.n)
+        self._vel_channels = eiv.velocity_channels(self.n)
         self.solver: ParameterSolver = make_solver(kind, self.layout, guess, lam, int(corr_lags))
         self.info_lin = np.zeros((len(self.layout.mu_active),) * 2)
         self.info_ang = np.zeros((len(self.layout.theta_active),) * 2)
@@ -231,7 +242,8 @@ class Identifier:
         self.reference = None       # momentum method: terms at t0
         self.ring = ()              # window > 0: the (t, E) of the last `window` seconds
         self.bias_fit = BiasFit()   # accel_bias: the accelerometer bias's running fit
-        self.history = []           # differenced accelerations: the window (t, flat sample)
+        self.history = []           # differenced accelerations: the window (t, flat sample);
+        #                             diff_momentum: (t, momentum rows, their noise rows, r_S)
         self._exc = None            # cached excitation() (cleared by update / set_state)
         self.tracking = DriftTracker.empty(lam)   # the estimates' lag (:mod:`.tracking`)
         self.thrust = consider.ThrustIntegrals()   # momentum form with thrust_sd: int F, M
@@ -244,15 +256,7 @@ class Identifier:
         with a window, differenced against the sample ``window`` earlier (:meth:`_windowed`);
         moving point: the angular rows about ``r_S`` of this sample (:func:`about_point`)."""
         force = self.method is Method.FORCE
-        if self._consider:
-            E = np.empty((3, kernels.N_COLS + 2 * consider.N_CONSIDER))
-            kernels.equations(force, flat, self.n, *self._geom, E)
-            o = kernels.Q0 + 3 * self.n                          # F, M, J, H
-            consider.thrust_sensitivity(force, flat[o:o + 3], flat[o + 3:o + 6],
-                                        flat[o + 6:o + 9], self.thrust, E[:, kernels.N_COLS:])
-        else:
-            E = np.empty((3, kernels.N_COLS))
-            kernels.equations(force, flat, self.n, *self._geom, E)
+        E = self._sample_rows(force, flat)
         if self.window > 0.0:
             dE = self._windowed(t, E)
         elif force:
@@ -265,6 +269,21 @@ class Identifier:
         if self.moving_point and dE is not None:
             about_point(dE, flat[kernels.R_S:kernels.R_S + 3])
         return dE
+
+    def _sample_rows(self, force: bool, flat: np.ndarray) -> np.ndarray:
+        """The (3, 42 [+ 16]) equation array of one sample alone: force form (eqs. 28, 31) or
+        momentum form before differencing (angular rows about the origin), with the thrust
+        errors' consider columns if any (:mod:`.consider`)."""
+        if not self._consider:
+            E = np.empty((3, kernels.N_COLS))
+            kernels.equations(force, flat, self.n, *self._geom, E)
+            return E
+        E = np.empty((3, kernels.N_COLS + 2 * consider.N_CONSIDER))
+        kernels.equations(force, flat, self.n, *self._geom, E)
+        o = kernels.Q0 + 3 * self.n                          # F, M, J, H
+        consider.thrust_sensitivity(force, flat[o:o + 3], flat[o + 3:o + 6],
+                                    flat[o + 6:o + 9], self.thrust, E[:, kernels.N_COLS:])
+        return E
 
     def _windowed(self, t: float, E: np.ndarray):
         """``E - E_ref``, ``E_ref`` the newest stored sample at least ``window`` seconds before
@@ -449,11 +468,13 @@ class Identifier:
             self.bias_fit = self.bias_fit.add(t, flat[k.V_S:k.V_S + 3], flat[k.A_S:k.A_S + 3])
             flat = flat.copy()
             flat[k.A_S:k.A_S + 3] -= self.bias_fit.bias()
-        if self._consider and self.method is Method.MOMENTUM:
+        if self._consider and (self.method is Method.MOMENTUM or self.diff_momentum):
             o = kernels.Q0 + 3 * self.n
             self.thrust = self.thrust.add(t, flat[kernels.R_S:kernels.R_S + 3], flat[o:o + 3],
                                           flat[o + 3:o + 6])
         sd = self._accel_sd
+        if self.diff_momentum:
+            return self._differenced_momentum(t, flat)
         if self.method is Method.FORCE and self.accel_source is AccelSource.DIFFERENCED:
             centre = self._differenced(t, flat)
             if centre is None:
@@ -523,6 +544,82 @@ class Identifier:
         times = np.array([tk for tk, _ in window])
         gain = float(np.linalg.norm(derivative_weights(times, self.diff_half_window)))
         return t_c, flat_c, gain
+
+    def _differenced_momentum(self, t: float, flat: np.ndarray):
+        """``(E, noise)`` of the momentum equations differentiated at the centre ``c`` of the
+        window of the last ``2m + 1`` samples by the derivative's weights ``w``
+        (:mod:`.differencing`), or ``(None, None)`` while the window fills.
+
+        The momentum equations hold at every sample, so for any weights with ``sum w = 0``
+        (the unknown initial momentum cancels) ``sum_i w_i E_mom(t_i)`` holds exactly: the
+        force equations averaged by the derivative's filter, with no truncation error however
+        fast the accelerations change between samples. The angular rows about the centre's
+        ``r_c`` need the base's displacements ``r_i - r_c``; measured positions (navigation
+        noise times the system's momentum, over the step) would swamp them, so they are
+        integrated from the velocities. With ``P_i`` the momentum (a row in ``mu``), ``J_i``
+        the impulse, ``P_i = P_c + J_i - J_c`` (at the truth), ``tau_i = t_i - t_c``::
+
+            sum_i w_i (L_O,i - [r_c]x (P_i - J_i))
+              = sum_i w_i (L_O,i - [r_i]x P_i)             own point: no position needed
+              + [sum_i w_i (r_i - r_c)]x P_c               = [u . v]x P_c (velocities)
+              + sum_i w_i [r_i - r_c]x (J_i - J_c)         ~ [v_c]x sum_i w_i tau_i (J_i - J_c)
+              + [r_c]x sum_i w_i J_i
+
+        (``u``: :func:`.differencing.displacement_weights`, exact for velocities polynomial
+        over the window; the third line's neglected part is of order ``a x F h^2``).
+        ``noise``: the rows ``sigma_l C_l`` of every sample's velocity channels (the rows are
+        affine in the velocities: the ``[u v]x P(v)`` term's quadratic part is
+        ``[e]x (m e)`` = 0; :mod:`.eiv`), or None.
+        """
+        E = self._sample_rows(False, flat)
+        Mom = _momentum_part(E, flat, self.n)
+        own = E.copy()
+        about_point(own, flat[kernels.R_S:kernels.R_S + 3], lin_of=Mom)    # L_O - [r_i]x P_i
+        C = None
+        if self._accel_sd is not None:
+            C = eiv.noise_rows(self._own_point_into, flat, own, self._vel_channels,
+                               self._accel_sd)
+        self.history = self.history + [(t, own, C, flat, E, Mom)]
+        m = self.diff_half_window
+        if len(self.history) < 2 * m + 1:
+            return None, None
+        window, self.history = self.history, self.history[1:]
+        times = np.array([s[0] for s in window])
+        w = derivative_weights(times, m)
+        u = displacement_weights(times, m, w)
+        x_c, Mom_c = window[m][3], window[m][5]
+        vs = slice(kernels.V_S, kernels.V_S + 3)
+        v_u = sum(uj * s[3][vs] for uj, s in zip(u, window))              # sum w (r - r_c)
+        out = sum(wi * s[1] for wi, s in zip(w, window))                  # d/dt momentum ~ force
+        imp = sum(wi * (s[4] - s[5]) for wi, s in zip(w, window))         # b = sum w J
+        about_point(out, x_c[kernels.R_S:kernels.R_S + 3], lin_of=imp)    # + [r_c]x sum w J
+        about_point(out, -v_u, lin_of=Mom_c)                              # + [u.v]x P_c
+        imp_c = window[m][4] - Mom_c
+        lever = sum(wi * (ti - times[m]) * (s[4] - s[5] - imp_c)
+                    for wi, ti, s in zip(w, times, window))
+        about_point(out, x_c[vs], lin_of=lever)                  # + [v_c]x sum w tau (J - J_c)
+        if C is None:
+            return out, None
+        blocks = []
+        for j, (wj, uj, s) in enumerate(zip(w, u, window)):
+            Cj = wj * s[2]                                   # (3 L, N_COLS), sigma_l C_l
+            for b, l in enumerate(np.flatnonzero(self._accel_sd > 0.0)):
+                blk = Cj[3 * b:3 * b + 3]
+                if l < 3:                                    # v_S: [u_j sigma e_l]x P_c
+                    e = np.zeros(3)
+                    e[l] = uj * self._accel_sd[l]
+                    about_point(blk, -e, lin_of=Mom_c)
+                if j == m:                                   # the centre's P_c: [u.v]x dP_c
+                    about_point(blk, -v_u, lin_of=s[2][3 * b:3 * b + 3])
+            blocks.append(Cj)
+        return out, _split(np.concatenate(blocks))
+
+    def _own_point_into(self, x: np.ndarray, out: np.ndarray) -> None:
+        """The momentum equation array (3, N_COLS) of the flat sample ``x`` into ``out``, its
+        momentum's angular rows about its own ``r_S`` (the impulse's about the origin):
+        ``L_O - [r]x P`` (:meth:`_differenced_momentum`)."""
+        kernels.equations(False, x, self.n, *self._geom, out)
+        about_point(out, x[kernels.R_S:kernels.R_S + 3], lin_of=_momentum_part(out, x, self.n))
 
     def _solve(self, A, b, phi, y, psi, b_c=None, y_c=None, noise=None):
         """The solver's update on the identified rows, then the residuals and information;
@@ -660,21 +757,35 @@ _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residu
             "reference", "ring", "bias_fit", "tracking", "thrust")
 
 
-def about_point(dE: np.ndarray, p: np.ndarray) -> None:
+def about_point(dE: np.ndarray, p: np.ndarray, lin_of: np.ndarray | None = None) -> None:
     """The angular rows of a momentum difference ``dE`` (3, 42 [+ 16]) about the point ``p`` (3,)
     instead of the origin, in place: ``L_p = L_O - p x P`` and ``H_p = H_O - p x J``, so the
     angular residual becomes ``r_ang - [p]x r_lin`` with ``r_lin = A mu - b``,
     ``r_ang = phi theta - y - psi D(mu)``: ``y -= [p]x b`` and, ``mu`` being the entries
-    ``m, m b`` of ``D(mu)`` of each body, ``psi[:, D index of mu] += [p]x A``."""
+    ``m, m b`` of ``D(mu)`` of each body, ``psi[:, D index of mu] += [p]x A``. ``lin_of``:
+    take ``r_lin`` from this array (same columns) instead of ``dE``'s own linear rows."""
     k = kernels
     P = consider.skew(p)                                 # [p]x
-    lin = P @ dE[:, k.COL_A:k.COL_B + 1]
+    src = dE if lin_of is None else lin_of
+    lin = P @ src[:, k.COL_A:k.COL_B + 1]
     dE[:, k.COL_Y] -= lin[:, 8]                          # y' = y - [p]x b
     dE[:, k.COL_PSI:k.COL_PSI + 4] += lin[:, 0:4]        # base m, m b
     dE[:, k.COL_PSI + 10:k.COL_PSI + 14] += lin[:, 4:8]  # target m, m b
     if dE.shape[1] > k.N_COLS:                           # consider columns: y_c -= [p]x b_c
-        b_c, y_c = _split_consider(dE)
-        y_c -= P @ b_c
+        y_c = _split_consider(dE)[1]
+        y_c -= P @ _split_consider(src)[0]
+
+
+def _momentum_part(E: np.ndarray, flat: np.ndarray, n: int) -> np.ndarray:
+    """The linear rows of a momentum equation array ``E`` without the impulse: ``A mu = b - J``
+    (residual ``P``, the system's momentum; ``b = J - P_arm``), no consider columns (only the
+    impulse depends on the thrust). Same columns as ``E``; only the linear rows are meaningful."""
+    out = np.zeros_like(E)
+    k = kernels
+    out[:, k.COL_A:k.COL_B] = E[:, k.COL_A:k.COL_B]
+    o = k.Q0 + 3 * n + 6                                 # J
+    out[:, k.COL_B] = E[:, k.COL_B] - flat[o:o + 3]
+    return out
 
 
 def _relative_norm(e: np.ndarray, rhs: np.ndarray) -> float:
@@ -857,6 +968,7 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float]
                        moving_point=_flag(v["ident.momentum_point"], "ident.momentum_point"),
                        accel_bias=_flag(v["ident.accel_bias"], "ident.accel_bias"),
                        thrust_sd=_thrust_sd([v[n] for n in THRUST_SD_NAMES], THRUST_SD_NAMES),
+                       diff_momentum=_flag(v["ident.diff_momentum"], "ident.diff_momentum"),
                        signal_sd={key: v[f"ident.noise.{name}"]
                                   for key, name, _, _ in SIGNAL_NOISE_PARAMETERS})
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))

@@ -223,6 +223,18 @@ def _observed_solve_columns(G: np.ndarray, R: np.ndarray) -> np.ndarray:
     return out
 
 
+def compensation_gain(S: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """``K = d x_c / d x_r`` (p, p) of the bias-compensated answer ``x_c = x_r + (S - N)^-1
+    (N x_r - N_Hr)`` (:func:`.eiv.compensation`): ``K = 1 + (S - N)^-1 N`` in the directions
+    ``S - N`` observes (there ``(S - N)^-1 S``), 1 in the others (left uncorrected).
+
+    Parameters
+    ----------
+    S, N : (p, p) the Gram matrix of the rows and its expected noise part
+    """
+    return np.eye(len(S)) + _observed_solve_columns(S - N, N)
+
+
 def block_lag(G: np.ndarray, M: np.ndarray, rate: np.ndarray, growth: float
               ) -> Tuple[np.ndarray, np.ndarray]:
     """``(A r, r)`` (p,) of one least-squares problem: ``A = G^-1 M`` (the information-weighted
@@ -334,7 +346,8 @@ class PaperSolver(ParameterSolver):
         :func:`.report_kernels.paper_covariance`)."""
         L, g0, rls = self.layout, self.guess, self.rls
         s2_lin, s2_ang = self._residual_variances()
-        return rk.paper_covariance(rls.lin.P, rls.ang.P, rls.M, self.mu, s2_lin, s2_ang,
+        P_lin, P_ang = self._covariances()
+        return rk.paper_covariance(P_lin, P_ang, rls.M, self.mu, s2_lin, s2_ang,
                                    g0.P0_mu, g0.P0_theta, L.mu_active, L.theta_active)
 
     def _residual_variances(self) -> Tuple[float, float]:
@@ -343,12 +356,16 @@ class PaperSolver(ParameterSolver):
         ``|phi theta - y - psi D(mu)|^2`` over all samples, per degree of freedom), times the
         forgetting's and the residuals' correlation factors (:mod:`.uncertainty`)."""
         rls, gl, ga = self.rls, self.gram_lin, self.gram_ang
+        mu, theta, D_mu = rls.mu, rls.theta, rls.D_mu
+        if self.eiv_lin is not None:                # at the compensated answers (.eiv)
+            L = self.layout
+            mu, theta, D_mu = self.mu[L.mu_active], self.theta[L.theta_active], par.D_of_mu(self.mu)
         one = 1.0                                   # a factor that does not apply
         vs_lin, vs_ang = (gl.var_scale, ga.var_scale) if self.lam != 1.0 else (one, one)
         inf_lin, inf_ang = ((self.corr_lin.inflation(), self.corr_ang.inflation())
                             if self.lags else (one, one))
         # z^T S z with z = [mu, -1] and [theta, -1, -D(mu)] (compiled)
-        return rk.paper_residual_variances(rls.mu, rls.theta, rls.D_mu, gl.S, ga.S,
+        return rk.paper_residual_variances(mu, theta, D_mu, gl.S, ga.S,
                                            gl.dof(len(rls.mu)), ga.dof(len(rls.theta)),
                                            vs_lin, inf_lin, vs_ang, inf_ang)
 
@@ -358,10 +375,25 @@ class PaperSolver(ParameterSolver):
         L, rls, ga, g0 = self.layout, self.rls, self.gram_ang, self.guess
         s2_lin, s2_ang = self._residual_variances()
         w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
+        P_lin, P_ang = self._covariances()
         return Uncertainty(*rk.paper_uncertainty(
-            self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, rls.lin.P, rls.ang.P, ga.S,
+            self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, P_lin, P_ang, ga.S,
             s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
             L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang, self._mu_rls_full()))
+
+    def _covariances(self) -> Tuple[np.ndarray, np.ndarray]:
+        """The unscaled covariances of the two answers: the RLS's ``P`` of each equation, or,
+        with the accelerations' noise compensated (:mod:`.eiv`), ``K P K^T`` with
+        :func:`compensation_gain` ``K``: the bias-compensated answer moves ``K`` times as far
+        as the RLS's, so its scatter is ``K`` times the RLS's (large where the noise takes
+        most of the rows' information)."""
+        rls = self.rls
+        if self.eiv_lin is None:
+            return rls.lin.P, rls.ang.P
+        p, r = len(rls.mu), len(rls.theta)
+        K_lin = compensation_gain(self.gram_lin.S[:p, :p], self.eiv_lin.S[:p, :p])
+        K_ang = compensation_gain(self.gram_ang.S[:r, :r], self.eiv_ang.S[:r, :r])
+        return K_lin @ rls.lin.P @ K_lin.T, K_ang @ rls.ang.P @ K_ang.T
 
     def _mu_rls_full(self) -> np.ndarray:
         """The 8 mu of the RLS itself (``self.mu`` holds the bias-compensated ones where the
@@ -523,14 +555,23 @@ class JointSolver(ParameterSolver):
         return rk.joint_jacobian(np.ascontiguousarray(z, dtype=float), self._s2p)
 
     def covariance(self) -> np.ndarray:
+        """The RLS's ``P`` times the residual variance; with the accelerations' noise
+        compensated (:mod:`.eiv`) ``K P K^T`` (:func:`compensation_gain`) and the residual
+        variance at the compensated answer."""
         g, x = self.gram, self.rls.x
+        P = self.rls.P
+        if self.eiv is not None:
+            p = len(x)
+            x = self.pi[self.layout.standard_active]
+            K = compensation_gain(g.S[:p, :p], self.eiv.S[:p, :p])
+            P = K @ P @ K.T
         cov = np.diag(self.prior())
         s2 = g.residual_variance(np.append(x, -1.0), len(x))
         if self.lam != 1.0:
             s2 *= g.var_scale
         if self.lags:
             s2 *= self.corr.inflation()
-        cov[self._ix] = self.rls.P * s2
+        cov[self._ix] = P * s2
         return cov
 
     def prior_pull(self) -> Tuple[np.ndarray, np.ndarray]:
