@@ -681,6 +681,24 @@ def paper_drift_lag(S_lin, S_ang, M_lin, M_ang, rate_z, growth, mu_full, mu_acti
 
 
 @njit(**_NB)
+def paper_estimates_lag(jac, rate_x, growth, S_lin, S_ang, M_lin, M_ang, mu_full, mu_active,
+                        theta_active):
+    """``(lag (20,), finite)``: the lag of the paper solver's estimates, ``J L(J^-1 rate_x)``
+    with ``L`` = :func:`paper_drift_lag` and ``J`` = ``jac`` (20, 20) the Jacobian of the
+    estimates in ``z`` (:func:`.tracking.matrix_lag` with the solver's ``drift_lag``: the same
+    calls in one); ``finite`` False if an entry is not finite (a singular block)."""
+    rate_z = lu_solve_vec(jac, rate_x)
+    lag_z = paper_drift_lag(S_lin, S_ang, M_lin, M_ang, rate_z, growth, mu_full, mu_active,
+                            theta_active)
+    lag = matvec(jac, lag_z)
+    finite = True
+    for i in range(lag.shape[0]):
+        if not math.isfinite(lag[i]):
+            finite = False
+    return lag, finite
+
+
+@njit(**_NB)
 def age_step(M, G, lam, dt):
     """``lam (M + dt G)`` (a new array): the age-weighted Gram matrix after a step ``dt``, every
     old row ``dt`` older (:mod:`.tracking`, eq. 2)."""
@@ -835,6 +853,40 @@ def both_physical(ls, physical):
     for k in range(2):
         e = EST0[k]
         physical[k] = is_physical(ls[e], ls[e + 1:e + 4], ls[e + 4:e + 10])
+
+
+@njit(**_NB)
+def error_scale(vec, com_min):
+    """Scale (20,) of the relative error of each entry of the estimates ``vec`` (20,)
+    (:meth:`spacerobot.interface.ParameterLayout.error_scale`, whose NumPy operations it
+    repeats per body, NaN included): ``|m|`` (1 if 0), ``max(|b_i|, com_min)``, ``|I_ii|`` (the
+    body's largest ``|I_ii|`` if 0) and for the products the largest ``|I_ii|`` (1 if that
+    is not > 0). Compiled because :meth:`.identifier.Identifier.report` needs it at every
+    sample."""
+    scale = np.empty(20)
+    for k in range(2):
+        e = EST0[k]
+        for i in range(10):
+            scale[e + i] = abs(vec[e + i])
+        imax = scale[e + 4]                                  # NaN propagates, as np.max
+        for i in range(5, 7):
+            v = scale[e + i]
+            if v > imax or v != v:
+                imax = v
+        if not imax > 0.0:
+            imax = 1.0
+        if scale[e] == 0.0:
+            scale[e] = 1.0
+        for i in range(1, 4):                                # np.maximum: NaN propagates
+            v = scale[e + i]
+            if not (v > com_min or v != v):
+                scale[e + i] = com_min
+        for i in range(4, 7):
+            if scale[e + i] == 0.0:
+                scale[e + i] = imax
+        for i in range(7, 10):
+            scale[e + i] = imax
+    return scale
 
 
 @njit(**_NB)
