@@ -242,6 +242,28 @@ def test_estimates_lag_in_one_call_equals_the_composition(runs, robot):
     assert compared > 100
 
 
+@pytest.mark.parametrize("robot,lam,lags", [("planar", 1.0, 0), ("spatial", 1.0, 0),
+                                             ("spatial", 0.995, 3)])
+def test_std_parts_in_one_call_equal_the_composition(runs, robot, lam, lags):
+    """The paper solver's standard deviations in one compiled call (paper_std_parts) equal the
+    composition it fuses (the residual variances, the pull's eigen-decompositions,
+    paper_uncertainty: each compiled on its own) bit for bit, at every sample of a run."""
+    sc, outs = runs[robot]
+    ident = Identifier(sc.robot, sc.guess, "momentum", "paper", lam=lam, corr_lags=lags)
+    for k, o in enumerate(outs):
+        ident.update(0.1 * k, o)
+        s, L, g0 = ident.solver, ident.layout, ident.guess
+        s2_lin, s2_ang = s._residual_variances()
+        w_mu, w_theta, eig_lin, eig_ang = s._pull_inputs()
+        want = rk.paper_uncertainty(
+            s.mu, s.theta, s.rls.mu, s.rls.theta, s.rls.D_mu, s.rls.M, s.rls.lin.P, s.rls.ang.P,
+            s.gram_ang.S, s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, s._mu0, s._th0,
+            L.mu_active, L.theta_active, s._s2p, eig_lin, eig_ang, s._mu_rls_full())
+        got = s.uncertainty_parts()
+        for a, b in zip(got, want):
+            assert np.array_equal(a, b)
+
+
 def test_layout_constants_of_the_kernels():
     L = interface.LAYOUT
     for k, b in enumerate(L.bodies):

@@ -852,17 +852,18 @@ def _rcond(info: np.ndarray) -> float:
 
     The excitation diagnostics are recorded at every communication step, so the usual case
     (every diagonal entry > 0, finite entries) takes a short path: the scaling in one compiled
-    call (:func:`.report_kernels.scaled_information`, the same divisions) and LAPACK's
+    call (:func:`.report_kernels.rcond_scaled`, the same divisions) and LAPACK's
     eigenvalues through NumPy's gufunc itself (what ``np.linalg.eigvalsh`` calls, without its
     argument checks and error-state set-up): the same numbers. Anything else, or a result
     that is not a number, goes through :func:`_rcond_numpy` (its errors and warnings too).
     """
     if _EIGVALSH is not None:
-        Gs, _, unobserved = report_kernels.scaled_information(info)
-        if not unobserved.any() and math.isfinite(Gs.sum()):
-            lam = _EIGVALSH(Gs, signature="d->d")
-            if lam[0] == lam[0] and lam[-1] == lam[-1]:
-                return float(max(lam[0], 0.0) / lam[-1])
+        Gs, ok = report_kernels.rcond_scaled(info)
+        if ok:
+            lam = _EIGVALSH(Gs, signature="d->d").tolist()
+            lo, hi = lam[0], lam[-1]
+            if lo == lo and hi == hi:                    # not NaN: converged
+                return float(max(lo, 0.0) / hi)
     return _rcond_numpy(info)
 
 

@@ -271,6 +271,24 @@ def eig_scaled(G):
 
 
 @njit(**_NB)
+def rcond_scaled(G):
+    """``(G_s, ok)``: the scale-free information ``G_s = G / (d d^T)`` of ``G`` (p, p)
+    (:func:`scaled_information`) and whether every diagonal entry of ``G`` is > 0 and every
+    entry of ``G_s`` finite: the case in which :func:`.identifier._rcond` hands ``G_s`` to
+    LAPACK itself."""
+    Gs, d, unobserved = scaled_information(G)
+    p = G.shape[0]
+    ok = True
+    for i in range(p):
+        if unobserved[i]:
+            ok = False
+        for j in range(p):
+            if not math.isfinite(Gs[i, j]):
+                ok = False
+    return Gs, ok
+
+
+@njit(**_NB)
 def eig_solve(lam, V, d, unobserved, r):
     """``(x, unobserved)``: ``G^-1 r`` in the directions the information observes, from the
     eigen-decomposition ``G_s = V diag(lam) V^T`` (ascending ``lam``) of the scaled information
@@ -574,6 +592,31 @@ def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_
     for i in range(var.shape[0]):
         sd[i] = math.sqrt(var[i]) if var[i] > 0.0 else 0.0
     return sd, unobserved, x - pull, J
+
+
+@njit(**_NB)
+def paper_std_parts(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_lin, S_ang,
+                    dof_lin, dof_ang, scale_lin, inflation_lin, scale_ang, inflation_ang,
+                    P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active, theta_active,
+                    sharp_to_project, mu_rls_full):
+    """``(sd, unobserved, data-only answer, J, ok)``: :func:`paper_uncertainty` with its
+    inputs computed in the same call, as :meth:`.solvers.PaperSolver.uncertainty_parts` takes
+    them: the residual variances (:func:`paper_residual_variances` of the Gram matrices
+    ``S_lin``, ``S_ang`` with the degrees of freedom, scales and inflations given) and the
+    eigen-decompositions (:func:`eig_scaled`) of the parameters' blocks of ``S_lin`` and
+    ``S_ang``; ``ok`` False if one of these did not converge (the caller raises, as
+    :func:`.uncertainty.eig_scaled` does)."""
+    s2_lin, s2_ang = paper_residual_variances(rls_mu, rls_theta, D_mu, S_lin, S_ang, dof_lin,
+                                              dof_ang, scale_lin, inflation_lin, scale_ang,
+                                              inflation_ang)
+    p, r = rls_mu.shape[0], rls_theta.shape[0]
+    lam_l, V_l, d_l, u_l, ok_l = eig_scaled(S_lin[:p, :p].copy())
+    lam_a, V_a, d_a, u_a, ok_a = eig_scaled(S_ang[:r, :r].copy())
+    sd, unobserved, data_only, J = paper_uncertainty(
+        mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_ang, s2_lin, s2_ang,
+        P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active, theta_active, sharp_to_project,
+        (lam_l, V_l, d_l, u_l), (lam_a, V_a, d_a, u_a), mu_rls_full)
+    return sd, unobserved, data_only, J, ok_l and ok_a
 
 
 # -- small dense solves (no LAPACK in the FMUs) -------------------------------------------------

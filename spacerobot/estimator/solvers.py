@@ -358,25 +358,35 @@ class PaperSolver(ParameterSolver):
         ``|phi theta - y - psi D(mu)|^2`` over all samples, per degree of freedom), times the
         forgetting's and the residuals' correlation factors (:mod:`.uncertainty`)."""
         rls, gl, ga = self.rls, self.gram_lin, self.gram_ang
+        # z^T S z with z = [mu, -1] and [theta, -1, -D(mu)] (compiled)
+        return rk.paper_residual_variances(rls.mu, rls.theta, rls.D_mu, gl.S, ga.S,
+                                           *self._variance_factors())
+
+    def _variance_factors(self) -> Tuple[float, ...]:
+        """``(dof_lin, dof_ang, scale_lin, inflation_lin, scale_ang, inflation_ang)``: the
+        degrees of freedom of both residual sums, the forgetting's scales and the
+        correlation's inflations (1: not applied) (:meth:`_residual_variances`)."""
+        rls, gl, ga = self.rls, self.gram_lin, self.gram_ang
         one = 1.0                                   # a factor that does not apply
         vs_lin, vs_ang = (gl.var_scale, ga.var_scale) if self.lam != 1.0 else (one, one)
         inf_lin, inf_ang = ((self.corr_lin.inflation(), self.corr_ang.inflation())
                             if self.lags else (one, one))
-        # z^T S z with z = [mu, -1] and [theta, -1, -D(mu)] (compiled)
-        return rk.paper_residual_variances(rls.mu, rls.theta, rls.D_mu, gl.S, ga.S,
-                                           gl.dof(len(rls.mu)), ga.dof(len(rls.theta)),
-                                           vs_lin, inf_lin, vs_ang, inf_ang)
+        return (gl.dof(len(rls.mu)), ga.dof(len(rls.theta)), vs_lin, inf_lin, vs_ang, inf_ang)
 
     def uncertainty_parts(self) -> "Uncertainty":
         """As :meth:`ParameterSolver.uncertainty_parts`, in one compiled call
-        (:func:`.report_kernels.paper_uncertainty`)."""
-        L, rls, ga, g0 = self.layout, self.rls, self.gram_ang, self.guess
-        s2_lin, s2_ang = self._residual_variances()
-        w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
-        return Uncertainty(*rk.paper_uncertainty(
-            self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, rls.lin.P, rls.ang.P, ga.S,
-            s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
-            L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang, self._mu_rls_full()))
+        (:func:`.report_kernels.paper_std_parts`: :meth:`_residual_variances`, the
+        eigen-decompositions of :meth:`_pull_inputs` and
+        :func:`.report_kernels.paper_uncertainty`)."""
+        L, rls, gl, ga, g0 = self.layout, self.rls, self.gram_lin, self.gram_ang, self.guess
+        *parts, ok = rk.paper_std_parts(
+            self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, rls.lin.P, rls.ang.P, gl.S,
+            ga.S, *self._variance_factors(), g0.P0_mu, g0.P0_theta,
+            gl.decay * (1.0 / g0.P0_mu), ga.decay * (1.0 / g0.P0_theta), self._mu0, self._th0,
+            L.mu_active, L.theta_active, self._s2p, self._mu_rls_full())
+        if not ok:
+            raise np.linalg.LinAlgError("Eigenvalues did not converge")
+        return Uncertainty(*parts)
 
     def _mu_rls_full(self) -> np.ndarray:
         """The 8 mu of the RLS itself (``self.mu`` holds the bias-compensated ones where the
