@@ -264,6 +264,36 @@ def test_std_parts_in_one_call_equal_the_composition(runs, robot, lam, lags):
             assert np.array_equal(a, b)
 
 
+@pytest.mark.parametrize("robot,lam", [("planar", 1.0), ("spatial", 1.0), ("spatial", 0.995)])
+def test_tracker_in_one_call_equals_drift_tracker_add(runs, robot, lam):
+    """The paper solver's tracker step in one compiled call (PaperSolver.track,
+    report_kernels.paper_tracker_add) equals DriftTracker.add with the solver's drift_lag
+    (NumPy glue around four compiled calls) in every field, bit for bit, at every sample of a
+    run: the identifier's own tracker (made by the first) against one made by the second."""
+    from spacerobot.estimator.solvers import ParameterSolver
+    sc, outs = runs[robot]
+    ident = Identifier(sc.robot, sc.guess, "momentum", "paper", lam=lam)
+    mine = None
+    for k, o in enumerate(outs):
+        info = ident.solver.information()
+        before = ident.tracking
+        ident.update(0.1 * k, o)
+        if ident.tracking is before:
+            continue                                     # the reference sample
+        u = ident.solver.std_parts()
+        mine = ParameterSolver.track(ident.solver, before if mine is None else mine,
+                                     float(ident.samples - 1), u.data_only, u.sd, info,
+                                     u.jacobian)
+        for name, a, b in zip(mine._fields, ident.tracking, mine):
+            if isinstance(a, tuple):
+                assert len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b))
+            elif a is None or b is None:
+                assert a is None and b is None, name
+            else:
+                assert np.array_equal(a, b, equal_nan=True), name
+    assert mine is not None and mine.mat_lag is not None
+
+
 def test_layout_constants_of_the_kernels():
     L = interface.LAYOUT
     for k, b in enumerate(L.bodies):

@@ -522,9 +522,8 @@ class Identifier:
         u = self.solver.std_parts()
         # the tracker's clock is the sample count: the estimates depend on the samples, not on
         # the step sizes between them (a rate per sample times an age in samples)
-        self.tracking = self.tracking.add(float(self.samples), u.data_only, u.sd, info,
-                                          u.jacobian, self.solver.drift_lag,
-                                          self.solver.estimates_lag)
+        self.tracking = self.solver.track(self.tracking, float(self.samples), u.data_only,
+                                          u.sd, info, u.jacobian)
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING

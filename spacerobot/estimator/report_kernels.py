@@ -742,6 +742,37 @@ def paper_estimates_lag(jac, rate_x, growth, S_lin, S_ang, M_lin, M_ang, mu_full
 
 
 @njit(**_NB)
+def paper_tracker_add(lam, s0, s1, t_ref, t_prev, a_bar_prev, w, mt, mx, ctt, ctx, t, x, sd,
+                      rate_memory, M_lin, M_ang, G_lin, G_ang, jac, S_lin, S_ang, mu_full,
+                      mu_active, theta_active):
+    """:meth:`.tracking.DriftTracker.add` of the paper solver's estimates in one call: the
+    regression (:func:`drift_regression`), the age-weighted Gram matrices ``M_lin``, ``M_ang``
+    stepped with the Gram matrices before the sample ``G_lin``, ``G_ang`` (:func:`age_step`),
+    and where every ``ctt > 0`` the estimates' lag (:func:`paper_estimates_lag` with the Gram
+    matrices after it, ``S_lin``, ``S_ang``). The same operations in the same order.
+
+    Returns ``(s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, rate, gain, M_lin, M_ang,
+    lag, has_lag)``; ``has_lag`` False: no matrix lag (a ``ctt`` not > 0, or a singular
+    block)."""
+    (s0, s1, t_ref, a_bar, da_dt, step, w, mt, mx, ctt, ctx, rate, gain
+     ) = drift_regression(lam, s0, s1, t_ref, t_prev, a_bar_prev, w, mt, mx, ctt, ctx, t, x, sd,
+                          rate_memory)
+    M_lin = age_step(M_lin, G_lin, lam, step)
+    M_ang = age_step(M_ang, G_ang, lam, step)
+    all_positive = True
+    for i in range(ctt.shape[0]):
+        if not ctt[i] > 0.0:
+            all_positive = False
+    lag, has_lag = np.zeros(x.shape[0]), False
+    if all_positive:
+        growth = da_dt / a_bar if a_bar > 0.0 else 0.0
+        lag, has_lag = paper_estimates_lag(jac, rate, growth, S_lin, S_ang, M_lin, M_ang,
+                                           mu_full, mu_active, theta_active)
+    return (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, rate, gain, M_lin, M_ang, lag,
+            has_lag)
+
+
+@njit(**_NB)
 def age_step(M, G, lam, dt):
     """``lam (M + dt G)`` (a new array): the age-weighted Gram matrix after a step ``dt``, every
     old row ``dt`` older (:mod:`.tracking`, eq. 2)."""

@@ -31,7 +31,7 @@ from . import eiv
 from . import parameters as par
 from . import report_kernels as rk
 from .rls import RLS, ModifiedRLS
-from .tracking import matrix_lag
+from .tracking import RATE_MEMORY, DriftTracker, matrix_lag
 from .uncertainty import Autocorrelation, Gram, eig_scaled, prior_pull
 
 
@@ -151,6 +151,14 @@ class ParameterSolver(ABC):
         (20, 20) the Jacobian of :meth:`vector_of` (:func:`.tracking.matrix_lag`); None where an
         information block is singular."""
         return matrix_lag(rate_x, growth, ages, jac, self.drift_lag)
+
+    def track(self, tracker: DriftTracker, t: float, x: np.ndarray, sd: np.ndarray,
+              info_before: Tuple[np.ndarray, ...], jac: np.ndarray) -> DriftTracker:
+        """``tracker`` after the sample of clock time ``t`` (:meth:`.DriftTracker.add` with
+        this solver's :meth:`drift_lag`): ``x`` (20,) the data-only estimates, ``sd`` (20,)
+        their standard deviations, ``info_before`` the Gram matrices before the sample
+        (:meth:`information`), ``jac`` (20, 20) the Jacobian of :meth:`vector_of`."""
+        return tracker.add(t, x, sd, info_before, jac, self.drift_lag, self.estimates_lag)
 
     @abstractmethod
     def snapshot(self) -> tuple:
@@ -462,6 +470,28 @@ class PaperSolver(ParameterSolver):
                                              float(growth), S_lin, S_ang, M_lin, M_ang, self.mu,
                                              L.mu_active, L.theta_active)
         return lag if finite else None
+
+    def track(self, tracker, t, x, sd, info_before, jac):
+        """:meth:`ParameterSolver.track` in one compiled call
+        (:func:`.report_kernels.paper_tracker_add`: the operations of
+        :meth:`.DriftTracker.add`, :meth:`estimates_lag` included)."""
+        tr, L, (S_lin, S_ang) = tracker, self.layout, self.information()
+        x = np.ascontiguousarray(x, dtype=float)
+        sd = np.ascontiguousarray(sd, dtype=float)
+        if tr.s0 == 0.0:                              # the lines start from 0
+            zero = np.zeros(len(x))
+            w = mt = mx = ctt = ctx = zero
+        else:
+            w, mt, mx, ctt, ctx = tr.w, tr.mt, tr.mx, tr.ctt, tr.ctx
+        M_lin, M_ang = tr.ages or [np.zeros_like(G) for G in info_before]
+        (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, slope, gain, M_lin, M_ang, lag,
+         has_lag) = rk.paper_tracker_add(
+            tr.lam, tr.s0, tr.s1, tr.t_ref, tr.t, tr.a_bar, w, mt, mx, ctt, ctx, float(t), x, sd,
+            RATE_MEMORY, M_lin, M_ang, info_before[0], info_before[1],
+            np.ascontiguousarray(jac, dtype=float), S_lin, S_ang, self.mu, L.mu_active,
+            L.theta_active)
+        return DriftTracker(tr.lam, s0, s1, t_ref, float(t), a_bar, da_dt, w, mt, mx, ctt, ctx,
+                            sd, (M_lin, M_ang), lag if has_lag else None, slope, gain)
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
