@@ -45,6 +45,12 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._sd_names = [n for n, k in outs if k[0] in _SDS]
         self._sd_pos = np.array([LAYOUT.index(n[len(_SD):]) for n in self._sd_names], dtype=int)
         self._scalar_outputs = [(n, k[0]) for n, k in outs if k[0] in _SCALAR_OUTPUTS]
+        # a refresh at every step: both 20-vectors with one index, the scalars with one getter
+        self._vec_names = self._est_names + self._sd_names
+        self._vec_pos = np.concatenate([self._est_pos, len(LAYOUT.names) + self._sd_pos])
+        self._scalar_names = [n for n, _ in self._scalar_outputs]
+        get = operator.attrgetter(*(a for _, a in self._scalar_outputs))
+        self._scalars = get if len(self._scalar_outputs) > 1 else (lambda x: (get(x),))
         self._flag_outputs = [(n, k) for n, k in outs if k[0] in _FLAGS]
         self._lazy_outputs = {n: None for n, k in outs if k[0] in _LAZY}
 
@@ -59,10 +65,9 @@ class SpaceRobotEstimator(InterfaceSlave):
     def _refresh(self) -> None:
         ident = self.ident
         rep = ident.report()
-        o = dict(zip(self._est_names, rep.vector.take(self._est_pos).tolist()))
-        o.update(zip(self._sd_names, rep.std.take(self._sd_pos).tolist()))
-        for name, attr in self._scalar_outputs:
-            o[name] = getattr(ident, attr)
+        o = dict(zip(self._vec_names,
+                     np.concatenate((rep.vector, rep.std)).take(self._vec_pos).tolist()))
+        o.update(zip(self._scalar_names, self._scalars(ident)))
         for name, (kind, who) in self._flag_outputs:
             o[name] = int(getattr(rep, kind)[who])
         o[_EXCITE] = self.request(rep.identified)
