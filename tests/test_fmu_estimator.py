@@ -197,9 +197,9 @@ def test_mixed_reads_equal_what_was_set_and_the_core(planar_fmus):
                   for n, x in params.items()}
         params["lambda"] = 0.999
         core, _ = identifier_from_values(sc.robot, params)
-        for k in range(12):
+        for _ in range(12):
             x = pair.sample()
-            core.update(pair.t, {key: val for key, val in _meas(pair.inputs, x, sc).items()})
+            core.update(pair.t, _meas(pair.inputs, x, sc))
             pair.step(DT, sample=x)
         rep = core.report()
         rng = np.random.default_rng(2)
