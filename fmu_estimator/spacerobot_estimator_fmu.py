@@ -32,8 +32,8 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._inputs = [(n, v.key) for n, v in self.interface.items() if v.causality == "input"]
         self._input_names = [n for n, _ in self._inputs]
         # a sample: the inputs' values in one array, in the order of the identifier's KEYS
-        # (each signal's elements row-major), and each signal a view into it
-        self._gather, self._signals = _sample_layout(self._inputs, self.robot.n_joints)
+        # (each signal's elements row-major), as Identifier.update_flat takes it
+        self._gather = _sample_layout(self._inputs, self.robot.n_joints)
         self._input_values = operator.itemgetter(*self._input_names)
         self.request = None
         # outputs: estimates and their standard deviations ("sd." + an estimate name), from
@@ -45,6 +45,12 @@ class SpaceRobotEstimator(InterfaceSlave):
         self._sd_names = [n for n, k in outs if k[0] in _SDS]
         self._sd_pos = np.array([LAYOUT.index(n[len(_SD):]) for n in self._sd_names], dtype=int)
         self._scalar_outputs = [(n, k[0]) for n, k in outs if k[0] in _SCALAR_OUTPUTS]
+        # a refresh at every step: both 20-vectors with one index, the scalars with one getter
+        self._vec_names = self._est_names + self._sd_names
+        self._vec_pos = np.concatenate([self._est_pos, len(LAYOUT.names) + self._sd_pos])
+        self._scalar_names = [n for n, _ in self._scalar_outputs]
+        get = operator.attrgetter(*(a for _, a in self._scalar_outputs))
+        self._scalars = get if len(self._scalar_outputs) > 1 else (lambda x: (get(x),))
         self._flag_outputs = [(n, k) for n, k in outs if k[0] in _FLAGS]
         self._lazy_outputs = {n: None for n, k in outs if k[0] in _LAZY}
 
@@ -59,10 +65,9 @@ class SpaceRobotEstimator(InterfaceSlave):
     def _refresh(self) -> None:
         ident = self.ident
         rep = ident.report()
-        o = dict(zip(self._est_names, rep.vector.take(self._est_pos).tolist()))
-        o.update(zip(self._sd_names, rep.std.take(self._sd_pos).tolist()))
-        for name, attr in self._scalar_outputs:
-            o[name] = getattr(ident, attr)
+        o = dict(zip(self._vec_names,
+                     np.concatenate((rep.vector, rep.std)).take(self._vec_pos).tolist()))
+        o.update(zip(self._scalar_names, self._scalars(ident)))
         for name, (kind, who) in self._flag_outputs:
             o[name] = int(getattr(rep, kind)[who])
         o[_EXCITE] = self.request(rep.identified)
@@ -82,8 +87,7 @@ class SpaceRobotEstimator(InterfaceSlave):
         if not self._check_step(current_time, step_size, math.inf):
             return False
         x = np.array(self._input_values(self.values), dtype=float).take(self._gather)
-        meas = {key: x[part].reshape(shape) for key, part, shape in self._signals}
-        status = self.ident.update(current_time, meas)    # never raises; undoes a bad update
+        status = self.ident.update_flat(current_time, x)  # never raises; undoes a bad update
         self._refresh()
         if status in (3, 4):
             # name the FMI inputs at fault, not only the core's signal name
@@ -120,21 +124,17 @@ _EXCITE = "ident.excite"
 _LAZY = ("excitation_mu", "excitation_theta")
 
 
-def _sample_layout(inputs, n: int):
-    """``(gather, signals)``: ``x[gather]`` puts the values of the FMI ``inputs`` (in their
-    order) into the order of the identifier's :data:`KEYS` (each signal's elements row-major);
-    ``signals`` = ``[(key, slice, shape)]`` of each signal in that array, so that a sample is
-    gathered with one index and its signals are views."""
+def _sample_layout(inputs, n: int) -> np.ndarray:
+    """``gather``: ``x[gather]`` puts the values of the FMI ``inputs`` (in their order) into
+    the order of the identifier's :data:`KEYS` (each signal's elements row-major), the flat
+    sample of ``Identifier.update_flat``, with one index."""
     shapes = {"A": (3, 3), "q": (n,), "qd": (n,), "qdd": (n,)}
     where = {}
     for pos, (_, (group, idx)) in enumerate(inputs):
         shape = shapes.get(group, (3,))
         flat = idx[0] * shape[1] + idx[1] if group == "A" else idx
         where[(group, flat)] = pos
-    gather, signals = [], []
+    gather = []
     for key in KEYS:
-        shape = shapes.get(key, (3,))
-        start = len(gather)
-        gather += [where[(key, k)] for k in range(int(np.prod(shape)))]
-        signals.append((key, slice(start, len(gather)), shape))
-    return np.array(gather, dtype=np.intp), signals
+        gather += [where[(key, k)] for k in range(int(np.prod(shapes.get(key, (3,)))))]
+    return np.array(gather, dtype=np.intp)

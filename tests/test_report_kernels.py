@@ -213,6 +213,87 @@ def test_drift_lag_equals_the_oracle(runs, solver):
     assert worst <= 1e-10, worst
 
 
+@pytest.mark.parametrize("robot", ["planar", "spatial"])
+def test_estimates_lag_in_one_call_equals_the_composition(runs, robot):
+    """The paper solver's lag of the estimates in one compiled call
+    (report_kernels.paper_estimates_lag) equals tracking.matrix_lag with the solver's
+    drift_lag (the three compiled calls it fuses) bit for bit, at the identifier's ages and
+    Jacobians, from the first samples (singular blocks: both None) on, at the run's rates and
+    random ones."""
+    from spacerobot.estimator.tracking import matrix_lag
+    sc, outs = runs[robot]
+    ident = Identifier(sc.robot, sc.guess, "momentum", "paper", lam=0.995)
+    rng = np.random.default_rng(8)
+    compared = 0
+    for k, o in enumerate(outs):
+        ident.update(0.1 * k, o)
+        s, tr = ident.solver, ident.tracking
+        if not tr.ages:
+            continue
+        jac = s.jacobian(s.z())
+        for rate in (np.asarray(tr.slope, float), rng.normal(size=20) * np.abs(s.z())):
+            growth = rng.uniform(0.0, 0.02)
+            got = s.estimates_lag(rate, growth, tr.ages, jac)
+            want = matrix_lag(rate, growth, tr.ages, jac, s.drift_lag)
+            assert (got is None) == (want is None)
+            if want is not None:
+                assert np.array_equal(got, want)
+                compared += 1
+    assert compared > 100
+
+
+@pytest.mark.parametrize("robot,lam,lags", [("planar", 1.0, 0), ("spatial", 1.0, 0),
+                                             ("spatial", 0.995, 3)])
+def test_std_parts_in_one_call_equal_the_composition(runs, robot, lam, lags):
+    """The paper solver's standard deviations in one compiled call (paper_std_parts) equal the
+    composition it fuses (the residual variances, the pull's eigen-decompositions,
+    paper_uncertainty: each compiled on its own) bit for bit, at every sample of a run."""
+    sc, outs = runs[robot]
+    ident = Identifier(sc.robot, sc.guess, "momentum", "paper", lam=lam, corr_lags=lags)
+    for k, o in enumerate(outs):
+        ident.update(0.1 * k, o)
+        s, L, g0 = ident.solver, ident.layout, ident.guess
+        s2_lin, s2_ang = s._residual_variances()
+        w_mu, w_theta, eig_lin, eig_ang = s._pull_inputs()
+        want = rk.paper_uncertainty(
+            s.mu, s.theta, s.rls.mu, s.rls.theta, s.rls.D_mu, s.rls.M, s.rls.lin.P, s.rls.ang.P,
+            s.gram_ang.S, s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, s._mu0, s._th0,
+            L.mu_active, L.theta_active, s._s2p, eig_lin, eig_ang, s._mu_rls_full())
+        got = s.uncertainty_parts()
+        for a, b in zip(got, want):
+            assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("robot,lam", [("planar", 1.0), ("spatial", 1.0), ("spatial", 0.995)])
+def test_tracker_in_one_call_equals_drift_tracker_add(runs, robot, lam):
+    """The paper solver's tracker step in one compiled call (PaperSolver.track,
+    report_kernels.paper_tracker_add) equals DriftTracker.add with the solver's drift_lag
+    (NumPy glue around four compiled calls) in every field, bit for bit, at every sample of a
+    run: the identifier's own tracker (made by the first) against one made by the second."""
+    from spacerobot.estimator.solvers import ParameterSolver
+    sc, outs = runs[robot]
+    ident = Identifier(sc.robot, sc.guess, "momentum", "paper", lam=lam)
+    mine = None
+    for k, o in enumerate(outs):
+        info = ident.solver.information()
+        before = ident.tracking
+        ident.update(0.1 * k, o)
+        if ident.tracking is before:
+            continue                                     # the reference sample
+        u = ident.solver.std_parts()
+        mine = ParameterSolver.track(ident.solver, before if mine is None else mine,
+                                     float(ident.samples - 1), u.data_only, u.sd, info,
+                                     u.jacobian)
+        for name, a, b in zip(mine._fields, ident.tracking, mine):
+            if isinstance(a, tuple):
+                assert len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b))
+            elif a is None or b is None:
+                assert a is None and b is None, name
+            else:
+                assert np.array_equal(a, b, equal_nan=True), name
+    assert mine is not None and mine.mat_lag is not None
+
+
 def test_layout_constants_of_the_kernels():
     L = interface.LAYOUT
     for k, b in enumerate(L.bodies):
@@ -253,3 +334,48 @@ def test_projection_equals_the_oracle(planar):
         assert physical.is_physical(m, b, I6) == orc.is_physical(m, b, I6)
         moved += got[3]
     assert 50 < moved < 500                     # both kinds of body were met
+
+
+def test_error_scale_equals_the_layouts():
+    """The compiled error scale (Identifier.report's) equals ParameterLayout.error_scale bit for
+    bit: random estimates with zeros, CoM offsets around COM_SCALE_MIN, negative entries, NaN
+    and infinities in every position."""
+    rng = np.random.default_rng(7)
+    specials = [0.0, -0.0, np.nan, np.inf, -np.inf, interface.COM_SCALE_MIN, -1e-3, 1e300]
+    for _ in range(2000):
+        v = rng.normal(0.0, 10.0, 20) * rng.choice([1e-3, 1.0, 1e3], 20)
+        for i in rng.choice(20, rng.integers(0, 8), replace=False):
+            v[i] = specials[rng.integers(len(specials))]
+        want = interface.LAYOUT.error_scale(v)
+        got = rk.error_scale(v, interface.COM_SCALE_MIN)
+        assert np.array_equal(got, want, equal_nan=True), v
+
+
+def test_rcond_short_path_equals_numpy(runs):
+    """The excitation diagnostics' short path (compiled scaling, NumPy's eigvalsh gufunc) gives
+    the NumPy formulation's reciprocal condition numbers bit for bit, on the information of a
+    run and on random matrices, and the same answer where it falls back (a zero diagonal
+    entry, NaN)."""
+    from spacerobot.estimator import identifier as idm
+    sc, outs = runs["spatial"]
+    ident = Identifier(sc.robot, sc.guess)
+    mats = []
+    for k, o in enumerate(outs[:40]):
+        ident.update(0.1 * k, o)
+        mats += [ident.info_lin.copy(), ident.info_ang.copy()]
+    rng = np.random.default_rng(3)
+    for n in (1, 3, 8, 12):
+        H = rng.normal(size=(2 * n, n)) * rng.choice([1e-6, 1.0, 1e6], n)
+        mats.append(H.T @ H)
+    singular = mats[-1].copy()
+    singular[2, :] = singular[:, 2] = 0.0
+    mats.append(singular)
+    for G in mats:
+        assert idm._rcond(G) == idm._rcond_numpy(G)
+    assert idm._rcond(singular) == 0.0
+    bad = mats[-2].copy()
+    bad[0, 1] = bad[1, 0] = np.nan
+    with pytest.raises(np.linalg.LinAlgError):
+        idm._rcond_numpy(bad)
+    with pytest.raises(np.linalg.LinAlgError):
+        idm._rcond(bad)

@@ -16,8 +16,8 @@ from typing import Mapping, Tuple
 
 import numpy as np
 
-from ..interface import (SIGNAL_NOISE_PARAMETERS, AccelSource, ExciteMode, Method,
-                         ParameterLayout, Solver, body_of, row_sd)
+from ..interface import (COM_SCALE_MIN, SIGNAL_NOISE_PARAMETERS, AccelSource, ExciteMode,
+                         Method, ParameterLayout, Solver, body_of, row_sd)
 from ..kinematics import ArmGeometry
 from ..robots import Guess, Robot
 from . import consider, eiv, kernels, report_kernels
@@ -218,6 +218,7 @@ class Identifier:
         self.n = robot.n_joints
         self._geom = ArmGeometry(robot).arrays()
         self._sizes = [3, 3, 9, 3, 3, 3, self.n, self.n, self.n, 3, 3, 3, 3]   # per KEYS entry
+        self._n_flat = sum(self._sizes)
         n, q0 = self.n, kernels.Q0
         # (acceleration, velocity) slices of a flattened sample: a_S, alpha_B, qdd
         self._diff_slices = ((slice(kernels.A_S, kernels.A_S + 3), slice(kernels.V_S, kernels.V_S + 3)),
@@ -397,7 +398,50 @@ class Identifier:
             See :data:`spacerobot.interface.STATUS`. A rejected sample leaves every estimate,
             covariance and internal state untouched; ``self.message`` says why.
         """
-        status, self.message, flat = self._validate(meas)
+        return self._update(t, *self._validate(meas))
+
+    def update_flat(self, t: float, flat: np.ndarray) -> int:
+        """:meth:`update` with the sample given as one flat array: the signals of :data:`KEYS`
+        one after the other, ``A`` row-major (``3 + 3 + 9 + 3 + 3 + 3 + 3 n + 4 * 3`` values;
+        what the estimator FMU gathers from its inputs), so that it need not be split into a
+        dictionary and concatenated again. The same checks and results as :meth:`update` with
+        the dictionary of the same values.
+
+        Parameters
+        ----------
+        t : float
+            Sample time [s].
+        flat : (6 + 3 n + 27,) array_like
+            The sample, flattened as above. Copied.
+
+        Returns
+        -------
+        status : int
+            As :meth:`update`.
+        """
+        try:
+            flat = np.array(flat, dtype=float)
+        except (ValueError, TypeError) as e:
+            return self._update(t, REJECT_INCONSISTENT, f"the sample is not numeric ({e})", None)
+        if flat.shape != (self._n_flat,):
+            return self._update(t, REJECT_INCONSISTENT, f"the flat sample has shape "
+                                f"{flat.shape}, expected ({self._n_flat},)", None)
+        if kernels.sample_check(flat, INPUT_LIMIT, ROTATION_TOL) == 0:
+            return self._update(t, ESTIMATING, "", flat)
+        return self.update(t, self._unflatten(flat))     # the careful path says what is wrong
+
+    def _unflatten(self, flat: np.ndarray) -> dict:
+        """The dictionary of :meth:`update` from a flat sample of the right length (views;
+        ``A`` (3, 3))."""
+        out, start = {}, 0
+        for k, size in zip(KEYS, self._sizes):
+            out[k] = flat[start:start + size].reshape((3, 3) if k == "A" else (size,))
+            start += size
+        return out
+
+    def _update(self, t: float, status: int, message: str, flat) -> int:
+        """:meth:`update` after the validation ``(status, message, flat)`` of the sample."""
+        self.message = message
         if status != ESTIMATING or not math.isfinite(t):
             self.status = status if status != ESTIMATING else REJECT_NONFINITE
             if not math.isfinite(t):
@@ -499,8 +543,8 @@ class Identifier:
         u = self.solver.std_parts()
         # the tracker's clock is the sample count: the estimates depend on the samples, not on
         # the step sizes between them (a rate per sample times an age in samples)
-        self.tracking = self.tracking.add(float(self.samples), u.data_only, u.sd, info,
-                                          u.jacobian, self.solver.drift_lag)
+        self.tracking = self.solver.track(self.tracking, float(self.samples), u.data_only,
+                                          u.sd, info, u.jacobian)
         self._exc = None
         self.samples += 1
         self.status = ESTIMATING
@@ -702,7 +746,7 @@ class Identifier:
             if not real[b.index]:
                 m, com, I6, _ = project(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
                 out[b.m], out[b.first], out[b.inertia] = m, com, I6
-        scale = self.layout.error_scale(out)
+        scale = report_kernels.error_scale(out, COM_SCALE_MIN)    # layout.error_scale(out)
         # identified: small standard deviation, and the reported value is the estimate's
         # (|sd| and |out - ls| <= sd_rel * scale), for every identified entry of the body
         ok_body = np.empty(len(self.layout.bodies), bool)
@@ -742,6 +786,11 @@ class Identifier:
             setattr(self, k, _copy(v))
         self._exc = None
 
+
+try:       # the gufunc of np.linalg.eigvalsh (lower triangle), for _rcond's short path
+    from numpy.linalg._umath_linalg import eigvalsh_lo as _EIGVALSH
+except ImportError:                                        # pragma: no cover - other NumPy
+    _EIGVALSH = None
 
 #: largest ``diff_half_window`` (samples each side of the differencing window's centre)
 MAX_HALF_WINDOW = 50
@@ -907,6 +956,29 @@ def _flag(x, name: str) -> bool:
 
 
 def _rcond(info: np.ndarray) -> float:
+    """Reciprocal condition number ``max(lam_min, 0) / lam_max`` of the information ``info``
+    (p, p) scaled to unit diagonal (``info / (d d^T)``, ``d = sqrt(diag info)``); 0 where a
+    diagonal entry is 0.
+
+    The excitation diagnostics are recorded at every communication step, so the usual case
+    (every diagonal entry > 0, finite entries) takes a short path: the scaling in one compiled
+    call (:func:`.report_kernels.rcond_scaled`, the same divisions) and LAPACK's
+    eigenvalues through NumPy's gufunc itself (what ``np.linalg.eigvalsh`` calls, without its
+    argument checks and error-state set-up): the same numbers. Anything else, or a result
+    that is not a number, goes through :func:`_rcond_numpy` (its errors and warnings too).
+    """
+    if _EIGVALSH is not None:
+        Gs, ok = report_kernels.rcond_scaled(info)
+        if ok:
+            lam = _EIGVALSH(Gs, signature="d->d").tolist()
+            lo, hi = lam[0], lam[-1]
+            if lo == lo and hi == hi:                    # not NaN: converged
+                return float(max(lo, 0.0) / hi)
+    return _rcond_numpy(info)
+
+
+def _rcond_numpy(info: np.ndarray) -> float:
+    """:func:`_rcond` in NumPy (the reference of its short path; every case)."""
     dg = info.diagonal()
     if not min(dg.tolist()) > 0.0:              # a zero (or negative/NaN) diagonal entry
         d = np.sqrt(np.clip(dg, 0.0, None))

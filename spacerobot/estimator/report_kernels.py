@@ -271,6 +271,24 @@ def eig_scaled(G):
 
 
 @njit(**_NB)
+def rcond_scaled(G):
+    """``(G_s, ok)``: the scale-free information ``G_s = G / (d d^T)`` of ``G`` (p, p)
+    (:func:`scaled_information`) and whether every diagonal entry of ``G`` is > 0 and every
+    entry of ``G_s`` finite: the case in which :func:`.identifier._rcond` hands ``G_s`` to
+    LAPACK itself."""
+    Gs, d, unobserved = scaled_information(G)
+    p = G.shape[0]
+    ok = True
+    for i in range(p):
+        if unobserved[i]:
+            ok = False
+        for j in range(p):
+            if not math.isfinite(Gs[i, j]):
+                ok = False
+    return Gs, ok
+
+
+@njit(**_NB)
 def eig_solve(lam, V, d, unobserved, r):
     """``(x, unobserved)``: ``G^-1 r`` in the directions the information observes, from the
     eigen-decomposition ``G_s = V diag(lam) V^T`` (ascending ``lam``) of the scaled information
@@ -576,6 +594,31 @@ def paper_uncertainty(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_
     return sd, unobserved, x - pull, J
 
 
+@njit(**_NB)
+def paper_std_parts(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_lin, S_ang,
+                    dof_lin, dof_ang, scale_lin, inflation_lin, scale_ang, inflation_ang,
+                    P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active, theta_active,
+                    sharp_to_project, mu_rls_full):
+    """``(sd, unobserved, data-only answer, J, ok)``: :func:`paper_uncertainty` with its
+    inputs computed in the same call, as :meth:`.solvers.PaperSolver.uncertainty_parts` takes
+    them: the residual variances (:func:`paper_residual_variances` of the Gram matrices
+    ``S_lin``, ``S_ang`` with the degrees of freedom, scales and inflations given) and the
+    eigen-decompositions (:func:`eig_scaled`) of the parameters' blocks of ``S_lin`` and
+    ``S_ang``; ``ok`` False if one of these did not converge (the caller raises, as
+    :func:`.uncertainty.eig_scaled` does)."""
+    s2_lin, s2_ang = paper_residual_variances(rls_mu, rls_theta, D_mu, S_lin, S_ang, dof_lin,
+                                              dof_ang, scale_lin, inflation_lin, scale_ang,
+                                              inflation_ang)
+    p, r = rls_mu.shape[0], rls_theta.shape[0]
+    lam_l, V_l, d_l, u_l, ok_l = eig_scaled(S_lin[:p, :p].copy())
+    lam_a, V_a, d_a, u_a, ok_a = eig_scaled(S_ang[:r, :r].copy())
+    sd, unobserved, data_only, J = paper_uncertainty(
+        mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_ang, s2_lin, s2_ang,
+        P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active, theta_active, sharp_to_project,
+        (lam_l, V_l, d_l, u_l), (lam_a, V_a, d_a, u_a), mu_rls_full)
+    return sd, unobserved, data_only, J, ok_l and ok_a
+
+
 # -- small dense solves (no LAPACK in the FMUs) -------------------------------------------------
 @njit(**_NB)
 def lu_solve(A, B):
@@ -678,6 +721,55 @@ def paper_drift_lag(S_lin, S_ang, M_lin, M_ang, rate_z, growth, mu_full, mu_acti
     for i in range(r):
         lag[N_MU + theta_active[i]] = lag_th[i]
     return lag
+
+
+@njit(**_NB)
+def paper_estimates_lag(jac, rate_x, growth, S_lin, S_ang, M_lin, M_ang, mu_full, mu_active,
+                        theta_active):
+    """``(lag (20,), finite)``: the lag of the paper solver's estimates, ``J L(J^-1 rate_x)``
+    with ``L`` = :func:`paper_drift_lag` and ``J`` = ``jac`` (20, 20) the Jacobian of the
+    estimates in ``z`` (:func:`.tracking.matrix_lag` with the solver's ``drift_lag``: the same
+    calls in one); ``finite`` False if an entry is not finite (a singular block)."""
+    rate_z = lu_solve_vec(jac, rate_x)
+    lag_z = paper_drift_lag(S_lin, S_ang, M_lin, M_ang, rate_z, growth, mu_full, mu_active,
+                            theta_active)
+    lag = matvec(jac, lag_z)
+    finite = True
+    for i in range(lag.shape[0]):
+        if not math.isfinite(lag[i]):
+            finite = False
+    return lag, finite
+
+
+@njit(**_NB)
+def paper_tracker_add(lam, s0, s1, t_ref, t_prev, a_bar_prev, w, mt, mx, ctt, ctx, t, x, sd,
+                      rate_memory, M_lin, M_ang, G_lin, G_ang, jac, S_lin, S_ang, mu_full,
+                      mu_active, theta_active):
+    """:meth:`.tracking.DriftTracker.add` of the paper solver's estimates in one call: the
+    regression (:func:`drift_regression`), the age-weighted Gram matrices ``M_lin``, ``M_ang``
+    stepped with the Gram matrices before the sample ``G_lin``, ``G_ang`` (:func:`age_step`),
+    and where every ``ctt > 0`` the estimates' lag (:func:`paper_estimates_lag` with the Gram
+    matrices after it, ``S_lin``, ``S_ang``). The same operations in the same order.
+
+    Returns ``(s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, rate, gain, M_lin, M_ang,
+    lag, has_lag)``; ``has_lag`` False: no matrix lag (a ``ctt`` not > 0, or a singular
+    block)."""
+    (s0, s1, t_ref, a_bar, da_dt, step, w, mt, mx, ctt, ctx, rate, gain
+     ) = drift_regression(lam, s0, s1, t_ref, t_prev, a_bar_prev, w, mt, mx, ctt, ctx, t, x, sd,
+                          rate_memory)
+    M_lin = age_step(M_lin, G_lin, lam, step)
+    M_ang = age_step(M_ang, G_ang, lam, step)
+    all_positive = True
+    for i in range(ctt.shape[0]):
+        if not ctt[i] > 0.0:
+            all_positive = False
+    lag, has_lag = np.zeros(x.shape[0]), False
+    if all_positive:
+        growth = da_dt / a_bar if a_bar > 0.0 else 0.0
+        lag, has_lag = paper_estimates_lag(jac, rate, growth, S_lin, S_ang, M_lin, M_ang,
+                                           mu_full, mu_active, theta_active)
+    return (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, rate, gain, M_lin, M_ang, lag,
+            has_lag)
 
 
 @njit(**_NB)
@@ -835,6 +927,40 @@ def both_physical(ls, physical):
     for k in range(2):
         e = EST0[k]
         physical[k] = is_physical(ls[e], ls[e + 1:e + 4], ls[e + 4:e + 10])
+
+
+@njit(**_NB)
+def error_scale(vec, com_min):
+    """Scale (20,) of the relative error of each entry of the estimates ``vec`` (20,)
+    (:meth:`spacerobot.interface.ParameterLayout.error_scale`, whose NumPy operations it
+    repeats per body, NaN included): ``|m|`` (1 if 0), ``max(|b_i|, com_min)``, ``|I_ii|`` (the
+    body's largest ``|I_ii|`` if 0) and for the products the largest ``|I_ii|`` (1 if that
+    is not > 0). Compiled because :meth:`.identifier.Identifier.report` needs it at every
+    sample."""
+    scale = np.empty(20)
+    for k in range(2):
+        e = EST0[k]
+        for i in range(10):
+            scale[e + i] = abs(vec[e + i])
+        imax = scale[e + 4]                                  # NaN propagates, as np.max
+        for i in range(5, 7):
+            v = scale[e + i]
+            if v > imax or v != v:
+                imax = v
+        if not imax > 0.0:
+            imax = 1.0
+        if scale[e] == 0.0:
+            scale[e] = 1.0
+        for i in range(1, 4):                                # np.maximum: NaN propagates
+            v = scale[e + i]
+            if not (v > com_min or v != v):
+                scale[e + i] = com_min
+        for i in range(4, 7):
+            if scale[e + i] == 0.0:
+                scale[e + i] = imax
+        for i in range(7, 10):
+            scale[e + i] = imax
+    return scale
 
 
 @njit(**_NB)

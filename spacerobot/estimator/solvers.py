@@ -31,6 +31,7 @@ from . import eiv
 from . import parameters as par
 from . import report_kernels as rk
 from .rls import RLS, ModifiedRLS
+from .tracking import RATE_MEMORY, DriftTracker, matrix_lag
 from .uncertainty import Autocorrelation, Gram, eig_scaled, prior_pull
 
 
@@ -143,6 +144,22 @@ class ParameterSolver(ABC):
         (same layout as :meth:`information`) and ``r = (1 - growth A)^-1 rate``. Raises
         ``LinAlgError`` where an information block is singular."""
 
+    def estimates_lag(self, rate_x: np.ndarray, growth: float, ages: Tuple[np.ndarray, ...],
+                      jac: np.ndarray) -> np.ndarray | None:
+        """The lag (20,) of the estimates behind parameters moving at the rate ``rate_x`` (20,)
+        the estimates show, ``J drift_lag(J^-1 rate_x, growth, ages)`` with ``J`` = ``jac``
+        (20, 20) the Jacobian of :meth:`vector_of` (:func:`.tracking.matrix_lag`); None where an
+        information block is singular."""
+        return matrix_lag(rate_x, growth, ages, jac, self.drift_lag)
+
+    def track(self, tracker: DriftTracker, t: float, x: np.ndarray, sd: np.ndarray,
+              info_before: Tuple[np.ndarray, ...], jac: np.ndarray) -> DriftTracker:
+        """``tracker`` after the sample of clock time ``t`` (:meth:`.DriftTracker.add` with
+        this solver's :meth:`drift_lag`): ``x`` (20,) the data-only estimates, ``sd`` (20,)
+        their standard deviations, ``info_before`` the Gram matrices before the sample
+        (:meth:`information`), ``jac`` (20, 20) the Jacobian of :meth:`vector_of`."""
+        return tracker.add(t, x, sd, info_before, jac, self.drift_lag, self.estimates_lag)
+
     @abstractmethod
     def snapshot(self) -> tuple:
         """The state an update changes, for :meth:`restore` (cheap: references)."""
@@ -200,6 +217,12 @@ class ParameterSolver(ABC):
         """Diagonal (20,) of the initial covariance of a 20-vector in the layout's order."""
         g = self.guess
         return np.where(self.layout.first_order, g.P0_mu, g.P0_theta).astype(float)
+
+
+def _columns(*blocks: np.ndarray) -> np.ndarray:
+    """``np.column_stack(blocks)`` (k, sum of widths) of (k, w) and (k,) float arrays: the same
+    new C-ordered array, with less call overhead (two per sample)."""
+    return np.concatenate([a if a.ndim == 2 else a[:, None] for a in blocks], axis=1)
 
 
 def _noise_gram(g, lam: float, rows: np.ndarray) -> Gram:
@@ -292,8 +315,8 @@ class PaperSolver(ParameterSolver):
         A, b, phi, y = self._active(A, b, phi, y)
         rls = self.rls
         e_lin, e_ang, rhs_ang = rls.update(A, b, phi, y, psi)
-        self.gram_lin = self.gram_lin.add(np.column_stack([A, b]))
-        self.gram_ang = self.gram_ang.add(np.column_stack([phi, y, psi]))
+        self.gram_lin = self.gram_lin.add(_columns(A, b))
+        self.gram_ang = self.gram_ang.add(_columns(phi, y, psi))
         if self.lags:
             self.corr_lin, self.corr_ang = self.corr_lin.add(e_lin), self.corr_ang.add(e_ang)
         if b_c is not None:
@@ -302,9 +325,9 @@ class PaperSolver(ParameterSolver):
         mu, theta = rls.mu, rls.theta
         if noise is not None:
             An, bn, phin, yn = self._active(*noise[:4])
-            self.eiv_lin = _noise_gram(self.eiv_lin, self.lam, np.column_stack([An, bn]))
+            self.eiv_lin = _noise_gram(self.eiv_lin, self.lam, _columns(An, bn))
             self.eiv_ang = _noise_gram(self.eiv_ang, self.lam,
-                                       np.column_stack([phin, yn, noise[4]]))
+                                       _columns(phin, yn, noise[4]))
             mu, theta = self._compensated(mu, theta)
         if L.complete:
             self.mu, self.theta = mu, theta
@@ -360,26 +383,42 @@ class PaperSolver(ParameterSolver):
         if self.eiv_lin is not None:                # at the compensated answers (.eiv)
             L = self.layout
             mu, theta, D_mu = self.mu[L.mu_active], self.theta[L.theta_active], par.D_of_mu(self.mu)
+        # z^T S z with z = [mu, -1] and [theta, -1, -D(mu)] (compiled)
+        return rk.paper_residual_variances(mu, theta, D_mu, gl.S, ga.S, *self._variance_factors())
+
+    def _variance_factors(self) -> Tuple[float, ...]:
+        """``(dof_lin, dof_ang, scale_lin, inflation_lin, scale_ang, inflation_ang)``: the
+        degrees of freedom of both residual sums, the forgetting's scales and the
+        correlation's inflations (1: not applied) (:meth:`_residual_variances`)."""
+        rls, gl, ga = self.rls, self.gram_lin, self.gram_ang
         one = 1.0                                   # a factor that does not apply
         vs_lin, vs_ang = (gl.var_scale, ga.var_scale) if self.lam != 1.0 else (one, one)
         inf_lin, inf_ang = ((self.corr_lin.inflation(), self.corr_ang.inflation())
                             if self.lags else (one, one))
-        # z^T S z with z = [mu, -1] and [theta, -1, -D(mu)] (compiled)
-        return rk.paper_residual_variances(mu, theta, D_mu, gl.S, ga.S,
-                                           gl.dof(len(rls.mu)), ga.dof(len(rls.theta)),
-                                           vs_lin, inf_lin, vs_ang, inf_ang)
+        return (gl.dof(len(rls.mu)), ga.dof(len(rls.theta)), vs_lin, inf_lin, vs_ang, inf_ang)
 
     def uncertainty_parts(self) -> "Uncertainty":
         """As :meth:`ParameterSolver.uncertainty_parts`, in one compiled call
-        (:func:`.report_kernels.paper_uncertainty`)."""
-        L, rls, ga, g0 = self.layout, self.rls, self.gram_ang, self.guess
-        s2_lin, s2_ang = self._residual_variances()
-        w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
-        P_lin, P_ang = self._covariances()
-        return Uncertainty(*rk.paper_uncertainty(
-            self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, P_lin, P_ang, ga.S,
-            s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
-            L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang, self._mu_rls_full()))
+        (:func:`.report_kernels.paper_std_parts`: :meth:`_residual_variances`, the
+        eigen-decompositions of :meth:`_pull_inputs` and
+        :func:`.report_kernels.paper_uncertainty`)."""
+        L, rls, gl, ga, g0 = self.layout, self.rls, self.gram_lin, self.gram_ang, self.guess
+        if self.eiv_lin is not None:       # compensated: K P K^T, residuals at its answers
+            s2_lin, s2_ang = self._residual_variances()
+            w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
+            P_lin, P_ang = self._covariances()
+            return Uncertainty(*rk.paper_uncertainty(
+                self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, P_lin, P_ang, ga.S,
+                s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
+                L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang, self._mu_rls_full()))
+        *parts, ok = rk.paper_std_parts(
+            self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, rls.lin.P, rls.ang.P, gl.S,
+            ga.S, *self._variance_factors(), g0.P0_mu, g0.P0_theta,
+            gl.decay * (1.0 / g0.P0_mu), ga.decay * (1.0 / g0.P0_theta), self._mu0, self._th0,
+            L.mu_active, L.theta_active, self._s2p, self._mu_rls_full())
+        if not ok:
+            raise np.linalg.LinAlgError("Eigenvalues did not converge")
+        return Uncertainty(*parts)
 
     def _covariances(self) -> Tuple[np.ndarray, np.ndarray]:
         """The unscaled covariances of the two answers: the RLS's ``P`` of each equation, or,
@@ -461,6 +500,37 @@ class PaperSolver(ParameterSolver):
         return rk.paper_drift_lag(S_lin, S_ang, M_lin, M_ang, rate_z, float(growth), self.mu,
                                   L.mu_active, L.theta_active)
 
+    def estimates_lag(self, rate_x, growth, ages, jac):
+        """:meth:`ParameterSolver.estimates_lag` in one compiled call
+        (:func:`.report_kernels.paper_estimates_lag`: the same operations)."""
+        L, (S_lin, S_ang), (M_lin, M_ang) = self.layout, self.information(), ages
+        lag, finite = rk.paper_estimates_lag(np.ascontiguousarray(jac, dtype=float), rate_x,
+                                             float(growth), S_lin, S_ang, M_lin, M_ang, self.mu,
+                                             L.mu_active, L.theta_active)
+        return lag if finite else None
+
+    def track(self, tracker, t, x, sd, info_before, jac):
+        """:meth:`ParameterSolver.track` in one compiled call
+        (:func:`.report_kernels.paper_tracker_add`: the operations of
+        :meth:`.DriftTracker.add`, :meth:`estimates_lag` included)."""
+        tr, L, (S_lin, S_ang) = tracker, self.layout, self.information()
+        x = np.ascontiguousarray(x, dtype=float)
+        sd = np.ascontiguousarray(sd, dtype=float)
+        if tr.s0 == 0.0:                              # the lines start from 0
+            zero = np.zeros(len(x))
+            w = mt = mx = ctt = ctx = zero
+        else:
+            w, mt, mx, ctt, ctx = tr.w, tr.mt, tr.mx, tr.ctt, tr.ctx
+        M_lin, M_ang = tr.ages or [np.zeros_like(G) for G in info_before]
+        (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, slope, gain, M_lin, M_ang, lag,
+         has_lag) = rk.paper_tracker_add(
+            tr.lam, tr.s0, tr.s1, tr.t_ref, tr.t, tr.a_bar, w, mt, mx, ctt, ctx, float(t), x, sd,
+            RATE_MEMORY, M_lin, M_ang, info_before[0], info_before[1],
+            np.ascontiguousarray(jac, dtype=float), S_lin, S_ang, self.mu, L.mu_active,
+            L.theta_active)
+        return DriftTracker(tr.lam, s0, s1, t_ref, float(t), a_bar, da_dt, w, mt, mx, ctt, ctx,
+                            sd, (M_lin, M_ang), lag if has_lag else None, slope, gain)
+
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
                 self.corr_lin, self.corr_ang, self.cons_lin, self.cons_ang, self.eiv_lin,
@@ -520,7 +590,7 @@ class JointSolver(ParameterSolver):
         Y, yy = self._stack(A, b, phi, y, psi)
         act = L.standard_active
         e, _ = self.rls.update(Y[:, act], yy)
-        self.gram = self.gram.add(np.column_stack([Y[:, act], yy]))
+        self.gram = self.gram.add(_columns(Y[:, act], yy))
         if self.lags:
             self.corr = self.corr.add(e)
         if b_c is not None:                               # fixed entries: no consider part
@@ -528,7 +598,7 @@ class JointSolver(ParameterSolver):
         x = self.rls.x
         if noise is not None:                             # bias-compensated (.eiv, eq. 2)
             Yn, yn = self._stack(*noise)
-            self.eiv = _noise_gram(self.eiv, self.lam, np.column_stack([Yn[:, act], yn]))
+            self.eiv = _noise_gram(self.eiv, self.lam, _columns(Yn[:, act], yn))
             x = x + eiv.compensation(self.gram.S, self.eiv.S, x)
         if L.complete:
             self.pi = x

@@ -114,13 +114,15 @@ class DriftTracker(NamedTuple):
         return cls(float(lam))
 
     def add(self, t: float, x: np.ndarray, sd: np.ndarray, info_before=(),
-            jac: np.ndarray | None = None, lag_of=None) -> "DriftTracker":
+            jac: np.ndarray | None = None, lag_of=None, estimates_lag=None) -> "DriftTracker":
         """With the estimate ``x`` (p,) and its standard deviation ``sd`` (p,) (without the
         lag) after the sample of time ``t`` [clock]. For the lag through the information-weighted
         mean age (module docstring, eq. 2), optionally: the solver's Gram matrices before the
         sample (:meth:`.ParameterSolver.information`), the Jacobian ``d x / d z`` (p, p) of the
         estimates in the solver's parameters ``z``, and ``lag_of(rate_z, growth, ages)`` (the
-        solver's :meth:`.ParameterSolver.drift_lag`)."""
+        solver's :meth:`.ParameterSolver.drift_lag`); ``estimates_lag(rate_x, growth, ages,
+        jac)``, if given, computes :func:`matrix_lag` of these in one call (the solver's
+        :meth:`.ParameterSolver.estimates_lag`)."""
         x = np.ascontiguousarray(x, dtype=float)
         sd = np.ascontiguousarray(sd, dtype=float)
         if self.s0 == 0.0:                            # the lines start from 0
@@ -139,9 +141,12 @@ class DriftTracker(NamedTuple):
         ages = tuple(rk.age_step(M, G, self.lam, dt) for M, G in
                      zip(self.ages or [np.zeros_like(G) for G in info_before], info_before))
         mat_lag = None
-        if lag_of is not None and ages and np.all(ctt > 0.0):
+        if lag_of is not None and ages and (ctt > 0.0).all():
             growth = da_dt / a_bar if a_bar > 0.0 else 0.0
-            mat_lag = _matrix_lag(slope, growth, ages, jac, lag_of)
+            if estimates_lag is not None:
+                mat_lag = estimates_lag(slope, growth, ages, jac)
+            else:
+                mat_lag = matrix_lag(slope, growth, ages, jac, lag_of)
         return DriftTracker(self.lam, s0, s1, t_ref, float(t), a_bar, da_dt, w, mt, mx, ctt,
                             ctx, sd, ages, mat_lag, slope, gain)
 
@@ -198,10 +203,12 @@ def total_sd(sd: np.ndarray, lag: np.ndarray | float, gain: np.ndarray | float =
     return rk.total_sd(sd, vec(lag), vec(gain), NOISE_LAG).reshape(shape)
 
 
-def _matrix_lag(rate_x: np.ndarray, growth: float, ages, jac: np.ndarray, lag_of
-                ) -> np.ndarray | None:
-    """Eq. (2): ``lag_x = J lag_of(J^-1 rate_x, growth, ages)``; None where an information
-    block is singular (then eq. 1)."""
+def matrix_lag(rate_x: np.ndarray, growth: float, ages, jac: np.ndarray, lag_of
+               ) -> np.ndarray | None:
+    """Eq. (2): ``lag_x = J lag_of(J^-1 rate_x, growth, ages)`` (p,) for the estimates' rate
+    ``rate_x`` (p,), the Jacobian ``jac`` (p, p) of the estimates in the solver's parameters,
+    the age-weighted Gram matrices ``ages`` and the solver's ``lag_of`` (its ``drift_lag``);
+    None where an information block is singular (then eq. 1)."""
     jac = np.ascontiguousarray(jac, dtype=float)
     lag = lag_of(rk.lu_solve_vec(jac, rate_x), growth, ages)
     lag = rk.matvec(jac, np.ascontiguousarray(lag, dtype=float))

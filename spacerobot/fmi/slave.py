@@ -36,6 +36,31 @@ def _escape(msg: str) -> str:
     return msg.replace("%", "%%")
 
 
+def _merged_getter(names, is_output):
+    """``get(outputs, values)``: the tuple of the values of ``names`` (k,) in their order, those
+    with ``is_output`` (k,) from the dictionary ``outputs``, the others from ``values``, in a
+    few C-level calls (``operator.itemgetter``); KeyError if one is missing."""
+    out = [n for n, o in zip(names, is_output) if o]
+    val = [n for n, o in zip(names, is_output) if not o]
+
+    def getter(keys):
+        if not keys:
+            return lambda d: ()
+        g = operator.itemgetter(*keys)
+        return g if len(keys) > 1 else (lambda d: (g(d),))
+
+    get_out, get_val = getter(out), getter(val)
+    if not val:
+        return lambda outputs, values: get_out(outputs)
+    if not out:
+        return lambda outputs, values: get_val(values)
+    # position of each name in get_out(outputs) + get_val(values)
+    where = {n: i for i, n in enumerate(out)}
+    where.update((n, len(out) + i) for i, n in enumerate(val))
+    order = operator.itemgetter(*(where[n] for n in names))
+    return lambda outputs, values: order(get_out(outputs) + get_val(values))
+
+
 class FmiError(ValueError):
     """A call refused with a logged message and the state unchanged: ``fmi2Error`` (with
     pythonfmu's stock binary, which cannot return it, ``fmi2Fatal``)."""
@@ -105,10 +130,10 @@ class InterfaceSlave(Fmi2Slave):
         plan = self._plans.get(("get", *vrs))
         if plan is None:
             plan = self._plan("get", vrs)
-        if plan:                                  # every one an output
+        if plan:
             get, names = plan
             try:
-                vals = get(self._outputs)
+                vals = get(self._outputs, self.values)
             except KeyError:                      # not (yet) among the outputs
                 vals = None
             if vals is not None:
@@ -143,17 +168,19 @@ class InterfaceSlave(Fmi2Slave):
 
     def _plan(self, kind: str, vrs):
         """The fast path of ``get_real`` / ``set_real`` for this list of value references
-        (cached): for ``get``, an ``operator.itemgetter`` of the names (a tuple of values
-        from ``_outputs``) and the names when every one is an output, for ``set`` the tuple of names when
-        every one is an input; ``()`` when the per-variable path must be taken. Refuses
-        (fmi2Error) unknown value references and variables of another type."""
+        (cached); ``()`` when the per-variable path must be taken. Refuses (fmi2Error) unknown
+        value references and variables of another type.
+
+        ``get``: ``(get, names)``, ``get(outputs, values)`` the tuple of the values in the
+        order asked for, outputs from ``_outputs`` (None there: computed when read), inputs and
+        parameters from ``values`` (a recorder asks for both at once). ``set``: the tuple of
+        names, when every one is an input."""
         self._check_refs("getReal" if kind == "get" else "setReal", vrs, Real)
         names = tuple(self._real_vr[vr] for vr in vrs)
         plan = ()
-        if kind == "get" and names and all(self.interface[n].causality == "output"
-                                           for n in names):
-            get = operator.itemgetter(*names)
-            plan = (get if len(names) > 1 else (lambda d, _get=get: (_get(d),)), names)
+        if kind == "get" and names:
+            plan = (_merged_getter(names, [self.interface[n].causality == "output"
+                                           for n in names]), names)
         elif kind == "set" and names and all(vr in self._input_vr for vr in vrs):
             plan = names
         if len(self._plans) >= _MAX_PLANS:      # a host that keeps asking for new lists
@@ -172,7 +199,27 @@ class InterfaceSlave(Fmi2Slave):
                            f"is not of type {cls.__name__}")
 
     def get_integer(self, vrs):
-        self._check_refs("getInteger", vrs, Integer)
+        # fast path as get_real's (the identifier's counters and flags are recorded at every
+        # step): outputs from ``_outputs``, parameters and inputs from ``values``, as their
+        # getters return them
+        key = ("geti", *vrs)
+        plan = self._plans.get(key)
+        if plan is None:
+            self._check_refs("getInteger", vrs, Integer)
+            is_out = [self.interface[self.vars[vr].name].causality == "output" for vr in vrs]
+            plan = (_merged_getter([self.vars[vr].name for vr in vrs], is_out), any(is_out))
+            if len(self._plans) >= _MAX_PLANS:
+                self._plans.clear()
+            self._plans[key] = plan
+        get, outputs = plan
+        if outputs:
+            self._ensure_current()                # as the outputs' getters (_get_output) do
+        try:
+            vals = get(self._outputs, self.values)
+        except KeyError:                          # not (yet) among the outputs
+            vals = (None,)
+        if None not in vals:
+            return list(map(int, vals))
         return super().get_integer(vrs)
 
     def set_integer(self, vrs, values):

@@ -141,6 +141,26 @@ class ArrayIO:
             raise FMICallException(function=f"fmi2{what}{self.typ}", status=status)
 
 
+def stepper(fmu) -> Callable[[float, float], None]:
+    """``step(t, dt)``: fmi2DoStep of ``fmu`` from ``t`` by ``dt``. For fmpy's ``FMU2Slave``
+    the function of its shared library is called directly (as :class:`ArrayIO` does for get and
+    set: the master calls it at every communication step), a status worse than Warning raising
+    fmpy's ``FMICallException`` as fmpy's ``doStep`` does; any other ``fmu`` (a test double)
+    through its ``doStep``."""
+    from fmpy.fmi2 import FMU2Slave, fmi2True
+
+    if not isinstance(fmu, FMU2Slave):
+        return lambda t, dt: fmu.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
+    do_step = fmu.dll.fmi2DoStep                                 # argtypes set by fmpy
+
+    def step(t: float, dt: float) -> None:
+        status = do_step(fmu.component, t, dt, fmi2True)
+        if status > 1:                                   # worse than fmi2Warning, as fmpy
+            from fmpy.fmi1 import FMICallException
+            raise FMICallException(function="fmi2DoStep", status=status)
+    return step
+
+
 class FMUInstance:
     """An FMU instance with name-based access (over fmpy's low-level ``FMU2Slave``).
 

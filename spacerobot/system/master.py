@@ -20,7 +20,7 @@ import threading
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 from .errors import Calls, SimulationError
-from .instance import ArrayIO
+from .instance import ArrayIO, stepper
 
 #: (start component, start connector, end component, end connector)
 Connection = Tuple[str, str, str, str]
@@ -86,7 +86,9 @@ class Master:
         for (a, b, typ), (src, dst) in wires.items():
             get = ArrayIO(self.instances[a].fmu, typ, src)
             self._wires.append((a, b, typ, get, ArrayIO(self.instances[b].fmu, typ, dst,
-                                                        values=get.values)))
+                                                        values=get.values),
+                                f"fmi2Get{typ}", f"fmi2Set{typ}"))
+        self._steps = [(name, stepper(inst.fmu)) for name, inst in self.instances.items()]
 
     def exchange(self) -> None:
         """For each (source, destination) pair in the order of the connections: read the
@@ -98,18 +100,18 @@ class Master:
         communication point, the values just set.
         """
         calls = self.calls
-        for a, b, typ, get, put in self._wires:
-            calls(a, f"fmi2Get{typ}")
+        for a, b, _, get, put, get_name, set_name in self._wires:
+            calls(a, get_name)
             get.get()
-            calls(b, f"fmi2Set{typ}")
+            calls(b, set_name)
             put.set()
 
     def do_step(self, t: float, dt: float) -> None:
         """fmi2DoStep(t, dt) of every component, in the order of ``instances``."""
         self.calls.t = t
-        for name, inst in self.instances.items():
+        for name, step in self._steps:
             self.calls(name, "fmi2DoStep")
-            inst.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
+            step(t, dt)
 
     def step(self, t: float, dt: float) -> None:
         """One communication step: :meth:`exchange` at ``t``, then :meth:`do_step`."""

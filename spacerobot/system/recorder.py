@@ -29,7 +29,8 @@ class Recorder:
         self.calls = calls or Calls()
         self.groups: Dict[str, Dict[str, tuple]] = {}
         self.columns: List[str] = ["time"]
-        #: per (component, type) with variables: (component, ArrayIO, first column, end column)
+        #: per (component, type) with variables: (component, ArrayIO, first column, end column,
+        #: the FMI function's name)
         self._reads: List[tuple] = []
         for comp, vnames in names.items():
             g = {typ: ([], []) for typ in _TYPES}
@@ -44,7 +45,7 @@ class Recorder:
                 if g[typ][1]:
                     j = len(self.columns)
                     self._reads.append((comp, ArrayIO(instances[comp].fmu, typ, g[typ][1]),
-                                        j, j + len(g[typ][1])))
+                                        j, j + len(g[typ][1]), f"fmi2Get{typ}"))
                 self.columns += [f"{comp}.{v}" for v in g[typ][0]]
         self.buf = np.empty((n_rows, len(self.columns)))
 
@@ -52,8 +53,8 @@ class Recorder:
         """Row ``k``: the time ``t`` and the current values."""
         row = self.buf[k]
         row[0] = t
-        for comp, io, j0, j1 in self._reads:
-            self.calls(comp, f"fmi2Get{io.typ}")
+        for comp, io, j0, j1, call in self._reads:
+            self.calls(comp, call)
             row[j0:j1] = io.get()
 
     def data(self) -> Dict[str, np.ndarray]:
