@@ -6,7 +6,9 @@ through plant -> sensors -> estimator (``<robot>_sensors.ssp``, parameter set ``
 the sensors' realistic defaults, docs/sensors.md; sensors ``seed`` = the case index), the
 excitation loop closed, for 300 s: the momentum method, and the force method with measured and
 with differenced accelerations (the momentum method reads no acceleration, so its two
-acceleration sources are one run).
+acceleration sources are one run), the differenced ones in both forms: the derivative's weights
+on the momentum equations (``ident.diff_momentum`` = 1, no truncation error) and on the
+velocities (the paper's force equations at the window's centre).
 
 The estimator runs with its noise model (docs/identification.md, "Under noise"): the row
 standard deviations ``ident.sd_row.*`` measured once on a pilot run (the default spatial
@@ -81,8 +83,11 @@ PILOT_SEED = 999_999
 #: The momentum set-up has its own (its window, :data:`SETTINGS`). With the paper's
 #: equations 600 lags were needed (``--paper-equations --corr-lags 600``).
 CORR_LAGS = 0
-#: the three estimator set-ups (method, acceleration source)
-COMBOS = (("momentum", "measured"), ("force", "measured"), ("force", "differenced"))
+#: the estimator set-ups (method, acceleration source, form of the differenced accelerations:
+#: "" = the derivative's weights on the momentum equations, ``ident.diff_momentum`` = 1, or
+#: "velocities" = on the velocities, the force equations at the centre, the paper's form)
+COMBOS = (("momentum", "measured", ""), ("force", "measured", ""), ("force", "differenced", ""),
+          ("force", "differenced", "velocities"))
 #: the noise model's equation settings per set-up (docs/identification.md, section 6):
 #: momentum differenced over 5 s with the angular rows about the base, the accelerometer bias
 #: estimated from the navigation velocity, the 3-point derivative (the noise compensated)
@@ -92,18 +97,27 @@ _SENSORS = estimator_noise_settings()
 _THRUST = {k: v for k, v in _SENSORS.items() if k.startswith("ident.sd_thrust.")}
 #: The momentum rows of overlapping 5 s windows share their errors for 5 s: the residual
 #: correlation over the window's 50 samples (at the 0.1 s step) inflates that set-up's scatter.
-SETTINGS = {("momentum", "measured"): {"ident.momentum_window": 5.0, "ident.momentum_point": 1,
-                                       "ident.corr_lags": 50, **_THRUST},
-            ("force", "measured"): {"ident.accel_bias": 1, **_THRUST,
-                                    **{f"ident.noise.{k}": _SENSORS[f"ident.noise.{k}"]
-                                       for k in ("base.a", "base.alpha", "arm.qdd")}},
-            ("force", "differenced"): {"ident.diff_half_window": 1, **_THRUST,
-                                       **{f"ident.noise.{k}": _SENSORS[f"ident.noise.{k}"]
-                                          for k in ("base.v", "base.omega", "arm.qd")}}}
+_VELOCITY_NOISE = {f"ident.noise.{k}": _SENSORS[f"ident.noise.{k}"]
+                   for k in ("base.v", "base.omega", "arm.qd")}
+#: The momentum-equations form of differenced accelerations has no truncation error, so its
+#: derivative may span 9 samples (0.8 s), which divides the velocities' noise by about 13 in
+#: variance; the velocities' form keeps the 3-point difference (a longer one misses more of the
+#: accelerations between samples).
+SETTINGS = {("momentum", "measured", ""): {"ident.momentum_window": 5.0,
+                                           "ident.momentum_point": 1, "ident.corr_lags": 50,
+                                           **_THRUST},
+            ("force", "measured", ""): {"ident.accel_bias": 1, **_THRUST,
+                                        **{f"ident.noise.{k}": _SENSORS[f"ident.noise.{k}"]
+                                           for k in ("base.a", "base.alpha", "arm.qdd")}},
+            ("force", "differenced", ""): {"ident.diff_momentum": 1, "ident.diff_half_window": 4,
+                                           **_THRUST, **_VELOCITY_NOISE},
+            ("force", "differenced", "velocities"): {"ident.diff_half_window": 1, **_THRUST,
+                                                     **_VELOCITY_NOISE}}
 #: the Identifier option of each equation setting (for the pilot run's noise_model)
 _OPTION = {"ident.momentum_window": ("window", float), "ident.momentum_point": ("moving_point", bool),
            "ident.accel_bias": ("accel_bias", bool),
-           "ident.diff_half_window": ("diff_half_window", int)}
+           "ident.diff_half_window": ("diff_half_window", int),
+           "ident.diff_momentum": ("diff_momentum", bool)}
 
 
 def identifier_options(settings) -> dict:
@@ -116,13 +130,15 @@ def identifier_options(settings) -> dict:
 @dataclass(frozen=True)
 class NoiseCase(Case):
     """A Monte Carlo case with the sensors FMU: its seed is the case index; ``estimator``
-    holds extra estimator parameters as ``(name, value)`` pairs (the noise model)."""
+    holds extra estimator parameters as ``(name, value)`` pairs (the noise model); ``form``
+    labels the set-up's form of differenced accelerations (:data:`COMBOS`)."""
 
     estimator: tuple = ()
+    form: str = ""
 
     @property
     def id(self) -> str:
-        return hashlib.sha256(json.dumps(["noise", super().id, list(self.estimator)]
+        return hashlib.sha256(json.dumps(["noise", super().id, list(self.estimator), self.form]
                                          ).encode()).hexdigest()[:16]
 
     def fmi_overrides(self):
@@ -145,11 +161,10 @@ def pilot_row_sd(ssp_path: Path, stop_time: float, tmp: Path, settings):
     truth = read_truth(read_csv(csv))
     base, target = body_of(truth, "base"), body_of(truth, "target")
     out = {}
-    for method, accel in COMBOS:
+    for combo in COMBOS:
         samples = ((t[k], {key: groups[key][k] for key in KEYS}) for k in range(len(t)))
-        out[(method, accel)] = equation_error_sd(
-            robot, base, target, samples, method, accel,
-            **identifier_options(settings.get((method, accel), {})))
+        out[combo] = equation_error_sd(robot, base, target, samples, combo[0], combo[1],
+                                       **identifier_options(settings.get(combo, {})))
     return out
 
 
@@ -180,6 +195,7 @@ def noise_row(res):
 
 def _fill_noise_case(row, case: NoiseCase, res) -> None:
     row.update(case_row(case, res))
+    row["form"] = case.form
     row.update(noise_row(res))
 
 
@@ -188,7 +204,7 @@ def run_noise_case(case: NoiseCase, ssp_path: str, runner: str = DEFAULT_RUNNER)
     return run_guarded(case, ssp_path, runner, _fill_noise_case)
 
 
-STUDY = Study(name="noise", columns=COLUMNS + NOISE_COLUMNS, key="case_id",
+STUDY = Study(name="noise", columns=COLUMNS + ("form",) + NOISE_COLUMNS, key="case_id",
               task=run_noise_case)
 
 
@@ -197,11 +213,7 @@ def summary(rows) -> str:
              "median worst error 300 s | largest 300 s | within 1 % at 300 s | "
              "mean fraction within 2 sd, 60 s | 300 s |",
              "|---|---|---|---|---|---|---|---|---|---|"]
-    groups = {}
-    for r in rows:
-        if r["status"] == "ok":
-            groups.setdefault((r["method"], r["accel_source"]), []).append(r)
-    for (method, accel), rs in sorted(groups.items()):
+    for (method, accel), rs in _groups(rows):
         w60 = np.array([float(r["worst_60"]) for r in rs])
         w300 = np.array([float(r["worst_300"]) for r in rs])
         c60 = np.mean([float(r["within2sd_60"]) for r in rs])
@@ -210,23 +222,37 @@ def summary(rows) -> str:
         lines.append(f"| {method} | {acc} | {len(rs)} | {100 * np.median(w60):.3g} % | "
                      f"{100 * w60.max():.3g} % | {100 * np.median(w300):.3g} % | "
                      f"{100 * w300.max():.3g} % | {(w300 < 1e-2).sum()}/{len(rs)} | "
-                     f"{c60:.2f} | {c300:.2f} |")
+                     f"{c60:.3f} | {c300:.3f} |")
     return "\n".join(lines)
+
+
+def _label(r) -> str:
+    """The acceleration source of a row as the tables show it (with its differencing form)."""
+    form = r.get("form") or ""
+    if form != form:                                   # NaN: an empty CSV cell
+        form = ""
+    return r["accel_source"] + (f" ({form})" if form else "")
+
+
+def _groups(rows):
+    """``[((method, accelerations label), rows)]`` of the successful runs, sorted."""
+    groups = {}
+    for r in rows:
+        if r["status"] == "ok":
+            groups.setdefault((r["method"], _label(r)), []).append(r)
+    return sorted(groups.items())
 
 
 def verdict(rows) -> str:
     """The paper's claim (momentum less sensitive to noise than force with differenced
     accelerations) against the runs: per checkpoint, the median worst errors and in how many
     cases (same case index) the momentum method's worst error is the smaller one."""
-    by = {}
-    for r in rows:
-        if r["status"] == "ok":
-            by.setdefault((r["method"], r["accel_source"]), {})[int(r["case"])] = r
+    by = {key: {int(r["case"]): r for r in rs} for key, rs in _groups(rows)}
     mom = by.get(("momentum", "measured"), {})
     out = []
     for t in CHECKPOINTS:
         col = f"worst_{int(t)}"
-        for accel in ("differenced", "measured"):
+        for accel in sorted({a for m, a in by if m == "force"}):
             force = by.get(("force", accel), {})
             common = sorted(set(mom) & set(force))
             if not common:
@@ -234,7 +260,7 @@ def verdict(rows) -> str:
             wm = np.array([float(mom[i][col]) for i in common])
             wf = np.array([float(force[i][col]) for i in common])
             k, n = int((wm < wf).sum()), len(common)
-            out.append(f"- {t:g} s, momentum vs force ({accel} accelerations): median worst "
+            out.append(f"- {t:g} s, momentum vs force, accelerations {accel}: median worst "
                        f"error {100 * np.median(wm):.3g} % vs {100 * np.median(wf):.3g} %; "
                        f"momentum smaller in {k} of {n} cases: {claim(k, n)}.")
     return "\n".join(out)
@@ -259,12 +285,9 @@ def plot(rows, out_png: Path) -> Path:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, len(CHECKPOINTS), figsize=(11, 4.2), sharey=True)
-    groups = {}
-    for r in rows:
-        if r["status"] == "ok":
-            groups.setdefault((r["method"], r["accel_source"]), []).append(r)
+    groups = _groups(rows)
     for ax, t in zip(np.atleast_1d(axes), CHECKPOINTS):
-        for (method, accel), rs in sorted(groups.items()):
+        for (method, accel), rs in groups:
             w = np.sort(np.maximum([100 * float(r[f"worst_{int(t)}"]) for r in rs], 1e-7))
             label = method if method == "momentum" else f"{method}, {accel}"
             ax.step(w, np.arange(1, len(w) + 1) / len(w), where="post",
@@ -309,10 +332,13 @@ def main(argv=None) -> int:
         settings = {} if args.paper_equations else SETTINGS
         row_sd = {} if args.defaults else pilot_row_sd(ssp, args.stop_time, Path(tmp), settings)
         t_pilot = time.time() - t_pilot
+        combos = COMBOS if not (args.defaults or args.paper_equations) else tuple(
+            c for c in COMBOS if not c[2])                  # the forms differ by settings only
         cases = [NoiseCase("spatial", i, args.seed, m, "closed", args.stop_time, a,
                            estimator=() if args.defaults else noise_model(
-                               m, row_sd[(m, a)], args.corr_lags, settings.get((m, a))))
-                 for i in range(args.cases) for m, a in COMBOS]
+                               m, row_sd[(m, a, f)], args.corr_lags, settings.get((m, a, f))),
+                           form=f)
+                 for i in range(args.cases) for m, a, f in combos]
         res = run_sweep(cases, csv, workers=args.workers, ssp={"spatial": str(ssp)},
                         progress=False, study=STUDY)
     wall = time.time() - t0
@@ -326,13 +352,13 @@ def main(argv=None) -> int:
                  "and the settings of each set-up:\n\n"
                  "| method | accelerations | settings | ident.sd_row lin | ang |\n"
                  "|---|---|---|---|---|\n"
-                 + "\n".join(f"| {m} | {'-' if m == 'momentum' else a} | "
+                 + "\n".join(f"| {m} | {'-' if m == 'momentum' else a + (f' ({f})' if f else '')} | "
                               + (", ".join(f"`{k}` = {v:g}" for k, v in
-                                           settings.get((m, a), {}).items()) or "paper's")
+                                           settings.get((m, a, f), {}).items()) or "paper's")
                               + f" | {sd[0]:.4g} "
                               f"{'N.s' if m == 'momentum' else 'N'} | {sd[1]:.4g} "
                               f"{'N.m.s' if m == 'momentum' else 'N.m'} |"
-                              for (m, a), sd in row_sd.items()))
+                              for (m, a, f), sd in row_sd.items()))
     rows = read_table(csv, STUDY.key)
     png = plot(rows, out.with_suffix(".png"))
     text = [
