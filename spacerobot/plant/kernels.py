@@ -140,7 +140,7 @@ def _jacobi_eigh(S, lam, U):
             j -= 1
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _sym3_eigenvalues(a00, a01, a02, a11, a12, a22):
     """Smallest and largest eigenvalue of a symmetric 3x3 matrix, closed form."""
     p1 = a01 * a01 + a02 * a02 + a12 * a12
