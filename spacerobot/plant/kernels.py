@@ -53,7 +53,10 @@ ERRORS = {1: "singular base inertia", 2: "singular arm inertia",
 PARAMS = ("K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn", "K_Dn",
           "qdd_max")
 
-_NB = dict(cache=True, nogil=True)
+# error_model='numpy': a division by zero gives inf/NaN (no Python exception check per
+# division; the inlined rigid-body kernels are compiled with these flags too), so that a
+# non-finite state propagates as NaN as documented above
+_NB = dict(cache=True, nogil=True, error_model="numpy")
 # inlined into their callers (Numba IR): small kernels called per RK4 stage, where passing the
 # arrays would cost about as much as their arithmetic
 _NI = dict(_NB, inline="always")
@@ -137,7 +140,7 @@ def _jacobi_eigh(S, lam, U):
             j -= 1
 
 
-@njit(**_NB)
+@njit(**_NI)
 def _sym3_eigenvalues(a00, a01, a02, a11, a12, a22):
     """Smallest and largest eigenvalue of a symmetric 3x3 matrix, closed form."""
     p1 = a01 * a01 + a02 * a02 + a12 * a12

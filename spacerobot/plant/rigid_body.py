@@ -122,7 +122,7 @@ def cholesky(S, L):
     return True
 
 
-@njit(**_NB)
+@njit(**_NI)
 def cho_solve(L, B):
     """Solve ``L L^T X = B`` in place of ``B`` (k, c).
 
