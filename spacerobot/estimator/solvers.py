@@ -516,11 +516,7 @@ class PaperSolver(ParameterSolver):
         tr, L, (S_lin, S_ang) = tracker, self.layout, self.information()
         x = np.ascontiguousarray(x, dtype=float)
         sd = np.ascontiguousarray(sd, dtype=float)
-        if tr.s0 == 0.0:                              # the lines start from 0
-            zero = np.zeros(len(x))
-            w = mt = mx = ctt = ctx = zero
-        else:
-            w, mt, mx, ctt, ctx = tr.w, tr.mt, tr.mx, tr.ctt, tr.ctx
+        w, mt, mx, ctt, ctx = tr.regression_sums(len(x))
         M_lin, M_ang = tr.ages or [np.zeros_like(G) for G in info_before]
         (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, slope, gain, M_lin, M_ang, lag,
          has_lag) = rk.paper_tracker_add(

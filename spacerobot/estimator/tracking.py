@@ -113,6 +113,14 @@ class DriftTracker(NamedTuple):
         """No sample yet, for an estimator with forgetting factor ``lam``."""
         return cls(float(lam))
 
+    def regression_sums(self, p: int):
+        """``(w, mt, mx, ctt, ctx)`` (p,) each: the rate regression's running sums, zeros
+        before its first point (the lines start from 0)."""
+        if self.s0 == 0.0:
+            zero = np.zeros(p)
+            return zero, zero, zero, zero, zero
+        return self.w, self.mt, self.mx, self.ctt, self.ctx
+
     def add(self, t: float, x: np.ndarray, sd: np.ndarray, info_before=(),
             jac: np.ndarray | None = None, lag_of=None, estimates_lag=None) -> "DriftTracker":
         """With the estimate ``x`` (p,) and its standard deviation ``sd`` (p,) (without the
@@ -125,11 +133,7 @@ class DriftTracker(NamedTuple):
         :meth:`.ParameterSolver.estimates_lag`)."""
         x = np.ascontiguousarray(x, dtype=float)
         sd = np.ascontiguousarray(sd, dtype=float)
-        if self.s0 == 0.0:                            # the lines start from 0
-            zero = np.zeros(len(x))
-            w = mt = mx = ctt = ctx = zero
-        else:
-            w, mt, mx, ctt, ctx = self.w, self.mt, self.mx, self.ctt, self.ctx
+        w, mt, mx, ctt, ctx = self.regression_sums(len(x))
         # the data's mean age, and the rate regression: forgetting lam_r, memory RATE_MEMORY x
         # the estimator's (s0 samples); each point weighs 1 / sd^2, so that answers the data did
         # not determine yet (large sd) do not count as movement
