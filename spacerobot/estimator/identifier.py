@@ -244,7 +244,8 @@ class Identifier:
         self.ring = ()              # window > 0: the (t, E) of the last `window` seconds
         self.bias_fit = BiasFit()   # accel_bias: the accelerometer bias's running fit
         self.history = []           # differenced accelerations: the window (t, flat sample);
-        #                             diff_momentum: (t, momentum rows, their noise rows, r_S)
+        #                             diff_momentum: (t, own-point rows, their noise rows,
+        #                             flat sample, momentum rows, momentum part)
         self._exc = None            # cached excitation() (cleared by update / set_state)
         self.tracking = DriftTracker.empty(lam)   # the estimates' lag (:mod:`.tracking`)
         self.thrust = consider.ThrustIntegrals()   # momentum form with thrust_sd: int F, M
