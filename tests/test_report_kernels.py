@@ -379,3 +379,86 @@ def test_rcond_short_path_equals_numpy(runs):
         idm._rcond_numpy(bad)
     with pytest.raises(np.linalg.LinAlgError):
         idm._rcond(bad)
+
+
+@pytest.mark.parametrize("robot,kw", [("planar", {}), ("spatial", {}),
+                                      ("spatial", {"lam": 0.995}),
+                                      ("spatial", {"method": "force", "accel_sd": 1e-3})])
+def test_excitation_from_the_update_equals_numpy_on_the_information(runs, robot, kw,
+                                                                   monkeypatch):
+    """The excitation diagnostics the paper solver's update computes from the spectra of its
+    standard deviations (report_kernels.rcond_of_spectrum on the Gram matrices' parameter
+    blocks) equal NumPy's eigvalsh of the identifier's own information matrices (scaled to unit
+    diagonal; _rcond_numpy) at every sample, to round-off (bias-compensated path included)."""
+    from spacerobot.estimator import identifier as idm
+    sc, outs = runs[robot]
+    kw = dict(kw)
+    sd = kw.pop("accel_sd", None)
+    if sd is not None:                           # the bias-compensated (eiv) path
+        kw["signal_sd"] = {"a_S": sd}
+    ident = Identifier(sc.robot, sc.guess, solver="paper", **kw)
+    with monkeypatch.context() as mp:            # the update's values, never the lazy path's
+        mp.setattr(idm, "_rcond", lambda G: pytest.fail("excitation computed lazily"))
+        got_all = []
+        for k, o in enumerate(outs):
+            ident.update(0.1 * k, o)
+            if ident.samples:                    # (none before the momentum reference)
+                got_all.append((k, ident.excitation(), ident.info_lin.copy(),
+                                ident.info_ang.copy()))
+    for k, got, info_lin, info_ang in got_all:
+        want = (idm._rcond_numpy(info_lin), idm._rcond_numpy(info_ang))
+        for g, w in zip(got, want):
+            assert g == pytest.approx(w, rel=1e-8, abs=1e-13), (k, got, want)
+    assert len(got_all) > 50 and got_all[-1][1][0] > 1e-6
+
+
+@pytest.mark.parametrize("robot,kw", [("planar", {}), ("spatial", {}),
+                                      ("spatial", {"lam": 0.995}),
+                                      ("spatial", {"method": "force", "window": 0.0}),
+                                      ("spatial", {"window": 2.0, "moving_point": True}),
+                                      ("planar", {"row_sd": (1e-3, 1e-2)})])
+def test_fused_step_equals_the_layers(runs, robot, kw):
+    """The paper solver's fused step (PaperSolver.step: one compiled call per sample) against the
+    same identifier run through the layers (update, std_parts, track; solver.fused = False),
+    side by side at every sample: the RLS state and the estimates bit for bit, the Gram and
+    information matrices to round-off (their sums are written out instead of BLAS's), and the
+    fused run's reported standard deviations and tracker equal to what the layers compute from
+    the fused run's own state (std_parts, DriftTracker.add through ParameterSolver.track) bit
+    for bit."""
+    from spacerobot.estimator.solvers import ParameterSolver
+    sc, outs = runs[robot]
+    fused = Identifier(sc.robot, sc.guess, solver="paper", **kw)
+    layered = Identifier(sc.robot, sc.guess, solver="paper", **kw)
+    layered.solver.fused = False
+    assert fused.solver.fuses(None, None) and not layered.solver.fuses(None, None)
+    checked = 0
+    for k, o in enumerate(outs):
+        info, before = fused.solver.information(), fused.tracking
+        fused.update(0.1 * k, o)
+        layered.update(0.1 * k, o)
+        a, b = fused.solver, layered.solver
+        for x, y in ((a.rls.mu, b.rls.mu), (a.rls.theta, b.rls.theta), (a.rls.lin.P, b.rls.lin.P),
+                     (a.rls.ang.P, b.rls.ang.P), (a.rls.M, b.rls.M), (fused.vector(),
+                                                                       layered.vector())):
+            assert np.array_equal(x, y)
+        for x, y in ((a.gram_lin.S, b.gram_lin.S), (a.gram_ang.S, b.gram_ang.S),
+                     (fused.info_lin, layered.info_lin), (fused.info_ang, layered.info_ang)):
+            assert np.allclose(x, y, rtol=1e-13, atol=1e-13 * np.abs(y).max())
+        assert (a.gram_lin.rows, a.gram_lin.decay, a.gram_ang.n1) == (
+            b.gram_lin.rows, b.gram_lin.decay, b.gram_ang.n1)
+        assert fused.residual_lin == pytest.approx(layered.residual_lin, rel=1e-12, abs=1e-300)
+        if fused.tracking is before:
+            continue                                     # the momentum reference sample
+        u = a.std_parts()                                # the layers on the fused state
+        assert np.array_equal(fused.tracking.sd, u.sd)
+        want = ParameterSolver.track(a, before, float(fused.samples - 1), u.data_only, u.sd,
+                                     info, u.jacobian)
+        for name, x, y in zip(want._fields, fused.tracking, want):
+            if isinstance(x, tuple):
+                assert all(np.array_equal(p, q) for p, q in zip(x, y)), name
+            elif x is None or y is None:
+                assert x is None and y is None, name
+            else:
+                assert np.array_equal(x, y, equal_nan=True), name
+        checked += 1
+    assert checked > 50

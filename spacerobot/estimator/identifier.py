@@ -486,7 +486,6 @@ class Identifier:
         for k, v in attrs.items():
             setattr(self, k, v)
         self.history = history
-        self._exc = None
 
     def _time_ok(self, t: float) -> bool:
         """False if ``t`` does not advance past the last stored sample (differencing history,
@@ -538,15 +537,24 @@ class Identifier:
         if E is None:
             self.status = REFERENCE
             return self.status
-        info = self.solver.information()
         b_c, y_c = _split_consider(E) if self._consider else (None, None)
-        self._solve(*_split(E), b_c, y_c, noise)
-        u = self.solver.std_parts()
         # the tracker's clock is the sample count: the estimates depend on the samples, not on
         # the step sizes between them (a rate per sample times an age in samples)
-        self.tracking = self.solver.track(self.tracking, float(self.samples), u.data_only,
-                                          u.sd, info, u.jacobian)
-        self._exc = None
+        clock = float(self.samples)
+        if self.solver.fuses(b_c, noise):            # the same steps in one compiled call
+            ((self.residual_lin, self.residual_ang), (self.info_lin, self.info_ang),
+             self.tracking, rcond) = self.solver.step(*self._identified_rows(*_split(E)),
+                                                      (self.info_lin, self.info_ang),
+                                                      self.tracking, clock)
+        else:
+            info = self.solver.information()
+            self._solve(*_split(E), b_c, y_c, noise)
+            u = self.solver.std_parts()
+            self.tracking = self.solver.track(self.tracking, clock, u.data_only, u.sd, info,
+                                              u.jacobian)
+            rcond = u.rcond
+        # the excitation diagnostics, where the standard deviations' spectra gave them
+        self._exc = None if rcond is None else (float(rcond[0]), float(rcond[1]))
         self.samples += 1
         self.status = ESTIMATING
         return self.status
@@ -767,7 +775,10 @@ class Identifier:
     def excitation(self):
         """Reciprocal condition numbers (scale-free) of the mass and inertia information.
 
-        Computed when asked for (eigenvalues), then cached until the next accepted sample.
+        The paper solver's update computes them with its standard deviations (the spectra of
+        the same scaled information, :func:`.report_kernels.rcond_of_spectrum`); otherwise
+        (the joint solver, after a restored state) computed when asked for (:func:`_rcond`),
+        then cached until the next accepted sample. The two agree to round-off.
         """
         if self._exc is None:
             self._exc = (_rcond(self.info_lin), _rcond(self.info_ang))
@@ -775,7 +786,8 @@ class Identifier:
 
     # -- state ------------------------------------------------------------------------------------
     def get_state(self) -> dict:
-        """Deep copy of everything that evolves (estimates, covariances, M, references, history)."""
+        """Deep copy of everything that evolves (estimates, covariances, M, references, history,
+        the excitation diagnostics the last update computed)."""
         st = {k: _copy(getattr(self, k)) for k in _UPDATED + ("rejected", "history")}
         st["solver"] = _copy(self.solver.snapshot())
         return st
@@ -783,9 +795,9 @@ class Identifier:
     def set_state(self, st: dict) -> None:
         st = dict(st)
         self.solver.restore(_copy(st.pop("solver")))
+        self._exc = None                 # (a state without them: computed when asked for)
         for k, v in st.items():
             setattr(self, k, _copy(v))
-        self._exc = None
 
 
 try:       # the gufunc of np.linalg.eigvalsh (lower triangle), for _rcond's short path
@@ -804,7 +816,7 @@ MAX_THRUST_SD = 1.0
 
 #: attributes of the identifier an update rebinds (restored by reference)
 _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",
-            "reference", "ring", "bias_fit", "tracking", "thrust")
+            "reference", "ring", "bias_fit", "tracking", "thrust", "_exc")
 
 
 def about_point(dE: np.ndarray, p: np.ndarray, lin_of: np.ndarray | None = None) -> None:

@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .kernels import D_of_mu
+from .kernels import D_of_mu, modified_rls_update
 
 # error_model="numpy": a division by zero gives inf / nan as in NumPy (the pull's map at a
 # data-only mass of zero), instead of raising
@@ -286,6 +286,21 @@ def rcond_scaled(G):
             if not math.isfinite(Gs[i, j]):
                 ok = False
     return Gs, ok
+
+
+@njit(**_NB)
+def rcond_of_spectrum(lam, unobserved):
+    """``max(lam_min, 0) / lam_max`` of the ascending spectrum ``lam`` (p,) of a scaled
+    information (:func:`eig_scaled`), 0 where a parameter has no information (``unobserved``
+    (p,) bool) or no eigenvalue is > 0: :func:`.identifier._rcond` of the unscaled matrix, to
+    round-off (these eigenvalues are the QL iteration's, not LAPACK's)."""
+    p = lam.shape[0]
+    for i in range(p):
+        if unobserved[i]:
+            return 0.0
+    if p == 0 or not lam[p - 1] > 0.0:
+        return 0.0
+    return max(lam[0], 0.0) / lam[p - 1]
 
 
 @njit(**_NB)
@@ -599,13 +614,15 @@ def paper_std_parts(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_an
                     dof_lin, dof_ang, scale_lin, inflation_lin, scale_ang, inflation_ang,
                     P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active, theta_active,
                     sharp_to_project, mu_rls_full):
-    """``(sd, unobserved, data-only answer, J, ok)``: :func:`paper_uncertainty` with its
-    inputs computed in the same call, as :meth:`.solvers.PaperSolver.uncertainty_parts` takes
-    them: the residual variances (:func:`paper_residual_variances` of the Gram matrices
+    """``(sd, unobserved, data-only answer, J, rcond, ok)``: :func:`paper_uncertainty` with
+    its inputs computed in the same call, as :meth:`.solvers.PaperSolver.uncertainty_parts`
+    takes them: the residual variances (:func:`paper_residual_variances` of the Gram matrices
     ``S_lin``, ``S_ang`` with the degrees of freedom, scales and inflations given) and the
     eigen-decompositions (:func:`eig_scaled`) of the parameters' blocks of ``S_lin`` and
-    ``S_ang``; ``ok`` False if one of these did not converge (the caller raises, as
-    :func:`.uncertainty.eig_scaled` does)."""
+    ``S_ang``; ``rcond`` (2,): those blocks' reciprocal condition numbers
+    (:func:`rcond_of_spectrum`, the excitation diagnostics); ``ok`` False if one of the
+    decompositions did not converge (the caller raises, as :func:`.uncertainty.eig_scaled`
+    does)."""
     s2_lin, s2_ang = paper_residual_variances(rls_mu, rls_theta, D_mu, S_lin, S_ang, dof_lin,
                                               dof_ang, scale_lin, inflation_lin, scale_ang,
                                               inflation_ang)
@@ -616,7 +633,10 @@ def paper_std_parts(mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_an
         mu_full, theta_full, rls_mu, rls_theta, D_mu, M, P_lin, P_ang, S_ang, s2_lin, s2_ang,
         P0_mu, P0_theta, w_mu, w_theta, mu0, th0, mu_active, theta_active, sharp_to_project,
         (lam_l, V_l, d_l, u_l), (lam_a, V_a, d_a, u_a), mu_rls_full)
-    return sd, unobserved, data_only, J, ok_l and ok_a
+    # the excitation diagnostics from the same spectra (S's parameter blocks are the
+    # identifier's information matrices)
+    rcond = np.array([rcond_of_spectrum(lam_l, u_l), rcond_of_spectrum(lam_a, u_a)])
+    return sd, unobserved, data_only, J, rcond, ok_l and ok_a
 
 
 # -- small dense solves (no LAPACK in the FMUs) -------------------------------------------------
@@ -770,6 +790,136 @@ def paper_tracker_add(lam, s0, s1, t_ref, t_prev, a_bar_prev, w, mt, mx, ctt, ct
                                            mu_full, mu_active, theta_active)
     return (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, rate, gain, M_lin, M_ang, lag,
             has_lag)
+
+
+@njit(**_NB)
+def gram_add(S, R, lam):
+    """``lam S + R^T R`` (a new array) of the Gram matrix ``S`` (n, n) and the augmented rows
+    ``R`` (k, n) of one more sample (:meth:`.uncertainty.Gram.add`; ``S + R^T R`` for
+    ``lam = 1``)."""
+    n = S.shape[0]
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            acc = 0.0
+            for l in range(R.shape[0]):
+                acc += R[l, i] * R[l, j]
+            out[i, j] = (S[i, j] if lam == 1.0 else lam * S[i, j]) + acc
+    return out
+
+
+@njit(**_NB)
+def _relative_norm(e, rhs):
+    """``|e| / |rhs|`` (``|rhs|`` floored at 1e-300), as the identifier's residual outputs."""
+    se, sr = 0.0, 0.0
+    for i in range(e.shape[0]):
+        se += e[i] * e[i]
+    for i in range(rhs.shape[0]):
+        sr += rhs[i] * rhs[i]
+    return math.sqrt(se) / max(math.sqrt(sr), 1e-300)
+
+
+@njit(**_NB)
+def paper_step(rls_state, rows, lam, mu_fixed, mu_active, theta_active, S_lin, S_ang, info_lin,
+               info_ang, mu_prev, theta_prev, gram_scalars, prior, s2p, com_min, tracker,
+               tracker_sums, M_lin, M_ang):
+    """One sample of the paper solver and what the identifier computes after it, in one call:
+    :func:`.kernels.modified_rls_update`, both Gram matrices and information matrices stepped
+    (:func:`gram_add`), the relative residuals, :func:`paper_std_parts` at the new answers
+    (its ``sd`` floored at the error scale of the estimates where unobserved, as
+    :meth:`.solvers.ParameterSolver.std_parts`) and :func:`paper_tracker_add` with it. The
+    same operations in the same order as :meth:`.identifier.Identifier._accept` through the
+    solver's layers, for the configurations it is used for: no consider columns, no noise
+    rows, no residual autocorrelation (:meth:`.solvers.PaperSolver.fused`).
+
+    Parameters
+    ----------
+    rls_state : tuple ``(lin_x (p,), lin_P (p, p), ang_x (r,), ang_P (r, r), M (r, 20),
+        D_mu (20,))`` of :class:`.rls.ModifiedRLS`
+    rows : tuple ``(A (k1, p), b (k1,), phi (k2, r), y (k2,), psi (k2, 20))``, the identified
+        rows with the fixed parameters' columns moved to the right-hand sides
+    lam : float, forgetting factor;  mu_fixed (8,), mu_active (p,), theta_active (r,) int
+    S_lin (p + 1, p + 1), S_ang (r + 21, r + 21) : Gram matrices before the sample
+    info_lin (p, p), info_ang (r, r) : the identifier's information before the sample
+    mu_prev (8,), theta_prev (12,) : the solver's full vectors before (their fixed entries)
+    gram_scalars : (6,) ``[dof_lin, dof_ang, var_scale_lin, var_scale_ang, decay_lin,
+        decay_ang]`` of the Gram matrices after the sample (:class:`.uncertainty.Gram`)
+    prior : tuple ``(P0_mu, P0_theta, mu0 (p,), th0 (r,))``
+    s2p : (6,) int, ``par.SHARP_TO_PROJECT``;  com_min : float, ``COM_SCALE_MIN``
+    tracker : (6,) ``[lam, s0, s1, t_ref, t_prev, a_bar]`` of the :class:`.tracking.DriftTracker`
+        and ``[clock t, rate_memory]`` appended: (8,)
+    tracker_sums : tuple ``(w, mt, mx, ctt, ctx)`` (20,) each (``regression_sums``)
+    M_lin, M_ang : its age-weighted Gram matrices before the sample
+
+    Returns
+    -------
+    status : int, :func:`.kernels.modified_rls_update`'s (nothing else is valid unless 0), or
+        3 where an eigen-decomposition did not converge
+    rls_new : ``(lin_x, lin_P, ang_x, ang_P, M, D_mu)``
+    grams : ``(S_lin, S_ang, info_lin, info_ang)`` after the sample
+    residuals : (2,) relative residuals (linear, angular)
+    mu, theta : (8,), (12,) the solver's full vectors after the sample
+    sd : (20,) standard deviations (floored where unobserved);  rcond : (2,)
+    tr : the 16 values of :func:`paper_tracker_add`
+    """
+    lin_x, lin_P, ang_x, ang_P, M, D_mu = rls_state
+    A, b, phi, y, psi = rows
+    (x1, P1, x2, P2, M2, D2, e1, e2, q1, q2, rhs, st) = modified_rls_update(
+        lin_x, lin_P, ang_x, ang_P, M, D_mu, A, b, phi, y, psi, lam, mu_fixed, mu_active)
+    p, r = x1.shape[0], x2.shape[0]
+    k1, k2 = A.shape[0], phi.shape[0]
+    # the augmented rows [A | b] and [phi | y | psi]
+    R_lin = np.empty((k1, p + 1))
+    for i in range(k1):
+        for j in range(p):
+            R_lin[i, j] = A[i, j]
+        R_lin[i, p] = b[i]
+    nD = psi.shape[1]
+    R_ang = np.empty((k2, r + 1 + nD))
+    for i in range(k2):
+        for j in range(r):
+            R_ang[i, j] = phi[i, j]
+        R_ang[i, r] = y[i]
+        for j in range(nD):
+            R_ang[i, r + 1 + j] = psi[i, j]
+    S_lin2, S_ang2 = gram_add(S_lin, R_lin, lam), gram_add(S_ang, R_ang, lam)
+    info_lin2, info_ang2 = gram_add(info_lin, A, lam), gram_add(info_ang, phi, lam)
+    residuals = np.array([_relative_norm(e1, b), _relative_norm(e2, rhs)])
+    mu, theta = mu_prev.copy(), theta_prev.copy()
+    for i in range(p):
+        mu[mu_active[i]] = x1[i]
+    for i in range(r):
+        theta[theta_active[i]] = x2[i]
+    dof_lin, dof_ang, vs_lin, vs_ang, decay_lin, decay_ang = (
+        gram_scalars[0], gram_scalars[1], gram_scalars[2], gram_scalars[3], gram_scalars[4],
+        gram_scalars[5])
+    P0_mu, P0_theta, mu0, th0 = prior
+    sd, unobserved, data_only, J, rcond, ok = paper_std_parts(
+        mu, theta, x1, x2, D2, M2, P1, P2, S_lin2, S_ang2, dof_lin, dof_ang, vs_lin, 1.0,
+        vs_ang, 1.0, P0_mu, P0_theta, decay_lin * (1.0 / P0_mu), decay_ang * (1.0 / P0_theta),
+        mu0, th0, mu_active, theta_active, s2p, mu)
+    if st == 0 and not ok:
+        st = 3
+    any_unobserved = False
+    for i in range(unobserved.shape[0]):
+        if unobserved[i]:
+            any_unobserved = True
+    if any_unobserved:                      # at least the error scale (a 100 % sd)
+        z = np.empty(mu.shape[0] + theta.shape[0])
+        z[:mu.shape[0]] = mu
+        z[mu.shape[0]:] = theta
+        floor = error_scale(paper_vector_of(z, s2p), com_min)
+        for i in range(sd.shape[0]):
+            if unobserved[i]:                # np.maximum: NaN if either is NaN
+                a, f = sd[i], floor[i]
+                sd[i] = a if (a != a or a >= f) else f
+    w, mt, mx, ctt, ctx = tracker_sums
+    tr = paper_tracker_add(tracker[0], tracker[1], tracker[2], tracker[3], tracker[4],
+                           tracker[5], w, mt, mx, ctt, ctx, tracker[6], data_only, sd,
+                           tracker[7], M_lin, M_ang, S_lin, S_ang, J, S_lin2, S_ang2, mu,
+                           mu_active, theta_active)
+    return (st, (x1, P1, x2, P2, M2, D2), (S_lin2, S_ang2, info_lin2, info_ang2), residuals,
+            mu, theta, sd, rcond, tr)
 
 
 @njit(**_NB)

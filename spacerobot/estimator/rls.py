@@ -125,7 +125,14 @@ class ModifiedRLS:
             c(phi, dtype=float), c(y, dtype=float), c(psi, dtype=float), lin.lam, self.mu_fixed,
             self.active)
         _raise_for(status)
-        lin.x, lin.P, lin.rows = x1, P1, lin.rows + len(e1)
-        ang.x, ang.P, ang.rows = x2, P2, ang.rows + len(e2)
-        self.M, self.D_mu = M, D
+        self.assign((x1, P1, x2, P2, M, D), len(e1), len(e2))
         return e1, e2, rhs
+
+    def assign(self, state: tuple, k1: int, k2: int) -> None:
+        """Take the state ``(lin_x, lin_P, ang_x, ang_P, M, D_mu)`` that an update of ``k1``
+        and ``k2`` rows computed (:func:`.kernels.modified_rls_update`'s first six results,
+        or a fused step's)."""
+        lin, ang = self.lin, self.ang
+        lin.x, lin.P, ang.x, ang.P, self.M, self.D_mu = state
+        lin.rows += k1
+        ang.rows += k2

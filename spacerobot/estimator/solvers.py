@@ -21,16 +21,16 @@ right-hand side.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import NamedTuple, Tuple
+from typing import NamedTuple, Optional, Tuple
 
 import numpy as np
 
-from ..interface import ParameterLayout, Solver
+from ..interface import COM_SCALE_MIN, ParameterLayout, Solver
 from ..robots import Guess
 from . import eiv
 from . import parameters as par
 from . import report_kernels as rk
-from .rls import RLS, ModifiedRLS
+from .rls import RLS, ModifiedRLS, _raise_for
 from .tracking import RATE_MEMORY, DriftTracker, matrix_lag
 from .uncertainty import Autocorrelation, Gram, eig_scaled, prior_pull
 
@@ -41,13 +41,17 @@ class Uncertainty(NamedTuple):
     sd (20,): standard deviations;  unobserved (20,) bool: estimates that depend on a direction
     the data have not observed;  data_only (20,): the data-only answer ``v(z - delta)`` (the
     estimate without the prior's pull; its first-order image where ``z - delta`` has no
-    positive mass);  jacobian (20, 20): ``d vector_of / d z`` at the estimate.
+    positive mass);  jacobian (20, 20): ``d vector_of / d z`` at the estimate;  rcond (2,):
+    the reciprocal condition numbers of the scaled mass and inertia information (the
+    identifier's excitation diagnostics) where the computation had their spectra on the way
+    (the paper solver), else None.
     """
 
     sd: np.ndarray
     unobserved: np.ndarray
     data_only: np.ndarray
     jacobian: np.ndarray
+    rcond: Optional[np.ndarray] = None
 
 
 class Step(NamedTuple):
@@ -128,6 +132,17 @@ class ParameterSolver(ABC):
     @abstractmethod
     def jacobian(self, z: np.ndarray) -> np.ndarray:
         """``d vector_of / d z`` (20, 20), written out (the delta method's Jacobian)."""
+
+    #: whether :meth:`fuses` may say yes (the paper solver's class sets it; set it False on an
+    #: instance to run every sample through the layers, the reference of the fused step)
+    fused = False
+
+    def fuses(self, b_c, noise) -> bool:
+        """Whether the identifier may run a sample with consider sensitivities ``b_c`` and
+        noise rows ``noise`` (None: none) through one fused compiled step
+        (:meth:`PaperSolver.step`) instead of :meth:`update`, :meth:`std_parts` and
+        :meth:`track`."""
+        return False
 
     @abstractmethod
     def information(self) -> Tuple[np.ndarray, ...]:
@@ -274,6 +289,7 @@ class PaperSolver(ParameterSolver):
     latest ``mu``."""
 
     kind = Solver.PAPER
+    fused = True
 
     def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0, lags: int = 0):
         super().__init__(layout, guess, lam, lags)
@@ -336,6 +352,64 @@ class PaperSolver(ParameterSolver):
             self.mu[L.mu_active] = mu
             self.theta[L.theta_active] = theta
         return Step(e_lin, e_ang, b, rhs_ang, A, phi)
+
+    def fuses(self, b_c, noise) -> bool:
+        """Yes without consider sensitivities, noise rows and residual autocorrelation: the
+        configurations :func:`.report_kernels.paper_step` implements."""
+        return self.fused and b_c is None and noise is None and not self.lags
+
+    def step(self, A, b, phi, y, psi, info: Tuple[np.ndarray, np.ndarray],
+             tracker: DriftTracker, clock: float):
+        """:meth:`update`, :meth:`std_parts` and :meth:`track` of one sample in one compiled
+        call (:func:`.report_kernels.paper_step`: the same operations), where :meth:`fuses`.
+
+        Parameters
+        ----------
+        A (k1, p1), b (k1,), phi (k2, p2), y (k2,), psi (k2, 20) : the identified rows (as
+            :meth:`update` takes them)
+        info : ``(info_lin (p, p), info_ang (r, r))``, the identifier's information matrices
+            before the sample
+        tracker : the identifier's :class:`.tracking.DriftTracker` before the sample
+        clock : its clock at this sample (the sample count)
+
+        Returns
+        -------
+        residuals : ``(lin, ang)`` relative a-priori residuals (the identifier's outputs)
+        info : the information matrices after the sample
+        tracker : the tracker after the sample
+        rcond : (2,) the excitation diagnostics (:class:`Uncertainty`)
+
+        Raises ``LinAlgError`` / ``FloatingPointError`` as :meth:`update` and :meth:`std_parts`
+        do, with this solver unchanged.
+        """
+        L, rls, gl, ga, g0 = self.layout, self.rls, self.gram_lin, self.gram_ang, self.guess
+        A, b, phi, y = self._active(A, b, phi, y)
+        c = np.ascontiguousarray
+        rows = (c(A, dtype=float), c(b, dtype=float), c(phi, dtype=float), c(y, dtype=float),
+                c(psi, dtype=float))
+        k1, k2 = len(rows[1]), len(rows[3])
+        gl2, ga2 = gl.counted(gl.S, k1), ga.counted(ga.S, k2)         # the counts after it
+        p, r = len(rls.mu), len(rls.theta)
+        scalars = np.array([gl2.dof(p), ga2.dof(r), gl2.var_scale, ga2.var_scale, gl2.decay,
+                            ga2.decay])
+        sums = tracker.regression_sums(len(self.mu) + len(self.theta))
+        M_lin, M_ang = tracker.ages or (np.zeros_like(gl.S), np.zeros_like(ga.S))
+        tr_in = np.array([tracker.lam, tracker.s0, tracker.s1, tracker.t_ref, tracker.t,
+                          tracker.a_bar, float(clock), RATE_MEMORY])
+        st, rls_new, (S_lin, S_ang, info_lin, info_ang), res, mu, theta, sd, rcond, tr = (
+            rk.paper_step((rls.lin.x, rls.lin.P, rls.ang.x, rls.ang.P, rls.M, rls.D_mu), rows,
+                          self.lam, rls.mu_fixed, L.mu_active, L.theta_active, gl.S, ga.S,
+                          info[0], info[1], self.mu, self.theta, scalars,
+                          (g0.P0_mu, g0.P0_theta, self._mu0, self._th0), self._s2p,
+                          COM_SCALE_MIN, tr_in, sums, M_lin, M_ang))
+        if st == 3:
+            raise np.linalg.LinAlgError("Eigenvalues did not converge")
+        _raise_for(st)
+        rls.assign(rls_new, k1, k2)
+        self.gram_lin, self.gram_ang = gl.counted(S_lin, k1), ga.counted(S_ang, k2)
+        self.mu, self.theta = mu, theta
+        return (float(res[0]), float(res[1])), (info_lin, info_ang), \
+            _tracker_after(tracker, clock, sd, tr), rcond
 
     def _compensated(self, mu_r: np.ndarray, th_r: np.ndarray):
         """The bias-compensated answers (:mod:`.eiv`) from the RLS's ``mu_r``, ``th_r``."""
@@ -401,16 +475,18 @@ class PaperSolver(ParameterSolver):
         """As :meth:`ParameterSolver.uncertainty_parts`, in one compiled call
         (:func:`.report_kernels.paper_std_parts`: :meth:`_residual_variances`, the
         eigen-decompositions of :meth:`_pull_inputs` and
-        :func:`.report_kernels.paper_uncertainty`)."""
+        :func:`.report_kernels.paper_uncertainty`), with ``rcond`` from the same spectra."""
         L, rls, gl, ga, g0 = self.layout, self.rls, self.gram_lin, self.gram_ang, self.guess
         if self.eiv_lin is not None:       # compensated: K P K^T, residuals at its answers
             s2_lin, s2_ang = self._residual_variances()
             w_mu, w_theta, eig_lin, eig_ang = self._pull_inputs()
             P_lin, P_ang = self._covariances()
+            rcond = np.array([rk.rcond_of_spectrum(e[0], e[3]) for e in (eig_lin, eig_ang)])
             return Uncertainty(*rk.paper_uncertainty(
                 self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, P_lin, P_ang, ga.S,
                 s2_lin, s2_ang, g0.P0_mu, g0.P0_theta, w_mu, w_theta, self._mu0, self._th0,
-                L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang, self._mu_rls_full()))
+                L.mu_active, L.theta_active, self._s2p, eig_lin, eig_ang, self._mu_rls_full()),
+                rcond)
         *parts, ok = rk.paper_std_parts(
             self.mu, self.theta, rls.mu, rls.theta, rls.D_mu, rls.M, rls.lin.P, rls.ang.P, gl.S,
             ga.S, *self._variance_factors(), g0.P0_mu, g0.P0_theta,
@@ -518,14 +594,12 @@ class PaperSolver(ParameterSolver):
         sd = np.ascontiguousarray(sd, dtype=float)
         w, mt, mx, ctt, ctx = tr.regression_sums(len(x))
         M_lin, M_ang = tr.ages or [np.zeros_like(G) for G in info_before]
-        (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, slope, gain, M_lin, M_ang, lag,
-         has_lag) = rk.paper_tracker_add(
+        out = rk.paper_tracker_add(
             tr.lam, tr.s0, tr.s1, tr.t_ref, tr.t, tr.a_bar, w, mt, mx, ctt, ctx, float(t), x, sd,
             RATE_MEMORY, M_lin, M_ang, info_before[0], info_before[1],
             np.ascontiguousarray(jac, dtype=float), S_lin, S_ang, self.mu, L.mu_active,
             L.theta_active)
-        return DriftTracker(tr.lam, s0, s1, t_ref, float(t), a_bar, da_dt, w, mt, mx, ctt, ctx,
-                            sd, (M_lin, M_ang), lag if has_lag else None, slope, gain)
+        return _tracker_after(tr, t, sd, out)
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
@@ -672,6 +746,16 @@ class JointSolver(ParameterSolver):
     def restore(self, snap: tuple) -> None:
         rls, self.pi, self.gram, self.corr, self.cons, self.eiv = snap
         self.rls.restore(rls)
+
+
+def _tracker_after(tracker: DriftTracker, t: float, sd: np.ndarray, out: tuple) -> DriftTracker:
+    """The :class:`.tracking.DriftTracker` after the sample of clock time ``t`` from the results
+    ``out`` of :func:`.report_kernels.paper_tracker_add` and the standard deviations ``sd``
+    (20,) it was given."""
+    (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, slope, gain, M_lin, M_ang, lag,
+     has_lag) = out
+    return DriftTracker(tracker.lam, s0, s1, t_ref, float(t), a_bar, da_dt, w, mt, mx, ctt, ctx,
+                        sd, (M_lin, M_ang), lag if has_lag else None, slope, gain)
 
 
 #: solver class per :class:`spacerobot.interface.Solver` code

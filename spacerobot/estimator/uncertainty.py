@@ -74,13 +74,19 @@ class Gram(NamedTuple):
     def add(self, rows: np.ndarray) -> "Gram":
         """With the augmented rows (k, n) of one more sample."""
         rows = np.asarray(rows, dtype=float)
-        k = rows.shape[0]
+        S = self.S + rows.T @ rows if self.lam == 1.0 else self.lam * self.S + rows.T @ rows
+        return self.counted(S, rows.shape[0])
+
+    def counted(self, S: np.ndarray, k: int) -> "Gram":
+        """The Gram matrix ``S`` (n, n) of these rows and ``k`` more, with the counts and the
+        prior's decay stepped by one sample of ``k`` rows (what :meth:`add` does besides the
+        sum; ``S`` is computed elsewhere, e.g. in a fused compiled step)."""
         if self.lam == 1.0:
             n = self.rows + k
-            return Gram(self.S + rows.T @ rows, n, 1.0, 1.0, float(n), float(n))
+            return Gram(S, n, 1.0, 1.0, float(n), float(n))
         lam = self.lam
-        return Gram(lam * self.S + rows.T @ rows, self.rows + k, lam, lam * self.decay,
-                    lam * self.n1 + k, lam * lam * self.n2 + k)
+        return Gram(S, self.rows + k, lam, lam * self.decay, lam * self.n1 + k,
+                    lam * lam * self.n2 + k)
 
     def dof(self, p: int) -> float:
         """Degrees of freedom of the weighted residual sum for ``p`` parameters,
