@@ -28,6 +28,7 @@ import math
 import os
 import platform
 import pstats
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -214,63 +215,87 @@ def merge_rounds(rounds: list) -> dict:
 
 
 def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
-    """Where one communication step (0.1 s) goes: the cores alone, the two doSteps through fmpy,
-    and the data exchange / recording calls, measured in a run_ssp-like loop."""
-    master = pair(ssp_paths["plant"], ssp_paths["estimator"])
-    plant, est = master.instances["plant"], master.instances["estimator"]
+    """Where one communication step (0.1 s) goes: the system built from the ``.ssp`` as
+    ``run_ssp`` builds it (its parameter set, connections and recorder), stepped as
+    ``Master.run`` steps it with a timer around each part (the exchange, the recording, each
+    component's ``fmi2DoStep``, the rest of the loop); then the cores alone."""
+    from spacerobot.system import runner
+    from spacerobot.system.errors import Calls
+    from spacerobot.system.instance import FMULog
+    from spacerobot.system.master import Master, initialize
+    from spacerobot.system.recorder import Recorder
+
+    tmp = Path(tempfile.mkdtemp(prefix="bench_breakdown_"))
+    dt = 0.1
+    n = int(round(seconds / dt))
+    insts = {}
     try:
-        p_out = plant.vrs(plant.names("output"))
-        e_out = [v.valueReference for v in est.vars.values()
-                 if v.causality == "output" and v.type == "Real"]
-        e_int = [v.valueReference for v in est.vars.values()
-                 if v.causality == "output" and v.type == "Integer"]
-        dt = 0.1
-        n = int(round(seconds / dt))
+        root_dir, info = runner.open_system(Path(ssp_paths["ssp"]), tmp)
+        _, chosen = runner.chosen_values(info, root_dir, None)
+        log, calls = FMULog(), Calls()
+        for name, comp in info.components.items():
+            insts[name] = runner._instance(comp, root_dir, tmp, log)
+            insts[name].instantiate()
+            runner.apply_component_bindings(insts[name], comp, chosen, calls)
+        runner.apply_system_bindings(insts, info, calls)
+        initialize(insts, 0.0, (n + 1) * dt, calls)
+        master = Master(insts, info.connections, calls)
+        recorder = Recorder(insts, runner._recorded(info, insts), n + 1, calls)
+        plant, est = insts["plant"], insts["estimator"]
+        # the standard deviations alone (part of the recording above; computed in the doStep)
         sd_vr = [v.valueReference for v in est.vars.values()
                  if v.causality == "output" and v.name.startswith("sd.")]
-        other_vr = [r for r in e_out if r not in set(sd_vr)]
-        # the recorder's reads (one preallocated array per component and type, as run_ssp)
-        reads = [ArrayIO(plant.fmu, "Real", p_out), ArrayIO(est.fmu, "Real", other_vr)]
-        if e_int:
-            reads.append(ArrayIO(est.fmu, "Integer", e_int))
-        sd_read = ArrayIO(est.fmu, "Real", sd_vr) if sd_vr else None
-        keys = ("exchange", "record", "record_sd", "plant_doStep", "estimator_doStep")
+        sd_read = ArrayIO(est.fmu, "Real", sd_vr)
+        steps = dict(master._steps)
+        keys = ("exchange", "record", "plant_doStep", "estimator_doStep", "loop_rest")
         per = {k: math.inf for k in keys}
-        t = 0.0
+        sd_cost = math.inf
+        t, k = 0.0, 0
         block = max(1, n // 8)
         for _ in range(8):                 # best of 8 blocks of n/8 communication steps
             tt = dict.fromkeys(keys, 0.0)
             for _ in range(block):
-                c = time.process_time()
+                c0 = time.process_time()
+                calls.t = t
                 master.exchange()
                 c1 = time.process_time()
-                for io_ in reads:
-                    io_.get()
+                recorder.record(k, t)
                 c2 = time.process_time()
-                if sd_read is not None:
-                    sd_read.get()
+                steps["plant"](t, dt)
                 c3 = time.process_time()
-                plant.fmu.doStep(t, dt)
+                steps["estimator"](t, dt)
                 c4 = time.process_time()
-                est.fmu.doStep(t, dt)
+                t, k = t + dt, k + 1
                 c5 = time.process_time()
-                for k, d in zip(keys, (c1 - c, c2 - c1, c3 - c2, c4 - c3, c5 - c4)):
-                    tt[k] += d
-                t += dt
-            for k in keys:
-                per[k] = min(per[k], tt[k] / block * 1e6)      # us per communication step
+                for key, d in zip(keys, (c1 - c0, c2 - c1, c3 - c2, c4 - c3, c5 - c4)):
+                    tt[key] += d
+            for key in keys:
+                per[key] = min(per[key], tt[key] / block * 1e6)      # us per communication step
+            c = time.process_time()
+            for _ in range(20):
+                sd_read.get()
+            sd_cost = min(sd_cost, (time.process_time() - c) / 20 * 1e6)
+        per["record_sd"] = sd_cost
+        per["excite_level"] = float(plant.get("excite.level"))       # at the end of the loop
     finally:
-        plant.free()
-        est.free()
-    # the cores alone, same scenario and length (best of 8 blocks)
-    p = new_plant(sc)
-    best = math.inf
-    for _ in range(8):
-        c = time.process_time()
-        for _ in range(block):
-            p.advance(0.1)
-        best = min(best, (time.process_time() - c) / block)
-    per["plant_core"] = best * 1e6
+        for inst in insts.values():
+            inst.free()
+        shutil.rmtree(tmp, ignore_errors=True)
+    # the cores alone, same scenario and length (best of 8 blocks): the plant without and with
+    # the excitation at full level (which the spatial system's estimator requests)
+    for key, level in (("plant_core", 0.0), ("plant_core_excited", 1.0)):
+        p = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
+                  sc.excitation)
+        p.set_excitation(level)
+        for _ in range(int(round(sc.excitation.ramp / dt))):      # past the ramp
+            p.advance(dt)
+        best = math.inf
+        for _ in range(8):
+            c = time.process_time()
+            for _ in range(block):
+                p.advance(dt)
+            best = min(best, (time.process_time() - c) / block)
+        per[key] = best * 1e6
     per.update(plant_kernel_parts(p))
     outs = record_outputs(sc, n * 0.1)
     per["estimator_core"] = core_update_cost(outs, sc, "momentum", repeats=4)
@@ -738,11 +763,15 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
                         "estimator core [us / sample]", "estimator FMU doStep [us]",
                         "standard deviations read [us / 0.1 s]"], rows) + "\n")
     L.append("### Where the time goes (per 0.1 s communication step, CPU microseconds)\n")
-    L.append("A run_ssp-like loop over the two FMUs with a timer around every call, and the two "
-             "cores alone on the same scenario; best of 8 blocks of 12 communication steps (the "
-             "estimator core: best of 4 passes over 10 s of samples).\n")
+    L.append("The system built from the `.ssp` as `run_ssp` builds it (its parameter set, "
+             "connections and recorder) and stepped as `Master.run` steps it, with a timer "
+             "around each part; and the two cores alone on the same scenario; best of 8 blocks "
+             "of 12 communication steps (the estimator core: best of 4 passes over 10 s of "
+             "samples).\n")
     rows = []
     keys = [("plant_core", "plant core alone: `Plant.advance(0.1)` (100 RK4 steps, no excitation)"),
+            ("plant_core_excited", "plant core alone, excitation at level 1 (the spatial "
+                                   "estimator requests it)"),
             ("terms_call", "  one compiled `rigid_body.terms` call (M, nle, momentum; 1 per RK4 step)"),
             ("aba_call", "  one compiled `rigid_body.aba` call (3 per RK4 step)"),
             ("plant_doStep", "plant FMU `doStep` through fmpy (closed loop)"),
@@ -750,8 +779,9 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
             ("estimator_report", "estimator core alone: `Identifier.report()` after each update"),
             ("estimator_doStep", "estimator FMU `doStep` through fmpy (update + report)"),
             ("exchange", "wiring: plant outputs -> estimator inputs, `ident.excite` back"),
-            ("record", "recording: every output except the standard deviations"),
-            ("record_sd", "recording: the standard deviations (computed in the `doStep`)")]
+            ("record", "recording: every connector and output (`Recorder.record`, as `run_ssp`)"),
+            ("record_sd", "  of which the standard deviations alone (computed in the `doStep`)"),
+            ("loop_rest", "the rest of the loop")]
     for k, lab in keys:
         nd = 2 if k.endswith("_call") else 0
         rows.append((lab,) + tuple(fmt(speed[r]["breakdown"].get(k, math.nan), nd)
@@ -765,8 +795,8 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     for r, v in speed.items():
         b = v["breakdown"]
         parts = {"plant FMU doStep": b["plant_doStep"], "estimator FMU doStep":
-                 b["estimator_doStep"], "wiring and recording": b["exchange"] + b["record"]
-                 + b["record_sd"]}
+                 b["estimator_doStep"], "wiring, recording and loop": b["exchange"] + b["record"]
+                 + b.get("loop_rest", 0.0)}
         tot = sum(parts.values())
         shares.append(f"{r}: {tot:.0f} us = " + ", ".join(
             f"{k} {x / tot * 100:.0f} %" for k, x in parts.items()))
@@ -786,16 +816,18 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              f"(this breakdown, against the floor of the table above): {per_step}; of it, one "
              "`terms` and three `aba` calls as in the rows above, the rest the control and "
              f"stage kernels. Sum of the measured parts per communication step: "
-             f"{'; '.join(shares)}. The estimator FMU's `doStep` is its update (which, since "
-             "issue #17, includes the standard deviations with the prior's pull and the "
-             "eigen-decompositions of the scaled 8x8 and 12x12 information, and the tracker of "
-             "the estimates' lag, each one compiled call of "
-             "`spacerobot/estimator/report_kernels.py` for the paper solver) plus the "
-             "identifier's `report()` "
+             f"{'; '.join(shares)}. In these systems the estimator requests the excitation "
+             "until it has identified both bodies, so the plant evaluates the multi-sine "
+             "references at every RK4 step: excitation level at the end of the loop "
+             + ", ".join(f"{r} {v['breakdown'].get('excite_level', math.nan):.2f}"
+                         for r, v in speed.items()) + ". "
+             "The estimator FMU's `doStep` is its update plus the identifier's `report()` "
              "(physical test and identified flags), every step, since the excitation request "
-             "and the identified flags depend on them. The "
-             "recording row includes the excitation diagnostics, computed when read (two "
-             "eigenvalue computations). The "
+             "and the identified flags depend on them. For the paper solver the update is one "
+             "compiled call after the equations (`report_kernels.paper_step`: the modified RLS, "
+             "the Gram and information sums, the standard deviations with the prior's pull and "
+             "the eigen-decompositions of the scaled 8x8 and 12x12 information, whose spectra "
+             "also give the excitation diagnostics, and the tracker of the estimates' lag). The "
              "estimator FMU serves `fmi2GetReal` / `fmi2SetReal` from its dictionaries with "
              "the names of each value-reference list looked up once (`spacerobot/fmi/slave.py`)."
              " The master reads and writes every connected "

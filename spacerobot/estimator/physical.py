@@ -116,6 +116,22 @@ def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarr
     """
     b = np.array(b, dtype=float)
     I6 = np.array(I6, dtype=float)
+    # one compiled call (report() projects at every sample while an estimate is not physical)
+    m_out, I_out, projected, ok = report_kernels.project_body(
+        float(m), np.ascontiguousarray(b).reshape(3), np.ascontiguousarray(I6).reshape(6),
+        REL_MASS_MIN * abs(m_scale), REL_SIGMA_MIN)
+    if not projected:
+        return float(m), b, I6, False
+    if ok:
+        return float(m_out), b, I_out, True
+    return _project_body_numpy(m, b, I6, m_scale)          # non-finite input: as NumPy does
+
+
+def _project_body_numpy(m: float, b, I6, m_scale: float = 1.0):
+    """:func:`project_body` in NumPy (LAPACK's eigen-decomposition): the reference of the
+    compiled :func:`.report_kernels.project_body` and its fallback for non-finite input."""
+    b = np.array(b, dtype=float)
+    I6 = np.array(I6, dtype=float)
     if is_physical(m, b, I6):
         return float(m), b, I6, False
     # m >= m_min: projection onto a half-line

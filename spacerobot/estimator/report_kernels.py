@@ -1125,3 +1125,35 @@ def identified_bodies(sd, out, ls, scale, sd_rel, identified, ok_body):
             if identified[i] and not (sd[i] <= tol and abs(out[i] - ls[i]) <= tol):
                 ok = False
         ok_body[k] = ok
+
+
+@njit(**_NB)
+def project_body(m, b, I6, m_min, rel_sigma_min):
+    """``(m, I6, projected, ok)``: :func:`.physical.project_body` of the body ``(m, b, I6)``
+    with the mass floor ``m_min`` and the relative eigenvalue floor ``rel_sigma_min``: the
+    mass clipped at ``m_min``, the eigenvalues of ``Sigma_c`` clipped at ``rel_sigma_min``
+    times the largest ``|eigenvalue|`` (:func:`eigh`), ``I_c = tr(Sigma_c) 1 - Sigma_c`` of
+    the symmetrised result. ``projected`` False: the body is physical (``m``, ``I6`` returned
+    as given, a copy); ``ok`` False: the eigen-decomposition did not converge (non-finite
+    input; the caller decides)."""
+    if is_physical(m, b, I6):
+        return m, I6.copy(), False, True
+    m_out = m if m >= m_min else m_min
+    lam, V, ok = eigh(second_moment(I6))
+    big = 0.0
+    for k in range(3):
+        big = max(big, abs(lam[k]))
+    s_min = rel_sigma_min * max(big, 2.2250738585072014e-308)      # finfo(float).tiny
+    S = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += V[i, k] * max(lam[k], s_min) * V[j, k]
+            S[i, j] = acc
+    for i in range(3):                                       # 0.5 (S + S^T)
+        for j in range(i + 1, 3):
+            S[i, j] = S[j, i] = 0.5 * (S[i, j] + S[j, i])
+    tr = S[0, 0] + S[1, 1] + S[2, 2]
+    out = np.array([tr - S[0, 0], tr - S[1, 1], tr - S[2, 2], -S[0, 1], -S[0, 2], -S[1, 2]])
+    return m_out, out, True, ok
