@@ -189,3 +189,30 @@ def test_compiled_projection_equals_numpy():
     got, want = project_body(1.0, np.zeros(3), bad), _project_body_numpy(1.0, np.zeros(3), bad)
     assert got[0] == want[0] and got[3] == want[3]
     assert np.array_equal(got[2], want[2], equal_nan=True)
+
+
+def test_compiled_planar_projection_equals_numpy():
+    """project_planar_body (compiled) against its NumPy formulation on random non-physical
+    planar estimates (wrong out-of-plane guesses, negative or tiny Izz, negative mass): the same
+    mass, the inertia to round-off, physical results; Izz moved only where no real body keeps
+    it (both versions fall back to the full projection there)."""
+    from spacerobot.estimator.physical import _project_planar_body_numpy
+    rng = np.random.default_rng(12)
+    n = small = 0
+    for _ in range(3000):
+        scale = 10.0 ** rng.uniform(-3, 3)
+        m = rng.uniform(-1.0, 3.0) * scale
+        b = np.array([*rng.normal(0.0, 0.3, 2), 0.0])
+        I6 = np.concatenate([rng.uniform(-0.5, 2.0, 3), rng.normal(0.0, 0.5, 3)]) * scale
+        if rng.random() < 0.1:
+            I6[2] = rng.uniform(-1e-7, 1e-7) * scale         # no real body keeps this Izz
+        got = project_planar_body(m, b, I6, m_scale=scale)
+        want = _project_planar_body_numpy(m, b, I6, m_scale=scale)
+        assert got[3] == want[3] and got[0] == want[0]
+        assert np.allclose(got[2], want[2], rtol=0.0, atol=1e-12 * np.abs(want[2]).max())
+        if got[3]:
+            n += 1
+            assert is_physical(got[0], got[1], got[2])
+            small += not got[2][2] == I6[2]
+            assert (got[2][2] == I6[2]) == (want[2][2] == I6[2])
+    assert n > 1000 and small > 10

@@ -158,6 +158,21 @@ def project_planar_body(m: float, b, I6, m_scale: float = 1.0
     """
     b = np.array(b, dtype=float)
     I6 = np.array(I6, dtype=float)
+    m_out, I_out, projected, ok = report_kernels.project_planar_body(
+        float(m), np.ascontiguousarray(b).reshape(3), np.ascontiguousarray(I6).reshape(6),
+        REL_MASS_MIN * abs(m_scale), REL_SIGMA_MIN)
+    if not projected:
+        return float(m), b, I6, False
+    if ok:
+        return float(m_out), b, I_out, True
+    return _project_planar_body_numpy(m, b, I6, m_scale)   # non-finite input: as NumPy does
+
+
+def _project_planar_body_numpy(m: float, b, I6, m_scale: float = 1.0):
+    """:func:`project_planar_body` in NumPy: the reference of the compiled
+    :func:`.report_kernels.project_planar_body` and its fallback for non-finite input."""
+    b = np.array(b, dtype=float)
+    I6 = np.array(I6, dtype=float)
     if is_physical(m, b, I6):
         return float(m), b, I6, False
     S = second_moment(I6)
@@ -166,7 +181,7 @@ def project_planar_body(m: float, b, I6, m_scale: float = 1.0
     s_min = REL_SIGMA_MIN * max(float(np.max(np.abs(np.linalg.eigvalsh(S)))),
                                 np.finfo(float).tiny)
     if not izz > 2.0 * s_min:
-        return project_body(m, b, I6, m_scale)
+        return _project_body_numpy(m, b, I6, m_scale)
     if lam[0] < s_min:                                       # clip with the sum kept
         lam = np.array([s_min, izz - s_min])
     P = np.zeros((3, 3))

@@ -1157,3 +1157,35 @@ def project_body(m, b, I6, m_min, rel_sigma_min):
     tr = S[0, 0] + S[1, 1] + S[2, 2]
     out = np.array([tr - S[0, 0], tr - S[1, 1], tr - S[2, 2], -S[0, 1], -S[0, 2], -S[1, 2]])
     return m_out, out, True, ok
+
+
+@njit(**_NB)
+def project_planar_body(m, b, I6, m_min, rel_sigma_min):
+    """``(m, I6, projected, ok)``: :func:`.physical.project_planar_body`: ``Izz`` (the trace of
+    the in-plane block of ``Sigma_c``) kept, that block's eigenvalues clipped at ``s_min`` with
+    their sum kept, the out-of-plane couplings dropped, ``Sigma_zz`` clipped; ``s_min`` as
+    :func:`project_body`'s. Where ``Izz <= 2 s_min`` no real body keeps it:
+    :func:`project_body`. ``ok`` as there."""
+    if is_physical(m, b, I6):
+        return m, I6.copy(), False, True
+    S = second_moment(I6)
+    lam, V, ok = eigh(S[:2, :2].copy())
+    lam3, _, ok3 = eigh(S)
+    izz = I6[2]
+    big = 0.0
+    for k in range(3):
+        big = max(big, abs(lam3[k]))
+    s_min = rel_sigma_min * max(big, 2.2250738585072014e-308)
+    if not izz > 2.0 * s_min:
+        return project_body(m, b, I6, m_min, rel_sigma_min)
+    if lam[0] < s_min:                                       # clip with the sum kept
+        lam[0], lam[1] = s_min, izz - s_min
+    P = np.zeros((3, 3))
+    for i in range(2):
+        for j in range(2):
+            P[i, j] = V[i, 0] * lam[0] * V[j, 0] + V[i, 1] * lam[1] * V[j, 1]
+    P[2, 2] = max(S[2, 2], s_min)
+    P[0, 1] = P[1, 0] = 0.5 * (P[0, 1] + P[1, 0])
+    tr = P[0, 0] + P[1, 1] + P[2, 2]
+    out = np.array([tr - P[0, 0], tr - P[1, 1], izz, -P[0, 1], -P[0, 2], -P[1, 2]])
+    return (m if m >= m_min else m_min), out, True, ok and ok3
