@@ -79,3 +79,47 @@ def test_values_of_the_wrong_shape_or_type_are_refused(pair):
         ArrayIO(plant.fmu, "Real", vrs, values=np.zeros(2))
     with pytest.raises(ValueError, match="values must be"):
         ArrayIO(plant.fmu, "Integer", vrs, values=np.zeros(3))
+
+
+def test_recorder_reads_parameters_once_and_repeats_them(pair):
+    """The Recorder reads parameters at its first row only (they cannot change while the
+    master steps) and every other variable at every row: its columns equal fmpy's own reads at
+    every row, parameters and outputs interleaved as in ``names``; the parameter reads are
+    counted once."""
+    from spacerobot.system.recorder import Recorder
+    plant, est = pair
+    names = {"plant": [n for n, v in plant.vars.items()
+                       if v.causality in ("parameter", "output")][:120],
+             "estimator": [n for n, v in est.vars.items()
+                           if v.causality in ("parameter", "output", "input")]}
+    assert any(plant.vars[n].causality == "parameter" for n in names["plant"])
+    calls = []
+
+    class Counting(Calls):
+        def __call__(self, component, function):
+            calls.append((component, function))
+
+    master = Master({"plant": plant, "estimator": est},
+                    [("plant", n, "estimator", n) for n in est.names("input")])
+    rec = Recorder({"plant": plant, "estimator": est}, names, 4, Counting())
+    want = []
+    for k in range(4):
+        master.exchange()
+        rec.record(k, 0.1 * k)
+        want.append({f"{c}.{n}": float(inst.get(n)) for c, inst in (("plant", plant),
+                                                                  ("estimator", est))
+                     for n in names[c]})
+        if k < 3:
+            master.do_step(0.1 * (k + 3), 0.1)
+    data = rec.data()
+    for col, values in data.items():
+        if col == "time":
+            continue
+        np.testing.assert_array_equal(values.astype(float), [w[col] for w in want], col)
+    # one FMI call per component, type and kind (parameter or not): the first kind once
+    kinds = {(c, inst.vars[n].type, inst.vars[n].causality == "parameter")
+             for c, inst in (("plant", plant), ("estimator", est)) for n in names[c]}
+    once = sum(1 for k in kinds if k[2])
+    assert once >= 1 and len(calls) == once + 4 * (len(kinds) - once)
+    # outputs change from row to row (so the equality above tests the per-row reads)
+    assert not np.array_equal(data["plant.base.r[1]"][:1], data["plant.base.r[1]"][3:])

@@ -16,11 +16,19 @@ from .instance import ArrayIO
 _TYPES = ("Real", "Integer", "Boolean")          # String variables are not recorded
 
 
+#: causalities whose values cannot change after initialisation unless the master sets them
+#: (this recorder's masters never set a parameter while stepping)
+_CONSTANT_CAUSALITIES = ("parameter", "calculatedParameter")
+
+
 class Recorder:
     """Rows ``[t, values...]`` of the variables ``names[component]`` of every instance.
 
     Columns are ``time`` and ``<component>.<variable>``, per component in the order Real,
-    Integer, Boolean; :meth:`data` returns Integer and Boolean columns with their own dtype.
+    Integer, Boolean (within each type, the variables in ``names`` order); :meth:`data` returns
+    Integer and Boolean columns with their own dtype. Parameters (and constants) are read at
+    the first recorded row only and repeated in every row: after initialisation they change only
+    when the master sets them, which the co-simulation masters here never do while stepping.
     """
 
     def __init__(self, instances: Mapping[str, object], names: Mapping[str, Sequence[str]],
@@ -29,36 +37,53 @@ class Recorder:
         self.calls = calls or Calls()
         self.groups: Dict[str, Dict[str, tuple]] = {}
         self.columns: List[str] = ["time"]
-        #: per (component, type) with variables: (component, ArrayIO, first column, end column,
-        #: the FMI function's name)
+        #: per (component, type) with variables: (component, ArrayIO, column index array,
+        #: the FMI function's name), the varying ones and those read once
         self._reads: List[tuple] = []
+        self._once: List[tuple] = []
+        self._first = None                       # the row the constant columns were read into
         for comp, vnames in names.items():
             g = {typ: ([], []) for typ in _TYPES}
+            const = {typ: [] for typ in _TYPES}
             for n in vnames:
                 v = instances[comp].var(n)
                 typ = "Integer" if v.type == "Enumeration" else v.type
                 if typ in g:
                     g[typ][0].append(n)
                     g[typ][1].append(v.valueReference)
+                    const[typ].append(v.causality in _CONSTANT_CAUSALITIES
+                                      or v.variability == "constant")
             self.groups[comp] = g
             for typ in _TYPES:
-                if g[typ][1]:
-                    j = len(self.columns)
-                    self._reads.append((comp, ArrayIO(instances[comp].fmu, typ, g[typ][1]),
-                                        j, j + len(g[typ][1]), f"fmi2Get{typ}"))
+                j = len(self.columns)
+                for once, target in ((False, self._reads), (True, self._once)):
+                    pick = [i for i, c in enumerate(const[typ]) if c == once]
+                    if pick:
+                        io = ArrayIO(instances[comp].fmu, typ, [g[typ][1][i] for i in pick])
+                        cols = np.array([j + i for i in pick], dtype=np.intp)
+                        target.append((comp, io, _as_slice(cols), f"fmi2Get{typ}"))
                 self.columns += [f"{comp}.{v}" for v in g[typ][0]]
         self.buf = np.empty((n_rows, len(self.columns)))
 
     def record(self, k: int, t: float) -> None:
-        """Row ``k``: the time ``t`` and the current values."""
+        """Row ``k``: the time ``t`` and the current values (parameters: see the class)."""
         row = self.buf[k]
         row[0] = t
-        for comp, io, j0, j1, call in self._reads:
+        if self._first is None:
+            for comp, io, cols, call in self._once:
+                self.calls(comp, call)
+                row[cols] = io.get()
+            self._first = k
+        for comp, io, cols, call in self._reads:
             self.calls(comp, call)
-            row[j0:j1] = io.get()
+            row[cols] = io.get()
 
     def data(self) -> Dict[str, np.ndarray]:
-        """Column name -> (N,) array."""
+        """Column name -> (N,) array (the rows recorded so far and beyond, as written)."""
+        if self._first is not None:
+            first = self.buf[self._first]
+            for _, _, cols, _ in self._once:
+                self.buf[:, cols] = first[cols]
         data = {c: self.buf[:, j].copy() for j, c in enumerate(self.columns)}
         for comp, g in self.groups.items():
             for v in g["Integer"][0]:
@@ -66,6 +91,14 @@ class Recorder:
             for v in g["Boolean"][0]:
                 data[f"{comp}.{v}"] = data[f"{comp}.{v}"].astype(bool)
         return data
+
+
+def _as_slice(cols: np.ndarray):
+    """``cols`` (k,) increasing column indices as a slice where they are consecutive (a basic
+    index: assignment without a fancy-index copy), else the array."""
+    if len(cols) and cols[-1] - cols[0] + 1 == len(cols):
+        return slice(int(cols[0]), int(cols[-1]) + 1)
+    return cols
 
 
 def check_writable(path: str | Path) -> Path:
