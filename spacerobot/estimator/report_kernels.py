@@ -857,10 +857,15 @@ def paper_step(rls_state, rows, lam, mu_fixed, mu_active, theta_active, S_lin, S
         3 where an eigen-decomposition did not converge
     rls_new : ``(lin_x, lin_P, ang_x, ang_P, M, D_mu)``
     grams : ``(S_lin, S_ang, info_lin, info_ang)`` after the sample
-    residuals : (2,) relative residuals (linear, angular)
-    mu, theta : (8,), (12,) the solver's full vectors after the sample
-    sd : (20,) standard deviations (floored where unobserved);  rcond : (2,)
-    tr : the 16 values of :func:`paper_tracker_add`
+    scalars : ``(residual_lin, residual_ang, rcond_lin, rcond_ang)``: the relative residuals
+        and the excitation diagnostics
+    tracker_scalars : ``(s0, s1, t_ref, a_bar, da_dt, has_lag)`` of :func:`paper_tracker_add`
+    pack : (9, 20) its vectors ``w, mt, mx, ctt, ctx, rate, gain, lag`` and the standard
+        deviations (floored where unobserved), one per row
+    M_lin, M_ang : its age-weighted Gram matrices after the sample
+
+    The solver's full vectors after the sample are ``mu_prev``, ``theta_prev`` with the RLS's
+    entries ``mu_active``, ``theta_active`` (the caller assembles them).
     """
     lin_x, lin_P, ang_x, ang_P, M, D_mu = rls_state
     A, b, phi, y, psi = rows
@@ -914,12 +919,20 @@ def paper_step(rls_state, rows, lam, mu_fixed, mu_active, theta_active, S_lin, S
                 a, f = sd[i], floor[i]
                 sd[i] = a if (a != a or a >= f) else f
     w, mt, mx, ctt, ctx = tracker_sums
-    tr = paper_tracker_add(tracker[0], tracker[1], tracker[2], tracker[3], tracker[4],
-                           tracker[5], w, mt, mx, ctt, ctx, tracker[6], data_only, sd,
-                           tracker[7], M_lin, M_ang, S_lin, S_ang, J, S_lin2, S_ang2, mu,
-                           mu_active, theta_active)
-    return (st, (x1, P1, x2, P2, M2, D2), (S_lin2, S_ang2, info_lin2, info_ang2), residuals,
-            mu, theta, sd, rcond, tr)
+    (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, rate, gain, M_lin2, M_ang2, lag,
+     has_lag) = paper_tracker_add(tracker[0], tracker[1], tracker[2], tracker[3], tracker[4],
+                                  tracker[5], w, mt, mx, ctt, ctx, tracker[6], data_only, sd,
+                                  tracker[7], M_lin, M_ang, S_lin, S_ang, J, S_lin2, S_ang2, mu,
+                                  mu_active, theta_active)
+    # the tracker's vectors as the rows of one array (one array handed back to Python, not 9)
+    pack = np.empty((9, sd.shape[0]))
+    for i in range(sd.shape[0]):
+        pack[0, i], pack[1, i], pack[2, i], pack[3, i], pack[4, i] = (w[i], mt[i], mx[i],
+                                                                      ctt[i], ctx[i])
+        pack[5, i], pack[6, i], pack[7, i], pack[8, i] = rate[i], gain[i], lag[i], sd[i]
+    return (st, (x1, P1, x2, P2, M2, D2), (S_lin2, S_ang2, info_lin2, info_ang2),
+            (residuals[0], residuals[1], rcond[0], rcond[1]),
+            (s0, s1, t_ref, a_bar, da_dt, has_lag), pack, M_lin2, M_ang2)
 
 
 @njit(**_NB)

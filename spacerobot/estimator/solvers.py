@@ -345,13 +345,18 @@ class PaperSolver(ParameterSolver):
             self.eiv_ang = _noise_gram(self.eiv_ang, self.lam,
                                        _columns(phin, yn, noise[4]))
             mu, theta = self._compensated(mu, theta)
+        self._take(mu, theta)
+        return Step(e_lin, e_ang, b, rhs_ang, A, phi)
+
+    def _take(self, mu: np.ndarray, theta: np.ndarray) -> None:
+        """The full vectors with the active entries ``mu``, ``theta`` (new arrays)."""
+        L = self.layout
         if L.complete:
             self.mu, self.theta = mu, theta
         else:
             self.mu, self.theta = self.mu.copy(), self.theta.copy()
             self.mu[L.mu_active] = mu
             self.theta[L.theta_active] = theta
-        return Step(e_lin, e_ang, b, rhs_ang, A, phi)
 
     def fuses(self, b_c, noise) -> bool:
         """Yes without consider sensitivities, noise rows and residual autocorrelation: the
@@ -377,7 +382,7 @@ class PaperSolver(ParameterSolver):
         residuals : ``(lin, ang)`` relative a-priori residuals (the identifier's outputs)
         info : the information matrices after the sample
         tracker : the tracker after the sample
-        rcond : (2,) the excitation diagnostics (:class:`Uncertainty`)
+        rcond : ``(lin, ang)`` the excitation diagnostics (:class:`Uncertainty`)
 
         Raises ``LinAlgError`` / ``FloatingPointError`` as :meth:`update` and :meth:`std_parts`
         do, with this solver unchanged.
@@ -396,7 +401,7 @@ class PaperSolver(ParameterSolver):
         M_lin, M_ang = tracker.ages or (np.zeros_like(gl.S), np.zeros_like(ga.S))
         tr_in = np.array([tracker.lam, tracker.s0, tracker.s1, tracker.t_ref, tracker.t,
                           tracker.a_bar, float(clock), RATE_MEMORY])
-        st, rls_new, (S_lin, S_ang, info_lin, info_ang), res, mu, theta, sd, rcond, tr = (
+        st, rls_new, (S_lin, S_ang, info_lin, info_ang), scal, tr_s, pack, M_lin, M_ang = (
             rk.paper_step((rls.lin.x, rls.lin.P, rls.ang.x, rls.ang.P, rls.M, rls.D_mu), rows,
                           self.lam, rls.mu_fixed, L.mu_active, L.theta_active, gl.S, ga.S,
                           info[0], info[1], self.mu, self.theta, scalars,
@@ -407,9 +412,12 @@ class PaperSolver(ParameterSolver):
         _raise_for(st)
         rls.assign(rls_new, k1, k2)
         self.gram_lin, self.gram_ang = gl.counted(S_lin, k1), ga.counted(S_ang, k2)
-        self.mu, self.theta = mu, theta
-        return (float(res[0]), float(res[1])), (info_lin, info_ang), \
-            _tracker_after(tracker, clock, sd, tr), rcond
+        self._take(rls.mu, rls.theta)
+        s0, s1, t_ref, a_bar, da_dt, has_lag = tr_s
+        tracker = DriftTracker(tracker.lam, s0, s1, t_ref, float(clock), a_bar, da_dt, pack[0],
+                               pack[1], pack[2], pack[3], pack[4], pack[8], (M_lin, M_ang),
+                               pack[7] if has_lag else None, pack[5], pack[6])
+        return scal[:2], (info_lin, info_ang), tracker, scal[2:]
 
     def _compensated(self, mu_r: np.ndarray, th_r: np.ndarray):
         """The bias-compensated answers (:mod:`.eiv`) from the RLS's ``mu_r``, ``th_r``."""
@@ -594,12 +602,14 @@ class PaperSolver(ParameterSolver):
         sd = np.ascontiguousarray(sd, dtype=float)
         w, mt, mx, ctt, ctx = tr.regression_sums(len(x))
         M_lin, M_ang = tr.ages or [np.zeros_like(G) for G in info_before]
-        out = rk.paper_tracker_add(
+        (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, slope, gain, M_lin, M_ang, lag,
+         has_lag) = rk.paper_tracker_add(
             tr.lam, tr.s0, tr.s1, tr.t_ref, tr.t, tr.a_bar, w, mt, mx, ctt, ctx, float(t), x, sd,
             RATE_MEMORY, M_lin, M_ang, info_before[0], info_before[1],
             np.ascontiguousarray(jac, dtype=float), S_lin, S_ang, self.mu, L.mu_active,
             L.theta_active)
-        return _tracker_after(tr, t, sd, out)
+        return DriftTracker(tr.lam, s0, s1, t_ref, float(t), a_bar, da_dt, w, mt, mx, ctt, ctx,
+                            sd, (M_lin, M_ang), lag if has_lag else None, slope, gain)
 
     def snapshot(self) -> tuple:
         return (self.rls.snapshot(), self.mu, self.theta, self.gram_lin, self.gram_ang,
@@ -746,16 +756,6 @@ class JointSolver(ParameterSolver):
     def restore(self, snap: tuple) -> None:
         rls, self.pi, self.gram, self.corr, self.cons, self.eiv = snap
         self.rls.restore(rls)
-
-
-def _tracker_after(tracker: DriftTracker, t: float, sd: np.ndarray, out: tuple) -> DriftTracker:
-    """The :class:`.tracking.DriftTracker` after the sample of clock time ``t`` from the results
-    ``out`` of :func:`.report_kernels.paper_tracker_add` and the standard deviations ``sd``
-    (20,) it was given."""
-    (s0, s1, t_ref, a_bar, da_dt, w, mt, mx, ctt, ctx, slope, gain, M_lin, M_ang, lag,
-     has_lag) = out
-    return DriftTracker(tracker.lam, s0, s1, t_ref, float(t), a_bar, da_dt, w, mt, mx, ctt, ctx,
-                        sd, (M_lin, M_ang), lag if has_lag else None, slope, gain)
 
 
 #: solver class per :class:`spacerobot.interface.Solver` code
