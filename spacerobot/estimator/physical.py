@@ -114,17 +114,24 @@ def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarr
     projected : bool
         False when the input was already physical; the outputs are then the inputs, exactly.
     """
+    return _projected(report_kernels.project_body, _project_body_numpy, m, b, I6, m_scale)
+
+
+def _projected(kernel, reference, m, b, I6, m_scale):
+    """A projection in one compiled call ``kernel`` (:func:`.report_kernels.project_body` or
+    ``project_planar_body``; ``report()`` projects at every sample while an estimate is not
+    physical); its NumPy ``reference`` where the kernel's eigen-decomposition did not converge
+    (non-finite input: as NumPy answers it)."""
     b = np.array(b, dtype=float)
     I6 = np.array(I6, dtype=float)
-    # one compiled call (report() projects at every sample while an estimate is not physical)
-    m_out, I_out, projected, ok = report_kernels.project_body(
+    m_out, I_out, projected, ok = kernel(
         float(m), np.ascontiguousarray(b).reshape(3), np.ascontiguousarray(I6).reshape(6),
         REL_MASS_MIN * abs(m_scale), REL_SIGMA_MIN)
     if not projected:
         return float(m), b, I6, False
     if ok:
         return float(m_out), b, I_out, True
-    return _project_body_numpy(m, b, I6, m_scale)          # non-finite input: as NumPy does
+    return reference(m, b, I6, m_scale)
 
 
 def _project_body_numpy(m: float, b, I6, m_scale: float = 1.0):
@@ -156,16 +163,8 @@ def project_planar_body(m: float, b, I6, m_scale: float = 1.0
 
     Parameters and returns as :func:`project_body`.
     """
-    b = np.array(b, dtype=float)
-    I6 = np.array(I6, dtype=float)
-    m_out, I_out, projected, ok = report_kernels.project_planar_body(
-        float(m), np.ascontiguousarray(b).reshape(3), np.ascontiguousarray(I6).reshape(6),
-        REL_MASS_MIN * abs(m_scale), REL_SIGMA_MIN)
-    if not projected:
-        return float(m), b, I6, False
-    if ok:
-        return float(m_out), b, I_out, True
-    return _project_planar_body_numpy(m, b, I6, m_scale)   # non-finite input: as NumPy does
+    return _projected(report_kernels.project_planar_body, _project_planar_body_numpy, m, b, I6,
+                      m_scale)
 
 
 def _project_planar_body_numpy(m: float, b, I6, m_scale: float = 1.0):
