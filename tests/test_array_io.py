@@ -123,3 +123,19 @@ def test_recorder_reads_parameters_once_and_repeats_them(pair):
     assert once >= 1 and len(calls) == once + 4 * (len(kinds) - once)
     # outputs change from row to row (so the equality above tests the per-row reads)
     assert not np.array_equal(data["plant.base.r[1]"][:1], data["plant.base.r[1]"][3:])
+
+
+def test_value_reference_lists_of_same_length_and_ends_are_not_confused(pair):
+    """The slaves cache one plan per list of value references, keyed by its length and ends and
+    checked against the whole list: two lists that differ only inside, asked for in turn, each
+    get their own values (as the per-variable reads give them)."""
+    plant, _ = pair
+    vrs = _vrs(plant, "output", "Real")
+    assert len(vrs) > 5
+    a = [vrs[0], vrs[1], vrs[-1]]
+    b = [vrs[0], vrs[2], vrs[-1]]
+    single = {vr: plant.fmu.getReal([vr])[0] for vr in set(a + b)}
+    assert single[vrs[1]] != single[vrs[2]]
+    for _ in range(3):
+        for lst in (a, b):
+            assert plant.fmu.getReal(lst) == [single[vr] for vr in lst]

@@ -127,7 +127,7 @@ class InterfaceSlave(Fmi2Slave):
     # dictionaries and the FMI call with C-level operations (same values, same checks) ---------
     def get_real(self, vrs):
         self._ensure_current()
-        plan = self._plans.get(("get", *vrs))
+        plan = self._cached("get", vrs)
         if plan is None:
             plan = self._plan("get", vrs)
         if plan:
@@ -139,7 +139,7 @@ class InterfaceSlave(Fmi2Slave):
             if vals is not None:
                 if None in vals:                  # outputs computed when read
                     vals = [self._get_output(n) if x is None else x for n, x in zip(names, vals)]
-                return list(map(float, vals))
+                return list(vals)                 # numbers: pythonfmu takes PyFloat_AsDouble
         names, outs, values = self._real_vr, self._outputs, self.values
         res = []
         for vr in vrs:
@@ -151,7 +151,7 @@ class InterfaceSlave(Fmi2Slave):
         return res
 
     def set_real(self, vrs, values):
-        plan = self._plans.get(("set", *vrs))
+        plan = self._cached("set", vrs)
         if plan is None:
             plan = self._plan("set", vrs)
         if plan:                                  # every one an input: stored as it comes
@@ -183,9 +183,20 @@ class InterfaceSlave(Fmi2Slave):
                                            for n in names]), names)
         elif kind == "set" and names and all(vr in self._input_vr for vr in vrs):
             plan = names
+        return self._store(kind, vrs, plan)
+
+    def _cached(self, kind: str, vrs):
+        """The plan stored for exactly this list of value references, or None. Keyed by the
+        list's length and ends (a tuple of every reference would be built and hashed at every
+        call), the whole list compared (C-level) before use."""
+        entry = self._plans.get((kind, len(vrs), vrs[0], vrs[-1]) if vrs else (kind, 0))
+        return entry[1] if entry is not None and entry[0] == vrs else None
+
+    def _store(self, kind: str, vrs, plan):
         if len(self._plans) >= _MAX_PLANS:      # a host that keeps asking for new lists
             self._plans.clear()
-        self._plans[(kind, *vrs)] = plan
+        key = (kind, len(vrs), vrs[0], vrs[-1]) if vrs else (kind, 0)
+        self._plans[key] = (vrs[:], plan)                 # a copy of the same type
         return plan
 
     def _check_refs(self, call: str, vrs, cls) -> None:
@@ -202,15 +213,12 @@ class InterfaceSlave(Fmi2Slave):
         # fast path as get_real's (the identifier's counters and flags are recorded at every
         # step): outputs from ``_outputs``, parameters and inputs from ``values``, as their
         # getters return them
-        key = ("geti", *vrs)
-        plan = self._plans.get(key)
+        plan = self._cached("geti", vrs)
         if plan is None:
             self._check_refs("getInteger", vrs, Integer)
             is_out = [self.interface[self.vars[vr].name].causality == "output" for vr in vrs]
-            plan = (_merged_getter([self.vars[vr].name for vr in vrs], is_out), any(is_out))
-            if len(self._plans) >= _MAX_PLANS:
-                self._plans.clear()
-            self._plans[key] = plan
+            plan = self._store("geti", vrs, (_merged_getter([self.vars[vr].name for vr in vrs],
+                                                            is_out), any(is_out)))
         get, outputs = plan
         if outputs:
             self._ensure_current()                # as the outputs' getters (_get_output) do
