@@ -221,84 +221,6 @@ def _place(R, p, axis, k, th, b00, b01, b02, b10, b11, b12, b20, b21, b22, o0, o
 
 
 @njit(**_NI)
-def _placements(planar, R, p, axis, q, bR, bp, S):
-    """Placement of every body in the base frame, ``bR[k]`` (3, 3), ``bp[k]`` (3,)
-    (``x_base = bR x_k + bp``), and the axis of joint ``k`` in the base frame,
-    ``S[k, 3:]`` (:func:`_place`)."""
-    nb = R.shape[0]
-    nq0 = 4 if planar else 7
-    for i in range(3):
-        bp[0, i] = 0.0
-        for j in range(3):
-            bR[0, i, j] = 1.0 if i == j else 0.0
-    for k in range(1, nb):
-        (bR[k, 0, 0], bR[k, 0, 1], bR[k, 0, 2], bR[k, 1, 0], bR[k, 1, 1], bR[k, 1, 2],
-         bR[k, 2, 0], bR[k, 2, 1], bR[k, 2, 2], bp[k, 0], bp[k, 1], bp[k, 2],
-         S[k, 3], S[k, 4], S[k, 5]) = _place(
-            R, p, axis, k, q[nq0 + k - 1], bR[k - 1, 0, 0], bR[k - 1, 0, 1], bR[k - 1, 0, 2],
-            bR[k - 1, 1, 0], bR[k - 1, 1, 1], bR[k - 1, 1, 2], bR[k - 1, 2, 0],
-            bR[k - 1, 2, 1], bR[k - 1, 2, 2], bp[k - 1, 0], bp[k - 1, 1], bp[k - 1, 2])
-
-
-@njit(**_NI)
-def _kinematics(planar, R, p, axis, I6, q, v, bR, bp, S, vel, cb, Ib):
-    """Placements, joint motions, velocities and inertias of every body in the base frame at
-    the base origin (the frame of :func:`terms`).
-
-    Writes :func:`_placements`' ``bR``, ``bp`` and, for body ``k``: ``S[k]`` (6,) the motion of
-    joint ``k`` per unit rate, ``[bp x s; s]`` (row 0 unused); ``vel[k]`` (6,) its spatial
-    velocity; ``cb[k] = vel[k] x (S_k qd_k)`` (the bias acceleration, ``dS/dt qd`` in a fixed
-    frame); ``Ib[k]`` (6, 6) its spatial inertia.
-    """
-    nb = R.shape[0]
-    nr = 3 if planar else 6
-    _placements(planar, R, p, axis, q, bR, bp, S)
-    for i in range(6):
-        vel[0, i] = 0.0
-        cb[0, i] = 0.0
-        S[0, i] = 0.0
-        for j in range(6):
-            Ib[0, i, j] = I6[0, i, j]
-    for j in range(nr):
-        vel[0, _row(planar, j)] = v[j]
-    for k in range(1, nb):
-        ox, oy, oz = bp[k, 0], bp[k, 1], bp[k, 2]
-        s3, s4, s5 = S[k, 3], S[k, 4], S[k, 5]
-        s0, s1, s2 = oy * s5 - oz * s4, oz * s3 - ox * s5, ox * s4 - oy * s3
-        S[k, 0], S[k, 1], S[k, 2] = s0, s1, s2
-        # velocity: v_k = v_p + S qd;  c_k = v_k x (S qd) = [w x sl + vl x sw; w x sw] qd
-        qd = v[nr + k - 1]
-        vl0 = vel[k - 1, 0] + s0 * qd
-        vl1 = vel[k - 1, 1] + s1 * qd
-        vl2 = vel[k - 1, 2] + s2 * qd
-        w0 = vel[k - 1, 3] + s3 * qd
-        w1 = vel[k - 1, 4] + s4 * qd
-        w2 = vel[k - 1, 5] + s5 * qd
-        vel[k, 0], vel[k, 1], vel[k, 2], vel[k, 3], vel[k, 4], vel[k, 5] = vl0, vl1, vl2, w0, w1, w2
-        cb[k, 0] = (w1 * s2 - w2 * s1 + vl1 * s5 - vl2 * s4) * qd
-        cb[k, 1] = (w2 * s0 - w0 * s2 + vl2 * s3 - vl0 * s5) * qd
-        cb[k, 2] = (w0 * s1 - w1 * s0 + vl0 * s4 - vl1 * s3) * qd
-        cb[k, 3] = (w1 * s5 - w2 * s4) * qd
-        cb[k, 4] = (w2 * s3 - w0 * s5) * qd
-        cb[k, 5] = (w0 * s4 - w1 * s3) * qd
-        _inertia_to_base(I6, k, bR[k], ox, oy, oz, Ib[k])
-
-
-@njit(**_NI)
-def _mass_blocks(m, g0, g1, g2, out):
-    """The blocks ``[[m 1, -[g]x], [[g]x, .]]`` of a spatial inertia of first moment ``g``."""
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = m if i == j else 0.0
-    out[0, 3], out[0, 4], out[0, 5] = 0.0, g2, -g1
-    out[1, 3], out[1, 4], out[1, 5] = -g2, 0.0, g0
-    out[2, 3], out[2, 4], out[2, 5] = g1, -g0, 0.0
-    out[3, 0], out[3, 1], out[3, 2] = 0.0, -g2, g1
-    out[4, 0], out[4, 1], out[4, 2] = g2, 0.0, -g0
-    out[5, 0], out[5, 1], out[5, 2] = -g1, g0, 0.0
-
-
-@njit(**_NI)
 def _shift(px, py, pz, a00, a01, a02, a11, a12, a22, b00, b01, b02, b10, b11, b12, b20, b21,
            b22, c00, c01, c02, c11, c12, c22):
     """``X^T Ia X`` (an inertia moved to the parent's origin) for the pure translation
@@ -336,52 +258,24 @@ def _shift(px, py, pz, a00, a01, a02, a11, a12, a22, b00, b01, b02, b10, b11, b1
 
 
 @njit(**_NI)
-def _inertia_to_base(I6, k, Rk, ox, oy, oz, out):
-    """Spatial inertia (6, 6) at the base origin of body ``k``, whose frame sits at ``Rk``,
-    ``o`` in the base frame, from ``I6[k] = [[m 1, -[h]x], [[h]x, I_o]]`` at its own origin
-    (``h = m c``): ``h' = Rk h``, ``I_o' = Rk I_o Rk^T``, then the shift to the base origin,
-    ``h_b = h' + m o`` and ``I_O = I_o' - [o]x [h']x - [h']x [o]x - m [o]x [o]x``
-    ``= I_o' + (2 o.h' + m |o|^2) 1 - (h' o^T + o h'^T + m o o^T)``."""
-    m = I6[k, 0, 0]
-    hx, hy, hz = I6[k, 5, 1], I6[k, 3, 2], I6[k, 4, 0]          # [h]x = m [c]x
-    h0 = Rk[0, 0] * hx + Rk[0, 1] * hy + Rk[0, 2] * hz
-    h1 = Rk[1, 0] * hx + Rk[1, 1] * hy + Rk[1, 2] * hz
-    h2 = Rk[2, 0] * hx + Rk[2, 1] * hy + Rk[2, 2] * hz
-    i00, i01, i02, i11, i12, i22 = _rot_sym(
-        Rk[0, 0], Rk[0, 1], Rk[0, 2], Rk[1, 0], Rk[1, 1], Rk[1, 2], Rk[2, 0], Rk[2, 1], Rk[2, 2],
-        I6[k, 3, 3], I6[k, 3, 4], I6[k, 3, 5], I6[k, 4, 4], I6[k, 4, 5], I6[k, 5, 5])
-    mo0, mo1, mo2 = m * ox, m * oy, m * oz
-    d = 2.0 * (ox * h0 + oy * h1 + oz * h2) + (mo0 * ox + mo1 * oy + mo2 * oz)
-    # h' o^T + o h'^T + m o o^T = g o^T + o h'^T with g = h' + m o = h_b
-    g0, g1, g2 = h0 + mo0, h1 + mo1, h2 + mo2
-    out[3, 3] = i00 + d - (g0 * ox + ox * h0)
-    out[4, 4] = i11 + d - (g1 * oy + oy * h1)
-    out[5, 5] = i22 + d - (g2 * oz + oz * h2)
-    e01 = i01 - (g0 * oy + ox * h1)
-    e02 = i02 - (g0 * oz + ox * h2)
-    e12 = i12 - (g1 * oz + oy * h2)
-    out[3, 4], out[4, 3] = e01, e01
-    out[3, 5], out[5, 3] = e02, e02
-    out[4, 5], out[5, 4] = e12, e12
-    _mass_blocks(m, g0, g1, g2, out)          # [[m 1, -[g]x], [[g]x, I_O]]
+def _rbi_mul(m, g0, g1, g2, j00, j01, j02, j11, j12, j22, vl0, vl1, vl2, w0, w1, w2):
+    """``I v`` for the rigid-body inertia ``I = [[m 1, -[g]x], [[g]x, J]]`` (``g`` the first
+    moment, ``J`` symmetric by its upper triangle) and the motion ``v = [v_l; w]``:
+    ``[m v_l - g x w; g x v_l + J w]`` (6 floats)."""
+    return (m * vl0 - (g1 * w2 - g2 * w1), m * vl1 - (g2 * w0 - g0 * w2),
+            m * vl2 - (g0 * w1 - g1 * w0),
+            (g1 * vl2 - g2 * vl1) + (j00 * w0 + j01 * w1 + j02 * w2),
+            (g2 * vl0 - g0 * vl2) + (j01 * w0 + j11 * w1 + j12 * w2),
+            (g0 * vl1 - g1 * vl0) + (j02 * w0 + j12 * w1 + j22 * w2))
 
 
 @njit(**_NI)
-def _crf_add(v, f, out):
-    """Force cross product ``out += v x* f`` = ``[w x f_l; w x f_n + v_l x f_l]``."""
-    _crf_add6(v[0], v[1], v[2], v[3], v[4], v[5], f, out)
-
-
-@njit(**_NI)
-def _crf_add6(vl0, vl1, vl2, w0, w1, w2, f, out):
-    """:func:`_crf_add` for the motion ``v = (vl0, vl1, vl2, w0, w1, w2)``."""
-    fl0, fl1, fl2, fn0, fn1, fn2 = f[0], f[1], f[2], f[3], f[4], f[5]
-    out[0] += w1 * fl2 - w2 * fl1
-    out[1] += w2 * fl0 - w0 * fl2
-    out[2] += w0 * fl1 - w1 * fl0
-    out[3] += w1 * fn2 - w2 * fn1 + vl1 * fl2 - vl2 * fl1
-    out[4] += w2 * fn0 - w0 * fn2 + vl2 * fl0 - vl0 * fl2
-    out[5] += w0 * fn1 - w1 * fn0 + vl0 * fl1 - vl1 * fl0
+def _crf(vl0, vl1, vl2, w0, w1, w2, fl0, fl1, fl2, fn0, fn1, fn2):
+    """Force cross product ``v x* f = [w x f_l; w x f_n + v_l x f_l]`` (6 floats)."""
+    return (w1 * fl2 - w2 * fl1, w2 * fl0 - w0 * fl2, w0 * fl1 - w1 * fl0,
+            w1 * fn2 - w2 * fn1 + vl1 * fl2 - vl2 * fl1,
+            w2 * fn0 - w0 * fn2 + vl2 * fl0 - vl0 * fl2,
+            w0 * fn1 - w1 * fn0 + vl0 * fl1 - vl1 * fl0)
 
 
 @njit(**_NI)
@@ -506,12 +400,11 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
     else:
         vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
     # the base: pA_0 = v_0 x* (I_0 v_0)
-    hv = v6[0]
-    for i in range(6):
-        hv[i] = (I6[0, i, 0] * vl0 + I6[0, i, 1] * vl1 + I6[0, i, 2] * vl2
-                 + I6[0, i, 3] * w0 + I6[0, i, 4] * w1 + I6[0, i, 5] * w2)
-        pA[0, i] = 0.0
-    _crf_add6(vl0, vl1, vl2, w0, w1, w2, hv, pA[0])
+    hl0, hl1, hl2, hn0, hn1, hn2 = _rbi_mul(I6[0, 0, 0], I6[0, 5, 1], I6[0, 3, 2], I6[0, 4, 0],
+                                            I6[0, 3, 3], I6[0, 3, 4], I6[0, 3, 5], I6[0, 4, 4],
+                                            I6[0, 4, 5], I6[0, 5, 5], vl0, vl1, vl2, w0, w1, w2)
+    pA[0, 0], pA[0, 1], pA[0, 2], pA[0, 3], pA[0, 4], pA[0, 5] = _crf(
+        vl0, vl1, vl2, w0, w1, w2, hl0, hl1, hl2, hn0, hn1, hn2)
     b00, b01, b02, b10, b11, b12, b20, b21, b22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
     o0, o1, o2 = 0.0, 0.0, 0.0
     bp[0, 0], bp[0, 1], bp[0, 2] = 0.0, 0.0, 0.0
@@ -690,46 +583,100 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, bR, bp, S, vel, cb, IA, 
 
     Writes ``M`` (nv, nv) (both triangles), ``nle`` (nv,) and ``hg`` (6,) = ``[P, L_c]``
     (inertial frame; angular momentum about the system centre of mass). Returns the system
-    centre of mass (3 floats, inertial frame).
+    centre of mass (3 floats, inertial frame). Of the work arrays (:class:`Workspace`) it
+    writes ``S`` (the joint motions ``[bp x s; s]``), ``IA`` (each body's inertia at the base
+    origin by its defining entries, as :func:`aba`), ``pA`` (each body's RNEA force) and
+    ``U`` (the CRBA's ``Ic S``).
+
+    Everything is in the base frame at the base origin (the spatial-algebra comment above);
+    the chain's running quantities (placement, velocity, acceleration, momentum in the forward
+    pass; composite inertia and force in the backward pass) stay in local variables, and every
+    inertia is a rigid body's ``(m, g, J)`` (:func:`_rbi_mul`), composites included.
     """
     nb = R.shape[0]
     nr = 3 if planar else 6
-    _kinematics(planar, R, p, axis, I6, q, v, bR, bp, S, vel, cb, IA)
-    # RNEA, forward: a_k = a_p + c_k (a_0 = 0), f_k = I a_k + v x* (I v); momentum h += I v
-    hv, h = v6[0], v6[1]
-    for i in range(6):
-        h[i] = 0.0
-    for k in range(nb):
-        for i in range(6):
-            acc[k, i] = 0.0 if k == 0 else acc[k - 1, i] + cb[k, i]
-        for i in range(6):
-            s = 0.0
-            sh = 0.0
-            for j in range(6):
-                s += IA[k, i, j] * acc[k, j]
-                sh += IA[k, i, j] * vel[k, j]
-            pA[k, i] = s
-            hv[i] = sh
-            h[i] += sh
-        _crf_add(vel[k], hv, pA[k])
-    # backward: nle_k = S^T f_k, f_p += f_k;  composite inertia Ic_p += Ic_k (all in one frame)
+    nq0 = 4 if planar else 7
+    # RNEA, forward: v_k = v_p + S qd, a_k = a_p + c_k (a_0 = 0), c_k = v_k x (S qd);
+    # f_k = I a_k + v x* (I v); momentum h = sum I v
+    vl0, vl1, vl2, w0, w1, w2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if planar:
+        vl0, vl1, w2 = v[0], v[1], v[2]
+    else:
+        vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
+    m = I6[0, 0, 0]
+    hl0, hl1, hl2, hn0, hn1, hn2 = _rbi_mul(m, I6[0, 5, 1], I6[0, 3, 2], I6[0, 4, 0],
+                                            I6[0, 3, 3], I6[0, 3, 4], I6[0, 3, 5], I6[0, 4, 4],
+                                            I6[0, 4, 5], I6[0, 5, 5], vl0, vl1, vl2, w0, w1, w2)
+    pA[0, 0], pA[0, 1], pA[0, 2], pA[0, 3], pA[0, 4], pA[0, 5] = _crf(
+        vl0, vl1, vl2, w0, w1, w2, hl0, hl1, hl2, hn0, hn1, hn2)
+    a0, a1, a2, a3, a4, a5 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    b00, b01, b02, b10, b11, b12, b20, b21, b22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+    ox, oy, oz = 0.0, 0.0, 0.0
+    for k in range(1, nb):
+        (b00, b01, b02, b10, b11, b12, b20, b21, b22, ox, oy, oz, s3, s4, s5) = _place(
+            R, p, axis, k, q[nq0 + k - 1], b00, b01, b02, b10, b11, b12, b20, b21, b22,
+            ox, oy, oz)
+        s0, s1, s2 = oy * s5 - oz * s4, oz * s3 - ox * s5, ox * s4 - oy * s3
+        S[k, 0], S[k, 1], S[k, 2], S[k, 3], S[k, 4], S[k, 5] = s0, s1, s2, s3, s4, s5
+        # velocity: v_k = v_p + S qd;  c_k = v_k x (S qd) = [w x sl + vl x sw; w x sw] qd
+        qd = v[nr + k - 1]
+        vl0, vl1, vl2 = vl0 + s0 * qd, vl1 + s1 * qd, vl2 + s2 * qd
+        w0, w1, w2 = w0 + s3 * qd, w1 + s4 * qd, w2 + s5 * qd
+        a0 += (w1 * s2 - w2 * s1 + vl1 * s5 - vl2 * s4) * qd
+        a1 += (w2 * s0 - w0 * s2 + vl2 * s3 - vl0 * s5) * qd
+        a2 += (w0 * s1 - w1 * s0 + vl0 * s4 - vl1 * s3) * qd
+        a3 += (w1 * s5 - w2 * s4) * qd
+        a4 += (w2 * s3 - w0 * s5) * qd
+        a5 += (w0 * s4 - w1 * s3) * qd
+        # inertia at the base origin: h' = bR_k h, I_o' = bR_k I_o bR_k^T, then shifted:
+        # g = h' + m o, J = I_o' + (2 o.h' + m |o|^2) 1 - (h' o^T + o h'^T + m o o^T)
+        m = I6[k, 0, 0]
+        hx, hy, hz = I6[k, 5, 1], I6[k, 3, 2], I6[k, 4, 0]          # [h]x = m [c]x
+        h0 = b00 * hx + b01 * hy + b02 * hz
+        h1 = b10 * hx + b11 * hy + b12 * hz
+        h2 = b20 * hx + b21 * hy + b22 * hz
+        i00, i01, i02, i11, i12, i22 = _rot_sym(b00, b01, b02, b10, b11, b12, b20, b21, b22,
+                                                I6[k, 3, 3], I6[k, 3, 4], I6[k, 3, 5],
+                                                I6[k, 4, 4], I6[k, 4, 5], I6[k, 5, 5])
+        mo0, mo1, mo2 = m * ox, m * oy, m * oz
+        dd = 2.0 * (ox * h0 + oy * h1 + oz * h2) + (mo0 * ox + mo1 * oy + mo2 * oz)
+        g0, g1, g2 = h0 + mo0, h1 + mo1, h2 + mo2       # h' o^T + o h'^T + m o o^T = g o^T + o h'^T
+        j00 = i00 + dd - (g0 * ox + ox * h0)
+        j11 = i11 + dd - (g1 * oy + oy * h1)
+        j22 = i22 + dd - (g2 * oz + oz * h2)
+        j01 = i01 - (g0 * oy + ox * h1)
+        j02 = i02 - (g0 * oz + ox * h2)
+        j12 = i12 - (g1 * oz + oy * h2)
+        IA[k, 5, 1], IA[k, 3, 2], IA[k, 4, 0] = g0, g1, g2
+        IA[k, 3, 3], IA[k, 3, 4], IA[k, 3, 5] = j00, j01, j02
+        IA[k, 4, 4], IA[k, 4, 5], IA[k, 5, 5] = j11, j12, j22
+        yl0, yl1, yl2, yn0, yn1, yn2 = _rbi_mul(m, g0, g1, g2, j00, j01, j02, j11, j12, j22,
+                                                vl0, vl1, vl2, w0, w1, w2)
+        hl0, hl1, hl2, hn0, hn1, hn2 = hl0 + yl0, hl1 + yl1, hl2 + yl2, hn0 + yn0, hn1 + yn1, \
+            hn2 + yn2
+        fl0, fl1, fl2, fn0, fn1, fn2 = _rbi_mul(m, g0, g1, g2, j00, j01, j02, j11, j12, j22,
+                                                a0, a1, a2, a3, a4, a5)
+        cl0, cl1, cl2, cn0, cn1, cn2 = _crf(vl0, vl1, vl2, w0, w1, w2, yl0, yl1, yl2, yn0, yn1,
+                                           yn2)
+        pA[k, 0], pA[k, 1], pA[k, 2] = fl0 + cl0, fl1 + cl1, fl2 + cl2
+        pA[k, 3], pA[k, 4], pA[k, 5] = fn0 + cn0, fn1 + cn1, fn2 + cn2
+    # backward: f_p += f_k, nle_k = S^T f_k; composite Ic_p += Ic_k; CRBA: F = Ic_k S_k,
+    # M_jk = S_j^T F (j <= k), base rows F
+    mt = g0 = g1 = g2 = j00 = j01 = j02 = j11 = j12 = j22 = 0.0
+    f0 = f1 = f2 = f3 = f4 = f5 = 0.0
     for k in range(nb - 1, 0, -1):
-        nle[nr + k - 1] = (S[k, 0] * pA[k, 0] + S[k, 1] * pA[k, 1] + S[k, 2] * pA[k, 2]
-                           + S[k, 3] * pA[k, 3] + S[k, 4] * pA[k, 4] + S[k, 5] * pA[k, 5])
-        for i in range(6):
-            pA[k - 1, i] += pA[k, i]
-            for j in range(6):
-                IA[k - 1, i, j] += IA[k, i, j]
-    for i in range(nr):
-        nle[i] = pA[0, _row(planar, i)]
-    # CRBA: F = Ic_k S_k; M_jk = S_j^T F (j <= k), base rows F
-    for k in range(nb - 1, 0, -1):
+        mt += I6[k, 0, 0]
+        g0, g1, g2 = g0 + IA[k, 5, 1], g1 + IA[k, 3, 2], g2 + IA[k, 4, 0]
+        j00, j01, j02 = j00 + IA[k, 3, 3], j01 + IA[k, 3, 4], j02 + IA[k, 3, 5]
+        j11, j12, j22 = j11 + IA[k, 4, 4], j12 + IA[k, 4, 5], j22 + IA[k, 5, 5]
+        f0, f1, f2 = f0 + pA[k, 0], f1 + pA[k, 1], f2 + pA[k, 2]
+        f3, f4, f5 = f3 + pA[k, 3], f4 + pA[k, 4], f5 + pA[k, 5]
         s0, s1, s2, s3, s4, s5 = S[k, 0], S[k, 1], S[k, 2], S[k, 3], S[k, 4], S[k, 5]
-        F = U[k]
-        for i in range(6):
-            F[i] = (IA[k, i, 0] * s0 + IA[k, i, 1] * s1 + IA[k, i, 2] * s2 + IA[k, i, 3] * s3
-                    + IA[k, i, 4] * s4 + IA[k, i, 5] * s5)
         col = nr + k - 1
+        nle[col] = s0 * f0 + s1 * f1 + s2 * f2 + s3 * f3 + s4 * f4 + s5 * f5
+        F = U[k]
+        F[0], F[1], F[2], F[3], F[4], F[5] = _rbi_mul(mt, g0, g1, g2, j00, j01, j02, j11, j12,
+                                                      j22, s0, s1, s2, s3, s4, s5)
         for j in range(k, 0, -1):
             mj = (S[j, 0] * F[0] + S[j, 1] * F[1] + S[j, 2] * F[2] + S[j, 3] * F[3]
                   + S[j, 4] * F[4] + S[j, 5] * F[5])
@@ -738,12 +685,29 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, bR, bp, S, vel, cb, IA, 
         for i in range(nr):
             M[i, col] = F[_row(planar, i)]
             M[col, i] = F[_row(planar, i)]
-    for i in range(nr):
-        for j in range(nr):
-            M[i, j] = IA[0, _row(planar, i), _row(planar, j)]
+    # the base: the whole system's composite inertia and force
+    mt += I6[0, 0, 0]
+    g0, g1, g2 = g0 + I6[0, 5, 1], g1 + I6[0, 3, 2], g2 + I6[0, 4, 0]
+    j00, j01, j02 = j00 + I6[0, 3, 3], j01 + I6[0, 3, 4], j02 + I6[0, 3, 5]
+    j11, j12, j22 = j11 + I6[0, 4, 4], j12 + I6[0, 4, 5], j22 + I6[0, 5, 5]
+    f0, f1, f2 = f0 + pA[0, 0], f1 + pA[0, 1], f2 + pA[0, 2]
+    f3, f4, f5 = f3 + pA[0, 3], f4 + pA[0, 4], f5 + pA[0, 5]
+    if planar:
+        nle[0], nle[1], nle[2] = f0, f1, f5
+        # rows/columns (v_x, v_y, omega_z) of [[m 1, -[g]x], [[g]x, J]]
+        M[0, 0], M[0, 1], M[0, 2] = mt, 0.0, -g1
+        M[1, 0], M[1, 1], M[1, 2] = 0.0, mt, g0
+        M[2, 0], M[2, 1], M[2, 2] = -g1, g0, j22
+    else:
+        nle[0], nle[1], nle[2], nle[3], nle[4], nle[5] = f0, f1, f2, f3, f4, f5
+        M[0, 0], M[0, 1], M[0, 2], M[0, 3], M[0, 4], M[0, 5] = mt, 0.0, 0.0, 0.0, g2, -g1
+        M[1, 0], M[1, 1], M[1, 2], M[1, 3], M[1, 4], M[1, 5] = 0.0, mt, 0.0, -g2, 0.0, g0
+        M[2, 0], M[2, 1], M[2, 2], M[2, 3], M[2, 4], M[2, 5] = 0.0, 0.0, mt, g1, -g0, 0.0
+        M[3, 0], M[3, 1], M[3, 2], M[3, 3], M[3, 4], M[3, 5] = 0.0, -g2, g1, j00, j01, j02
+        M[4, 0], M[4, 1], M[4, 2], M[4, 3], M[4, 4], M[4, 5] = g2, 0.0, -g0, j01, j11, j12
+        M[5, 0], M[5, 1], M[5, 2], M[5, 3], M[5, 4], M[5, 5] = -g1, g0, 0.0, j02, j12, j22
     # centre of mass (base frame): the composite's first moment over its mass
-    mt = IA[0, 0, 0]
-    cx, cy, cz = IA[0, 5, 1] / mt, IA[0, 3, 2] / mt, IA[0, 4, 0] / mt
+    cx, cy, cz = g0 / mt, g1 / mt, g2 / mt
     # inertial frame: base rotation A and position r; P = A h_l, L_c = A (h_n - c x h_l)
     if planar:
         c, s = q[2], q[3]
@@ -756,10 +720,10 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, bR, bp, S, vel, cb, IA, 
         a10, a11, a12 = s2 * (x * y + z * w), 1.0 - s2 * (x * x + z * z), s2 * (y * z - x * w)
         a20, a21, a22 = s2 * (x * z - y * w), s2 * (y * z + x * w), 1.0 - s2 * (x * x + y * y)
         r0, r1, r2 = q[0], q[1], q[2]
-    l0, l1, l2 = h[0], h[1], h[2]
-    n0 = h[3] - (cy * l2 - cz * l1)
-    n1 = h[4] - (cz * l0 - cx * l2)
-    n2 = h[5] - (cx * l1 - cy * l0)
+    l0, l1, l2 = hl0, hl1, hl2
+    n0 = hn0 - (cy * l2 - cz * l1)
+    n1 = hn1 - (cz * l0 - cx * l2)
+    n2 = hn2 - (cx * l1 - cy * l0)
     hg[0] = a00 * l0 + a01 * l1 + a02 * l2
     hg[1] = a10 * l0 + a11 * l1 + a12 * l2
     hg[2] = a20 * l0 + a21 * l1 + a22 * l2
