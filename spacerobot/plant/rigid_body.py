@@ -99,10 +99,11 @@ def chain_arrays(model) -> tuple:
 # -- small linear algebra -------------------------------------------------------------------
 
 
-@njit(**_NB)
+@njit(**_NI)
 def cholesky(S, L):
     """Lower Cholesky factor of the SPD matrix ``S`` into ``L``; False if a pivot is <= 0
-    (a NaN pivot passes, so that NaN propagates)."""
+    (a NaN pivot passes, so that NaN propagates). One division per pivot: the column is scaled
+    by its reciprocal."""
     k = S.shape[0]
     for j in range(k):
         d = S[j, j]
@@ -112,11 +113,12 @@ def cholesky(S, L):
             return False
         d = math.sqrt(d)
         L[j, j] = d
+        r = 1.0 / d
         for i in range(j + 1, k):
             s = S[i, j]
             for p in range(j):
                 s -= L[i, p] * L[j, p]
-            L[i, j] = s / d
+            L[i, j] = s * r
         for i in range(j):
             L[i, j] = 0.0
     return True
@@ -127,24 +129,25 @@ def cho_solve(L, B):
     """Solve ``L L^T X = B`` in place of ``B`` (k, c).
 
     Row by row with the columns innermost (independent, so they pipeline), each entry summed
-    in the same order as a column-by-column substitution."""
+    in the same order as a column-by-column substitution; one division per row (its entries
+    are scaled by the reciprocal of the pivot)."""
     k, c = B.shape
     for i in range(k):                   # L Y = B
         for p in range(i):
             lip = L[i, p]
             for col in range(c):
                 B[i, col] -= lip * B[p, col]
-        d = L[i, i]
+        r = 1.0 / L[i, i]
         for col in range(c):
-            B[i, col] /= d
+            B[i, col] *= r
     for i in range(k - 1, -1, -1):       # L^T X = Y
         for p in range(i + 1, k):
             lpi = L[p, i]
             for col in range(c):
                 B[i, col] -= lpi * B[p, col]
-        d = L[i, i]
+        r = 1.0 / L[i, i]
         for col in range(c):
-            B[i, col] /= d
+            B[i, col] *= r
 
 
 # -- spatial algebra ----------------------------------------------------------------------------
@@ -311,6 +314,7 @@ def _base_solve(planar, IA0, pA0, tau, L, d, w, x):
             return False
         d[j] = dj
         r = 1.0 / dj
+        L[j, j] = r                      # the diagonal is not read again: 1 / d_j
         for i in range(j + 1, nr):
             s = L[i, j]
             for p in range(j):
@@ -322,7 +326,7 @@ def _base_solve(planar, IA0, pA0, tau, L, d, w, x):
             s -= L[i, p] * x[p]
         x[i] = s
     for i in range(nr):                  # D y = z
-        x[i] /= d[i]
+        x[i] *= L[i, i]
     for i in range(nr - 1, -1, -1):      # L^T x = y
         s = x[i]
         for p in range(i + 1, nr):
@@ -349,7 +353,7 @@ class Workspace:
         self.pA = np.zeros((nb, 6))
         self.acc = np.zeros((nb, 6))
         self.U = np.zeros((nb, 6))          # IA S of each joint
-        self.Du = np.zeros((nb, 2))         # [S^T IA S, tau - S^T pA] of each joint
+        self.Du = np.zeros((nb, 2))         # [1 / S^T IA S, tau - S^T pA] of each joint
         self.M6 = np.zeros((2, 6, 6))       # scratch matrices
         self.v6 = np.zeros((6, 6))          # scratch vectors
 
@@ -480,10 +484,11 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
         D = U3 * s0 + U4 * s1 + U5 * s2
         u = tau[nr + k - 1] - (P3 * s0 + P4 * s1 + P5 * s2)
         U[k, 0], U[k, 1], U[k, 2], U[k, 3], U[k, 4], U[k, 5] = U0, U1, U2, U3, U4, U5
-        Du[k, 0], Du[k, 1] = D, u
+        rD = 1.0 / D                      # one division per joint
+        Du[k, 0], Du[k, 1] = rD, u
         x0, x1, x2, x3, x4, x5 = cb[k, 0], cb[k, 1], cb[k, 2], cb[k, 3], cb[k, 4], cb[k, 5]
         # pa = pA + IA c + U (u - U^T c) / D
-        g = (u - (U0 * x0 + U1 * x1 + U2 * x2 + U3 * x3 + U4 * x4 + U5 * x5)) / D
+        g = (u - (U0 * x0 + U1 * x1 + U2 * x2 + U3 * x3 + U4 * x4 + U5 * x5)) * rD
         pa0 = P0 + U0 * g + a00 * x0 + a01 * x1 + a02 * x2 + e00 * x3 + e01 * x4 + e02 * x5
         pa1 = P1 + U1 * g + a01 * x0 + a11 * x1 + a12 * x2 + e10 * x3 + e11 * x4 + e12 * x5
         pa2 = P2 + U2 * g + a02 * x0 + a12 * x1 + a22 * x2 + e20 * x3 + e21 * x4 + e22 * x5
@@ -491,7 +496,7 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
         pa4 = P4 + U4 * g + e01 * x0 + e11 * x1 + e21 * x2 + c01 * x3 + c11 * x4 + c12 * x5
         pa5 = P5 + U5 * g + e02 * x0 + e12 * x1 + e22 * x2 + c02 * x3 + c12 * x4 + c22 * x5
         # Ia = IA - U U^T / D, then to the parent's origin
-        y0, y1, y2, y3, y4, y5 = U0 / D, U1 / D, U2 / D, U3 / D, U4 / D, U5 / D
+        y0, y1, y2, y3, y4, y5 = U0 * rD, U1 * rD, U2 * rD, U3 * rD, U4 * rD, U5 * rD
         d0, d1, d2 = bp[k, 0] - bp[k - 1, 0], bp[k, 1] - bp[k - 1, 1], bp[k, 2] - bp[k - 1, 2]
         (a00, a01, a02, a11, a12, a22, e00, e01, e02, e10, e11, e12, e20, e21, e22,
          c00, c01, c02, c11, c12, c22) = _shift(
@@ -568,7 +573,7 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
         x3, x4, x5 = x3 + cb[k, 3], x4 + cb[k, 4], x5 + cb[k, 5]
         s = (Du[k, 1] - U[k, 0] * x0 - U[k, 1] * x1 - U[k, 2] * x2 - U[k, 3] * x3
              - U[k, 4] * x4 - U[k, 5] * x5)
-        qdd = s / Du[k, 0]
+        qdd = s * Du[k, 0]
         ddq[nr + k - 1] = qdd
         x3, x4, x5 = x3 + S[k, 3] * qdd, x4 + S[k, 4] * qdd, x5 + S[k, 5] * qdd
     return 0
