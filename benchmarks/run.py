@@ -287,17 +287,16 @@ def plant_kernel_parts(p: Plant, calls: int = 20000) -> dict:
 
     @njit
     def loop_aba(n, planar, R, pp, axis, I6, q, v, tau, ddq, ws):
-        bR, bp, S, vel, cb, IA, pA, acc, U, Du, M6, v6 = ws     # (no *ws: aba is inlined)
+        bp, S, cb, IA, pA, U, Du, M6, v6 = ws     # (no *ws: aba is inlined)
         for _ in range(n):
-            rb.aba(planar, R, pp, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc, U,
-                   Du, M6, v6)
+            rb.aba(planar, R, pp, axis, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6)
 
     @njit
     def loop_terms(n, planar, R, pp, axis, I6, mc, q, v, M, nle, hg, ws):
-        bR, bp, S, vel, cb, IA, pA, acc, U, Du, M6, v6 = ws
+        bp, S, cb, IA, pA, U, Du, M6, v6 = ws
         for _ in range(n):
-            rb.terms(planar, R, pp, axis, I6, mc, q, v, M, nle, hg, bR, bp, S, vel, cb, IA, pA,
-                     acc, U, Du, M6, v6)
+            rb.terms(planar, R, pp, axis, I6, mc, q, v, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6,
+                     v6)
 
     planar, R, pp, axis, I6, mc = rb.chain_arrays(p.pm.model)
     ws = tuple(rb.Workspace(R.shape[0] - 1).arrays())

@@ -648,7 +648,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
     could not be taken; ``xout`` and ``t_reached`` are then the state and time at its start.
     """
     R, p, axis, I6, mc = mdl
-    bR, bp, S, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    bp, S, cb, IA, pA, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
     nx = x.shape[0]
     om = 6 + qn.shape[0] + vs.shape[0]   # m_p in the state
@@ -660,8 +660,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         dt = h if k < n_steps else rest
         if on:
             base_inertia(xa[om], pp, I6d, I6u, mcd, I6, mc)
-        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bR, bp, S, vel, cb, IA, pA, accb, U,
-              Du, M6, v6)
+        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6)
         err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM,
                              pp, xa[om], dt, parw, cw)
         if err:
@@ -672,8 +671,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         for i in range(1, 4):
             if on:
                 base_inertia(xs[om], pp, I6d, I6u, mcd, I6, mc)
-            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, bR, bp, S, vel, cb, IA, pA, accb, U,
-                   Du, M6, v6):
+            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
                 for j in range(nx):
                     xout[j] = xa[j]
                 load(planar, xa, qn, vs)
@@ -718,7 +716,7 @@ def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn,
     :func:`advance`. Returns 0 or the code (:data:`ERRORS`) of a singular matrix.
     """
     R, p, axis, I6, mc = mdl
-    bR, bp, S, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    bp, S, cb, IA, pA, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
     nq, nv = qn.shape[0], vs.shape[0]
     nb = 3 if planar else 6
@@ -728,8 +726,8 @@ def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn,
     load(planar, x, qn, vs)
     if pp[0] != 0.0:
         base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc)
-    c0, c1, c2 = terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bR, bp, S, vel, cb, IA,
-                       pA, accb, U, Du, M6, v6)
+    c0, c1, c2 = terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du,
+                       M6, v6)
     err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp,
                          m_p, h, parw, cw)
     if err:

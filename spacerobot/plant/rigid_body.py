@@ -340,31 +340,28 @@ def _base_solve(planar, IA0, pA0, tau, L, d, w, x):
 
 class Workspace:
     """Preallocated arrays of the algorithms for a chain of ``n`` links (a plain holder; the
-    compiled functions take its arrays)."""
+    compiled functions take its arrays, :meth:`arrays`)."""
 
     def __init__(self, n: int):
         nb = n + 1
-        self.bR = np.zeros((nb, 3, 3))      # placement of each body in the base frame
-        self.bp = np.zeros((nb, 3))
-        self.S = np.zeros((nb, 6))          # joint motion axes (base frame)
-        self.vel = np.zeros((nb, 6))
-        self.cb = np.zeros((nb, 6))
-        self.IA = np.zeros((nb, 6, 6))      # body, articulated or composite inertias
-        self.pA = np.zeros((nb, 6))
-        self.acc = np.zeros((nb, 6))
-        self.U = np.zeros((nb, 6))          # IA S of each joint
-        self.Du = np.zeros((nb, 2))         # [1 / S^T IA S, tau - S^T pA] of each joint
-        self.M6 = np.zeros((2, 6, 6))       # scratch matrices
-        self.v6 = np.zeros((6, 6))          # scratch vectors
+        self.bp = np.zeros((nb, 3))         # joint origins in the base frame (aba)
+        self.S = np.zeros((nb, 6))          # joint motions, base frame
+        self.cb = np.zeros((nb, 6))         # joint bias accelerations (aba)
+        self.IA = np.zeros((nb, 6, 6))      # body inertias (defining entries); base's IA (aba)
+        self.pA = np.zeros((nb, 6))         # bias forces (aba), RNEA forces (terms)
+        self.U = np.zeros((nb, 6))          # IA S (aba), Ic S (terms) of each joint
+        self.Du = np.zeros((nb, 2))         # [1 / S^T IA S, tau - S^T pA] of each joint (aba)
+        self.M6 = np.zeros((6, 6))          # scratch matrix (the base solve's factor)
+        self.v6 = np.zeros((2, 6))          # scratch vectors
 
     def arrays(self) -> tuple:
-        return (self.bR, self.bp, self.S, self.vel, self.cb, self.IA, self.pA, self.acc, self.U,
-                self.Du, self.M6, self.v6)
+        """``(bp, S, cb, IA, pA, U, Du, M6, v6)``, the work arrays :func:`aba` and :func:`terms`
+        take."""
+        return (self.bp, self.S, self.cb, self.IA, self.pA, self.U, self.Du, self.M6, self.v6)
 
 
 @njit(**_NI)
-def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc, U, Du, M6,
-        v6):
+def aba(planar, R, p, axis, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
     """Forward dynamics ``ddq = M^-1 (tau - c(q, v))`` by the articulated-body algorithm.
 
     Parameters
@@ -374,9 +371,8 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
     q : (nq,)   configuration (unit quaternion / (cos, sin) of the root)
     v : (nv,)   velocity ``[v_base (nb), qd (n)]``;  tau : (nv,) generalised force
     ddq : (nv,) output
-    bR, bp, S, vel, cb, IA, pA, acc, U, Du, M6, v6 : work arrays (:class:`Workspace`); of
-    them this function writes ``bp``, ``S[:, 3:]``, ``cb``, ``IA``, ``pA``, ``U``, ``Du``,
-    ``M6[0]``, ``v6[1:3]``
+    bp, S, cb, IA, pA, U, Du, M6, v6 : work arrays (:class:`Workspace`; ``S[:, :3]`` is not
+    written)
 
     Returns 0, or 1 if the base's articulated inertia is not positive definite.
 
@@ -558,7 +554,7 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
     pA[0, 3] += f3
     pA[0, 4] += f4
     pA[0, 5] += f5
-    if not _base_solve(planar, IB, pA[0], tau, M6[0], v6[1], v6[2], ddq):
+    if not _base_solve(planar, IB, pA[0], tau, M6, v6[0], v6[1], ddq):
         return 1
     # pass 3 (base to tip): a = shift(a_p) + c_k, qdd_k = (u_k - U_k^T a) / D_k, a_k = a + S qdd
     x0, x1, x2, x3, x4, x5 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -580,18 +576,17 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc,
 
 
 @njit(**_NI)
-def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, bR, bp, S, vel, cb, IA, pA, acc, U, Du,
-          M6, v6):
+def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6):
     """Joint-space inertia (CRBA), non-linear effects (RNEA at zero acceleration) and the
     centroidal momentum, as Pinocchio's ``computeAllTerms`` gives ``data.M``, ``data.nle`` and
     ``data.hg``.
 
     Writes ``M`` (nv, nv) (both triangles), ``nle`` (nv,) and ``hg`` (6,) = ``[P, L_c]``
     (inertial frame; angular momentum about the system centre of mass). Returns the system
-    centre of mass (3 floats, inertial frame). Of the work arrays (:class:`Workspace`) it
-    writes ``S`` (the joint motions ``[bp x s; s]``), ``IA`` (each body's inertia at the base
-    origin by its defining entries, as :func:`aba`), ``pA`` (each body's RNEA force) and
-    ``U`` (the CRBA's ``Ic S``).
+    centre of mass (3 floats, inertial frame). Of the work arrays (:class:`Workspace`, as
+    :func:`aba` takes them) it writes ``S`` (the joint motions ``[bp x s; s]``), ``IA`` (each
+    body's inertia at the base origin by its defining entries, as :func:`aba`), ``pA`` (each
+    body's RNEA force) and ``U`` (the CRBA's ``Ic S``).
 
     Everything is in the base frame at the base origin (the spatial-algebra comment above);
     the chain's running quantities (placement, velocity, acceleration, momentum in the forward
