@@ -314,12 +314,23 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, c
             s -= sol[r0 + j, p] * post[p]
         rhs[j] = s
     # selectively damped inverse of GWG (damped only near a singular coupling)
-    lo, hi = GWG[0, 0], GWG[0, 0]
     if r == 3:
-        lo, hi = _sym3_eigenvalues(GWG[0, 0], GWG[0, 1], GWG[0, 2], GWG[1, 1], GWG[1, 2],
-                                   GWG[2, 2])
-    lmax = max(hi, 1e-300)
-    if lo / lmax >= 1.01 * DLS_RATIO:     # z = (GWG)^+ rhs
+        g00, g01, g02, g11, g12, g22 = GWG[0, 0], GWG[0, 1], GWG[0, 2], GWG[1, 1], GWG[1, 2], \
+            GWG[2, 2]
+        det = (g00 * (g11 * g22 - g12 * g12) - g01 * (g01 * g22 - g12 * g02)
+               + g02 * (g01 * g12 - g11 * g02))
+        tr = g00 + g11 + g22
+        # positive definite (leading minors > 0) with lo / hi >= 4 det / tr^3 (lo = det /
+        # (mid hi), mid hi <= (tr / 2)^2, hi <= tr) twice the threshold: the eigenvalues would
+        # choose the undamped branch too, so they are not computed
+        plain = (g00 > 0.0 and g00 * g11 - g01 * g01 > 0.0 and det > 0.0
+                 and 4.0 * det >= 2.0 * 1.01 * DLS_RATIO * (tr * tr * tr))
+        if not plain:
+            lo, hi = _sym3_eigenvalues(g00, g01, g02, g11, g12, g22)
+            plain = lo / max(hi, 1e-300) >= 1.01 * DLS_RATIO
+    else:
+        plain = GWG[0, 0] / max(GWG[0, 0], 1e-300) >= 1.01 * DLS_RATIO
+    if plain:                            # z = (GWG)^+ rhs
         if not cholesky(GWG, Lg):
             return 3
         for j in range(r):

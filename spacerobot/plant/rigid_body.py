@@ -99,7 +99,7 @@ def chain_arrays(model) -> tuple:
 # -- small linear algebra -------------------------------------------------------------------
 
 
-@njit(**_NI)
+@njit(**_NB)
 def cholesky(S, L):
     """Lower Cholesky factor of the SPD matrix ``S`` into ``L``; False if a pivot is <= 0
     (a NaN pivot passes, so that NaN propagates). One division per pivot: the column is scaled
