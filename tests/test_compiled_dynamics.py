@@ -69,7 +69,7 @@ def _random_state(model, rng):
 def test_compiled_dynamics_equal_pinocchio(name):
     model = MODELS[name]
     data = model.createData()
-    planar, R, p, axis, I6, mc = rb.chain_arrays(model)
+    planar, R, p, I6, mc = rb.chain_arrays(model)
     assert planar == (name == "planar")
     ws = rb.Workspace(R.shape[0] - 1).arrays()
     rng = np.random.default_rng(abs(hash(name)) % 2**32)
@@ -78,12 +78,12 @@ def test_compiled_dynamics_equal_pinocchio(name):
         q, v, tau = _random_state(model, rng)
         # forward dynamics
         ddq = np.empty(nv)
-        assert rb.aba(planar, R, p, axis, I6, q, v, tau, ddq, *ws) == 0
+        assert rb.aba(planar, R, p, I6, q, v, tau, ddq, *ws) == 0
         ref = pin.aba(model, data, q, v, tau)
         assert np.max(np.abs(ddq - ref)) <= TOL * max(1.0, np.max(np.abs(ref)))
         # M, nle, centroidal momentum, centre of mass
         M, nle, hg = np.empty((nv, nv)), np.empty(nv), np.empty(6)
-        com = np.array(rb.terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, *ws))
+        com = np.array(rb.terms(planar, R, p, I6, mc, q, v, M, nle, hg, *ws))
         pin.computeAllTerms(model, data, q, v)
         Mref = data.M.copy()
         Mref = np.triu(Mref) + np.triu(Mref, 1).T

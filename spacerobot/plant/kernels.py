@@ -641,7 +641,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
     Parameters
     ----------
     planar : bool
-    mdl : tuple ``(R, p, axis, I6, mc)`` of :func:`.rigid_body.chain_arrays`
+    mdl : tuple ``(R, p, I6, mc)`` of :func:`.rigid_body.chain_arrays`
     ws : tuple, the work arrays of :class:`.rigid_body.Workspace`
     cw : tuple, the scratch arrays of :func:`control_work`
     x : (nx,) state ``[J, H, q, v, m_p, P_x, L_x]`` (:func:`stage`); ``qn``, ``vs`` must hold
@@ -658,7 +658,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
     Returns ``(status, t_reached)``: status 0, or the code (:data:`ERRORS`) of the step that
     could not be taken; ``xout`` and ``t_reached`` are then the state and time at its start.
     """
-    R, p, axis, I6, mc = mdl
+    R, p, I6, mc = mdl
     bp, S, cb, IA, pA, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
     nx = x.shape[0]
@@ -671,7 +671,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         dt = h if k < n_steps else rest
         if on:
             base_inertia(xa[om], pp, I6d, I6u, mcd, I6, mc)
-        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6)
+        terms(planar, R, p, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6)
         err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM,
                              pp, xa[om], dt, parw, cw)
         if err:
@@ -682,7 +682,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         for i in range(1, 4):
             if on:
                 base_inertia(xs[om], pp, I6d, I6u, mcd, I6, mc)
-            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
+            if aba(planar, R, p, I6, qn, vs, gen, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
                 for j in range(nx):
                     xout[j] = xa[j]
                 load(planar, xa, qn, vs)
@@ -726,7 +726,7 @@ def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn,
     ``mdl``, ``ws``, ``cw``, ``par``, ``q_home``, ``ramp``, ``tab``, ``prop``: as in
     :func:`advance`. Returns 0 or the code (:data:`ERRORS`) of a singular matrix.
     """
-    R, p, axis, I6, mc = mdl
+    R, p, I6, mc = mdl
     bp, S, cb, IA, pA, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
     nq, nv = qn.shape[0], vs.shape[0]
@@ -737,8 +737,8 @@ def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn,
     load(planar, x, qn, vs)
     if pp[0] != 0.0:
         base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc)
-    c0, c1, c2 = terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du,
-                       M6, v6)
+    c0, c1, c2 = terms(planar, R, p, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6,
+                       v6)
     err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp,
                          m_p, h, parw, cw)
     if err:

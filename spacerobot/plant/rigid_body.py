@@ -4,17 +4,17 @@ joints: the articulated-body algorithm (forward dynamics), the composite-rigid-b
 centroidal momentum, in Pinocchio's conventions so that Pinocchio is the reference they are
 tested against (tests/test_compiled_dynamics.py).
 
-The model arrays come from a Pinocchio model (:func:`chain_arrays`: joint placements, body
-inertias, joint axes), so any robot Pinocchio builds (from code or URDF) whose root joint is a
-free-flyer or a planar joint, followed by a serial chain of one-axis revolute joints, runs here.
+The model arrays come from a Pinocchio model (:func:`chain_arrays`: joint placements and body
+inertias in joint frames whose ``z`` is the joint axis), so any robot Pinocchio builds (from
+code or URDF) whose root joint is a free-flyer or a planar joint, followed by a serial chain of
+one-axis revolute joints, runs here.
 
 Conventions (Pinocchio's): spatial motion ``[linear; angular]`` and force ``[linear; angular]``;
 the algorithms express them in base axes (the "spatial algebra" comment below: ``terms`` at the
 base origin, ``aba`` at each joint's origin), and their results (``ddq``, ``M``, ``nle``, ``hg``)
 are Pinocchio's. Body ``k = 0`` is the base (root joint),
-``k = 1..n`` the links. ``R[k], p[k]`` is the placement of joint ``k`` in its parent's frame
-(``x_parent = R x_k + p``; for ``k = 0`` the identity); a revolute joint turns about
-``axis[k]`` (unit, in its own frame). The planar root joint is the free-flyer restricted to
+``k = 1..n`` the links. ``R[k], p[k]`` is the placement of joint ``k`` in its parent's joint
+frame at ``q_k = 0`` (``x_parent = R Rz(q_k) x_k + p``; for ``k = 0`` the identity). The planar root joint is the free-flyer restricted to
 ``(v_x, v_y, omega_z)``: its motion subspace is the columns 0, 1, 5 of the identity
 (:func:`_row`), with no bias acceleration (as for the free-flyer, whose velocity is
 expressed in the base frame). The model must be gravity-free (a free-floating robot).
@@ -36,8 +36,29 @@ _NB = dict(cache=True, nogil=True, error_model="numpy")
 _NI = dict(_NB, inline="always")
 
 
+def _z_frame(a) -> np.ndarray:
+    """A rotation ``Q`` (3, 3) whose third column is the unit vector along ``a``: the joint
+    frame in which the revolute axis ``a`` (body frame) is ``z``. The identity and exact
+    permutations for the ``z``, ``x`` and ``y`` axes (their placements and inertias keep their
+    values), otherwise two orthonormal vectors completing ``a``."""
+    a = np.asarray(a, float) / np.linalg.norm(a)
+    if a[0] == 0.0 and a[1] == 0.0 and a[2] == 1.0:
+        return np.eye(3)
+    if a[0] == 1.0 and a[1] == 0.0 and a[2] == 0.0:
+        return np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])    # (y, z, x)
+    if a[0] == 0.0 and a[1] == 1.0 and a[2] == 0.0:
+        return np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])    # (z, x, y)
+    x = np.cross([1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0], a)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(a, x), a])
+
+
 def chain_arrays(model) -> tuple:
     """Arrays of the compiled model from a Pinocchio model.
+
+    Each link is described in its joint frame: the body frame turned by :func:`_z_frame` so
+    that the joint axis is ``z`` (the joint's rotation is then ``Rz(q_k)``, cheaper to apply
+    than a rotation about a general axis; the base keeps its frame).
 
     Parameters
     ----------
@@ -49,9 +70,9 @@ def chain_arrays(model) -> tuple:
     Returns
     -------
     planar : bool
-    R : (n + 1, 3, 3), p : (n + 1, 3)   joint placements in the parent frame
-    axis : (n + 1, 3)                    revolute axes (row 0 unused)
-    I6 : (n + 1, 6, 6)                   spatial inertias at the joint origins
+    R : (n + 1, 3, 3), p : (n + 1, 3)   joint placements in the parent's joint frame:
+                                         ``x_parent = R[k] Rz(q_k) x_k + p[k]``
+    I6 : (n + 1, 6, 6)                   spatial inertias at the joint origins (joint frames)
     mc : (n + 1, 4)                      mass [kg] and centre of mass (joint frame) [m]
 
     Raises ``ValueError`` for a model outside that family.
@@ -66,34 +87,39 @@ def chain_arrays(model) -> tuple:
         raise ValueError("the compiled dynamics is for a gravity-free model")
     n = nj - 2
     R, p = np.zeros((n + 1, 3, 3)), np.zeros((n + 1, 3))
-    axis, I6, mc = np.zeros((n + 1, 3)), np.zeros((n + 1, 6, 6)), np.zeros((n + 1, 4))
+    I6, mc = np.zeros((n + 1, 6, 6)), np.zeros((n + 1, 4))
     unit = {"JointModelRX": (1.0, 0.0, 0.0), "JointModelRY": (0.0, 1.0, 0.0),
             "JointModelRZ": (0.0, 0.0, 1.0)}
+    Qp = np.eye(3)                       # the parent's joint frame in its body frame
     for k in range(n + 1):
         j = k + 1
+        Q = np.eye(3)
         if k > 0:
             jm = model.joints[j]
             name = jm.shortname()
             if model.parents[j] != j - 1:
                 raise ValueError(f"joint {j} is not the child of joint {j - 1}: not a serial chain")
             if name in unit:
-                axis[k] = unit[name]
+                Q = _z_frame(unit[name])
             elif name == "JointModelRevoluteUnaligned":
-                axis[k] = np.asarray(jm.extract().axis, float)
+                Q = _z_frame(jm.extract().axis)
             else:
                 raise ValueError(f"joint {j} ({name}) is not a one-axis revolute joint")
+        # body k at x_p = Rj Rot(a, q) x_k + pj with Rot(a, q) = Q Rz(q) Q^T: in joint frames
+        # (x = Q x'), x_p' = (Qp^T Rj Q) Rz(q) x_k' + Qp^T pj
         M = model.jointPlacements[j]
-        R[k], p[k] = M.rotation, M.translation
+        R[k], p[k] = Qp.T @ M.rotation @ Q, Qp.T @ M.translation
         Y = model.inertias[j]
-        m, c = float(Y.mass), np.asarray(Y.lever, float)
+        m, c = float(Y.mass), Q.T @ np.asarray(Y.lever, float)
         cx = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0]])
         # I6 = [[m 1, -m [c]x], [m [c]x, I_c - m [c]x [c]x]]  (Pinocchio's Inertia.matrix())
         I6[k, :3, :3] = m * np.eye(3)
         I6[k, :3, 3:] = -m * cx
         I6[k, 3:, :3] = m * cx
-        I6[k, 3:, 3:] = np.asarray(Y.inertia, float) - m * cx @ cx
+        I6[k, 3:, 3:] = Q.T @ np.asarray(Y.inertia, float) @ Q - m * cx @ cx
         mc[k, 0], mc[k, 1:] = m, c
-    return root == "JointModelPlanar", R, p, axis, I6, mc
+        Qp = Q
+    return root == "JointModelPlanar", R, p, I6, mc
 
 
 # -- small linear algebra -------------------------------------------------------------------
@@ -184,24 +210,18 @@ def _rot_sym(r00, r01, r02, r10, r11, r12, r20, r21, r22, a00, a01, a02, a11, a1
 
 
 @njit(**_NI)
-def _place(R, p, axis, k, th, b00, b01, b02, b10, b11, b12, b20, b21, b22, o0, o1, o2):
+def _place(R, p, k, th, b00, b01, b02, b10, b11, b12, b20, b21, b22, o0, o1, o2):
     """Placement of body ``k`` (joint angle ``th``) in the base frame from its parent's,
-    ``bR_p`` (entries ``bij``) and ``bp_p = o``: body ``k`` sits at
-    ``x_parent = R[k] Rot(axis[k], th) x_k + p[k]``, so ``bR_k = bR_p R[k] Rot``,
-    ``bp_k = bp_p + bR_p p[k]``, and its joint axis in the base frame is ``bR_p R[k] axis[k]``.
-    Returns ``bR_k`` (9 floats, row-major), ``bp_k`` (3) and the axis (3)."""
-    ax, ay, az = axis[k, 0], axis[k, 1], axis[k, 2]
+    ``E_p`` (entries ``bij``) and ``bp_p = o``: body ``k``'s joint frame sits at
+    ``x_parent = R[k] Rz(th) x_k + p[k]``, so ``E_k = E_p R[k] Rz(th)``,
+    ``bp_k = bp_p + E_p p[k]``, and its joint axis in the base frame is the third column of
+    ``E_p R[k]``. Returns ``E_k`` (9 floats, row-major), ``bp_k`` (3) and the axis (3)."""
     sn, cs = math.sin(th), math.cos(th)
-    t = 1.0 - cs
-    # Rot(a, th) = cos I + sin [a]x + (1 - cos) a a^T
-    j00, j01, j02 = cs + t * ax * ax, t * ax * ay - sn * az, t * ax * az + sn * ay
-    j10, j11, j12 = t * ax * ay + sn * az, cs + t * ay * ay, t * ay * az - sn * ax
-    j20, j21, j22 = t * ax * az - sn * ay, t * ay * az + sn * ax, cs + t * az * az
     px, py, pz = p[k, 0], p[k, 1], p[k, 2]
     q00, q01, q02 = R[k, 0, 0], R[k, 0, 1], R[k, 0, 2]
     q10, q11, q12 = R[k, 1, 0], R[k, 1, 1], R[k, 1, 2]
     q20, q21, q22 = R[k, 2, 0], R[k, 2, 1], R[k, 2, 2]
-    # A = bR_p R_k, row by row
+    # A = E_p R_k, row by row
     a00 = b00 * q00 + b01 * q10 + b02 * q20
     a01 = b00 * q01 + b01 * q11 + b02 * q21
     a02 = b00 * q02 + b01 * q12 + b02 * q22
@@ -211,16 +231,12 @@ def _place(R, p, axis, k, th, b00, b01, b02, b10, b11, b12, b20, b21, b22, o0, o
     a20 = b20 * q00 + b21 * q10 + b22 * q20
     a21 = b20 * q01 + b21 * q11 + b22 * q21
     a22 = b20 * q02 + b21 * q12 + b22 * q22
-    return (a00 * j00 + a01 * j10 + a02 * j20, a00 * j01 + a01 * j11 + a02 * j21,
-            a00 * j02 + a01 * j12 + a02 * j22,
-            a10 * j00 + a11 * j10 + a12 * j20, a10 * j01 + a11 * j11 + a12 * j21,
-            a10 * j02 + a11 * j12 + a12 * j22,
-            a20 * j00 + a21 * j10 + a22 * j20, a20 * j01 + a21 * j11 + a22 * j21,
-            a20 * j02 + a21 * j12 + a22 * j22,
+    # A Rz(th): columns 0, 1 turned, column 2 (the axis) kept
+    return (a00 * cs + a01 * sn, a01 * cs - a00 * sn, a02,
+            a10 * cs + a11 * sn, a11 * cs - a10 * sn, a12,
+            a20 * cs + a21 * sn, a21 * cs - a20 * sn, a22,
             o0 + (b00 * px + b01 * py + b02 * pz), o1 + (b10 * px + b11 * py + b12 * pz),
-            o2 + (b20 * px + b21 * py + b22 * pz),
-            a00 * ax + a01 * ay + a02 * az, a10 * ax + a11 * ay + a12 * az,
-            a20 * ax + a21 * ay + a22 * az)
+            o2 + (b20 * px + b21 * py + b22 * pz), a02, a12, a22)
 
 
 @njit(**_NI)
@@ -361,13 +377,13 @@ class Workspace:
 
 
 @njit(**_NI)
-def aba(planar, R, p, axis, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
+def aba(planar, R, p, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
     """Forward dynamics ``ddq = M^-1 (tau - c(q, v))`` by the articulated-body algorithm.
 
     Parameters
     ----------
     planar : bool
-    R, p, axis, I6 : model arrays of :func:`chain_arrays`
+    R, p, I6 : model arrays of :func:`chain_arrays`
     q : (nq,)   configuration (unit quaternion / (cos, sin) of the root)
     v : (nv,)   velocity ``[v_base (nb), qd (n)]``;  tau : (nv,) generalised force
     ddq : (nv,) output
@@ -410,7 +426,7 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6
     bp[0, 0], bp[0, 1], bp[0, 2] = 0.0, 0.0, 0.0
     for k in range(1, nb):
         (b00, b01, b02, b10, b11, b12, b20, b21, b22, n0, n1, n2, s0, s1, s2) = _place(
-            R, p, axis, k, q[nq0 + k - 1], b00, b01, b02, b10, b11, b12, b20, b21, b22,
+            R, p, k, q[nq0 + k - 1], b00, b01, b02, b10, b11, b12, b20, b21, b22,
             o0, o1, o2)
         d0, d1, d2 = n0 - o0, n1 - o1, n2 - o2
         o0, o1, o2 = n0, n1, n2
@@ -576,7 +592,7 @@ def aba(planar, R, p, axis, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6
 
 
 @njit(**_NI)
-def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6):
+def terms(planar, R, p, I6, mc, q, v, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6):
     """Joint-space inertia (CRBA), non-linear effects (RNEA at zero acceleration) and the
     centroidal momentum, as Pinocchio's ``computeAllTerms`` gives ``data.M``, ``data.nle`` and
     ``data.hg``.
@@ -614,7 +630,7 @@ def terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, bp, S, cb, IA, pA, U, Du
     ox, oy, oz = 0.0, 0.0, 0.0
     for k in range(1, nb):
         (b00, b01, b02, b10, b11, b12, b20, b21, b22, ox, oy, oz, s3, s4, s5) = _place(
-            R, p, axis, k, q[nq0 + k - 1], b00, b01, b02, b10, b11, b12, b20, b21, b22,
+            R, p, k, q[nq0 + k - 1], b00, b01, b02, b10, b11, b12, b20, b21, b22,
             ox, oy, oz)
         s0, s1, s2 = oy * s5 - oz * s4, oz * s3 - ox * s5, ox * s4 - oy * s3
         S[k, 0], S[k, 1], S[k, 2], S[k, 3], S[k, 4], S[k, 5] = s0, s1, s2, s3, s4, s5
