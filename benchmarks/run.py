@@ -311,34 +311,32 @@ def plant_kernel_parts(p: Plant, calls: int = 20000) -> dict:
     from spacerobot.plant import rigid_body as rb
 
     @njit
-    def loop_aba(n, planar, R, pp, axis, I6, q, v, tau, ddq, ws):
-        bR, bp, S, vel, cb, IA, pA, acc, U, Du, M6, v6 = ws     # (no *ws: aba is inlined)
+    def loop_aba(n, planar, R, pp, I6, q, v, tau, ddq, ws):
+        bp, S, cb, IA, pA, U, Du, M6, v6 = ws     # (no *ws: aba is inlined)
         for _ in range(n):
-            rb.aba(planar, R, pp, axis, I6, q, v, tau, ddq, bR, bp, S, vel, cb, IA, pA, acc, U,
-                   Du, M6, v6)
+            rb.aba(planar, R, pp, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6)
 
     @njit
-    def loop_terms(n, planar, R, pp, axis, I6, mc, q, v, M, nle, hg, ws):
-        bR, bp, S, vel, cb, IA, pA, acc, U, Du, M6, v6 = ws
+    def loop_terms(n, planar, R, pp, I6, mc, q, v, M, nle, hg, ws):
+        bp, S, cb, IA, pA, U, Du, M6, v6 = ws
         for _ in range(n):
-            rb.terms(planar, R, pp, axis, I6, mc, q, v, M, nle, hg, bR, bp, S, vel, cb, IA, pA,
-                     acc, U, Du, M6, v6)
+            rb.terms(planar, R, pp, I6, mc, q, v, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6)
 
-    planar, R, pp, axis, I6, mc = rb.chain_arrays(p.pm.model)
+    planar, R, pp, I6, mc = rb.chain_arrays(p.pm.model)
     ws = tuple(rb.Workspace(R.shape[0] - 1).arrays())
     v = p.pm.model.nv
     qn, vs = np.array(p.q, float), np.array(p.v, float)
     tau, ddq = np.zeros(v), np.empty(v)
     M, nle, hg = np.empty((v, v)), np.empty(v), np.empty(6)
-    loop_aba(1, planar, R, pp, axis, I6, qn, vs, tau, ddq, ws)          # compile
-    loop_terms(1, planar, R, pp, axis, I6, mc, qn, vs, M, nle, hg, ws)
+    loop_aba(1, planar, R, pp, I6, qn, vs, tau, ddq, ws)          # compile
+    loop_terms(1, planar, R, pp, I6, mc, qn, vs, M, nle, hg, ws)
     best_a = best_t = math.inf
     for _ in range(5):
         c = time.process_time()
-        loop_aba(calls, planar, R, pp, axis, I6, qn, vs, tau, ddq, ws)
+        loop_aba(calls, planar, R, pp, I6, qn, vs, tau, ddq, ws)
         best_a = min(best_a, (time.process_time() - c) / calls)
         c = time.process_time()
-        loop_terms(calls, planar, R, pp, axis, I6, mc, qn, vs, M, nle, hg, ws)
+        loop_terms(calls, planar, R, pp, I6, mc, qn, vs, M, nle, hg, ws)
         best_t = min(best_t, (time.process_time() - c) / calls)
     return {"aba_call": best_a * 1e6, "terms_call": best_t * 1e6}
 

@@ -1,8 +1,8 @@
 """The compiled rigid-body dynamics (spacerobot/plant/rigid_body.py) against Pinocchio: forward
 dynamics (ABA), joint-space inertia (CRBA), non-linear effects and centroidal momentum at random
 states, for the planar and spatial robots and the shipped 7-joint servicer URDF (each with a
-grasped target) and a randomly generated 7-joint chain, so that arbitrary serial chains are
-covered."""
+grasped target), a randomly generated 7-joint chain and an 8-joint one with joints about x, y,
+z, -z and random axes, so that arbitrary serial chains are covered."""
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -25,17 +25,22 @@ def _random_inertia(rng) -> pin.Inertia:
                        Q @ np.diag([a, b, c]) @ Q.T)
 
 
-def random_chain(rng, n: int = 7) -> pin.Model:
+def random_chain(rng, n: int = 7, kinds: str = "uuz") -> pin.Model:
     """Free-flyer base + ``n`` revolute joints with random placements, axes and inertias, built
-    in Pinocchio (mixing aligned and unaligned revolute joints)."""
+    in Pinocchio; joint ``k`` is of the kind ``kinds[k % len(kinds)]``: ``x``, ``y``, ``z``
+    (``RX``, ``RY``, ``RZ``), ``u`` (unaligned, a random axis) or ``m`` (unaligned along
+    ``-z``)."""
     model = pin.Model()
     model.gravity = pin.Motion.Zero()
     parent = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "base")
     model.appendBodyToJoint(parent, _random_inertia(rng), pin.SE3.Identity())
-    aligned = (pin.JointModelRX, pin.JointModelRY, pin.JointModelRZ)
+    aligned = {"x": pin.JointModelRX, "y": pin.JointModelRY, "z": pin.JointModelRZ}
     for k in range(n):
-        if k % 3 == 2:
-            jm = aligned[k % 3]()
+        kind = kinds[k % len(kinds)]
+        if kind in aligned:
+            jm = aligned[kind]()
+        elif kind == "m":
+            jm = pin.JointModelRevoluteUnaligned(np.array([0.0, 0.0, -1.0]))
         else:
             ax = rng.normal(size=3)
             jm = pin.JointModelRevoluteUnaligned(ax / np.linalg.norm(ax))
@@ -50,6 +55,8 @@ def _models():
     out["servicer7"] = build_model(get_robot(str(URDF_DIR / "servicer7.urdf")),
                                    target=TARGET).model
     out["chain7"] = random_chain(np.random.default_rng(7))
+    # every kind of joint frame of chain_arrays (identity, the x/y permutations, general)
+    out["chain_xyzm"] = random_chain(np.random.default_rng(8), n=8, kinds="xyzmu")
     return out
 
 
@@ -69,7 +76,7 @@ def _random_state(model, rng):
 def test_compiled_dynamics_equal_pinocchio(name):
     model = MODELS[name]
     data = model.createData()
-    planar, R, p, axis, I6, mc = rb.chain_arrays(model)
+    planar, R, p, I6, mc = rb.chain_arrays(model)
     assert planar == (name == "planar")
     ws = rb.Workspace(R.shape[0] - 1).arrays()
     rng = np.random.default_rng(abs(hash(name)) % 2**32)
@@ -78,12 +85,12 @@ def test_compiled_dynamics_equal_pinocchio(name):
         q, v, tau = _random_state(model, rng)
         # forward dynamics
         ddq = np.empty(nv)
-        assert rb.aba(planar, R, p, axis, I6, q, v, tau, ddq, *ws) == 0
+        assert rb.aba(planar, R, p, I6, q, v, tau, ddq, *ws) == 0
         ref = pin.aba(model, data, q, v, tau)
         assert np.max(np.abs(ddq - ref)) <= TOL * max(1.0, np.max(np.abs(ref)))
         # M, nle, centroidal momentum, centre of mass
         M, nle, hg = np.empty((nv, nv)), np.empty(nv), np.empty(6)
-        com = np.array(rb.terms(planar, R, p, axis, I6, mc, q, v, M, nle, hg, *ws))
+        com = np.array(rb.terms(planar, R, p, I6, mc, q, v, M, nle, hg, *ws))
         pin.computeAllTerms(model, data, q, v)
         Mref = data.M.copy()
         Mref = np.triu(Mref) + np.triu(Mref, 1).T

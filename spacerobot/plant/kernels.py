@@ -314,12 +314,23 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, c
             s -= sol[r0 + j, p] * post[p]
         rhs[j] = s
     # selectively damped inverse of GWG (damped only near a singular coupling)
-    lo, hi = GWG[0, 0], GWG[0, 0]
     if r == 3:
-        lo, hi = _sym3_eigenvalues(GWG[0, 0], GWG[0, 1], GWG[0, 2], GWG[1, 1], GWG[1, 2],
-                                   GWG[2, 2])
-    lmax = max(hi, 1e-300)
-    if lo / lmax >= 1.01 * DLS_RATIO:     # z = (GWG)^+ rhs
+        g00, g01, g02, g11, g12, g22 = GWG[0, 0], GWG[0, 1], GWG[0, 2], GWG[1, 1], GWG[1, 2], \
+            GWG[2, 2]
+        det = (g00 * (g11 * g22 - g12 * g12) - g01 * (g01 * g22 - g12 * g02)
+               + g02 * (g01 * g12 - g11 * g02))
+        tr = g00 + g11 + g22
+        # positive definite (leading minors > 0) with lo / hi >= 4 det / tr^3 (lo = det /
+        # (mid hi), mid hi <= (tr / 2)^2, hi <= tr) twice the threshold: the eigenvalues would
+        # choose the undamped branch too, so they are not computed
+        plain = (g00 > 0.0 and g00 * g11 - g01 * g01 > 0.0 and det > 0.0
+                 and 4.0 * det >= 2.0 * 1.01 * DLS_RATIO * (tr * tr * tr))
+        if not plain:
+            lo, hi = _sym3_eigenvalues(g00, g01, g02, g11, g12, g22)
+            plain = lo / max(hi, 1e-300) >= 1.01 * DLS_RATIO
+    else:
+        plain = GWG[0, 0] / max(GWG[0, 0], 1e-300) >= 1.01 * DLS_RATIO
+    if plain:                            # z = (GWG)^+ rhs
         if not cholesky(GWG, Lg):
             return 3
         for j in range(r):
@@ -630,7 +641,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
     Parameters
     ----------
     planar : bool
-    mdl : tuple ``(R, p, axis, I6, mc)`` of :func:`.rigid_body.chain_arrays`
+    mdl : tuple ``(R, p, I6, mc)`` of :func:`.rigid_body.chain_arrays`
     ws : tuple, the work arrays of :class:`.rigid_body.Workspace`
     cw : tuple, the scratch arrays of :func:`control_work`
     x : (nx,) state ``[J, H, q, v, m_p, P_x, L_x]`` (:func:`stage`); ``qn``, ``vs`` must hold
@@ -647,8 +658,8 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
     Returns ``(status, t_reached)``: status 0, or the code (:data:`ERRORS`) of the step that
     could not be taken; ``xout`` and ``t_reached`` are then the state and time at its start.
     """
-    R, p, axis, I6, mc = mdl
-    bR, bp, S, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    R, p, I6, mc = mdl
+    bp, S, cb, IA, pA, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
     nx = x.shape[0]
     om = 6 + qn.shape[0] + vs.shape[0]   # m_p in the state
@@ -660,8 +671,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         dt = h if k < n_steps else rest
         if on:
             base_inertia(xa[om], pp, I6d, I6u, mcd, I6, mc)
-        terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bR, bp, S, vel, cb, IA, pA, accb, U,
-              Du, M6, v6)
+        terms(planar, R, p, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6)
         err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM,
                              pp, xa[om], dt, parw, cw)
         if err:
@@ -672,8 +682,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         for i in range(1, 4):
             if on:
                 base_inertia(xs[om], pp, I6d, I6u, mcd, I6, mc)
-            if aba(planar, R, p, axis, I6, qn, vs, gen, ddq, bR, bp, S, vel, cb, IA, pA, accb, U,
-                   Du, M6, v6):
+            if aba(planar, R, p, I6, qn, vs, gen, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
                 for j in range(nx):
                     xout[j] = xa[j]
                 load(planar, xa, qn, vs)
@@ -717,8 +726,8 @@ def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn,
     ``mdl``, ``ws``, ``cw``, ``par``, ``q_home``, ``ramp``, ``tab``, ``prop``: as in
     :func:`advance`. Returns 0 or the code (:data:`ERRORS`) of a singular matrix.
     """
-    R, p, axis, I6, mc = mdl
-    bR, bp, S, vel, cb, IA, pA, accb, U, Du, M6, v6 = ws
+    R, p, I6, mc = mdl
+    bp, S, cb, IA, pA, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
     nq, nv = qn.shape[0], vs.shape[0]
     nb = 3 if planar else 6
@@ -728,8 +737,8 @@ def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn,
     load(planar, x, qn, vs)
     if pp[0] != 0.0:
         base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc)
-    c0, c1, c2 = terms(planar, R, p, axis, I6, mc, qn, vs, M, nle, hg, bR, bp, S, vel, cb, IA,
-                       pA, accb, U, Du, M6, v6)
+    c0, c1, c2 = terms(planar, R, p, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6,
+                       v6)
     err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp,
                          m_p, h, parw, cw)
     if err:

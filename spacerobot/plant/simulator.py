@@ -103,11 +103,11 @@ class Plant:
         self._FM = np.zeros(7)                     # thrust [F, M], inertial; mass flow [kg/s]
         self._par = np.array([getattr(controller, k) for k in kernels.PARAMS], float)
         # compiled rigid-body model (from the Pinocchio model) and its work space
-        self._mdl = rigid_body.chain_arrays(pm.model)[1:]   # (R, p, axis, I6, mc)
+        self._mdl = rigid_body.chain_arrays(pm.model)[1:]   # (R, p, I6, mc)
         # propellant: its array, the dry base (body 0), 1 kg of propellant, a scratch par
         pp = propellant_array(propellant)
-        self._prop = (pp, self._mdl[3][0].copy(), unit_sphere_inertia(pp),
-                      self._mdl[4][0].copy(), np.empty_like(self._par))
+        self._prop = (pp, self._mdl[2][0].copy(), unit_sphere_inertia(pp),
+                      self._mdl[3][0].copy(), np.empty_like(self._par))
         self._ws = rigid_body.Workspace(pm.model.njoints - 2).arrays()
         self._cw = kernels.control_work(robot.planar, self._nv)
         self._M = np.zeros((self._nv, self._nv))
@@ -266,7 +266,7 @@ class Plant:
             self._loaded = x
         pp, I6d, I6u, mcd, parw = self._prop
         if pp[0] != 0.0:
-            kernels.base_inertia(x[self._om], pp, I6d, I6u, mcd, self._mdl[3], self._mdl[4])
+            kernels.base_inertia(x[self._om], pp, I6d, I6u, mcd, self._mdl[2], self._mdl[3])
         rigid_body.terms(self.pm.planar, *self._mdl, qn, vs, self._M, self._nle, self._hg,
                          *self._ws)
         # the thrust held over the next internal step (a step of h)
