@@ -8,7 +8,8 @@ Implementation notes (performance; the equations are those of :mod:`.dynamics` a
   :mod:`.kernels`); the public attributes ``q``, ``v``, ``J``, ``H`` are views of it. Every
   step makes a new ``x`` (the arrays a caller kept are never changed behind its back); a
   caller that assigns e.g. ``plant.q = ...`` is noticed at the next step.
-* A communication step is one compiled call (:func:`.kernels.advance`): per 1 ms RK4 step the
+* A communication step is one compiled call (:func:`.kernels.advance_measured`: :func:`.kernels.advance`
+  then :func:`.kernels.measure` at the state reached): per 1 ms RK4 step the
   rigid-body terms (:func:`.rigid_body.terms`) and the control kernel at the start of the step
   (zero-order hold; its inverse dynamics give the first stage's accelerations), then three
   times the compiled articulated-body algorithm (:func:`.rigid_body.aba`) followed by the stage
@@ -17,9 +18,11 @@ Implementation notes (performance; the equations are those of :mod:`.dynamics` a
   which is otherwise not used while stepping. With a propellant model
   (:class:`~spacerobot.robots.Propellant`, ``m0 > 0``) the compiled base inertia follows the
   propellant mass inside the compiled call.
-* The outputs are one more compiled call (:func:`.kernels.measure`): the rigid-body terms and
-  the controls at the current state (those the next step holds) and every output, written
-  into one flat vector (:meth:`Plant.output_vector`, layout :func:`.kernels.output_layout`).
+* The outputs (:func:`.kernels.measure`: the rigid-body terms and the controls at the current
+  state, those the next step holds, and every output, written into one flat vector;
+  :meth:`Plant.output_vector`, layout :func:`.kernels.output_layout`) come with the step that
+  reached the state; at any other state (a restored one, the initial one, after
+  :meth:`Plant.set_excitation`) they are one compiled call of their own.
 """
 from __future__ import annotations
 
@@ -133,6 +136,8 @@ class Plant:
         self._u: Controls | None = None
         self._loaded = None        # the state vector whose configuration is in _qn, _vs
         self._ctrl_x = None        # the state vector the control buffers were computed for
+        self._y_x = None           # the state vector whose outputs are in _y
+        self._finite = True        # whether the state reached by the last step is finite
 
     # -- copies (the integrator's closures refer to this instance's buffers) -------------------
     def __deepcopy__(self, memo):
@@ -208,7 +213,7 @@ class Plant:
         self._x = np.concatenate([J, H, q, v, prop])
         self._publish()
         self._u = None
-        self._loaded = self._ctrl_x = None
+        self._loaded = self._ctrl_x = self._y_x = None
 
     # -- excitation --------------------------------------------------------------------------
     def set_excitation(self, level: float) -> None:
@@ -227,7 +232,7 @@ class Plant:
         s_now = kernels.ramp_level(self.t, self._ramp)[0]
         self._ramp = np.array([s_now, level, self.t, self.excitation.ramp])
         self._u = None
-        self._ctrl_x = None
+        self._ctrl_x = self._y_x = None
 
     def excitation_level(self) -> tuple:
         """``(s, ds/dt, d2s/dt2)``: the excitation level in effect now and its derivatives."""
@@ -281,18 +286,21 @@ class Plant:
     # -- integration -------------------------------------------------------------------------
     def _run(self, n: int, h: float, rest: float) -> None:
         """``n`` RK4 steps of ``h`` then one of ``rest`` (if > 0) in one compiled call
-        (:func:`.kernels.advance`); the controls of each step are held over it."""
+        (:func:`.kernels.advance_measured`); the controls of each step are held over it. The
+        same call measures the outputs at the state reached (:meth:`output_vector` then needs
+        no call of its own)."""
         x = self._collect()
         if self._loaded is not x:
             kernels.load(self.pm.planar, x, self._qn, self._vs)
         xn = np.empty_like(x)
-        err, t = kernels.advance(self.pm.planar, self._mdl, self._ws, self._cw, x, n, h, rest,
-                                 self.t,
-                                 self._par, self.q_home, self._ramp, self._ex_tab, self._prop,
-                                 *self._buf, xn)
+        err, t, measured, self._finite = kernels.advance_measured(
+            self.pm.planar, self._mdl, self._ws, self._cw, x, n, h, rest, self.t, self._par,
+            self.q_home, self._ramp, self._ex_tab, self._prop, *self._buf, xn, self.h, self._dry,
+            self._y)
         self._x, self.t = xn, t
         self._loaded = xn                 # the kernel left xn's configuration in _qn, _vs
-        self._ctrl_x = None
+        # and, measured, the controls for xn in _FM, _gen, _acc and its outputs in _y
+        self._ctrl_x = self._y_x = xn if measured == 0 else None
         self._u = None
         self._publish()
         if err:
@@ -311,7 +319,7 @@ class Plant:
         if rest < 1e-9 * self.h:
             rest = 0.0
         self._run(n, self.h, rest)
-        if not np.all(np.isfinite(self._x)):
+        if not self._finite:
             raise FloatingPointError(f"state became non-finite at t = {self.t:.6g} s")
 
     # -- measurements ------------------------------------------------------------------------
@@ -334,15 +342,17 @@ class Plant:
         :meth:`output_slices`, computed in one compiled call (:func:`.kernels.measure`: the
         controls held from this instant and the rigid-body terms at the current state)."""
         x = self._collect()
+        if self._y_x is x:                # measured by the step that reached x (_run)
+            return self._y.copy()
         err = kernels.measure(self.pm.planar, self._mdl, self._ws, self._cw, x, self.t, self.h,
                               self._par, self.q_home, self._ramp, self._ex_tab, self._prop,
                               self._dry, self._qn, self._vs, self._gen, self._acc, self._FM,
                               self._M, self._nle, self._hg, self._y)
         self._loaded = x                  # the kernel left x's configuration in _qn, _vs
         if err:
-            self._ctrl_x = None
+            self._ctrl_x = self._y_x = None
             raise np.linalg.LinAlgError(kernels.ERRORS[err])
-        self._ctrl_x = x                  # and the controls for x in _FM, _gen, _acc
+        self._ctrl_x = self._y_x = x      # and the controls for x in _FM, _gen, _acc
         self._u = None
         return self._y.copy()
 
