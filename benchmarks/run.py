@@ -585,6 +585,11 @@ def accuracy_table(robot: str, a: dict, labs, values: bool) -> str:
     return note + "\n\n" + table(head, rows)
 
 
+#: repetitions of each timed run (short, long, bare loop, interleaved) in a speed round; the
+#: host's speed drifts within seconds, and the best of more repetitions is steadier
+SPEED_REPEATS = 7
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="short runs (smoke test of the script)")
@@ -605,7 +610,7 @@ def main(argv=None) -> int:
     seconds = {"planar": 3.0, "spatial": 3.0} if quick else {"planar": 10.0, "spatial": 10.0}
     # measured in rounds spread over the run (now, after section 2, after section 3) and
     # merged by taking the best of each figure: robust against bursts of other load
-    rounds = [cosim_speed(systems, seconds, repeats=1 if quick else 3)]
+    rounds = [cosim_speed(systems, seconds, repeats=1 if quick else SPEED_REPEATS)]
     print("speed:", {r: round(v["ratio"], 2) for r, v in rounds[-1].items()}, flush=True)
     prof = profile_summary(systems["spatial"]["ssp"], 2.0 if quick else 10.0)
 
@@ -638,11 +643,11 @@ def main(argv=None) -> int:
     gc.collect()
 
     if not quick:
-        rounds.append(cosim_speed(systems, seconds, repeats=3))
+        rounds.append(cosim_speed(systems, seconds, repeats=SPEED_REPEATS))
     # 3. accuracy
     acc = {r: accuracy(r, 25.0 if quick else 60.0) for r in ("planar", "spatial")}
     if not quick:
-        rounds.append(cosim_speed(systems, seconds, repeats=3))
+        rounds.append(cosim_speed(systems, seconds, repeats=SPEED_REPEATS))
     speed = merge_rounds(rounds)
     print("speed rounds:", [{r: round(v["ratio"], 2) for r, v in x.items()} for x in rounds],
           "merged:", {r: round(v["ratio"], 2) for r, v in speed.items()}, flush=True)
@@ -716,7 +721,7 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              "initialisation (reported separately). Floor = a bare RK4 loop over `pin.aba` "
              "(zero torques, `pin.integrate` for the configuration) on the same Pinocchio model, "
              "1 ms step, same initial state. Measured in the same process, interleaved, in three rounds spread over the benchmark run "
-             "(best of 3 repetitions in each round); the round with the median ratio is shown, as "
+             f"(best of {SPEED_REPEATS} repetitions in each round); the round with the median ratio is shown, as "
              "the host's speed drifts between rounds (1 round of 1 in --quick).\n")
     rows = []
     for r, v in speed.items():
