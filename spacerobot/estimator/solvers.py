@@ -411,7 +411,7 @@ class PaperSolver(ParameterSolver):
             raise np.linalg.LinAlgError("Eigenvalues did not converge")
         _raise_for(st)
         rls.assign(rls_new, k1, k2)
-        self.gram_lin, self.gram_ang = gl.counted(S_lin, k1), ga.counted(S_ang, k2)
+        self.gram_lin, self.gram_ang = gl2._replace(S=S_lin), ga2._replace(S=S_ang)
         self._take(rls.mu, rls.theta)
         s0, s1, t_ref, a_bar, da_dt, has_lag = tr_s
         tracker = DriftTracker(tracker.lam, s0, s1, t_ref, float(clock), a_bar, da_dt, pack[0],

@@ -36,6 +36,11 @@ def _escape(msg: str) -> str:
     return msg.replace("%", "%%")
 
 
+def _plan_key(kind: str, vrs) -> tuple:
+    """The key of a value-reference list's plan: its kind, length and ends."""
+    return (kind, len(vrs), vrs[0], vrs[-1]) if vrs else (kind, 0)
+
+
 def _merged_getter(names, is_output):
     """``get(outputs, values)``: the tuple of the values of ``names`` (k,) in their order, those
     with ``is_output`` (k,) from the dictionary ``outputs``, the others from ``values``, in a
@@ -189,14 +194,13 @@ class InterfaceSlave(Fmi2Slave):
         """The plan stored for exactly this list of value references, or None. Keyed by the
         list's length and ends (a tuple of every reference would be built and hashed at every
         call), the whole list compared (C-level) before use."""
-        entry = self._plans.get((kind, len(vrs), vrs[0], vrs[-1]) if vrs else (kind, 0))
+        entry = self._plans.get(_plan_key(kind, vrs))
         return entry[1] if entry is not None and entry[0] == vrs else None
 
     def _store(self, kind: str, vrs, plan):
         if len(self._plans) >= _MAX_PLANS:      # a host that keeps asking for new lists
             self._plans.clear()
-        key = (kind, len(vrs), vrs[0], vrs[-1]) if vrs else (kind, 0)
-        self._plans[key] = (vrs[:], plan)                 # a copy of the same type
+        self._plans[_plan_key(kind, vrs)] = (vrs[:], plan)    # a copy of the same type
         return plan
 
     def _check_refs(self, call: str, vrs, cls) -> None:
