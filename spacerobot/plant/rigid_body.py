@@ -298,6 +298,24 @@ def _crf(vl0, vl1, vl2, w0, w1, w2, fl0, fl1, fl2, fn0, fn1, fn2):
 
 
 @njit(**_NI)
+def _base_motion(planar, v, I6, pA):
+    """The base's velocity ``v_0 = [v_l; w]`` from ``v`` (planar: ``v_x, v_y, w_z``), its
+    momentum ``I_0 v_0`` and its bias force ``pA[0] = v_0 x* (I_0 v_0)`` (written), where the
+    articulated-body and the composite-body passes start: 12 floats ``v_l, w, h_l, h_n``."""
+    vl0, vl1, vl2, w0, w1, w2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if planar:
+        vl0, vl1, w2 = v[0], v[1], v[2]
+    else:
+        vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
+    hl0, hl1, hl2, hn0, hn1, hn2 = _rbi_mul(I6[0, 0, 0], I6[0, 5, 1], I6[0, 3, 2], I6[0, 4, 0],
+                                            I6[0, 3, 3], I6[0, 3, 4], I6[0, 3, 5], I6[0, 4, 4],
+                                            I6[0, 4, 5], I6[0, 5, 5], vl0, vl1, vl2, w0, w1, w2)
+    pA[0, 0], pA[0, 1], pA[0, 2], pA[0, 3], pA[0, 4], pA[0, 5] = _crf(
+        vl0, vl1, vl2, w0, w1, w2, hl0, hl1, hl2, hn0, hn1, hn2)
+    return vl0, vl1, vl2, w0, w1, w2, hl0, hl1, hl2, hn0, hn1, hn2
+
+
+@njit(**_NI)
 def _row(planar, i):
     """Row of the base spatial velocity ``[v; omega]`` that is the base's generalised velocity
     ``i``: all six for the free-flyer, rows 0, 1, 5 (``v_x, v_y, omega_z``) planar."""
@@ -410,17 +428,8 @@ def aba(planar, R, p, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
     nq0 = 4 if planar else 7
     # pass 1 (base to tip): v_k = shift(v_p) + [0; s qd], c_k = v_k x [0; s qd],
     # body inertia in base axes, pA_k = v_k x* (I_k v_k)
-    vl0, vl1, vl2, w0, w1, w2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    if planar:
-        vl0, vl1, w2 = v[0], v[1], v[2]
-    else:
-        vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
     # the base: pA_0 = v_0 x* (I_0 v_0)
-    hl0, hl1, hl2, hn0, hn1, hn2 = _rbi_mul(I6[0, 0, 0], I6[0, 5, 1], I6[0, 3, 2], I6[0, 4, 0],
-                                            I6[0, 3, 3], I6[0, 3, 4], I6[0, 3, 5], I6[0, 4, 4],
-                                            I6[0, 4, 5], I6[0, 5, 5], vl0, vl1, vl2, w0, w1, w2)
-    pA[0, 0], pA[0, 1], pA[0, 2], pA[0, 3], pA[0, 4], pA[0, 5] = _crf(
-        vl0, vl1, vl2, w0, w1, w2, hl0, hl1, hl2, hn0, hn1, hn2)
+    vl0, vl1, vl2, w0, w1, w2, hl0, hl1, hl2, hn0, hn1, hn2 = _base_motion(planar, v, I6, pA)
     b00, b01, b02, b10, b11, b12, b20, b21, b22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
     o0, o1, o2 = 0.0, 0.0, 0.0
     bp[0, 0], bp[0, 1], bp[0, 2] = 0.0, 0.0, 0.0
@@ -614,17 +623,7 @@ def terms(planar, R, p, I6, mc, q, v, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, 
     nq0 = 4 if planar else 7
     # RNEA, forward: v_k = v_p + S qd, a_k = a_p + c_k (a_0 = 0), c_k = v_k x (S qd);
     # f_k = I a_k + v x* (I v); momentum h = sum I v
-    vl0, vl1, vl2, w0, w1, w2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    if planar:
-        vl0, vl1, w2 = v[0], v[1], v[2]
-    else:
-        vl0, vl1, vl2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
-    m = I6[0, 0, 0]
-    hl0, hl1, hl2, hn0, hn1, hn2 = _rbi_mul(m, I6[0, 5, 1], I6[0, 3, 2], I6[0, 4, 0],
-                                            I6[0, 3, 3], I6[0, 3, 4], I6[0, 3, 5], I6[0, 4, 4],
-                                            I6[0, 4, 5], I6[0, 5, 5], vl0, vl1, vl2, w0, w1, w2)
-    pA[0, 0], pA[0, 1], pA[0, 2], pA[0, 3], pA[0, 4], pA[0, 5] = _crf(
-        vl0, vl1, vl2, w0, w1, w2, hl0, hl1, hl2, hn0, hn1, hn2)
+    vl0, vl1, vl2, w0, w1, w2, hl0, hl1, hl2, hn0, hn1, hn2 = _base_motion(planar, v, I6, pA)
     a0, a1, a2, a3, a4, a5 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     b00, b01, b02, b10, b11, b12, b20, b21, b22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
     ox, oy, oz = 0.0, 0.0, 0.0
