@@ -69,13 +69,13 @@ class SpaceRobotPlant(InterfaceSlave):
         level = self._excite_input(current_time)
         if level is None:
             return False
-        before = self.plant.get_state()
+        before = self.plant.checkpoint()
         try:
             self.plant.set_excitation(level)
             self.plant.advance(step_size)
             self._refresh()
         except (FloatingPointError, ValueError, np.linalg.LinAlgError) as e:
-            self.plant.set_state(before)
+            self.plant.rollback(before)
             self._refresh()
             self.log(_escape(f"step from t = {current_time:.6g} s by {step_size:.6g} s failed: "
                              f"{e}; state kept at t = {self.plant.t:.6g} s"), Fmi2Status.discard)

@@ -183,7 +183,8 @@ def _run_on(pair, extra, evr, t0, n):
 
 def test_mixed_reads_equal_what_was_set_and_the_core(planar_fmus):
     """One fmi2GetReal / fmi2GetInteger of inputs, parameters and outputs mixed (as a recorder
-    asks: the slave's merged fast path) in a shuffled order, also with a value reference twice:
+    asks: the slave's merged fast path) in a shuffled order, also with a value reference twice,
+    and with the inputs and parameters before or after the outputs:
     the inputs are the values set, the parameters their values, the outputs those of an
     estimator core fed the same samples (the excitation diagnostics, computed when read,
     included); each read again one variable at a time gives the same."""
@@ -203,9 +204,15 @@ def test_mixed_reads_equal_what_was_set_and_the_core(planar_fmus):
             pair.step(DT, sample=x)
         rep = core.report()
         rng = np.random.default_rng(2)
+        orders = []
         for typ in ("Real", "Integer"):
             names = [n for n, v in est.vars.items() if v.type == typ]
-            names = [names[i] for i in rng.permutation(len(names))] + names[:1]
+            outs = [n for n in names if est.vars[n].causality == "output"]
+            rest = [n for n in names if est.vars[n].causality != "output"]
+            # shuffled (reordered), and each kind in one run (joined as read)
+            orders += [(typ, [names[i] for i in rng.permutation(len(names))] + names[:1]),
+                       (typ, rest + outs), (typ, outs + rest)]
+        for typ, names in orders:
             vrs = [est.vars[n].valueReference for n in names]
             got = (est.fmu.getReal if typ == "Real" else est.fmu.getInteger)(vrs)
             one = [(est.fmu.getReal if typ == "Real" else est.fmu.getInteger)([vr])[0]

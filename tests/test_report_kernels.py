@@ -336,6 +336,36 @@ def test_projection_equals_the_oracle(planar):
     assert 50 < moved < 500                     # both kinds of body were met
 
 
+def test_report_flags_equal_the_separate_kernels():
+    """report_flags (one call) against both_physical, error_scale and identified_bodies: the
+    physical flags always, the identified ones where both bodies are physical (else it
+    returns False and the caller projects), on random estimates, some not physical."""
+    rng = np.random.default_rng(7)
+    ident = interface.LAYOUT.identified
+    both = projected = 0
+    for k in range(3000):
+        ls = np.empty(20)
+        for e in (0, 10):
+            ls[e] = rng.uniform(-5.0, 100.0)
+            ls[e + 1:e + 4] = rng.normal(0.0, 0.3, 3)
+            ls[e + 4:e + 7] = rng.uniform(1.0, 20.0, 3)
+            ls[e + 7:e + 10] = rng.normal(0.0, 1.0, 3)
+        sd = np.abs(ls) * 10.0 ** rng.uniform(-6, 0, 20)
+        sd_rel = 10.0 ** rng.uniform(-3, -1)
+        flags = np.empty(4, bool)
+        got = rk.report_flags(ls, sd, interface.COM_SCALE_MIN, sd_rel, ident, flags)
+        physical, ok = np.empty(2, bool), np.empty(2, bool)
+        rk.both_physical(ls, physical)
+        assert got == bool(physical.all()) and np.array_equal(flags[:2], physical)
+        if got:
+            scale = rk.error_scale(ls, interface.COM_SCALE_MIN)
+            rk.identified_bodies(sd, ls, ls, scale, sd_rel, ident, ok)
+            assert np.array_equal(flags[2:], ok)
+            both += ok.any()
+        projected += not got
+    assert both > 50 and projected > 50
+
+
 def test_error_scale_equals_the_layouts():
     """The compiled error scale (Identifier.report's) equals ParameterLayout.error_scale bit for
     bit: random estimates with zeros, CoM offsets around COM_SCALE_MIN, negative entries, NaN
@@ -451,6 +481,12 @@ def test_fused_step_equals_the_layers(runs, robot, kw):
             continue                                     # the momentum reference sample
         u = a.std_parts()                                # the layers on the fused state
         assert np.array_equal(fused.tracking.sd, u.sd)
+        # what the report reads, as the fused step computed it, against the layers on the
+        # fused state: the estimates and the tracker's total standard deviations
+        rep = fused.report()
+        assert np.array_equal(fused.vector(), a.vector())
+        assert np.array_equal(fused.std(), fused.tracking.total_sd())
+        assert np.array_equal(rep.std, fused.tracking.total_sd())
         want = ParameterSolver.track(a, before, float(fused.samples - 1), u.data_only, u.sd,
                                      info, u.jacobian)
         for name, x, y in zip(want._fields, fused.tracking, want):

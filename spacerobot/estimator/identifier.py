@@ -11,6 +11,7 @@ from __future__ import annotations
 import copy
 import math
 import numbers
+import operator
 from dataclasses import dataclass
 from typing import Mapping, Tuple
 
@@ -247,6 +248,7 @@ class Identifier:
         #                             diff_momentum: (t, own-point rows, their noise rows,
         #                             flat sample, momentum rows, momentum part)
         self._exc = None            # cached excitation() (cleared by update / set_state)
+        self._reported = None       # what the fused step computed for the report (_kept)
         self.tracking = DriftTracker.empty(lam)   # the estimates' lag (:mod:`.tracking`)
         self.thrust = consider.ThrustIntegrals()   # momentum form with thrust_sd: int F, M
 
@@ -477,13 +479,12 @@ class Identifier:
         """What an update may change, for :meth:`_restore`. Cheap: the solver's snapshot and
         the identifier's attributes are references (an update rebinds them, never writes into
         them), the history a shallow copy of its list."""
-        return (self.solver.snapshot(), {k: getattr(self, k) for k in _UPDATED},
-                list(self.history))
+        return self.solver.snapshot(), _updated_of(self), list(self.history)
 
     def _restore(self, snap) -> None:
         solver, attrs, history = snap
         self.solver.restore(solver)
-        for k, v in attrs.items():
+        for k, v in zip(_UPDATED, attrs):
             setattr(self, k, v)
         self.history = history
 
@@ -543,9 +544,10 @@ class Identifier:
         clock = float(self.samples)
         if self.solver.fuses(b_c, noise):            # the same steps in one compiled call
             ((self.residual_lin, self.residual_ang), (self.info_lin, self.info_ang),
-             self.tracking, rcond) = self.solver.step(*self._identified_rows(*_split(E)),
-                                                      (self.info_lin, self.info_ang),
-                                                      self.tracking, clock)
+             self.tracking, rcond, (vec, sd)) = self.solver.step(
+                *self._identified_rows(*_split(E)), (self.info_lin, self.info_ang),
+                self.tracking, clock)
+            self._reported = (self.tracking, self.solver.mu, self.solver.theta, vec, sd)
         else:
             info = self.solver.information()
             self._solve(*_split(E), b_c, y_c, noise)
@@ -713,7 +715,19 @@ class Identifier:
     def vector(self) -> np.ndarray:
         """Estimates as one (20,) vector in the order of
         :data:`spacerobot.interface.ESTIMATE_NAMES`: per body m, b (3), I (6)."""
-        return self.solver.vector()
+        kept = self._kept()
+        return self.solver.vector() if kept is None else kept[0].copy()
+
+    def _kept(self):
+        """``(vector, std)`` as the fused step computed them with the state it left
+        (:meth:`.PaperSolver.step`), while that state is the current one (the tracker and the
+        solver's vectors are those it made: an update rebinds them, never writes into them);
+        else None."""
+        k = self._reported
+        if (k is not None and k[0] is self.tracking and k[1] is self.solver.mu
+                and k[2] is self.solver.theta and self.samples and not self._consider):
+            return k[3], k[4]
+        return None
 
     def std(self) -> np.ndarray:
         """Standard deviations of :meth:`vector` (20,) (:meth:`.ParameterSolver.uncertainty`).
@@ -731,6 +745,9 @@ class Identifier:
         """
         if not self.samples:
             return self.solver.std()
+        kept = self._kept()
+        if kept is not None:
+            return kept[1].copy()
         sd = self.tracking.total_sd()
         if self._consider:                           # + the thrust errors' share (.consider)
             s = self.solver
@@ -745,25 +762,28 @@ class Identifier:
         The projection acts on the output only: the solver keeps the exact least-squares
         state, so the report equals :meth:`vector` as soon as that is physical.
         """
-        ls, sd = self.vector(), self.std()
-        out, physical = ls.copy(), {}
-        real = np.empty(len(self.layout.bodies), bool)
-        report_kernels.both_physical(ls, real)          # is_physical of both, one call
-        project = project_planar_body if self.robot.planar else project_body
-        for b, g in zip(self.layout.bodies, (self.guess.base, self.guess.target)):
-            physical[b.name] = bool(real[b.index])
-            if not real[b.index]:
-                m, com, I6, _ = project(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
-                out[b.m], out[b.first], out[b.inertia] = m, com, I6
-        scale = report_kernels.error_scale(out, COM_SCALE_MIN)    # layout.error_scale(out)
-        # identified: small standard deviation, and the reported value is the estimate's
-        # (|sd| and |out - ls| <= sd_rel * scale), for every identified entry of the body
-        ok_body = np.empty(len(self.layout.bodies), bool)
-        report_kernels.identified_bodies(sd, out, ls, scale, self.sd_rel, self.layout.identified,
-                                         ok_body)
-        identified = {b.name: bool(self.samples > 0 and ok_body[b.index])
-                      for b in self.layout.bodies}
-        return Report(out, sd, identified, physical)
+        kept = self._kept()
+        ls, sd = (self.vector(), self.std()) if kept is None else (kept[0], kept[1].copy())
+        out = ls.copy()
+        # physical flags, and identified: small standard deviation, and the reported value is
+        # the estimate's (|sd| and |out - ls| <= sd_rel * scale), for every identified entry of
+        # the body; one call where both are physical (out = ls)
+        flags = np.empty(4, bool)
+        if not report_kernels.report_flags(ls, sd, COM_SCALE_MIN, self.sd_rel,
+                                           self.layout.identified, flags):
+            project = project_planar_body if self.robot.planar else project_body
+            for b, g in zip(self.layout.bodies, (self.guess.base, self.guess.target)):
+                if not flags[b.index]:
+                    m, com, I6, _ = project(ls[b.m], ls[b.first], ls[b.inertia], g.mass)
+                    out[b.m], out[b.first], out[b.inertia] = m, com, I6
+            scale = report_kernels.error_scale(out, COM_SCALE_MIN)    # layout.error_scale(out)
+            report_kernels.identified_bodies(sd, out, ls, scale, self.sd_rel,
+                                             self.layout.identified, flags[2:])
+        base, target = self.layout.bodies
+        some = self.samples > 0
+        return Report(out, sd, {base.name: bool(some and flags[2 + base.index]),
+                                target.name: bool(some and flags[2 + target.index])},
+                      {base.name: bool(flags[base.index]), target.name: bool(flags[target.index])})
 
     def estimates(self) -> dict:
         """``{'base': BodyEstimate, 'target': BodyEstimate}`` (the least-squares estimates;
@@ -817,6 +837,8 @@ MAX_THRUST_SD = 1.0
 #: attributes of the identifier an update rebinds (restored by reference)
 _UPDATED = ("info_lin", "info_ang", "samples", "status", "residual_lin", "residual_ang",
             "reference", "ring", "bias_fit", "tracking", "thrust", "_exc")
+#: their values, in that order, in one call (:meth:`Identifier._snapshot`)
+_updated_of = operator.attrgetter(*_UPDATED)
 
 
 def about_point(dE: np.ndarray, p: np.ndarray, lin_of: np.ndarray | None = None) -> None:

@@ -847,7 +847,7 @@ def paper_step(rls_state, rows, lam, mu_fixed, mu_active, theta_active, S_lin, S
     prior : tuple ``(P0_mu, P0_theta, mu0 (p,), th0 (r,))``
     s2p : (6,) int, ``par.SHARP_TO_PROJECT``;  com_min : float, ``COM_SCALE_MIN``
     tracker : (6,) ``[lam, s0, s1, t_ref, t_prev, a_bar]`` of the :class:`.tracking.DriftTracker`
-        and ``[clock t, rate_memory]`` appended: (8,)
+        and ``[clock t, rate_memory, noise_lag]`` appended: (9,)
     tracker_sums : tuple ``(w, mt, mx, ctt, ctx)`` (20,) each (``regression_sums``)
     M_lin, M_ang : its age-weighted Gram matrices before the sample
 
@@ -860,8 +860,10 @@ def paper_step(rls_state, rows, lam, mu_fixed, mu_active, theta_active, S_lin, S
     scalars : ``(residual_lin, residual_ang, rcond_lin, rcond_ang)``: the relative residuals
         and the excitation diagnostics
     tracker_scalars : ``(s0, s1, t_ref, a_bar, da_dt, has_lag)`` of :func:`paper_tracker_add`
-    pack : (9, 20) its vectors ``w, mt, mx, ctt, ctx, rate, gain, lag`` and the standard
-        deviations (floored where unobserved), one per row
+    pack : (11, 20) its vectors ``w, mt, mx, ctt, ctx, rate, gain, lag``, the standard
+        deviations (floored where unobserved), and what the report reads after the sample:
+        the estimates (:func:`paper_vector_of`) and their total standard deviations
+        (:func:`total_sd` with the tracker's lag), one per row
     M_lin, M_ang : its age-weighted Gram matrices after the sample
 
     The solver's full vectors after the sample are ``mu_prev``, ``theta_prev`` with the RLS's
@@ -924,12 +926,24 @@ def paper_step(rls_state, rows, lam, mu_fixed, mu_active, theta_active, S_lin, S
                                   tracker[5], w, mt, mx, ctt, ctx, tracker[6], data_only, sd,
                                   tracker[7], M_lin, M_ang, S_lin, S_ang, J, S_lin2, S_ang2, mu,
                                   mu_active, theta_active)
-    # the tracker's vectors as the rows of one array (one array handed back to Python, not 9)
-    pack = np.empty((9, sd.shape[0]))
+    # what the report reads: the estimates and their total standard deviations
+    # (DriftTracker.lag: the matrix lag, else rate * a_bar / max(1 - da_dt, 0.1))
+    z = np.empty(mu.shape[0] + theta.shape[0])
+    z[:mu.shape[0]] = mu
+    z[mu.shape[0]:] = theta
+    vec = paper_vector_of(z, s2p)
+    factor = a_bar / max(1.0 - da_dt, 0.1)
+    lag_now = np.empty(sd.shape[0])
+    for i in range(sd.shape[0]):
+        lag_now[i] = lag[i] if has_lag else rate[i] * factor
+    total = total_sd(sd, lag_now, gain, tracker[8])
+    # the tracker's vectors as the rows of one array (one array handed back to Python, not 11)
+    pack = np.empty((11, sd.shape[0]))
     for i in range(sd.shape[0]):
         pack[0, i], pack[1, i], pack[2, i], pack[3, i], pack[4, i] = (w[i], mt[i], mx[i],
                                                                       ctt[i], ctx[i])
         pack[5, i], pack[6, i], pack[7, i], pack[8, i] = rate[i], gain[i], lag[i], sd[i]
+        pack[9, i], pack[10, i] = vec[i], total[i]
     return (st, (x1, P1, x2, P2, M2, D2), (S_lin2, S_ang2, info_lin2, info_ang2),
             (residuals[0], residuals[1], rcond[0], rcond[1]),
             (s0, s1, t_ref, a_bar, da_dt, has_lag), pack, M_lin2, M_ang2)
@@ -1138,6 +1152,21 @@ def identified_bodies(sd, out, ls, scale, sd_rel, identified, ok_body):
             if identified[i] and not (sd[i] <= tol and abs(out[i] - ls[i]) <= tol):
                 ok = False
         ok_body[k] = ok
+
+
+@njit(**_NB)
+def report_flags(ls, sd, com_min, sd_rel, identified, flags):
+    """The flags of :meth:`.identifier.Identifier.report` in one call where both bodies of
+    the estimates ``ls`` (20,) are physical: ``flags`` (4,) bool = :func:`both_physical`, then
+    :func:`identified_bodies` of ``ls`` reported as it is (``out = ls``, the scale
+    :func:`error_scale` of it). Returns False, with only ``flags[:2]`` written, where a body
+    needs its projection (the caller then goes on with the projected estimates)."""
+    physical = flags[:2]
+    both_physical(ls, physical)
+    if not (physical[0] and physical[1]):
+        return False
+    identified_bodies(sd, ls, ls, error_scale(ls, com_min), sd_rel, identified, flags[2:])
+    return True
 
 
 @njit(**_NB)

@@ -31,7 +31,7 @@ from . import eiv
 from . import parameters as par
 from . import report_kernels as rk
 from .rls import RLS, ModifiedRLS, _raise_for
-from .tracking import RATE_MEMORY, DriftTracker, matrix_lag
+from .tracking import NOISE_LAG, RATE_MEMORY, DriftTracker, matrix_lag
 from .uncertainty import Autocorrelation, Gram, eig_scaled, prior_pull
 
 
@@ -383,6 +383,8 @@ class PaperSolver(ParameterSolver):
         info : the information matrices after the sample
         tracker : the tracker after the sample
         rcond : ``(lin, ang)`` the excitation diagnostics (:class:`Uncertainty`)
+        report : ``(vector (20,), sd (20,))`` after the sample: :meth:`vector` and the
+            tracker's :meth:`.tracking.DriftTracker.total_sd` (what the identifier reports)
 
         Raises ``LinAlgError`` / ``FloatingPointError`` as :meth:`update` and :meth:`std_parts`
         do, with this solver unchanged.
@@ -400,7 +402,7 @@ class PaperSolver(ParameterSolver):
         sums = tracker.regression_sums(len(self.mu) + len(self.theta))
         M_lin, M_ang = tracker.ages or (np.zeros_like(gl.S), np.zeros_like(ga.S))
         tr_in = np.array([tracker.lam, tracker.s0, tracker.s1, tracker.t_ref, tracker.t,
-                          tracker.a_bar, float(clock), RATE_MEMORY])
+                          tracker.a_bar, float(clock), RATE_MEMORY, NOISE_LAG])
         st, rls_new, (S_lin, S_ang, info_lin, info_ang), scal, tr_s, pack, M_lin, M_ang = (
             rk.paper_step((rls.lin.x, rls.lin.P, rls.ang.x, rls.ang.P, rls.M, rls.D_mu), rows,
                           self.lam, rls.mu_fixed, L.mu_active, L.theta_active, gl.S, ga.S,
@@ -411,13 +413,14 @@ class PaperSolver(ParameterSolver):
             raise np.linalg.LinAlgError("Eigenvalues did not converge")
         _raise_for(st)
         rls.assign(rls_new, k1, k2)
-        self.gram_lin, self.gram_ang = gl2._replace(S=S_lin), ga2._replace(S=S_ang)
+        # gl2, ga2 with the new sums (as _replace(S=...), without its keyword machinery)
+        self.gram_lin, self.gram_ang = gl2._make((S_lin,) + gl2[1:]), ga2._make((S_ang,) + ga2[1:])
         self._take(rls.mu, rls.theta)
         s0, s1, t_ref, a_bar, da_dt, has_lag = tr_s
         tracker = DriftTracker(tracker.lam, s0, s1, t_ref, float(clock), a_bar, da_dt, pack[0],
                                pack[1], pack[2], pack[3], pack[4], pack[8], (M_lin, M_ang),
                                pack[7] if has_lag else None, pack[5], pack[6])
-        return scal[:2], (info_lin, info_ang), tracker, scal[2:]
+        return scal[:2], (info_lin, info_ang), tracker, scal[2:], (pack[9], pack[10])
 
     def _compensated(self, mu_r: np.ndarray, th_r: np.ndarray):
         """The bias-compensated answers (:mod:`.eiv`) from the RLS's ``mu_r``, ``th_r``."""

@@ -44,7 +44,9 @@ def _plan_key(kind: str, vrs) -> tuple:
 def _merged_getter(names, is_output):
     """``get(outputs, values)``: the tuple of the values of ``names`` (k,) in their order, those
     with ``is_output`` (k,) from the dictionary ``outputs``, the others from ``values``, in a
-    few C-level calls (``operator.itemgetter``); KeyError if one is missing."""
+    few C-level calls (``operator.itemgetter``); KeyError if one is missing. Where the names
+    of each kind are contiguous (e.g. a recorder's connectors, then the outputs) the two
+    tuples are joined as they are; otherwise reordered by one more getter."""
     out = [n for n, o in zip(names, is_output) if o]
     val = [n for n, o in zip(names, is_output) if not o]
 
@@ -59,6 +61,11 @@ def _merged_getter(names, is_output):
         return lambda outputs, values: get_out(outputs)
     if not out:
         return lambda outputs, values: get_val(values)
+    flips = sum(a != b for a, b in zip(is_output, is_output[1:]))
+    if flips == 1:                                  # two runs: one join, no reordering
+        if is_output[0]:
+            return lambda outputs, values: get_out(outputs) + get_val(values)
+        return lambda outputs, values: get_val(values) + get_out(outputs)
     # position of each name in get_out(outputs) + get_val(values)
     where = {n: i for i, n in enumerate(out)}
     where.update((n, len(out) + i) for i, n in enumerate(val))
@@ -77,6 +84,10 @@ class InterfaceSlave(Fmi2Slave):
     Subclasses provide ``_outputs`` (name -> value, refreshed by the subclass) and implement
     ``_core_state``/``_restore_core_state`` and ``do_step``.
     """
+
+    #: outputs computed when read (name -> None; None in ``_outputs``, ``_get_output`` computes
+    #: them); a subclass that has such outputs names them before the first value is read
+    _lazy_outputs: Dict[str, None] = {}
 
     def _setup(self, variables_of) -> None:
         """Load the bundled scenario and register ``variables_of(robot, scenario)``."""
@@ -136,15 +147,16 @@ class InterfaceSlave(Fmi2Slave):
         if plan is None:
             plan = self._plan("get", vrs)
         if plan:
-            get, names = plan
+            get, names, lazy = plan
             try:
                 vals = get(self._outputs, self.values)
             except KeyError:                      # not (yet) among the outputs
                 vals = None
             if vals is not None:
-                if None in vals:                  # outputs computed when read
-                    vals = [self._get_output(n) if x is None else x for n, x in zip(names, vals)]
-                return list(vals)                 # numbers: pythonfmu takes PyFloat_AsDouble
+                vals = list(vals)                 # numbers: pythonfmu takes PyFloat_AsDouble
+                for i in lazy:                    # outputs computed when read
+                    vals[i] = self._get_output(names[i])
+                return vals
         names, outs, values = self._real_vr, self._outputs, self.values
         res = []
         for vr in vrs:
@@ -176,16 +188,18 @@ class InterfaceSlave(Fmi2Slave):
         (cached); ``()`` when the per-variable path must be taken. Refuses (fmi2Error) unknown
         value references and variables of another type.
 
-        ``get``: ``(get, names)``, ``get(outputs, values)`` the tuple of the values in the
-        order asked for, outputs from ``_outputs`` (None there: computed when read), inputs and
-        parameters from ``values`` (a recorder asks for both at once). ``set``: the tuple of
-        names, when every one is an input."""
+        ``get``: ``(get, names, lazy)``, ``get(outputs, values)`` the tuple of the values in
+        the order asked for, outputs from ``_outputs``, inputs and parameters from ``values``
+        (a recorder asks for both at once); ``lazy`` the positions of the outputs computed when
+        read (:attr:`_lazy_outputs`, None in ``_outputs``). ``set``: the tuple of names, when
+        every one is an input."""
         self._check_refs("getReal" if kind == "get" else "setReal", vrs, Real)
         names = tuple(self._real_vr[vr] for vr in vrs)
         plan = ()
         if kind == "get" and names:
             plan = (_merged_getter(names, [self.interface[n].causality == "output"
-                                           for n in names]), names)
+                                           for n in names]), names,
+                    tuple(i for i, n in enumerate(names) if n in self._lazy_outputs))
         elif kind == "set" and names and all(vr in self._input_vr for vr in vrs):
             plan = names
         return self._store(kind, vrs, plan)

@@ -16,6 +16,8 @@ The equations are the paper's (docs/models.md, "Controllers") and those of :mod:
 * the optional excitation (issue #12): eq. 39 about a multi-sine attitude reference and the
   posture term about a multi-sine joint reference, scaled by a ramped level
   (:func:`ramp_level`, :func:`channel`, :func:`reference`; design in ``docs/models.md``);
+  within a communication step the sines of the references are stepped by rotation
+  (:func:`rotate_trig`, :data:`TRIG_ANCHOR`);
 * state derivative ``[dJ = F, dH = M + r_S x F, dq/dt, dv/dt, dm_p/dt, dP_x/dt, dL_x/dt]``
   with ``dq/dt`` of the root joint written out (quaternion / (cos, sin) kinematics), so
   classic RK4 applies unchanged;
@@ -44,6 +46,11 @@ from .rigid_body import aba, cho_solve, cholesky, terms
 
 #: eigenvalue ratio below which the attitude solve is damped (singularity robustness)
 DLS_RATIO = 1e-2
+
+#: steps between fresh evaluations of the excitation references' sines in :func:`advance`
+#: (rotated by the step in between, :func:`rotate_trig`: the rounding of the rotation grows by
+#: about one unit in the last place per step)
+TRIG_ANCHOR = 20
 
 #: kernel return codes
 ERRORS = {1: "singular base inertia", 2: "singular arm inertia",
@@ -190,6 +197,42 @@ def channel(tab, c, t):
     return h * (s1 + s2), h * (w1 * c1 + w2 * c2), -h * (w1 * w1 * s1 + w2 * w2 * s2)
 
 
+@njit(**_NI)
+def channel_trig(tab, c, trig):
+    """:func:`channel` from ``trig[c] = [sin(w1 t + p1), cos(w1 t + p1), sin(w2 t + p2),
+    cos(w2 t + p2)]`` (:func:`fill_trig`, :func:`rotate_trig`) instead of ``t``."""
+    a, w1, w2 = tab[c, 0], tab[c, 1], tab[c, 3]
+    s1, c1, s2, c2 = trig[c, 0], trig[c, 1], trig[c, 2], trig[c, 3]
+    h = 0.5 * a
+    return h * (s1 + s2), h * (w1 * c1 + w2 * c2), -h * (w1 * w1 * s1 + w2 * w2 * s2)
+
+
+@njit(**_NI)
+def fill_trig(tab, t, trig):
+    """``trig[c]`` = the sines and cosines of both phases of every channel ``c`` at ``t``
+    (:func:`channel_trig`); row ``len(tab)`` holds ``t`` (the time they are for)."""
+    m = tab.shape[0]
+    for c in range(m):
+        a1, a2 = tab[c, 1] * t + tab[c, 2], tab[c, 3] * t + tab[c, 4]
+        trig[c, 0], trig[c, 1] = math.sin(a1), math.cos(a1)
+        trig[c, 2], trig[c, 3] = math.sin(a2), math.cos(a2)
+    trig[m, 0] = t
+
+
+@njit(**_NI)
+def rotate_trig(rot, trig, t):
+    """``trig`` (:func:`fill_trig`) advanced by the step ``h`` of ``rot[c] = [cos(w1 h),
+    sin(w1 h), cos(w2 h), sin(w2 h)]`` by the angle-addition formulas, now for the time
+    ``t``: two products per sine instead of a sine and cosine per phase and step."""
+    m = rot.shape[0]
+    for c in range(m):
+        for j in (0, 2):
+            sn, cs, ch, sh = trig[c, j], trig[c, j + 1], rot[c, j], rot[c, j + 1]
+            trig[c, j] = sn * ch + cs * sh
+            trig[c, j + 1] = cs * ch - sn * sh
+    trig[m, 0] = t
+
+
 @njit(**_NB)
 def reference(t, ramp, tab, c):
     """Scaled reference ``s(t) f_c(t)`` of channel ``c`` and its first two time derivatives
@@ -202,6 +245,12 @@ def reference(t, ramp, tab, c):
 def _scaled(s, ds, dds, tab, c, t):
     """``s f_c(t)`` and its first two time derivatives, for the level ``(s, s', s'')``."""
     f, df, ddf = channel(tab, c, t)
+    return _level_times(s, ds, dds, f, df, ddf)
+
+
+@njit(**_NI)
+def _level_times(s, ds, dds, f, df, ddf):
+    """``s f`` and its first two time derivatives (product rule)."""
     return s * f, ds * f + s * df, dds * f + 2.0 * ds * df + s * ddf
 
 
@@ -221,7 +270,10 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, c
     ramp : (4,)              excitation level ramp ``[s0, u, t0, T]`` (:func:`ramp_level`)
     tab : (r + n, 5)         excitation channels: ``r`` attitude axes (1 planar, 3 spatial),
                              then the joints (:func:`channel`)
-    cw : tuple               scratch arrays of :func:`control_work`
+    cw : tuple               scratch arrays of :func:`control_work`; its ``trig`` array holds
+                             the references' sines where they are for ``t`` (row ``len(tab)``
+                             equal to ``t``: :func:`advance` steps them), else they are
+                             evaluated here (:func:`fill_trig`)
 
     With the excitation level and its derivatives all zero, the references are not evaluated
     at all (the law is then exactly the paper's, bit for bit). Otherwise eq. 39 becomes the
@@ -243,7 +295,7 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, c
     for i in range(3):
         FM[i] = bounded_law(hg[i], par[0], par[1], par[2])
         FM[3 + i] = bounded_law(hg[3 + i], par[3], par[4], par[5])
-    Lb, sol, Lm, WiGt, GWG, Lg, zz, vec = cw
+    Lb, sol, Lm, WiGt, GWG, Lg, zz, vec, trig, rot = cw
     e, post, rhs, zv = vec[0, :3], vec[1, :n], vec[2, :r], vec[3, :r]
     # thrust in base coordinates, and the attitude error e (rotation vector; theta_z planar)
     e[0] = e[1] = e[2] = 0.0
@@ -302,11 +354,15 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, c
     lev, dlev, ddlev = ramp_level(t, ramp)
     if lev != 0.0 or dlev != 0.0 or ddlev != 0.0:
         # excitation: posture about q_home + q_r, attitude error about e_r
+        if trig[tab.shape[0], 0] != t:
+            fill_trig(tab, t, trig)
         for i in range(n):
-            qr, dqr, ddqr = _scaled(lev, dlev, ddlev, tab, r + i, t)
+            f, df, ddf = channel_trig(tab, r + i, trig)
+            qr, dqr, ddqr = _level_times(lev, dlev, ddlev, f, df, ddf)
             post[i] += ddqr + KPn * qr + KDn * dqr
         for j in range(r):
-            er, der, dder = _scaled(lev, dlev, ddlev, tab, j, t)
+            f, df, ddf = channel_trig(tab, j, trig)
+            er, der, dder = _level_times(lev, dlev, ddlev, f, df, ddf)
             rhs[j] -= dder + KD * der + KP * er
     for j in range(r):
         s = rhs[j]
@@ -382,11 +438,17 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, c
 
 def control_work(planar: bool, nv: int) -> tuple:
     """Scratch arrays of :func:`control` for a robot with ``nv`` velocities (allocated once by
-    the plant, so that the kernel allocates nothing per call)."""
+    the plant, so that the kernel allocates nothing per call); the last two: the excitation
+    references' sines ``trig`` (:func:`fill_trig`, for no time yet) and their rotation per
+    step ``rot`` (:func:`rotate_trig`), for the ``r + n`` channels of
+    :meth:`spacerobot.robots.Excitation.channels`."""
     nb = 3 if planar else 6
     n, r = nv - nb, 1 if planar else 3
+    trig = np.zeros((r + n + 1, 4))
+    trig[r + n, 0] = np.nan
     return (np.empty((nb, nb)), np.empty((nb, n + 1)), np.empty((n, n)), np.empty((n, r)),
-            np.empty((r, r)), np.empty((r, r)), np.empty((r, 1)), np.empty((4, max(n, 3))))
+            np.empty((r, r)), np.empty((r, r)), np.empty((r, 1)), np.empty((4, max(n, 3))),
+            trig, np.empty((r + n, 4)))
 
 
 #: layout of the propellant array ``pp`` (:func:`.simulator.propellant_array`): 1/(Isp g0)
@@ -636,7 +698,11 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
     Each step holds the controls of its start (zero-order hold): the rigid-body terms
     (:func:`.rigid_body.terms`: ``M``, non-linear effects, centroidal momentum) feed
     :func:`control`, whose accelerations are the first stage's; stages 2-4 call
-    :func:`.rigid_body.aba` on the stage state :func:`stage` prepared.
+    :func:`.rigid_body.aba` on the stage state :func:`stage` prepared. With the excitation
+    on, the references' sines are evaluated at the call's first step and every
+    :data:`TRIG_ANCHOR` steps, and rotated by ``h`` (:func:`rotate_trig`) at the steps between
+    (they differ from a fresh evaluation by a few units in the last place; a run gives the
+    same results for the same sequence of calls).
 
     Parameters
     ----------
@@ -661,11 +727,21 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
     R, p, I6, mc = mdl
     bp, S, cb, IA, pA, U, Du, M6, v6 = ws
     pp, I6d, I6u, mcd, parw = prop
+    trig, rot = cw[8], cw[9]
     nx = x.shape[0]
     om = 6 + qn.shape[0] + vs.shape[0]   # m_p in the state
     on = pp[0] != 0.0
     for j in range(nx):
         xa[j] = x[j]
+    # the excitation references' sines: evaluated at the call's start and every TRIG_ANCHOR
+    # steps, rotated by h in between (the results depend only on the state and the call)
+    m = tab.shape[0]
+    trig[m, 0] = np.nan
+    excited = ramp[0] != 0.0 or ramp[1] != 0.0
+    if excited:
+        for c in range(m):
+            rot[c, 0], rot[c, 1] = math.cos(tab[c, 1] * h), math.sin(tab[c, 1] * h)
+            rot[c, 2], rot[c, 3] = math.cos(tab[c, 3] * h), math.sin(tab[c, 3] * h)
     total = n_steps + (1 if rest > 0.0 else 0)
     for k in range(total):
         dt = h if k < n_steps else rest
@@ -675,6 +751,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM,
                              pp, xa[om], dt, parw, cw)
         if err:
+            trig[m, 0] = np.nan
             for j in range(nx):
                 xout[j] = xa[j]
             return err, t
@@ -683,6 +760,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
             if on:
                 base_inertia(xs[om], pp, I6d, I6u, mcd, I6, mc)
             if aba(planar, R, p, I6, qn, vs, gen, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
+                trig[m, 0] = np.nan
                 for j in range(nx):
                     xout[j] = xa[j]
                 load(planar, xa, qn, vs)
@@ -690,7 +768,14 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
             stage(planar, i, xa, xs, ddq, K, FM, dt, xs, qn, vs, gen, xout, pp)
         for j in range(nx):            # the stage kernel left xout's configuration in qn, vs
             xa[j] = xout[j]
+        t_prev = t
         t += dt
+        # the next step's sines from this step's (where the control evaluated them at t_prev)
+        if excited and trig[m, 0] == t_prev and dt == h and (k + 1) % TRIG_ANCHOR != 0:
+            rotate_trig(rot, trig, t)
+        else:
+            trig[m, 0] = np.nan
+    trig[m, 0] = np.nan                  # outside this call the sines are evaluated afresh
     for j in range(nx):
         xout[j] = xa[j]
     return 0, t
@@ -762,6 +847,7 @@ def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn,
         base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc)
     c0, c1, c2 = terms(planar, R, p, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6,
                        v6)
+    cw[8][tab.shape[0], 0] = np.nan      # the references' sines evaluated at t
     err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp,
                          m_p, h, parw, cw)
     if err:

@@ -179,6 +179,20 @@ class Plant:
                 "H": self.H.copy(), "excite_ramp": self._ramp.copy(),
                 "prop": self._x[self._om:].copy()}
 
+    def checkpoint(self) -> tuple:
+        """What :meth:`rollback` returns to: the time, the state vector and the excitation
+        ramp, by reference (no copy: a step makes a new state vector and a new level a new
+        ramp, neither is written in place). Writes into the public arrays (``q``, ``v``, ``J``,
+        ``H``) in place after it are not undone; :meth:`get_state` copies."""
+        return self.t, self._collect(), self._ramp
+
+    def rollback(self, cp: tuple) -> None:
+        """Return to a :meth:`checkpoint` of this plant (e.g. after a step that failed)."""
+        self.t, self._x, self._ramp = cp
+        self._publish()
+        self._u = None
+        self._loaded = self._ctrl_x = self._y_x = None
+
     def set_state(self, s: dict) -> None:
         """Restore a state of :meth:`get_state`; raises ``ValueError`` (the plant unchanged)
         if it does not fit this plant."""
