@@ -588,6 +588,8 @@ def accuracy_table(robot: str, a: dict, labs, values: bool) -> str:
 #: repetitions of each timed run (short, long, bare loop, interleaved) in a speed round; the
 #: host's speed drifts within seconds, and the best of more repetitions is steadier
 SPEED_REPEATS = 7
+#: rounds of the speed measurement, spread over the run (the round with the median ratio is shown)
+SPEED_ROUNDS = 5
 
 
 def main(argv=None) -> int:
@@ -608,8 +610,9 @@ def main(argv=None) -> int:
 
     # 1. speed
     seconds = {"planar": 3.0, "spatial": 3.0} if quick else {"planar": 10.0, "spatial": 10.0}
-    # measured in rounds spread over the run (now, after section 2, after section 3) and
-    # merged by taking the best of each figure: robust against bursts of other load
+    # measured in SPEED_ROUNDS rounds spread over the run (now, after sections 2, 3 and 4,
+    # and once more at the end) and merged by taking the round with the median ratio: the
+    # host's speed drifts for seconds at a time
     rounds = [cosim_speed(systems, seconds, repeats=1 if quick else SPEED_REPEATS)]
     print("speed:", {r: round(v["ratio"], 2) for r, v in rounds[-1].items()}, flush=True)
     prof = profile_summary(systems["spatial"]["ssp"], 2.0 if quick else 10.0)
@@ -648,14 +651,16 @@ def main(argv=None) -> int:
     acc = {r: accuracy(r, 25.0 if quick else 60.0) for r in ("planar", "spatial")}
     if not quick:
         rounds.append(cosim_speed(systems, seconds, repeats=SPEED_REPEATS))
-    speed = merge_rounds(rounds)
-    print("speed rounds:", [{r: round(v["ratio"], 2) for r, v in x.items()} for x in rounds],
-          "merged:", {r: round(v["ratio"], 2) for r, v in speed.items()}, flush=True)
     print("accuracy done", flush=True)
 
     # 4. memory
     mem = memory(systems["spatial"], args.memory_seconds) if args.memory_seconds > 0 else None
     print("memory:", mem, flush=True)
+    while not quick and len(rounds) < SPEED_ROUNDS:
+        rounds.append(cosim_speed(systems, seconds, repeats=SPEED_REPEATS))
+    speed = merge_rounds(rounds)
+    print("speed rounds:", [{r: round(v["ratio"], 2) for r, v in x.items()} for x in rounds],
+          "merged:", {r: round(v["ratio"], 2) for r, v in speed.items()}, flush=True)
     info["load_end"] = os.getloadavg()
     info["runtime_s"] = time.perf_counter() - t_start
     Path(args.out).write_text(render(info, speed, prof, est_cost, batch, acc, mem, quick))
@@ -720,7 +725,8 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              "of two runs (1 s and 1 s + T), which removes extraction, instantiation and "
              "initialisation (reported separately). Floor = a bare RK4 loop over `pin.aba` "
              "(zero torques, `pin.integrate` for the configuration) on the same Pinocchio model, "
-             "1 ms step, same initial state. Measured in the same process, interleaved, in three rounds spread over the benchmark run "
+             "1 ms step, same initial state. Measured in the same process, interleaved, in "
+             f"{SPEED_ROUNDS} rounds spread over the benchmark run "
              f"(best of {SPEED_REPEATS} repetitions in each round); the round with the median ratio is shown, as "
              "the host's speed drifts between rounds (1 round of 1 in --quick).\n")
     rows = []
