@@ -116,12 +116,18 @@ def reference_control(planar, q, v, M, nle, hg, c, q_home, refs=None):
 NO_RAMP, NO_TAB = np.array([0.0, 0.0, 0.0, 1.0]), np.zeros((9, 5))
 
 
-def _run_kernel(planar, q, v, M, nle, hg, c, q_home, t=0.0, ramp=NO_RAMP, tab=NO_TAB):
+def _run_kernel(planar, q, v, M, nle, hg, c, q_home, t=0.0, ramp=NO_RAMP, tab=NO_TAB,
+                work_nv=None):
+    """The control kernel; ``work_nv``: its work arrays made for another number of velocities
+    (their references' sines then do not fit ``tab``)."""
     par = np.array([getattr(c, k) for k in kernels.PARAMS], float)
     nv = len(v)
     gen, acc, FM = np.zeros(nv), np.zeros(nv), np.zeros(6)
+    cw = kernels.control_work(planar, nv)
+    if work_nv is not None:
+        cw = cw[:8] + kernels.control_work(planar, work_nv)[8:]
     err = kernels.control(planar, q, v, M, nle, hg, par, np.asarray(q_home, float), t, ramp, tab,
-                          gen, acc, FM, kernels.control_work(planar, nv))
+                          gen, acc, FM, cw)
     assert err == 0
     return FM, gen, acc
 
@@ -245,6 +251,12 @@ def test_control_kernel_with_excitation_matches_reference(robot):
                                 refs)
         for x, y in zip(out, ref):
             np.testing.assert_allclose(x, y, rtol=0, atol=1e-8 * np.abs(y).max())
+        # sines' work arrays that do not fit the table: evaluated in the call, the same law
+        for nv_other in (len(v) - 2, len(v) + 3):
+            other = _run_kernel(plant.pm.planar, q, v, M, nle, hg, sc.controller, plant.q_home,
+                                t, ramp, tab, work_nv=nv_other)
+            for x, y in zip(other, out):
+                assert np.array_equal(x, y)
         # and it differs from the law without excitation
         off = _run_kernel(plant.pm.planar, q, v, M, nle, hg, sc.controller, plant.q_home)
         assert np.abs(off[2] - out[2]).max() > 1e-6

@@ -354,6 +354,8 @@ def control(planar, q, v, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, c
     lev, dlev, ddlev = ramp_level(t, ramp)
     if lev != 0.0 or dlev != 0.0 or ddlev != 0.0:
         # excitation: posture about q_home + q_r, attitude error about e_r
+        if trig.shape[0] != tab.shape[0] + 1:       # work arrays not made for this table
+            trig = np.full((tab.shape[0] + 1, 4), np.nan)
         if trig[tab.shape[0], 0] != t:
             fill_trig(tab, t, trig)
         for i in range(n):
@@ -735,9 +737,10 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         xa[j] = x[j]
     # the excitation references' sines: evaluated at the call's start and every TRIG_ANCHOR
     # steps, rotated by h in between (the results depend only on the state and the call)
-    m = tab.shape[0]
-    trig[m, 0] = np.nan
-    excited = ramp[0] != 0.0 or ramp[1] != 0.0
+    m, mt = tab.shape[0], trig.shape[0] - 1       # the channels; the row of trig's time
+    trig[mt, 0] = np.nan
+    excited = ((ramp[0] != 0.0 or ramp[1] != 0.0) and trig.shape[0] == m + 1
+               and rot.shape[0] == m)
     if excited:
         for c in range(m):
             rot[c, 0], rot[c, 1] = math.cos(tab[c, 1] * h), math.sin(tab[c, 1] * h)
@@ -751,7 +754,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM,
                              pp, xa[om], dt, parw, cw)
         if err:
-            trig[m, 0] = np.nan
+            trig[mt, 0] = np.nan
             for j in range(nx):
                 xout[j] = xa[j]
             return err, t
@@ -760,7 +763,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
             if on:
                 base_inertia(xs[om], pp, I6d, I6u, mcd, I6, mc)
             if aba(planar, R, p, I6, qn, vs, gen, ddq, bp, S, cb, IA, pA, U, Du, M6, v6):
-                trig[m, 0] = np.nan
+                trig[mt, 0] = np.nan
                 for j in range(nx):
                     xout[j] = xa[j]
                 load(planar, xa, qn, vs)
@@ -774,8 +777,8 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         if excited and trig[m, 0] == t_prev and dt == h and (k + 1) % TRIG_ANCHOR != 0:
             rotate_trig(rot, trig, t)
         else:
-            trig[m, 0] = np.nan
-    trig[m, 0] = np.nan                  # outside this call the sines are evaluated afresh
+            trig[mt, 0] = np.nan
+    trig[mt, 0] = np.nan                 # outside this call the sines are evaluated afresh
     for j in range(nx):
         xout[j] = xa[j]
     return 0, t
@@ -847,7 +850,7 @@ def measure(planar, mdl, ws, cw, x, t, h, par, q_home, ramp, tab, prop, dry, qn,
         base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc)
     c0, c1, c2 = terms(planar, R, p, I6, mc, qn, vs, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6,
                        v6)
-    cw[8][tab.shape[0], 0] = np.nan      # the references' sines evaluated at t
+    cw[8][cw[8].shape[0] - 1, 0] = np.nan   # the references' sines evaluated afresh at t
     err = thrust_control(planar, qn, vs, M, nle, hg, par, q_home, t, ramp, tab, gen, acc, FM, pp,
                          m_p, h, parw, cw)
     if err:
