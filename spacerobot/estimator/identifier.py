@@ -721,11 +721,12 @@ class Identifier:
     def _kept(self):
         """``(vector, std)`` as the fused step computed them with the state it left
         (:meth:`.PaperSolver.step`), while that state is the current one (the tracker and the
-        solver's vectors are those it made: an update rebinds them, never writes into them);
-        else None."""
+        solver's vectors are those it made: an update rebinds them, never writes into them;
+        a restored or copied state has others); else None. The fused step runs only with
+        samples and without the consider term, so what it kept is the full report."""
         k = self._reported
         if (k is not None and k[0] is self.tracking and k[1] is self.solver.mu
-                and k[2] is self.solver.theta and self.samples and not self._consider):
+                and k[2] is self.solver.theta):
             return k[3], k[4]
         return None
 

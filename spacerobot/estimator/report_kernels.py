@@ -907,15 +907,17 @@ def paper_step(rls_state, rows, lam, mu_fixed, mu_active, theta_active, S_lin, S
         mu0, th0, mu_active, theta_active, s2p, mu)
     if st == 0 and not ok:
         st = 3
+    # the estimates after the sample (reported below; the floor of unobserved ones)
+    z = np.empty(mu.shape[0] + theta.shape[0])
+    z[:mu.shape[0]] = mu
+    z[mu.shape[0]:] = theta
+    vec = paper_vector_of(z, s2p)
     any_unobserved = False
     for i in range(unobserved.shape[0]):
         if unobserved[i]:
             any_unobserved = True
     if any_unobserved:                      # at least the error scale (a 100 % sd)
-        z = np.empty(mu.shape[0] + theta.shape[0])
-        z[:mu.shape[0]] = mu
-        z[mu.shape[0]:] = theta
-        floor = error_scale(paper_vector_of(z, s2p), com_min)
+        floor = error_scale(vec, com_min)
         for i in range(sd.shape[0]):
             if unobserved[i]:                # np.maximum: NaN if either is NaN
                 a, f = sd[i], floor[i]
@@ -926,12 +928,8 @@ def paper_step(rls_state, rows, lam, mu_fixed, mu_active, theta_active, S_lin, S
                                   tracker[5], w, mt, mx, ctt, ctx, tracker[6], data_only, sd,
                                   tracker[7], M_lin, M_ang, S_lin, S_ang, J, S_lin2, S_ang2, mu,
                                   mu_active, theta_active)
-    # what the report reads: the estimates and their total standard deviations
+    # what the report reads: the estimates (vec) and their total standard deviations
     # (DriftTracker.lag: the matrix lag, else rate * a_bar / max(1 - da_dt, 0.1))
-    z = np.empty(mu.shape[0] + theta.shape[0])
-    z[:mu.shape[0]] = mu
-    z[mu.shape[0]:] = theta
-    vec = paper_vector_of(z, s2p)
     factor = a_bar / max(1.0 - da_dt, 0.1)
     lag_now = np.empty(sd.shape[0])
     for i in range(sd.shape[0]):

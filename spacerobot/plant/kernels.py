@@ -774,7 +774,7 @@ def advance(planar, mdl, ws, cw, x, n_steps, h, rest, t, par, q_home, ramp, tab,
         t_prev = t
         t += dt
         # the next step's sines from this step's (where the control evaluated them at t_prev)
-        if excited and trig[m, 0] == t_prev and dt == h and (k + 1) % TRIG_ANCHOR != 0:
+        if excited and trig[mt, 0] == t_prev and dt == h and (k + 1) % TRIG_ANCHOR != 0:
             rotate_trig(rot, trig, t)
         else:
             trig[mt, 0] = np.nan
