@@ -63,7 +63,8 @@ def _vec(prefix, group, unit, what, causality, variability="continuous", start=N
 
 def _dcm(causality):
     return [Var(f"base.A[{i + 1},{j + 1}]", causality, "continuous", "Real", "1",
-                f"Direction cosine matrix base -> inertial (x_I = A x_B), element ({i + 1},{j + 1})",
+                f"Direction cosine matrix base -> inertial (x_I = A x_B: column j is base axis j "
+                f"in inertial axes), element ({i + 1},{j + 1})",
                 None, ("A", (i, j))) for i in range(3) for j in range(3)]
 
 
@@ -77,29 +78,43 @@ def measurement_vars(n: int, causality: str) -> List[Var]:
     c = causality
     start = (0.0, 0.0, 0.0) if c == "input" else None
     out = []
-    out += _vec("base.r", "r_S", "m", "Position of the base sensor point S, inertial frame", c, start=start)
-    out += _vec("base.v", "v_S", "m/s", "Velocity of S, inertial frame", c, start=start)
+    # the descriptions say what a plant of another origin must provide (docs/fmus.md)
+    out += _vec("base.r", "r_S", "m", "Position of the base sensor point S (origin of the base "
+                "frame B), inertial frame", c, start=start)
+    out += _vec("base.v", "v_S", "m/s", "Velocity of S, dr_S/dt in inertial axes (the base "
+                "frame origin, not the base centre of mass)", c, start=start)
     dcm = _dcm(c)
     if c == "input":  # identity start so that an unconnected estimator sees a valid DCM
         dcm = [Var(v.name, v.causality, v.variability, v.type, v.unit, v.description,
                    1.0 if v.key[1][0] == v.key[1][1] else 0.0, v.key) for v in dcm]
     out += dcm
-    out += _vec("base.omega", "omega_B", "rad/s", "Base angular velocity, base frame", c, start=start)
-    out += _vec("base.a", "a_S", "m/s2", "Acceleration of S, inertial frame", c, start=start)
-    out += _vec("base.alpha", "alpha_B", "rad/s2", "Base angular acceleration, base frame", c, start=start)
-    for group, unit, what in (("q", "rad", "Joint angle"), ("qd", "rad/s", "Joint rate"),
-                              ("qdd", "rad/s2", "Joint acceleration")):
+    out += _vec("base.omega", "omega_B", "rad/s", "Base angular velocity in base axes (body "
+                "rates, as a gyro measures: A^T omega_inertial)", c, start=start)
+    out += _vec("base.a", "a_S", "m/s2", "Acceleration of S, d²r_S/dt² in inertial axes (not a "
+                "spatial acceleration in body axes)", c, start=start)
+    out += _vec("base.alpha", "alpha_B", "rad/s2", "Base angular acceleration in base axes, "
+                "d(base.omega)/dt", c, start=start)
+    for group, unit, what in (
+            ("q", "rad", "Joint angle about the joint axis of the robot description (0 = its "
+                         "zero posture)"),
+            ("qd", "rad/s", "Joint rate, d(arm.q)/dt"),
+            ("qdd", "rad/s2", "Joint acceleration, d²(arm.q)/dt²")):
         vs = _joint(f"arm.{group}", group, unit, what, n, c)
         if c == "input":
             vs = [Var(v.name, v.causality, v.variability, v.type, v.unit, v.description, 0.0, v.key)
                   for v in vs]
         out += vs
-    out += _vec("thrust.F", "F", "N", "Thruster force applied at S, inertial frame, at this instant", c, start=start)
-    out += _vec("thrust.M", "M", "N.m", "Thruster torque, inertial frame, at this instant", c, start=start)
-    out += _vec("thrust.J", "J", "N.s", "Accumulated impulse of the thruster force since t = 0", c, start=start)
-    out += _vec("thrust.H", "H", "N.m.s",
-                "Accumulated angular impulse of (M + r_S x F) about the inertial origin since t = 0",
+    out += _vec("thrust.F", "F", "N", "Resultant thruster force at this instant, inertial axes, "
+                "taken as acting at S (a force elsewhere adds its moment about S to thrust.M)",
                 c, start=start)
+    out += _vec("thrust.M", "M", "N.m", "Resultant thruster torque about S at this instant, "
+                "inertial axes", c, start=start)
+    out += _vec("thrust.J", "J", "N.s", "Impulse of thrust.F, inertial axes, accumulated from a "
+                "fixed instant (the plant: t = 0); the estimator uses only its changes", c,
+                start=start)
+    out += _vec("thrust.H", "H", "N.m.s", "Angular impulse of (thrust.M + r_S x thrust.F) about "
+                "the inertial origin, inertial axes, accumulated from the same instant as "
+                "thrust.J", c, start=start)
     return out
 
 

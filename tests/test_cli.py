@@ -103,8 +103,9 @@ def test_run_robot_builds_if_needed_and_uses_default_csv_name(workdir):
     p = _run(["run", "--robot", "planar", "--build-dir", "bd", "--target", "small",
               "--method", "force", "--accel", "differenced", "--stop-time", "1"], cwd=d)
     assert (d / "bd" / "planar.ssp").is_file()
-    # the default name holds method, acceleration source and solver: runs do not overwrite
-    csv_path = d / "results" / "planar-small-force-differenced-paper.csv"
+    # the default name holds method, acceleration source, solver and the explicit stop time:
+    # runs do not overwrite
+    csv_path = d / "results" / "planar-small-force-differenced-paper-t1.csv"
     assert csv_path.is_file()
     table = _table(p.stdout)
     assert table["target.m"][1] == TARGETS["planar"]["small"].mass
@@ -345,3 +346,194 @@ def test_run_uses_the_parameter_sets_duration(monkeypatch, capsys, tmp_path, arg
     with pytest.raises(RuntimeError, match="stop here"):
         cli.main(["run", "--robot", "spatial", "--out", str(tmp_path / "r.csv"), *argv])
     assert seen["stop_time"] == expected
+
+
+# ---------------------------------------------------------------------------------------------
+# issue #28: results named by their settings, replacements announced, slow steps announced,
+# a closed pipe ends quietly
+# ---------------------------------------------------------------------------------------------
+
+def _fake_run(monkeypatch, tmp_path, built_calls=None):
+    """``cli.main(['run', ...])`` without FMUs: ensure_ssp and run_ssp record their arguments
+    and run_ssp returns a tiny result (the CSV path it was given is recorded, not written)."""
+    from spacerobot.system import runner, ssd
+    seen = {}
+
+    def ensure(robot, out_dir=None, sensors=False, on_build=None, **kw):
+        out = Path(out_dir) if out_dir else Path("build") / robot
+        if on_build is not None and built_calls is not None:
+            on_build(out)
+            built_calls.append(out)
+        return tmp_path / "fake.ssp"
+
+    def run(ssp, **kw):
+        seen.update(kw)
+        t = np.array([0.0, 0.1])
+        return runner.RunResult(time=t, data={"time": t}, truth={"target.m": 250.0},
+                                final={"target.m": 250.0}, csv_path=kw["csv_path"])
+    monkeypatch.setattr(ssd, "ensure_ssp", ensure)
+    monkeypatch.setattr(runner, "run_ssp", run)
+    monkeypatch.setattr(cli, "kernels_compiled", lambda: True)
+    return seen
+
+
+def test_default_name_holds_the_set_overrides_and_the_stop_time(monkeypatch, tmp_path, capsys):
+    """Runs that differ only in --set (or --stop-time) get their own default CSV; the same
+    settings in another order the same one; a long list a stable 10-digit hash."""
+    seen = _fake_run(monkeypatch, tmp_path)
+    monkeypatch.chdir(tmp_path)
+
+    def name(*extra):
+        assert cli.main(["run", "--robot", "planar", "--no-progress", *extra]) == 0
+        capsys.readouterr()
+        return Path(seen["csv_path"]).name
+
+    base = "planar-medium-momentum-measured-paper"
+    assert name() == f"{base}.csv"
+    assert name("--set", "plant.base.v0[1]=5") == f"{base}-plant.base.v0_1=5.csv"
+    assert name("--set", "plant.base.v0[1]=6") == f"{base}-plant.base.v0_1=6.csv"
+    two = name("--set", "plant.base.v0[1]=5", "--set", "estimator.lambda=0.98")
+    assert two == f"{base}-estimator.lambda=0.98_plant.base.v0_1=5.csv"
+    assert name("--set", "estimator.lambda=0.98", "--set", "plant.base.v0[1]=5.0") == two
+    assert name("--stop-time", "30") == f"{base}-t30.csv"
+    many = [a for i in range(8) for a in ("--set", f"plant.base.v0[{i % 3 + 1}]={i}.5")]
+    long_name = name(*many, "--set", "estimator.P0_mu=12345.678")
+    assert long_name.startswith(f"{base}-set-") and len(long_name) == len(base) + 19
+    assert name("--set", "estimator.P0_mu=12345.678", *many) == long_name   # stable
+    assert name("--set", "estimator.P0_mu=1", *many) != long_name
+
+
+def test_replacing_a_result_is_announced(monkeypatch, tmp_path, capsys):
+    """An existing result file is never replaced silently: one line on stderr before the run."""
+    _fake_run(monkeypatch, tmp_path)
+    out = tmp_path / "r.csv"
+    assert cli.main(["run", "--robot", "planar", "--out", str(out)]) == 0
+    assert capsys.readouterr().err == ""                     # a new file: nothing to say
+    out.write_text("earlier result")
+    assert cli.main(["run", "--robot", "planar", "--out", str(out)]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"spacerobot run: {out} exists: this run replaces it"]
+
+
+def test_slow_steps_say_what_they_do_on_stderr(monkeypatch, tmp_path, capsys):
+    """Building the FMUs (build, and run when the SSP is missing) and a first run on a machine
+    (kernels not compiled yet) each say so in one line on stderr before they start."""
+    from spacerobot.system import ssd
+    built_calls = []
+    _fake_run(monkeypatch, tmp_path, built_calls)
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["run", "--robot", "planar", "--build-dir", "bd"]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "spacerobot run: building the FMUs and the SSP for planar into bd/ ..."]
+    monkeypatch.setattr(cli, "kernels_compiled", lambda: False)
+    monkeypatch.setattr(cli, "fmus_compile_kernels", lambda ssp: True)
+    assert cli.main(["run", "--robot", "planar", "--build-dir", "bd"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and err[1].startswith(
+        "spacerobot run: first run on this machine: the FMUs compile their kernels") \
+        and "minutes" in err[1]
+    monkeypatch.undo()
+    monkeypatch.setattr(ssd, "build_system", lambda robot, out, sensors=False, **kw: {"ssp": out})
+    assert cli.main(["build", "--robot", "planar", "--out", str(tmp_path / "b")]) == 0
+    cap = capsys.readouterr()
+    assert cap.err.splitlines() == [
+        f"spacerobot build: building the FMUs and the SSP for planar into {tmp_path / 'b'}/ ..."]
+    assert cap.out.split() == ["ssp", str(tmp_path / "b")]   # stdout: the result only
+
+
+def test_kernels_compiled_looks_at_the_cache(monkeypatch, tmp_path):
+    monkeypatch.setenv("SPACEROBOT_CACHE_DIR", str(tmp_path / "cache"))
+    assert cli.kernels_compiled() is False                  # no cache folder yet
+    folder = tmp_path / "cache" / "kernels-0123" / "__pycache__"
+    folder.mkdir(parents=True)
+    assert cli.kernels_compiled() is False
+    (folder / "kernels.step-12.py311.nbi").write_bytes(b"")
+    assert cli.kernels_compiled() is True
+
+
+def test_fmus_compile_kernels_looks_into_the_ssp(tmp_path):
+    """The first-run notice is for FMUs that carry Numba kernels, not for others (native)."""
+    import io
+
+    def ssp(name, members):
+        fmu = io.BytesIO()
+        with zipfile.ZipFile(fmu, "w") as z:
+            for m in members:
+                z.writestr(m, "")
+        path = tmp_path / name
+        with zipfile.ZipFile(path, "w") as z:
+            z.writestr("SystemStructure.ssd", "")
+            z.writestr("resources/SpaceRobotPlant.fmu", fmu.getvalue())
+        return path
+    assert cli.fmus_compile_kernels(ssp("numba.ssp", ["modelDescription.xml",
+                                                      "resources/_p/plant/kernels.py"]))
+    assert not cli.fmus_compile_kernels(ssp("native.ssp", ["modelDescription.xml",
+                                                           "binaries/linux64/x.so"]))
+    assert not cli.fmus_compile_kernels(tmp_path / "missing.ssp")
+
+
+def test_montecarlo_says_what_it_starts(monkeypatch, tmp_path, capsys):
+    mc = pytest.importorskip("spacerobot.system.montecarlo")
+
+    def stop(*a, **k):
+        raise ValueError("stopped before the study")
+    monkeypatch.setattr(mc, "run_montecarlo", stop)
+    out = tmp_path / "mc.csv"
+    assert cli.main(["montecarlo", "--cases", "3", "--stop-time", "20", "--out", str(out)]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == (f"spacerobot montecarlo: 6 runs of 20 s (3 random cases x 2 methods x 1 "
+                      f"excitation modes) on 2 local Dask workers, building the SSP first; results "
+                      f"-> {out} ...")
+
+
+def test_error_column_is_the_body_scaled_relative_error():
+    """One metric in every row, named in the header: |est - truth| / error_scale(truth), here
+    computed by hand (a product of inertia relative to the body's largest moment, a zero CoM
+    component relative to 5 cm), not relative to its own (tiny) truth."""
+    from spacerobot.system.runner import RunResult, format_results
+    truth = {"base.m": 500.0, "base.b[1]": 0.0, "base.Ixx": 80.0, "base.Iyy": 90.0,
+             "base.Izz": 100.0, "base.Ixy": 0.02}
+    final = {"base.m": 501.0, "base.b[1]": 0.001, "base.Ixx": 80.0, "base.Iyy": 90.0,
+             "base.Izz": 100.0, "base.Ixy": 0.0202}
+    t = np.zeros(1)
+    text = format_results(RunResult(time=t, data={}, truth=truth, final=final))
+    head = text.splitlines()[0].split()
+    assert head[:4] == ["parameter", "estimate", "truth", "error/scale"]
+    rows = {line.split()[0]: line.split() for line in text.splitlines()[2:]
+            if line.split() and line.split()[0] in truth}
+    expected = {"base.m": 1.0 / 500.0, "base.b[1]": 0.001 / 0.05, "base.Ixx": 0.0,
+                "base.Ixy": 0.0002 / 100.0}
+    for n, rel in expected.items():
+        assert float(rows[n][3]) == pytest.approx(100 * rel, abs=1e-5), n
+        assert rows[n][4] == "%"
+    assert "error/scale = |estimate - truth| / error_scale(truth)" in text
+
+
+def _pipe_run(built, tmp_path, name):
+    return [str(a) for a in CLI + ["run", built["ssp"], "--stop-time", "0.3", "--no-progress",
+                                   "--out", tmp_path / name]]
+
+
+def test_closed_pipe_ends_quietly(built, tmp_path):
+    """stdout closed by its reader before the table is printed: exit status 141 (128 +
+    SIGPIPE, as Unix tools), no traceback, no error line; the CSV was written."""
+    env = dict(os.environ, PYTHONWARNINGS="ignore")
+    p = subprocess.Popen(_pipe_run(built, tmp_path, "closed.csv"), cwd=tmp_path, env=env,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p.stdout.close()                                        # the reader is gone
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=300) == 141, err
+    assert err == "", err
+    assert read_csv(tmp_path / "closed.csv")["time"][-1] == pytest.approx(0.3)
+
+
+def test_head_one_ends_quietly(built, tmp_path):
+    """`spacerobot run ... | head -1`, as a user types it: the first line, then a quiet end
+    (0 if the table fitted in the pipe before head exited, else 141)."""
+    cmd = " ".join(f"'{a}'" for a in _pipe_run(built, tmp_path, "head.csv"))
+    p = subprocess.run(["bash", "-c", f"set -o pipefail; {cmd} | head -1"], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=300,
+                       env=dict(os.environ, PYTHONWARNINGS="ignore"))
+    assert p.returncode in (0, 141), p.stderr
+    assert "Traceback" not in p.stderr and "Broken pipe" not in p.stderr, p.stderr
+    assert p.stdout.startswith(str(built["ssp"]))

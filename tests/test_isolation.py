@@ -1,11 +1,16 @@
-"""The estimator never imports plant code or Pinocchio, in the library and in its FMU."""
+"""The estimator never imports plant code or Pinocchio, in the library and in its FMUs (native
+and pythonfmu-hosted)."""
 import ast
+import re
 import zipfile
 from pathlib import Path
 
 import pytest
 
-from spacerobot.fmi.build import BUNDLES
+from spacerobot.fmi.build import BUNDLES, build_fmu
+from spacerobot.robots import scenario
+
+ROOT = Path(__file__).resolve().parents[1]
 
 LIB = Path(__file__).resolve().parents[1] / "spacerobot"
 FORBIDDEN = ("pinocchio", "plant")
@@ -33,19 +38,52 @@ def test_estimator_bundle_sources_do_not_import_plant_or_pinocchio(path):
         assert not any(p in FORBIDDEN for p in parts), f"{path} imports {mod}"
 
 
-def test_estimator_fmu_contains_no_plant_code(planar_fmus):
-    names = zipfile.ZipFile(planar_fmus["estimator"]).namelist()
+@pytest.fixture(scope="module")
+def python_estimator(tmp_path_factory):
+    """The pythonfmu-hosted estimator FMU (``--backend pythonfmu``)."""
+    return build_fmu("estimator", scenario("planar"), tmp_path_factory.mktemp("py"),
+                     backend="pythonfmu")
+
+
+def test_native_estimator_sources_include_no_plant_code():
+    """The native estimator's binary is built from the core modules listed for it, none of
+    which is the plant's dynamics or the sensors, and none includes their headers."""
+    import importlib.util
+    import sys
+    spec = importlib.util.spec_from_file_location("native_build", ROOT / "native" / "build.py")
+    nb = sys.modules.setdefault("native_build", importlib.util.module_from_spec(spec))
+    spec.loader.exec_module(nb)
+    sources = [ROOT / "native" / "src" / n for n in nb.MODEL_SOURCES["estimator"]]
+    sources += [ROOT / "fmu_estimator" / "estimator.c", *(ROOT / "native" / "fmi2").glob("*.c")]
+    for src in sources:
+        assert src.stem not in ("dynamics", "sensors", "rng"), src
+        for inc in re.findall(r'#include\s+"([^"]+)"', src.read_text()):
+            assert inc not in ("dynamics.h", "sensors.h", "rng.h"), (src, inc)
+
+
+def test_native_estimator_fmu_contains_no_plant_code(planar_fmus):
+    """No Python, and no symbol of the plant's dynamics or the sensors in its binaries."""
+    z = zipfile.ZipFile(planar_fmus["estimator"])
+    assert not [n for n in z.namelist() if n.endswith(".py")]
+    for n in z.namelist():
+        if n.startswith("binaries/"):
+            data = z.read(n)
+            assert data and b"sr_dyn_" not in data and b"sr_sensors_" not in data, n
+
+
+def test_estimator_fmu_contains_no_plant_code(python_estimator):
+    names = zipfile.ZipFile(python_estimator).namelist()
     assert any(n.endswith("_spacerobot_estimator/estimator/identifier.py") for n in names)
     assert not any("/plant/" in n or n.endswith("/plant") for n in names), names
     for n in names:
         if n.endswith(".py") and "pythonfmu/" not in n:
-            src = zipfile.ZipFile(planar_fmus["estimator"]).read(n).decode()
+            src = zipfile.ZipFile(python_estimator).read(n).decode()
             assert "pinocchio" not in src.replace("Pinocchio", ""), n
 
 
-def test_the_two_fmus_bundle_their_library_under_distinct_names(planar_fmus):
+def test_the_two_fmus_bundle_their_library_under_distinct_names(planar_fmus, python_estimator):
     plant = {n.split("/")[1] for n in zipfile.ZipFile(planar_fmus["plant"]).namelist()
              if n.startswith("resources/_spacerobot")}
-    est = {n.split("/")[1] for n in zipfile.ZipFile(planar_fmus["estimator"]).namelist()
+    est = {n.split("/")[1] for n in zipfile.ZipFile(python_estimator).namelist()
            if n.startswith("resources/_spacerobot")}
     assert plant == {"_spacerobot_plant"} and est == {"_spacerobot_estimator"}

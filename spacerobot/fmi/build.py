@@ -39,9 +39,50 @@ def _script(kind: str) -> Path:
     return folder / f"spacerobot_{kind}_fmu.py"
 
 
-def build_fmu(kind: str, sc: Scenario, out_dir: str | Path) -> Path:
+#: how an FMU is built: ``native`` (the C core's binaries, :mod:`.native`; no Python at run
+#: time) or ``pythonfmu`` (the Python core hosted by pythonfmu, for users who extend it in Python)
+BACKENDS = ("native", "pythonfmu")
+#: the backend ``build_fmu`` uses by default (the native estimator becomes the default once it
+#: covers every option of the Python one)
+DEFAULT_BACKEND = "native"
+
+
+def native_kinds() -> tuple:
+    """The kinds of FMU that have a native build."""
+    from .native import MODELS
+    return tuple(MODELS)
+
+
+def fmu_backend(fmu) -> str:
+    """The backend an FMU (a path or its bytes) was built with: ``native`` if it carries the
+    native variable table, else ``pythonfmu``."""
+    import io
+    import zipfile
+
+    from .native import VARIABLES_FILE
+    src = io.BytesIO(fmu) if isinstance(fmu, (bytes, bytearray)) else fmu
+    with zipfile.ZipFile(src) as zf:
+        return "native" if f"resources/{VARIABLES_FILE}" in zf.namelist() else "pythonfmu"
+
+
+def backend_of(kind: str, backend: str | None = None) -> str:
+    """The backend an FMU of ``kind`` is built with when ``backend`` is asked for (None: the
+    default): ``native`` only for the kinds that have a native build, ``pythonfmu`` for the
+    others."""
+    backend = backend or DEFAULT_BACKEND
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    return backend if backend != "native" or kind in native_kinds() else "pythonfmu"
+
+
+def build_fmu(kind: str, sc: Scenario, out_dir: str | Path, backend: str | None = None) -> Path:
     """Build one FMU (``kind`` = 'plant', 'estimator' or 'sensors') into ``out_dir``; returns
-    its path."""
+    its path. ``backend`` (:data:`BACKENDS`; None: :data:`DEFAULT_BACKEND`): ``native`` builds the
+    kinds that have a native build (:func:`native_kinds`) natively and the others with
+    pythonfmu."""
+    if backend_of(kind, backend) == "native":
+        from .native import build_native_fmu
+        return build_native_fmu(kind, sc, out_dir)
     from pythonfmu.builder import FmuBuilder
 
     if kind not in BUNDLES:

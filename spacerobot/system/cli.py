@@ -18,8 +18,11 @@ from __future__ import annotations
 
 import argparse
 import functools
+import hashlib
 import importlib
 import importlib.util
+import os
+import re
 import sys
 from pathlib import Path
 from typing import Optional, Sequence
@@ -44,6 +47,8 @@ def fail_on_errors(command: str):
             from .errors import SimulationError
             try:
                 return func(args)
+            except BrokenPipeError:
+                raise                         # the reader went away: main() ends quietly
             except KeyboardInterrupt:
                 print(f"spacerobot {command}: interrupted", file=sys.stderr)
                 return 130
@@ -55,6 +60,101 @@ def fail_on_errors(command: str):
                 return 1
         return run
     return wrap
+
+
+def notice(command: str, text: str) -> None:
+    """One line ``spacerobot <command>: <text>`` on stderr, at once: what a slow step is about
+    to do, or that a result file is replaced (stdout stays the result)."""
+    print(f"spacerobot {command}: {text}", file=sys.stderr, flush=True)
+
+
+def kernel_cache() -> str:
+    """The kernel cache folder, as the messages name it."""
+    from ..jit import cache_root
+    return str(cache_root())
+
+
+def kernels_compiled() -> bool:
+    """Whether the kernel cache (:func:`spacerobot.jit.cache_root`) holds any compiled kernel:
+    False on a machine where nothing has run yet, whose first run compiles for minutes."""
+    from ..jit import cache_root
+    try:
+        return any(cache_root().glob("*/__pycache__/*.nbi"))
+    except OSError:
+        return False
+
+
+def library_compiles_kernels() -> bool:
+    """Whether this installation's estimator runs Numba kernels (compiled at their first use on
+    a machine, :func:`kernels_compiled`): Numba installed and ``spacerobot.estimator.kernels``
+    present."""
+    try:
+        return (importlib.util.find_spec("numba") is not None
+                and importlib.util.find_spec("spacerobot.estimator.kernels") is not None)
+    except (ImportError, ValueError):
+        return False
+
+
+def fmus_compile_kernels(ssp: Path) -> bool:
+    """Whether a component FMU of ``ssp`` (an archive or a folder) carries Numba kernels
+    (``.../kernels.py``), which it compiles at its first instantiation on a machine; False for
+    FMUs without them (native ones) and for anything that cannot be read (the run reports
+    that)."""
+    import io
+    import zipfile
+
+    def has_kernels(fmu: zipfile.ZipFile) -> bool:
+        return any(n.endswith("/kernels.py") for n in fmu.namelist())
+    try:
+        if ssp.is_dir():
+            return any(has_kernels(zipfile.ZipFile(f)) for f in ssp.glob("resources/*.fmu"))
+        with zipfile.ZipFile(ssp) as zf:
+            return any(has_kernels(zipfile.ZipFile(io.BytesIO(zf.read(n))))
+                       for n in zf.namelist() if n.endswith(".fmu"))
+    except (OSError, zipfile.BadZipFile, KeyError):
+        return False
+
+
+#: the longest settings tag put into a default file name as NAME=VALUE pairs; longer: a hash
+MAX_TAG = 60
+
+
+def _value_text(value: float) -> str:
+    text = repr(float(value))
+    return text[:-2] if text.endswith(".0") else text
+
+
+def settings_tag(assignments: Optional[Sequence[str]], stop_time: Optional[float] = None,
+                 strip: str = "") -> str:
+    """The part of a default result name that holds the settings a run was given beyond the
+    named choices: the ``--set NAME=VALUE`` overrides (sorted by name, the prefix ``strip``
+    removed from each name, characters other than letters, digits and ``._=-`` replaced by
+    ``_``, values as numbers: ``plant.base.v0[1]=5`` -> ``plant.base.v0_1=5``) joined by
+    ``_``, then ``t<T>`` for an explicit ``--stop-time``. A tag longer than :data:`MAX_TAG`
+    characters becomes ``set-<10 hex digits>``, a hash of it (stable from run to run). Empty
+    without such settings.
+
+    ``ValueError`` for an assignment that is not NAME=VALUE (as ``--set`` reports it)."""
+    from .bindings import parse_assignments
+    values = {k.removeprefix(strip) if strip else k: v
+              for k, v in parse_assignments(assignments).items()}
+    parts = []
+    for name in sorted(values):
+        safe = re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("_")
+        parts.append(f"{safe}={_value_text(values[name])}")
+    if stop_time is not None:
+        parts.append(f"t{_value_text(stop_time)}")
+    tag = "_".join(parts)
+    if len(tag) > MAX_TAG:
+        tag = "set-" + hashlib.sha1(tag.encode()).hexdigest()[:10]
+    return tag
+
+
+def announce_replace(command: str, path: Path) -> None:
+    """Say on stderr, before a run, that its result will replace the existing file ``path``
+    (results are never replaced silently)."""
+    if path.is_file():
+        notice(command, f"{path} exists: this run replaces it")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -99,18 +199,47 @@ def cmd_build(args) -> int:
     from .ssd import build_system
     robot = robot_key(args)
     out = Path(args.out) if args.out else Path("build") / robot_label(robot)
-    for key, path in build_system(robot, out, sensors=args.sensors).items():
+    notice("build", f"building the FMUs and the SSP for {robot_label(robot)} into {out}/ ...")
+    for key, path in build_system(robot, out, sensors=args.sensors,
+                                  backend=args.backend).items():
         print(f"{key:<12} {path}")
+    warn_missing_platforms(args.backend)
     return 0
 
 
+def add_backend_argument(p: argparse.ArgumentParser) -> None:
+    """``--backend native|pythonfmu``."""
+    from ..fmi.build import BACKENDS, DEFAULT_BACKEND
+    p.add_argument("--backend", choices=BACKENDS, default=DEFAULT_BACKEND,
+                   help="how the FMUs are built: native (the C core, no Python at run time, "
+                        "linux64 + win64; today the estimator) or pythonfmu (the Python core, "
+                        f"for extending it in Python); default {DEFAULT_BACKEND}")
+
+
+def warn_missing_platforms(backend: str) -> None:
+    """One line on stderr for each platform the native FMUs cannot carry on this install."""
+    if backend != "native":
+        return
+    from ..fmi.native import MODELS, PLATFORMS, binaries
+    for ident, *_ in MODELS.values():
+        missing = sorted(set(PLATFORMS) - set(binaries(ident)))
+        for plat in missing:
+            print(f"spacerobot build: {ident}.fmu carries no {plat} binary: it was not compiled "
+                  f"when the package was installed (win64 needs x86_64-w64-mingw32-gcc, Debian "
+                  f"package gcc-mingw-w64-x86-64; install it and reinstall the package)",
+                  file=sys.stderr)
+
+
 def result_name(robot: Optional[str], ssp: Path, target: Optional[str], args) -> Path:
-    """Default results CSV: ``results/<robot>[_sensors]-<target>-<method>-<accel>-<solver>.csv``,
-    so that runs that differ in any of them do not overwrite each other."""
+    """Default results CSV: ``results/<robot>[_sensors]-<target>-<method>-<accel>-<solver>
+    [-<settings>].csv``, ``<settings>`` the ``--set`` overrides and an explicit ``--stop-time``
+    (:func:`settings_tag`), so that runs that differ in any of them do not overwrite each
+    other."""
     sensors = "_sensors" if robot and args.sensors and not args.ssp else ""
     name = robot_label(robot) + sensors if robot else ssp.stem
+    tag = settings_tag(args.set, args.stop_time)
     return Path("results") / (f"{name}-{target or 'bound'}-{args.method}-"
-                              f"{args.accel}-{args.solver}.csv")
+                              f"{args.accel}-{args.solver}" + (f"-{tag}" if tag else "") + ".csv")
 
 
 def set_stop_time(robot: Optional[str], target: Optional[str]) -> Optional[float]:
@@ -150,9 +279,15 @@ def cmd_run(args) -> int:
     check_writable(csv_path)              # before the build and the run: results never lost
     if csv_path.suffix.lower() != ".csv":  # a typo must not overwrite e.g. README.md
         raise CommandError(f"--out {csv_path}: the result file must end in .csv")
+    announce_replace("run", csv_path)
     if ssp is None:
-        ssp = ensure_ssp(robot, args.build_dir, sensors=args.sensors)
+        ssp = ensure_ssp(robot, args.build_dir, sensors=args.sensors, on_build=lambda out: notice(
+            "run", f"building the FMUs and the SSP for {robot_label(robot)} into {out}/ ..."),
+            backend=args.backend)
     stop_time = args.stop_time if args.stop_time is not None else set_stop_time(robot, target)
+    if not kernels_compiled() and fmus_compile_kernels(Path(ssp)):
+        notice("run", "first run on this machine: the FMUs compile their kernels before the "
+                      f"run starts (minutes, once; cached in {kernel_cache()}) ...")
     res = run_ssp(ssp, parameter_set=args.target, stop_time=stop_time,
                   overrides=overrides, csv_path=csv_path,
                   progress=False if args.no_progress else None)
@@ -202,6 +337,7 @@ def build_parser() -> argparse.ArgumentParser:
                                                 "<robot> the URDF's robot name)")
     p.add_argument("--sensors", action="store_true", help="the system with the sensors FMU "
                    "between plant and estimator (<robot>_sensors.ssp, docs/sensors.md)")
+    add_backend_argument(p)
     p.set_defaults(func=cmd_build)
 
     p = sub.add_parser("run", help="run the co-simulation and print the final estimates",
@@ -224,14 +360,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="FMU parameter override, e.g. plant.base.v0[1]=5 (repeatable)")
     p.add_argument("--out", metavar="CSV",
-                   help="results CSV (default "
-                   "results/<robot>-<target>-<method>-<accel>-<solver>.csv)")
+                   help="results CSV (default results/<robot>-<target>-<method>-<accel>-"
+                   "<solver>[-<settings>].csv, <settings> the --set overrides and an explicit "
+                   "--stop-time; an existing file is replaced, with a note on stderr)")
     p.add_argument("--build-dir", metavar="DIR", help="where to build the .ssp for --robot "
                                                       "(default build/<robot>/)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--sensors", action="store_true", help="with --robot: run the system with "
                    "the sensors FMU (parameter sets ideal, realistic (default) and the "
                    "others; seed: --set sensors.seed=N)")
+    add_backend_argument(p)
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("plot", help="plot a run CSV (paper Fig. 4/5 view) or a sweep table",
@@ -250,9 +388,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Entry point of the ``spacerobot`` console script; returns the exit status."""
+    """Entry point of the ``spacerobot`` console script; returns the exit status.
+
+    A reader that closes the pipe early (``spacerobot run ... | head -1``) ends the command
+    quietly with status 141 (128 + SIGPIPE, what a Unix tool killed by the signal returns):
+    no traceback, no error line; the results file of a run is written before its table is
+    printed."""
     args = build_parser().parse_args(argv)
-    return int(args.func(args) or 0)
+    try:
+        status = int(args.func(args) or 0)
+        sys.stdout.flush()                  # a closed pipe shows here, not at exit
+        return status
+    except BrokenPipeError:
+        # Python would flush stdout again at exit and report the closed pipe: point stdout at
+        # /dev/null first (the recipe of the Python documentation, signal module: SIGPIPE)
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError):
+            pass
+        return 141
 
 
 if __name__ == "__main__":

@@ -17,7 +17,9 @@ if present, give the table's truth.
 
 The result has one row per sample: ``time``, the 20 estimates, their standard deviations
 ``sd.<estimate>`` and the estimator's diagnostics, with the names of the estimator FMU's
-outputs; the row of time ``t`` holds the estimates after the sample of ``t``. (The FMU
+outputs, and, where the telemetry has a truth, ``truth.<estimate>`` (the truth at that
+sample, so that ``spacerobot plot`` compares with it); the row of time ``t`` holds the
+estimates after the sample of ``t``. (The FMU
 consumes the sample of ``t`` in its step from ``t``: its outputs at ``t + dt`` equal this
 row.)
 """
@@ -93,6 +95,18 @@ def read_telemetry(path: str | Path, n_joints: int) -> Tuple[np.ndarray, Dict[st
                          + (f" and {len(missing) - 6} more" if len(missing) > 6 else "")
                          + f" (looked up as <name>, {', '.join(p + '<name>' for p in PREFIXES[1:])})")
     return time, groups
+
+
+def truth_columns(data: Mapping[str, np.ndarray], names=ESTIMATE_NAMES
+                  ) -> Dict[str, np.ndarray]:
+    """``{'truth.<name>': (N,) array}``: the truth of each estimate at every sample, looked up
+    as :func:`read_truth` does (``truth.``, ``plant.truth.``, ``plant.``); empty if none."""
+    out = {}
+    for n in names:
+        col = _column(data, n, TRUTH_PREFIXES)
+        if col is not None and col.dtype.kind == "f" and len(col):
+            out["truth." + n] = np.asarray(col, float)
+    return out
 
 
 def read_truth(path_or_data, names=ESTIMATE_NAMES) -> Dict[str, float]:
@@ -191,8 +205,10 @@ def identify(time: np.ndarray, groups: Mapping[str, np.ndarray], robot: str,
 def identify_csv(telemetry: str | Path, robot: str, out: Optional[str | Path] = None,
                  overrides: Optional[Mapping[str, float]] = None) -> RunResult:
     """Read a telemetry CSV, identify, write the result CSV (default
-    ``<telemetry stem>-identified.csv`` beside it); a :class:`RunResult` whose ``final`` are
-    the last estimates and ``truth`` the telemetry's truth columns, if any."""
+    ``<telemetry stem>-identified.csv`` beside it; the command line names it by its settings,
+    :func:`default_output`); a :class:`RunResult` whose ``final`` are the last estimates and
+    ``truth`` the telemetry's truth columns, if any (also written, as ``truth.<name>``, beside
+    the estimates)."""
     check_robot(robot)
     telemetry = Path(telemetry)
     parameters = estimator_parameters(robot, overrides)
@@ -201,12 +217,25 @@ def identify_csv(telemetry: str | Path, robot: str, out: Optional[str | Path] = 
     data = identify(time, groups, robot, parameters)
     out = Path(out) if out else telemetry.with_name(telemetry.stem + "-identified.csv")
     truth = read_truth(raw)
+    data.update(truth_columns(raw))
     final = {n: float(data[n][-1]) for n in ESTIMATE_NAMES}
     res = RunResult(time=data["time"], data=data, truth=truth, final=final,
                     start_time=float(time[0]), stop_time=float(time[-1]),
                     step_size=float(np.median(np.diff(time))) if len(time) > 1 else math.nan)
     res.csv_path = write_csv(out, data)
     return res
+
+
+def default_output(telemetry: str | Path, args) -> Path:
+    """The command line's default result file: ``<telemetry stem>-identified-<method>-<accel>-
+    <solver>[-<settings>].csv`` beside the telemetry, ``<settings>`` the ``--set`` overrides
+    (:func:`spacerobot.system.cli.settings_tag`, names without the ``estimator.`` prefix), so
+    that identifications with other settings do not overwrite each other."""
+    from .cli import settings_tag
+    telemetry = Path(telemetry)
+    tag = settings_tag(args.set, strip="estimator.")
+    return telemetry.with_name(f"{telemetry.stem}-identified-{args.method}-{args.accel}-"
+                               f"{args.solver}" + (f"-{tag}" if tag else "") + ".csv")
 
 
 def register(subparsers):
@@ -230,15 +259,24 @@ def register(subparsers):
                    help="estimator parameter, e.g. guess.target.m=300 or lambda=0.999 "
                         "(repeatable)")
     p.add_argument("--out", metavar="CSV", help="result CSV (default "
-                   "<TELEMETRY>-identified.csv)")
+                   "<TELEMETRY>-identified-<method>-<accel>-<solver>[-<settings>].csv beside "
+                   "it, <settings> the --set overrides; an existing file is replaced, with a "
+                   "note on stderr)")
 
     @fail_on_errors("identify")
     def cmd_identify(args) -> int:
+        from .cli import (announce_replace, kernel_cache, kernels_compiled,
+                          library_compiles_kernels, notice)
         overrides = {"method": METHOD_CODES[args.method], "accel_source": ACCEL_CODES[args.accel],
                      "solver": SOLVER_CODES[args.solver]}
         overrides.update(parse_assignments(args.set))
         robot = robot_key(args)
-        res = identify_csv(args.telemetry, robot, args.out, overrides)
+        out = Path(args.out) if args.out else default_output(args.telemetry, args)
+        announce_replace("identify", out)
+        if library_compiles_kernels() and not kernels_compiled():
+            notice("identify", "first use on this machine: compiling the estimator's kernels "
+                               f"(minutes, once; cached in {kernel_cache()}) ...")
+        res = identify_csv(args.telemetry, robot, out, overrides)
         print(f"{args.telemetry}: robot {robot_label(robot)}, method {args.method}, solver "
               f"{args.solver}, accelerations {args.accel}; {len(res.time)} samples, "
               f"t = {res.start_time:g} .. {res.stop_time:g} s")

@@ -51,7 +51,8 @@ def run_metrics(time: np.ndarray, est: np.ndarray, truth: np.ndarray, scale: np.
 
     Returns
     -------
-    dict with ``worst_error`` (at the end, over the identified estimates), ``worst_param``
+    dict with ``worst_error`` (at the end, over the identified estimates; the error of an
+    estimate is ``|est - truth| / scale``, the ``error/scale`` of every table), ``worst_param``
     index, ``t_1pct`` and ``t_01pct`` (settling times of the worst error), per body
     ``identified.<b>`` (final flag), ``t_identified.<b>`` (first rise),
     ``false_identified.<b>`` (1 if the flag was ever 1 while an estimate of that body was

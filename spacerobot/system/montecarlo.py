@@ -189,14 +189,16 @@ def read_results(csv_path) -> List[Dict[str, str]]:
 
 def summary_table(rows: Sequence[Dict[str, str]]) -> str:
     """A Markdown table per (method, excitation): cases, within 1 % / 0.1 % at the end, median
-    and largest worst error, median time to 1 % and 0.1 %, identified, false flags, impossible
+    and largest worst error (``error/scale``: :func:`spacerobot.interface.relative_errors`, the
+    metric of every table), median time to 1 % and 0.1 %, identified, false flags, impossible
     estimates."""
     groups: Dict[tuple, List[Dict[str, str]]] = {}
     for r in rows:
         if r["status"] == "ok":
             groups.setdefault((r["robot"], r["method"], r["excite"]), []).append(r)
     lines = ["| robot | method | excitation | cases | within 1 % | within 0.1 % | median worst "
-             "error | largest worst error | median time to 1 % [s] | median time to 0.1 % [s] "
+             "error/scale | largest worst error/scale | median time to 1 % [s] | median time "
+             "to 0.1 % [s] "
              "| both identified | false flags | impossible estimates |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (robot, method, excite), rs in sorted(groups.items()):
@@ -242,7 +244,7 @@ def plot_montecarlo(csv_path, out_png: Optional[str] = None) -> Path:
         ax.axvline(x, color="grey", lw=0.8, ls=":")
         ax.text(x, 0.02, f" {lab}", color="grey", fontsize=8)
     ax.set_xscale("log")
-    ax.set_xlabel("worst relative error of the identified estimates at the end [%]")
+    ax.set_xlabel("worst error/scale of the identified estimates at the end [%]")
     ax.set_ylabel("fraction of cases")
     ax.set_ylim(0, 1.02)
     ax.set_title(f"Monte Carlo: {rows[0]['robot']} robot, random bases and targets, "
@@ -313,6 +315,12 @@ def cli_montecarlo(args) -> int:
         ssp = {robot: str(Path(args.ssp).resolve())}
     cases = make_cases(robot, args.cases, args.seed, args.method, args.excite,
                        args.stop_time)
+    from .cli import notice
+    notice("montecarlo", f"{len(cases)} runs of {args.stop_time:g} s ({args.cases} random "
+           f"cases x {len(args.method)} methods x {len(args.excite)} excitation modes) on "
+           + (f"the Dask scheduler {args.scheduler}" if args.scheduler else
+              f"{args.workers} local Dask workers")
+           + (", building the SSP first" if not ssp else "") + f"; results -> {out} ...")
     try:
         summary = run_montecarlo(cases, out, workers=args.workers, scheduler=args.scheduler,
                                  build_dir=args.build_dir, ssp=ssp,

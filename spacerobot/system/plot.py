@@ -3,10 +3,15 @@
 
 Reads the CSV written by :func:`spacerobot.system.runner.run_ssp` (columns ``time``,
 ``plant.<name>``, ``estimator.<name>``, ``estimator.sd.<name>``) or by ``spacerobot identify``
-(columns ``time``, ``<name>``, ``sd.<name>``). The truth of each parameter is the plant's
-parameter connector of the same name (``plant.target.m`` ...), recorded by the runner, or,
-where the plant outputs one, its current truth ``plant.truth.<name>`` at every sample (a base
-that uses propellant, issue #17).
+(columns ``time``, ``<name>``, ``sd.<name>`` and, where its telemetry had a truth,
+``truth.<name>``). The truth of each parameter is the plant's parameter connector of the same
+name (``plant.target.m`` ...), recorded by the runner, or, where the plant outputs one, its
+current truth ``plant.truth.<name>`` at every sample (a base that uses propellant, issue #17),
+or the ``truth.<name>`` column that ``spacerobot identify`` copies from the telemetry.
+
+The y-axis of each panel follows the estimate (its second half, where it has settled), never
+the +-2 sd band: at the first samples the standard deviations are those of the prior, orders
+of magnitude wider than the parameter, and would flatten every curve.
 """
 from __future__ import annotations
 
@@ -56,19 +61,39 @@ def identified(data: Dict[str, np.ndarray], prefix: str = "estimator.") -> List[
     return out
 
 
+def _truth_column(data: Dict[str, np.ndarray], name: str) -> Optional[np.ndarray]:
+    """The truth of ``name`` against time: the plant's current truth ``plant.truth.<name>``,
+    the ``truth.<name>`` column of ``spacerobot identify``'s output, or the plant's parameter
+    ``plant.<name>``, the first recorded."""
+    for prefix in ("plant.truth.", "truth.", "plant."):
+        col = data.get(prefix + name)
+        if col is not None and col.dtype.kind == "f" and len(col):
+            return col
+    return None
+
+
 def _truth(data: Dict[str, np.ndarray], name: str) -> Optional[float]:
-    col = data.get("plant." + name)
-    if col is None or col.dtype.kind != "f" or not len(col):
-        return None
-    return float(col[-1])
+    """The truth of ``name`` at the end (:func:`_truth_column`), if recorded."""
+    col = _truth_column(data, name)
+    return None if col is None else float(col[-1])
 
 
 def _truth_now(data: Dict[str, np.ndarray], name: str) -> Optional[np.ndarray]:
-    """The plant's current truth ``plant.truth.<name>`` against time, if recorded."""
-    col = data.get("plant.truth." + name)
-    if col is None or col.dtype.kind != "f" or not len(col):
+    """The truth of ``name`` against time where it changes during the run (a base that uses
+    propellant), else None (a constant truth: :func:`_truth`)."""
+    col = _truth_column(data, name)
+    if col is None or not np.isfinite(col).all() or np.ptp(col) == 0.0:
         return None
     return col
+
+
+def _limits(y: np.ndarray, centre: float, floor: float) -> Tuple[float, float]:
+    """y-limits around ``centre`` that hold the finite values of ``y`` (the estimate's second
+    half) with a margin, at least +-``floor``."""
+    y = y[np.isfinite(y)]
+    d = float(np.max(np.abs(y - centre))) if len(y) else 0.0
+    d = max(1.3 * d, floor)
+    return centre - d, centre + d
 
 
 def _zero_truth_scale(data: Dict[str, np.ndarray], name: str) -> Tuple[float, str]:
@@ -141,13 +166,16 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
             # the +-2 sd band in the panel's units: estimate, error (truth 0), estimate / truth
             lo, hi = (band if truth is None else (band[0] - ref, band[1] - ref) if truth == 0.0
                       else (band[0] / ref, band[1] / ref))
-            ax.fill_between(t, np.minimum(lo, hi), np.maximum(lo, hi), color="tab:blue",
-                            alpha=0.2, lw=0, label="±2 sd")
+            ok = np.isfinite(lo) & np.isfinite(hi)
+            ax.fill_between(t, np.minimum(lo, hi), np.maximum(lo, hi), where=ok,
+                            color="tab:blue", alpha=0.2, lw=0, label="±2 sd")
             band_drawn = True
         if truth is None:
             ax.plot(t, est, lw=1.2)
             ax.set_title(f"{n} (no truth in CSV)", fontsize=9)
             ax.set_ylabel("estimate")
+            end = float(est[-1]) if np.isfinite(est[-1]) else 0.0
+            ax.set_ylim(*_limits(est[half], end, max(5 * BAND * abs(end), 1e-9)))
         elif truth == 0.0:
             err = est - ref
             ax.plot(t, err, lw=1.2)
@@ -157,9 +185,7 @@ def plot_run(csv_path: str | Path, out: Optional[str | Path] = None,
             ax.set_title(f"{n}: absolute error (truth = 0)\nband ±0.1 % of {scale_txt}",
                          fontsize=8)
             ax.set_ylabel("estimate - truth")
-            d = float(np.max(np.abs(err[half]))) if len(err[half]) else 1.0
-            d = max(d, 5 * BAND * scale)
-            ax.set_ylim(-1.3 * d, 1.3 * d)
+            ax.set_ylim(*_limits(err[half], 0.0, 5 * BAND * scale))
         else:
             ratio = est / ref
             ax.plot(t, ratio, lw=1.2)

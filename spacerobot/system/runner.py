@@ -256,9 +256,17 @@ def run_ssp(ssp_path: str | Path, parameter_set: Optional[str] = None,
     return result
 
 
+#: the header of the error column of :func:`format_results`, and the line that defines it
+ERROR_HEADER = "error/scale"
+ERROR_NOTE = ("error/scale = |estimate - truth| / error_scale(truth), the metric of the identified "
+              "flags and the Monte Carlo study;\nscale: mass |m|, centre of mass max(|b_i|, 5 cm), "
+              "moments |I_ii|, products of inertia the body's largest moment")
+
+
 def format_results(result: RunResult, paper: Optional[Mapping[str, float]] = None,
                    identified_only: Optional[Sequence[str]] = None) -> str:
-    """Text table of every estimate: final value, truth, relative error, and the paper's value.
+    """Text table of every estimate: final value, truth, error, and the paper's value; then
+    the estimator's verdict (identified, physical) at the end, when recorded.
 
     Parameters
     ----------
@@ -270,35 +278,39 @@ def format_results(result: RunResult, paper: Optional[Mapping[str, float]] = Non
         The parameters the model identifies; the others are marked ``not identified``
         (e.g. the planar model identifies only m, b[1], b[2], Izz of each body).
 
-    For a zero truth the absolute error is shown instead of the relative one.
+    The error of every row is the one metric the estimator's flags and the Monte Carlo study
+    use, :func:`spacerobot.interface.relative_errors` (``|est - truth| / error_scale(truth)``,
+    in %; also for a zero truth), named in the header and defined in a line below the table.
     """
     paper = paper or {}
-    head = f"{'parameter':<12} {'estimate':>14} {'truth':>12} {'error':>16} {'paper':>9}  note"
+    rel = interface.relative_errors_by_name(
+        result.final, {n: v for n, v in result.truth.items() if not math.isnan(v)})
+    head = (f"{'parameter':<12} {'estimate':>14} {'truth':>12} {ERROR_HEADER:>14} "
+            f"{'paper':>9}  note")
     lines = [head, "-" * len(head)]
     for n, est in result.final.items():
+        err = f"{100.0 * rel[n]:.5f} %" if n in rel else "n/a"
         tru = result.truth.get(n, math.nan)
-        if math.isnan(tru):
-            err = "n/a"
-        elif tru == 0.0:
-            err = f"abs {abs(est - tru):.2e}"
-        else:
-            err = f"{100.0 * abs(est - tru) / abs(tru):.5f} %"
         pv = f"{paper[n]:.2f}" if n in paper else ""
         note = ""
         if identified_only is not None and n not in identified_only:
             note = "not identified"
-        lines.append(f"{n:<12} {est:>14.6f} {tru:>12.6g} {err:>16} {pv:>9}  {note}".rstrip())
+        lines.append(f"{n:<12} {est:>14.6f} {tru:>12.6g} {err:>14} {pv:>9}  {note}".rstrip())
+    lines.append(ERROR_NOTE)
     lines += _flag_lines(result.data)
     return "\n".join(lines)
 
 
 def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
-    """The estimator's verdict at the end: ``diag.identified.*`` and ``diag.physical.*``."""
+    """The estimator's verdict at the end: ``diag.identified.*`` and ``diag.physical.*``, from
+    the columns of a run (``estimator.diag.*``) or of ``spacerobot identify`` (``diag.*``)."""
     out = []
     for flag, text in (("identified", "identified (sd below ident.sd_rel)"),
                        ("physical", "real body as estimated (no projection)")):
-        cols = [(b, data.get(f"estimator.diag.{flag}.{b}")) for b in ("base", "target")]
-        if all(c is not None and len(c) for _, c in cols):
-            out.append(f"{text}: " + ", ".join(f"{b} {'yes' if c[-1] > 0.5 else 'no'}"
-                                               for b, c in cols))
+        for prefix in ("estimator.", ""):
+            cols = [(b, data.get(f"{prefix}diag.{flag}.{b}")) for b in ("base", "target")]
+            if all(c is not None and len(c) for _, c in cols):
+                out.append(f"{text}: " + ", ".join(f"{b} {'yes' if c[-1] > 0.5 else 'no'}"
+                                                   for b, c in cols))
+                break
     return out

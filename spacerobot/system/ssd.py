@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import zipfile
 from pathlib import Path
-from typing import Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple
 from xml.sax.saxutils import quoteattr
 
 from ..interface import (ESTIMATE_NAMES, EXCITATION_DOC, PROPELLANT_DOC, UNITS, Var,
@@ -389,7 +389,7 @@ def write_ssp_sources(dest: str | Path = SSP_SOURCE_DIR) -> List[Path]:
 
 
 def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]] = None,
-                 sensors: bool = False) -> Dict[str, Path]:
+                 sensors: bool = False, backend: Optional[str] = None) -> Dict[str, Path]:
     """Build the FMUs, the SSD, the SSVs and the packaged ``<robot>.ssp`` into ``out_dir``.
 
     Parameters
@@ -404,6 +404,10 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     sensors : bool
         The system with the sensors FMU between plant and estimator: ``<robot>_sensors.ssp``
         (its SSD and parameter sets go to ``out_dir/<robot>_sensors/``).
+    backend : str, optional
+        How the FMUs are built (:data:`spacerobot.fmi.build.BACKENDS`): ``native`` builds the
+        models that have a native binary (:func:`spacerobot.fmi.build.native_kinds`) natively
+        and the others with pythonfmu; default :data:`spacerobot.fmi.build.DEFAULT_BACKEND`.
 
     Returns
     -------
@@ -421,7 +425,7 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     fmus = dict(fmus or {})
     for kind in kinds:
         if kind not in fmus:
-            fmus[kind] = build_fmu(kind, scenario(robot), out)
+            fmus[kind] = build_fmu(kind, scenario(robot), out, backend)
     paths: Dict[str, Path] = {k: Path(fmus[k]) for k in kinds}
     files = generate(robot, sensors)
     src_dir = out / system_name(robot, True) if sensors else out
@@ -477,17 +481,25 @@ def _newest_source_mtime(robot: Optional[str] = None) -> float:
         for item in items:
             src = LIB / item
             paths += list(src.rglob("*.py")) if src.is_dir() else [src]
+    paths += list((LIB / "core" / "lib").rglob("*.*"))    # the native binaries
     return max(p.stat().st_mtime for p in paths if p.exists())
 
 
-def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None, sensors: bool = False) -> Path:
+def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None, sensors: bool = False,
+               on_build: Optional[Callable[[Path], None]] = None,
+               backend: Optional[str] = None) -> Path:
     """Path of ``<out_dir>/<robot>[_sensors].ssp``, (re)built with :func:`build_system` if it
     is missing, older than any library source it is built from, or its SSD differs from the
     generator's.
 
     ``out_dir`` defaults to ``build/<robot>/`` in the current directory (``<robot>``: the
     built-in name or the URDF's robot name, :func:`spacerobot.robots.robot_label`).
+    ``on_build(out_dir)`` is called just before a (re)build (the command line says so).
+    ``backend``: as :func:`build_system`'s; an .ssp whose estimator was built with another
+    backend is rebuilt.
     """
+    from ..fmi.build import backend_of, fmu_backend
+
     _check_robot(robot)
     out = Path(out_dir) if out_dir is not None else Path("build") / robot_label(robot)
     ssp = out / f"{system_name(robot, sensors)}.ssp"
@@ -495,11 +507,14 @@ def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None, sensors: bool =
     if ssp.exists() and ssp.stat().st_mtime >= _newest_source_mtime(robot):
         try:
             with zipfile.ZipFile(ssp) as zf:
-                fresh = zf.read(SSD_NAME).decode("utf-8") == ssd_xml(robot, sensors=sensors)
+                fresh = (zf.read(SSD_NAME).decode("utf-8") == ssd_xml(robot, sensors=sensors)
+                         and fmu_backend(zf.read(SOURCES[ESTIMATOR])) == backend_of(ESTIMATOR, backend))
         except (zipfile.BadZipFile, KeyError):
             fresh = False
     if not fresh:
-        build_system(robot, out, sensors=sensors)
+        if on_build is not None:
+            on_build(out)
+        build_system(robot, out, sensors=sensors, backend=backend)
     return ssp
 
 

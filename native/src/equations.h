@@ -1,0 +1,78 @@
+/* The identification equations of one sample (port of spacerobot/estimator/kernels.py).
+ *
+ * One sample gives, for the base (body 1) and the target held at the end-effector frame E
+ * (body n), three rows of
+ *   momentum form (eqs. 11/16):  B mu = J - P_arm,    Phi theta = H - L_arm - Psi D(mu);
+ *   force form (eqs. 28/31, moments about the base sensor point S):
+ *                                G mu = F - F_arm,    Q theta = M - M_arm,S - S D(mu),
+ * with mu = [m1, m1 b1, mn, mn bn] (8), theta = [I1#, In#] (12, eq. 21) and D(mu) (20, eq. 23).
+ * They are written into one row-major (3 x SR_N_COLS) array
+ *   E = [A (8) | b | phi (12) | y | psi (20)],   A mu = b,   phi theta = y + psi D(mu),
+ * with psi = -Psi (momentum) or -S (force); for the momentum form the identifier subtracts the
+ * reference sample's E.
+ *
+ * Frames (DESIGN.md section 2): A is the base DCM body -> inertial (x_I = A x_B), omega_B and
+ * alpha_B the base angular velocity and acceleration in the base frame, every other vector
+ * inertial.
+ */
+#ifndef SR_EQUATIONS_H
+#define SR_EQUATIONS_H
+
+#include "arm.h"
+#include "sr_api.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* columns of the equation array E (3 x SR_N_COLS, row-major) */
+#define SR_COL_A 0        /* A: 8 columns, mu = [m1, m1 b1, mn, mn bn] */
+#define SR_COL_B 8        /* b */
+#define SR_COL_PHI 9      /* phi: 12 columns, theta = [I1#, In#] */
+#define SR_COL_Y 21       /* y */
+#define SR_COL_PSI 22     /* psi: 20 columns, multiplies D(mu) */
+#define SR_N_COLS 42
+
+/* layout of the flat sample x (spacerobot.estimator.identifier.KEYS order) */
+#define SR_X_R_S 0        /* r_S (3) base sensor point position [m] */
+#define SR_X_V_S 3        /* v_S (3) its velocity [m/s] */
+#define SR_X_A_B 6        /* A (9) base DCM body -> inertial, row-major */
+#define SR_X_OMEGA_B 15   /* omega_B (3) base angular velocity, base frame [rad/s] */
+#define SR_X_A_S 18       /* a_S (3) acceleration of S [m/s2] */
+#define SR_X_ALPHA_B 21   /* alpha_B (3) base angular acceleration, base frame [rad/s2] */
+#define SR_X_Q 24                          /* q (n) joint angles [rad] */
+#define SR_X_QD(n) (SR_X_Q + (n))          /* qd (n) joint rates [rad/s] */
+#define SR_X_QDD(n) (SR_X_Q + 2 * (n))     /* qdd (n) joint accelerations [rad/s2] */
+#define SR_X_F(n) (SR_X_Q + 3 * (n))       /* F (3) total external force (thrust) [N] */
+#define SR_X_M(n) (SR_X_Q + 3 * (n) + 3)   /* M (3) its moment about S [N.m] */
+#define SR_X_J(n) (SR_X_Q + 3 * (n) + 6)   /* J (3) linear momentum of the system [N.s] */
+#define SR_X_H(n) (SR_X_Q + 3 * (n) + 9)   /* H (3) angular momentum about the origin [N.m.s] */
+#define SR_X_LEN(n) (SR_X_Q + 3 * (n) + 12)
+
+/** Length of the flat sample of a robot with n joints: 24 + 3 n + 12. */
+SR_API int sr_sample_length(int n);
+
+/** The equations of one sample into E (3 x SR_N_COLS, row-major), see the top of this file.
+ *  force: 1 force form (eqs. 28/31), 0 momentum form (eqs. 11/16); x: the flat sample
+ *  (SR_X_LEN(robot->n)). Returns 0, or 1 (E untouched) for a NULL pointer or robot->n out of
+ *  1..SR_MAX_JOINTS. No allocation; the inputs' finiteness is the caller's (sr_sample_check). */
+SR_API int sr_equations(const sr_robot *robot, int force, const double *x, double *E);
+
+/** D(mu) = [m1 J(b1); mn J(bn)] (20) from mu = [m1, m1 b1, mn, mn bn] (8), with
+ *  J(b) = [1, b, bx^2, bx by, bx bz, by^2, by bz, bz^2] (eq. 23). */
+SR_API void sr_D_of_mu(const double mu[8], double D[20]);
+
+/** err = max |A^T A - 1| and det = det A of the DCM A (9, row-major). */
+SR_API void sr_rotation_error(const double *A, double *err, double *det);
+
+/** Check a flat sample x (len values): 0 if every entry is within [-limit, limit] (NaN is not)
+ *  and its base DCM (x[SR_X_A_B..+9]) is a rotation (sr_rotation_error err <= tol, det > 0);
+ *  1 for a value out of range or non-finite, 2 for a non-rotation, 3 for x NULL or
+ *  len < SR_X_A_B + 9. */
+SR_API int sr_sample_check(const double *x, int len, double limit, double tol);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SR_EQUATIONS_H */

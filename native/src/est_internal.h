@@ -1,0 +1,194 @@
+/* Internals of the estimator core (estimator.c, est_paper.c): the Model, the layout of the
+ * Data block and the paper solver's step. Not part of the library's API.
+ *
+ * Sizes: p <= 8 identified entries of mu = [m1, m1 b1, mn, mn bn], r <= 12 of theta =
+ * [I1#, In#]; the Gram matrices of the augmented rows [A | b] (nl = p + 1) and
+ * [phi | y | psi] (na = r + 1 + 20). Matrices are row-major and compact (row stride = their
+ * own column count) inside buffers sized for the largest case.
+ */
+#ifndef SR_EST_INTERNAL_H
+#define SR_EST_INTERNAL_H
+
+#include <stddef.h>
+
+#include "estimator.h"
+
+#define EST_NMU 8                 /* mu (8) */
+#define EST_NTH 12                /* theta (12) */
+#define EST_ND 20                 /* D(mu) (20) */
+#define EST_NZ 20                 /* z = [mu, theta] and the estimates (20) */
+#define EST_NL (EST_NMU + 1)      /* largest [A | b] width */
+#define EST_NA (EST_NTH + 1 + EST_ND)  /* largest [phi | y | psi] width */
+#define EST_NJ (EST_NZ + 1)       /* largest [Y | y] width of the joint solver */
+#define EST_MAXK 6                /* most rows of one sample in one RLS update */
+
+/* memory of the drift tracker's rate regression, in multiples of the estimator's
+ * (tracking.RATE_MEMORY), and the lag taken as the estimate's own movement (NOISE_LAG) */
+#define EST_RATE_MEMORY 2.0
+#define EST_NOISE_LAG 1.0
+
+struct sr_estimator_model {
+    sr_robot robot;
+    sr_estimator_options opt;
+    int n, nflat;                 /* joints, flat sample length */
+    int force, differenced;       /* force method; differenced accelerations */
+    int diffmom;                  /* differenced: the derivative of the momentum equations */
+    int eiv;                      /* the accelerations' noise compensated (signal_sd > 0) */
+    double accel_sd[6 + SR_MAX_JOINTS];   /* its sd per acceleration channel (differenced:
+                                             of the velocities; times the derivative's gain) */
+    int accel_ch[6 + SR_MAX_JOINTS];      /* a_S, alpha_B, qdd in a flat sample */
+    int slot;                     /* doubles per history sample: t, sample (, own-point rows) */
+    double w_lin, w_ang;          /* row weights 1 / row_sd (1: unweighted) */
+    /* the identified parameters and rows (spacerobot.interface.ParameterLayout) */
+    int p, r, nl, na;
+    int mu_active[EST_NMU], theta_active[EST_NTH];
+    int n_mu_out, mu_out[EST_NMU], n_th_out, th_out[EST_NTH];
+    int k1, k2, rows_lin[3], rows_ang[3];
+    int identified[EST_NZ];
+    int sharp_to_project[6];
+    /* the joint solver's standard parameters [m, m b, I_O#] per body (20): the identified
+     * ones (q), the others, and which identified ones are masses / first moments */
+    int q, std_active[EST_NZ], n_std_out, std_out[EST_NZ];
+    int n_lin_cols, lin_cols[EST_NZ], n_ang_cols, ang_cols[EST_NZ];
+    double pi0_full[EST_NZ], prior[EST_NZ];       /* guesses; P0 per standard parameter */
+    double mu0_full[EST_NMU], th0_full[EST_NTH];   /* the guesses (8), (12) */
+    double mu0[EST_NMU], th0[EST_NTH];             /* their identified entries (p), (r) */
+    /* layout of the Data block's variable tail (byte offsets from its start) */
+    int half;                     /* diff_half_window m: history of 2 m samples */
+    int lags;                     /* corr_lags L */
+    size_t off_hist, off_corr_lin, off_corr_ang, size;
+};
+
+/* Everything an accepted sample changes except the variable tail (history, residual ring):
+ * an update computes a new one on the stack and commits it only when it came out finite. */
+typedef struct est_core {
+    /* the modified RLS (eqs. 34-38): identified mu (p), theta (r), their P, M = dtheta/dD
+     * (r x 20), D(mu) (20) of the full mu */
+    double mu[EST_NMU], P_mu[EST_NMU * EST_NMU];
+    double theta[EST_NTH], P_th[EST_NTH * EST_NTH];
+    double M[EST_NTH * EST_ND], D[EST_ND];
+    /* Gram matrices of the weighted rows [A | b] (nl x nl), [phi | y | psi] (na x na) and
+     * their counts (uncertainty.Gram) */
+    double S_lin[EST_NL * EST_NL], S_ang[EST_NA * EST_NA];
+    double rows_lin, rows_ang, decay_lin, decay_ang, n1_lin, n2_lin, n1_ang, n2_ang;
+    /* the drift tracker (tracking.DriftTracker; clock = the sample count) */
+    double tr_s0, tr_s1, tr_t_ref, tr_t, tr_a_bar;
+    double tr_w[EST_NZ], tr_mt[EST_NZ], tr_mx[EST_NZ], tr_ctt[EST_NZ], tr_ctx[EST_NZ];
+    double age_lin[EST_NL * EST_NL], age_ang[EST_NA * EST_NA];
+    /* the joint solver (solver 2): the standard parameters (20, identified ones active), the
+     * covariance of the identified ones (q x q), the Gram matrix of [Y | y] and its
+     * age-weighted copy ((q + 1)^2; counts in the *_lin fields), the information of the
+     * masses / first moments and of the inertias for the excitation diagnostics */
+    double pi[EST_NZ], P_pi[EST_NZ * EST_NZ];
+    double S_pi[EST_NJ * EST_NJ], age_pi[EST_NJ * EST_NJ];
+    double info_lin[EST_NZ * EST_NZ], info_ang[EST_NZ * EST_NZ];
+    /* errors in variables (eiv.py; the paper solver with signal_sd > 0): the expected noise
+     * parts of S_lin, S_ang (has_eiv once the first noise rows came) and the bias-compensated
+     * identified mu (p), theta (r) that the estimates report */
+    int has_eiv;
+    double N_lin[EST_NL * EST_NL], N_ang[EST_NA * EST_NA];
+    double mu_c[EST_NMU], th_c[EST_NTH];
+    /* residual autocorrelation rings (lin, ang; the joint solver: one): next row, rows stored */
+    int corr_head[2], corr_count[2];
+    /* what the report reads after the latest accepted sample */
+    double vec[EST_NZ], sd[EST_NZ];          /* least-squares estimates, total sd */
+    double residual_lin, residual_ang, rcond_mu, rcond_theta;
+    /* momentum reference sample's equations (3 x 42) */
+    int has_ref;
+    double ref[3 * 42];
+    /* differencing history ring (2 m samples of [t, flat]): next slot, samples stored */
+    int hist_head, hist_count;
+} est_core;
+
+/* The Data block's fixed head; the variable tail follows at the model's offsets. */
+typedef struct est_data {
+    unsigned magic;
+    int samples, rejected, status;
+    char msg[SR_EST_MSG_LEN];
+    est_core core;
+} est_data;
+
+#define EST_MAGIC 0x53524531u     /* "SRE1" */
+
+/* -- shared by the solvers (est_paper.c) -- */
+double est_pymax(double a, double b);
+void est_gram_add(const double *S, int n, const double *R, int k, double lam, double *out);
+void est_gram_count(double lam, int k, double *rows, double *decay, double *n1, double *n2);
+double est_gram_dof(double lam, double rows, double n1, double n2, int p);
+double est_gram_var_scale(double lam, double n1, double n2);
+double est_residual_variance(const double *S, const double *z, int n, double dof);
+int est_rls_step(const double *x, const double *P, const double *H, const double *y, int p,
+                 int k, double lam, double *x_new, double *P_new, double *e, double *K);
+void est_sparse_lu_solve(double *A, int n, double *b);
+void est_block_lag(const double *G_full, const double *M_full, int n, int q,
+                   const double *rate, double growth, double *Ar, double *r_out,
+                   double *extra);
+void est_tracker_add(const sr_estimator_model *m, const est_core *old, est_core *nw,
+                     double t, const double *x, const double *sd, const double *J,
+                     const double *mu_full);
+double est_relative_norm(const double *e, const double *rhs, int k);
+void est_scatter_sd(const sr_estimator_model *m, const double *J, const double *C,
+                    const double *pull, const int *unobserved_z, const double *x,
+                    int nan_to_zero, double *sd);
+
+/* -- the joint solver (est_joint.c) -- */
+/* sd, data_only, J, vec as est_std_parts, for the joint solver (its covariance scaled by the
+ * residual variance times the autocorrelation inflation infl). 0, or 3 not converged. */
+int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double infl,
+                        double *sd, double *data_only, double *J, double *vec);
+/* the lag (20) of the joint solver's estimates (tracking eq. 2); 1 if finite */
+int est_joint_lag(const sr_estimator_model *m, const est_core *c, const double *J,
+                  const double *rate_x, double growth, double *lag);
+/* est_paper_step for the joint solver: one RLS over the identified standard parameters;
+ * e (k1 + k2) the a-priori residuals */
+int est_joint_step(const sr_estimator_model *m, const void *data, const est_core *old,
+                   est_core *nw, const double *E, double clock, double *e);
+/* the joint solver's initial standard parameters and covariance into c */
+void est_joint_init(const sr_estimator_model *m, est_core *c);
+
+/* The standard deviations of the solver's estimates for the state c (uncertainty of
+ * solvers.ParameterSolver.std_parts): sd (20) floored at the error scale where unobserved,
+ * data_only (20) the estimate without the prior's pull, J (20 x 20) the Jacobian of the
+ * estimates in z, vec (20) the estimates, rcond (2) the excitation diagnostics.
+ * infl_lin, infl_ang: the residual autocorrelation's inflations (1: none). Returns 0, or 3
+ * where an eigen-decomposition did not converge. */
+int est_std_parts(const sr_estimator_model *m, const est_core *c, double infl_lin,
+                  double infl_ang, double *sd, double *data_only, double *J, double *vec,
+                  double *rcond);
+
+/* The full mu (8) and theta (12) of the state c: the guesses with the identified entries. */
+void est_full_vectors(const sr_estimator_model *m, const est_core *c, double *mu_full,
+                      double *theta_full);
+
+/* The autocorrelation inflation after adding the residual e (k) to the ring of equation eq
+ * (0 lin, 1 ang) of the Data block data, without writing (Autocorrelation.add/inflation). */
+double est_corr_inflation(const sr_estimator_model *m, const void *data, const est_core *c,
+                          int eq, const double *e, int k);
+
+/* The autocorrelation inflation of the sums as they are (Autocorrelation.inflation). */
+double est_corr_current(const sr_estimator_model *m, const void *data, int eq);
+
+/* Add the residual e (k) to the ring of equation eq: the sums and the ring (the commit). */
+void est_corr_commit(const sr_estimator_model *m, void *data, est_core *c, int eq,
+                     const double *e, int k);
+
+/* Commit the new state src of est_paper_step into dst: the parts of its arrays in use (the
+ * rest of dst, e.g. a planar robot's unused entries, keeps its bytes), its scalars and the
+ * autocorrelation rings' heads; not the momentum reference and the history (which the step
+ * does not change). */
+void est_core_commit(const sr_estimator_model *m, est_core *dst, const est_core *src);
+
+/* One sample of the paper solver and everything the report reads after it: the rows E
+ * (3 x 42, full 3D rows of one sample) in, the new state *nw from the old *old, at the
+ * tracker's clock: every part of *nw that est_core_commit copies is written (nw need not be
+ * initialised but for corr_head, corr_count). e_lin (k1), e_ang (k2): the a-priori residuals
+ * (for the residual autocorrelation's commit). data: the Data block (read only: the
+ * autocorrelation rings). Returns 0 ok, 1 the covariance lost definiteness, 2 non-finite
+ * numbers, 3 an eigen-decomposition did not converge. noise (n_noise blocks of 3 x 42):
+ * the rows sigma_l C_l whose Gram matrix is the expected noise part of this sample's (eiv.py
+ * eq. 1), or NULL. */
+int est_paper_step(const sr_estimator_model *m, const void *data, const est_core *old,
+                   est_core *nw, const double *E, const double *noise, int n_noise,
+                   double clock, double *e_lin, double *e_ang);
+
+#endif /* SR_EST_INTERNAL_H */

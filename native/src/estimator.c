@@ -1,0 +1,1208 @@
+/* The estimator core's Model, Data and the one step path (see estimator.h): options and their
+ * validation (the rules and messages of spacerobot.estimator.identifier), the layout of the
+ * identified parameters (spacerobot.interface.ParameterLayout), the sample's validation, its
+ * equations (momentum form against the reference sample, optionally about the base's position;
+ * force form with measured or differenced accelerations, or the derivative of the momentum
+ * equations; the accelerations' noise rows), the transaction around the solver's step
+ * (est_paper.c, est_joint.c) and the report (physical projection, identified flags, excitation
+ * request).
+ */
+#include <math.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "differencing.h"
+#include "equations.h"
+#include "est_internal.h"
+#include "linalg.h"
+#include "physical.h"
+#include "sr_math.h"
+
+/* -- messages (locale-independent number formatting) ------------------------------------------ */
+
+/* append the string s to buf (size n, NUL-terminated) */
+static void cat(char *buf, size_t n, const char *s)
+{
+    size_t len = strlen(buf);
+    while (*s && len + 1 < n)
+        buf[len++] = *s++;
+    buf[len] = '\0';
+}
+
+/* append the integer v */
+static void cat_int(char *buf, size_t n, long v)
+{
+    char tmp[24];
+    int i = 0, neg = v < 0;
+    unsigned long u = neg ? 0UL - (unsigned long)v : (unsigned long)v;
+    do {
+        tmp[i++] = (char)('0' + (int)(u % 10));
+        u /= 10;
+    } while (u && i < 22);
+    if (neg)
+        tmp[i++] = '-';
+    char out[24];
+    for (int j = 0; j < i; j++)
+        out[j] = tmp[i - 1 - j];
+    out[i] = '\0';
+    cat(buf, n, out);
+}
+
+/* append x as C's "%.{sig}g" would in the "C" locale (never the C library's formatting) */
+static void cat_num(char *buf, size_t n, double x, int sig)
+{
+    if (x != x) {
+        cat(buf, n, "nan");
+        return;
+    }
+    if (isinf(x)) {
+        cat(buf, n, x > 0 ? "inf" : "-inf");
+        return;
+    }
+    if (x == 0.0) {
+        cat(buf, n, signbit(x) ? "-0" : "0");
+        return;
+    }
+    if (sig < 1)
+        sig = 1;
+    if (sig > 17)
+        sig = 17;
+    char out[64];
+    int o = 0;
+    if (x < 0) {
+        out[o++] = '-';
+        x = -x;
+    }
+    int e10 = (int)floor(sr_log10(x));
+    int shift = sig - 1 - e10;
+    if (shift > 300) {                       /* below ~1e-284: 10^shift overflows; two steps */
+        x *= 1e300;
+        shift -= 300;
+    }
+    double scale = sr_pow10(shift);
+    double dig = floor(x * scale + 0.5);                     /* sig digits as an integer */
+    double top = sr_pow10(sig);
+    if (dig >= top) {
+        dig = floor(dig / 10.0 + 0.5);
+        e10++;
+    }
+    char d[20];
+    for (int i = sig - 1; i >= 0; i--) {
+        d[i] = (char)('0' + (int)fmod(dig, 10.0));
+        dig = floor(dig / 10.0);
+    }
+    int nd = sig;
+    while (nd > 1 && d[nd - 1] == '0')                       /* strip trailing zeros */
+        nd--;
+    if (e10 < -4 || e10 >= sig) {                            /* d.ddde+XX */
+        out[o++] = d[0];
+        if (nd > 1) {
+            out[o++] = '.';
+            for (int i = 1; i < nd; i++)
+                out[o++] = d[i];
+        }
+        out[o++] = 'e';
+        out[o++] = e10 < 0 ? '-' : '+';
+        int ae = e10 < 0 ? -e10 : e10;
+        if (ae >= 100)
+            out[o++] = (char)('0' + ae / 100);
+        out[o++] = (char)('0' + (ae / 10) % 10);
+        out[o++] = (char)('0' + ae % 10);
+    } else if (e10 < 0) {                                    /* 0.000ddd */
+        out[o++] = '0';
+        out[o++] = '.';
+        for (int i = 0; i < -e10 - 1; i++)
+            out[o++] = '0';
+        for (int i = 0; i < nd; i++)
+            out[o++] = d[i];
+    } else {                                                 /* ddd.ddd */
+        for (int i = 0; i <= e10; i++)
+            out[o++] = i < nd ? d[i] : '0';
+        if (nd > e10 + 1) {
+            out[o++] = '.';
+            for (int i = e10 + 1; i < nd; i++)
+                out[o++] = d[i];
+        }
+    }
+    out[o] = '\0';
+    cat(buf, n, out);
+}
+
+/* append x as Python's repr of a float: the shortest digits that give x back (checked in
+ * double arithmetic, good for messages), "1.5", "-1.0", "1e+16", "1e-05", "nan", "inf" */
+static void cat_repr(char *buf, size_t n, double x)
+{
+    if (!isfinite(x) || x == 0.0) {
+        cat_num(buf, n, x, 1);
+        if (x == 0.0)
+            cat(buf, n, ".0");
+        return;
+    }
+    double ax = fabs(x);
+    int e10 = (int)floor(sr_log10(ax)), sig = 17;
+    for (int s = 1; s <= 17; s++) {                          /* the shortest round trip */
+        double scale = sr_pow10(s - 1 - e10);
+        double dig = floor(ax * scale + 0.5);
+        if (dig / scale == ax || dig * sr_pow10(e10 + 1 - s) == ax) {
+            sig = s;
+            break;
+        }
+    }
+    char tmp[64];
+    tmp[0] = '\0';
+    if (e10 >= -5 && e10 < 16) {                             /* fixed notation */
+        /* %.{sig}g switches to exponents at e10 >= sig: pad with the integer digits */
+        cat_num(tmp, sizeof tmp, x, e10 + 1 > sig ? e10 + 1 : sig);
+        if (e10 == -5) {                                     /* repr: 1e-05, not 0.00001 */
+            tmp[0] = '\0';
+            cat_num(tmp, sizeof tmp, x, sig);
+        }
+        if (!strchr(tmp, '.') && !strchr(tmp, 'e'))
+            cat(tmp, sizeof tmp, ".0");
+    } else {
+        cat_num(tmp, sizeof tmp, x, sig);
+    }
+    cat(buf, n, tmp);
+}
+
+/* append "[a b c]" of v (k values, 4 significant digits, as NumPy's array2string precision=4) */
+static void cat_vec(char *buf, size_t n, const double *v, int k)
+{
+    cat(buf, n, "[");
+    for (int i = 0; i < k; i++) {
+        if (i)
+            cat(buf, n, " ");
+        cat_num(buf, n, v[i], 4);
+    }
+    cat(buf, n, "]");
+}
+
+static void set_msg(char *buf, size_t n, const char *s)
+{
+    if (n) {
+        buf[0] = '\0';
+        cat(buf, n, s);
+    }
+}
+
+/* -- options ------------------------------------------------------------------------------------ */
+
+void sr_estimator_options_default(sr_estimator_options *o)
+{
+    static const double base[10] = {600.0, 0.0, 0.0, 0.0, 100.0, 100.0, 100.0, 0.0, 0.0, 0.0};
+    static const double target[10] = {100.0, 0.1, 0.1, 0.1, 10.0, 10.0, 10.0, 0.0, 0.0, 0.0};
+    if (!o)
+        return;
+    memset(o, 0, sizeof *o);
+    o->method = 1;
+    o->solver = 1;
+    o->accel_source = 1;
+    o->lambda = 1.0;
+    o->P0_mu = 1e6;
+    o->P0_theta = 1e6;
+    memcpy(o->guess_base, base, sizeof base);
+    memcpy(o->guess_target, target, sizeof target);
+    o->sd_rel = 1e-3;
+    o->excite_mode = 1;
+    o->excite_level = 1.0;
+    o->diff_half_window = 1;
+    o->corr_lags = 0;
+    o->momentum_window = 0.0;
+}
+
+size_t sr_estimator_options_size(void) { return sizeof(sr_estimator_options); }
+size_t sr_estimator_data_head_size(void) { return offsetof(est_data, core); }
+size_t sr_estimator_report_size(void) { return sizeof(sr_estimator_report); }
+
+/* robots.check_body of a guess (name "guess.base" / "guess.target"): 0 ok, else a message */
+static int check_body(const char *name, const double *g, char *err, size_t errlen)
+{
+    for (int i = 0; i < 10; i++)
+        if (!isfinite(g[i])) {
+            set_msg(err, errlen, name);
+            cat(err, errlen, ": parameters must be finite numbers, got mass=");
+            cat_num(err, errlen, g[0], 6);
+            cat(err, errlen, ", b=");
+            cat_vec(err, errlen, g + 1, 3);
+            cat(err, errlen, ", inertia=");
+            cat_vec(err, errlen, g + 4, 6);
+            return 1;
+        }
+    if (g[0] <= 0.0) {
+        set_msg(err, errlen, name);
+        cat(err, errlen, ".m must be > 0 kg, got ");
+        cat_repr(err, errlen, g[0]);
+        return 1;
+    }
+    /* Ixx Iyy Izz Ixy Ixz Iyz -> the tensor; its principal moments */
+    double I[9] = {g[4], g[7], g[8], g[7], g[5], g[9], g[8], g[9], g[6]}, w[3], V[9];
+    if (sr_eigh(I, 3, w, V) != 0 || w[0] <= 0.0) {
+        set_msg(err, errlen, name);
+        cat(err, errlen, " inertia must be positive definite; principal moments ");
+        cat_vec(err, errlen, w, 3);
+        cat(err, errlen, " kg.m2");
+        return 1;
+    }
+    if (w[2] > w[0] + w[1] + 1e-12 * w[2]) {
+        set_msg(err, errlen, name);
+        cat(err, errlen, " inertia violates the triangle inequality: principal moments ");
+        cat_vec(err, errlen, w, 3);
+        cat(err, errlen, " kg.m2 (largest must not exceed the sum of the other two)");
+        return 1;
+    }
+    /* the physical ranges (beyond the Python Identifier's rules, which hold above): values
+     * outside them are no real body, and in them every product the estimator forms stays far
+     * from overflow (m |b|^2 <= 1e21, D(mu); the sd of b ~ sqrt(P0) / m <= 1e21) */
+    if (!(g[0] >= SR_EST_MASS_MIN && g[0] <= SR_EST_MASS_MAX)) {
+        set_msg(err, errlen, name);
+        cat(err, errlen, ".m must be within [1e-06, 1e+15] kg, got ");
+        cat_repr(err, errlen, g[0]);
+        return 1;
+    }
+    for (int i = 0; i < 3; i++)
+        if (!(fabs(g[1 + i]) <= SR_EST_COM_MAX)) {
+            set_msg(err, errlen, name);
+            cat(err, errlen, ".b[");
+            cat_int(err, errlen, i + 1);
+            cat(err, errlen, "] must be within [-1000, 1000] m (a centre of mass within 1 km "
+                             "of the body frame's origin), got ");
+            cat_repr(err, errlen, g[1 + i]);
+            return 1;
+        }
+    if (!(w[0] >= SR_EST_INERTIA_MIN && w[2] <= SR_EST_INERTIA_MAX)) {
+        set_msg(err, errlen, name);
+        cat(err, errlen, " inertia: principal moments must be within [1e-06, 1e+15] kg.m2, "
+                         "got ");
+        cat_vec(err, errlen, w, 3);
+        return 1;
+    }
+    return 0;
+}
+
+/* "what = v is not one of choices" (Code.parse) */
+static void bad_code(char *err, size_t errlen, const char *what, int v, const char *choices)
+{
+    set_msg(err, errlen, what);
+    cat(err, errlen, " = ");
+    cat_int(err, errlen, v);
+    cat(err, errlen, " is not one of ");
+    cat(err, errlen, choices);
+}
+
+/* "name = value is not available in the native core yet" */
+static void not_ported(char *err, size_t errlen, const char *name, double v)
+{
+    set_msg(err, errlen, name);
+    cat(err, errlen, " = ");
+    char num[64];
+    num[0] = '\0';
+    cat_repr(num, sizeof num, v);
+    size_t len = strlen(num);                /* as the FMU parameter's value: 2, 0.01 */
+    if (len > 2 && strcmp(num + len - 2, ".0") == 0)
+        num[len - 2] = '\0';
+    cat(err, errlen, num);
+    cat(err, errlen, " is not available in the native core yet");
+}
+
+/* the options' checks, in the order of identifier_from_values / Identifier.__init__ */
+static int check_options(const sr_estimator_options *o, char *err, size_t errlen)
+{
+    static const char *row_names[2][2] = {{"ident.sd_row.momentum_lin", "ident.sd_row.momentum_ang"},
+                                          {"ident.sd_row.force_lin", "ident.sd_row.force_ang"}};
+    static const char *noise_names[6] = {"ident.noise.base.a (signal_sd['a_S'])",
+                                         "ident.noise.base.alpha (signal_sd['alpha_B'])",
+                                         "ident.noise.arm.qdd (signal_sd['qdd'])",
+                                         "ident.noise.base.v (signal_sd['v_S'])",
+                                         "ident.noise.base.omega (signal_sd['omega_B'])",
+                                         "ident.noise.arm.qd (signal_sd['qd'])"};
+    if (o->method != 1 && o->method != 2) {
+        bad_code(err, errlen, "method", o->method, "1 (momentum), 2 (force)");
+        return 1;
+    }
+    if (o->solver != 1 && o->solver != 2) {
+        bad_code(err, errlen, "solver", o->solver, "1 (paper), 2 (joint)");
+        return 1;
+    }
+    if (o->accel_source != 1 && o->accel_source != 2) {
+        bad_code(err, errlen, "accel_source", o->accel_source, "1 (measured), 2 (differenced)");
+        return 1;
+    }
+    double rs[2] = {o->row_sd_lin, o->row_sd_ang};
+    for (int i = 0; i < 2; i++)
+        if (!(isfinite(rs[i]) && rs[i] >= 0.0)) {
+            set_msg(err, errlen, row_names[o->method - 1][i]);
+            cat(err, errlen, " must be a finite number >= 0 (0 = unit weight), got ");
+            cat_repr(err, errlen, rs[i]);
+            return 1;
+        }
+    if (!(o->lambda > 0.0 && o->lambda <= 1.0)) {
+        set_msg(err, errlen, "forgetting factor lambda must satisfy 0 < lambda <= 1, got ");
+        cat_repr(err, errlen, o->lambda);
+        return 1;
+    }
+    if (!(o->sd_rel > 0.0 && o->sd_rel < 1.0)) {
+        set_msg(err, errlen, "relative standard deviation threshold ident.sd_rel must satisfy "
+                             "0 < sd_rel < 1, got ");
+        cat_repr(err, errlen, o->sd_rel);
+        return 1;
+    }
+    if (o->diff_half_window < 1 || o->diff_half_window > SR_EST_MAX_HALF_WINDOW) {
+        set_msg(err, errlen, "ident.diff_half_window must be an integer from 1 to 50, got ");
+        cat_int(err, errlen, o->diff_half_window);
+        return 1;
+    }
+    if (o->corr_lags < 0 || o->corr_lags > SR_EST_MAX_CORR_LAGS) {
+        set_msg(err, errlen, "ident.corr_lags must be an integer from 0 to 10000, got ");
+        cat_int(err, errlen, o->corr_lags);
+        return 1;
+    }
+    if (!(isfinite(o->momentum_window) && o->momentum_window >= 0.0
+          && o->momentum_window <= 1e6)) {
+        set_msg(err, errlen, "ident.momentum_window must be a number of seconds from 0 to "
+                             "1e+06, got ");
+        cat_repr(err, errlen, o->momentum_window);
+        return 1;
+    }
+    if (o->momentum_point != 0 && o->momentum_point != 1) {
+        set_msg(err, errlen, "ident.momentum_point must be 0 or 1, got ");
+        cat_int(err, errlen, o->momentum_point);
+        return 1;
+    }
+    if (o->diff_momentum != 0 && o->diff_momentum != 1) {
+        set_msg(err, errlen, "ident.diff_momentum must be 0 or 1, got ");
+        cat_int(err, errlen, o->diff_momentum);
+        return 1;
+    }
+    if (check_body("guess.base", o->guess_base, err, errlen)
+        || check_body("guess.target", o->guess_target, err, errlen))
+        return 1;
+    if (!(o->P0_mu > 0.0 && isfinite(o->P0_mu))) {
+        set_msg(err, errlen, "P0_mu must be a finite covariance > 0, got ");
+        cat_repr(err, errlen, o->P0_mu);
+        return 1;
+    }
+    if (!(o->P0_theta > 0.0 && isfinite(o->P0_theta))) {
+        set_msg(err, errlen, "P0_theta must be a finite covariance > 0, got ");
+        cat_repr(err, errlen, o->P0_theta);
+        return 1;
+    }
+    /* beyond the Python rules: the prior's weight 1 / P0 and the covariances' products stay
+     * finite (5e-324 would give an infinite weight) */
+    const double P0[2] = {o->P0_mu, o->P0_theta};
+    for (int i = 0; i < 2; i++)
+        if (!(P0[i] >= SR_EST_P0_MIN && P0[i] <= SR_EST_P0_MAX)) {
+            set_msg(err, errlen, i ? "P0_theta" : "P0_mu");
+            cat(err, errlen, " must be a covariance within [1e-12, 1e+16] (SI units), got ");
+            cat_repr(err, errlen, P0[i]);
+            return 1;
+        }
+    for (int i = 0; i < 6; i++)
+        if (!(isfinite(o->signal_sd[i]) && o->signal_sd[i] >= 0.0)) {
+            set_msg(err, errlen, noise_names[i]);
+            cat(err, errlen, " must be a finite number >= 0, got ");
+            cat_repr(err, errlen, o->signal_sd[i]);
+            return 1;
+        }
+    if (o->excite_mode < 0 || o->excite_mode > 2) {
+        bad_code(err, errlen, "ident.excite_mode", o->excite_mode,
+                 "0 (off), 1 (until_identified), 2 (always)");
+        return 1;
+    }
+    if (!(o->excite_level >= 0.0 && o->excite_level <= 1.0)) {
+        set_msg(err, errlen, "ident.excite_level must be in [0, 1], got ");
+        cat_repr(err, errlen, o->excite_level);
+        return 1;
+    }
+    /* what the native core does not do yet: refused where it would take effect (the Python
+     * Identifier ignores these options for the other method / acceleration source too) */
+    int momentum = o->method == 1, force = o->method == 2;
+    if (momentum && o->momentum_window > 0.0) {
+        not_ported(err, errlen, "ident.momentum_window", o->momentum_window);
+        return 1;
+    }
+    if (force && (o->solver == 2 || (o->accel_source == 2 && o->diff_momentum)))
+        for (int i = 0; i < 6; i++)
+            if (o->signal_sd[i] > 0.0 && (i < 3) == (o->accel_source == 1)) {
+                static const char *names[6] = {"ident.noise.base.a", "ident.noise.base.alpha",
+                                               "ident.noise.arm.qdd", "ident.noise.base.v",
+                                               "ident.noise.base.omega", "ident.noise.arm.qd"};
+                not_ported(err, errlen, names[i], o->signal_sd[i]);
+                return 1;
+            }
+    return 0;
+}
+
+/* -- the model ----------------------------------------------------------------------------------- */
+
+/* ParameterLayout.sharp_to_project: I = I#[s2p] (I# = I11 I12 I13 I22 I23 I33) */
+static const int S2P[6] = {0, 3, 5, 1, 2, 4};
+
+static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
+
+sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
+                                           const sr_estimator_options *opt,
+                                           char *err, size_t errlen)
+{
+    if (err && errlen)
+        err[0] = '\0';
+    if (!robot || !opt) {
+        set_msg(err, errlen, "sr_estimator_model_new: robot and options are required");
+        return NULL;
+    }
+    if (robot->n < 1 || robot->n > SR_MAX_JOINTS) {
+        set_msg(err, errlen, "the robot must have 1 to 12 joints, got ");
+        cat_int(err, errlen, robot->n);
+        return NULL;
+    }
+    if (check_options(opt, err, errlen))
+        return NULL;
+    sr_estimator_model *m = (sr_estimator_model *)calloc(1, sizeof *m);
+    if (!m) {
+        set_msg(err, errlen, "out of memory");
+        return NULL;
+    }
+    m->robot = *robot;
+    m->opt = *opt;
+    m->n = robot->n;
+    m->nflat = sr_sample_length(robot->n);
+    m->force = opt->method == 2;
+    m->differenced = m->force && opt->accel_source == 2;
+    m->diffmom = m->differenced && opt->diff_momentum;
+    /* the accelerations' noise per channel (identifier._channel_sd): the measured
+     * accelerations' sd, or the velocities' (times the derivative's gain per sample) */
+    for (int i = 0; i < 3; i++) {
+        m->accel_ch[i] = SR_X_A_S + i;
+        m->accel_ch[3 + i] = SR_X_ALPHA_B + i;
+    }
+    for (int i = 0; i < robot->n; i++)
+        m->accel_ch[6 + i] = SR_X_QDD(robot->n) + i;
+    if (m->force && opt->solver == 1 && !m->diffmom) {
+        const double *sd = opt->signal_sd + (m->differenced ? 3 : 0);
+        for (int i = 0; i < 6 + robot->n; i++)
+            m->accel_sd[i] = sd[i < 3 ? 0 : i < 6 ? 1 : 2];
+        m->eiv = sd[0] > 0.0 || sd[1] > 0.0 || sd[2] > 0.0;
+    }
+    m->w_lin = opt->row_sd_lin > 0.0 ? 1.0 / opt->row_sd_lin : 1.0;
+    m->w_ang = opt->row_sd_ang > 0.0 ? 1.0 / opt->row_sd_ang : 1.0;
+    memcpy(m->sharp_to_project, S2P, sizeof S2P);
+    /* the identified estimates (interface.identified_estimates): all 20, or for a planar robot
+     * m, b[1], b[2], Izz of each body; then ParameterLayout's index arrays */
+    for (int k = 0; k < 2; k++)
+        for (int i = 0; i < 10; i++)
+            m->identified[10 * k + i] = !robot->planar || i == 0 || i == 1 || i == 2 || i == 6;
+    m->p = m->r = 0;
+    for (int k = 0; k < 2; k++) {
+        for (int i = 0; i < 4; i++)                          /* m, b -> mu */
+            if (m->identified[10 * k + i])
+                m->mu_active[m->p++] = 4 * k + i;
+        int sharp[6], ns = 0;                                /* I -> theta, sorted by I# */
+        for (int i = 0; i < 6; i++)
+            if (m->identified[10 * k + 4 + i])
+                sharp[ns++] = S2P[i];
+        for (int a = 1; a < ns; a++)
+            for (int b = a; b > 0 && sharp[b - 1] > sharp[b]; b--) {
+                int t = sharp[b];
+                sharp[b] = sharp[b - 1];
+                sharp[b - 1] = t;
+            }
+        for (int i = 0; i < ns; i++)
+            m->theta_active[m->r++] = 6 * k + sharp[i];
+    }
+    for (int i = 0, a = 0; i < EST_NMU; i++) {
+        if (a < m->p && m->mu_active[a] == i)
+            a++;
+        else
+            m->mu_out[m->n_mu_out++] = i;
+    }
+    for (int i = 0, a = 0; i < EST_NTH; i++) {
+        if (a < m->r && m->theta_active[a] == i)
+            a++;
+        else
+            m->th_out[m->n_th_out++] = i;
+    }
+    m->k1 = m->k2 = 0;
+    for (int i = 0; i < 3; i++) {
+        if (m->identified[1 + i])                            /* the translation axes of b */
+            m->rows_lin[m->k1++] = i;
+        if (m->identified[4 + i])                            /* the rotation axes of Ixx.. */
+            m->rows_ang[m->k2++] = i;
+    }
+    m->nl = m->p + 1;
+    m->na = m->r + 1 + EST_ND;
+    /* the guesses as mu (8) and theta (12) (parameters.paper_vectors) */
+    const double *g[2] = {opt->guess_base, opt->guess_target};
+    for (int k = 0; k < 2; k++) {
+        m->mu0_full[4 * k] = g[k][0];
+        for (int i = 0; i < 3; i++)
+            m->mu0_full[4 * k + 1 + i] = g[k][0] * g[k][1 + i];
+        for (int i = 0; i < 6; i++)
+            m->th0_full[6 * k + S2P[i]] = g[k][4 + i];
+    }
+    /* the joint solver's standard parameters [m, m b, I_O#] per body
+     * (parameters.standard_from_physical: I_O = I_c + m (|b|^2 1 - b b^T)) */
+    for (int k = 0; k < 2; k++) {
+        const double *gb = g[k];
+        double mk = gb[0], bb = gb[1] * gb[1] + gb[2] * gb[2] + gb[3] * gb[3];
+        double Ic[9] = {gb[4], gb[7], gb[8], gb[7], gb[5], gb[9], gb[8], gb[9], gb[6]};
+        static const int SI[6] = {0, 0, 0, 1, 1, 2}, SJ[6] = {0, 1, 2, 1, 2, 2};
+        m->pi0_full[10 * k] = mk;
+        for (int i = 0; i < 3; i++)
+            m->pi0_full[10 * k + 1 + i] = mk * gb[1 + i];
+        for (int q = 0; q < 6; q++) {
+            int i = SI[q], j = SJ[q];
+            double par = (i == j ? bb * 1.0 : bb * 0.0) - gb[1 + i] * gb[1 + j];
+            m->pi0_full[10 * k + 4 + q] = Ic[3 * i + j] + mk * par;
+        }
+        for (int i = 0; i < 10; i++)
+            m->prior[10 * k + i] = i < 4 ? opt->P0_mu : opt->P0_theta;
+    }
+    m->q = 0;                                    /* ParameterLayout.standard_active */
+    for (int k = 0; k < 2; k++) {
+        for (int i = 0; i < 4; i++)
+            if (m->identified[10 * k + i])
+                m->std_active[m->q++] = 10 * k + i;
+        for (int i = 0; i < m->r; i++)
+            if (m->theta_active[i] / 6 == k)
+                m->std_active[m->q++] = 10 * k + 4 + m->theta_active[i] % 6;
+    }
+    for (int i = 0, a = 0; i < EST_NZ; i++) {
+        if (a < m->q && m->std_active[a] == i)
+            a++;
+        else
+            m->std_out[m->n_std_out++] = i;
+    }
+    for (int i = 0; i < m->q; i++) {
+        if (m->std_active[i] % 10 < 4)
+            m->lin_cols[m->n_lin_cols++] = i;
+        else
+            m->ang_cols[m->n_ang_cols++] = i;
+    }
+    for (int i = 0; i < m->p; i++)
+        m->mu0[i] = m->mu0_full[m->mu_active[i]];
+    for (int i = 0; i < m->r; i++)
+        m->th0[i] = m->th0_full[m->theta_active[i]];
+    /* the Data block: head and core, the differencing history (2 m samples of [t, flat]),
+     * the autocorrelation sums and rings (L + 1 and L k values per equation) */
+    m->half = m->differenced ? opt->diff_half_window : 0;
+    m->lags = opt->corr_lags;
+    size_t off = align8(sizeof(est_data));
+    m->off_hist = off;
+    m->slot = 1 + m->nflat + (m->diffmom ? 3 * SR_N_COLS : 0);
+    off += sizeof(double) * (size_t)(2 * m->half) * (size_t)m->slot;
+    m->off_corr_lin = off;          /* the joint solver: one ring of both equations' rows */
+    int width_lin = opt->solver == 1 ? m->k1 : m->k1 + m->k2;
+    off += m->lags ? sizeof(double) * (size_t)(m->lags + 1 + m->lags * width_lin) : 0;
+    m->off_corr_ang = off;
+    if (opt->solver == 1)
+        off += m->lags ? sizeof(double) * (size_t)(m->lags + 1 + m->lags * m->k2) : 0;
+    m->size = off;
+    return m;
+}
+
+void sr_estimator_model_free(sr_estimator_model *m) { free(m); }
+
+size_t sr_estimator_data_size(const sr_estimator_model *m) { return m ? m->size : 0; }
+
+int sr_estimator_sample_length(const sr_estimator_model *m) { return m ? m->nflat : 0; }
+
+void sr_estimator_data_init(const sr_estimator_model *m, void *data)
+{
+    if (!m || !data)
+        return;
+    memset(data, 0, m->size);
+    est_data *d = (est_data *)data;
+    est_core *c = &d->core;
+    d->magic = EST_MAGIC;
+    d->status = SR_EST_NO_SAMPLE;
+    memcpy(c->mu, m->mu0, sizeof(double) * m->p);
+    memcpy(c->theta, m->th0, sizeof(double) * m->r);
+    for (int i = 0; i < m->p; i++)
+        c->P_mu[i * m->p + i] = m->opt.P0_mu;
+    for (int i = 0; i < m->r; i++)
+        c->P_th[i * m->r + i] = m->opt.P0_theta;
+    sr_D_of_mu(m->mu0_full, c->D);                            /* M(0) = 0 */
+    if (m->opt.solver == 2)
+        est_joint_init(m, c);
+    c->decay_lin = c->decay_ang = 1.0;
+    c->tr_t_ref = c->tr_t = NAN;                              /* DriftTracker.empty */
+}
+
+/* -- one sample ------------------------------------------------------------------------------- */
+
+static const char *const KEYS[13] = {"r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd",
+                                     "qdd", "F", "M", "J", "H"};
+
+/* Identifier._validate's careful path: the status and message of a sample that
+ * sr_sample_check refused */
+static int explain_rejection(const sr_estimator_model *m, const double *x, char *msg, size_t n)
+{
+    int sizes[13] = {3, 3, 9, 3, 3, 3, m->n, m->n, m->n, 3, 3, 3, 3};
+    int o = 0;
+    for (int k = 0; k < 13; o += sizes[k], k++) {
+        int finite = 1, inrange = 1;
+        for (int i = 0; i < sizes[k]; i++) {
+            if (!isfinite(x[o + i]))
+                finite = 0;
+            else if (!(fabs(x[o + i]) <= SR_EST_INPUT_LIMIT))
+                inrange = 0;
+        }
+        if (!finite) {
+            set_msg(msg, n, "non-finite input ");
+            cat(msg, n, KEYS[k]);
+            cat(msg, n, " = ");
+            cat_vec(msg, n, x + o, sizes[k]);
+            return SR_EST_REJECT_NONFINITE;
+        }
+        if (!inrange) {
+            set_msg(msg, n, "input ");
+            cat(msg, n, KEYS[k]);
+            cat(msg, n, " = ");
+            cat_vec(msg, n, x + o, sizes[k]);
+            cat(msg, n, " is beyond the physical range |x| <= 1e+15 (SI units?)");
+            return SR_EST_REJECT_NONFINITE;
+        }
+    }
+    double err, det;
+    sr_rotation_error(x + SR_X_A_B, &err, &det);
+    set_msg(msg, n, "base.A is not a rotation matrix (|A^T A - I| = ");
+    cat_num(msg, n, err, 3);
+    cat(msg, n, " > 1e-06 or det = ");
+    cat_num(msg, n, det, 6);
+    cat(msg, n, " <= 0)");
+    return SR_EST_REJECT_INCONSISTENT;
+}
+
+static double *history(const sr_estimator_model *m, void *data)
+{
+    return (double *)((char *)data + m->off_hist);
+}
+
+/* the slot (1 + nflat values: t, sample) of the history's i-th oldest sample */
+static const double *hist_slot(const sr_estimator_model *m, const void *data, const est_core *c,
+                               int i)
+{
+    int cap = 2 * m->half;
+    int idx = (c->hist_head - c->hist_count + i + 2 * cap) % cap;
+    return history(m, (void *)data) + (size_t)idx * (size_t)m->slot;
+}
+
+/* The centre sample of the window (the 2 m stored samples and the new one) with its
+ * accelerations the derivatives of its velocities at its time (Identifier._differenced,
+ * differencing.centre_derivative): into xc (nflat). Returns 0 or the weights' status. */
+static int centre_sample(const sr_estimator_model *m, const void *data, const est_core *c,
+                         double t, const double *x, double *xc, double *gain)
+{
+    int half = m->half, k = 2 * half + 1, n = m->n;
+    double times[SR_DIFF_MAX_SAMPLES], w[SR_DIFF_MAX_SAMPLES];
+    const double *rows[SR_DIFF_MAX_SAMPLES];
+    for (int i = 0; i < k - 1; i++) {
+        const double *s = hist_slot(m, data, c, i);
+        times[i] = s[0];
+        rows[i] = s + 1;
+    }
+    times[k - 1] = t;
+    rows[k - 1] = x;
+    int st = sr_derivative_weights(times, k, half, w);
+    if (st != 0)
+        return st;
+    double g = 0.0;                          /* |w|: white velocity noise s gives s |w| */
+    for (int i = 0; i < k; i++)
+        g += w[i] * w[i];
+    *gain = sqrt(g);
+    memcpy(xc, rows[half], sizeof(double) * m->nflat);
+    /* (acceleration, velocity) channels: a_S <- v_S, alpha_B <- omega_B, qdd <- qd */
+    int acc[6 + SR_MAX_JOINTS], vel[6 + SR_MAX_JOINTS];
+    for (int i = 0; i < 3; i++) {
+        acc[i] = SR_X_A_S + i;
+        vel[i] = SR_X_V_S + i;
+        acc[3 + i] = SR_X_ALPHA_B + i;
+        vel[3 + i] = SR_X_OMEGA_B + i;
+    }
+    for (int i = 0; i < n; i++) {
+        acc[6 + i] = SR_X_QDD(n) + i;
+        vel[6 + i] = SR_X_QD(n) + i;
+    }
+    for (int p = 0; p < 6 + n; p++) {
+        double s = 0.0;
+        for (int i = 0; i < k; i++)
+            s += w[i] * rows[i][vel[p]];
+        xc[acc[p]] = s;
+    }
+    return 0;
+}
+
+/* The angular rows of a momentum equation array E (3 x 42) about the point p (3) instead of
+ * the inertial origin, in place (identifier.about_point): L_p = L_O - p x P, H_p = H_O - p x J,
+ * so y -= [p]x b and, mu being the entries m, m b of D(mu) of each body,
+ * psi[:, D index of mu] += [p]x A; the linear rows [A | b] (3 x 9, row stride lin_stride)
+ * taken from lin (E's own: lin = E, lin_stride = SR_N_COLS). */
+static void about_point_of(double *E, const double *p, const double *lin, int lin_stride)
+{
+    const double P[9] = {0.0, -p[2], p[1], p[2], 0.0, -p[0], -p[1], p[0], 0.0};   /* [p]x */
+    double pl[3][9];
+    for (int i = 0; i < 3; i++)
+        for (int c = 0; c <= SR_COL_B; c++)
+            pl[i][c] = P[3 * i] * lin[c] + P[3 * i + 1] * lin[lin_stride + c]
+                       + P[3 * i + 2] * lin[2 * lin_stride + c];
+    for (int i = 0; i < 3; i++) {
+        double *row = E + i * SR_N_COLS;
+        row[SR_COL_Y] -= pl[i][8];                           /* y' = y - [p]x b */
+        for (int c = 0; c < 4; c++) {
+            row[SR_COL_PSI + c] += pl[i][c];                 /* base m, m b */
+            row[SR_COL_PSI + 10 + c] += pl[i][4 + c];        /* target m, m b */
+        }
+    }
+}
+
+static void about_point(double *E, const double *p) { about_point_of(E, p, E, SR_N_COLS); }
+
+/* The momentum equations of the flat sample x with their angular rows about its own r_S
+ * (Identifier._own_point_into): L_O - [r]x P, P = the system's momentum (the linear rows
+ * without the impulse: [A | b - J]) */
+static void own_point_rows(const sr_estimator_model *m, const double *x, double *own)
+{
+    double mom[3 * 9];
+    sr_equations(&m->robot, 0, x, own);                      /* eqs. 11/16 of this sample */
+    for (int i = 0; i < 3; i++) {
+        memcpy(mom + 9 * i, own + i * SR_N_COLS, sizeof(double) * 8);
+        mom[9 * i + 8] = own[i * SR_N_COLS + SR_COL_B] - x[SR_X_J(m->n) + i];
+    }
+    about_point_of(own, x + SR_X_R_S, mom, 9);
+}
+
+/* The momentum equations differentiated at the centre c of the window (the 2 m stored
+ * samples and the new one, x with its own-point rows own_x) by the derivative's weights w
+ * (Identifier._differenced_momentum, docs/identification.md section 6): for any weights with
+ * sum w = 0 the unknown momentum cancels and sum_i w_i E_mom(t_i) holds exactly (the force
+ * equations averaged by the derivative's filter). With P_i the momentum, J_i the impulse,
+ * tau_i = t_i - t_c and u the displacement weights:
+ *   sum_i w_i (L_O,i - [r_c]x (P_i - J_i))
+ *     = sum_i w_i (L_O,i - [r_i]x P_i)                 own point: no position needed
+ *     + [sum_i w_i (r_i - r_c)]x P_c                   = [u . v]x P_c (velocities)
+ *     + sum_i w_i [r_i - r_c]x (J_i - J_c)             ~ [v_c]x sum_i w_i tau_i (J_i - J_c)
+ *     + [r_c]x sum_i w_i J_i
+ * into out (3 x 42). Returns 0 or the weights' status. */
+static int momentum_derivative(const sr_estimator_model *m, const void *data, const est_core *c,
+                               double t, const double *x, const double *own_x, double *out)
+{
+    int half = m->half, k = 2 * half + 1, oJ = SR_X_J(m->n);
+    double times[SR_DIFF_MAX_SAMPLES], w[SR_DIFF_MAX_SAMPLES], u[SR_DIFF_MAX_SAMPLES];
+    const double *fl[SR_DIFF_MAX_SAMPLES], *own[SR_DIFF_MAX_SAMPLES];
+    for (int i = 0; i < k - 1; i++) {
+        const double *slot = hist_slot(m, data, c, i);
+        times[i] = slot[0];
+        fl[i] = slot + 1;
+        own[i] = slot + 1 + m->nflat;
+    }
+    times[k - 1] = t;
+    fl[k - 1] = x;
+    own[k - 1] = own_x;
+    int st = sr_derivative_weights(times, k, half, w);
+    if (st == 0)
+        st = sr_displacement_weights(times, k, half, w, u);
+    if (st != 0)
+        return st;
+    const double *xc = fl[half], *own_c = own[half];
+    double v_u[3] = {0.0, 0.0, 0.0};                         /* sum u v = sum w (r - r_c) */
+    for (int i = 0; i < k; i++)
+        for (int j = 0; j < 3; j++)
+            v_u[j] += u[i] * fl[i][SR_X_V_S + j];
+    for (int a = 0; a < 3 * SR_N_COLS; a++) {               /* d/dt momentum ~ force */
+        double s = 0.0;
+        for (int i = 0; i < k; i++)
+            s += w[i] * own[i][a];
+        out[a] = s;
+    }
+    double lin[27] = {0.0};                                  /* [A | b] rows, A = 0 */
+    for (int j = 0; j < 3; j++) {                            /* + [r_c]x sum w J */
+        double s = 0.0;
+        for (int i = 0; i < k; i++)
+            s += w[i] * fl[i][oJ + j];
+        lin[9 * j + 8] = s;
+    }
+    about_point_of(out, xc + SR_X_R_S, lin, 9);
+    double mom_c[27], neg_vu[3] = {-v_u[0], -v_u[1], -v_u[2]};
+    for (int j = 0; j < 3; j++) {                            /* + [u.v]x P_c */
+        memcpy(mom_c + 9 * j, own_c + j * SR_N_COLS, sizeof(double) * 8);
+        mom_c[9 * j + 8] = own_c[j * SR_N_COLS + SR_COL_B] - xc[oJ + j];
+    }
+    about_point_of(out, neg_vu, mom_c, 9);
+    for (int j = 0; j < 3; j++) {                            /* + [v_c]x sum w tau (J - J_c) */
+        double s = 0.0;
+        for (int i = 0; i < k; i++)
+            s += w[i] * (times[i] - times[half]) * (fl[i][oJ + j] - xc[oJ + j]);
+        lin[9 * j + 8] = s;
+    }
+    about_point_of(out, xc + SR_X_V_S, lin, 9);
+    return 0;
+}
+
+/* the sample (t, x, its own-point rows own where the derivative is the momentum
+ * equations') into the history ring's next slot (over the oldest once full) */
+static void push_history(const sr_estimator_model *m, void *data, est_core *c, double t,
+                         const double *x, const double *own)
+{
+    double *slot = history(m, data) + (size_t)c->hist_head * (size_t)m->slot;
+    slot[0] = t;
+    memcpy(slot + 1, x, sizeof(double) * m->nflat);
+    if (m->diffmom)
+        memcpy(slot + 1 + m->nflat, own, sizeof(double) * 3 * SR_N_COLS);
+    c->hist_head = (c->hist_head + 1) % (2 * m->half);
+}
+
+/* n + 1, saturated at INT_MAX (the counters of a long run, or of a restored block, never
+ * overflow) */
+static int count_up(int n) { return n < 2147483647 ? n + 1 : n; }
+
+/* a rejection after validation: counters, status, message */
+static int reject(est_data *d, int status, const char *why, char *msg, size_t msglen)
+{
+    d->rejected = count_up(d->rejected);
+    d->status = status;
+    set_msg(d->msg, sizeof d->msg, why);
+    if (msg && msglen)
+        set_msg(msg, msglen, d->msg);
+    return status;
+}
+
+/* "name = v is out of range lo..hi" (a Data block's count or index) */
+static void bad_count(char *err, size_t errlen, const char *name, long v, long lo, long hi)
+{
+    set_msg(err, errlen, "the estimator's state block is not valid: ");
+    cat(err, errlen, name);
+    cat(err, errlen, " = ");
+    cat_int(err, errlen, v);
+    cat(err, errlen, " is out of its range ");
+    cat_int(err, errlen, lo);
+    cat(err, errlen, "..");
+    cat_int(err, errlen, hi);
+}
+
+int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char *err,
+                            size_t errlen)
+{
+    if (err && errlen)
+        err[0] = '\0';
+    if (!m || !data) {
+        set_msg(err, errlen, "the estimator's state block is not valid: no model or no block");
+        return 1;
+    }
+    const est_data *d = (const est_data *)data;
+    const est_core *c = &d->core;
+    /* the history holds 2 m samples (none without differenced accelerations), each ring L */
+    int cap = 2 * m->half, L = m->lags;
+    if (d->magic != EST_MAGIC) {
+        set_msg(err, errlen, "the estimator's state block is not valid (not initialised, or "
+                             "not an estimator's state)");
+        return 1;
+    }
+    const struct { const char *name; long v, lo, hi; } ranges[] = {
+        {"diag.samples", d->samples, 0, 2147483647L},
+        {"diag.rejected", d->rejected, 0, 2147483647L},
+        {"diag.status", d->status, SR_EST_NO_SAMPLE, SR_EST_REJECT_INCONSISTENT},
+        /* the momentum reference exists only for the momentum method */
+        {"the momentum reference flag", c->has_ref, 0, m->force ? 0 : 1},
+        /* the noise parts exist only where the accelerations' noise is compensated */
+        {"the noise compensation flag", c->has_eiv, 0, m->eiv ? 1 : 0},
+        {"the differencing history's count", c->hist_count, 0, cap},
+        {"the differencing history's head", c->hist_head, 0, cap > 0 ? cap - 1 : 0},
+        {"the residual ring's count (linear)", c->corr_count[0], 0, L},
+        {"the residual ring's head (linear)", c->corr_head[0], 0, L > 0 ? L - 1 : 0},
+        {"the residual ring's count (angular)", c->corr_count[1], 0, L},
+        {"the residual ring's head (angular)", c->corr_head[1], 0, L > 0 ? L - 1 : 0},
+    };
+    for (size_t i = 0; i < sizeof ranges / sizeof ranges[0]; i++)
+        if (ranges[i].v < ranges[i].lo || ranges[i].v > ranges[i].hi) {
+            bad_count(err, errlen, ranges[i].name, ranges[i].v, ranges[i].lo, ranges[i].hi);
+            return 1;
+        }
+    if (!memchr(d->msg, '\0', sizeof d->msg)) {
+        set_msg(err, errlen, "the estimator's state block is not valid: its message is not "
+                             "terminated");
+        return 1;
+    }
+    return 0;
+}
+
+/* 1 if the Data block passes sr_estimator_data_check (a block restored from outside, e.g. FMI
+ * set/deserialize state, is checked before any index into it is used) */
+static int data_valid(const sr_estimator_model *m, const est_data *d)
+{
+    return sr_estimator_data_check(m, d, NULL, 0) == 0;
+}
+
+/* 1 if everything the report reads after the step nw is finite */
+static int outputs_finite(const est_core *nw)
+{
+    int ok = isfinite(nw->residual_lin + nw->residual_ang) && isfinite(nw->rcond_mu) && isfinite(nw->rcond_theta);
+    for (int i = 0; i < EST_NZ; i++)
+        ok &= isfinite(nw->vec[i]) && isfinite(nw->sd[i]);
+    return ok;
+}
+
+int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const double *sample,
+                        char *msg, size_t msglen)
+{
+    if (msg && msglen)
+        msg[0] = '\0';
+    if (!m || !data)
+        return SR_EST_REJECT_NONFINITE;
+    est_data *d = (est_data *)data;
+    est_core *c = &d->core;
+    if (sr_estimator_data_check(m, d, msg, msglen) != 0)   /* never index with a corrupt
+                                                             block's counts */
+        return SR_EST_REJECT_NONFINITE;
+    char why[SR_EST_MSG_LEN];
+    why[0] = '\0';
+    /* validation (Identifier._update): one rule, a sample as a whole */
+    int status = SR_EST_ESTIMATING;
+    if (!sample) {
+        status = SR_EST_REJECT_INCONSISTENT;
+        set_msg(why, sizeof why, "no sample given");
+    } else if (sr_sample_check(sample, m->nflat, SR_EST_INPUT_LIMIT, SR_EST_ROTATION_TOL) != 0) {
+        status = explain_rejection(m, sample, why, sizeof why);
+    }
+    if (status != SR_EST_ESTIMATING || !isfinite(t)) {
+        if (!isfinite(t)) {
+            set_msg(why, sizeof why, "non-finite sample time ");
+            cat_num(why, sizeof why, t, 6);
+        }
+        return reject(d, status != SR_EST_ESTIMATING ? status : SR_EST_REJECT_NONFINITE, why,
+                      msg, msglen);
+    }
+    if (m->differenced && c->hist_count > 0) {
+        double last = hist_slot(m, data, c, c->hist_count - 1)[0];
+        if (!(t > last)) {
+            set_msg(why, sizeof why, "differenced accelerations, the moving reference and the "
+                                     "thrust integrals need increasing sample times: t = ");
+            cat_num(why, sizeof why, t, 6);
+            cat(why, sizeof why, " s after ");
+            cat_num(why, sizeof why, last, 6);
+            cat(why, sizeof why, " s");
+            return reject(d, SR_EST_REJECT_INCONSISTENT, why, msg, msglen);
+        }
+    }
+
+    /* the transaction: the new state on the stack, committed only if all came out finite */
+    double E[3 * SR_N_COLS], own[3 * SR_N_COLS];
+    double xc[SR_X_LEN(SR_MAX_JOINTS)];
+    const double *x = sample;
+    int stored = 0, have_E = 0;               /* stored 1: a history sample only */
+    double gain = 1.0;                        /* the derivative's noise gain */
+    if (m->diffmom)
+        own_point_rows(m, sample, own);
+    if (m->differenced) {
+        int wst = 0;
+        if (c->hist_count < 2 * m->half)
+            stored = 1;
+        else if (m->diffmom)                             /* the momentum equations' derivative */
+            have_E = (wst = momentum_derivative(m, data, c, t, sample, own, E)) == 0;
+        else if ((wst = centre_sample(m, data, c, t, sample, xc, &gain)) == 0)
+            x = xc;                                      /* the centre, its accelerations */
+        if (wst != 0)
+            return reject(d, SR_EST_REJECT_NONFINITE, "the update failed: the derivative's "
+                          "weights are not finite; are the inputs in SI units and of "
+                          "physical size?", msg, msglen);
+    }
+    if (!stored && !have_E)
+        sr_equations(&m->robot, m->force, x, E);         /* eqs. 11/16 or 28/31 */
+    int first_reference = !m->force && !c->has_ref;
+    if (first_reference) {                               /* the momentum reference t0 */
+        double s = 0.0;
+        for (int i = 0; i < 3 * SR_N_COLS; i++)
+            s += E[i];
+        if (!isfinite(s))
+            return reject(d, SR_EST_REJECT_NONFINITE, "the update failed: it produced "
+                          "non-finite numbers; are the inputs in SI units and of physical "
+                          "size?", msg, msglen);
+        memcpy(c->ref, E, sizeof E);
+        c->has_ref = 1;
+        stored = 2;
+    } else if (!m->force) {                              /* eqs. 11/16: [.](t) - [.](t0) */
+        for (int i = 0; i < 3 * SR_N_COLS; i++)
+            E[i] -= c->ref[i];
+        if (m->opt.momentum_point)                       /* about r_S of this sample */
+            about_point(E, sample + SR_X_R_S);
+    }
+    if (stored == 1) {                                   /* the differencing history fills */
+        push_history(m, data, c, t, sample, own);
+        c->hist_count++;
+    }
+    if (stored) {
+        d->status = SR_EST_REFERENCE;
+        d->msg[0] = '\0';
+        return d->status;
+    }
+    /* the noise rows sigma_l C_l, C_l = E(x + e_l) - E(x) (eiv.noise_rows, eq. 1): the
+     * equations are affine in the accelerations */
+    double noise[3 * (6 + SR_MAX_JOINTS) * SR_N_COLS];
+    int n_noise = 0;
+    if (m->eiv) {
+        double xk[SR_X_LEN(SR_MAX_JOINTS)], Ek[3 * SR_N_COLS];
+        memcpy(xk, x, sizeof(double) * m->nflat);
+        for (int l = 0; l < 6 + m->n; l++) {
+            double sd = m->accel_sd[l] * gain;
+            if (!(sd > 0.0))
+                continue;
+            int i = m->accel_ch[l];
+            xk[i] = x[i] + 1.0;
+            sr_equations(&m->robot, 1, xk, Ek);
+            xk[i] = x[i];
+            for (int a = 0; a < 3 * SR_N_COLS; a++)
+                noise[n_noise * 3 * SR_N_COLS + a] = sd * (Ek[a] - E[a]);
+            n_noise++;
+        }
+    }
+    est_core nw;                              /* written by the step, copied by the commit */
+    for (int i = 0; i < 2; i++) {
+        nw.corr_head[i] = c->corr_head[i];
+        nw.corr_count[i] = c->corr_count[i];
+    }
+    double e_lin[EST_MAXK], e_ang[3];
+    /* the tracker's clock is the sample count: the estimates depend on the samples, not on
+     * the step sizes between them */
+    int st = m->opt.solver == 1
+                 ? est_paper_step(m, data, c, &nw, E, n_noise ? noise : NULL, n_noise,
+                                  (double)d->samples, e_lin, e_ang)
+                 : est_joint_step(m, data, c, &nw, E, (double)d->samples, e_lin);
+    if (st == 0 && !outputs_finite(&nw))   /* e.g. a restored block's numbers: never report
+                                               them non-finite */
+        st = 2;
+    if (st != 0) {
+        const char *what = st == 1 ? "the update failed (LinAlgError: lam I + H P H^T is not "
+                                     "positive definite); are the inputs in SI units and of "
+                                     "physical size?"
+                         : st == 3 ? "the update failed (LinAlgError: Eigenvalues did not "
+                                     "converge); are the inputs in SI units and of physical "
+                                     "size?"
+                                   : "the update failed: it produced non-finite numbers; are "
+                                     "the inputs in SI units and of physical size?";
+        return reject(d, SR_EST_REJECT_NONFINITE, what, msg, msglen);
+    }
+    /* commit */
+    if (m->lags > 0 && m->opt.solver == 1) {
+        est_corr_commit(m, data, &nw, 0, e_lin, m->k1);
+        est_corr_commit(m, data, &nw, 1, e_ang, m->k2);
+    } else if (m->lags > 0) {
+        est_corr_commit(m, data, &nw, 0, e_lin, m->k1 + m->k2);
+    }
+    if (m->differenced)                                  /* the window moves by one sample */
+        push_history(m, data, c, t, sample, own);
+    est_core_commit(m, c, &nw);
+    d->samples = count_up(d->samples);
+    d->status = SR_EST_ESTIMATING;
+    d->msg[0] = '\0';
+    return d->status;
+}
+
+/* -- the report ------------------------------------------------------------------------------ */
+
+/* the least-squares estimates and standard deviations: after a sample as the step left them,
+ * before any the prior's (solvers.ParameterSolver.std) */
+static void estimates(const sr_estimator_model *m, const est_data *d, double *vec, double *sd)
+{
+    if (d->samples > 0) {
+        memcpy(vec, d->core.vec, sizeof(double) * EST_NZ);
+        memcpy(sd, d->core.sd, sizeof(double) * EST_NZ);
+        return;
+    }
+    double data_only[EST_NZ], J[EST_NZ * EST_NZ], rcond[2];
+    est_std_parts(m, &d->core, 1.0, 1.0, sd, data_only, J, vec, rcond);
+}
+
+void sr_estimator_estimates(const sr_estimator_model *m, const void *data, double *vec,
+                            double *sd)
+{
+    if (!m || !data || !vec || !sd)
+        return;
+    if (!data_valid(m, (const est_data *)data)) {
+        for (int i = 0; i < EST_NZ; i++)
+            vec[i] = sd[i] = NAN;
+        return;
+    }
+    estimates(m, (const est_data *)data, vec, sd);
+}
+
+void sr_estimator_sd_without_lag(const sr_estimator_model *m, const void *data, double *sd)
+{
+    if (!m || !data || !sd)
+        return;
+    const est_data *d = (const est_data *)data;
+    if (!data_valid(m, d)) {
+        for (int i = 0; i < EST_NZ; i++)
+            sd[i] = NAN;
+        return;
+    }
+    double vec[EST_NZ], data_only[EST_NZ], J[EST_NZ * EST_NZ], rcond[2];
+    est_std_parts(m, &d->core, est_corr_current(m, data, 0),
+                  m->opt.solver == 1 ? est_corr_current(m, data, 1) : 1.0, sd, data_only, J,
+                  vec, rcond);
+}
+
+void sr_estimator_message(const sr_estimator_model *m, const void *data, char *msg,
+                          size_t msglen)
+{
+    if (!m || !data || !msg || !msglen)
+        return;
+    const est_data *d = (const est_data *)data;
+    char buf[SR_EST_MSG_LEN];
+    memcpy(buf, d->msg, sizeof buf);         /* NUL-terminated even in a corrupt block */
+    buf[SR_EST_MSG_LEN - 1] = '\0';
+    set_msg(msg, msglen, buf);
+}
+
+void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
+                             sr_estimator_report *r)
+{
+    if (!m || !data || !r)
+        return;
+    const est_data *d = (const est_data *)data;
+    double ls[EST_NZ];
+    memset(r, 0, sizeof *r);
+    if (!data_valid(m, d)) {                 /* a corrupt block: nothing but the status */
+        r->status = SR_EST_REJECT_NONFINITE;
+        return;
+    }
+    estimates(m, d, ls, r->sd);
+    memcpy(r->vector, ls, sizeof ls);
+    /* physical flags; identified: small sd and the reported value the estimate's
+     * (Identifier.report), the projection onto real bodies where needed */
+    int flags[4];
+    if (!sr_report_flags(ls, r->sd, SR_COM_SCALE_MIN, m->opt.sd_rel, m->identified, flags)) {
+        const double *g[2] = {m->opt.guess_base, m->opt.guess_target};
+        for (int k = 0; k < 2; k++) {
+            if (flags[k])
+                continue;
+            double *body = r->vector + 10 * k, m_out;
+            int projected;
+            double m_min = SR_REL_MASS_MIN * fabs(g[k][0]);
+            if (m->robot.planar)
+                sr_project_planar_body(body[0], body + 1, body + 4, m_min, SR_REL_SIGMA_MIN,
+                                       &m_out, body + 4, &projected);
+            else
+                sr_project_body(body[0], body + 1, body + 4, m_min, SR_REL_SIGMA_MIN, &m_out,
+                                body + 4, &projected);
+            body[0] = m_out;
+        }
+        double scale[EST_NZ];
+        sr_error_scale(r->vector, SR_COM_SCALE_MIN, scale);
+        sr_identified_bodies(r->sd, r->vector, ls, scale, m->opt.sd_rel, m->identified,
+                             flags + 2);
+    }
+    for (int k = 0; k < 2; k++) {
+        r->physical[k] = flags[k];
+        r->identified[k] = d->samples > 0 && flags[2 + k];
+    }
+    r->residual_lin = d->core.residual_lin;
+    r->residual_ang = d->core.residual_ang;
+    r->excitation_mu = d->samples > 0 ? d->core.rcond_mu : 0.0;
+    r->excitation_theta = d->samples > 0 ? d->core.rcond_theta : 0.0;
+    r->samples = d->samples;
+    r->rejected = d->rejected;
+    r->status = d->status;
+    /* the excitation request (identifier.ExcitationRequest) */
+    int mode = m->opt.excite_mode;
+    r->excite = (mode == 2 || (mode == 1 && !(r->identified[0] && r->identified[1])))
+                    ? m->opt.excite_level : 0.0;
+}

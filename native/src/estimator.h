@@ -1,0 +1,192 @@
+/* The estimator core: online identification of the inertial parameters of a space robot's base
+ * and grasped target, one sample at a time (Zhang, Yue, Yuan, IEEE Access 2020), as the Python
+ * spacerobot.estimator.Identifier does it.
+ *
+ * Shaped as Pinocchio's Model / Data:
+ *   - a Model (sr_estimator_model), constant after sr_estimator_model_new: the known arm, the
+ *     options, the prior, and the layout of the identified parameters;
+ *   - a Data block (sr_estimator_data_size bytes, NO pointers inside): every state that evolves
+ *     (estimates, covariances, Gram matrices, tracker, history, counters). FMI get/set/serialize
+ *     FMU state is a memcpy of it. Several Data blocks may share one Model (the Model is only
+ *     read by update and report).
+ *   - one step path, sr_estimator_update: validation, the sample's equations (momentum eqs.
+ *     11/16 or force eqs. 28/31), the paper's modified RLS (eqs. 34-38), the standard deviations
+ *     and the drift tracker, computed on the stack and committed only when every number came out
+ *     finite (a rejected sample changes only the counters, status and message);
+ *   - sr_estimator_report_get reads the Data only (pure).
+ *
+ * Vectors of 20 estimates are in the order of spacerobot.interface.ESTIMATE_NAMES: per body
+ * (base, then target) m [kg], b (3) [m], Ixx Iyy Izz Ixy Ixz Iyz [kg.m2] (about the com, body
+ * frame).
+ */
+#ifndef SR_ESTIMATOR_H
+#define SR_ESTIMATOR_H
+
+#include <stddef.h>
+
+#include "arm.h"
+#include "sr_api.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* status codes (spacerobot.interface.STATUS) */
+#define SR_EST_NO_SAMPLE 0           /* no sample yet */
+#define SR_EST_REFERENCE 1           /* momentum reference / differencing history stored */
+#define SR_EST_ESTIMATING 2          /* last sample used */
+#define SR_EST_REJECT_NONFINITE 3    /* non-finite / out-of-range input, or an update overflowed */
+#define SR_EST_REJECT_INCONSISTENT 4 /* base.A not a rotation, or time not increasing */
+
+/* largest accepted input magnitude, SI units (identifier.INPUT_LIMIT) */
+#define SR_EST_INPUT_LIMIT 1e15
+/* base.A is accepted as a rotation when max |A^T A - I| <= this and det A > 0 */
+#define SR_EST_ROTATION_TOL 1e-6
+/* largest ident.diff_half_window and ident.corr_lags */
+#define SR_EST_MAX_HALF_WINDOW 50
+#define SR_EST_MAX_CORR_LAGS 10000
+/* the accepted ranges of the guesses and initial covariances (beyond the Python Identifier's
+ * rules: finite, m > 0, inertia a real body's, P0 > 0): a body of 1 mg to 1e15 kg (the input
+ * limit), its centre of mass within 1 km of its frame's origin, principal moments of 1e-6 to
+ * 1e15 kg.m2; covariances of 1e-12 to 1e16 (SI units; a prior sd of 1e8 kg or kg.m2 says no
+ * more than "unknown", and beyond it the covariance update P - K H P cancels every digit of a
+ * double: the samples are then rejected). Every product the estimator forms of values in these
+ * ranges stays finite (m |b|^2 <= 1e21; 1 / P0 <= 1e12; sd of b ~ sqrt(P0) / m <= 1e14); the
+ * project's parameter sets lie well inside (m 100..600 kg, |b| <= 0.2 m, moments 10..100
+ * kg.m2, P0 1..1e12). */
+#define SR_EST_MASS_MIN 1e-6
+#define SR_EST_MASS_MAX 1e15
+#define SR_EST_COM_MAX 1e3
+#define SR_EST_INERTIA_MIN 1e-6
+#define SR_EST_INERTIA_MAX 1e15
+#define SR_EST_P0_MIN 1e-12
+#define SR_EST_P0_MAX 1e16
+/* length of the message buffers (rejections, model errors) */
+#define SR_EST_MSG_LEN 256
+
+/** The estimator's options: the estimator FMU's parameters (their FMI names in the comments). */
+typedef struct sr_estimator_options {
+    int method;            /* method: 1 momentum (eqs. 11/16), 2 force (eqs. 28/31) */
+    int solver;            /* solver: 1 the paper's modified RLS, 2 joint RLS over the 20
+                              standard parameters */
+    int accel_source;      /* accel_source: 1 measured, 2 differenced (force method) */
+    double lambda;         /* lambda: forgetting factor, 0 < lambda <= 1 */
+    double P0_mu, P0_theta;/* P0_mu, P0_theta: initial covariances (diagonal), > 0 */
+    double guess_base[10], guess_target[10];  /* guess.base.*, guess.target.*: m, b(3) [m],
+                                                 Ixx Iyy Izz Ixy Ixz Iyz about the com */
+    double sd_rel;         /* ident.sd_rel: identified threshold, 0 < sd_rel < 1 (1e-3) */
+    int excite_mode;       /* ident.excite_mode: 0 off, 1 until identified, 2 always */
+    double excite_level;   /* ident.excite_level: 0..1 */
+    double row_sd_lin, row_sd_ang;   /* ident.sd_row.<method>_lin / _ang of the chosen method's
+                                        equations; 0 = unit weight */
+    int diff_half_window;  /* ident.diff_half_window: 1..50 */
+    int diff_momentum;     /* ident.diff_momentum: 0/1 (force, differenced: the derivative's
+                              weights on the momentum equations of the window's samples) */
+    int corr_lags;         /* ident.corr_lags: 0..10000 */
+    double signal_sd[6];   /* ident.noise.*: a_S, alpha_B, qdd (measured); v_S, omega_B, qd
+                              (differenced): white-noise sd per sample; > 0: the force method's
+                              estimates bias-compensated (errors in variables; the paper
+                              solver without diff_momentum) */
+    double momentum_window;/* ident.momentum_window [s] (> 0 not ported yet) */
+    int momentum_point;    /* ident.momentum_point: 0/1 (momentum method: the angular rows
+                              about the base's position at the newer sample) */
+} sr_estimator_options;
+
+/** The defaults of the estimator FMU's parameters (the paper's guesses and covariances of
+ *  spacerobot.robots' default scenario: base 20 kg, target 2 kg cuboids, P0 = 1e4). */
+SR_API void sr_estimator_options_default(sr_estimator_options *o);
+
+/** The constant part: robot, options, prior, parameter layout. */
+typedef struct sr_estimator_model sr_estimator_model;
+
+/** A new Model, or NULL on invalid options or robot with a one-line message in err (errlen
+ *  bytes, NUL-terminated when errlen > 0; err may be NULL) naming the parameter by its FMU name,
+ *  e.g. "forgetting factor lambda must satisfy 0 < lambda <= 1, got 1.5" (the rules and
+ *  messages of the Python Identifier), or saying that a value is not available in the native
+ *  core yet ("ident.diff_momentum = 1 is not available in the native core yet"). The robot is
+ *  copied. Free with sr_estimator_model_free. */
+SR_API sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
+                                                  const sr_estimator_options *opt,
+                                                  char *err, size_t errlen);
+SR_API void sr_estimator_model_free(sr_estimator_model *m);
+
+/** Bytes of one Data block of this Model (depends on diff_half_window, corr_lags, n). */
+SR_API size_t sr_estimator_data_size(const sr_estimator_model *m);
+
+/** Initialise the Data block data (sr_estimator_data_size(m) bytes, any alignment of a malloc'ed
+ *  or double-aligned buffer) to the state before any sample. */
+SR_API void sr_estimator_data_init(const sr_estimator_model *m, void *data);
+
+/** Number of values of a flat sample of a robot with n joints: 24 + 3 n + 12 (r_S 0, v_S 3,
+ *  A 6 row-major, omega_B 15, a_S 18, alpha_B 21, q 24, qd 24+n, qdd 24+2n, F, M, J, H). */
+SR_API int sr_estimator_sample_length(const sr_estimator_model *m);
+
+/** One sample taken at time t [s]; sample (sr_estimator_sample_length(m) values) as above.
+ *  Never fails hard: returns the status (SR_EST_*). A rejected sample (3, 4) leaves every
+ *  estimate, covariance and internal state untouched except the rejected counter, the status
+ *  and the message. msg (msglen bytes; may be NULL) gets the reason of a rejection ("" when
+ *  accepted), as the Python Identifier.message. Sample times must increase only where the state
+ *  depends on them (differenced accelerations), as in the Python Identifier. A Data block
+ *  whose counters are out of range (not initialised, corrupt, or of another Model) is not
+ *  used: status 3, nothing written. */
+SR_API int sr_estimator_update(const sr_estimator_model *m, void *data, double t,
+                               const double *sample, char *msg, size_t msglen);
+
+/** Check a Data block restored from outside (FMI set / deserialize state, a file) before it is
+ *  used: the magic, every count, index, flag and status within its range for this Model (the
+ *  differencing history's and the residual rings' heads and counts, the momentum reference and
+ *  noise-compensation flags, the sample counters, the status, the message's terminating NUL).
+ *  Its floating-point values are not judged: whatever they are, an update reads and writes
+ *  only within the block and commits only finite numbers (else it rejects the sample). The
+ *  block must be sr_estimator_data_size(m) bytes (the caller knows its size). Returns 0 when
+ *  valid, else 1 with a one-line reason in err (errlen bytes, NUL-terminated when errlen > 0;
+ *  err may be NULL). sr_estimator_update and the readers refuse a block that fails it. */
+SR_API int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char *err,
+                                   size_t errlen);
+
+/** What the estimator reports (the estimator FMU's outputs). */
+typedef struct sr_estimator_report {
+    double vector[20], sd[20];        /* physically consistent estimates and their standard
+                                         deviations (sd.<estimate>) */
+    int identified[2], physical[2];   /* diag.identified.base/target, diag.physical.* */
+    double residual_lin, residual_ang, excitation_mu, excitation_theta;   /* diag.* */
+    int samples, rejected, status;    /* diag.samples, diag.rejected, diag.status (the
+                                         counters saturate at INT_MAX) */
+    double excite;                    /* the excitation level requested (output ident.excite) */
+} sr_estimator_report;
+
+/** The report of the Data block (reads it only). */
+SR_API void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
+                                    sr_estimator_report *r);
+
+/** The message of the last sample ("" when it was accepted) into msg (msglen bytes). */
+SR_API void sr_estimator_message(const sr_estimator_model *m, const void *data, char *msg,
+                                 size_t msglen);
+
+/** The least-squares estimates (20, before the physical projection) and the standard
+ *  deviations (20) of the Data block, as the Python Identifier.vector() / std(). */
+SR_API void sr_estimator_estimates(const sr_estimator_model *m, const void *data, double *vec,
+                                   double *sd);
+
+/** Bytes at the start of a Data block that hold the counters (samples, rejected), the status
+ *  and the message: what a rejected sample changes. The rest (estimates, covariances, Gram
+ *  matrices, tracker, history) changes only with an accepted sample. */
+SR_API size_t sr_estimator_data_head_size(void);
+
+/** The standard deviations (20) of the least-squares estimates without the drift tracker's
+ *  lag term: the data's scatter, the prior's pull, the unobserved floor, computed from the
+ *  Data block (Python: Identifier.solver.std_parts().sd). A diagnostic: the report's sd
+ *  adds the lag (tracking.total_sd). */
+SR_API void sr_estimator_sd_without_lag(const sr_estimator_model *m, const void *data,
+                                        double *sd);
+
+/** sizeof(sr_estimator_options) and sizeof(sr_estimator_report), for bindings that check their
+ *  view of the structs. */
+SR_API size_t sr_estimator_options_size(void);
+SR_API size_t sr_estimator_report_size(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SR_ESTIMATOR_H */

@@ -1,0 +1,154 @@
+/* The sensor models between the plant's true signals and the estimator (a port of
+ * spacerobot/sensors/models.py, SensorSuite; docs/sensors.md): gyro (white noise, initial bias,
+ * bias random walk), star tracker, relative navigation, accelerometer / IMU, joint encoders
+ * (noise, quantisation), thrust knowledge (scale factor and misalignment drawn once per run),
+ * sample delay.
+ *
+ * A sample is the flat sample of equations.h (SR_X_LEN(n) values: r_S, v_S, A (row-major),
+ * omega_B, a_S, alpha_B, q, qd, qdd, F, M, J, H). The model (sr_sensors_model: constants) and
+ * the state (sr_sensors_state: the random generators, biases, white-noise draws, thrust
+ * errors, the delay ring) are plain structs without pointers: copy the state to save or
+ * restore a run (its size is fixed: sr_sensors_state_size()).
+ *
+ * Timing (as SensorSuite): sr_sensors_measure is a pure function of the true sample and the
+ * state (the measurement output at the sample's time, direct feedthrough);
+ * sr_sensors_advance moves on one sample interval (remember the measurement in the delay
+ * ring, integrate the thrust error's angular impulse, walk the biases, draw the next white
+ * noise); sr_sensors_update does both.
+ *
+ * Random numbers: one sr_rng stream per sensor (gyro, star, nav, imu, enc, thrust: stream k is
+ * the seed's splitmix64 / xoshiro256** generator jumped k times), drawn in SensorSuite's
+ * order, so changing one sensor's parameters leaves the others' noise unchanged. The same seed
+ * gives the same bits on every platform (rng.h); the statistics equal SensorSuite's (NumPy's
+ * generator: not the same numbers).
+ */
+#ifndef SR_SENSORS_H
+#define SR_SENSORS_H
+
+#include <stddef.h>
+
+#include "arm.h"
+#include "equations.h"
+#include "rng.h"
+#include "sr_api.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* the noise.* magnitudes (FMU parameters noise.<name>, spacerobot.interface.NOISE_PARAMETERS
+ * without noise.scale, in that order); units as there */
+enum {
+    SR_NOISE_GYRO_ARW = 0,      /* gyro white rate noise over 1 s [rad/s] */
+    SR_NOISE_GYRO_BIAS,         /* gyro initial bias sd [rad/s] */
+    SR_NOISE_GYRO_RRW,          /* gyro bias change over 1 s [rad/s] */
+    SR_NOISE_STAR_CROSS,        /* star tracker about base x, y [rad] */
+    SR_NOISE_STAR_ROLL,         /* star tracker about base z [rad] */
+    SR_NOISE_NAV_R,             /* navigation position [m] */
+    SR_NOISE_NAV_V,             /* navigation velocity [m/s] */
+    SR_NOISE_ACCEL_VRW,         /* accelerometer white noise over 1 s [m/s2] */
+    SR_NOISE_ACCEL_BIAS,        /* accelerometer initial bias sd [m/s2] */
+    SR_NOISE_ACCEL_BRW,         /* accelerometer bias change over 1 s [m/s2] */
+    SR_NOISE_ALPHA,             /* angular acceleration [rad/s2] */
+    SR_NOISE_ENC_RESOLUTION,    /* encoder quantisation step [rad] (0: none) */
+    SR_NOISE_ENC_Q,             /* joint angle noise before quantisation [rad] */
+    SR_NOISE_ENC_QD,            /* joint rate noise [rad/s] */
+    SR_NOISE_ENC_QDD,           /* joint acceleration noise [rad/s2] */
+    SR_NOISE_THRUST_SCALE,      /* thrust scale factor error sd [1] */
+    SR_NOISE_THRUST_MISALIGN,   /* thrust misalignment sd per axis [rad] */
+    SR_NOISE_COUNT
+};
+
+/* the random streams, one per sensor */
+enum { SR_STREAM_GYRO = 0, SR_STREAM_STAR, SR_STREAM_NAV, SR_STREAM_IMU, SR_STREAM_ENC,
+       SR_STREAM_THRUST, SR_N_STREAMS };
+
+/** Longest sample delay (noise.delay) in samples: the delay ring's size. */
+#define SR_SENSORS_MAX_DELAY 100
+/** Length of one sample row in the delay ring (the flat sample of SR_MAX_JOINTS joints). */
+#define SR_SENSORS_ROW SR_X_LEN(SR_MAX_JOINTS)
+
+/** The constants of a sensor suite (set by sr_sensors_init only). */
+typedef struct sr_sensors_model {
+    int n;                          /* joints, 1..SR_MAX_JOINTS */
+    int delay;                      /* noise.delay [samples], 0..SR_SENSORS_MAX_DELAY */
+    int imu;                        /* noise.imu: 1 accelerometer / IMU present, 0 absent */
+    int reserved;                   /* 0 */
+    double scale;                   /* noise.scale >= 0 */
+    double dt;                      /* the communication step [s] (first white-noise draws) */
+    uint64_t seed;                  /* seed >= 0 */
+    double p[SR_NOISE_COUNT];       /* magnitudes in effect: noise.* times noise.scale */
+} sr_sensors_model;
+
+/** Everything that evolves (plain data: copy it to save or restore a run). */
+typedef struct sr_sensors_state {
+    sr_rng rng[SR_N_STREAMS];       /* one stream per sensor */
+    double gyro_bias[3];            /* [rad/s], base frame */
+    double accel_bias[3];           /* [m/s2], inertial */
+    double E_F[9], E_M[9];          /* (1 + s) R(phi) - 1 of force and moment (3 x 3) */
+    double H_err[3];                /* integral of the thrust error's angular impulse [N.m.s] */
+    /* the white-noise draws of the current sample */
+    double d_omega[3], d_att[3], d_r[3], d_v[3], d_a[3], d_alpha[3];
+    double d_q[SR_MAX_JOINTS], d_qd[SR_MAX_JOINTS], d_qdd[SR_MAX_JOINTS];
+    int32_t count;                  /* measurements in the delay ring, 0..delay */
+    int32_t head;                   /* ring index of the oldest, 0..delay-1 (0 if delay 0) */
+    double line[SR_SENSORS_MAX_DELAY][SR_SENSORS_ROW];   /* the last `delay` measurements */
+} sr_sensors_state;
+
+/** sizeof(sr_sensors_model) and sizeof(sr_sensors_state) [bytes] (for hosts that allocate
+ *  them as opaque blocks). */
+SR_API size_t sr_sensors_model_size(void);
+SR_API size_t sr_sensors_state_size(void);
+
+/** The FMU parameter name of magnitude i ("noise.gyro.arw", ...), NULL for i out of
+ *  0..SR_NOISE_COUNT-1. */
+SR_API const char *sr_sensors_parameter_name(int i);
+
+/** Set up the model: n joints; noise (SR_NOISE_COUNT): the noise.* magnitudes in the order
+ *  above (not yet scaled); scale = noise.scale; seed = seed; delay = noise.delay;
+ *  imu = noise.imu; dt the communication step [s]. Returns 0, or 1 with model untouched and
+ *  a NUL-terminated message naming the FMU parameter in msg (msg_size bytes; msg may be
+ *  NULL) for: n outside 1..SR_MAX_JOINTS, a magnitude or noise.scale not finite and >= 0 (or
+ *  their product not finite), seed < 0, noise.delay outside 0..SR_SENSORS_MAX_DELAY,
+ *  noise.imu not 0 or 1, dt not finite and > 0, a NULL model or noise. */
+SR_API int sr_sensors_init(sr_sensors_model *model, int n, const double *noise, double scale,
+                           long long seed, int delay, int imu, double dt, char *msg,
+                           int msg_size);
+
+/** Start a run (SensorSuite's constructor): seed the streams, draw the initial biases, the
+ *  thrust errors E_F then E_M, the first white noise (with model->dt); H_err = 0; empty delay
+ *  ring. Returns 0, or 1 for a NULL pointer or a model not set by sr_sensors_init. */
+SR_API int sr_sensors_start(const sr_sensors_model *model, sr_sensors_state *state);
+
+/** The measurement y (SR_X_LEN(n)) at the time of the true sample x (SR_X_LEN(n)): the
+ *  oldest measurement in the delay ring when noise.delay > 0 and the ring is not empty
+ *  (SensorSuite.measure), else the measurement of x. noise.scale = 0: y = x bit for bit
+ *  (with noise.imu = 0 a_S = alpha_B = 0 whatever the scale). y may alias x. The state is
+ *  not changed. Returns 0; 1 for a NULL pointer or a bad model; 3 for an inconsistent state
+ *  (delay ring indices out of range; y untouched). Non-finite inputs are passed on. */
+SR_API int sr_sensors_measure(const sr_sensors_model *model, const sr_sensors_state *state,
+                              const double *x, double *y);
+
+/** Move on from the true sample x (SR_X_LEN(n)) to the next, dt [s] later
+ *  (SensorSuite.advance): remember the measurement of x (delay ring); then, unless
+ *  noise.scale = 0, add dt (E_M M + r_S x E_F F) to H_err (not if non-finite), walk the
+ *  biases (b += d sqrt(dt) N(0, 1)), draw the next white noise. Returns 0; 1 for a NULL
+ *  pointer or a bad model; 2 for dt not finite and > 0; 3 for an inconsistent state (state
+ *  untouched on every error). */
+SR_API int sr_sensors_advance(const sr_sensors_model *model, sr_sensors_state *state,
+                              const double *x, double dt);
+
+/** sr_sensors_measure then sr_sensors_advance: one call per sample. y may alias x. Returns
+ *  as those (nothing changed on an error). */
+SR_API int sr_sensors_update(const sr_sensors_model *model, sr_sensors_state *state,
+                             const double *x, double dt, double *y);
+
+/** exp([phi]x) (R 3 x 3, row-major) of the rotation vector phi (3) [rad] (Rodrigues, with
+ *  the portable sine and cosine of rng.h; I + K + K^2/2 below 1e-8 rad, as SensorSuite). */
+SR_API void sr_rotation_vector_to_matrix(const double *phi, double *R);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SR_SENSORS_H */

@@ -1,0 +1,337 @@
+"""Helpers of the native FMU host tests (tests/test_native_fmu_hosts.py, test_native_fmu_fuzz.py).
+
+* the tools, each ``None`` where missing: the system C compiler, mingw-w64
+  (``x86_64-w64-mingw32-gcc``), Wine, valgrind, a working ASan/UBSan runtime;
+* the FMU binaries of the sources in this tree, built once per session with
+  ``native/build.py`` (plain: linux64 and win64; sanitised: linux64 with
+  ``-fsanitize=address,undefined``), and the estimator FMUs assembled from them
+  (:func:`spacerobot.fmi.native.build_native_fmu`), extracted to fresh folders;
+* the C hosts (``tests/c_host/fmu_host.c``, ``fmu_fuzz.c``) compiled for Linux or Windows;
+* one Wine prefix per session under the pytest temporary folder, and running a host from an
+  EMPTY environment (only ``PATH=/usr/bin:/bin``; under Wine also the Wine variables).
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib.util
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import zipfile
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+C_HOST = Path(__file__).resolve().parent / "c_host"
+HOST_SOURCE = C_HOST / "fmu_host.c"
+FUZZ_SOURCE = C_HOST / "fmu_fuzz.c"
+MODEL = "estimator"
+IDENT = "SpaceRobotEstimator"
+#: the flags of a sanitised build (FMU binary and host alike)
+SANITIZE = ("-fsanitize=address,undefined", "-fno-omit-frame-pointer", "-g")
+#: a sanitiser report fails the run: UBSan stops at its first finding, ASan looks for leaks
+SANITIZER_ENV = {"ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0:exitcode=23",
+                 "UBSAN_OPTIONS": "halt_on_error=1:print_stacktrace=1:exitcode=24"}
+SANITIZER_WORDS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:",
+                   "SUMMARY: UndefinedBehaviorSanitizer")
+EMPTY_PATH = "/usr/bin:/bin"
+WINE_ENV = {"WINEDEBUG": "-all", "WINEDLLOVERRIDES": "mscoree,mshtml="}
+
+_LOCK = threading.Lock()
+_CACHE: dict = {}
+
+
+# ---- tools -------------------------------------------------------------------------------------
+def c_compiler() -> Optional[str]:
+    for name in (os.environ.get("CC", ""), "cc", "gcc", "clang"):
+        if name and shutil.which(name):
+            return shutil.which(name)
+    return None
+
+
+def mingw() -> Optional[str]:
+    return shutil.which("x86_64-w64-mingw32-gcc")
+
+
+def wine() -> Optional[str]:
+    return shutil.which("wine")
+
+
+def valgrind() -> Optional[str]:
+    return shutil.which("valgrind")
+
+
+def require(tool: Optional[str], what: str) -> str:
+    """``tool``, or skip the test saying what is missing."""
+    if tool is None:
+        pytest.skip(f"{what} is not installed")
+    return tool
+
+
+def asan_missing(work: Path) -> Optional[str]:
+    """``None`` when a program built with :data:`SANITIZE` runs here, else why not."""
+    key = "asan"
+    with _LOCK:
+        if key not in _CACHE:
+            cc = c_compiler()
+            if cc is None:
+                _CACHE[key] = "no C compiler"
+            else:
+                src, exe = work / "asan_probe.c", work / "asan_probe"
+                src.write_text("#include <stdlib.h>\nint main(void) { char *p = malloc(4); "
+                               "p[0] = 1; int r = p[0] - 1; free(p); return r; }\n")
+                r = subprocess.run([cc, *SANITIZE, str(src), "-o", str(exe)],
+                                   capture_output=True, text=True)
+                if r.returncode != 0:
+                    _CACHE[key] = f"the ASan/UBSan runtime is missing ({r.stderr.strip()[-200:]})"
+                else:
+                    r = subprocess.run([str(exe)], capture_output=True, text=True,
+                                       env={"PATH": EMPTY_PATH, **SANITIZER_ENV})
+                    _CACHE[key] = (None if r.returncode == 0 else
+                                   f"an ASan program does not run here: {r.stderr[-300:]}")
+        return _CACHE[key]
+
+
+# ---- the FMU binaries of this tree (native/build.py) ---------------------------------------------
+def native_build():
+    """``native/build.py`` as a private module (its PLATFORMS may be replaced in this copy)."""
+    name = "_spacerobot_native_build_for_hosts"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, ROOT / "native" / "build.py")
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+    return sys.modules[name]
+
+
+#: built binaries are kept here between sessions, by a digest of everything that makes them
+BUILD_CACHE = Path(tempfile.gettempdir()) / "spacerobot-native-hosts"
+
+
+def _sources() -> List[Path]:
+    nb = native_build()
+    return [ROOT / "native" / "build.py", *sorted(nb.SRC.glob("*")), *sorted(nb.FMI2.glob("*")),
+            nb.model_glue(MODEL)]
+
+
+def _build(platform: str, sanitize: bool) -> Path:
+    """The estimator's FMU binary for ``platform`` (sanitised: ``-O1`` plus :data:`SANITIZE`,
+    compile and link), built by ``native/build.py``'s own ``build_fmu_binary`` (its sources,
+    includes and flags) unless a build of the same sources, flags and compiler is cached."""
+    nb = native_build()
+    cc = nb.PLATFORMS[platform].compiler()
+    if cc is None:
+        raise nb.BuildError(f"no compiler for {platform}")
+    h = hashlib.sha256(f"{platform} {sanitize} {cc} {SANITIZE}".encode())
+    h.update(subprocess.run([cc, "--version"], capture_output=True).stdout)
+    for p in _sources():
+        h.update(p.name.encode() + b"\0" + p.read_bytes())
+    out_dir = BUILD_CACHE / h.hexdigest()[:24]
+    target = out_dir / "fmu" / platform / f"{IDENT}{nb.PLATFORMS[platform].suffix}"
+    if target.is_file():
+        return target
+    mod = nb
+    if sanitize:
+        # a private copy of the module whose platform adds the flags: build_fmu_binary itself
+        # (sources, includes, defines) stays the tree's
+        spec = importlib.util.spec_from_file_location(f"_sr_build_san_{platform}",
+                                                      ROOT / "native" / "build.py")
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[spec.name] = mod
+        spec.loader.exec_module(mod)
+        base = mod.PLATFORMS[platform]
+        mod.PLATFORMS = {**mod.PLATFORMS, platform: dataclasses.replace(
+            base, cflags=(*base.cflags, "-O1", *SANITIZE), ldflags=(*base.ldflags, *SANITIZE))}
+    built = mod.build_fmu_binary(MODEL, platform, out_dir / "fmu")
+    _prune_cache(keep=out_dir)
+    return built
+
+
+def _prune_cache(keep: Path, entries: int = 12) -> None:
+    """Only the newest builds stay in the cache."""
+    try:
+        dirs = sorted((d for d in BUILD_CACHE.iterdir() if d.is_dir() and d != keep),
+                      key=lambda d: d.stat().st_mtime, reverse=True)
+    except OSError:
+        return
+    for d in dirs[entries - 1:]:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def fmu_binaries(work: Path) -> Dict[str, Path]:
+    """Library folders (``<dir>/fmu/<platform>/SpaceRobotEstimator.*``, as
+    :func:`spacerobot.fmi.native.build_native_fmu` takes them) of this tree's sources, once per
+    session: ``{"plain": dir, "sanitized": dir}``; win64 inside "plain" where mingw is
+    installed; no "sanitized" where the ASan runtime is missing. Built in parallel."""
+    with _LOCK:
+        if "binaries" in _CACHE:
+            return _CACHE["binaries"]
+    native_build()                            # imported once, before the threads use it
+    jobs = [("plain", "linux64", False)]
+    if mingw():
+        jobs.append(("plain", "win64", False))
+    if asan_missing(work) is None:
+        jobs.append(("sanitized", "linux64", True))
+    with ThreadPoolExecutor(max_workers=min(3, os.cpu_count() or 1)) as ex:
+        built = [(kind, plat, ex.submit(_build, plat, san)) for kind, plat, san in jobs]
+        out = {}
+        for kind, plat, f in built:
+            path = f.result()                 # a build error fails the test, with its output
+            dst = work / f"lib_{kind}" / "fmu" / plat / path.name
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(path, dst)
+            out[kind] = work / f"lib_{kind}"
+    with _LOCK:
+        _CACHE["binaries"] = out
+    return out
+
+
+# ---- FMUs --------------------------------------------------------------------------------------
+@dataclasses.dataclass
+class Variable:
+    vr: int
+    type: str
+    causality: str
+    variability: str
+    name: str
+
+
+class Extracted:
+    """An FMU unzipped into a fresh folder: its binaries, resource URIs, variables."""
+
+    def __init__(self, fmu: Path, folder: Path):
+        if folder.exists():
+            shutil.rmtree(folder)
+        folder.mkdir(parents=True)
+        with zipfile.ZipFile(fmu) as z:
+            z.extractall(folder)
+        self.fmu = fmu
+        self.dir = folder
+        self.so = folder / "binaries" / "linux64" / f"{IDENT}.so"
+        self.dll = folder / "binaries" / "win64" / f"{IDENT}.dll"
+        self.uri = (folder / "resources").as_uri()
+        self.wine_uri = "file:///Z:" + (folder / "resources").as_uri()[len("file://"):]
+        self.variables: List[Variable] = []
+        for line in (folder / "resources" / "spacerobot_variables.txt").read_text().splitlines():
+            f = line.split()
+            if line.startswith("guid "):
+                self.guid = f[1]
+            elif f and f[0].isdigit():
+                self.variables.append(Variable(int(f[0]), f[1], f[2], f[3], f[6]))
+        self.vr = {v.name: v.vr for v in self.variables}
+
+    def vrs(self, type_: str, causality: str) -> List[int]:
+        return [v.vr for v in self.variables if v.type == type_ and v.causality == causality]
+
+    def names(self, type_: str, causality: str) -> List[str]:
+        return [v.name for v in self.variables if v.type == type_ and v.causality == causality]
+
+
+def estimator_fmu(work: Path, robot: str, target: Optional[str], lib_dir: Path,
+                  tag: str) -> Extracted:
+    """The estimator FMU of ``scenario(robot, target)`` built from ``lib_dir``'s binaries, copied
+    to a fresh folder and extracted there (cached per session)."""
+    from spacerobot.fmi.native import build_native_fmu
+    from spacerobot.robots import scenario
+
+    key = ("fmu", robot, target, str(lib_dir), tag)
+    with _LOCK:
+        if key not in _CACHE:
+            d = work / f"fmu_{tag}_{robot}_{target or 'default'}"
+            fmu = build_native_fmu(MODEL, scenario(robot, target), d / "built", lib_dir=lib_dir)
+            fresh = d / "copy" / fmu.name                 # the FMU copied to a fresh folder
+            fresh.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(fmu, fresh)
+            _CACHE[key] = Extracted(fresh, d / "extracted")
+        return _CACHE[key]
+
+
+# ---- hosts -------------------------------------------------------------------------------------
+def compile_host(source: Path, work: Path, platform: str = "linux64",
+                 sanitize: bool = False) -> Path:
+    """``source`` compiled warning-free as a Linux program (gcc, dlopen) or a Windows one
+    (mingw, LoadLibrary); cached per session."""
+    key = ("host", str(source), platform, sanitize)
+    with _LOCK:
+        if key in _CACHE:
+            return _CACHE[key]
+    flags = ["-std=c99", "-O1", "-Wall", "-Wextra", "-Werror"]
+    if platform == "linux64":
+        cc = require(c_compiler(), "a C compiler")
+        exe = work / f"{source.stem}{'_san' if sanitize else ''}"
+        cmd = [cc, *flags, *(SANITIZE if sanitize else ()), "-o", str(exe), str(source),
+               "-ldl", "-lm"]
+    else:
+        cc = require(mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
+        exe = work / f"{source.stem}.exe"
+        cmd = [cc, *flags, "-o", str(exe), str(source), "-static-libgcc"]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, f"{' '.join(cmd)}\n{r.stderr}"
+    with _LOCK:
+        _CACHE[key] = exe
+    return exe
+
+
+def empty_env(extra: Optional[dict] = None) -> dict:
+    """An EMPTY environment but for PATH (what a tool started by a scheduler may see)."""
+    return {"PATH": EMPTY_PATH, **(extra or {})}
+
+
+class WinePrefix:
+    """One Wine prefix per session, created in the background (``wineboot -i``) so that it
+    overlaps the builds; :meth:`env` waits for it."""
+
+    def __init__(self, folder: Path):
+        self.folder = folder
+        self.proc = subprocess.Popen([require(wine(), "Wine"), "wineboot", "-i"],
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                     env=empty_env({"WINEPREFIX": str(folder), **WINE_ENV}))
+        self.ready = False
+
+    def env(self, extra: Optional[dict] = None) -> dict:
+        if not self.ready:
+            _, err = self.proc.communicate(timeout=300)
+            assert self.proc.returncode == 0, \
+                f"wineboot failed: {err.decode(errors='replace')[-2000:]}"
+            subprocess.run(["wineserver", "-w"], env=empty_env({"WINEPREFIX": str(self.folder)}),
+                           timeout=120)
+            self.ready = True
+        return empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV, **(extra or {})})
+
+
+def wine_prefix(work: Path) -> WinePrefix:
+    require(wine(), "Wine")
+    with _LOCK:
+        if "wine" not in _CACHE:
+            _CACHE["wine"] = WinePrefix(work / "wineprefix")
+        return _CACHE["wine"]
+
+
+def wine_path(p: Path) -> str:
+    """A Linux path as Wine's Z: drive sees it."""
+    return "Z:" + str(p).replace("/", "\\")
+
+
+def run(cmd: Sequence, env: dict, timeout: float = 300) -> subprocess.CompletedProcess:
+    """Run a host; Windows line ends (CR LF) become LF."""
+    r = subprocess.run([str(c) for c in cmd], capture_output=True, env=env, timeout=timeout)
+    return subprocess.CompletedProcess(r.args, r.returncode,
+                                       r.stdout.decode(errors="replace").replace("\r", ""),
+                                       r.stderr.decode(errors="replace").replace("\r", ""))
+
+
+def sanitizer_reports(stderr: str) -> List[str]:
+    return [line for line in stderr.splitlines() if any(w in line for w in SANITIZER_WORDS)]
+
+
+def hex_bits(x: float) -> str:
+    """The IEEE-754 bits of ``x`` as the host's input files take them (exact, locale-free)."""
+    import struct
+    return "0x%016x" % struct.unpack("<Q", struct.pack("<d", float(x)))[0]

@@ -1,0 +1,291 @@
+"""The native estimator FMU in real hosts (no Python in the FMU's process but the test's fmpy run).
+
+The FMU is built from this tree's sources (``native/build.py``, assembled by
+``spacerobot.fmi.native.build_native_fmu``), copied to a fresh folder and driven by the C host
+``tests/c_host/fmu_host.c`` (one source: gcc + dlopen, mingw + LoadLibrary) from an EMPTY
+environment (``PATH=/usr/bin:/bin`` only), with 30 s of samples recorded from the Python plant
+(:class:`spacerobot.plant.Plant`) of the planar "medium" and the spatial (paper's) scenarios as
+its input file:
+
+1. linux64: every output (estimates, standard deviations, diagnostics, counters) at every
+   sample equals the same FMU run in fmpy to 1e-12 relative (integers exactly); a state
+   serialised mid-run and restored reproduces the run bit for bit; 3 create/free cycles first;
+   the estimates end near the truth (the samples reached the estimator as meant);
+2. win64: the DLL, run by the same host source cross-compiled with mingw under Wine
+   (headless), gives the linux64 results to 1e-12 relative; it imports only KERNEL32.dll and
+   msvcrt.dll;
+3. memory: the FMU binary and host built with ``-fsanitize=address,undefined`` run the same
+   scenarios (5 create/free cycles, the state round trip, terminate, free, unload the library)
+   with no sanitizer report (leaks included) and the same results; the plain binary under
+   ``valgrind --error-exitcode=1`` memcheck likewise (no error, no definite leak).
+
+Each part skips, saying why, where its tool (mingw, Wine, valgrind, the ASan runtime) is missing.
+"""
+from __future__ import annotations
+
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+import native_hosts as nh
+
+DT = 0.1
+SECONDS = 30.0
+N = int(round(SECONDS / DT))
+STATE_STEP = N // 2
+CASES = [("planar", "medium"), ("spatial", None)]      # the spatial robot's paper target
+IDS = ["planar-medium", "spatial-paper"]
+RTOL = 1e-12
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory):
+    return tmp_path_factory.getbasetemp() / "native_hosts"
+
+
+@pytest.fixture(scope="module")
+def libs(work):
+    work.mkdir(exist_ok=True)
+    if nh.wine() and nh.mingw():
+        nh.wine_prefix(work)                    # its creation overlaps the builds
+    return nh.fmu_binaries(work)
+
+
+def record(robot: str, target, fmu: nh.Extracted):
+    """The plant's outputs at t = 0, DT, ..., SECONDS - DT as the estimator FMU's inputs:
+    (value references, rows of values) and the truth of the 20 estimates."""
+    from spacerobot import interface
+    from spacerobot.interface import estimator_vars
+    from spacerobot.plant import Plant
+    from spacerobot.robots import scenario
+
+    sc = scenario(robot, target)
+    keys = {v.name: v.key for v in estimator_vars(sc.robot, sc)}
+    names = fmu.names("Real", "input")
+    p = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
+              excitation=sc.excitation)
+    rows = []
+    for _ in range(N):
+        out = p.outputs()
+        rows.append([float(np.asarray(out[keys[n][0]])[keys[n][1]]) for n in names])
+        p.advance(DT)
+    rows = np.array(rows)
+    assert np.all(np.isfinite(rows)) and np.ptp(rows, axis=0).max() > 0.1     # it moved
+    return [fmu.vr[n] for n in names], rows, interface.estimate_vector(sc.robot.base, sc.target)
+
+
+class Case:
+    """One scenario: its FMU, its samples as the host's input file, the fmpy run."""
+
+    def __init__(self, work, libs, robot, target):
+        self.robot, self.target = robot, target
+        self.tag = f"{robot}-{target or 'paper'}"
+        self.fmu = nh.estimator_fmu(work, robot, target, libs["plain"], "plain")
+        self.in_vr, self.samples, self.truth = record(robot, target, self.fmu)
+        self.csv = work / f"inputs_{self.tag}.csv"
+        self.csv.write_text(",".join(map(str, self.in_vr)) + "\n" + "".join(
+            ",".join(nh.hex_bits(x) for x in row) + "\n" for row in self.samples))
+        self.real_out = self.fmu.vrs("Real", "output")
+        self.int_out = self.fmu.vrs("Integer", "output")
+        self.fmpy = self.run_fmpy()
+
+    def run_fmpy(self) -> np.ndarray:
+        """The same FMU, the same samples, in fmpy (the reference host): rows as the C host
+        prints them (t, Real outputs, Integer outputs)."""
+        from fmpy.fmi2 import FMU2Slave
+
+        s = FMU2Slave(guid=self.fmu.guid, unzipDirectory=str(self.fmu.dir),
+                      modelIdentifier=nh.IDENT, instanceName="fmpy")
+        s.instantiate()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+
+        def row(t):
+            return [t, *s.getReal(self.real_out), *s.getInteger(self.int_out)]
+
+        rows = [row(0.0)]
+        for k in range(N):
+            s.setReal(self.in_vr, list(self.samples[k]))
+            s.doStep(k * DT, DT)
+            rows.append(row((k + 1) * DT))
+        s.terminate()
+        s.freeInstance()
+        return np.array(rows)
+
+    def host_args(self, binary, uri, csv, *extra):
+        return [*extra, "-i", csv, "-j", ",".join(map(str, self.int_out)), binary, self.fmu.guid,
+                uri, DT, N, ",".join(map(str, self.real_out))]
+
+
+_CASES: dict = {}
+
+
+@pytest.fixture(scope="module", params=CASES, ids=IDS)
+def case(request, work, libs) -> Case:
+    robot, target = request.param
+    if (robot, target) not in _CASES:
+        _CASES[(robot, target)] = Case(work, libs, robot, target)
+    return _CASES[(robot, target)]
+
+
+def parse(stdout: str) -> np.ndarray:
+    return np.array([[float(x) for x in line.split(",")] for line in stdout.strip().splitlines()])
+
+
+def worst_relative(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest |a - b| / |b| (0 where both are 0; inf where only b is 0)."""
+    assert a.shape == b.shape, (a.shape, b.shape)
+    diff = np.abs(a - b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.where(diff == 0, 0.0, diff / np.abs(b))
+    return float(np.max(rel))
+
+
+def assert_same_run(c_rows: np.ndarray, ref: np.ndarray, case: "Case", what: str) -> float:
+    """Every row of the run equal to the reference run: times and Integers exactly, Reals to
+    RTOL relative; else the message names the outputs that differ and where they start to."""
+    n_int = len(case.int_out)
+    assert c_rows.shape == ref.shape, (what, c_rows.shape, ref.shape)
+    np.testing.assert_array_equal(c_rows[:, 0], ref[:, 0])                   # times
+    names = case.fmu.names("Real", "output")
+    a, b = c_rows[:, 1:-n_int], ref[:, 1:-n_int]
+    err = worst_relative(a, b)
+    if err > RTOL:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = np.where(a == b, 0.0, np.abs(a - b) / np.abs(b))
+        cols = [j for j in range(a.shape[1]) if rel[:, j].max() > RTOL]
+        first = int(np.argmax((rel > RTOL).any(axis=1)))
+        detail = ", ".join(f"{names[j]} {rel[:, j].max():.2g}" for j in cols)
+        pytest.fail(f"{what}: {len(cols)} of {len(names)} Real outputs differ by more than "
+                    f"{RTOL:g} relative, from sample {first} (t = {c_rows[first, 0]:g} s) on; "
+                    f"worst {err:.3g}; per output: {detail}")
+    np.testing.assert_array_equal(c_rows[:, -n_int:], ref[:, -n_int:])       # integer outputs
+    return err
+
+
+_LINUX_RUNS: dict = {}
+
+
+def linux_run(case: Case, host) -> np.ndarray:
+    if case.tag not in _LINUX_RUNS:
+        t = time.perf_counter()
+        r = nh.run([host, *case.host_args(case.fmu.so, case.fmu.uri, case.csv, "-c", 3,
+                                          "-s", STATE_STEP)], env=nh.empty_env())
+        assert r.returncode == 0, r.stderr[-3000:]
+        assert "3 instantiate/free cycles done" in r.stderr
+        assert f"state round trip after step {STATE_STEP}" in r.stderr and "identical" in r.stderr
+        print(f"{case.tag}: linux64 host {time.perf_counter() - t:.2f} s; "
+              f"{r.stderr.strip().splitlines()[-1]}")
+        _LINUX_RUNS[case.tag] = parse(r.stdout)
+    return _LINUX_RUNS[case.tag]
+
+
+@pytest.fixture(scope="module")
+def host(work, libs):
+    return nh.compile_host(nh.HOST_SOURCE, work)
+
+
+# ---- 1. linux64 from an empty environment ------------------------------------------------------
+def test_c_host_from_an_empty_environment_equals_fmpy(case, host):
+    c_rows = linux_run(case, host)
+    err = assert_same_run(c_rows, case.fmpy, case, "C host vs fmpy")
+    print(f"{case.tag}: C host vs fmpy, {c_rows.shape[0]} rows x {c_rows.shape[1] - 1} outputs, "
+          f"worst relative difference {err:.3g}")
+    # the samples reached the estimator as meant: every sample used, none rejected ...
+    names = case.fmu.names("Integer", "output")
+    last = dict(zip(names, c_rows[-1, -len(case.int_out):]))
+    assert last["diag.samples"] >= N - 2 and last["diag.rejected"] == 0, last
+    # ... and the estimates moved from the guesses towards the truth (target mass within 5 %)
+    est = dict(zip(case.fmu.names("Real", "output"), c_rows[-1, 1:-len(case.int_out)]))
+    first = dict(zip(case.fmu.names("Real", "output"), c_rows[0, 1:-len(case.int_out)]))
+    m_true = case.truth[10]
+    assert abs(est["target.m"] - m_true) <= 0.05 * m_true, (est["target.m"], m_true)
+    assert abs(est["target.m"] - m_true) < abs(first["target.m"] - m_true)
+
+
+def test_c_host_refuses_what_it_cannot_run(case, host, tmp_path):
+    """The host's failures are exit codes with a reason, never a crash: a wrong GUID
+    (fmi2Instantiate returns NULL after the FMU logged why), a missing binary."""
+    args = case.host_args(case.fmu.so, case.fmu.uri, case.csv)
+    bad = list(args)
+    bad[bad.index(case.fmu.guid)] = "{00000000-0000-0000-0000-000000000000}"
+    r = nh.run([host, *bad], env=nh.empty_env())
+    assert r.returncode == 4 and "returned NULL" in r.stderr, r.stderr[-2000:]
+    assert any("[status 3][logStatusError]" in line and "guid" in line.lower()
+               for line in r.stderr.splitlines()), r.stderr[-2000:]
+    missing = list(args)
+    missing[missing.index(case.fmu.so)] = tmp_path / "none.so"
+    r = nh.run([host, *missing], env=nh.empty_env())
+    assert r.returncode == 2 and "cannot load" in r.stderr
+
+
+# ---- 2. win64 under Wine -----------------------------------------------------------------------
+def test_win64_dll_imports_only_kernel32_and_msvcrt(case, libs):
+    nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
+    assert case.fmu.dll.is_file(), "the FMU carries no win64 binary although mingw is installed"
+    r = subprocess.run(["x86_64-w64-mingw32-objdump", "-p", str(case.fmu.dll)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    dlls = sorted({line.split(":", 1)[1].strip() for line in r.stdout.splitlines()
+                   if "DLL Name:" in line})
+    assert dlls == ["KERNEL32.dll", "msvcrt.dll"], dlls
+    exports = {line.split()[-1] for line in r.stdout.splitlines() if "fmi2" in line}
+    assert {"fmi2Instantiate", "fmi2DoStep", "fmi2SerializeFMUstate"} <= exports
+
+
+def test_win64_dll_under_wine_equals_linux64(case, work, host):
+    nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
+    nh.require(nh.wine(), "Wine")
+    exe = nh.compile_host(nh.HOST_SOURCE, work, "win64")
+    env = nh.wine_prefix(work).env()
+    t = time.perf_counter()
+    r = nh.run(["wine", exe, *case.host_args(nh.wine_path(case.fmu.dll), case.fmu.wine_uri,
+                                             nh.wine_path(case.csv), "-c", 3, "-s", STATE_STEP)],
+               env=env)
+    elapsed = time.perf_counter() - t
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert f"state round trip after step {STATE_STEP}" in r.stderr and "identical" in r.stderr
+    w_rows = parse(r.stdout)
+    err = assert_same_run(w_rows, linux_run(case, host), case, "win64 vs linux64")
+    print(f"{case.tag}: win64 under Wine ({elapsed:.2f} s) vs linux64: worst relative "
+          f"difference {err:.3g}; bit-identical rows: "
+          f"{int(np.all(w_rows == linux_run(case, host), axis=1).sum())}/{w_rows.shape[0]}")
+
+
+# ---- 3. memory safety -------------------------------------------------------------------------
+#: one run: 5 create/free cycles, the 30 s run with its state saved, serialised and restored
+#: at 15 s, then terminate, free and unload the library
+MEMORY_RUN = ["-c", 5, "-s", STATE_STEP, "-x", "dlclose"]
+
+
+def test_sanitized_binary_runs_clean(case, work, libs, host):
+    why = nh.asan_missing(work)
+    if why:
+        pytest.skip(why)
+    fmu = nh.estimator_fmu(work, case.robot, case.target, libs["sanitized"], "sanitized")
+    exe = nh.compile_host(nh.HOST_SOURCE, work, sanitize=True)
+    t = time.perf_counter()
+    r = nh.run([exe, *case.host_args(fmu.so, fmu.uri, case.csv, *MEMORY_RUN)],
+               env=nh.empty_env(nh.SANITIZER_ENV))
+    assert not nh.sanitizer_reports(r.stderr), "\n".join(nh.sanitizer_reports(r.stderr)[:20])
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "identical" in r.stderr and "5 instantiate/free cycles done" in r.stderr
+    assert_same_run(parse(r.stdout), linux_run(case, host), case, "sanitized")
+    print(f"{case.tag}: ASan/UBSan clean in {time.perf_counter() - t:.1f} s")
+
+
+def test_valgrind_memcheck_clean(case, host):
+    vg = nh.require(nh.valgrind(), "valgrind")
+    t = time.perf_counter()
+    r = nh.run([vg, "--error-exitcode=1", "--leak-check=full", "--show-leak-kinds=definite",
+                "--errors-for-leak-kinds=definite", "-q", host,
+                *case.host_args(case.fmu.so, case.fmu.uri, case.csv, *MEMORY_RUN)],
+               env=nh.empty_env())
+    assert r.returncode == 0, r.stderr[-4000:]
+    assert not [line for line in r.stderr.splitlines() if line.startswith("==")], r.stderr[-4000:]
+    assert "identical" in r.stderr and "5 instantiate/free cycles done" in r.stderr
+    assert_same_run(parse(r.stdout), linux_run(case, host), case, "valgrind")
+    print(f"{case.tag}: valgrind memcheck clean in {time.perf_counter() - t:.1f} s")

@@ -1,0 +1,244 @@
+"""The portable elementary functions of the native core (native/src/sr_math.c) and the rule
+that keeps the core's results the same bits on every platform.
+
+1. Sources: no C file of the core (native/src, native/fmi2, fmu_estimator/estimator.c) outside
+   sr_math.c calls a libm function that IEEE 754 does not round exactly (hypot, sin, cos, tan,
+   the inverse and hyperbolic functions, exp, log, pow, ...): the C libraries differ in their
+   last bits there (glibc vs mingw's msvcrt), and the estimator's standard deviations amplify a
+   1-ulp difference beyond the 1e-12 the win64 and linux64 FMUs must agree to. sqrt, fabs,
+   floor, ceil, fmod, nearbyint, fmin, fmax, ... are exact and allowed. The scan is checked to
+   find a planted call (it can fail).
+2. Accuracy against independent references: NumPy's functions (glibc's) over wide argument
+   ranges, within 1 ulp (sine and cosine 2 ulp beyond |x| = 4 rad, as documented; log10 2 ulp
+   of NumPy's, whose own log10 is 1.5 ulp off, and 0.75 ulp of the exact value from Python's
+   decimal module); the integer powers and powers of ten against exact rational arithmetic
+   (fractions.Fraction): correctly rounded 10^n for every n, within 0.6 ulp for x^n; hypot
+   within 1 ulp of the correctly rounded decimal square root. Special values as C99 (0, -0,
+   inf, nan, subnormals; sine and cosine NaN beyond 1e15, as documented).
+3. The same bits as before for the generator: sr_portable_log / sr_portable_sincos (rng.h)
+   are sr_ln / sr_sincos.
+
+The library under test is ``$SPACEROBOT_CORE_LIB`` when set, else a fresh build of sr_math.c and
+rng.c (native/build.py, warnings as errors).
+"""
+from __future__ import annotations
+
+import ctypes
+import importlib.util
+import os
+import re
+import sys
+from decimal import Decimal, getcontext
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "native" / "src"
+SOURCES = ["sr_math.c", "rng.c"]
+D, I = ctypes.c_double, ctypes.c_int
+
+#: libm functions IEEE 754 does not round exactly (and their float / long double variants)
+INEXACT = ("hypot sin cos tan asin acos atan atan2 sinh cosh tanh asinh acosh atanh exp exp2 "
+           "expm1 log log10 log1p log2 logb pow cbrt erf erfc lgamma tgamma sincos exp10 pow10 "
+           "j0 j1 jn y0 y1 yn").split()
+CALL = re.compile(r"(?<![\w.>])(" + "|".join(INEXACT) + r")[fl]?\s*\(")
+
+
+def core_sources():
+    """The C files compiled into the core's binaries, except sr_math.c itself."""
+    files = [*sorted(SRC.glob("*.c")), *sorted((ROOT / "native" / "fmi2").glob("*.c")),
+             ROOT / "fmu_estimator" / "estimator.c"]
+    return [f for f in files if f.name != "sr_math.c" and f.exists()]
+
+
+def strip_c(text: str) -> str:
+    """C source without comments and string / character literals (kept: line structure)."""
+    pattern = re.compile(r'/\*.*?\*/|//[^\n]*|"(?:\\.|[^"\\\n])*"|\'(?:\\.|[^\'\\\n])*\'', re.S)
+    return pattern.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
+
+
+def inexact_calls(text: str):
+    code = strip_c(text)
+    return [(code.count("\n", 0, m.start()) + 1, m.group(1)) for m in CALL.finditer(code)]
+
+
+def test_the_scan_finds_a_planted_call_and_ignores_comments_strings_and_sr_names():
+    planted = ("double f(double x) { /* sin(x) */ const char *s = \"log(x)\";\n"
+               "  return sr_sin(x) + s->pow(2) + sqrt(x) + floor(x) + hypot (x, 1.0) + powf(x, 2); }\n")
+    assert inexact_calls(planted) == [(2, "hypot"), (2, "pow")]
+
+
+def test_no_inexact_libm_call_outside_sr_math():
+    found = {str(f.relative_to(ROOT)): inexact_calls(f.read_text()) for f in core_sources()}
+    assert len(found) >= 10                                  # the scan saw the core
+    assert {f: c for f, c in found.items() if c} == {}
+
+
+# -- accuracy --------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def lib(tmp_path_factory):
+    env = os.environ.get("SPACEROBOT_CORE_LIB")
+    if env:
+        lib = ctypes.CDLL(env)
+    else:
+        spec = importlib.util.spec_from_file_location("sr_native_build_m", ROOT / "native" / "build.py")
+        build = importlib.util.module_from_spec(spec)
+        sys.modules[spec.name] = build
+        spec.loader.exec_module(build)
+        lib = ctypes.CDLL(str(build.build_library(tmp_path_factory.mktemp("srmath"), SOURCES,
+                                                  strict=True)))
+    for name, res, args in [("sr_hypot", D, [D, D]), ("sr_sin", D, [D]), ("sr_cos", D, [D]),
+                            ("sr_ln", D, [D]), ("sr_log10", D, [D]), ("sr_powi", D, [D, I]),
+                            ("sr_pow10", D, [I]), ("sr_portable_log", D, [D]),
+                            ("sr_sincos", None, [D, ctypes.POINTER(D), ctypes.POINTER(D)]),
+                            ("sr_portable_sincos", None, [D, ctypes.POINTER(D), ctypes.POINTER(D)])]:
+        f = getattr(lib, name)
+        f.restype, f.argtypes = res, args
+    return lib
+
+
+def each(f, *args):
+    return np.array([f(*a) for a in zip(*args)], dtype=float)
+
+
+def ulps(got, ref):
+    """|got - ref| in units of ref's last place (equal values, NaN pairs and infs: 0)."""
+    got, ref = np.asarray(got, float), np.asarray(ref, float)
+    same = (got == ref) | (np.isnan(got) & np.isnan(ref))
+    with np.errstate(invalid="ignore"):
+        err = np.abs(got - ref) / np.spacing(np.abs(ref))
+    return np.where(same, 0.0, err)
+
+
+def exact_ulps(got, exact: Fraction):
+    r = float(exact)
+    return float(abs(Fraction(got) - exact) / Fraction(float(np.spacing(abs(r)))))
+
+
+RNG = np.random.default_rng(20261126)
+
+
+def test_hypot_within_one_ulp_wide_range_and_special_values(lib):
+    n = 30000
+    with np.errstate(over="ignore"):
+        x = np.exp(RNG.uniform(-744, 709, n)) * RNG.choice([-1.0, 1.0], n)
+        y = x * np.exp(RNG.uniform(-45, 45, n)) * RNG.choice([-1.0, 1.0], n)
+    keep = np.isfinite(y)
+    x, y = np.concatenate([x[keep], RNG.normal(size=n)]), np.concatenate([y[keep], RNG.normal(size=n)])
+    got = each(lib.sr_hypot, x, y)
+    err = ulps(got, np.hypot(x, y))
+    assert err.max() <= 1.0, (err.max(), x[err.argmax()], y[err.argmax()])
+    assert np.mean(err > 0) < 0.01                           # almost always correctly rounded
+    getcontext().prec = 60
+    for i in np.flatnonzero(err > 0)[:100]:                  # against the exact value
+        exact = Fraction((Decimal(x[i]) ** 2 + Decimal(y[i]) ** 2).sqrt())
+        assert exact_ulps(got[i], exact) < 1.0
+    inf, nan, big, tiny = np.inf, np.nan, np.finfo(float).max, 5e-324
+    assert lib.sr_hypot(3.0, 4.0) == 5.0 and lib.sr_hypot(-3.0, 4.0) == 5.0
+    assert lib.sr_hypot(big, big) == inf and lib.sr_hypot(big, 1.0) == big
+    assert lib.sr_hypot(tiny, tiny) == np.hypot(tiny, tiny) and lib.sr_hypot(tiny, 0.0) == tiny
+    assert lib.sr_hypot(1e-310, 3e-310) == np.hypot(1e-310, 3e-310)
+    assert lib.sr_hypot(inf, nan) == inf and lib.sr_hypot(nan, -inf) == inf
+    assert np.isnan(lib.sr_hypot(nan, 1.0)) and np.isnan(lib.sr_hypot(0.0, nan))
+    z = lib.sr_hypot(-0.0, -0.0)
+    assert z == 0.0 and not np.signbit(z) and lib.sr_hypot(-2.5, 0.0) == 2.5
+
+
+def test_sine_and_cosine_within_one_ulp_to_four_rad_two_beyond(lib):
+    small = np.concatenate([RNG.uniform(-4, 4, 40000), RNG.uniform(-1e-3, 1e-3, 2000),
+                            np.pi / 2 * np.arange(-2, 3), [1e-9, 1e-300, 5e-324, np.pi / 4]])
+    wide = np.concatenate([RNG.uniform(-100, 100, 10000), RNG.uniform(-1e5, 1e5, 10000),
+                           np.pi / 2 * np.arange(-60000, 60000, 997)])
+    for f, ref in ((lib.sr_sin, np.sin), (lib.sr_cos, np.cos)):
+        e_small, e_wide = ulps(each(f, small), ref(small)), ulps(each(f, wide), ref(wide))
+        assert e_small.max() <= 1.0 and e_wide.max() <= 2.0, (f, e_small.max(), e_wide.max())
+    s, c = D(), D()
+    for x in np.concatenate([small[:200], wide[:200]]):
+        lib.sr_sincos(float(x), ctypes.byref(s), ctypes.byref(c))
+        assert s.value == lib.sr_sin(x) and c.value == lib.sr_cos(x)
+    lib.sr_sincos(1.0, None, ctypes.byref(c))                # NULL outputs are allowed
+    assert c.value == lib.sr_cos(1.0)
+    for zero in (0.0, -0.0):
+        assert lib.sr_sin(zero) == 0.0 and np.signbit(lib.sr_sin(zero)) == np.signbit(zero)
+        assert lib.sr_cos(zero) == 1.0
+    assert lib.sr_sin(-5e-324) == -5e-324 and lib.sr_cos(5e-324) == 1.0
+    # documented: deterministic, less accurate up to 1e15; NaN beyond and for non-finite x
+    assert abs(lib.sr_sin(1e6) - np.sin(1e6)) < 1e-12          # 1.6e6 rad: k pi/2 still exact
+    for big in (1e8, 1e14):                                  # a sine and cosine of nearby angles
+        sv, cv = lib.sr_sin(big), lib.sr_cos(big)
+        assert abs(sv * sv + cv * cv - 1.0) < 1e-15 and abs(sv - np.sin(big)) < 1e-2
+    for bad in (np.inf, -np.inf, np.nan, 1e15, -1e300, np.finfo(float).max):
+        assert np.isnan(lib.sr_sin(bad)) and np.isnan(lib.sr_cos(bad))
+
+
+def test_logarithms_within_one_ulp_and_special_values(lib):
+    x = np.concatenate([np.exp(RNG.uniform(-744, 709, 40000)), RNG.uniform(0.5, 2.0, 40000),
+                        1.0 + RNG.uniform(-1e-6, 1e-6, 2000), [1e-310, 5e-324, np.finfo(float).max,
+                        np.nextafter(1.0, 2.0), np.nextafter(1.0, 0.0), 2.0, 0.5]])
+    e_ln = ulps(each(lib.sr_ln, x), np.log(x))
+    assert e_ln.max() <= 1.0, (e_ln.max(), x[e_ln.argmax()])
+    got10 = each(lib.sr_log10, x)
+    e10 = ulps(got10, np.log10(x))
+    assert e10.max() <= 2.0, (e10.max(), x[e10.argmax()])
+    getcontext().prec = 60                                   # the worst ones, exactly
+    worst = 0.0
+    for i in np.argsort(e10)[-200:]:
+        worst = max(worst, exact_ulps(got10[i], Fraction(Decimal(x[i]).log10())))
+    assert worst < 0.75, worst                               # measured 0.59
+    assert all(lib.sr_log10(float(10 ** n)) == n for n in range(23))
+    assert all(lib.sr_log10(float(Fraction(10) ** n)) == n for n in range(-307, 309))
+    for f in (lib.sr_ln, lib.sr_log10):
+        assert f(1.0) == 0.0 and f(0.0) == -np.inf and f(-0.0) == -np.inf and f(np.inf) == np.inf
+        assert np.isnan(f(-1.0)) and np.isnan(f(np.nan)) and np.isnan(f(-np.inf))
+        assert np.isnan(f(-5e-324))
+
+
+def test_powers_of_ten_correctly_rounded_for_every_exponent(lib):
+    for n in range(-345, 320):
+        exact = Fraction(10) ** n
+        ref = np.inf if exact >= 2 ** 1024 else float(exact)     # float() rounds correctly
+        assert lib.sr_pow10(n) == ref, n
+    assert lib.sr_pow10(2 ** 31 - 1) == np.inf and lib.sr_pow10(-2 ** 31) == 0.0
+
+
+def test_integer_powers_against_exact_rationals_and_numpy(lib):
+    worst = 0.0
+    xs = np.concatenate([RNG.uniform(-3, 3, 1500), np.exp(RNG.uniform(-50, 50, 500))])
+    ns = RNG.integers(-70, 70, xs.size)
+    for x, n in zip(xs, ns):
+        exact = Fraction(float(x)) ** int(n)
+        if abs(exact) >= 2 ** 1024 or (exact != 0 and abs(exact) < Fraction(2) ** -1022):
+            continue
+        got = lib.sr_powi(float(x), int(n))
+        worst = max(worst, exact_ulps(got, exact) if float(exact) != got else 0.0)
+    assert worst < 0.6, worst
+    # the differentiation windows' use: nodes in [-1, 1], exponents to 40, against NumPy
+    x, n = RNG.uniform(-1, 1, 20000), RNG.integers(0, 41, 20000)
+    assert ulps(each(lib.sr_powi, x, n), np.power(x, n.astype(float))).max() <= 1.0
+    # exact whenever the power is representable; subnormal and overflowing results
+    assert lib.sr_powi(3.0, 33) == 3.0 ** 33 and lib.sr_powi(-2.0, -1074) == 5e-324
+    assert lib.sr_powi(0.5, 1074) == 5e-324 and lib.sr_powi(0.5, 1076) == 0.0
+    assert lib.sr_powi(2.0, 1024) == np.inf and lib.sr_powi(-2.0, 1025) == -np.inf
+    assert lib.sr_powi(1e-310, 1) == 1e-310 and lib.sr_powi(1e-160, 2) == np.power(1e-160, 2.0)
+    inf, nan = np.inf, np.nan
+    for x in (0.0, -0.0, inf, -inf, nan, 5e-324, -2.5):
+        for n in (-3, -2, 0, 1, 2, 3):
+            with np.errstate(divide="ignore"):
+                ref = np.power(x, float(n))                  # C99 pow's special values
+            got = lib.sr_powi(x, n)
+            assert (np.isnan(got) and np.isnan(ref)) or (got == ref and np.signbit(got) ==
+                                                          np.signbit(ref)), (x, n, got, ref)
+
+
+def test_generator_functions_are_the_sr_math_ones(lib):
+    xs = np.concatenate([np.exp(RNG.uniform(-700, 700, 2000)), RNG.uniform(-10, 10, 2000)])
+    s1, c1, s2, c2 = D(), D(), D(), D()
+    for x in xs:
+        if x > 0:
+            assert lib.sr_portable_log(x) == lib.sr_ln(x)
+        lib.sr_portable_sincos(x, ctypes.byref(s1), ctypes.byref(c1))
+        lib.sr_sincos(x, ctypes.byref(s2), ctypes.byref(c2))
+        assert np.array([s1.value, c1.value]).tobytes() == np.array([s2.value, c2.value]).tobytes()
