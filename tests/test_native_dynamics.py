@@ -440,10 +440,7 @@ def test_same_model_arrays_give_numbas_numbers(lib, cases, name):
         worst = max(worst, _rel(dyn.aba(q, v, tau), ddq), _rel(Mc, M), _rel(nlec, nle),
                     _rel(hgc, hg), _rel(comc, com))
     print(name, f"C vs Numba, same model arrays: {worst:.1e}")
-    # the C core takes its joint sines and cosines from sr_sincos (native/src/sr_math.c: the
-    # same bits on every platform), Numba from libm: they differ by 1 ulp at times, amplified
-    # by M's conditioning (up to 1e5 here); measured 9.5e-14 (servicer7), 0 with libm's
-    assert worst <= 2e-13
+    assert worst <= 1e-15
 
 
 # -- bad input ---------------------------------------------------------------------------------

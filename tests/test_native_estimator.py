@@ -40,6 +40,16 @@ ROOT = Path(__file__).resolve().parents[1]
 TOL = 1e-9
 #: reciprocal condition number from which the standard deviations are compared
 OBSERVED_RCOND = 1e-6
+#: The core's joint sines and cosines are native/src/sr_math.c's (the same bits on every
+#: platform, correctly rounded), the Python Identifier's glibc's, which misround 0.13 % of
+#: arguments: on the spatial streams the inputs then differ by 1 ulp at times (on the planar
+#: one they happen not to: bit equality there). The estimates stay within 1e-9 of the error
+#: scale (measured 1.3e-12), but these streams are noise-free: the residuals and the
+#: residual-driven standard deviations are round-off-sized and their relative differences
+#: O(1) (measured up to 2e2 relative; 0 with libm's sine and cosine). So here: residuals
+#: within 2e-5 relative (measured 5.8e-6), standard deviations within 5e-5 of the error
+#: scale (measured 1.1e-5, against sd up to 1e3 of it).
+PORTABLE_TRIG = {"sd_scale_tol": 5e-5, "res_rel": 2e-5}
 
 
 @pytest.fixture(scope="module")
@@ -108,7 +118,8 @@ def native_options(sc, method, lam, accel="measured", **kw):
 
 
 def compare(lib, sc, rec, method, lam, accel="measured", py_kw=None, nat_kw=None,
-            x_tol=TOL, sd_tol=TOL, res_tol=1e-12, observed_rcond=OBSERVED_RCOND):
+            x_tol=TOL, sd_tol=TOL, res_tol=1e-12, observed_rcond=OBSERVED_RCOND,
+            sd_scale_tol=None, res_rel=1e-9):
     """Run both on ``rec``; assert the agreement of the module docstring at every sample.
     Returns (Python, native) after the run and the worst differences (estimates x scale,
     sd x sd)."""
@@ -134,13 +145,16 @@ def compare(lib, sc, rec, method, lam, accel="measured", py_kw=None, nat_kw=None
         assert rep["physical"] == rep_py.physical, k
         for a, b in ((rep["residual_lin"], py.residual_lin),
                      (rep["residual_ang"], py.residual_ang)):
-            assert abs(a - b) <= 1e-9 * abs(b) + res_tol, (k, a, b)
+            assert abs(a - b) <= res_rel * abs(b) + res_tol, (k, a, b)
         exc = py.excitation()
         for a, b in zip((rep["excitation_mu"], rep["excitation_theta"]), exc):
             assert abs(a - b) <= 1e-6 * abs(b) + 1e-15, (k, a, b)
         observed = observed or (py.samples > 0 and min(exc) >= observed_rcond)
         if observed:
             for a, b in ((sd, py.std()), (rep["sd"], rep_py.std)):
+                if sd_scale_tol is not None:         # see PORTABLE_TRIG
+                    assert np.max(np.abs(a - b) / scale) <= sd_scale_tol, k
+                    continue
                 d = np.max(np.abs(a - b) / np.maximum(np.abs(b), 1e-300 + 1e-14 * scale))
                 assert d <= sd_tol, (k, d, np.argmax(np.abs(a - b) / np.abs(b)))
                 worst_sd = max(worst_sd, d)
@@ -157,7 +171,8 @@ def test_measured_matches_python(lib, name, method, lam):
     estimates, their standard deviations, the reported (physical) bodies, the flags, the
     residuals and the excitation diagnostics equal the Python Identifier's."""
     sc, rec = stream(name)
-    py, nat, dx, dsd = compare(lib, sc, rec, method, lam)
+    py, nat, dx, dsd = compare(lib, sc, rec, method, lam,
+                               **(PORTABLE_TRIG if name != "planar-medium" else {}))
     assert py.samples == len(rec) - (method == "momentum")
 
 
@@ -168,7 +183,8 @@ def test_differenced_matches_python(lib, name, lam):
     (diff_half_window 1; the equations at the window's centre): the first 2 samples are
     stored, then the results equal the Python Identifier's."""
     sc, rec = stream(name)
-    py, nat, _, _ = compare(lib, sc, rec, "force", lam, "differenced")
+    py, nat, _, _ = compare(lib, sc, rec, "force", lam, "differenced",
+                            **(PORTABLE_TRIG if name != "planar-medium" else {}))
     assert nat.report()["samples"] == len(rec) - 2
 
 

@@ -9,11 +9,12 @@ that keeps the core's results the same bits on every platform.
    floor, ceil, fmod, nearbyint, fmin, fmax, ... are exact and allowed. The scan is checked to
    find a planted call (it can fail).
 2. Accuracy against independent references: NumPy's functions (glibc's) over wide argument
-   ranges, within 1 ulp (sine and cosine 2 ulp beyond |x| = 4 rad, as documented; log10 2 ulp
+   ranges, within 1 ulp (sine and cosine: also equal to the correctly rounded value from a
+   70-digit decimal Taylor series wherever they differ from glibc's; log10 2 ulp
    of NumPy's, whose own log10 is 1.5 ulp off, and 0.75 ulp of the exact value from Python's
    decimal module); the integer powers and powers of ten against exact rational arithmetic
    (fractions.Fraction): correctly rounded 10^n for every n, within 0.6 ulp for x^n; hypot
-   within 1 ulp of the correctly rounded decimal square root. Special values as C99 (0, -0,
+   (glibc's algorithm: NumPy's bits) within 1 ulp of the decimal square root. Special values as C99 (0, -0,
    inf, nan, subnormals; sine and cosine NaN beyond 1e15, as documented).
 3. The same bits as before for the generator: sr_portable_log / sr_portable_sincos (rng.h)
    are sr_ln / sr_sincos.
@@ -147,14 +148,47 @@ def test_hypot_within_one_ulp_wide_range_and_special_values(lib):
     assert z == 0.0 and not np.signbit(z) and lib.sr_hypot(-2.5, 0.0) == 2.5
 
 
-def test_sine_and_cosine_within_one_ulp_to_four_rad_two_beyond(lib):
+def dec_sincos(x: float):
+    """sin x and cos x to ~70 digits (decimal: pi by Machin's formula, Taylor series)."""
+    getcontext().prec = 90
+
+    def atan_inv(n):
+        t = s = Decimal(1) / n
+        k, x2 = 1, t * t
+        while abs(t) > Decimal(10) ** -88:
+            t *= -x2
+            k += 2
+            s += t / k
+        return s
+    pi = 4 * (4 * atan_inv(5) - atan_inv(239))
+    xd = Decimal(x)
+    k = (xd / (pi / 2)).to_integral_value()
+    r = xd - k * pi / 2
+    out = []
+    for t, n in ((r, 1), (Decimal(1), 0)):
+        acc = Decimal(0)
+        while abs(t) > Decimal(10) ** -85:
+            acc += t
+            t *= -r * r / ((n + 1) * (n + 2))
+            n += 2
+        out.append(acc)
+    s, c = out
+    return [(s, c), (c, -s), (-s, -c), (-c, s)][int(k) % 4]
+
+
+def test_sine_and_cosine_correctly_rounded(lib):
     small = np.concatenate([RNG.uniform(-4, 4, 40000), RNG.uniform(-1e-3, 1e-3, 2000),
                             np.pi / 2 * np.arange(-2, 3), [1e-9, 1e-300, 5e-324, np.pi / 4]])
     wide = np.concatenate([RNG.uniform(-100, 100, 10000), RNG.uniform(-1e5, 1e5, 10000),
                            np.pi / 2 * np.arange(-60000, 60000, 997)])
-    for f, ref in ((lib.sr_sin, np.sin), (lib.sr_cos, np.cos)):
-        e_small, e_wide = ulps(each(f, small), ref(small)), ulps(each(f, wide), ref(wide))
-        assert e_small.max() <= 1.0 and e_wide.max() <= 2.0, (f, e_small.max(), e_wide.max())
+    for i, (f, ref) in enumerate(((lib.sr_sin, np.sin), (lib.sr_cos, np.cos))):
+        for xs in (small, wide):
+            got, want = each(f, xs), ref(xs)
+            assert ulps(got, want).max() <= 1.0
+            differ = np.flatnonzero(got != want)
+            assert differ.size < 0.01 * xs.size              # measured 0.13 % (glibc's misroundings)
+            for j in differ[:40]:                            # there, ours is the correctly rounded
+                assert got[j] == float(dec_sincos(xs[j])[i]), (f, xs[j])
     s, c = D(), D()
     for x in np.concatenate([small[:200], wide[:200]]):
         lib.sr_sincos(float(x), ctypes.byref(s), ctypes.byref(c))
@@ -226,7 +260,7 @@ def test_integer_powers_against_exact_rationals_and_numpy(lib):
     inf, nan = np.inf, np.nan
     for x in (0.0, -0.0, inf, -inf, nan, 5e-324, -2.5):
         for n in (-3, -2, 0, 1, 2, 3):
-            with np.errstate(divide="ignore"):
+            with np.errstate(divide="ignore", over="ignore"):
                 ref = np.power(x, float(n))                  # C99 pow's special values
             got = lib.sr_powi(x, n)
             assert (np.isnan(got) and np.isnan(ref)) or (got == ref and np.signbit(got) ==

@@ -120,10 +120,6 @@ double est_residual_variance(const double *S, const double *z, int n, double dof
 
 /* -- the RLS step ------------------------------------------------------------------------------ */
 
-/* One RLS step for H x = y with forgetting factor lam (kernels.rls_update):
- * S = lam 1 + H P H^T, K = P H^T S^-1, x+ = x + K e (e = y - H x), P+ = (P - K H P) / lam
- * symmetrised. x (p), P (p x p), H (k x p), y (k) -> x_new (p), P_new (p x p), e (k), K (p x k).
- * Returns 0 ok, 1 S not positive definite, 2 non-finite numbers. */
 /* the compilers that can be told to inline a function (the row count k of est_rls_step then
  * a constant: its short loops unrolled, the same operations in the same order) */
 #if defined(__GNUC__)
@@ -132,6 +128,10 @@ double est_residual_variance(const double *S, const double *z, int n, double dof
 #define EST_INLINE static inline
 #endif
 
+/* One RLS step for H x = y with forgetting factor lam (kernels.rls_update):
+ * S = lam 1 + H P H^T, K = P H^T S^-1, x+ = x + K e (e = y - H x), P+ = (P - K H P) / lam
+ * symmetrised. x (p), P (p x p), H (k x p), y (k) -> x_new (p), P_new (p x p), e (k), K (p x k).
+ * Returns 0 ok, 1 S not positive definite, 2 non-finite numbers. */
 EST_INLINE int rls_step(const double *x, const double *P, const double *H, const double *y,
                         int p, int k, double lam, double *x_new, double *P_new, double *e,
                         double *K)
@@ -242,7 +242,7 @@ static void D_jacobian(const double *mu, double *Jac)
  * c_i c_j / m that contain it; D_jacobian) */
 static void theta_of_mu(const double *M, const double *Dj, int r, double *T)
 {
-    /* the lists of DJ_ROWS written out (the sums from 0.0, in the lists' order) */
+    /* the lists above written out (each sum from 0.0, in its list's order) */
 #define EST_TM(l, j) (Mi[(l) + e] * Dj[((l) + e) * EST_NMU + (j) + u])
     for (int i = 0; i < r; i++) {
         const double *Mi = M + i * EST_ND;
@@ -459,10 +459,18 @@ static void covariance(const sr_estimator_model *m, const double *P_mu, const do
             cov[(EST_NMU + i) * EST_NZ + j] = TC[i * EST_NMU + j];
             cov[j * EST_NZ + EST_NMU + i] = TC[i * EST_NMU + j];
         }
+        const double *ti = TC + i * EST_NMU;
         for (int j = 0; j < EST_NTH; j++) {
-            double s = 0.0;                                  /* (T C T^T)[i][j] */
-            for (int l = 0; l < EST_NMU; l++)
-                s += TC[i * EST_NMU + l] * Tm[j * EST_NMU + l];
+            const double *tj = Tm + j * EST_NMU;
+            double s = 0.0;                  /* (T C T^T)[i][j]: the sum over l = 0..7 */
+            s += ti[0] * tj[0];
+            s += ti[1] * tj[1];
+            s += ti[2] * tj[2];
+            s += ti[3] * tj[3];
+            s += ti[4] * tj[4];
+            s += ti[5] * tj[5];
+            s += ti[6] * tj[6];
+            s += ti[7] * tj[7];
             cov[(EST_NMU + i) * EST_NZ + EST_NMU + j] = Cth[i * EST_NTH + j] + s;
         }
     }
@@ -1139,13 +1147,16 @@ int est_paper_step(const sr_estimator_model *m, const void *data, const est_core
     if (st2 != 0)                            /* eq. 35: theta by RLS on phi theta = rhs */
         return st2;
     double W[3 * EST_ND], total = 0.0;
-    for (int a = 0; a < k2; a++)                             /* psi - phi M */
-        for (int j = 0; j < EST_ND; j++) {
-            double w = psi[a * EST_ND + j];
-            for (int q = 0; q < r; q++)
-                w -= phi[a * r + q] * old->M[q * EST_ND + j];
-            W[a * EST_ND + j] = w;
+    for (int a = 0; a < k2; a++) {          /* psi - phi M (each entry's sum in the order of q;
+                                               the loop over j innermost: contiguous rows) */
+        double *Wa = W + a * EST_ND;
+        memcpy(Wa, psi + a * EST_ND, sizeof(double) * EST_ND);
+        for (int q = 0; q < r; q++) {
+            const double f = phi[a * r + q], *Mq = old->M + q * EST_ND;
+            for (int j = 0; j < EST_ND; j++)
+                Wa[j] -= f * Mq[j];
         }
+    }
     for (int i = 0; i < r; i++) {            /* M+ = M + K (psi - phi M) = (1 - K phi) M + K psi */
         const double *Ki = K2 + i * k2;
         for (int j = 0; j < EST_ND; j++) {

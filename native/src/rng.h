@@ -79,8 +79,8 @@ SR_API void sr_rng_normals(sr_rng *g, int n, double *out);
 SR_API double sr_portable_log(double x);
 
 /** Sine and cosine of x [rad]: sr_sincos of sr_math.h (+, -, *, / and floor only: the same
- *  bits on every IEEE 754 platform), kept under this name for existing callers. Within 2 ulp
- *  of the true values for |x| < 1e5 (deterministic, less accurate beyond); NaN for
+ *  bits on every IEEE 754 platform), kept under this name for existing callers. Correctly
+ *  rounded for |x| < 1.6e6 (deterministic, less accurate beyond); NaN for
  *  non-finite x or |x| >= 1e15. s or c may be NULL. */
 SR_API void sr_portable_sincos(double x, double *s, double *c);
 

@@ -1,7 +1,8 @@
 /* Portable elementary functions (see sr_math.h): +, -, *, /, sqrt, floor, fmod and bit
  * manipulation only, so every IEEE 754 platform gives the same bits. Constants are hexadecimal
- * floating literals (exact). sr_ln and sr_sincos are the algorithms rng.c used for its normals
- * and the sensors' rotations (unchanged: the same bits as before). */
+ * floating literals (exact). sr_ln is the algorithm rng.c used for its normals (unchanged:
+ * the same bits as before); sr_sincos replaces rng.c's single-double Taylor sine and cosine
+ * (within 2 ulp) by a correctly rounded double-double one. */
 #include "sr_math.h"
 
 #include <math.h>

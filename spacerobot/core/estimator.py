@@ -89,8 +89,9 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     L.sr_estimator_estimates.restype = None
     L.sr_estimator_sd_without_lag.argtypes = [vp, vp, dp]
     L.sr_estimator_sd_without_lag.restype = None
-    L.sr_estimator_data_check.argtypes = [vp, vp, cp, sz]
-    L.sr_estimator_data_check.restype = ctypes.c_int
+    if hasattr(L, "sr_estimator_data_check"):    # (a library built before it: no check_state)
+        L.sr_estimator_data_check.argtypes = [vp, vp, cp, sz]
+        L.sr_estimator_data_check.restype = ctypes.c_int
     for name in ("sr_estimator_options_size", "sr_estimator_report_size",
                  "sr_estimator_data_head_size"):
         getattr(L, name).argtypes = []
