@@ -45,7 +45,6 @@ if str(ROOT) not in sys.path:
 from spacerobot import (ESTIMATE_NAMES, PAPER_PLANAR_MEDIUM, FMUInstance,  # noqa: E402
                         Identifier, Master, Plant, estimate_vector, identified_estimates,
                         relative_errors, run_ssp, scenario)
-from spacerobot.fmi.build import build_fmu  # noqa: E402
 from spacerobot.robots import PLANAR  # noqa: E402
 from spacerobot.system.instance import ArrayIO  # noqa: E402
 
@@ -636,9 +635,7 @@ def main(argv=None) -> int:
         est_names = [v.name for v in read_model_description(
             str(systems[r]["estimator"])).modelVariables if v.causality == "input"]
         reps = 1 if quick else 5
-        native = build_fmu("estimator", sc, build / r / "native", backend="native")
         est_cost[r] = {
-            "native_fmu": fmu_dostep_cost(native, outs[r], est_names, repeats=reps),
             "core_momentum": core_update_cost(outs[r], sc, "momentum", repeats=reps),
             "core_force": core_update_cost(outs[r], sc, "force", repeats=reps),
             "core_momentum_joint": core_update_cost(outs[r], sc, "momentum", "joint",
@@ -649,9 +646,7 @@ def main(argv=None) -> int:
     long_s = 65.0 if quick else 605.0
     long_outs = outs["spatial"] if quick else record_outputs(scenario("spatial"), long_s)
     batch = batch_cost(long_outs, scenario("spatial"), Ns)
-    print("estimator:", {r: round(v["core_momentum"], 1) for r, v in est_cost.items()},
-          "native doStep:", {r: round(v["native_fmu"]["doStep"], 1) for r, v in est_cost.items()},
-          flush=True)
+    print("estimator:", {r: round(v["core_momentum"], 1) for r, v in est_cost.items()}, flush=True)
     # release the recorded samples (~10^5 live Python objects) before the next speed rounds:
     # every cyclic-GC pass of the co-simulation would otherwise walk them, a cost of this
     # script's bookkeeping, not of the product
@@ -895,16 +890,6 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              "its cost). Targets of issue #6: core <= 50 us "
              "(spatial), FMU `doStep` <= 150 us, both exceeded since the standard deviations "
              "and the tracker run in the update.\n")
-    L.append("\n### The native estimator FMU (issue #26)\n")
-    L.append("The same measurement of the native estimator FMU (C core and FMI layer, "
-             "`spacerobot build --backend native`), in the same run on the same samples, default "
-             "parameters (paper solver, momentum). Target of issue #26: `doStep` <= 20 us (spatial).\n")
-    rows = [(r, fmt(v["native_fmu"]["setReal"]), fmt(v["native_fmu"]["doStep"]),
-             fmt(v["native_fmu"]["getReal"]), fmt(v["fmu"]["doStep"]),
-             fmt(v["fmu"]["doStep"] / v["native_fmu"]["doStep"], 0)) for r, v in est_cost.items()]
-    L.append(table(["robot", "native setReal [us]", "native doStep [us]",
-                    "native getReal estimates [us]", "Python FMU doStep [us]",
-                    "Python / native doStep"], rows))
     L.append("\n### One-step RLS against a batch re-solve\n")
     L.append("The batch alternative re-solves over all N samples at every new sample: stack the "
              "rows, `lstsq` for mu, then `lstsq` for theta with the right-hand side "

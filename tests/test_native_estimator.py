@@ -59,6 +59,7 @@ def lib(tmp_path_factory):
     from spacerobot.core.estimator import _bind
     try:
         L = _bind(load_library())                 # every function the binding declares
+        L.sr_estimator_data_check                 # (an older build lacks it: build anew)
     except (CoreUnavailable, AttributeError, OSError, RuntimeError):
         if os.environ.get("SPACEROBOT_CORE_LIB"):
             raise

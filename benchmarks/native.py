@@ -1,0 +1,167 @@
+"""The native estimator against the Python one, in one run (issue #26); writes benchmarks/NATIVE.md.
+
+Measured on the same recorded plant samples (the Python plant, 60 s at 0.1 s, default
+parameters: paper solver, momentum method), interleaved in ROUNDS rounds, each the best of
+REPEATS passes, CPU time per sample:
+
+* estimator FMU ``doStep`` through fmpy (after ``setReal`` of the inputs): the native FMU and the
+  pythonfmu-hosted one, and their ratio within each round;
+* the core's update alone: ``Identifier.update_flat`` (Python + Numba) and the C core through
+  ctypes (``spacerobot.core.estimator.NativeEstimator.update``), and their ratio;
+* instantiation + 60 s of estimation of the native FMU in a fresh process started from an empty
+  environment (wall time, fmpy's ``simulate_fmu``, which extracts the FMU first).
+
+Nothing here asserts a timing. Run: ``python benchmarks/native.py [--quick] [--out PATH]``.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from benchmarks.run import fmt, machine, record_outputs, started, table  # noqa: E402
+from spacerobot.core.estimator import NativeEstimator  # noqa: E402
+from spacerobot.estimator import Identifier  # noqa: E402
+from spacerobot.estimator.identifier import KEYS  # noqa: E402
+from spacerobot.fmi.build import build_fmu  # noqa: E402
+from spacerobot.robots import scenario  # noqa: E402
+
+ROUNDS, REPEATS = 5, 5
+
+
+def flat_samples(outs: list) -> list:
+    """The samples in the flat layout both cores take (``Identifier.update_flat``)."""
+    return [np.concatenate([np.ravel(o[k]) for k in KEYS]).astype(float) for o in outs]
+
+
+def input_rows(outs: list, names: list) -> list:
+    """The estimator FMU's input values (in ``names`` order) of each sample."""
+    keys = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "omega_B",
+            "base.a": "a_S", "base.alpha": "alpha_B", "arm.q": "q", "arm.qd": "qd",
+            "arm.qdd": "qdd", "thrust.F": "F", "thrust.M": "M", "thrust.J": "J", "thrust.H": "H"}
+
+    def value(o, name):
+        stem, idx = name.split("[")
+        idx = [int(i) - 1 for i in idx.rstrip("]").split(",")]
+        x = o[keys[stem]]
+        return float(x[idx[0], idx[1]] if len(idx) == 2 else x[idx[0]])
+    return [[value(o, n) for n in names] for o in outs]
+
+
+def dostep_cost(fmu: Path, rows: list, repeats: int) -> float:
+    """Best CPU time per ``doStep`` [us] over ``repeats`` passes over ``rows``."""
+    best = float("inf")
+    for _ in range(repeats):
+        est = started(fmu, "estimator")
+        vr = est.vrs(est.names("input"))
+        acc, t = 0.0, 0.0
+        for r in rows:
+            est.fmu.setReal(vr, r)
+            c = time.process_time()
+            est.fmu.doStep(t, 0.1)
+            acc += time.process_time() - c
+            t += 0.1
+        est.free()
+        best = min(best, acc / len(rows) * 1e6)
+    return best
+
+
+def core_cost(make, flats: list, repeats: int) -> float:
+    """Best CPU time per update [us] of ``make()``'s ``update_flat``/``update``."""
+    best = float("inf")
+    for _ in range(repeats):
+        core = make()
+        update = getattr(core, "update_flat", None) or core.update
+        c = time.process_time()
+        for k, x in enumerate(flats):
+            update(0.1 * k, x)
+        best = min(best, (time.process_time() - c) / len(flats) * 1e6)
+    return best
+
+
+def cold_run(fmu: Path, seconds: float) -> float:
+    """Wall time [s] of a fresh Python process, empty environment, that instantiates the FMU and
+    runs ``seconds`` of estimation with fmpy."""
+    code = ("import fmpy, sys; r = fmpy.simulate_fmu(sys.argv[1], stop_time=float(sys.argv[2]), "
+            "output_interval=0.1); assert len(r) > 1")
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", "import fmpy"], check=True,
+                   env={"PATH": "/usr/bin:/bin"})
+    t_import = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code, str(fmu), str(seconds)], check=True,
+                   env={"PATH": "/usr/bin:/bin"})
+    return time.perf_counter() - t0 - t_import
+
+
+def spread(xs) -> str:
+    return f"{fmt(float(np.median(xs)))} ({fmt(min(xs))}-{fmt(max(xs))})"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="short runs (smoke test)")
+    ap.add_argument("--out", default=str(HERE / "NATIVE.md"))
+    a = ap.parse_args(argv)
+    rounds, repeats, seconds = (2, 1, 10.0) if a.quick else (ROUNDS, REPEATS, 60.0)
+    info = machine()
+    rows_out, cold = [], {}
+    with tempfile.TemporaryDirectory(prefix="srnative_") as tmp:
+        res = {}
+        for robot in ("planar", "spatial"):
+            sc = scenario(robot)
+            native = build_fmu("estimator", sc, Path(tmp) / robot / "native", backend="native")
+            python = build_fmu("estimator", sc, Path(tmp) / robot / "py", backend="pythonfmu")
+            outs = record_outputs(sc, seconds)
+            names = started(native, "names").names("input")
+            rows, flats = input_rows(outs, names), flat_samples(outs)
+            r = res[robot] = {k: [] for k in ("fmu_n", "fmu_p", "core_n", "core_p")}
+            for _ in range(rounds):          # interleaved: the host's speed drifts
+                r["fmu_n"].append(dostep_cost(native, rows, repeats))
+                r["fmu_p"].append(dostep_cost(python, rows, repeats))
+                r["core_n"].append(core_cost(lambda: NativeEstimator(sc.robot, {"guess": sc.guess}),
+                                             flats, repeats))
+                r["core_p"].append(core_cost(lambda: Identifier(sc.robot, sc.guess), flats,
+                                             repeats))
+            cold[robot] = [cold_run(native, 60.0) for _ in range(3)]
+            print(robot, {k: round(float(np.median(v)), 1) for k, v in r.items()}, flush=True)
+            fr = [p / n for p, n in zip(r["fmu_p"], r["fmu_n"])]
+            cr = [p / n for p, n in zip(r["core_p"], r["core_n"])]
+            rows_out.append((robot, spread(r["fmu_n"]), spread(r["fmu_p"]), spread(fr),
+                             spread(r["core_n"]), spread(r["core_p"]), spread(cr),
+                             spread([c * 1e3 for c in cold[robot]])))
+    text = ["# The native estimator against the Python one\n",
+            f"Generated by `python benchmarks/native.py{' --quick' if a.quick else ''}` on "
+            f"{info['cpu']} ({info['cores']} cores, load "
+            f"{' '.join(f'{x:.1f}' for x in info['load'])}), "
+            f"{time.strftime('%Y-%m-%d')}. Median of {rounds} interleaved rounds, each the best of "
+            f"{repeats} passes over {seconds:g} s of recorded plant samples (0.1 s), CPU time per "
+            "sample; the range over the rounds in brackets. Default parameters (paper solver, "
+            "momentum method). Cold run: a fresh Python process from an empty environment "
+            "(`env -i PATH=/usr/bin:/bin`) that extracts, instantiates and runs the native FMU for "
+            "60 s with fmpy's `simulate_fmu`, minus the process's `import fmpy`; wall time, "
+            "3 runs.\n",
+            table(["robot", "native FMU doStep [us]", "pythonfmu FMU doStep [us]",
+                   "ratio (per round)", "C core update [us]", "Python core update [us]",
+                   "ratio (per round)", "cold: instantiate + 60 s [ms]"], rows_out),
+            "\nThe FMU `doStep` includes fmpy's ctypes call; the C core update includes the "
+            "ctypes call of `NativeEstimator.update`. Target of issue #26: native `doStep` "
+            "<= 20 us (spatial), cold run under 1 s.\n"]
+    Path(a.out).write_text("\n".join(text))
+    print(f"wrote {a.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
