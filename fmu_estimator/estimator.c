@@ -171,7 +171,8 @@ static const struct { const char *key, *name; } PYTHON_ONLY[] = {
     {"window.force", "ident.force_window"}, {"accel_bias", "ident.accel_bias"},
     {"sd_thrust.scale", "ident.sd_thrust.scale"}, {"sd_thrust.misalign", "ident.sd_thrust.misalign"}};
 
-#define PYTHON_ROUTE " (the Python-hosted estimator has it: spacerobot build --backend pythonfmu)"
+#define PYTHON_ROUTE " (the Python-hosted estimator has it: spacerobot run --backend pythonfmu, " \
+                     "or spacerobot build --backend pythonfmu)"
 
 /* build a core for the current parameters; 0 ok (err untouched), else err says why */
 static int build_core(sr_instance *inst, estimator_glue *g, sr_estimator_model **core, void **data,
