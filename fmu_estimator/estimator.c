@@ -133,7 +133,7 @@ static int int_of(sr_instance *inst, const char *key) {
     return vr < 0 ? -1 : sr_integers(inst)[vr];
 }
 
-/* options from the parameter values; 0 ok, else err says which parameter is unknown to the core */
+/* options from the parameter values (the core checks them: sr_estimator_model_new) */
 static void options_of(sr_instance *inst, sr_estimator_options *o) {
     static const char *const SIGNAL_SD[6] = {"signal_sd.a_S", "signal_sd.alpha_B", "signal_sd.qdd",
                                              "signal_sd.v_S", "signal_sd.omega_B", "signal_sd.qd"};
@@ -211,6 +211,7 @@ static void write_outputs(sr_instance *inst, const estimator_glue *g, const sr_e
     sr_estimator_report r;
     double *x = sr_reals(inst);
     int *z = sr_integers(inst);
+    if (!core || !data) return;              /* no core: the report would stay unset */
     sr_estimator_report_get(core, data, &r);
     for (int b = 0; b < 2; ++b) {
         for (int i = 0; i < 10; ++i) {

@@ -111,6 +111,16 @@ def native_build():
     return sys.modules[name]
 
 
+def build_core(tmp_dir: Path, sources: Sequence[str]):
+    """The core library under test as a ``ctypes.CDLL``: ``$SPACEROBOT_CORE_LIB``, else the
+    modules ``sources`` (names in ``native/src``) built by native/build.py, warnings errors."""
+    import ctypes
+    env = os.environ.get("SPACEROBOT_CORE_LIB")
+    if env:
+        return ctypes.CDLL(env)
+    return ctypes.CDLL(str(native_build().build_library(tmp_dir, sources, strict=True)))
+
+
 #: built binaries are kept here between sessions, by a digest of everything that makes them
 BUILD_CACHE = Path(tempfile.gettempdir()) / "spacerobot-native-hosts"
 

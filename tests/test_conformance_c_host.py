@@ -189,8 +189,9 @@ int main(int argc, char **argv) {
 """
     src.write_text(code)
     exe = tmp_path / "four"
+    # src lives in tmp_path: -I finds the header the host includes (tests/c_host/fmi2_host.h)
     r = subprocess.run([c_compiler(), "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-O1",
-                        f"-I{fmi_headers()}", "-o", str(exe), str(src), "-ldl"],
+                        f"-I{fmi_headers()}", f"-I{SOURCE.parent}", "-o", str(exe), str(src), "-ldl"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     both = run_host(exe, [*wired_args(*pairs["planar"]), "--", *wired_args(*pairs["spatial"])])

@@ -376,13 +376,10 @@ def test_momentum_conserved_and_balanced_along_rk4(cases, name):
     assert Perr <= 1e-11 and Lerr <= 1e-11
 
 
-# -- agreement with the compiled Numba dynamics (rigid_body.py) -------------------------------
-
-@pytest.mark.parametrize("name", NAMES)
-def test_agrees_with_compiled_rigid_body(cases, name):
-    rb = pytest.importorskip("spacerobot.plant.rigid_body")
-    dyn, model = cases[name]
-    planar, R, p, I6, mc = rb.chain_arrays(model)
+def _worst_vs_numba(rb, dyn, model, name, arrays) -> float:
+    """The largest relative difference of the C ABA and terms from those of the compiled
+    rigid-body kernels ``rb`` on ``arrays`` (rb.chain_arrays) over 10 random states of ``model``."""
+    planar, R, p, I6, mc = arrays
     ws = rb.Workspace(R.shape[0] - 1).arrays()
     rng = _rng(name + "numba")
     worst = 0.0
@@ -395,6 +392,17 @@ def test_agrees_with_compiled_rigid_body(cases, name):
         Mc, nlec, hgc, comc = dyn.terms(q, v)
         worst = max(worst, _rel(dyn.aba(q, v, tau), ddq), _rel(Mc, M), _rel(nlec, nle),
                     _rel(hgc, hg), _rel(comc, com))
+    return worst
+
+
+# -- agreement with the compiled Numba dynamics (rigid_body.py) -------------------------------
+
+@pytest.mark.parametrize("name", NAMES)
+def test_agrees_with_compiled_rigid_body(cases, name):
+    rb = pytest.importorskip("spacerobot.plant.rigid_body")
+    dyn, model = cases[name]
+    planar, R, p, I6, mc = rb.chain_arrays(model)
+    worst = _worst_vs_numba(rb, dyn, model, name, (planar, R, p, I6, mc))
     print(name, f"C vs Numba: {worst:.1e}")
     # the models differ by the rounding of their construction (1e-16), amplified by M's
     # conditioning (up to 1e5 here) in the accelerations
@@ -427,18 +435,7 @@ def test_same_model_arrays_give_numbas_numbers(lib, cases, name):
     dyn = Dyn(lib, r, t)
     planar, R, p, I6, mc = rb.chain_arrays(model)
     _model_arrays(lib, dyn, R, p, I6)
-    ws = rb.Workspace(R.shape[0] - 1).arrays()
-    rng = _rng(name + "numba")
-    worst = 0.0
-    for _ in range(10):
-        q, v, tau = TCD._random_state(model, rng)
-        ddq = np.empty(model.nv)
-        assert rb.aba(planar, R, p, I6, q, v, tau, ddq, *ws) == 0
-        M, nle, hg = np.empty((model.nv, model.nv)), np.empty(model.nv), np.empty(6)
-        com = np.array(rb.terms(planar, R, p, I6, mc, q, v, M, nle, hg, *ws))
-        Mc, nlec, hgc, comc = dyn.terms(q, v)
-        worst = max(worst, _rel(dyn.aba(q, v, tau), ddq), _rel(Mc, M), _rel(nlec, nle),
-                    _rel(hgc, hg), _rel(comc, com))
+    worst = _worst_vs_numba(rb, dyn, model, name, (planar, R, p, I6, mc))
     print(name, f"C vs Numba, same model arrays: {worst:.1e}")
     assert worst <= 1e-15
 

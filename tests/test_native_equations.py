@@ -10,12 +10,11 @@ import ctypes
 import numpy as np
 import pytest
 
-from oracles import regressors as rg
-from oracles.kinematics import ArmKinematics
 from spacerobot.core import robot_record as rr
 from spacerobot.estimator import kernels
 from spacerobot.estimator.identifier import INPUT_LIMIT, KEYS, ROTATION_TOL
 from spacerobot.kinematics import ArmGeometry
+from test_estimator_kernels import reference_equations
 from test_robot_record import ROBOTS, core_library, robot_of
 
 _DP = ctypes.POINTER(ctypes.c_double)
@@ -61,21 +60,7 @@ def flat(s):
 def oracle_equations(robot, s, force):
     """(A, b, phi, y, psi) of one sample from the NumPy oracles (the construction of
     tests/test_estimator_kernels.py)."""
-    kin = ArmKinematics(robot)
-    links, ee = kin.compute(s["r_S"], s["A"], s["v_S"], s["omega_B"], s["a_S"], s["alpha_B"],
-                            s["q"], s["qd"], s["qdd"])
-    A, w, beta = s["A"], s["A"] @ s["omega_B"], s["A"] @ s["alpha_B"]
-    if not force:
-        B1, D1, Psi1 = rg.momentum_terms(s["r_S"], A, s["v_S"], w)
-        Bn, Dn, Psin = rg.momentum_terms(ee.r, ee.A, ee.v, ee.w)
-        P_arm, L_arm = kin.momentum(links)
-        return (np.hstack([B1, Bn]), s["J"] - P_arm, np.hstack([D1, Dn]), s["H"] - L_arm,
-                -np.hstack([Psi1, Psin]))
-    G1, Q1, S1 = rg.force_terms(np.zeros(3), A, s["a_S"], w, beta)
-    Gn, Qn, Sn = rg.force_terms(ee.r - s["r_S"], ee.A, ee.a, ee.w, ee.beta)
-    F_arm, M_arm = kin.rate_of_momentum(links, s["r_S"])
-    return (np.hstack([G1, Gn]), s["F"] - F_arm, np.hstack([Q1, Qn]), s["M"] - M_arm,
-            -np.hstack([S1, Sn]))
+    return reference_equations(robot, s, "force" if force else "momentum")
 
 
 def split(E):

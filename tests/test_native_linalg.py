@@ -12,32 +12,22 @@ matrices to 1e-12 relative.
 from __future__ import annotations
 
 import ctypes
-import importlib.util
-import os
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from numpy.ctypeslib import ndpointer
 
+import native_hosts
 from oracles import report as orc
 from spacerobot.estimator import report_kernels as rk
 
-ROOT = Path(__file__).resolve().parents[1]
 SOURCES = ["linalg.c", "physical.c", "differencing.c", "sr_math.c"]
 
 
 def build_core(tmp_dir: Path) -> ctypes.CDLL:
     """``$SPACEROBOT_CORE_LIB``, else the modules of SOURCES built by native/build.py."""
-    env = os.environ.get("SPACEROBOT_CORE_LIB")
-    if env:
-        return ctypes.CDLL(env)
-    spec = importlib.util.spec_from_file_location("sr_native_build", ROOT / "native" / "build.py")
-    build = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = build                       # its dataclasses need the module
-    spec.loader.exec_module(build)
-    return ctypes.CDLL(str(build.build_library(tmp_dir, SOURCES, strict=True)))
+    return native_hosts.build_core(tmp_dir, SOURCES)
 
 
 D = ndpointer(np.float64, flags="C_CONTIGUOUS")

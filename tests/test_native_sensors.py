@@ -27,18 +27,17 @@ this file needs (native/build.py, warnings as errors).
 from __future__ import annotations
 
 import ctypes
-import importlib.util
 import math
 import os
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from numpy.ctypeslib import ndpointer
 
+import native_hosts
 from spacerobot.interface import NOISE_PARAMETERS
 from spacerobot.sensors import SIGNALS, SensorSuite, default_parameters
 
@@ -52,14 +51,7 @@ M64 = (1 << 64) - 1
 
 def build_core(tmp_dir: Path) -> ctypes.CDLL:
     """``$SPACEROBOT_CORE_LIB``, else the modules of SOURCES built by native/build.py."""
-    env = os.environ.get("SPACEROBOT_CORE_LIB")
-    if env:
-        return ctypes.CDLL(env)
-    spec = importlib.util.spec_from_file_location("sr_native_build", ROOT / "native" / "build.py")
-    build = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = build                       # its dataclasses need the module
-    spec.loader.exec_module(build)
-    return ctypes.CDLL(str(build.build_library(tmp_dir, SOURCES, strict=True)))
+    return native_hosts.build_core(tmp_dir, SOURCES)
 
 
 class Rng(ctypes.Structure):

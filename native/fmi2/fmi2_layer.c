@@ -9,6 +9,7 @@
  * A refused call returns fmi2Error (fmi2Discard for a step that cannot be taken) with a logged
  * reason and leaves the instance as it was; nothing here aborts or exits.
  */
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -227,7 +228,8 @@ static int load_variables(sr_instance *inst, const char *resources, const char *
             v->type = (sr_type)t;
             v->causality = (sr_causality)c;
             v->variability = (sr_variability)va;
-            if (parse_hex_double(f[4], &v->start) || !isfinite(v->start)) {
+            if (parse_hex_double(f[4], &v->start) || !isfinite(v->start) ||
+                (v->type == SR_INTEGER && !(v->start >= INT_MIN && v->start <= INT_MAX))) {
                 sr_log(inst, SR_LOG_ERROR, "%s line %d: malformed start value", path, lineno);
                 ok = 0;
                 break;
@@ -754,6 +756,10 @@ static const char *state_mismatch(sr_instance *inst, const saved_state *s, size_
     if (s->h.nvars != (uint64_t)inst->nvars) return "a state of an FMU with other variables";
     if (s->h.phase < PHASE_INSTANTIATED || s->h.phase > PHASE_TERMINATED) return "a damaged state";
     if (s->h.has_model > 1 || s->h.model_size > (1u << 30) || (!s->h.has_model && s->h.model_size))
+        return "a damaged state";
+    /* save_into stores the model exactly in the phases that have one (has_core): a state that
+       says otherwise would leave a stepping instance without its core */
+    if (s->h.has_model != (uint64_t)(s->h.phase == PHASE_STEP || s->h.phase == PHASE_TERMINATED))
         return "a damaged state";
     if (size && size != stored_size(inst, s)) return "a state of the wrong size";
     return NULL;

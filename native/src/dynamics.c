@@ -36,6 +36,7 @@
 #include <string.h>
 
 #include "sr_math.h"
+#include "vec3.h"
 
 /* -- small helpers ------------------------------------------------------------------------ */
 
@@ -787,27 +788,6 @@ static void dcm_of_q(const sr_dyn_model *md, const double *q, double *A, double 
     }
 }
 
-static void matvec(const double *A, const double *x, double *o)
-{
-    int i;
-    for (i = 0; i < 3; i++)
-        o[i] = A[3 * i] * x[0] + A[3 * i + 1] * x[1] + A[3 * i + 2] * x[2];
-}
-
-static void matTvec(const double *A, const double *x, double *o)
-{
-    int i;
-    for (i = 0; i < 3; i++)
-        o[i] = A[i] * x[0] + A[3 + i] * x[1] + A[6 + i] * x[2];
-}
-
-static void cross3(const double *a, const double *b, double *o)
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 SR_API int sr_dyn_aba(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
                       const double *v, const double *tau, double *ddq)
 {
@@ -845,8 +825,8 @@ SR_API int sr_dyn_terms(const sr_dyn_model *model, sr_dyn_data *data, const doub
         nn[0] = hm[3] - (c[1] * l[2] - c[2] * l[1]);
         nn[1] = hm[4] - (c[2] * l[0] - c[0] * l[2]);
         nn[2] = hm[5] - (c[0] * l[1] - c[1] * l[0]);
-        matvec(A, l, hg);
-        matvec(A, nn, hg + 3);
+        mat3_vec(A, l, hg);
+        mat3_vec(A, nn, hg + 3);
     }
     if (com != NULL) {
         int i;
@@ -877,13 +857,13 @@ static void base_velocity(const sr_dyn_model *md, const double *A, const double 
     if (md->planar) {
         double cs, sn;
         planar_dcm(A, Ae, &cs, &sn);
-        matTvec(Ae, v_S, vl);
+        mat3t_vec(Ae, v_S, vl);
         vb[0] = vl[0];
         vb[1] = vl[1];
         vb[2] = omega_B[2];
     } else {
         memcpy(Ae, A, 9 * sizeof(double));
-        matTvec(A, v_S, vl);
+        mat3t_vec(A, v_S, vl);
         vb[0] = vl[0]; vb[1] = vl[1]; vb[2] = vl[2];
         vb[3] = omega_B[0]; vb[4] = omega_B[1]; vb[5] = omega_B[2];
     }
@@ -894,14 +874,14 @@ static void base_force(const sr_dyn_model *md, const double *Ae, const double *F
                        const double *M_S, double *fb)
 {
     double t[3];
-    matTvec(Ae, F, t);
+    mat3t_vec(Ae, F, t);
     fb[0] = t[0];
     fb[1] = t[1];
     if (md->planar) {
         fb[2] = M_S[2];
     } else {
         fb[2] = t[2];
-        matTvec(Ae, M_S, fb + 3);
+        mat3t_vec(Ae, M_S, fb + 3);
     }
 }
 
@@ -1017,11 +997,11 @@ SR_API int sr_dyn_forward(const sr_dyn_model *model, sr_dyn_data *data, const do
         al[0] = ab[0]; al[1] = ab[1]; al[2] = ab[2];
         alpha_B[0] = ab[3]; alpha_B[1] = ab[4]; alpha_B[2] = ab[5];
     }
-    cross3(w, vl, t);
+    vec3_cross(w, vl, t);
     t[0] += al[0];
     t[1] += al[1];
     t[2] += al[2];
-    matvec(Ae, t, a_S);
+    mat3_vec(Ae, t, a_S);
     return SR_DYN_OK;
 }
 
@@ -1050,9 +1030,9 @@ SR_API int sr_dyn_momentum(const sr_dyn_model *model, sr_dyn_data *data, const d
     base_velocity(model, A, v_S, omega_B, vb, Ae);
     terms_core(model, data, q_arm, qd, vb, NULL, NULL, hm, gm);
     /* P = A h_l;  L about the origin = A h_n (about S) + r_S x P */
-    matvec(Ae, hm, P);
-    matvec(Ae, hm + 3, L);
-    cross3(r_S, P, t);
+    mat3_vec(Ae, hm, P);
+    mat3_vec(Ae, hm + 3, L);
+    vec3_cross(r_S, P, t);
     L[0] += t[0];
     L[1] += t[1];
     L[2] += t[2];
@@ -1061,7 +1041,7 @@ SR_API int sr_dyn_momentum(const sr_dyn_model *model, sr_dyn_data *data, const d
         c[0] = gm[1] / gm[0];
         c[1] = gm[2] / gm[0];
         c[2] = gm[3] / gm[0];
-        matvec(Ae, c, t);
+        mat3_vec(Ae, c, t);
         com[0] = r_S[0] + t[0];
         com[1] = r_S[1] + t[1];
         com[2] = r_S[2] + t[2];

@@ -12,29 +12,7 @@
 #include <string.h>
 
 #include "sr_math.h"
-
-static void cross(const double *a, const double *b, double *out)
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* out = A x (A 3 x 3 row-major) */
-static void matvec(const double *A, const double *x, double *out)
-{
-    int i;
-    for (i = 0; i < 3; i++)
-        out[i] = A[3 * i] * x[0] + A[3 * i + 1] * x[1] + A[3 * i + 2] * x[2];
-}
-
-/* out = A^T x */
-static void matTvec(const double *A, const double *x, double *out)
-{
-    int i;
-    for (i = 0; i < 3; i++)
-        out[i] = A[i] * x[0] + A[3 + i] * x[1] + A[6 + i] * x[2];
-}
+#include "vec3.h"
 
 /* out = A B (3 x 3 each) */
 static void matmul3(const double *A, const double *B, double *out)
@@ -50,10 +28,10 @@ static void inertia_times(const double *A, const double *I, const double *w, dou
 {
     double tmp[3], s[3];
     int i;
-    matTvec(A, w, tmp);
+    mat3t_vec(A, w, tmp);
     for (i = 0; i < 3; i++)
         s[i] = I[3 * i] * tmp[0] + I[3 * i + 1] * tmp[1] + I[3 * i + 2] * tmp[2];
-    matvec(A, s, out);
+    mat3_vec(A, s, out);
 }
 
 /* E[:, col:col+6] += sign * A [#u] (6 columns of a 3 x ncols array); eq. 20: I v = [#v] I# */
@@ -106,7 +84,7 @@ static void body_rows(int force, int k, const double *r_O, const double *A, cons
     const double *lever = force ? rho : r_O;
     double u[3], t1[3], t2[3], col[3];
     int i, j, c;
-    cross(lever, lvec, t1);
+    vec3_cross(lever, lvec, t1);
     for (i = 0; i < 3; i++) {
         E[SR_N_COLS * i + cA] = lvec[i];                 /* eq. 11 / 29: v_O or a_O */
         E[SR_N_COLS * i + cS] = -t1[i];                  /* -(r_O x v_O) or -(rho x a_O) */
@@ -115,15 +93,15 @@ static void body_rows(int force, int k, const double *r_O, const double *A, cons
         col[0] = A[j];
         col[1] = A[3 + j];
         col[2] = A[6 + j];
-        cross(w, col, t1);                               /* [w]x A_j */
+        vec3_cross(w, col, t1);                               /* [w]x A_j */
         if (force) {
-            cross(w, t1, t2);                            /* w x (w x A_j) */
-            cross(beta, col, t1);                        /* beta x A_j */
+            vec3_cross(w, t1, t2);                            /* w x (w x A_j) */
+            vec3_cross(beta, col, t1);                        /* beta x A_j */
             for (i = 0; i < 3; i++)
                 t1[i] += t2[i];                          /* K A_j */
         }
-        cross(lever, t1, t2);                            /* r x X A_j */
-        cross(lvec, col, u);                             /* l x A_j */
+        vec3_cross(lever, t1, t2);                            /* r x X A_j */
+        vec3_cross(lvec, col, u);                             /* l x A_j */
         for (i = 0; i < 3; i++) {
             E[SR_N_COLS * i + cA + 1 + j] = t1[i];
             E[SR_N_COLS * i + cS + 1 + j] = -(t2[i] - u[i]);
@@ -132,18 +110,18 @@ static void body_rows(int force, int k, const double *r_O, const double *A, cons
     for (i = 0; i < 3; i++)
         for (c = 0; c < 6; c++)
             E[SR_N_COLS * i + cP + c] = 0.0;
-    matTvec(A, force ? beta : w, u);
+    mat3t_vec(A, force ? beta : w, u);
     a_sharp(A, u, E, SR_N_COLS, cP, 1.0);               /* A [#(A^T w)] or A [#(A^T beta)] */
     if (force) {                                         /* + [w]x A [#(A^T w)] (eq. 31) */
         double tmpE[18];
         memset(tmpE, 0, sizeof tmpE);
-        matTvec(A, w, u);
+        mat3t_vec(A, w, u);
         a_sharp(A, u, tmpE, 6, 0, 1.0);
         for (c = 0; c < 6; c++) {
             col[0] = tmpE[c];
             col[1] = tmpE[6 + c];
             col[2] = tmpE[12 + c];
-            cross(w, col, t1);
+            vec3_cross(w, col, t1);
             for (i = 0; i < 3; i++)
                 E[SR_N_COLS * i + cP + c] += t1[i];
         }
@@ -179,8 +157,8 @@ SR_API int sr_equations(const sr_robot *robot, int force, const double *x, doubl
     Mm = x + o + 3;
     Jm = x + o + 6;
     Hm = x + o + 9;
-    matvec(A0, x + SR_X_OMEGA_B, w0);                    /* w = A omega_B */
-    matvec(A0, x + SR_X_ALPHA_B, b0);                    /* d/dt(A w_B) = A dw_B/dt */
+    mat3_vec(A0, x + SR_X_OMEGA_B, w0);                    /* w = A omega_B */
+    mat3_vec(A0, x + SR_X_ALPHA_B, b0);                    /* d/dt(A w_B) = A dw_B/dt */
     /* parent frame state (starts at the base, origin S) */
     memcpy(Ap, A0, sizeof Ap);
     memcpy(rp, r_S, sizeof rp);
@@ -193,7 +171,7 @@ SR_API int sr_equations(const sr_robot *robot, int force, const double *x, doubl
     for (i = 0; i < n; i++) {
         const double *k = robot->axis[i];
         double cq, sq, vq, m;
-        matvec(Ap, robot->xyz[i], d);
+        mat3_vec(Ap, robot->xyz[i], d);
         /* Rot(axis, q) = cos q 1 + sin q [k]x + (1 - cos q) k k^T */
         sr_sincos(q[i], &sq, &cq);                       /* portable: the same bits everywhere */
         vq = 1.0 - cq;
@@ -208,27 +186,27 @@ SR_API int sr_equations(const sr_robot *robot, int force, const double *x, doubl
         Rq[8] = cq + vq * k[2] * k[2];
         matmul3(Ap, robot->R[i], T);
         matmul3(T, Rq, Ai);                              /* A_i = A_p R_i Rot(axis_i, q_i) */
-        matvec(Ai, k, z);
+        mat3_vec(Ai, k, z);
         /* origin of frame i: r, v (a) from the parent */
-        cross(wp, d, t1);
+        vec3_cross(wp, d, t1);
         for (j = 0; j < 3; j++) {
             rp[j] += d[j];
             vp[j] += t1[j];
         }
         if (force) {
-            cross(bp, d, t2);
-            cross(wp, t1, t3);
+            vec3_cross(bp, d, t2);
+            vec3_cross(wp, t1, t3);
             for (j = 0; j < 3; j++)
                 ap[j] += t2[j] + t3[j];
-            cross(wp, z, t2);                            /* b_i = b_p + z qdd + w_p x z qd */
+            vec3_cross(wp, z, t2);                            /* b_i = b_p + z qdd + w_p x z qd */
             for (j = 0; j < 3; j++)
                 bp[j] += z[j] * qdd[i] + t2[j] * qd[i];
         }
         for (j = 0; j < 3; j++)
             wp[j] += z[j] * qd[i];
         /* the link's centre of mass */
-        matvec(Ai, robot->link[i].com, c);
-        cross(wp, c, t1);
+        mat3_vec(Ai, robot->link[i].com, c);
+        vec3_cross(wp, c, t1);
         for (j = 0; j < 3; j++) {
             rc[j] = rp[j] + c[j];
             vc[j] = vp[j] + t1[j];
@@ -237,7 +215,7 @@ SR_API int sr_equations(const sr_robot *robot, int force, const double *x, doubl
         inertia_times(Ai, robot->link[i].I, wp, Iw);
         if (!force) {
             /* P = sum m v_c ;  L = sum A I A^T w + m r_c x v_c  (the arm's part of eqs. 11, 16) */
-            cross(rc, vc, t2);
+            vec3_cross(rc, vc, t2);
             for (j = 0; j < 3; j++) {
                 lin[j] += m * vc[j];
                 ang[j] += Iw[j] + m * t2[j];
@@ -245,15 +223,15 @@ SR_API int sr_equations(const sr_robot *robot, int force, const double *x, doubl
         } else {
             /* F = sum m a_c ;  M_S = sum A I A^T beta + w x A I A^T w + m (r_c - r_S) x a_c
                (eqs. 26-27) */
-            cross(bp, c, t2);
-            cross(wp, t1, t3);
+            vec3_cross(bp, c, t2);
+            vec3_cross(wp, t1, t3);
             for (j = 0; j < 3; j++)
                 ac[j] = ap[j] + t2[j] + t3[j];
             inertia_times(Ai, robot->link[i].I, bp, Ib);
-            cross(wp, Iw, t1);
+            vec3_cross(wp, Iw, t1);
             for (j = 0; j < 3; j++)
                 t3[j] = rc[j] - r_S[j];
-            cross(t3, ac, t2);
+            vec3_cross(t3, ac, t2);
             for (j = 0; j < 3; j++) {
                 lin[j] += m * ac[j];
                 ang[j] += Ib[j] + t1[j] + m * t2[j];
@@ -262,16 +240,16 @@ SR_API int sr_equations(const sr_robot *robot, int force, const double *x, doubl
         memcpy(Ap, Ai, sizeof Ap);
     }
     /* end-effector frame E (the target's frame) */
-    matvec(Ap, robot->ee_xyz, d);
+    mat3_vec(Ap, robot->ee_xyz, d);
     matmul3(Ap, robot->ee_R, AE);
-    cross(wp, d, t1);
+    vec3_cross(wp, d, t1);
     for (j = 0; j < 3; j++) {
         rE[j] = rp[j] + d[j];
         vE[j] = vp[j] + t1[j];
     }
     if (force) {
-        cross(bp, d, t2);
-        cross(wp, t1, t3);
+        vec3_cross(bp, d, t2);
+        vec3_cross(wp, t1, t3);
         for (j = 0; j < 3; j++)
             aE[j] = ap[j] + t2[j] + t3[j];
         for (j = 0; j < 3; j++)

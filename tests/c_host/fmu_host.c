@@ -63,29 +63,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* ---- the FMI 2.0 types the host uses (FMI 2.0.4, sections 2.1.2-2.1.9) ------------------- */
-typedef void *fmi2Component;
-typedef void *fmi2ComponentEnvironment;
-typedef void *fmi2FMUstate;
-typedef unsigned int fmi2ValueReference;
-typedef double fmi2Real;
-typedef int fmi2Integer;
-typedef int fmi2Boolean;
-typedef const char *fmi2String;
-typedef char fmi2Byte;
-#define fmi2True 1
-#define fmi2False 0
-typedef enum { fmi2OK, fmi2Warning, fmi2Discard, fmi2Error, fmi2Fatal, fmi2Pending } fmi2Status;
-typedef enum { fmi2ModelExchange, fmi2CoSimulation } fmi2Type;
-typedef void (*fmi2CallbackLogger)(fmi2ComponentEnvironment, fmi2String, fmi2Status, fmi2String,
-                                   fmi2String, ...);
-typedef struct {
-    fmi2CallbackLogger logger;
-    void *(*allocateMemory)(size_t, size_t);
-    void (*freeMemory)(void *);
-    void (*stepFinished)(fmi2ComponentEnvironment, fmi2Status);
-    fmi2ComponentEnvironment componentEnvironment;
-} fmi2CallbackFunctions;
+#include "fmi2_host.h"   /* the FMI 2.0 types (FMI 2.0.4, sections 2.1.2-2.1.9) */
 
 /* the fmi2 functions called, as pointer types */
 typedef const char *(*GetVersion_t)(void);
