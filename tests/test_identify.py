@@ -23,13 +23,21 @@ def planar_systems(tmp_path_factory, planar_fmus):
             "sensors": ssd.build_system("planar", root / "sens", fmus=planar_fmus, sensors=True)}
 
 
-def _assert_replay_equals_live(live, replay, rtol=1e-12, sd_rtol=1e-12):
+#: round-off in the standard deviations of noise-free runs, relative to the estimate's scale: the
+#: drift tracker amplifies a 1-ulp difference (e.g. of a sine) to up to 1.1e-5 of the error scale
+#: (measured, tests/test_native_estimator.py PORTABLE_TRIG)
+SD_ROUNDOFF = 5e-5
+
+
+def _assert_replay_equals_live(live, replay, rtol=1e-9, sd_rtol=1e-9):
     """Live row k+1 (the FMU's outputs after consuming the sample of row k) = replay row k.
 
     The live estimator is the native FMU, the replay the library's Python core: two
-    implementations of one algorithm, equal to the last bit where they add in the same order.
+    implementations of one algorithm (on this machine kind they agree to 1.3e-12 of the error
+    scale; another C library may round a sine differently), compared within tolerances.
     ``sd_rtol``: standard deviations of estimates the data have observed (an sd above 1e6 times
-    the estimate is the unobserved floor, which bounds nothing and follows round-off)."""
+    the estimate is the unobserved floor, which bounds nothing and follows round-off), plus
+    :data:`SD_ROUNDOFF` of the estimate's scale."""
     outs = [c[len("estimator."):] for c in live if c.startswith("estimator.")
             and c[len("estimator."):] in replay]
     assert set(ESTIMATE_NAMES) <= set(outs) and "sd.target.m" in outs and "diag.samples" in outs
@@ -38,7 +46,8 @@ def _assert_replay_equals_live(live, replay, rtol=1e-12, sd_rtol=1e-12):
         if n.startswith("sd."):
             est = np.maximum(1.0, np.abs(live["estimator." + n[3:]][1:]))
             seen = np.abs(a) <= 1e6 * est
-            assert np.all(np.abs(a - b)[seen] <= sd_rtol * np.abs(a)[seen]), n
+            tol = sd_rtol * np.abs(a) + SD_ROUNDOFF * est
+            assert np.all(np.abs(a - b)[seen] <= tol[seen]), n
         else:
             assert np.all(np.abs(a - b) <= rtol * np.maximum(1.0, np.abs(a))), n
 
@@ -74,7 +83,7 @@ def test_recorded_run_replayed_gives_the_live_estimates(planar_systems, tmp_path
     printed = capsys.readouterr().out
     assert "target.m" in printed and "CSV: " in printed
     live, replay = read_csv(csv), read_csv(out)
-    _assert_replay_equals_live(live, replay, *(NOISE_MODEL_TOL if model else (1e-12, 1e-12)))
+    _assert_replay_equals_live(live, replay, *(NOISE_MODEL_TOL if model else ()))
     lag = 2 * model.get("ident.diff_half_window", 1)     # reference / differencing window
     assert replay["diag.samples"][-1] >= len(replay["time"]) - lag    # every sample used
     # the truth columns of the recorded run make the table's truth

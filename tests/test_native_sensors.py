@@ -38,6 +38,7 @@ import pytest
 from numpy.ctypeslib import ndpointer
 
 import native_hosts
+from test_sensors import true_sample, zero_except  # the same samples and parameters
 from spacerobot.interface import NOISE_PARAMETERS
 from spacerobot.sensors import SIGNALS, SensorSuite, default_parameters
 
@@ -321,27 +322,6 @@ class CSuite:
             out[g] = Y[:, j:j + m].reshape(n, 3, 3) if g == "A" else Y[:, j:j + m]
             j += m
         return out
-
-
-def _rotation(rng) -> np.ndarray:
-    q, r = np.linalg.qr(rng.standard_normal((3, 3)))
-    q = q * np.sign(np.diag(r))
-    return q if np.linalg.det(q) > 0 else -q
-
-
-def true_sample(rng) -> dict:
-    """A random true sample (values of every size and sign, exact zeros and -0.0 included)."""
-    x = {g: rng.standard_normal(N_JOINTS if g in ("q", "qd", "qdd") else 3) * 10.0 ** rng.integers(-3, 3)
-         for g in SIGNALS if g != "A"}
-    x["A"] = _rotation(rng)
-    x["F"][0], x["M"][1] = -0.0, 0.0
-    return x
-
-
-def zero_except(**kw):
-    p = {k: 0.0 for k in default_parameters()}
-    p.update(kw)
-    return p
 
 
 def run(suite, x, n, dt=DT):
