@@ -1,15 +1,23 @@
-"""The native estimator against the Python one, in one run (issue #26); writes benchmarks/NATIVE.md.
+"""The native estimator FMU against the pythonfmu-hosted one, and the library's Identifier
+against the bare C core, in one run (issue #26); writes benchmarks/NATIVE.md.
 
 Measured on the same recorded plant samples (the Python plant, 60 s at 0.1 s, default
 parameters: paper solver, momentum method), interleaved in ROUNDS rounds, each the best of
 REPEATS passes, CPU time per sample:
 
 * estimator FMU ``doStep`` through fmpy (after ``setReal`` of the inputs): the native FMU and the
-  pythonfmu-hosted one, and their ratio within each round;
-* the core's update alone: ``Identifier.update_flat`` (Python + Numba) and the C core through
-  ctypes (``spacerobot.core.estimator.NativeEstimator.update``), and their ratio;
+  pythonfmu-hosted one (whose Identifier runs the same C core through ctypes: the difference is
+  pythonfmu's and the Python wrapper's overhead), and their ratio within each round;
+* the core's update alone: ``Identifier.update_flat`` (the library's Python face of the C core)
+  and the bare C core through ctypes (``spacerobot.core.estimator.NativeEstimator.update``),
+  and their ratio;
 * instantiation + 60 s of estimation of the native FMU in a fresh process started from an empty
-  environment (wall time, fmpy's ``simulate_fmu``, which extracts the FMU first).
+  environment (wall time, fmpy's ``simulate_fmu``, which extracts the FMU first);
+* the closed loop in the C host, spatial, 60 s: the native plant and estimator FMUs wired as the
+  SSP wires them (plant outputs -> estimator inputs, estimator ``ident.excite`` -> plant
+  ``ident.excite``) in ``tests/c_host/fmu_host.c`` (compiled with the system C compiler), 600
+  steps of 0.1 s, started from an empty environment: the process's wall time and the stepping
+  loop's own time (no Python in the process).
 
 Nothing here asserts a timing. Run: ``python benchmarks/native.py [--quick] [--out PATH]``.
 """
@@ -105,6 +113,54 @@ def cold_run(fmu: Path, seconds: float) -> float:
     return time.perf_counter() - t0 - t_import
 
 
+def c_host_closed_loop(tmp: Path, robot: str = "spatial", seconds: float = 60.0,
+                       runs: int = 5):
+    """Wall time [s] of the closed loop in the C host (``tests/c_host/fmu_host.c``), per run:
+    ``(process wall times, stepping-loop times)``, or None where no C compiler is found."""
+    import shutil
+    import zipfile
+
+    from spacerobot.system.ssd import ESTIMATOR, PLANT, system_connections
+
+    cc = next((shutil.which(c) for c in (os.environ.get("CC", ""), "cc", "gcc", "clang")
+               if c and shutil.which(c)), None)
+    if cc is None:
+        return None
+    src = ROOT / "tests" / "c_host" / "fmu_host.c"
+    host = tmp / "fmu_host"
+    subprocess.run([cc, "-std=c99", "-O2", "-o", str(host), str(src), "-ldl", "-lm"], check=True)
+    sc = scenario(robot)
+    fmu = {}
+    for kind in (PLANT, ESTIMATOR):
+        path = build_fmu(kind, sc, tmp / f"loop_{kind}", backend="native")
+        d = tmp / f"loop_{kind}" / "x"
+        with zipfile.ZipFile(path) as z:
+            z.extractall(d)
+        table_ = (d / "resources" / "spacerobot_variables.txt").read_text().splitlines()
+        ident = next(line.split()[1] for line in table_ if line.startswith("model "))
+        fmu[kind] = {"so": d / "binaries" / "linux64" / f"{ident}.so",
+                     "uri": (d / "resources").as_uri(),
+                     "guid": next(line.split()[1] for line in table_ if line.startswith("guid ")),
+                     "vr": {f[6]: f[0] for f in map(str.split, table_) if f and f[0].isdigit()},
+                     "out": [f[0] for f in map(str.split, table_)
+                             if f and f[0].isdigit() and f[1] == "Real" and f[2] == "output"]}
+    p, e = fmu[PLANT], fmu[ESTIMATOR]
+    conns = system_connections(robot)
+    fwd = [f"{p['vr'][a]}:{e['vr'][b]}" for s, a, t, b in conns if (s, t) == (PLANT, ESTIMATOR)]
+    back = [f"{e['vr'][a]}:{p['vr'][b]}" for s, a, t, b in conns if (s, t) == (ESTIMATOR, PLANT)]
+    args = [str(host), "-e", str(e["so"]), "-g", e["guid"], "-r", e["uri"], "-w", ",".join(fwd),
+            "-b", ",".join(back), "-o", ",".join(e["out"]), str(p["so"]), p["guid"], p["uri"],
+            "0.1", str(int(round(seconds / 0.1))), p["vr"]["ident.excite"]]
+    walls, loops = [], []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        r = subprocess.run(args, capture_output=True, text=True, env={"PATH": "/usr/bin:/bin"},
+                           check=True)
+        walls.append(time.perf_counter() - t0)
+        loops.append(float(r.stderr.strip().splitlines()[-1].split()[-2]))   # "... steps X s"
+    return walls, loops
+
+
 def spread(xs) -> str:
     return f"{fmt(float(np.median(xs)))} ({fmt(min(xs))}-{fmt(max(xs))})"
 
@@ -141,7 +197,15 @@ def main(argv=None) -> int:
             rows_out.append((robot, spread(r["fmu_n"]), spread(r["fmu_p"]), spread(fr),
                              spread(r["core_n"]), spread(r["core_p"]), spread(cr),
                              spread([c * 1e3 for c in cold[robot]])))
-    text = ["# The native estimator against the Python one\n",
+        loop = c_host_closed_loop(Path(tmp), seconds=seconds)
+        if loop is not None:
+            print("closed loop in the C host", [round(w, 3) for w in loop[0]], flush=True)
+    loop_rows = [("closed loop in the C host, spatial, "
+                  f"{seconds:g} s", *(("n/a (no C compiler)",) * 2 if loop is None else
+                                     (spread([w * 1e3 for w in loop[0]]),
+                                      spread([w * 1e3 for w in loop[1]]))))]
+    text = ["# The native estimator FMU against the pythonfmu-hosted one; the library's "
+            "Identifier against the bare C core\n",
             f"Generated by `python benchmarks/native.py{' --quick' if a.quick else ''}` on "
             f"{info['cpu']} ({info['cores']} cores, load "
             f"{' '.join(f'{x:.1f}' for x in info['load'])}), "
@@ -153,11 +217,20 @@ def main(argv=None) -> int:
             "60 s with fmpy's `simulate_fmu`, minus the process's `import fmpy`; wall time, "
             "3 runs.\n",
             table(["robot", "native FMU doStep [us]", "pythonfmu FMU doStep [us]",
-                   "ratio (per round)", "C core update [us]", "Python core update [us]",
+                   "ratio (per round)", "C core update [us]", "Identifier.update_flat [us]",
                    "ratio (per round)", "cold: instantiate + 60 s [ms]"], rows_out),
             "\nThe FMU `doStep` includes fmpy's ctypes call; the C core update includes the "
-            "ctypes call of `NativeEstimator.update`. Target of issue #26: native `doStep` "
-            "<= 20 us (spatial), cold run under 1 s.\n"]
+            "ctypes call of `NativeEstimator.update`; `Identifier.update_flat` is the same core "
+            "behind the library's Python class (issue #26: no Numba left). Target of issue #26: "
+            "native `doStep` "
+            "<= 20 us (spatial), cold run under 1 s.\n",
+            "\nNo Python at all: the native plant and estimator FMUs in the C host "
+            "`tests/c_host/fmu_host.c` (system C compiler, -O2), wired as the SSP wires them "
+            "(plant outputs -> estimator inputs, estimator `ident.excite` -> plant "
+            "`ident.excite`), steps of 0.1 s, started from an empty environment; median (range) "
+            "of 5 runs. The process time includes loading and instantiating both FMUs; the "
+            "stepping time is the host's own measurement of its loop.\n",
+            table(["run", "process wall time [ms]", "stepping [ms]"], loop_rows)]
     Path(a.out).write_text("\n".join(text))
     print(f"wrote {a.out}")
     return 0

@@ -13,7 +13,8 @@ velocities (the paper's force equations at the window's centre).
 The estimator runs with its noise model (docs/identification.md, "Under noise"): the row
 standard deviations ``ident.sd_row.*`` measured once on a pilot run (the default spatial
 scenario, sensors seed :data:`PILOT_SEED`, not a case seed) with
-``spacerobot.estimator.noise_model.equation_error_sd`` with the set-up's equation settings,
+``equation_error_sd`` of the tests' NumPy oracle estimator (tests/oracles/estimator/
+noise_model.py: the native core keeps its rows internal) with the set-up's equation settings,
 and the set-up's :data:`SETTINGS`: the momentum window about the base (its residual
 correlation over the window), the accelerometer bias, the derivative's window, and what the
 sensors' realistic defaults tell the estimator (``spacerobot.sensors.estimator_noise_settings``:
@@ -53,9 +54,12 @@ ROOT = HERE.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+if str(ROOT / "tests") not in sys.path:   # the pilot's rows: the NumPy oracle estimator's
+    sys.path.insert(0, str(ROOT / "tests"))
+
+from oracles.estimator.noise_model import equation_error_sd  # noqa: E402
 from spacerobot import __version__  # noqa: E402
 from spacerobot.estimator.identifier import KEYS  # noqa: E402
-from spacerobot.estimator.noise_model import equation_error_sd  # noqa: E402
 from spacerobot.interface import ESTIMATE_NAMES, relative_errors  # noqa: E402
 from spacerobot.robots import get_robot  # noqa: E402
 from spacerobot.sensors import estimator_noise_settings  # noqa: E402

@@ -107,8 +107,12 @@ def bare_rk4(sc, seconds: float) -> tuple:
     """``(CPU s, wall s)`` of a bare RK4 loop over pin.aba (zero torques) on the plant's model,
     at the plant's step, from the plant's initial state: Pinocchio called from Python."""
     import pinocchio as pin
+    if str(ROOT / "tests") not in sys.path:
+        sys.path.insert(0, str(ROOT / "tests"))
+    from oracles.pinocchio_model import build_model        # the plant's model on Pinocchio
     p = new_plant(sc)
-    model, data = p.pm.model, p.pm.model.createData()
+    model = build_model(sc.robot, sc.robot.base, sc.target).model
+    data = model.createData()
     q, v = p.q.copy(), p.v.copy()
     tau = np.zeros(model.nv)
     h = sc.h
@@ -304,49 +308,10 @@ def breakdown(ssp_paths: dict, sc, seconds: float) -> dict:
                 p.advance(dt)
             best = min(best, (time.process_time() - c) / block)
         per[key] = best * 1e6
-    per.update(plant_kernel_parts(p))
     outs = record_outputs(sc, n * 0.1)
     per["estimator_core"] = core_update_cost(outs, sc, "momentum", repeats=4)
     per["estimator_report"] = core_report_cost(outs, sc, repeats=4)
     return per
-
-
-def plant_kernel_parts(p: Plant, calls: int = 20000) -> dict:
-    """CPU microseconds of one compiled ``rigid_body.terms`` and one ``rigid_body.aba`` call
-    inside compiled code (a Numba loop, so no Python call cost) at the plant's current state:
-    per RK4 step the plant makes one of the first and three of the second."""
-    from numba import njit
-    from spacerobot.plant import rigid_body as rb
-
-    @njit
-    def loop_aba(n, planar, R, pp, I6, q, v, tau, ddq, ws):
-        bp, S, cb, IA, pA, U, Du, M6, v6 = ws     # (no *ws: aba is inlined)
-        for _ in range(n):
-            rb.aba(planar, R, pp, I6, q, v, tau, ddq, bp, S, cb, IA, pA, U, Du, M6, v6)
-
-    @njit
-    def loop_terms(n, planar, R, pp, I6, mc, q, v, M, nle, hg, ws):
-        bp, S, cb, IA, pA, U, Du, M6, v6 = ws
-        for _ in range(n):
-            rb.terms(planar, R, pp, I6, mc, q, v, M, nle, hg, bp, S, cb, IA, pA, U, Du, M6, v6)
-
-    planar, R, pp, I6, mc = rb.chain_arrays(p.pm.model)
-    ws = tuple(rb.Workspace(R.shape[0] - 1).arrays())
-    v = p.pm.model.nv
-    qn, vs = np.array(p.q, float), np.array(p.v, float)
-    tau, ddq = np.zeros(v), np.empty(v)
-    M, nle, hg = np.empty((v, v)), np.empty(v), np.empty(6)
-    loop_aba(1, planar, R, pp, I6, qn, vs, tau, ddq, ws)          # compile
-    loop_terms(1, planar, R, pp, I6, mc, qn, vs, M, nle, hg, ws)
-    best_a = best_t = math.inf
-    for _ in range(5):
-        c = time.process_time()
-        loop_aba(calls, planar, R, pp, I6, qn, vs, tau, ddq, ws)
-        best_a = min(best_a, (time.process_time() - c) / calls)
-        c = time.process_time()
-        loop_terms(calls, planar, R, pp, I6, mc, qn, vs, M, nle, hg, ws)
-        best_t = min(best_t, (time.process_time() - c) / calls)
-    return {"aba_call": best_a * 1e6, "terms_call": best_t * 1e6}
 
 
 def core_report_cost(outs: list, sc, repeats: int = 3) -> float:
@@ -448,9 +413,14 @@ def fmu_dostep_cost(est_fmu: Path, outs: list, names: list, repeats: int = 3) ->
 
 def batch_cost(outs: list, sc, Ns, repeats: int = 5) -> dict:
     """The two-step batch alternative (momentum form): stack the rows of all N samples,
-    lstsq for mu, then lstsq for theta with y + psi D(mu): seconds per re-solve at N."""
+    lstsq for mu, then lstsq for theta with y + psi D(mu): seconds per re-solve at N. The rows
+    come from the NumPy oracle estimator of the tests (tests/oracles/estimator; the native core
+    keeps its equations internal): only the re-solves are timed."""
     from spacerobot.estimator import parameters as rg
-    ident = Identifier(sc.robot, sc.guess, method="momentum")
+    if str(ROOT / "tests") not in sys.path:
+        sys.path.insert(0, str(ROOT / "tests"))
+    from oracles.estimator import Identifier as OracleIdentifier
+    ident = OracleIdentifier(sc.robot, sc.guess, method="momentum")
     rows = []
     for k, o in enumerate(outs):
         s = {key: np.array(o[key], float) for key in o}
@@ -470,7 +440,7 @@ def batch_cost(outs: list, sc, Ns, repeats: int = 5) -> dict:
             A = np.concatenate([r[0][rl][:, mi] for r in sub])
             b = np.concatenate([r[1][rl] for r in sub])
             mu_a = np.linalg.lstsq(A, b, rcond=None)[0]
-            mu = ident.solver.mu.copy()
+            mu = rg.paper_vectors(sc.guess)[0]
             mu[mi] = mu_a
             D = rg.D_of_mu(mu)
             phi = np.concatenate([r[2][ra][:, ti] for r in sub])
@@ -790,8 +760,6 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     keys = [("plant_core", "plant core alone: `Plant.advance(0.1)` (100 RK4 steps, no excitation)"),
             ("plant_core_excited", "plant core alone, excitation at level 1 (the spatial "
                                    "estimator requests it)"),
-            ("terms_call", "  one compiled `rigid_body.terms` call (M, nle, momentum; 1 per RK4 step)"),
-            ("aba_call", "  one compiled `rigid_body.aba` call (3 per RK4 step)"),
             ("plant_doStep", "plant FMU `doStep` through fmpy (closed loop)"),
             ("estimator_core", "estimator core alone: `Identifier.update`"),
             ("estimator_report", "estimator core alone: `Identifier.report()` after each update"),
@@ -823,21 +791,18 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
                       f"alone takes {b['plant_doStep']:.0f} us ({b['plant_doStep'] / floor:.2f} "
                       f"x the floor) and the estimator's `doStep` "
                       f"{b['estimator_doStep']:.0f} us")
-    L.append("\nThe plant advances a whole communication step in one compiled call "
-             "(`spacerobot/plant/kernels.py` `advance`): per 1 ms RK4 step the rigid-body terms "
-             "(`spacerobot/plant/rigid_body.py` `terms`: M, non-linear effects, centroidal "
-             "momentum) and the control kernel, whose inverse dynamics give the first stage's "
-             "accelerations, then three compiled articulated-body (`aba`) calls, each followed "
-             "by the stage kernel; then, in the same call (`advance_measured`), `measure` computes the controls "
-             "held from the new instant and every output into one vector (no Pinocchio call "
-             "while stepping). Plant core per RK4 step "
-             f"(this breakdown, against the floor of the table above): {per_step}; of it, one "
-             "`terms` and three `aba` calls as in the rows above, the rest the control and "
-             f"stage kernels. Sum of the measured parts per communication step: "
+    L.append("\nThe plant is the native C core (`native/src/plant.c`, through ctypes in the "
+             "library and behind the FMI layer in the plant FMU): one call advances a whole "
+             "communication step; per 1 ms RK4 step the rigid-body terms (M, non-linear "
+             "effects, centroidal momentum; `native/src/dynamics.c`) and the controllers, whose "
+             "inverse dynamics give the first stage's accelerations, then three "
+             "articulated-body (ABA) evaluations for the other stages. Plant core per RK4 step "
+             f"(this breakdown, against the floor of the table above): {per_step}. "
+             f"Sum of the measured parts per communication step: "
              f"{'; '.join(shares)}. In these systems the estimator requests the excitation "
              "until it has identified both bodies, so the plant evaluates the multi-sine "
              "references at every RK4 step (their sines afresh every 20 steps and rotated by "
-             "the step in between, `kernels.rotate_trig`): excitation level at the end of the "
+             "the step in between): excitation level at the end of the "
              "loop "
              + ", ".join(f"{r} {v['breakdown'].get('excite_level', math.nan):.2f}"
                          for r, v in speed.items()) + ". "
@@ -860,8 +825,8 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
 
     # 2
     L.append("## 2. Estimator cost per sample\n")
-    L.append("Core = `Identifier.update` (the library's Python core, which the pythonfmu-hosted "
-             "estimator FMU runs) on recorded plant outputs (60 s, CPU time per sample, "
+    L.append("Core = `Identifier.update` (the library's Python class over the native C core, "
+             "which the pythonfmu-hosted estimator FMU runs too) on recorded plant outputs (60 s, CPU time per sample, "
              "best of 5 passes, paper solver unless stated). FMU = the estimator FMU of the "
              "system (the native one since issue #26; `benchmarks/NATIVE.md` compares both "
              "FMUs and both cores in one run) alone through fmpy: "

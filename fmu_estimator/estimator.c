@@ -163,38 +163,18 @@ static void options_of(sr_instance *inst, sr_estimator_options *o) {
     for (int i = 0; i < 6; ++i) o->signal_sd[i] = real_of(inst, SIGNAL_SD[i]);
     o->momentum_window = real_of(inst, "window.momentum");
     o->momentum_point = int_of(inst, "momentum_point");
+    o->sd_thrust_scale = real_of(inst, "sd_thrust.scale");
+    o->sd_thrust_misalign = real_of(inst, "sd_thrust.misalign");
+    o->accel_bias = int_of(inst, "accel_bias");
 }
-
-/* the FMU's parameters of the Python-hosted estimator that the native core does not have: their
-   defaults (the estimator without them) are accepted, any other value refused */
-static const struct { const char *key, *name; } PYTHON_ONLY[] = {
-    {"window.force", "ident.force_window"}, {"accel_bias", "ident.accel_bias"},
-    {"sd_thrust.scale", "ident.sd_thrust.scale"}, {"sd_thrust.misalign", "ident.sd_thrust.misalign"}};
-
-#define PYTHON_ROUTE " (the Python-hosted estimator has it: spacerobot run --backend pythonfmu, " \
-                     "or spacerobot build --backend pythonfmu)"
 
 /* build a core for the current parameters; 0 ok (err untouched), else err says why */
 static int build_core(sr_instance *inst, estimator_glue *g, sr_estimator_model **core, void **data,
                       char *err, size_t errlen) {
     sr_estimator_options o;
-    for (size_t i = 0; i < sizeof PYTHON_ONLY / sizeof PYTHON_ONLY[0]; ++i) {
-        int vr = sr_key_vr(inst, PYTHON_ONLY[i].key, 0);
-        const sr_var *v = sr_variable(inst, vr);
-        double x = !v ? 0.0 : v->type == SR_REAL ? sr_reals(inst)[vr] : sr_integers(inst)[vr];
-        if (v && x != 0.0) {
-            snprintf(err, errlen, "%s = %.17g is not available in the native estimator" PYTHON_ROUTE,
-                     PYTHON_ONLY[i].name, x);
-            return 1;
-        }
-    }
     options_of(inst, &o);
     *core = sr_estimator_model_new(&g->robot, &o, err, errlen);
-    if (!*core) {
-        if (strstr(err, "not available in the native core") && strlen(err) + sizeof PYTHON_ROUTE < errlen)
-            strcat(err, PYTHON_ROUTE);
-        return 1;
-    }
+    if (!*core) return 1;
     *data = malloc(sr_estimator_data_size(*core));
     if (!*data) {
         sr_estimator_model_free(*core);
@@ -324,3 +304,8 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     g->data = data;
     return 0;
 }
+
+/* outputs change only in doStep (no direct feedthrough) */
+const int SR_MODEL_FEEDTHROUGH = 0;
+const double SR_MODEL_MAX_STEP = INFINITY;      /* one sample per step, of any length */
+void sr_model_outputs(void *model, sr_instance *inst) { (void)model; (void)inst; }

@@ -1,8 +1,9 @@
 """pythonfmu slave of the identifier: a thin wrapper mapping FMI variables to
-spacerobot.estimator. It never imports plant code: inside the FMU the library is bundled as
-``_spacerobot_estimator`` with only the robot description, the interface table, the arm
-geometry, the kernel loader, the FMI base class and the estimator (``fmi/build.py``'s
-``BUNDLES``).
+spacerobot.estimator, whose Identifier runs the native C core through ctypes. It never imports
+plant code: inside the FMU the library is bundled as ``_spacerobot_estimator`` with only the
+robot description, the interface table, the arm geometry, the FMI base class, the core's ctypes
+binding with the compiled library (``core/lib``) and the estimator (``fmi/build.py``'s
+``BUNDLES``). The FMU state is the core's Data block (bytes).
 """
 import math
 import operator

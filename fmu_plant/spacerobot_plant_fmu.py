@@ -1,7 +1,9 @@
 """pythonfmu slave of the plant: a thin wrapper mapping FMI variables to spacerobot.plant.
 
-Built by ``spacerobot build``; inside the FMU the library is bundled as ``_spacerobot_plant``
-(a unique name, so that it can share a process with the estimator FMU).
+Built by ``spacerobot build --backend pythonfmu``; inside the FMU the library is bundled as
+``_spacerobot_plant`` (a unique name, so that it can share a process with the estimator FMU),
+with the compiled native core it runs on (``_spacerobot_plant/core/lib/libspacerobot.*``: the
+same C plant as the native plant FMU).
 """
 import math
 
@@ -21,8 +23,8 @@ class SpaceRobotPlant(InterfaceSlave):
     """Free-floating space robot (base + arm + grasped target) after capture."""
 
     author = "spacerobot developers"
-    description = ("Free-floating space robot after capture: base, arm and target on Pinocchio, "
-                   "RK4, bounded momentum controller on the base thrusters, arm motion that "
+    description = ("Free-floating space robot after capture: base, arm and target (native C "
+                   "core), RK4, bounded momentum controller on the base thrusters, arm motion that "
                    "stabilises the base attitude (Zhang, Yue, Yuan 2020).")
     version = "0.1.0"
     license = "MIT"

@@ -37,10 +37,13 @@ FMI2 = HERE / "fmi2"
 #: where the install step puts the binaries (inside the Python package)
 DEFAULT_OUT = ROOT / "spacerobot" / "core" / "lib"
 #: the models with a native FMU: model name -> model identifier
-MODELS = {"estimator": "SpaceRobotEstimator"}
+MODELS = {"estimator": "SpaceRobotEstimator", "sensors": "SpaceRobotSensors",
+          "plant": "SpaceRobotPlant"}
 #: the core modules each model's binary is built from (the estimator carries no plant code)
 MODEL_SOURCES = {"estimator": ("sr_math.c", "linalg.c", "arm.c", "equations.c", "differencing.c",
-                               "physical.c", "estimator.c", "est_paper.c", "est_joint.c")}
+                               "physical.c", "estimator.c", "est_paper.c", "est_joint.c"),
+                 "sensors": ("sr_math.c", "rng.c", "sensors.c"),
+                 "plant": ("sr_math.c", "linalg.c", "arm.c", "dynamics.c", "plant.c")}
 
 #: flags of every compilation: C99, optimised, no contraction into FMA (the same results on
 #: every platform and compiler), hidden symbols unless marked SR_API / FMI2_Export

@@ -27,7 +27,7 @@ _API = {
     "SOLVERS": "spacerobot.interface", "ACCEL_SOURCES": "spacerobot.interface",
     "estimate_vector": "spacerobot.interface", "relative_errors": "spacerobot.interface",
     "identified_estimates": "spacerobot.interface", "error_scale": "spacerobot.interface",
-    # numerical cores (Numba; Pinocchio for the plant)
+    # numerical cores (the plant: the native C core through ctypes)
     "Identifier": "spacerobot.estimator", "Plant": "spacerobot.plant",
     "ExcitationRequest": "spacerobot.estimator", "project_body": "spacerobot.estimator",
     "is_physical": "spacerobot.estimator",

@@ -296,7 +296,7 @@ class Solver(Code):
 
 class AccelSource(Code):
     """Force method accelerations: the measured inputs, or derivatives of the velocities
-    (:mod:`spacerobot.estimator.differencing`)."""
+    (native/src/differencing.c)."""
 
     MEASURED = 1
     DIFFERENCED = 2
@@ -457,11 +457,6 @@ def noise_model_vars() -> List[Var]:
               "1 = the base's position at the newer sample of each difference (position, "
               "velocity and thrust errors not multiplied by the base's distance from the "
               "origin)", 0, ("momentum_point",)),
-          Var("ident.force_window", "parameter", "fixed", "Real", "s",
-              "Force method: each sample's equations differenced against the newest sample "
-              "at least this much older (a high-pass: removes constant errors such as an "
-              "accelerometer bias). 0 = the paper's (each sample alone)", 0.0,
-              ("window", "force")),
           Var("ident.accel_bias", "parameter", "fixed", "Integer", None,
               "Force method, measured accelerations: 1 = subtract the accelerometer bias "
               "estimated online from the navigation velocity (the slope of v - integral a), "
@@ -801,3 +796,28 @@ def sensor_connections(robot: Robot) -> List[Tuple[str, str]]:
     """``[(plant output, sensors input)]``: plant ``<name>`` -> sensors ``true.<name>``; the
     sensors output ``<name>`` goes to the estimator input of the same name."""
     return [(name, TRUE_PREFIX + name) for name in connections(robot)]
+
+
+def sensors_dependencies(variables: Sequence[Var]) -> Dict[int, List[int]]:
+    """``{output index: [input indices]}`` of the sensors FMU's variables (:func:`sensors_vars`,
+    indices into ``variables``): the inputs each measurement is made from (its direct
+    feedthrough; ``native/src/sensors.c``). Each signal element is measured from the same
+    element of its true value, except that a row of ``base.A`` is turned by the star tracker's
+    error (the row's three elements) and the thrust's scale factor and misalignment mix the
+    three components of ``F``, ``M`` and ``J``."""
+    index = {(v.causality, v.key): i for i, v in enumerate(variables)}
+    mixed = ("F", "M", "J")
+    deps: Dict[int, List[int]] = {}
+    for i, v in enumerate(variables):
+        if v.causality != "output":
+            continue
+        group, idx = v.key
+        if group == "A":
+            keys = [(group, (idx[0], j)) for j in range(3)]
+        elif group in mixed:
+            keys = [(group, j) for j in range(3)]
+        else:
+            keys = [v.key]
+        deps[i] = [index[("input", k)] for k in keys]
+    return deps
+

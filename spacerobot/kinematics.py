@@ -1,6 +1,7 @@
 """The arm's constant geometry, as the compiled kinematics read it, and a cross product.
 
-The estimator's equations of a sample (:mod:`spacerobot.estimator.kernels`) evaluate the arm's
+The estimator's equations of a sample (native/src/equations.c, through the robot record;
+the tests' NumPy oracle tests/oracles/estimator/kernels.py) evaluate the arm's
 forward kinematics from :class:`ArmGeometry`; the NumPy reference of the same recursion that
 the tests check them against lives outside the library (``tests/oracles/kinematics.py``), so
 that it does not ship in the FMUs.
@@ -50,5 +51,5 @@ class ArmGeometry:
 
     def arrays(self):
         """``(xyz, R, axis, mass, com, I, ee_xyz, ee_R)``, the arguments of
-        :func:`spacerobot.estimator.kernels.equations`."""
+        :func:`oracles.estimator.kernels.equations`."""
         return self.xyz, self.R, self.axis, self.mass, self.com, self.I, self.ee_xyz, self.ee_R

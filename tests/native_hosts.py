@@ -1,11 +1,13 @@
-"""Helpers of the native FMU host tests (tests/test_native_fmu_hosts.py, test_native_fmu_fuzz.py).
+"""Helpers of the native FMU host tests (tests/test_native_fmu_hosts.py, test_native_fmu_fuzz.py,
+test_native_closed_loop_host.py).
 
 * the tools, each ``None`` where missing: the system C compiler, mingw-w64
   (``x86_64-w64-mingw32-gcc``), Wine, valgrind, a working ASan/UBSan runtime;
-* the FMU binaries of the sources in this tree, built once per session with
-  ``native/build.py`` (plain: linux64 and win64; sanitised: linux64 with
-  ``-fsanitize=address,undefined``), and the estimator FMUs assembled from them
-  (:func:`spacerobot.fmi.native.build_native_fmu`), extracted to fresh folders;
+* the FMU binaries of every model (:data:`MODELS`: plant, sensors, estimator) from the
+  sources in this tree, built once per session with ``native/build.py`` (plain: linux64 and
+  win64; sanitised: linux64 with ``-fsanitize=address,undefined``), and the FMUs of any kind
+  assembled from them (:func:`spacerobot.fmi.native.build_native_fmu`), extracted to fresh
+  folders;
 * the C hosts (``tests/c_host/fmu_host.c``, ``fmu_fuzz.c``) compiled for Linux or Windows;
 * one Wine prefix per session under the pytest temporary folder, and running a host from an
   EMPTY environment (only ``PATH=/usr/bin:/bin``; under Wine also the Wine variables).
@@ -32,8 +34,12 @@ ROOT = Path(__file__).resolve().parents[1]
 C_HOST = Path(__file__).resolve().parent / "c_host"
 HOST_SOURCE = C_HOST / "fmu_host.c"
 FUZZ_SOURCE = C_HOST / "fmu_fuzz.c"
+#: the model kinds with a native FMU -> model identifier (native/build.py's MODELS)
+MODELS = {"plant": "SpaceRobotPlant", "sensors": "SpaceRobotSensors",
+          "estimator": "SpaceRobotEstimator"}
+#: the estimator, the default of the helpers that take a model kind
 MODEL = "estimator"
-IDENT = "SpaceRobotEstimator"
+IDENT = MODELS[MODEL]
 #: the flags of a sanitised build (FMU binary and host alike)
 SANITIZE = ("-fsanitize=address,undefined", "-fno-omit-frame-pointer", "-g")
 #: a sanitiser report fails the run: UBSan stops at its first finding, ASan looks for leaks
@@ -125,33 +131,33 @@ def build_core(tmp_dir: Path, sources: Sequence[str]):
 BUILD_CACHE = Path(tempfile.gettempdir()) / "spacerobot-native-hosts"
 
 
-def _sources() -> List[Path]:
+def _sources(model: str = MODEL) -> List[Path]:
     nb = native_build()
     return [ROOT / "native" / "build.py", *sorted(nb.SRC.glob("*")), *sorted(nb.FMI2.glob("*")),
-            nb.model_glue(MODEL)]
+            nb.model_glue(model)]
 
 
-def _build(platform: str, sanitize: bool) -> Path:
-    """The estimator's FMU binary for ``platform`` (sanitised: ``-O1`` plus :data:`SANITIZE`,
+def _build(platform: str, sanitize: bool, model: str = MODEL) -> Path:
+    """The FMU binary of ``model`` for ``platform`` (sanitised: ``-O1`` plus :data:`SANITIZE`,
     compile and link), built by ``native/build.py``'s own ``build_fmu_binary`` (its sources,
     includes and flags) unless a build of the same sources, flags and compiler is cached."""
     nb = native_build()
     cc = nb.PLATFORMS[platform].compiler()
     if cc is None:
         raise nb.BuildError(f"no compiler for {platform}")
-    h = hashlib.sha256(f"{platform} {sanitize} {cc} {SANITIZE}".encode())
+    h = hashlib.sha256(f"{model} {platform} {sanitize} {cc} {SANITIZE}".encode())
     h.update(subprocess.run([cc, "--version"], capture_output=True).stdout)
-    for p in _sources():
+    for p in _sources(model):
         h.update(p.name.encode() + b"\0" + p.read_bytes())
     out_dir = BUILD_CACHE / h.hexdigest()[:24]
-    target = out_dir / "fmu" / platform / f"{IDENT}{nb.PLATFORMS[platform].suffix}"
+    target = out_dir / "fmu" / platform / f"{nb.MODELS[model]}{nb.PLATFORMS[platform].suffix}"
     if target.is_file():
         return target
     mod = nb
     if sanitize:
         # a private copy of the module whose platform adds the flags: build_fmu_binary itself
         # (sources, includes, defines) stays the tree's
-        spec = importlib.util.spec_from_file_location(f"_sr_build_san_{platform}",
+        spec = importlib.util.spec_from_file_location(f"_sr_build_san_{model}_{platform}",
                                                       ROOT / "native" / "build.py")
         mod = importlib.util.module_from_spec(spec)
         sys.modules[spec.name] = mod
@@ -159,12 +165,12 @@ def _build(platform: str, sanitize: bool) -> Path:
         base = mod.PLATFORMS[platform]
         mod.PLATFORMS = {**mod.PLATFORMS, platform: dataclasses.replace(
             base, cflags=(*base.cflags, "-O1", *SANITIZE), ldflags=(*base.ldflags, *SANITIZE))}
-    built = mod.build_fmu_binary(MODEL, platform, out_dir / "fmu")
+    built = mod.build_fmu_binary(model, platform, out_dir / "fmu")
     _prune_cache(keep=out_dir)
     return built
 
 
-def _prune_cache(keep: Path, entries: int = 12) -> None:
+def _prune_cache(keep: Path, entries: int = 36) -> None:
     """Only the newest builds stay in the cache."""
     try:
         dirs = sorted((d for d in BUILD_CACHE.iterdir() if d.is_dir() and d != keep),
@@ -175,23 +181,34 @@ def _prune_cache(keep: Path, entries: int = 12) -> None:
         shutil.rmtree(d, ignore_errors=True)
 
 
-def fmu_binaries(work: Path) -> Dict[str, Path]:
-    """Library folders (``<dir>/fmu/<platform>/SpaceRobotEstimator.*``, as
-    :func:`spacerobot.fmi.native.build_native_fmu` takes them) of this tree's sources, once per
-    session: ``{"plain": dir, "sanitized": dir}``; win64 inside "plain" where mingw is
-    installed; no "sanitized" where the ASan runtime is missing. Built in parallel."""
+def fmu_binaries(work: Path, models: Sequence[str] = (MODEL,),
+                 sanitized: bool = True) -> Dict[str, Path]:
+    """Library folders (``<dir>/fmu/<platform>/<model identifier>.*``, as
+    :func:`spacerobot.fmi.native.build_native_fmu` takes them) holding the binaries of
+    ``models`` (kinds of :data:`MODELS`) from this tree's sources, each built once per session:
+    ``{"plain": dir, "sanitized": dir}``; win64 inside "plain" where mingw is installed; no
+    "sanitized" where the ASan runtime is missing or ``sanitized`` is false. The folders are the
+    same for every call (a later call adds its models' binaries). Built in parallel."""
+    unknown = [m for m in models if m not in MODELS]
+    assert not unknown, f"no native model {unknown}; choose from {sorted(MODELS)}"
+    variants = ["plain"] + (["sanitized"] if sanitized and asan_missing(work) is None else [])
     with _LOCK:
-        if "binaries" in _CACHE:
-            return _CACHE["binaries"]
+        done = _CACHE.setdefault("binaries_of", set())
+        todo = [(m, v) for m in dict.fromkeys(models) for v in variants if (m, v) not in done]
+        if not todo:
+            return {k: d for k, d in _CACHE["binaries"].items() if k in variants}
     native_build()                            # imported once, before the threads use it
-    jobs = [("plain", "linux64", False)]
-    if mingw():
-        jobs.append(("plain", "win64", False))
-    if asan_missing(work) is None:
-        jobs.append(("sanitized", "linux64", True))
+    jobs = []
+    for m, v in todo:
+        if v == "plain":
+            jobs.append(("plain", "linux64", False, m))
+            if mingw():
+                jobs.append(("plain", "win64", False, m))
+        else:
+            jobs.append(("sanitized", "linux64", True, m))
+    out = {}
     with ThreadPoolExecutor(max_workers=min(3, os.cpu_count() or 1)) as ex:
-        built = [(kind, plat, ex.submit(_build, plat, san)) for kind, plat, san in jobs]
-        out = {}
+        built = [(kind, plat, ex.submit(_build, plat, san, m)) for kind, plat, san, m in jobs]
         for kind, plat, f in built:
             path = f.result()                 # a build error fails the test, with its output
             dst = work / f"lib_{kind}" / "fmu" / plat / path.name
@@ -199,8 +216,9 @@ def fmu_binaries(work: Path) -> Dict[str, Path]:
             shutil.copy2(path, dst)
             out[kind] = work / f"lib_{kind}"
     with _LOCK:
-        _CACHE["binaries"] = out
-    return out
+        _CACHE.setdefault("binaries", {}).update(out)
+        _CACHE["binaries_of"].update(todo)
+        return {k: d for k, d in _CACHE["binaries"].items() if k in variants}
 
 
 # ---- FMUs --------------------------------------------------------------------------------------
@@ -214,7 +232,8 @@ class Variable:
 
 
 class Extracted:
-    """An FMU unzipped into a fresh folder: its binaries, resource URIs, variables."""
+    """An FMU unzipped into a fresh folder: its binaries, resource URIs, variables (the model
+    identifier, hence the binaries' names, from the variable table's ``model`` line)."""
 
     def __init__(self, fmu: Path, folder: Path):
         if folder.exists():
@@ -224,18 +243,27 @@ class Extracted:
             z.extractall(folder)
         self.fmu = fmu
         self.dir = folder
-        self.so = folder / "binaries" / "linux64" / f"{IDENT}.so"
-        self.dll = folder / "binaries" / "win64" / f"{IDENT}.dll"
         self.uri = (folder / "resources").as_uri()
         self.wine_uri = "file:///Z:" + (folder / "resources").as_uri()[len("file://"):]
         self.variables: List[Variable] = []
+        self.ident = IDENT
         for line in (folder / "resources" / "spacerobot_variables.txt").read_text().splitlines():
             f = line.split()
             if line.startswith("guid "):
                 self.guid = f[1]
+            elif line.startswith("model "):
+                self.ident = f[1]
             elif f and f[0].isdigit():
                 self.variables.append(Variable(int(f[0]), f[1], f[2], f[3], f[6]))
+        self.kind = next((k for k, i in MODELS.items() if i == self.ident), None)
+        self.so = folder / "binaries" / "linux64" / f"{self.ident}.so"
+        self.dll = folder / "binaries" / "win64" / f"{self.ident}.dll"
         self.vr = {v.name: v.vr for v in self.variables}
+        self.start = {}
+        for line in (folder / "resources" / "spacerobot_variables.txt").read_text().splitlines():
+            f = line.split()
+            if f and f[0].isdigit():
+                self.start[f[6]] = _from_bits(f[4])
 
     def vrs(self, type_: str, causality: str) -> List[int]:
         return [v.vr for v in self.variables if v.type == type_ and v.causality == causality]
@@ -244,23 +272,37 @@ class Extracted:
         return [v.name for v in self.variables if v.type == type_ and v.causality == causality]
 
 
-def estimator_fmu(work: Path, robot: str, target: Optional[str], lib_dir: Path,
-                  tag: str) -> Extracted:
-    """The estimator FMU of ``scenario(robot, target)`` built from ``lib_dir``'s binaries, copied
-    to a fresh folder and extracted there (cached per session)."""
+def _from_bits(text: str) -> float:
+    """A start value of the variable table: IEEE-754 bits ``0x...``."""
+    import struct
+    return struct.unpack("<d", struct.pack("<Q", int(text, 16)))[0]
+
+
+def native_fmu(work: Path, kind: str, robot: str, target: Optional[str], lib_dir: Path,
+               tag: str) -> Extracted:
+    """The FMU of model ``kind`` (:data:`MODELS`) of ``scenario(robot, target)`` built from
+    ``lib_dir``'s binaries, copied to a fresh folder and extracted there (cached per session)."""
     from spacerobot.fmi.native import build_native_fmu
     from spacerobot.robots import scenario
 
-    key = ("fmu", robot, target, str(lib_dir), tag)
+    assert kind in MODELS, kind
+    key = ("fmu", kind, robot, target, str(lib_dir), tag)
     with _LOCK:
         if key not in _CACHE:
-            d = work / f"fmu_{tag}_{robot}_{target or 'default'}"
-            fmu = build_native_fmu(MODEL, scenario(robot, target), d / "built", lib_dir=lib_dir)
+            prefix = "fmu" if kind == MODEL else f"fmu_{kind}"
+            d = work / f"{prefix}_{tag}_{robot}_{target or 'default'}"
+            fmu = build_native_fmu(kind, scenario(robot, target), d / "built", lib_dir=lib_dir)
             fresh = d / "copy" / fmu.name                 # the FMU copied to a fresh folder
             fresh.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(fmu, fresh)
             _CACHE[key] = Extracted(fresh, d / "extracted")
         return _CACHE[key]
+
+
+def estimator_fmu(work: Path, robot: str, target: Optional[str], lib_dir: Path,
+                  tag: str) -> Extracted:
+    """The estimator FMU of ``scenario(robot, target)`` (:func:`native_fmu`)."""
+    return native_fmu(work, MODEL, robot, target, lib_dir, tag)
 
 
 # ---- hosts -------------------------------------------------------------------------------------

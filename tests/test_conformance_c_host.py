@@ -15,8 +15,9 @@ LD_PRELOAD, PYTHONHOME, PYTHONPATH, not even HOME):
 - a missing or broken record of the Python installation: fmi2Instantiate returns NULL and the
   host's logger gets the reason.
 
-Skipped, with the reason, when the FMUs were built without the front library (no C compiler or
-no shared libpython at build time).
+The FMUs are the pythonfmu-hosted ones (``--backend pythonfmu``: the front library is theirs;
+the native FMUs' C hosts: tests/test_native_fmu_hosts.py). Skipped, with the reason, when the FMUs
+were built without the front library (no C compiler or no shared libpython at build time).
 """
 from __future__ import annotations
 
@@ -30,7 +31,21 @@ import numpy as np
 import pytest
 
 from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
-from test_conformance_util import DT, OK, ROBOTS, Inst, fmus_for
+from test_conformance_util import DT, OK, ROBOTS, Inst
+
+_PY_FMUS: dict = {}
+
+
+def fmus_for(request, robot: str) -> dict:
+    """The pythonfmu-hosted FMUs of ``robot``, built once per session."""
+    if robot not in _PY_FMUS:
+        from spacerobot.fmi.build import build_fmu
+        from spacerobot.robots import scenario
+
+        d = request.getfixturevalue("fmu_dir") / f"pythonfmu_{robot}"
+        _PY_FMUS[robot] = {kind: build_fmu(kind, scenario(robot), d, backend="pythonfmu")
+                           for kind in ("plant", "estimator", "sensors")}
+    return _PY_FMUS[robot]
 
 from spacerobot.fmi import front_library
 from spacerobot.fmi.front_library import c_compiler
@@ -249,8 +264,7 @@ def test_the_record_names_this_python_and_where_the_runtime_packages_are(request
     from spacerobot.fmi.build import fmu_backend
 
     for kind in ("plant", "estimator", "sensors"):
-        if fmu_backend(fmus_for(request, "planar")[kind]) == "native":
-            continue                               # no Python, no record (test_native_fmu.py)
+        assert fmu_backend(fmus_for(request, "planar")[kind]) == "pythonfmu"
         fmu = Unzipped(fmus_for(request, "planar")[kind])
         record = (fmu.dir / "resources" / front_library.RECORD_NAME).read_text().splitlines()
         values = {}

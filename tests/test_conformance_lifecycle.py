@@ -206,15 +206,17 @@ def test_plant_variable_step_sizes(robot_fmus):
     path = fmus["plant"]
     regular = as_array(run_plant(path, steps=[0.1, 0.1]))
     multiples = as_array(run_plant(path, steps=[0.05, 0.15]))
-    # whole numbers of RK4 steps (h = 1 ms): the same arithmetic in a different grouping
-    assert np.array_equal(regular, multiples)
+    # whole numbers of RK4 steps (h = 1 ms): the same steps in a different grouping; the joint
+    # sines are evaluated afresh at the start of each call and rotated between (plant.c), so the
+    # groupings agree to round-off (measured 2e-11 on accelerations), not bit for bit
+    scale = np.maximum(np.abs(regular), 1.0)
+    assert np.max(np.abs(multiples - regular) / scale) < 1e-9
     irregular = [0.0375, 0.1625]
     x = as_array(run_plant(path, steps=irregular))
     y = as_array(run_plant(path, steps=irregular))
     assert np.array_equal(x, y), "same irregular steps must give the same result"
     # a step that is not a multiple of h ends with one shorter RK4 step; the controller's
     # zero-order hold then samples at other instants (< h apart): a small, bounded difference
-    scale = np.maximum(np.abs(regular), 1.0)
     rel = np.max(np.abs(x - regular) / scale)
     assert 0.0 < rel < 1e-5, rel
 

@@ -11,9 +11,9 @@ thrusters use (spacerobot.robots.Propellant, docs/models.md "Propellant").
   prop.P, prop.L, and system.P + prop.P - P(0) = thrust.J, system.L + prop.L - L(0) =
   thrust.H, to the tolerance of the constant-base balance (tests/test_plant_physics.py); the
   balance without prop.P fails, so the term is not vacuous.
-* The compiled dynamics with the base inertia updated from the propellant mass equals
-  Pinocchio's with that base built from scratch (Pinocchio's own inertia addition is the
-  oracle of the combined body).
+* The plant's dynamics (momentum, forward dynamics under its controls) with the base inertia
+  updated from the propellant mass equal Pinocchio's with that base built from scratch
+  (Pinocchio's own inertia addition is the oracle of the combined body).
 """
 from __future__ import annotations
 
@@ -25,10 +25,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from spacerobot.plant import Plant, kernels
-from spacerobot.plant.simulator import propellant_array, unit_sphere_inertia
-from spacerobot.plant import rigid_body as rb
-from spacerobot.plant.dynamics import build_model
+from oracles.pinocchio_model import build_model
+from spacerobot.plant import Plant
 from spacerobot.robots import G0, Propellant, RigidBody, scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -157,7 +155,7 @@ def test_momentum_balance_with_depletion(robot):
     assert eL <= 1e-9
 
 
-# -- the combined base and the compiled dynamics -------------------------------------------------
+# -- the combined base and the plant's dynamics -------------------------------------------------
 
 def _oracle_base(dry: RigidBody, prop: Propellant, m_p: float) -> pin.Inertia:
     """Dry base + a solid sphere (inertia (2/5) m R^2) at the tank, added by Pinocchio."""
@@ -178,42 +176,49 @@ def test_combined_base_equals_pinocchio_inertia_addition():
 
 
 @pytest.mark.parametrize("robot", ["planar", "spatial"])
-def test_compiled_dynamics_with_the_updated_base_inertia_equals_pinocchio(robot):
-    """kernels.base_inertia on the compiled model, then ABA, CRBA, non-linear effects and the
-    centroidal momentum, against Pinocchio on a model whose base is built from the combined
-    body (the oracle above), at random states and propellant masses."""
+def test_plant_dynamics_with_the_updated_base_inertia_equal_pinocchio(robot):
+    """Along a depleting, excited run of the plant: its momentum outputs P, L and the
+    accelerations of its controls (held thrust and joint torques) against Pinocchio on a model
+    whose base is built from the combined body at the plant's propellant mass (the oracle
+    above): Pinocchio's centroidal momentum and forward dynamics (ABA) at the plant's state."""
     sc = scenario(robot)
     prop = propellant(robot, 100.0)
-    pp = propellant_array(prop)
+    p = make(robot, prop, excite=1.0)
     dry_model = build_model(sc.robot, sc.robot.base, sc.target).model
-    planar, R, p, I6, mc = rb.chain_arrays(dry_model)
-    I6d, mcd, I6u = I6[0].copy(), mc[0].copy(), unit_sphere_inertia(pp)
-    ws = rb.Workspace(dry_model.njoints - 2).arrays()
-    rng = np.random.default_rng(17)
-    for m_p in (100.0, 42.0, 3.0):
-        kernels.base_inertia(m_p, pp, I6d, I6u, mcd, I6, mc)
+    masses = []
+    for _ in range(4):
+        p.advance(0.75)
+        q, v, m_p = p.q, p.v, p.m_p
+        masses.append(m_p)
         model = build_model(sc.robot, sc.robot.base, sc.target).model
         model.inertias[1] = _oracle_base(sc.robot.base, prop, m_p)
         data = model.createData()
-        for _ in range(3):
-            q = pin.randomConfiguration(model, -np.pi * np.ones(model.nq),
-                                        np.pi * np.ones(model.nq))
-            v, tau = rng.normal(size=model.nv), rng.normal(size=model.nv) * 10.0
-            ddq = np.empty(model.nv)
-            assert rb.aba(planar, R, p, I6, q, v, tau, ddq, *ws) == 0
-            ref = pin.aba(model, data, q, v, tau)
-            np.testing.assert_allclose(ddq, ref, rtol=0, atol=1e-10 * np.abs(ref).max())
-            M, nle, hg = np.zeros((model.nv, model.nv)), np.zeros(model.nv), np.zeros(6)
-            rb.terms(planar, R, p, I6, mc, q, v, M, nle, hg, *ws)
-            pin.computeAllTerms(model, data, q, v)
-            np.testing.assert_allclose(M, data.M, rtol=0, atol=1e-10 * np.abs(data.M).max())
-            np.testing.assert_allclose(nle, data.nle, rtol=0,
-                                       atol=1e-10 * max(np.abs(data.nle).max(), 1.0))
-            pin.computeCentroidalMomentum(model, data, q, v)
-            np.testing.assert_allclose(hg, data.hg.vector, rtol=0,
-                                       atol=1e-10 * np.abs(data.hg.vector).max())
-        # not vacuous: the dry base gives another mass matrix
-        assert abs(M[0, 0] - dry_model.inertias[1].mass) > 1.0
+        # momentum about the inertial origin
+        hg = pin.computeCentroidalMomentum(model, data, q, v)
+        P = np.array(hg.linear)
+        L = np.array(hg.angular) + np.cross(data.com[0], P)
+        o = p.outputs()
+        np.testing.assert_allclose(o["P"], P, rtol=0, atol=1e-10 * np.abs(P).max())
+        np.testing.assert_allclose(o["L"], L, rtol=0, atol=1e-10 * np.abs(L).max())
+        # forward dynamics under the held controls (the base's generalised force: the thrust
+        # at S in the base frame)
+        u = p.controls()
+        A = o["A"]
+        if sc.robot.planar:
+            f_b = np.array([*(A.T @ u.F)[:2], u.M[2]])
+        else:
+            f_b = np.concatenate([A.T @ u.F, A.T @ u.M])
+        ref = pin.aba(model, data, q, v, np.concatenate([f_b, u.tau]))
+        # the plant's accelerations are those of its control law (tau from them by inverse
+        # dynamics): ABA recovers them to the rounding amplified by M's conditioning (up to
+        # 2e5 along the spatial run)
+        M = pin.crba(model, data, q)
+        tol = max(1e-12, 1e-14 * np.linalg.cond(np.triu(M) + np.triu(M, 1).T))
+        np.testing.assert_allclose(u.a, ref, rtol=0, atol=tol * np.abs(ref).max())
+        # not vacuous: the dry base gives other accelerations
+        dry = pin.aba(dry_model, dry_model.createData(), q, v, np.concatenate([f_b, u.tau]))
+        assert np.abs(dry - ref).max() > 1e-6 * np.abs(ref).max()
+    assert masses[-1] < masses[0] < 100.0                     # the tank empties along the run
 
 
 def test_bad_propellant_parameters_are_rejected():
@@ -225,7 +230,7 @@ def test_bad_propellant_parameters_are_rejected():
 
 @pytest.mark.parametrize("robot", ["planar", "spatial"])
 def test_base_truth_output_is_the_propellant_base(robot):
-    """The compiled output ``base_now`` (kernels.measure) against Propellant.base (NumPy) as the
+    """The plant's output ``base_now`` against Propellant.base (NumPy) as the
     tank empties; and the dry base exactly without propellant model."""
     prop = propellant(robot, 30.0)
     p = make(robot, prop, excite=1.0)

@@ -1,11 +1,12 @@
 """Differenced accelerations without truncation error (issue 14, ``ident.diff_momentum``) and
-the covariance of the bias-compensated answers (:func:`spacerobot.estimator.solvers.
-compensation_gain`).
+the covariance of the bias-compensated answers (:func:`oracles.estimator.solvers.
+compensation_gain`, the NumPy oracle estimator).
 
 * The displacement weights are Simpson's rule at an even step and exact for polynomial
   velocities on uneven steps (against the polynomial's own integral).
-* The linear rows are the momentum method's rows differenced over the window (an independent
-  path: the momentum identifier's equations), so they hold at the truth to round-off.
+* The linear rows (of the NumPy oracle, the native core's reference) are the momentum method's
+  rows differenced over the window (an independent path: the momentum identifier's
+  equations), so they hold at the truth to round-off.
 * On an excited noise-free run, where the velocities' derivatives miss the accelerations
   between samples, the rows hold at the truth and the estimates reach it; the velocities'
   form does neither.
@@ -13,7 +14,8 @@ compensation_gain`).
   scatter as ``K P K^T`` predicts, not as the plain ``P``.
 * With the velocities' noise (the sensors' models) the reported standard deviations cover
   the errors; the velocities' form does not.
-* Plumbing: only the force method with differenced accelerations uses it; bad FMU values are
+* Plumbing (the native Identifier): only the force method with differenced accelerations
+  uses it; bad FMU values are
   refused; the state round trip continues bit for bit.
 """
 from __future__ import annotations
@@ -21,12 +23,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from oracles import estimator as oracle
 from spacerobot.estimator import Identifier
-from spacerobot.estimator.differencing import derivative_weights, displacement_weights
-from spacerobot.estimator.eiv import compensation
+from oracles.estimator.differencing import derivative_weights, displacement_weights
+from oracles.estimator.eiv import compensation
 from spacerobot.estimator.identifier import KEYS, identifier_from_values
-from spacerobot.estimator.noise_model import equation_error_sd
-from spacerobot.estimator.solvers import compensation_gain
+from oracles.estimator.noise_model import equation_error_sd
+from oracles.estimator.solvers import compensation_gain
 from spacerobot.interface import estimate_vector, relative_errors
 from spacerobot.system.identify import estimator_parameters
 from test_eiv import DIFFERENCED, signal_sd, with_noise
@@ -63,9 +66,12 @@ def test_displacement_weights_are_simpson_and_exact_for_polynomials():
 
 
 def test_linear_rows_are_the_momentum_rows_differenced(excited):
+    """The oracle's rows (the reference of the native core's diff_momentum,
+    tests/test_native_estimator.py; the native core does not expose its rows)."""
     sc, data = excited
-    dm = Identifier(sc.robot, sc.guess, "force", accel_source="differenced", diff_momentum=True)
-    mom = Identifier(sc.robot, sc.guess, "momentum")
+    dm = oracle.Identifier(sc.robot, sc.guess, "force", accel_source="differenced",
+                           diff_momentum=True)
+    mom = oracle.Identifier(sc.robot, sc.guess, "momentum")
     E_mom = [mom.equations(o) for _, o in data]              # minus the first sample's
     times = [t for t, _ in data]
     checked = 0

@@ -1,4 +1,5 @@
-"""The force method's noisy accelerations, compensated (issue 14, :mod:`spacerobot.estimator.eiv`).
+"""The force method's noisy accelerations, compensated (issue 14; the native Identifier, and the
+NumPy oracle's :mod:`oracles.estimator.eiv`).
 
 * The equations are affine in the accelerations (what the noise rows assume): a step of any
   size in one acceleration moves the equation array by that step times the unit step's change.
@@ -6,7 +7,7 @@
   compensated normal equations remove the attenuation that plain least squares shows.
 * On an excited noise-free run with white noise added to the accelerations only (the sensors
   model, every other error off), the plain force method underestimates the masses; the
-  compensated one does not, for both solvers; with differenced accelerations the compensated
+  compensated one does not, for both solvers (the native Identifier); with differenced accelerations the compensated
   estimate returns to the noise-free run's.
 * Zero noise settings: bit for bit the plain estimator; state round trip; bad values refused.
 """
@@ -15,14 +16,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from oracles import estimator as oracle
+from oracles.estimator import kernels
 from spacerobot.estimator import Identifier
-from spacerobot.estimator import kernels
-from spacerobot.estimator.eiv import accel_channels, compensation
+from oracles.estimator.eiv import accel_channels, compensation
 from spacerobot.estimator.identifier import KEYS, identifier_from_values
 from spacerobot.interface import estimate_vector
 from spacerobot.kinematics import ArmGeometry
 from spacerobot.robots import get_robot
-from spacerobot.sensors import SensorSuite, default_parameters, estimator_noise_settings
+from oracles.sensors import SensorSuite  # the NumPy sensor models: test data
+from spacerobot.sensors import default_parameters, estimator_noise_settings
 from spacerobot.system.identify import estimator_parameters
 from test_moving_reference import record
 
@@ -53,8 +56,8 @@ def signal_sd(source: str) -> dict:
     return {k: s[f"ident.noise.{n}"] for k, n in names.items()}
 
 
-def identify(sc, data, solver="paper", **kw):
-    ident = Identifier(sc.robot, sc.guess, "force", solver, **kw)
+def identify(sc, data, solver="paper", cls=Identifier, **kw):
+    ident = cls(sc.robot, sc.guess, "force", solver, **kw)
     for t, o in data:
         ident.update(t, o)
     return ident
@@ -154,7 +157,7 @@ def test_bad_noise_settings_are_refused(excited, bad, match):
     sc, _ = excited
     with pytest.raises(ValueError, match=match):
         Identifier(sc.robot, sc.guess, "force", signal_sd=bad)
-    with pytest.raises(ValueError, match="force_window"):
+    with pytest.raises(ValueError, match="momentum method's.*force method takes 0"):
         Identifier(sc.robot, sc.guess, "force", window=1.0, signal_sd={"a_S": 1e-3})
 
 
@@ -184,13 +187,16 @@ def test_noise_settings_are_the_sensors_per_sample_noise(excited, sensor, key, s
 
 def test_the_prior_pull_is_the_rls_own_with_compensation(excited):
     """The compensated estimate moves ``mu``; the prior's pull (part of the sd) stays the RLS's
-    distance to its data-only answer, not that shift."""
+    distance to its data-only answer, not that shift (the oracle's solver: the native core
+    keeps these parts internal)."""
     sc, data = excited
     noisy = with_noise(sc, data[:200], 1, MEASURED)
-    plain = identify(sc, noisy).solver.prior_pull()[0]
-    fixed = identify(sc, noisy, signal_sd=signal_sd("measured")).solver
+    o = oracle.Identifier
+    plain_solver = identify(sc, noisy, cls=o).solver
+    plain = plain_solver.prior_pull()[0]
+    fixed = identify(sc, noisy, cls=o, signal_sd=signal_sd("measured")).solver
     pull = fixed.prior_pull()[0]
-    shift = np.abs(fixed.mu - identify(sc, noisy).solver.mu).max()
+    shift = np.abs(fixed.mu - plain_solver.mu).max()
     assert shift > 1e-3                                          # the compensation moved mu
     assert np.abs(pull).max() <= 10.0 * np.abs(plain).max() + 1e-9, (pull, plain)
 

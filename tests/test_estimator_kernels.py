@@ -1,13 +1,16 @@
-"""The identifier's compiled kernels (spacerobot/estimator/kernels.py) against the NumPy
-reference of the same equations (the test oracles tests/oracles/kinematics.py and
-regressors.py), at random, non-physical inputs where no term vanishes; the RLS step's
-refusals; the one validation rule on both of its paths."""
+"""The oracle estimator's equation kernels (tests/oracles/estimator/kernels.py, the reference
+of the native equations in tests/test_native_equations.py) against the independent NumPy
+reference of the same equations (tests/oracles/kinematics.py and regressors.py), at random,
+non-physical inputs where no term vanishes; the native Identifier's one validation rule,
+whether a sample comes as arrays or as lists, and its refusal of a sample of the wrong
+shape."""
 import numpy as np
 import pytest
 
 from oracles import regressors as rg
 from oracles.kinematics import ArmKinematics
-from spacerobot.estimator import RLS, Identifier
+from oracles.estimator import Identifier as OracleIdentifier
+from spacerobot.estimator import Identifier
 from spacerobot.estimator import parameters as par
 from spacerobot.estimator.identifier import KEYS, ROTATION_TOL
 from spacerobot.robots import scenario
@@ -45,10 +48,10 @@ def reference_equations(robot, s, method):
 
 @pytest.mark.parametrize("robot", ["planar", "spatial"])
 @pytest.mark.parametrize("method", ["momentum", "force"])
-def test_compiled_equations_match_numpy_reference(robot, method):
+def test_oracle_equations_match_numpy_reference(robot, method):
     sc = scenario(robot)
     rng = np.random.default_rng(11)
-    ident = Identifier(sc.robot, sc.guess, method)
+    ident = OracleIdentifier(sc.robot, sc.guess, method)
     for _ in range(20):
         s0, s1 = random_sample(rng, sc.robot.n_joints), random_sample(rng, sc.robot.n_joints)
         if method == "momentum":
@@ -74,22 +77,6 @@ def test_D_of_mu_is_the_paper_map():
         np.testing.assert_allclose(D[10 * k:10 * k + 10], m * np.array(J), rtol=1e-15)
 
 
-def test_rls_refuses_an_indefinite_covariance_and_keeps_its_state():
-    rls = RLS(np.zeros(3), -np.eye(3))                          # H P H^T + I < 0
-    x, P = rls.x.copy(), rls.P.copy()
-    with pytest.raises(np.linalg.LinAlgError):
-        rls.update(np.eye(3) * 2.0, np.ones(3))
-    assert np.array_equal(rls.x, x) and np.array_equal(rls.P, P) and rls.rows == 0
-
-
-def test_rls_refuses_a_non_finite_result_and_keeps_its_state():
-    rls = RLS(np.zeros(2), 1e300 * np.eye(2))
-    x, P = rls.x.copy(), rls.P.copy()
-    with pytest.raises(FloatingPointError):
-        rls.update(np.array([[1e10, 0.0]]), np.array([1e300]))
-    assert np.array_equal(rls.x, x) and np.array_equal(rls.P, P) and rls.rows == 0
-
-
 def test_sample_of_wrong_shape_is_rejected_with_its_name():
     sc = scenario("spatial")
     ident = Identifier(sc.robot, sc.guess)
@@ -98,7 +85,8 @@ def test_sample_of_wrong_shape_is_rejected_with_its_name():
     s["q"] = np.zeros(sc.robot.n_joints - 1)                    # same total length
     assert ident.update(0.0, s) == 4
     assert "input q has shape" in ident.message
-    assert ident.samples == 0 and ident.reference is None and ident.rejected == 1
+    assert ident.samples == 0 and ident.rejected == 1
+    assert ident.update(0.1, random_sample(np.random.default_rng(2), sc.robot.n_joints)) == 1
     assert list(KEYS)[6] == "q"
 
 
@@ -132,9 +120,9 @@ def test_one_rotation_rule_on_both_validation_paths(as_lists):
             s = {k: np.asarray(v).tolist() for k, v in s.items()}
         status = ident.update(0.0, s)
         if ok:
-            assert status == 1 and ident.reference is not None, (err, ident.message)
+            assert status == 1 and ident.rejected == 0, (err, ident.message)
         else:
-            assert status == 4 and ident.reference is None and ident.rejected == 1, err
+            assert status == 4 and ident.status == 4 and ident.rejected == 1, err
             assert "base.A is not a rotation matrix" in ident.message
     # lists are accepted as samples
     ident = Identifier(sc.robot, sc.guess)

@@ -72,15 +72,20 @@ def test_excitation_off_is_the_paper_plant_bit_for_bit(robot):
 # bounds by construction
 # ------------------------------------------------------------------------------------------------
 
+def _set_time(p: Plant, t: float) -> None:
+    """Move the plant's clock to ``t`` without stepping (the references depend on t only)."""
+    p.set_state(dict(p.get_state(), t=t))
+
+
 def _sample_references(p: Plant, times, requests):
     """References at ``times``, the level requests ``(t, level)`` applied when reached."""
     req = list(requests)
     rows = []
     for t in times:
         while req and req[0][0] <= t:
-            p.t = req[0][0]
+            _set_time(p, req[0][0])
             p.set_excitation(req.pop(0)[1])
-        p.t = t
+        _set_time(p, t)
         r = p.references()
         rows.append((p.excitation_level(), r))
     return rows

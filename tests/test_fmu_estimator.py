@@ -250,10 +250,23 @@ def _meas(names, x, sc) -> dict:
     return out
 
 
-def test_fmu_state_round_trip(planar_fmus):
+@pytest.fixture(scope="module")
+def pythonfmu_estimator_fmus(planar_fmus, tmp_path_factory):
+    """The native plant with the pythonfmu-hosted estimator (the native-backed Identifier)."""
+    from spacerobot.fmi.build import build_fmu
+    from spacerobot.robots import scenario as _scenario
+    return {"plant": planar_fmus["plant"],
+            "estimator": build_fmu("estimator", _scenario("planar"),
+                                   tmp_path_factory.mktemp("pyest"), backend="pythonfmu")}
+
+
+@pytest.mark.parametrize("backend", ["native", "pythonfmu"])
+def test_fmu_state_round_trip(planar_fmus, pythonfmu_estimator_fmus, backend):
     """Save at 10 s, run 3 s, restore (get/set and via bytes, also into fresh instances),
     run 3 s again: bit-identical outputs of the plant, a momentum and a force/differenced
-    estimator (the latter keeps a differencing history in its state)."""
+    estimator (the latter keeps a differencing history in its state); the native estimator FMU
+    and the pythonfmu-hosted one (its state: the Identifier's core Data block)."""
+    planar_fmus = planar_fmus if backend == "native" else pythonfmu_estimator_fmus
     pair = Pair(planar_fmus)
     extra = started_slave(planar_fmus["estimator"], {"method": 2, "accel_source": 2}, "extra")
     evr = [pair.est.vars[n].valueReference for n in pair.inputs]

@@ -48,7 +48,8 @@ def test_fmu_equals_the_core_and_the_seed_fixes_the_run(planar_fmus):
     b = _feed(_sensors(planar_fmus, {"seed": 4}), names, samples)
     c = _feed(_sensors(planar_fmus, {"seed": 5}), names, samples)
     assert a.tobytes() == b.tobytes() and not np.array_equal(a, c)
-    # independent computation: the core (no FMI) on the same samples
+    # the FMU maps variables to its core: the core (no FMI) on the same samples gives the same
+    # bits
     sc = scenario("planar")
     core = SensorSuite(sc.robot.n_joints, seed=4, dt=sc.sample_time)
     from spacerobot.interface import measurement_vars
@@ -105,7 +106,20 @@ def test_sensors_ssd_validates_and_wires_through_the_sensors(sensors_system):
                 schema = sd if name.endswith(".ssd") else sv
                 assert schema.validate(etree.fromstring(zf.read(name))), name
     assert "resources/SpaceRobotSensors.fmu" in members
-    assert {"resources/ideal.ssv", "resources/realistic.ssv", "resources/medium.ssv"} <= members
+    assert {"resources/ideal.ssv", "resources/realistic.ssv", "resources/medium.ssv",
+            "resources/sensors/ideal.ssv", "resources/sensors/realistic.ssv"} <= members
+    # each component is bound only to variables it has (OMSimulator: "Unknown signal")
+    from spacerobot.interface import plant_vars, sensors_vars
+    sc = scenario("planar")
+    has = {"resources": {v.name for v in plant_vars(sc.robot, sc)},
+           "sensors": {v.name for v in sensors_vars(sc.robot, sc)}}
+    with zipfile.ZipFile(sensors_system["ssp"]) as zf:
+        for name in members:
+            folder = (["", *name.split("/")])[-2]
+            if name.endswith(".ssv") and folder in has:
+                bound = {p.get("name") for p in etree.fromstring(zf.read(name)).iter(
+                    "{*}Parameter")}
+                assert bound and bound <= has[folder], (name, bound - has[folder])
     assert ssd.robot_of(sensors_system["ssp"]) == "planar"
     conns = ssd.system_connections("planar", sensors=True)
     est_inputs = {b for _, _, c, b in conns if c == "estimator"}

@@ -1,5 +1,5 @@
 """The native differencing weights (native/src/differencing.c) against the Python functions
-(spacerobot.estimator.differencing) and exact properties.
+(oracles.estimator.differencing) and exact properties.
 
 Tolerances: derivative weights to 1e-12 of the largest |weight| (a 3x3 well-scaled normal
 system); displacement weights to round-off times the condition number of the Vandermonde
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from numpy.ctypeslib import ndpointer
 
-from spacerobot.estimator import differencing as dif
+from oracles.estimator import differencing as dif
 from test_native_linalg import build_core
 
 D = ndpointer(np.float64, flags="C_CONTIGUOUS")

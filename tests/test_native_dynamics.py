@@ -1,11 +1,11 @@
 """The native rigid-body dynamics (native/src/dynamics.c) against Pinocchio: forward dynamics
 (ABA), joint-space inertia (CRBA), non-linear effects (RNEA) and momentum at random states, for
 the planar and spatial robots and the shipped 7-joint servicer URDF (each with a grasped
-target, through the robot record and the C reader), and the random 7- and 8-joint chains of
-tests/test_compiled_dynamics.py (joints about x, y, z, -z and random axes); the ABA against
-M^-1 (tau - nle) of the C CRBA/RNEA; the physical-state interface against Pinocchio's classical
-base acceleration; momentum conservation (and balance under thrust) along an RK4 integration;
-the agreement with the compiled Numba functions of spacerobot/plant/rigid_body.py."""
+target, through the robot record and the C reader; the Pinocchio models of the test oracle
+tests/oracles/pinocchio_model.py), and random 7- and 8-joint chains (joints about x, y, z, -z and
+random axes); the ABA against M^-1 (tau - nle) of the C CRBA/RNEA; the physical-state interface
+against Pinocchio's classical base acceleration; momentum conservation (and balance under
+thrust) along an RK4 integration."""
 from __future__ import annotations
 
 import ctypes
@@ -18,8 +18,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from oracles.pinocchio_model import build_model, random_chain, random_state
 from spacerobot.core import robot_record as rr
-from spacerobot.plant.dynamics import build_model
 from spacerobot.robots import ROBOTS, URDF_DIR, RigidBody, get_robot
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,16 +27,6 @@ TOL = 1e-12
 TARGET = RigidBody(120.0, (0.05, 0.02, -0.03), (9.0, 7.0, 5.0, 0.3, -0.2, 0.1))
 _D = ctypes.POINTER(ctypes.c_double)
 _V = ctypes.c_void_p
-
-
-def _test_compiled():
-    spec = importlib.util.spec_from_file_location("_tcd", ROOT / "tests" / "test_compiled_dynamics.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-TCD = _test_compiled()          # random_chain, _random_state: the same models and states
 
 
 # -- the library --------------------------------------------------------------------------------
@@ -191,7 +181,7 @@ def _cases(L):
         out[name] = (rr.c_robot(robot, L), _sr_body(TARGET),
                      build_model(robot, target=TARGET).model)
     for name, rng, n, kinds in [("chain7", 7, 7, "uuz"), ("chain_xyzm", 8, 8, "xyzmu")]:
-        model = TCD.random_chain(np.random.default_rng(rng), n=n, kinds=kinds)
+        model = random_chain(np.random.default_rng(rng), n=n, kinds=kinds)
         out[name] = (_sr_robot_of_pinocchio(model), None, model)
     return out
 
@@ -241,7 +231,7 @@ def test_aba_crba_rnea_momentum_equal_pinocchio(cases, name):
     rng = _rng(name)
     worst = dict(aba=0.0, M=0.0, nle=0.0, hg=0.0, com=0.0, inv=0.0)
     for _ in range(20):
-        q, v, tau = TCD._random_state(model, rng)
+        q, v, tau = random_state(model, rng)
         ddq = dyn.aba(q, v, tau)
         ref = pin.aba(model, data, q, v, tau)
         worst["aba"] = max(worst["aba"], _rel(ddq, ref))
@@ -269,7 +259,7 @@ def test_physical_state_interface(cases, name):
     data = model.createData()
     rng = _rng(name + "phys")
     for _ in range(10):
-        q, v, _ = TCD._random_state(model, rng)
+        q, v, _ = random_state(model, rng)
         r, A, vS, w, qa, qd = _physical(model, q, v)
         F, Mt, tau = rng.normal(scale=50.0, size=3), rng.normal(scale=50.0, size=3), \
             rng.normal(scale=20.0, size=dyn.n)
@@ -349,7 +339,7 @@ def _rk4_momentum(dyn, r, A, vS, w, qa, qd, F, Mt, tau, h, steps):
 def test_momentum_conserved_and_balanced_along_rk4(cases, name):
     dyn, model = cases[name]
     rng = _rng(name + "rk4")
-    q, v, _ = TCD._random_state(model, rng)
+    q, v, _ = random_state(model, rng)
     v *= 0.3
     r, A, vS, w, qa, qd = _physical(model, q, v)
     tau = rng.normal(scale=5.0, size=dyn.n)         # internal: momentum is conserved
@@ -374,70 +364,6 @@ def test_momentum_conserved_and_balanced_along_rk4(cases, name):
     print(name, f"momentum balance error over 0.2 s under thrust (relative): P {Perr:.1e}, "
           f"L {Lerr:.1e}")
     assert Perr <= 1e-11 and Lerr <= 1e-11
-
-
-def _worst_vs_numba(rb, dyn, model, name, arrays) -> float:
-    """The largest relative difference of the C ABA and terms from those of the compiled
-    rigid-body kernels ``rb`` on ``arrays`` (rb.chain_arrays) over 10 random states of ``model``."""
-    planar, R, p, I6, mc = arrays
-    ws = rb.Workspace(R.shape[0] - 1).arrays()
-    rng = _rng(name + "numba")
-    worst = 0.0
-    for _ in range(10):
-        q, v, tau = TCD._random_state(model, rng)
-        ddq = np.empty(model.nv)
-        assert rb.aba(planar, R, p, I6, q, v, tau, ddq, *ws) == 0
-        M, nle, hg = np.empty((model.nv, model.nv)), np.empty(model.nv), np.empty(6)
-        com = np.array(rb.terms(planar, R, p, I6, mc, q, v, M, nle, hg, *ws))
-        Mc, nlec, hgc, comc = dyn.terms(q, v)
-        worst = max(worst, _rel(dyn.aba(q, v, tau), ddq), _rel(Mc, M), _rel(nlec, nle),
-                    _rel(hgc, hg), _rel(comc, com))
-    return worst
-
-
-# -- agreement with the compiled Numba dynamics (rigid_body.py) -------------------------------
-
-@pytest.mark.parametrize("name", NAMES)
-def test_agrees_with_compiled_rigid_body(cases, name):
-    rb = pytest.importorskip("spacerobot.plant.rigid_body")
-    dyn, model = cases[name]
-    planar, R, p, I6, mc = rb.chain_arrays(model)
-    worst = _worst_vs_numba(rb, dyn, model, name, (planar, R, p, I6, mc))
-    print(name, f"C vs Numba: {worst:.1e}")
-    # the models differ by the rounding of their construction (1e-16), amplified by M's
-    # conditioning (up to 1e5 here) in the accelerations
-    assert worst <= 1e-12
-
-
-def _model_arrays(lib, dyn, R, p, I6):
-    """Overwrite the C model's R, p, m, h, J with rigid_body.chain_arrays' (the struct's layout,
-    dynamics.h: 4 ints, then R[13][9], p[13][3], m[13], h[13][3], J[13][6], Q[13][9])."""
-    NB = rr.MAX_JOINTS + 1
-    assert lib.sr_dyn_model_size() == 16 + 8 * NB * 31
-    buf = np.frombuffer(dyn.model, dtype=np.float64, offset=16)
-    nb = R.shape[0]
-    iu = [(3, 3), (3, 4), (3, 5), (4, 4), (4, 5), (5, 5)]
-    for off, arr in [(0, R.reshape(nb, 9)), (NB * 9, p), (NB * 12, I6[:, 0, 0].reshape(nb, 1)),
-                     (NB * 13, np.stack([I6[:, 5, 1], I6[:, 3, 2], I6[:, 4, 0]], 1)),
-                     (NB * 16, np.stack([I6[:, a, b] for a, b in iu], 1))]:
-        w = arr.shape[1]
-        buf[off:off + nb * w] = arr.ravel()
-
-
-@pytest.mark.parametrize("name", NAMES)
-def test_same_model_arrays_give_numbas_numbers(lib, cases, name):
-    """With the model arrays of rigid_body.chain_arrays, the C algorithms (the same order of
-    operations) reproduce the compiled ones to rounding: the port itself, model construction
-    aside."""
-    rb = pytest.importorskip("spacerobot.plant.rigid_body")
-    _, model = cases[name]
-    r, t, _ = _cases(lib)[name]
-    dyn = Dyn(lib, r, t)
-    planar, R, p, I6, mc = rb.chain_arrays(model)
-    _model_arrays(lib, dyn, R, p, I6)
-    worst = _worst_vs_numba(rb, dyn, model, name, (planar, R, p, I6, mc))
-    print(name, f"C vs Numba, same model arrays: {worst:.1e}")
-    assert worst <= 1e-15
 
 
 # -- bad input ---------------------------------------------------------------------------------
@@ -503,7 +429,7 @@ def test_set_base_equals_a_model_with_that_base(lib, cases):
     data = model.createData()
     rng = _rng("set_base")
     for _ in range(5):
-        q, v, tau = TCD._random_state(model, rng)
+        q, v, tau = random_state(model, rng)
         want = pin.aba(model, data, q, v, tau)
         for d in (ref, dyn, dyn2):
             assert _rel(d.aba(q, v, tau), want) <= TOL

@@ -1,7 +1,7 @@
 """The equations of one sample in C (native/src/equations.c) against the NumPy test oracles
 (tests/oracles/kinematics.py, regressors.py: an independent, vectorised formulation) and
-against today's compiled kernels (spacerobot/estimator/kernels.py), for the planar, spatial
-and servicer7 robots, at random states where no term vanishes; D(mu), the rotation error and
+against the former Python kernels (tests/oracles/estimator/kernels.py, now plain NumPy), for
+the planar, spatial and servicer7 robots, at random states where no term vanishes; D(mu), the rotation error and
 the sample check against kernels.py and NumPy."""
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from spacerobot.core import robot_record as rr
-from spacerobot.estimator import kernels
+from oracles.estimator import kernels
 from spacerobot.estimator.identifier import INPUT_LIMIT, KEYS, ROTATION_TOL
 from spacerobot.kinematics import ArmGeometry
 from test_estimator_kernels import reference_equations

@@ -1,22 +1,30 @@
-"""The native estimator core (native/src/estimator.c, est_paper.c) against the Python
-Identifier (spacerobot.estimator), fed the same recorded sample streams open loop.
+"""The native estimator core (native/src/estimator.c, est_paper.c) against the NumPy oracle
+(tests/oracles/estimator: the former Python Identifier, pure NumPy), fed the same recorded
+sample streams open loop.
 
 Streams: the Python plant (spacerobot.plant.Plant) with excitation 1 for the scenarios
 ("planar", "medium"), ("spatial", "default") (the spatial robot has no "paper" target: its
 default is the paper's) and a random spatial target, 30 s at 0.1 s.
 
-Agreement is measured in the project's error metric: ``|native - python| <= 1e-9 * scale``
-with ``scale`` = :func:`spacerobot.interface.error_scale` of the Python estimate (relative to
+Agreement is measured in the project's error metric: ``|native - oracle| <= TOL * scale``
+with ``scale`` = :func:`spacerobot.interface.error_scale` of the oracle's estimate (relative to
 the mass, to max(|b|, 5 cm), to the moments; a product of inertia near 0 has no relative error
-of its own). Standard deviations agree within 1e-9 of themselves from the first sample at
-which both excitation diagnostics (reciprocal condition numbers of the scaled information) are
->= 1e-6: before that the information is ill-conditioned and the summation order of the two
-implementations (or of the Python package's own two paths) moves the sd by up to 1e-3
-(docs/identification.md; the prior's pull is G^-1 of a nearly singular G there).
+of its own). The two are independent implementations (the native core ported the Python
+package's fused compiled step; the oracle runs the layered NumPy/LAPACK path), so they agree to
+round-off amplified by the information's conditioning, not bit for bit: estimates within 1e-8
+of the error scale (measured up to 3.4e-9, spatial momentum with forgetting), standard
+deviations within ``SD_REL_TOL`` of themselves plus ``SD_SCALE_TOL`` of the error scale from
+the first sample at which both excitation diagnostics (reciprocal condition numbers of the
+scaled information) are >= ``OBSERVED_RCOND``. On these noise-free streams the standard
+deviations are the residuals' round-off and the prior's pull through a barely conditioned
+information, so only their size relative to the estimates is meaningful (measured up to 3e-5
+of the error scale from rcond 1e-4; relative to themselves O(1)); before that the prior's pull
+is G^-1 of a nearly singular G (docs/identification.md) and they move by 1e-3 of the scale.
 """
 from __future__ import annotations
 
 import ctypes
+import dataclasses
 import os
 import struct
 import subprocess
@@ -30,16 +38,18 @@ import pytest
 from spacerobot import interface
 from spacerobot.core import CoreUnavailable, load_library
 from spacerobot.core.estimator import NativeEstimator
-from spacerobot.estimator import Identifier
-from spacerobot.estimator.identifier import KEYS, identifier_from_values
+from oracles.estimator import Identifier
+from oracles.estimator.identifier import KEYS, identifier_from_values
 from spacerobot.plant import Plant
 from spacerobot.robots import random_scenario, scenario
 
 ROOT = Path(__file__).resolve().parents[1]
-#: agreement of estimates (x error scale) and of standard deviations (x themselves)
-TOL = 1e-9
+#: agreement of estimates (x error scale)
+TOL = 1e-8
+#: agreement of standard deviations: x themselves, plus x the error scale (module docstring)
+SD_REL_TOL, SD_SCALE_TOL = 1e-6, 1e-4
 #: reciprocal condition number from which the standard deviations are compared
-OBSERVED_RCOND = 1e-6
+OBSERVED_RCOND = 1e-4
 #: The core's joint sines and cosines are native/src/sr_math.c's (the same bits on every
 #: platform, correctly rounded), the Python Identifier's glibc's, which misround 0.13 % of
 #: arguments: on the spatial streams the inputs then differ by 1 ulp at times (on the planar
@@ -119,8 +129,8 @@ def native_options(sc, method, lam, accel="measured", **kw):
 
 
 def compare(lib, sc, rec, method, lam, accel="measured", py_kw=None, nat_kw=None,
-            x_tol=TOL, sd_tol=TOL, res_tol=1e-12, observed_rcond=OBSERVED_RCOND,
-            sd_scale_tol=None, res_rel=1e-9):
+            x_tol=TOL, sd_tol=SD_REL_TOL, res_tol=1e-12, observed_rcond=OBSERVED_RCOND,
+            sd_scale_tol=SD_SCALE_TOL, res_rel=1e-9):
     """Run both on ``rec``; assert the agreement of the module docstring at every sample.
     Returns (Python, native) after the run and the worst differences (estimates x scale,
     sd x sd)."""
@@ -140,7 +150,9 @@ def compare(lib, sc, rec, method, lam, accel="measured", py_kw=None, nat_kw=None
         scale = interface.error_scale(py.vector())
         dx = np.max(np.abs(vec - py.vector()) / scale)
         dr = np.max(np.abs(rep["vector"] - rep_py.vector) / scale)
-        assert dx <= x_tol and dr <= x_tol, (k, dx, dr)
+        # the projection of an unphysical estimate (an eigen-decomposition with clipping)
+        # amplifies the round-off of its input (measured 3.2e-8 of the scale)
+        assert dx <= x_tol and dr <= 100 * x_tol, (k, dx, dr)
         worst_x = max(worst_x, dx, dr)
         assert rep["identified"] == rep_py.identified, k
         assert rep["physical"] == rep_py.physical, k
@@ -153,12 +165,9 @@ def compare(lib, sc, rec, method, lam, accel="measured", py_kw=None, nat_kw=None
         observed = observed or (py.samples > 0 and min(exc) >= observed_rcond)
         if observed:
             for a, b in ((sd, py.std()), (rep["sd"], rep_py.std)):
-                if sd_scale_tol is not None:         # see PORTABLE_TRIG
-                    assert np.max(np.abs(a - b) / scale) <= sd_scale_tol, k
-                    continue
-                d = np.max(np.abs(a - b) / np.maximum(np.abs(b), 1e-300 + 1e-14 * scale))
-                assert d <= sd_tol, (k, d, np.argmax(np.abs(a - b) / np.abs(b)))
-                worst_sd = max(worst_sd, d)
+                d = np.abs(a - b) / (sd_tol * np.abs(b) + sd_scale_tol * scale)
+                assert np.max(d) <= 1.0, (k, np.max(d), np.argmax(d), a, b)
+                worst_sd = max(worst_sd, float(np.max(np.abs(a - b) / scale)))
     assert observed, "the run never got observed enough to compare the standard deviations"
     return py, nat, worst_x, worst_sd
 
@@ -215,7 +224,8 @@ def test_row_weights_and_correlation_lags_match_python(lib, method, lam):
     whose Gram sums have BLAS's summation order, and the drift tracker's lag (the slope of
     the converged estimates, computed through the information's inverse) carries that
     round-off into the sd: the Python package's own fused and layered paths differ by 5e-6
-    in the sd on this stream without lags. Bound: 1e-4 (measured 7e-6), against inflations
+    in the sd on this stream without lags. Bound: 1e-4 (measured 7e-6), residuals 1e-6
+    relative (measured 9e-8), against inflations
     of 1.1 to 5."""
     sc, rec = stream("planar-medium")
     rec = noisy(rec, 1e-4, corr=0.0 if method == "momentum" else 0.9)
@@ -223,7 +233,7 @@ def test_row_weights_and_correlation_lags_match_python(lib, method, lam):
     py, nat, _, _ = compare(lib, sc, rec, method, lam,
                             py_kw={"row_sd": row_sd, "corr_lags": 8},
                             nat_kw={"row_sd_lin": row_sd[0], "row_sd_ang": row_sd[1],
-                                    "corr_lags": 8}, sd_tol=1e-4)
+                                    "corr_lags": 8}, sd_tol=1e-4, res_rel=1e-6)
     inflation = py.solver.corr_lin.inflation(), py.solver.corr_ang.inflation()
     assert max(inflation) > 1.01          # the inflation did act on the compared sd
 
@@ -246,13 +256,13 @@ def test_momentum_point_matches_python(lib, name, lam):
                                                      ("spatial-default", "force", 0.98, 5),
                                                      ("random", "momentum", 0.98, 0)])
 def test_joint_solver_matches_python(lib, name, method, lam, lags):
-    """solver = 2, one RLS over the 20 standard parameters (solvers.JointSolver): the same
-    RLS kernel, so the estimates agree to the bit; the excitation diagnostics and residuals
-    as the paper solver's. The Python JointSolver forms its Gram matrix with NumPy (BLAS),
-    so its standard deviations are not reproducible to the bit: compared on a stream with
-    1e-4 white noise (noise-free they are round-off-sized), without the drift tracker's lag
-    term (sd_without_lag = solver.std_parts().sd) from the 10th sample: within 1e-8 (measured
-    1e-10). The lag term itself is not compared: while the 20 x 20 information is singular
+    """solver = 2, one RLS over the 20 standard parameters (the oracle's JointSolver, its RLS
+    step by LAPACK's Cholesky and solve): on a stream with 1e-4 white noise (noise-free the
+    standard deviations are round-off-sized), estimates within 1e-6 of the error scale over
+    the first 20 samples, while the 20 x 20 information is barely conditioned (measured 1e-7),
+    1e-7 after (measured 1.2e-8); residuals within 1e-8 relative (measured 1.7e-9); the
+    standard deviations without the drift tracker's lag term (sd_without_lag =
+    solver.std_parts().sd) from the 10th sample within 1e-8 (measured 7.8e-10). The lag term itself is not compared: while the 20 x 20 information is singular
     (the first samples) Python's LU returns round-off garbage (lags of 1e16) where the C LU
     meets an exact zero pivot and falls back to eq. 1, and the tracker's weights remember
     it."""
@@ -268,13 +278,13 @@ def test_joint_solver_matches_python(lib, name, method, lam, lags):
         assert py.update_flat(t, x) == nat.update(t, x)
         vec, _ = nat.estimates()
         scale = interface.error_scale(py.vector())
-        assert np.max(np.abs(vec - py.vector()) / scale) <= TOL, k
+        assert np.max(np.abs(vec - py.vector()) / scale) <= (1e-6 if k < 20 else 1e-7), k
         rep = nat.report()
         for a, b in zip((rep["excitation_mu"], rep["excitation_theta"]), py.excitation()):
             assert abs(a - b) <= 1e-6 * abs(b) + 1e-15, (k, a, b)
         for a, b in ((rep["residual_lin"], py.residual_lin),
                      (rep["residual_ang"], py.residual_ang)):
-            assert abs(a - b) <= 1e-9 * abs(b) + 1e-12, (k, a, b)
+            assert abs(a - b) <= 1e-8 * abs(b) + 1e-12, (k, a, b)
         if k >= 10:
             sd_py = py.solver.std_parts().sd
             d = np.max(np.abs(nat.sd_without_lag() - sd_py) / sd_py)
@@ -617,13 +627,54 @@ def test_converges_to_the_truth_planar_momentum(lib):
     assert rep["excite"] == 0.0                       # until identified: no more excitation
 
 
+
+@pytest.mark.parametrize("method, P0s", [("momentum", (1e8, 1e12, 1e16)), ("force", (1e16,))])
+def test_weak_prior_noise_free_run_keeps_every_sample(lib, method, P0s):
+    """Issue #26: with a weak prior (P0_mu = P0_theta up to 1e16, the largest accepted) the
+    scatter variance of an estimate of a noise-free run comes out <= 0 by round-off at times
+    (sd 0: the oracle too), and the drift tracker's rate regression weighed that sample by
+    1 / 1e-300: its sums overflowed and the core rejected the sample as non-finite (this
+    stream, before the fix: momentum, paper solver 45 of 301 at 1e16; joint solver 1 at 1e8,
+    11 at 1e12, 21 at 1e16; force at 1e16: 51 and 57). The oracle takes those samples, with
+    standard deviations NaN from then on. Now: no sample rejected, every reported number
+    finite, the estimates within 1e-4 of the error scale of the oracle's over the first 20
+    samples (the covariance update's round-off grows with P0 while the information is barely
+    conditioned: measured 1.3e-5, joint solver at 1e16), within TOL after (measured 1.8e-9;
+    5e-12 at the end), and at the end within 1e-6 of the truth, as the oracle's (measured
+    1.7e-7 momentum, the plant's integration; 4e-9 force)."""
+    sc, rec = stream("spatial-default")
+    truth = interface.estimate_vector(sc.robot.base, sc.target)
+    for P0 in P0s:
+        guess = dataclasses.replace(sc.guess, P0_mu=P0, P0_theta=P0)
+        for solver in (1, 2):
+            py = Identifier(sc.robot, guess, method, ("paper", "joint")[solver - 1],
+                            "measured", 1.0)
+            nat = NativeEstimator(sc.robot, {**native_options(sc, method, 1.0),
+                                             "guess": guess, "solver": solver}, lib=lib)
+            for k, (t, x) in enumerate(rec):
+                s_py, s_nat = py.update_flat(t, x), nat.update(t, x)
+                assert s_nat in (1, 2) and s_py in (1, 2), (P0, solver, k, s_nat, nat.message)
+                vec, _ = nat.estimates()
+                dx = np.max(np.abs(vec - py.vector()) / interface.error_scale(py.vector()))
+                assert dx <= (1e-4 if k < 20 else TOL), (P0, solver, k, dx)
+            rep = nat.report()
+            assert rep["rejected"] == 0 and rep["samples"] == py.samples >= len(rec) - 1, (
+                P0, solver, rep["samples"], py.samples)
+            assert _finite_report(nat), (P0, solver)
+            err_nat = interface.relative_errors(nat.estimates()[0], truth).max()
+            err_py = interface.relative_errors(py.vector(), truth).max()
+            assert err_nat < 1e-6 and err_py < 1e-6, (P0, solver, err_nat, err_py)
+
+
 # -- options -----------------------------------------------------------------------------------------
 def test_options_refused_with_the_python_messages(lib):
-    """Invalid options: no model, the message of the Python Identifier naming the
-    parameter; options the native core does not implement yet: refused, never ignored."""
+    """Invalid options: no model, the message of the oracle (the former Python Identifier)
+    naming the parameter; a reference window with the force method: refused by the library's
+    Identifier, never ignored."""
     sc, _ = stream("planar-medium")
     values = {v.name: v.start for v in interface.estimator_vars(sc.robot, sc)
               if v.causality == "parameter"}
+    values.setdefault("ident.force_window", 0.0)      # the oracle's parameter (gone from the FMU)
 
     def python_message(**changes):
         with pytest.raises(ValueError) as e:
@@ -646,12 +697,9 @@ def test_options_refused_with_the_python_messages(lib):
         NativeEstimator(sc.robot, {"guess_base": [1.0, 0, 0, 0, 1, 1, 3, 0, 0, 0]}, lib=lib)
     with pytest.raises(ValueError, match="method = 3 is not one of"):
         NativeEstimator(sc.robot, {"method": 3}, lib=lib)
-    for opts, words in (({"momentum_window": 2.0}, "ident.momentum_window = 2 is not available"),
-                        ({"method": 2, "solver": 2, "signal_sd": [0.01, 0, 0, 0, 0, 0]},
-                         "ident.noise.base.a = 0.01 is not available"),
-                        ):
-        with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)")):
-            NativeEstimator(sc.robot, opts, lib=lib)
+    from spacerobot.estimator import Identifier as LibraryIdentifier
+    with pytest.raises(ValueError, match="momentum method's.*force method takes 0"):
+        LibraryIdentifier(sc.robot, sc.guess, "force", lib=lib, window=2.0)
     # where the Python Identifier ignores an option (the other method's), so does the core
     NativeEstimator(sc.robot, {"method": 2, "momentum_window": 5.0}, lib=lib)
 

@@ -1,23 +1,33 @@
-"""The native estimator FMU in real hosts (no Python in the FMU's process but the test's fmpy run).
+"""The native FMUs (estimator, sensors, plant) in real hosts (no Python in the FMU's process but
+the test's fmpy run).
 
-The FMU is built from this tree's sources (``native/build.py``, assembled by
+Each FMU is built from this tree's sources (``native/build.py``, assembled by
 ``spacerobot.fmi.native.build_native_fmu``), copied to a fresh folder and driven by the C host
 ``tests/c_host/fmu_host.c`` (one source: gcc + dlopen, mingw + LoadLibrary) from an EMPTY
-environment (``PATH=/usr/bin:/bin`` only), with 30 s of samples recorded from the Python plant
-(:class:`spacerobot.plant.Plant`) of the planar "medium" and the spatial (paper's) scenarios as
-its input file:
+environment (``PATH=/usr/bin:/bin`` only), for the planar "medium" and the spatial default
+scenarios, with an input file per model:
 
-1. linux64: every output (estimates, standard deviations, diagnostics, counters) at every
-   sample equals the same FMU run in fmpy to 1e-12 relative (integers exactly); a state
-   serialised mid-run and restored reproduces the run bit for bit; 3 create/free cycles first;
-   the estimates end near the truth (the samples reached the estimator as meant);
+* estimator: 30 s of samples recorded from the Python plant (:class:`spacerobot.plant.Plant`);
+* sensors (direct feedthrough; default noise, ``noise.scale`` 1): the same 30 s of plant
+  samples as its inputs ``true.<name>``;
+* plant: 30 s of excitation levels ``ident.excite`` (1, 0.5, 0, with one value above 1 and one
+  below 0 that the plant clips with a warning).
+
+1. linux64: every output at every sample equals the same FMU run in fmpy to 1e-12 relative
+   (integers exactly); a state serialised mid-run and restored reproduces the run bit for bit;
+   3 create/free cycles first; and the run is what it should be (checked against independent
+   facts): the estimates end near the truth (the samples reached the estimator as meant); the
+   sensor outputs lie within a few noise standard deviations of the true inputs and differ
+   from them; the plant moved and its attitude matrix stays orthonormal;
 2. win64: the DLL, run by the same host source cross-compiled with mingw under Wine
    (headless), gives the linux64 results to 1e-12 relative; it imports only KERNEL32.dll and
    msvcrt.dll;
 3. memory: the FMU binary and host built with ``-fsanitize=address,undefined`` run the same
    scenarios (5 create/free cycles, the state round trip, terminate, free, unload the library)
    with no sanitizer report (leaks included) and the same results; the plain binary under
-   ``valgrind --error-exitcode=1`` memcheck likewise (no error, no definite leak).
+   ``valgrind --error-exitcode=1`` memcheck likewise (no error, no definite leak). The plant's
+   memory runs take its first 5 s (its 100 integration steps per sample are slow under
+   valgrind); the others the whole 30 s.
 
 Each part skips, saying why, where its tool (mingw, Wine, valgrind, the ASan runtime) is missing.
 """
@@ -35,8 +45,13 @@ DT = 0.1
 SECONDS = 30.0
 N = int(round(SECONDS / DT))
 STATE_STEP = N // 2
-CASES = [("planar", "medium"), ("spatial", None)]      # the spatial robot's paper target
-IDS = ["planar-medium", "spatial-paper"]
+SCENARIOS = [("planar", "medium"), ("spatial", None)]  # the spatial robot's default target
+KINDS = ["estimator", "sensors", "plant"]
+CASES = [(kind, robot, target) for kind in KINDS for robot, target in SCENARIOS]
+IDS = [f"{kind}-{robot}-{target or 'default'}" for kind, robot, target in CASES]
+#: steps of the memory runs (sanitised, valgrind) per model: the plant integrates 100 internal
+#: steps per sample (valgrind: ~50 ms a sample)
+MEMORY_STEPS = {"estimator": N, "sensors": N, "plant": 50}
 RTOL = 1e-12
 
 
@@ -50,12 +65,13 @@ def libs(work):
     work.mkdir(exist_ok=True)
     if nh.wine() and nh.mingw():
         nh.wine_prefix(work)                    # its creation overlaps the builds
-    return nh.fmu_binaries(work)
+    return nh.fmu_binaries(work, KINDS)
 
 
 def record(robot: str, target, fmu: nh.Extracted):
-    """The plant's outputs at t = 0, DT, ..., SECONDS - DT as the estimator FMU's inputs:
-    (value references, rows of values) and the truth of the 20 estimates."""
+    """The plant's outputs at t = 0, DT, ..., SECONDS - DT as the estimator's (or the sensors'
+    ``true.<name>``) inputs: (value references, rows of values) and the truth of the 20
+    estimates."""
     from spacerobot import interface
     from spacerobot.interface import estimator_vars
     from spacerobot.plant import Plant
@@ -63,6 +79,7 @@ def record(robot: str, target, fmu: nh.Extracted):
 
     sc = scenario(robot, target)
     keys = {v.name: v.key for v in estimator_vars(sc.robot, sc)}
+    keys.update({f"true.{n}": k for n, k in keys.items()})
     names = fmu.names("Real", "input")
     p = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
               excitation=sc.excitation)
@@ -76,14 +93,24 @@ def record(robot: str, target, fmu: nh.Extracted):
     return [fmu.vr[n] for n in names], rows, interface.estimate_vector(sc.robot.base, sc.target)
 
 
-class Case:
-    """One scenario: its FMU, its samples as the host's input file, the fmpy run."""
+def excitation_levels(fmu: nh.Extracted):
+    """The plant's input ``ident.excite`` at each sample: full, half, none, with one level above
+    1 and one below 0 (clipped by the plant, with a warning)."""
+    levels = np.where(np.arange(N) < N // 3, 1.0, np.where(np.arange(N) < 2 * N // 3, 0.5, 0.0))
+    levels[N // 6], levels[N // 2] = 1.5, -0.25
+    return [fmu.vr["ident.excite"]], levels[:, None], None
 
-    def __init__(self, work, libs, robot, target):
-        self.robot, self.target = robot, target
-        self.tag = f"{robot}-{target or 'paper'}"
-        self.fmu = nh.estimator_fmu(work, robot, target, libs["plain"], "plain")
-        self.in_vr, self.samples, self.truth = record(robot, target, self.fmu)
+
+class Case:
+    """One model and scenario: its FMU, its input file, the fmpy run."""
+
+    def __init__(self, work, libs, kind, robot, target):
+        self.kind, self.robot, self.target = kind, robot, target
+        self.tag = f"{kind}-{robot}-{target or 'default'}"
+        self.fmu = nh.native_fmu(work, kind, robot, target, libs["plain"], "plain")
+        self.in_vr, self.samples, self.truth = (excitation_levels(self.fmu) if kind == "plant"
+                                                else record(robot, target, self.fmu))
+        self.memory_steps = MEMORY_STEPS[kind]
         self.csv = work / f"inputs_{self.tag}.csv"
         self.csv.write_text(",".join(map(str, self.in_vr)) + "\n" + "".join(
             ",".join(nh.hex_bits(x) for x in row) + "\n" for row in self.samples))
@@ -97,7 +124,7 @@ class Case:
         from fmpy.fmi2 import FMU2Slave
 
         s = FMU2Slave(guid=self.fmu.guid, unzipDirectory=str(self.fmu.dir),
-                      modelIdentifier=nh.IDENT, instanceName="fmpy")
+                      modelIdentifier=self.fmu.ident, instanceName="fmpy")
         s.instantiate()
         s.setupExperiment(startTime=0.0)
         s.enterInitializationMode()
@@ -125,10 +152,9 @@ _CASES: dict = {}
 
 @pytest.fixture(scope="module", params=CASES, ids=IDS)
 def case(request, work, libs) -> Case:
-    robot, target = request.param
-    if (robot, target) not in _CASES:
-        _CASES[(robot, target)] = Case(work, libs, robot, target)
-    return _CASES[(robot, target)]
+    if request.param not in _CASES:
+        _CASES[request.param] = Case(work, libs, *request.param)
+    return _CASES[request.param]
 
 
 def parse(stdout: str) -> np.ndarray:
@@ -151,7 +177,8 @@ def assert_same_run(c_rows: np.ndarray, ref: np.ndarray, case: "Case", what: str
     assert c_rows.shape == ref.shape, (what, c_rows.shape, ref.shape)
     np.testing.assert_array_equal(c_rows[:, 0], ref[:, 0])                   # times
     names = case.fmu.names("Real", "output")
-    a, b = c_rows[:, 1:-n_int], ref[:, 1:-n_int]
+    n_real = c_rows.shape[1] - n_int
+    a, b = c_rows[:, 1:n_real], ref[:, 1:n_real]
     err = worst_relative(a, b)
     if err > RTOL:
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -162,7 +189,7 @@ def assert_same_run(c_rows: np.ndarray, ref: np.ndarray, case: "Case", what: str
         pytest.fail(f"{what}: {len(cols)} of {len(names)} Real outputs differ by more than "
                     f"{RTOL:g} relative, from sample {first} (t = {c_rows[first, 0]:g} s) on; "
                     f"worst {err:.3g}; per output: {detail}")
-    np.testing.assert_array_equal(c_rows[:, -n_int:], ref[:, -n_int:])       # integer outputs
+    np.testing.assert_array_equal(c_rows[:, n_real:], ref[:, n_real:])       # integer outputs
     return err
 
 
@@ -194,6 +221,11 @@ def test_c_host_from_an_empty_environment_equals_fmpy(case, host):
     err = assert_same_run(c_rows, case.fmpy, case, "C host vs fmpy")
     print(f"{case.tag}: C host vs fmpy, {c_rows.shape[0]} rows x {c_rows.shape[1] - 1} outputs, "
           f"worst relative difference {err:.3g}")
+    {"estimator": check_estimator_run, "sensors": check_sensors_run,
+     "plant": check_plant_run}[case.kind](case, c_rows)
+
+
+def check_estimator_run(case: Case, c_rows: np.ndarray) -> None:
     # the samples reached the estimator as meant: every sample used, none rejected ...
     names = case.fmu.names("Integer", "output")
     last = dict(zip(names, c_rows[-1, -len(case.int_out):]))
@@ -204,6 +236,31 @@ def test_c_host_from_an_empty_environment_equals_fmpy(case, host):
     m_true = case.truth[10]
     assert abs(est["target.m"] - m_true) <= 0.05 * m_true, (est["target.m"], m_true)
     assert abs(est["target.m"] - m_true) < abs(first["target.m"] - m_true)
+
+
+def check_sensors_run(case: Case, c_rows: np.ndarray) -> None:
+    """The outputs after the step from t_k measure the inputs set at t_k (direct feedthrough):
+    joint angles within 1e-3 rad of the truth (encoder noise 5e-6 rad, resolution 1.2e-5 rad),
+    the position within 0.1 m (navigation noise 1 cm), and not equal to it (noise.scale 1)."""
+    out = dict(zip(case.fmu.names("Real", "output"), c_rows[1:, 1:].T))
+    true = dict(zip(case.fmu.names("Real", "input"), case.samples.T))
+    q = [n for n in out if n.startswith("arm.q[")]
+    assert q and all(np.max(np.abs(out[n] - true[f"true.{n}"])) < 1e-3 for n in q), \
+        {n: float(np.max(np.abs(out[n] - true[f"true.{n}"]))) for n in q}
+    dr = np.max(np.abs(out["base.r[1]"] - true["true.base.r[1]"]))
+    assert 0.0 < dr < 0.1, dr
+
+
+def check_plant_run(case: Case, c_rows: np.ndarray) -> None:
+    """The plant moved, and its attitude matrix stays orthonormal to 1e-9 (an invariant of the
+    rigid-body integration)."""
+    out = dict(zip(case.fmu.names("Real", "output"), c_rows[:, 1:].T))
+    assert np.all(np.isfinite(c_rows))
+    assert np.ptp(out["arm.q[1]"]) > 1e-3 and np.ptp(out["base.r[1]"]) > 0.1
+    A = np.stack([out[f"base.A[{i},{j}]"] for i in (1, 2, 3) for j in (1, 2, 3)], axis=1)
+    A = A.reshape(-1, 3, 3)
+    dev = np.max(np.abs(A @ A.transpose(0, 2, 1) - np.eye(3)))
+    assert dev < 1e-9, dev
 
 
 def test_c_host_refuses_what_it_cannot_run(case, host, tmp_path):
@@ -256,24 +313,34 @@ def test_win64_dll_under_wine_equals_linux64(case, work, host):
 
 
 # ---- 3. memory safety -------------------------------------------------------------------------
-#: one run: 5 create/free cycles, the 30 s run with its state saved, serialised and restored
-#: at 15 s, then terminate, free and unload the library
-MEMORY_RUN = ["-c", 5, "-s", STATE_STEP, "-x", "dlclose"]
+#: one run: 5 create/free cycles, the run (30 s; the plant's first 5 s) with its state saved,
+#: serialised and restored half-way, then terminate, free and unload the library
+def memory_run(case: Case) -> list:
+    return ["-c", 5, "-s", case.memory_steps // 2, "-x", "dlclose"]
+
+
+def memory_args(case: Case, binary, uri) -> list:
+    args = case.host_args(binary, uri, case.csv, *memory_run(case))
+    args[-2] = case.memory_steps                 # NSTEPS
+    return args
+
+
+def memory_reference(case: Case, host) -> np.ndarray:
+    return linux_run(case, host)[:case.memory_steps + 1]
 
 
 def test_sanitized_binary_runs_clean(case, work, libs, host):
     why = nh.asan_missing(work)
     if why:
         pytest.skip(why)
-    fmu = nh.estimator_fmu(work, case.robot, case.target, libs["sanitized"], "sanitized")
+    fmu = nh.native_fmu(work, case.kind, case.robot, case.target, libs["sanitized"], "sanitized")
     exe = nh.compile_host(nh.HOST_SOURCE, work, sanitize=True)
     t = time.perf_counter()
-    r = nh.run([exe, *case.host_args(fmu.so, fmu.uri, case.csv, *MEMORY_RUN)],
-               env=nh.empty_env(nh.SANITIZER_ENV))
+    r = nh.run([exe, *memory_args(case, fmu.so, fmu.uri)], env=nh.empty_env(nh.SANITIZER_ENV))
     assert not nh.sanitizer_reports(r.stderr), "\n".join(nh.sanitizer_reports(r.stderr)[:20])
     assert r.returncode == 0, r.stderr[-3000:]
     assert "identical" in r.stderr and "5 instantiate/free cycles done" in r.stderr
-    assert_same_run(parse(r.stdout), linux_run(case, host), case, "sanitized")
+    assert_same_run(parse(r.stdout), memory_reference(case, host), case, "sanitized")
     print(f"{case.tag}: ASan/UBSan clean in {time.perf_counter() - t:.1f} s")
 
 
@@ -282,10 +349,9 @@ def test_valgrind_memcheck_clean(case, host):
     t = time.perf_counter()
     r = nh.run([vg, "--error-exitcode=1", "--leak-check=full", "--show-leak-kinds=definite",
                 "--errors-for-leak-kinds=definite", "-q", host,
-                *case.host_args(case.fmu.so, case.fmu.uri, case.csv, *MEMORY_RUN)],
-               env=nh.empty_env())
+                *memory_args(case, case.fmu.so, case.fmu.uri)], env=nh.empty_env())
     assert r.returncode == 0, r.stderr[-4000:]
     assert not [line for line in r.stderr.splitlines() if line.startswith("==")], r.stderr[-4000:]
     assert "identical" in r.stderr and "5 instantiate/free cycles done" in r.stderr
-    assert_same_run(parse(r.stdout), linux_run(case, host), case, "valgrind")
+    assert_same_run(parse(r.stdout), memory_reference(case, host), case, "valgrind")
     print(f"{case.tag}: valgrind memcheck clean in {time.perf_counter() - t:.1f} s")

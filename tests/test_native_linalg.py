@@ -20,7 +20,7 @@ from numpy.ctypeslib import ndpointer
 
 import native_hosts
 from oracles import report as orc
-from spacerobot.estimator import report_kernels as rk
+from oracles.estimator import report_kernels as rk
 
 SOURCES = ["linalg.c", "physical.c", "differencing.c", "sr_math.c"]
 
@@ -204,7 +204,7 @@ def test_cholesky_bad_input(lib):
 
 def test_cholesky_status_as_rls_update(lib):
     """The statuses of the Cholesky of kernels.rls_update's S: 1 not positive definite, 2 NaN."""
-    from spacerobot.estimator.kernels import rls_update
+    from oracles.estimator.kernels import rls_update
     for S, want in ((np.array([[1.0, 2.0], [2.0, 1.0]]), 1), (np.diag([1.0, np.nan]), 2)):
         k = S.shape[0]
         # rls_update's S = lam 1 + H P H^T is P itself for H = 1, lam = 0
@@ -327,7 +327,7 @@ def test_rcond(lib):
     """rcond_of_spectrum = max(lam_min, 0) / lam_max of NumPy's eigenvalues of the scaled
     information (identifier._rcond_numpy's definition), 0 with a zero diagonal entry;
     rcond_scaled = the scaled matrix and whether it is usable as it is."""
-    from spacerobot.estimator.identifier import _rcond_numpy
+    from oracles.estimator.identifier import _rcond_numpy
     rng = np.random.default_rng(9)
     for p in (3, 8, 12):
         for label, G in information_cases(rng, p):

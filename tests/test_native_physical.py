@@ -1,5 +1,5 @@
 """The native physical-consistency module (native/src/physical.c) against the Python/NumPy
-reference (spacerobot.estimator.physical: is_physical, the LAPACK-based projections
+reference (the oracle tests/oracles/estimator/physical.py: is_physical, the LAPACK-based projections
 _project_body_numpy / _project_planar_body_numpy) and ParameterLayout.error_scale.
 
 Tolerances: projected inertias to 1e-12 of the body's largest |entry| (two eigen-decompositions,
@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from numpy.ctypeslib import ndpointer
 
-from spacerobot.estimator import physical
-from spacerobot.estimator import report_kernels as rk
+from oracles.estimator import physical
+from oracles.estimator import report_kernels as rk
 from spacerobot.interface import COM_SCALE_MIN, LAYOUT
 from test_native_linalg import build_core
 

@@ -10,8 +10,8 @@ Kolmogorov-Smirnov test (p > 1e-3) over 10^6 draws, and the same bits from a min
 Wine as from the native build (skipped without mingw or Wine; $WINEPREFIX is used when set,
 else a new prefix, which takes Wine some 10 s to create).
 
-Sensors against today's Python SensorSuite (spacerobot.sensors, NumPy's generator: the same
-statistics, not the same numbers), per channel: white noise standard deviations and means over
+Sensors against the NumPy reference SensorSuite (tests/oracles/sensors.py, NumPy's generator:
+the same statistics, not the same numbers), per channel: white noise standard deviations and means over
 10000 samples, the bias random walks' increments and the growth of their variance with time
 (k = 10 and 40 steps) over 1000 runs (C) and 300 (Python), initial biases and the thrust scale factor and
 misalignment over 2000 seeds. Tolerance: 5 standard errors of the difference of the two
@@ -40,7 +40,8 @@ from numpy.ctypeslib import ndpointer
 import native_hosts
 from test_sensors import true_sample, zero_except  # the same samples and parameters
 from spacerobot.interface import NOISE_PARAMETERS
-from spacerobot.sensors import SIGNALS, SensorSuite, default_parameters
+from oracles.sensors import SensorSuite
+from spacerobot.sensors import SIGNALS, default_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "native" / "src"

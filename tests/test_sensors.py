@@ -1,4 +1,4 @@
-"""The sensor models (spacerobot.sensors, no FMI): ideal sensors pass the true sample on bit
+"""The sensor models (spacerobot.sensors.SensorSuite: the native core, no FMI): ideal sensors pass the true sample on bit
 for bit, a seed fixes the run, the state round-trips exactly, and each sensor's error over a
 long run has the configured mean, standard deviation and drift (statistical tolerances: 5
 standard errors of the estimated quantity, or more where stated)."""
@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from spacerobot.interface import NOISE_PARAMETERS
-from spacerobot.sensors import SIGNALS, SensorSuite, default_parameters, rotation_vector_to_matrix
+from oracles.sensors import rotation_vector_to_matrix
+from spacerobot.sensors import SIGNALS, SensorSuite, default_parameters
 
 N_JOINTS, DT = 6, 0.1
 

@@ -1,10 +1,10 @@
-"""The prior's pull and the a-posteriori residual variance (spacerobot.estimator.uncertainty),
+"""The prior's pull and the a-posteriori residual variance (oracles.estimator.uncertainty),
 against batch least squares computed directly."""
 import numpy as np
 import pytest
 
-from spacerobot.estimator.rls import RLS
-from spacerobot.estimator.uncertainty import Gram, prior_pull, residual_variance
+from oracles.estimator.rls import RLS
+from oracles.estimator.uncertainty import Gram, prior_pull, residual_variance
 
 
 def batch(Hs, ys, x0, P0, lam):

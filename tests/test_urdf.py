@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import json
 import math
 import re
 import zipfile
@@ -420,11 +419,12 @@ def test_cli_builds_fmus_and_ssp_of_a_urdf_robot(tmp_path, capsys):
     md = read_model_description(str(out / "SpaceRobotEstimator.fmu"))
     names = {v.name for v in md.modelVariables}
     assert "arm.qdd[7]" in names and "arm.q[8]" not in names
+    from spacerobot.core.robot_record import parse_robot_record, robot_record_text
     with zipfile.ZipFile(out / "SpaceRobotPlant.fmu") as zf:
-        cfg = json.loads(zf.read("resources/spacerobot_config.json"))
-    robot = Robot.from_dict(cfg["scenario"]["robot"])
-    assert robot == load_robot(SERVICER7, ee="gripper")
-    assert robot.ee_xyz == pytest.approx((0.0, 0.0, 0.1))
+        text = zf.read("resources/robot.txt").decode()
+    assert text == robot_record_text(load_robot(SERVICER7, ee="gripper"))
+    rec = parse_robot_record(text)
+    assert rec["n"] == 7 and list(rec["ee_xyz"]) == pytest.approx([0.0, 0.0, 0.1])
     # and runs it through the FMUs (a few seconds; the identification is tested on the cores)
     csv = tmp_path / "run.csv"
     assert main(["run", "--robot", str(SERVICER7), "--ee", "gripper", "--build-dir", str(out),

@@ -41,6 +41,8 @@ struct sr_instance {
     double *real;                    /* values by value reference (Real variables) */
     int *integer;                    /* values by value reference (Integer variables) */
     int preview_dirty;               /* a parameter changed in initialisation mode */
+    int outputs_dirty;               /* feedthrough: inputs, state or time changed since the
+                                        outputs were computed (stepping mode) */
     void *model;
     void **states;                   /* the FMU states handed out and not freed yet */
     int nstates, cap_states;
@@ -169,6 +171,33 @@ static char *read_file(const char *path, size_t *len) {
     }
     fclose(f);
     return buf;
+}
+
+int sr_resource_double(sr_instance *inst, const char *resource_dir, const char *file,
+                       const char *key, double *out) {
+    char path[4096], *text, *line, *next;
+    size_t len = 0;
+    int found = 0;
+    snprintf(path, sizeof path, "%s%s", resource_dir, file);
+    if ((text = read_file(path, &len)) == NULL) {
+        sr_log(inst, SR_LOG_ERROR, "cannot read %s", path);
+        return 1;
+    }
+    for (line = text; line && !found; line = next) {
+        char *field[3];
+        next = strchr(line, '\n');
+        if (next) *next++ = '\0';
+        if (split(line, field, 3) == 2 && strcmp(field[0], key) == 0) {
+            char *end = field[1] + strcspn(field[1], "\r");
+            *end = '\0';
+            found = parse_hex_double(field[1], out) == 0 ? 1 : -1;
+        }
+    }
+    free(text);
+    if (found != 1)
+        sr_log(inst, SR_LOG_ERROR, "%s: %s %s", path, found ? "not a hexadecimal IEEE-754 "
+               "double: the value of" : "no line with the key", key);
+    return found == 1 ? 0 : 1;
 }
 
 static int load_variables(sr_instance *inst, const char *resources, const char *guid) {
@@ -428,6 +457,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     if (check_finite_parameters(inst) != 0 || sr_model_initialize(inst->model, inst) != 0)
         return fmi2Error;
     inst->phase = PHASE_STEP;
+    inst->outputs_dirty = 1;
     sr_log(inst, SR_LOG_EVENTS, "initialised at t = %g s", inst->time);
     return fmi2OK;
 }
@@ -466,12 +496,17 @@ static fmi2Status check_refs(sr_instance *inst, const char *call, const fmi2Valu
     return fmi2OK;
 }
 
-static void refresh_preview(sr_instance *inst, const fmi2ValueReference vr[], size_t nvr) {
-    if (inst->phase != PHASE_INITIALIZATION || !inst->preview_dirty) return;
+/* Outputs about to be read: in initialisation mode the preview for the parameters set so far;
+   in stepping mode (feedthrough models) the outputs for the current inputs. */
+static void refresh_outputs(sr_instance *inst, const fmi2ValueReference vr[], size_t nvr) {
+    int *dirty = inst->phase == PHASE_INITIALIZATION ? &inst->preview_dirty
+               : inst->phase == PHASE_STEP && SR_MODEL_FEEDTHROUGH ? &inst->outputs_dirty : NULL;
+    if (!dirty || !*dirty) return;
     for (size_t i = 0; i < nvr; ++i)
         if (inst->vars[vr[i]].causality == SR_OUTPUT) {
-            sr_model_preview(inst->model, inst);
-            inst->preview_dirty = 0;
+            if (inst->phase == PHASE_INITIALIZATION) sr_model_preview(inst->model, inst);
+            else sr_model_outputs(inst->model, inst);
+            *dirty = 0;
             return;
         }
 }
@@ -481,7 +516,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     if (!inst) return fmi2Error;
     if (nvr > 0 && !value) return refuse(inst, "fmi2GetReal: the value array is NULL");
     if (check_refs(inst, "fmi2GetReal", vr, nvr, SR_REAL) != fmi2OK) return fmi2Error;
-    refresh_preview(inst, vr, nvr);
+    refresh_outputs(inst, vr, nvr);
     for (size_t i = 0; i < nvr; ++i) value[i] = inst->real[vr[i]];
     return fmi2OK;
 }
@@ -491,7 +526,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     if (!inst) return fmi2Error;
     if (nvr > 0 && !value) return refuse(inst, "fmi2GetInteger: the value array is NULL");
     if (check_refs(inst, "fmi2GetInteger", vr, nvr, SR_INTEGER) != fmi2OK) return fmi2Error;
-    refresh_preview(inst, vr, nvr);
+    refresh_outputs(inst, vr, nvr);
     for (size_t i = 0; i < nvr; ++i) value[i] = inst->integer[vr[i]];
     return fmi2OK;
 }
@@ -519,6 +554,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     for (size_t i = 0; i < nvr; ++i) {
         inst->real[vr[i]] = value[i];
         if (inst->vars[vr[i]].causality == SR_PARAMETER) inst->preview_dirty = 1;
+        inst->outputs_dirty = 1;
     }
     return fmi2OK;
 }
@@ -537,6 +573,7 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     for (size_t i = 0; i < nvr; ++i) {
         inst->integer[vr[i]] = value[i];
         if (inst->vars[vr[i]].causality == SR_PARAMETER) inst->preview_dirty = 1;
+        inst->outputs_dirty = 1;
     }
     return fmi2OK;
 }
@@ -578,11 +615,14 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSet
         sr_log(inst, SR_LOG_DISCARD, "non-finite communication point %g", t);
         return fmi2Discard;
     }
-    if (!(isfinite(h) && h > 0.0)) {
+    if (!(isfinite(h) && h > 0.0 && h <= SR_MODEL_MAX_STEP)) {
+        char longest[32] = "inf";            /* spelled out: msvcrt prints infinity as 1.#INF */
+        if (isfinite(SR_MODEL_MAX_STEP)) snprintf(longest, sizeof longest, "%g", SR_MODEL_MAX_STEP);
         sr_log(inst, SR_LOG_DISCARD, "communication step %g s at t = %g s rejected: it must be "
-               "finite and in (0, inf] s", h, t);
+               "finite and in (0, %s] s", h, t, longest);
         return fmi2Discard;
     }
+    inst->outputs_dirty = 1;
     if (sr_model_do_step(inst->model, inst, t, h) != 0) return fmi2Discard;
     inst->time = t + h;
     return fmi2OK;
@@ -802,6 +842,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
     inst->phase = (phase_t)s->h.phase;
     inst->time = s->h.time;
     inst->preview_dirty = 1;
+    inst->outputs_dirty = 1;
     return fmi2OK;
 }
 

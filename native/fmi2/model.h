@@ -41,6 +41,10 @@ int sr_key_vr(sr_instance *inst, const char *key, int required);
 double *sr_reals(sr_instance *inst);
 int *sr_integers(sr_instance *inst);
 const sr_var *sr_variable(const sr_instance *inst, int vr);
+/* The value of `key` in the resource file <resource_dir><file> (lines "key 0x<IEEE-754 bits>",
+   e.g. resources/scenario.txt). 0 ok; else 1, logged as an error. */
+int sr_resource_double(sr_instance *inst, const char *resource_dir, const char *file,
+                       const char *key, double *out);
 /* The instance's log (printf-like; categories as in the model description). */
 void sr_log(sr_instance *inst, sr_log_category category, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -63,6 +67,15 @@ int sr_model_initialize(void *model, sr_instance *inst);
 /* In initialisation mode, outputs read before fmi2ExitInitializationMode: the initial outputs for the
    parameters set so far (nothing changes where they are not valid yet). */
 void sr_model_preview(void *model, sr_instance *inst);
+/* Direct feedthrough: nonzero when outputs depend on the current inputs (the layer then calls
+   sr_model_outputs before an output is read after an input, the state or the time changed). */
+extern const int SR_MODEL_FEEDTHROUGH;
+/* Stepping mode, SR_MODEL_FEEDTHROUGH models: the outputs for the current inputs and state
+   (the state does not change). Other models: never called. */
+void sr_model_outputs(void *model, sr_instance *inst);
+/* The longest communication step the model takes [s] (INFINITY: no limit); the layer refuses
+   longer ones with fmi2Discard. */
+extern const double SR_MODEL_MAX_STEP;
 /* One communication step from t by h (both checked finite, h > 0, by the layer).
    0 ok, 1 discard (reason logged; the state must be as before the call). */
 int sr_model_do_step(void *model, sr_instance *inst, double t, double h);

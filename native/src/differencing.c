@@ -6,15 +6,6 @@
 #include "linalg.h"
 
 #include "sr_math.h"
-static int all_finite(const double *x, int k)
-{
-    int i;
-    for (i = 0; i < k; ++i)
-        if (!isfinite(x[i]))
-            return 0;
-    return 1;
-}
-
 /* tau = t - t[centre] and s = max |tau| (the scale of the times: well-conditioned systems) */
 static double centred_times(const double *t, int k, int centre, double *tau)
 {
@@ -39,7 +30,7 @@ int sr_derivative_weights(const double *t, int k, int centre, double *w)
         w[0] = -h2 / (h1 * (h1 + h2));
         w[1] = (h2 - h1) / (h1 * h2);
         w[2] = h1 / (h2 * (h1 + h2));
-        return all_finite(w, 3) ? 0 : 2;
+        return sr_finite_all(w, 3) ? 0 : 2;
     }
     s = centred_times(t, k, centre, tau);
     /* V = [1, tau/s, (tau/s)^2] (k x 3): B = V^T (3 x k), G = V^T V (3 x 3) */
@@ -64,7 +55,7 @@ int sr_derivative_weights(const double *t, int k, int centre, double *w)
     }
     for (i = 0; i < k; ++i)
         w[i] = B[k + i] / s;
-    return all_finite(w, k) ? 0 : 2;
+    return sr_finite_all(w, k) ? 0 : 2;
 }
 
 int sr_displacement_weights(const double *t, int k, int centre, const double *w, double *u)
@@ -90,7 +81,7 @@ int sr_displacement_weights(const double *t, int k, int centre, const double *w,
     /* u = V^-T W^T w by LU with partial pivoting, as np.linalg.solve (LAPACK gesv) */
     if (sr_lu_solve(A, k, u, 1) != 0)
         return 2;
-    return all_finite(u, k) ? 0 : 2;
+    return sr_finite_all(u, k) ? 0 : 2;
 }
 
 int sr_centre_derivative(const double *t, const double *X, int k, int n, const int *acc,

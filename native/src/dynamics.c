@@ -40,14 +40,6 @@
 
 /* -- small helpers ------------------------------------------------------------------------ */
 
-static int finite_all(const double *x, int n)
-{
-    int i;
-    for (i = 0; i < n; i++)
-        if (!isfinite(x[i]))
-            return 0;
-    return 1;
-}
 
 static int model_ok(const sr_dyn_model *md)
 {
@@ -65,14 +57,18 @@ static int base_row(int planar, int i)
 /* upper triangle of Rk A Rk^T, A symmetric by its upper triangle a = (a00 a01 a02 a11 a12 a22) */
 static void rot_sym(const double *r, const double *a, double *o)
 {
+    const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5];
     double w[9];
-    int i;
-    for (i = 0; i < 3; i++) {              /* W = Rk A */
-        const double r0 = r[3 * i], r1 = r[3 * i + 1], r2 = r[3 * i + 2];
-        w[3 * i] = r0 * a[0] + r1 * a[1] + r2 * a[2];
-        w[3 * i + 1] = r0 * a[1] + r1 * a[3] + r2 * a[4];
-        w[3 * i + 2] = r0 * a[2] + r1 * a[4] + r2 * a[5];
-    }
+    /* W = Rk A (written out: the loops of 3 unrolled, values kept in registers) */
+    w[0] = r[0] * a0 + r[1] * a1 + r[2] * a2;
+    w[1] = r[0] * a1 + r[1] * a3 + r[2] * a4;
+    w[2] = r[0] * a2 + r[1] * a4 + r[2] * a5;
+    w[3] = r[3] * a0 + r[4] * a1 + r[5] * a2;
+    w[4] = r[3] * a1 + r[4] * a3 + r[5] * a4;
+    w[5] = r[3] * a2 + r[4] * a4 + r[5] * a5;
+    w[6] = r[6] * a0 + r[7] * a1 + r[8] * a2;
+    w[7] = r[6] * a1 + r[7] * a3 + r[8] * a4;
+    w[8] = r[6] * a2 + r[7] * a4 + r[8] * a5;
     /* (W Rk^T)_ij = W_i . Rk_j */
     o[0] = w[0] * r[0] + w[1] * r[1] + w[2] * r[2];
     o[1] = w[0] * r[3] + w[1] * r[4] + w[2] * r[5];
@@ -82,27 +78,36 @@ static void rot_sym(const double *r, const double *a, double *o)
     o[5] = w[6] * r[6] + w[7] * r[7] + w[8] * r[8];
 }
 
-/* placement of body k (joint angle th) in the base frame from its parent's (Ep 3 x 3, op):
- * the joint frame sits at x_parent = R[k] Rz(th) x_k + p[k], so Ek = Ep R[k] Rz(th),
- * ok = op + Ep p[k]; the joint axis in the base frame s is the third column of Ep R[k].
- * Ek must not alias Ep. */
-static void place(const sr_dyn_model *md, int k, double th, const double *Ep, const double *op,
-                  double *Ek, double *ok, double *s)
+/* the sines and cosines of the arm's joint angles qa (n): sc (n x 2) = (sin, cos) rows */
+static void arm_sincos(const sr_dyn_model *md, const double *qa, double *sc)
+{
+    int k;
+    for (k = 0; k < md->n; k++)
+        sr_sincos(qa[k], &sc[2 * k], &sc[2 * k + 1]);   /* portable: the same bits everywhere */
+}
+
+/* placement of body k (joint angle th, sn = sin th, cs = cos th) in the base frame from its
+ * parent's (Ep 3 x 3, op): the joint frame sits at x_parent = R[k] Rz(th) x_k + p[k], so
+ * Ek = Ep R[k] Rz(th), ok = op + Ep p[k]; the joint axis in the base frame s is the third
+ * column of Ep R[k]. Ek must not alias Ep. */
+static void place(const sr_dyn_model *md, int k, double sn, double cs, const double *Ep,
+                  const double *op, double *Ek, double *ok, double *s)
 {
     const double *q = md->R[k], *p = md->p[k];
-    double sn, cs;
+    const double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3], q4 = q[4], q5 = q[5], q6 = q[6],
+                 q7 = q[7], q8 = q[8], p0 = p[0], p1 = p[1], p2 = p[2];
     int i;
-    sr_sincos(th, &sn, &cs);                /* portable: the same bits everywhere */
-    for (i = 0; i < 3; i++) {
-        const double b0 = Ep[3 * i], b1 = Ep[3 * i + 1], b2 = Ep[3 * i + 2];
-        const double a0 = b0 * q[0] + b1 * q[3] + b2 * q[6];     /* (Ep R[k]) row i */
-        const double a1 = b0 * q[1] + b1 * q[4] + b2 * q[7];
-        const double a2 = b0 * q[2] + b1 * q[5] + b2 * q[8];
-        Ek[3 * i] = a0 * cs + a1 * sn;                           /* columns 0, 1 turned */
-        Ek[3 * i + 1] = a1 * cs - a0 * sn;
-        Ek[3 * i + 2] = a2;                                       /* column 2: the axis */
-        ok[i] = op[i] + (b0 * p[0] + b1 * p[1] + b2 * p[2]);
-        s[i] = a2;
+    for (i = 0; i < 9; i += 3) {           /* row i/3 of Ep (unrolled by the compiler or not:
+                                            * the same operations) */
+        const double b0 = Ep[i], b1 = Ep[i + 1], b2 = Ep[i + 2];
+        const double a0 = b0 * q0 + b1 * q3 + b2 * q6;           /* (Ep R[k]) row */
+        const double a1 = b0 * q1 + b1 * q4 + b2 * q7;
+        const double a2 = b0 * q2 + b1 * q5 + b2 * q8;
+        Ek[i] = a0 * cs + a1 * sn;                               /* columns 0, 1 turned */
+        Ek[i + 1] = a1 * cs - a0 * sn;
+        Ek[i + 2] = a2;                                           /* column 2: the axis */
+        ok[i / 3] = op[i / 3] + (b0 * p0 + b1 * p1 + b2 * p2);
+        s[i / 3] = a2;
     }
 }
 
@@ -136,11 +141,9 @@ static void shift(const double *d, double *A, double *B, double *C)
     pb[6] = -py * B[0] + px * B[3];
     pb[7] = -py * B[1] + px * B[4];
     pb[8] = -py * B[2] + px * B[5];
-    {
-        int i;
-        for (i = 0; i < 9; i++)
-            B[i] -= ap[i];
-    }
+    B[0] -= ap[0]; B[1] -= ap[1]; B[2] -= ap[2];
+    B[3] -= ap[3]; B[4] -= ap[4]; B[5] -= ap[5];
+    B[6] -= ap[6]; B[7] -= ap[7]; B[8] -= ap[8];
     C[0] = C[0] + 2.0 * pb[0] - pap00;
     C[1] = C[1] + pb[1] + pb[3] - pap01;
     C[2] = C[2] + pb[2] + pb[6] - pap02;
@@ -188,15 +191,80 @@ static void base_motion(const sr_dyn_model *md, sr_dyn_data *d, const double *vb
     crf(v0, h, d->pA[0]);
 }
 
+/* the inverse (upper triangle o (6)) of the symmetric 3 x 3 matrix a (upper triangle a00 a01
+ * a02 a11 a12 a22) by its cofactors (one division). Returns 0, or SR_DYN_EPD if a leading
+ * minor is <= 0 (a is not positive definite; a NaN passes). */
+static int spd3_inverse(const double *a, double *o)
+{
+    const double a00 = a[0], a01 = a[1], a02 = a[2], a11 = a[3], a12 = a[4], a22 = a[5];
+    const double c00 = a11 * a22 - a12 * a12, c01 = a02 * a12 - a01 * a22,
+                 c02 = a01 * a12 - a02 * a11, c11 = a00 * a22 - a02 * a02,
+                 c12 = a01 * a02 - a00 * a12, c22 = a00 * a11 - a01 * a01;
+    const double det = a00 * c00 + a01 * c01 + a02 * c02;
+    double r;
+    if (a00 <= 0.0 || c22 <= 0.0 || det <= 0.0)
+        return SR_DYN_EPD;
+    r = 1.0 / det;
+    o[0] = c00 * r; o[1] = c01 * r; o[2] = c02 * r;
+    o[3] = c11 * r; o[4] = c12 * r; o[5] = c22 * r;
+    return SR_DYN_OK;
+}
+
+/* the free-flyer base's acceleration x (6) from IA0 x = fb - pA0 (IA0 6 x 6 symmetric) by
+ * blocks, IA0 = [[A, B], [B^T, C]]: the Schur complement C - B^T A^-1 B, both 3 x 3 inverses
+ * by cofactors (a short dependency chain: the ABA's critical path). Returns 0, or SR_DYN_EPD
+ * if A or the Schur complement is not positive definite (IA0 is not; a NaN passes). */
+static int base_solve6(double IA0[6][6], const double *pA0, const double *fb, double *x)
+{
+    const double a[6] = {IA0[0][0], IA0[0][1], IA0[0][2], IA0[1][1], IA0[1][2], IA0[2][2]};
+    double ai[6], X[9], sc[6], si[6], y[3], rw[3], aw[3], b[6];
+    int i, j;
+    if (spd3_inverse(a, ai) != SR_DYN_OK)
+        return SR_DYN_EPD;
+    for (i = 0; i < 6; i++)
+        b[i] = fb[i] - pA0[i];
+    for (j = 0; j < 3; j++) {                /* X = A^-1 B */
+        const double b0 = IA0[0][3 + j], b1 = IA0[1][3 + j], b2 = IA0[2][3 + j];
+        X[j] = ai[0] * b0 + ai[1] * b1 + ai[2] * b2;
+        X[3 + j] = ai[1] * b0 + ai[3] * b1 + ai[4] * b2;
+        X[6 + j] = ai[2] * b0 + ai[4] * b1 + ai[5] * b2;
+    }
+    /* Schur complement C - B^T X (upper triangle), y = A^-1 b_l, rw = b_w - B^T y */
+    sc[0] = IA0[3][3] - (IA0[0][3] * X[0] + IA0[1][3] * X[3] + IA0[2][3] * X[6]);
+    sc[1] = IA0[3][4] - (IA0[0][3] * X[1] + IA0[1][3] * X[4] + IA0[2][3] * X[7]);
+    sc[2] = IA0[3][5] - (IA0[0][3] * X[2] + IA0[1][3] * X[5] + IA0[2][3] * X[8]);
+    sc[3] = IA0[4][4] - (IA0[0][4] * X[1] + IA0[1][4] * X[4] + IA0[2][4] * X[7]);
+    sc[4] = IA0[4][5] - (IA0[0][4] * X[2] + IA0[1][4] * X[5] + IA0[2][4] * X[8]);
+    sc[5] = IA0[5][5] - (IA0[0][5] * X[2] + IA0[1][5] * X[5] + IA0[2][5] * X[8]);
+    y[0] = ai[0] * b[0] + ai[1] * b[1] + ai[2] * b[2];
+    y[1] = ai[1] * b[0] + ai[3] * b[1] + ai[4] * b[2];
+    y[2] = ai[2] * b[0] + ai[4] * b[1] + ai[5] * b[2];
+    for (j = 0; j < 3; j++)
+        rw[j] = b[3 + j] - (IA0[0][3 + j] * y[0] + IA0[1][3 + j] * y[1] + IA0[2][3 + j] * y[2]);
+    if (spd3_inverse(sc, si) != SR_DYN_OK)
+        return SR_DYN_EPD;
+    aw[0] = si[0] * rw[0] + si[1] * rw[1] + si[2] * rw[2];
+    aw[1] = si[1] * rw[0] + si[3] * rw[1] + si[4] * rw[2];
+    aw[2] = si[2] * rw[0] + si[4] * rw[1] + si[5] * rw[2];
+    for (i = 0; i < 3; i++) {                /* a_l = y - X a_w */
+        x[i] = y[i] - (X[3 * i] * aw[0] + X[3 * i + 1] * aw[1] + X[3 * i + 2] * aw[2]);
+        x[3 + i] = aw[i];
+    }
+    return SR_DYN_OK;
+}
+
 /* the base's acceleration of the ABA: x (nr) from (S^T IA0 S) x = fb - S^T pA0 (S the rows
- * base_row; nr = 3 planar, 6 free-flyer) by L D L^T (no square roots; one division per pivot).
- * IA0 6 x 6. Returns 0, or SR_DYN_EPD if a pivot is <= 0 (a NaN pivot passes). */
+ * base_row; nr = 3 planar, 6 free-flyer): base_solve6 for the free-flyer, else by L D L^T
+ * (no square roots; one division per pivot). IA0 6 x 6. Returns 0, or SR_DYN_EPD if IA0 is
+ * not positive definite (a pivot <= 0; a NaN passes). */
 static int base_solve(int planar, double IA0[6][6], const double *pA0, const double *fb,
                       double *x)
 {
     const int nr = planar ? 3 : 6;
     double L[6][6], dd[6], w[6];
     int i, j, p;
+    if (!planar)
+        return base_solve6(IA0, pA0, fb, x);
     for (i = 0; i < nr; i++) {
         const int ri = base_row(planar, i);
         x[i] = fb[i] - pA0[ri];
@@ -242,10 +310,11 @@ static int base_solve(int planar, double IA0[6][6], const double *pA0, const dou
 /* -- the algorithms on the base-frame state ---------------------------------------------- */
 
 /* Articulated-body algorithm (RBDA Table 7.1 with the floating base of Chapter 9).
- * qa, qd, tau: the arm's angles, rates and torques (n); vb, fb: the base's generalised
+ * sc (n x 2): the sines and cosines of the arm's angles; qd, tau: its rates and torques (n);
+ * vb, fb: the base's generalised
  * velocity and force (nr = 3 planar, 6 spatial); out: ab (nr) the base's generalised
  * acceleration, qdd (n). */
-static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, const double *qd,
+static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, const double *qd,
                     const double *tau, const double *vb, const double *fb, double *ab,
                     double *qdd)
 {
@@ -264,18 +333,21 @@ static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, co
         double *bp = d->bp[k], *s = d->S[k] + 3, *cb = d->cb[k], *pA = d->pA[k];
         double dl[3], z[3], fl[3], fn[3], m;
         const double *g = d->g[k], *J = d->J[k];
-        place(md, k, qa[k - 1], E[cur], o, E[1 - cur], bp, s);
+        place(md, k, sc[2 * k - 2], sc[2 * k - 1], E[cur], o, E[1 - cur], bp, s);
         cur = 1 - cur;
-        for (i = 0; i < 3; i++) {
-            dl[i] = bp[i] - o[i];
-            o[i] = bp[i];
-        }
+        dl[0] = bp[0] - o[0];
+        dl[1] = bp[1] - o[1];
+        dl[2] = bp[2] - o[2];
+        o[0] = bp[0];
+        o[1] = bp[1];
+        o[2] = bp[2];
         /* linear velocity at the new origin: v_l + w x d */
         v[0] = v[0] + (v[4] * dl[2] - v[5] * dl[1]);
         v[1] = v[1] + (v[5] * dl[0] - v[3] * dl[2]);
         v[2] = v[2] + (v[3] * dl[1] - v[4] * dl[0]);
-        for (i = 0; i < 3; i++)
-            z[i] = s[i] * qd[k - 1];
+        z[0] = s[0] * qd[k - 1];
+        z[1] = s[1] * qd[k - 1];
+        z[2] = s[2] * qd[k - 1];
         cb[0] = v[1] * z[2] - v[2] * z[1];            /* c_k = v_k x [0; z] */
         cb[1] = v[2] * z[0] - v[0] * z[2];
         cb[2] = v[0] * z[1] - v[1] * z[0];
@@ -289,8 +361,9 @@ static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, co
         {
             const double *Ek = E[cur], *h = md->h[k];
             double *gk = d->g[k];
-            for (i = 0; i < 3; i++)
-                gk[i] = Ek[3 * i] * h[0] + Ek[3 * i + 1] * h[1] + Ek[3 * i + 2] * h[2];
+            gk[0] = Ek[0] * h[0] + Ek[1] * h[1] + Ek[2] * h[2];
+            gk[1] = Ek[3] * h[0] + Ek[4] * h[1] + Ek[5] * h[2];
+            gk[2] = Ek[6] * h[0] + Ek[7] * h[1] + Ek[8] * h[2];
             rot_sym(Ek, md->J[k], d->J[k]);
         }
         /* pA_k = v_k x* (I_k v_k), I_k v_k = [m v_l + w x h; h x v_l + I_o w] */
@@ -318,14 +391,19 @@ static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, co
     for (k = nb - 1; k > 0; k--) {
         const double m = md->m[k], *h = d->g[k], *J = d->J[k], *s = d->S[k] + 3;
         const double *x0 = d->cb[k];
-        double P[6], U[6], pa[6], y[6], D, u, rD, gg, dl[3];
+        double P[6], U[6], pa[6], y[6], D, u, uc, rD, gg, dl[3];
+        double *Ut = d->U[k];
         A[0] += m; A[3] += m; A[5] += m;
         B[1] += h[2]; B[2] -= h[1]; B[3] -= h[2];        /* -[h]x */
         B[5] += h[0]; B[6] += h[1]; B[7] -= h[0];
-        for (i = 0; i < 6; i++) {
-            C[i] += J[i];
-            P[i] = d->pA[k][i] + f[i];
-        }
+        C[0] += J[0]; C[1] += J[1]; C[2] += J[2];
+        C[3] += J[3]; C[4] += J[4]; C[5] += J[5];
+        P[0] = d->pA[k][0] + f[0];
+        P[1] = d->pA[k][1] + f[1];
+        P[2] = d->pA[k][2] + f[2];
+        P[3] = d->pA[k][3] + f[3];
+        P[4] = d->pA[k][4] + f[4];
+        P[5] = d->pA[k][5] + f[5];
         U[0] = B[0] * s[0] + B[1] * s[1] + B[2] * s[2];
         U[1] = B[3] * s[0] + B[4] * s[1] + B[5] * s[2];
         U[2] = B[6] * s[0] + B[7] * s[1] + B[8] * s[2];
@@ -334,14 +412,24 @@ static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, co
         U[5] = C[2] * s[0] + C[4] * s[1] + C[5] * s[2];
         D = U[3] * s[0] + U[4] * s[1] + U[5] * s[2];
         u = tau[k - 1] - (P[3] * s[0] + P[4] * s[1] + P[5] * s[2]);
-        for (i = 0; i < 6; i++)
-            d->U[k][i] = U[i];
         rD = 1.0 / D;                                    /* one division per joint */
+        dl[0] = d->bp[k][0] - d->bp[k - 1][0];
+        dl[1] = d->bp[k][1] - d->bp[k - 1][1];
+        dl[2] = d->bp[k][2] - d->bp[k - 1][2];
+        /* for pass 3: U moved to the parent's origin, Ut = [U_l; U_n + d x U_l] (so that
+         * Ut^T a_p = U^T (a_p moved here)), and uc = u - U^T c */
+        Ut[0] = U[0];
+        Ut[1] = U[1];
+        Ut[2] = U[2];
+        Ut[3] = U[3] + (dl[1] * U[2] - dl[2] * U[1]);
+        Ut[4] = U[4] + (dl[2] * U[0] - dl[0] * U[2]);
+        Ut[5] = U[5] + (dl[0] * U[1] - dl[1] * U[0]);
+        uc = u - (U[0] * x0[0] + U[1] * x0[1] + U[2] * x0[2] + U[3] * x0[3] + U[4] * x0[4]
+                  + U[5] * x0[5]);
         d->Du[k][0] = rD;
-        d->Du[k][1] = u;
+        d->Du[k][1] = uc;
         /* pa = pA + IA c + U (u - U^T c) / D */
-        gg = (u - (U[0] * x0[0] + U[1] * x0[1] + U[2] * x0[2] + U[3] * x0[3] + U[4] * x0[4]
-                   + U[5] * x0[5])) * rD;
+        gg = uc * rD;
         pa[0] = P[0] + U[0] * gg + A[0] * x0[0] + A[1] * x0[1] + A[2] * x0[2] + B[0] * x0[3]
                 + B[1] * x0[4] + B[2] * x0[5];
         pa[1] = P[1] + U[1] * gg + A[1] * x0[0] + A[3] * x0[1] + A[4] * x0[2] + B[3] * x0[3]
@@ -355,17 +443,15 @@ static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, co
         pa[5] = P[5] + U[5] * gg + B[2] * x0[0] + B[5] * x0[1] + B[8] * x0[2] + C[2] * x0[3]
                 + C[4] * x0[4] + C[5] * x0[5];
         /* Ia = IA - U U^T / D, then to the parent's origin */
-        for (i = 0; i < 6; i++)
-            y[i] = U[i] * rD;
+        y[0] = U[0] * rD; y[1] = U[1] * rD; y[2] = U[2] * rD;
+        y[3] = U[3] * rD; y[4] = U[4] * rD; y[5] = U[5] * rD;
         A[0] = A[0] - y[0] * U[0]; A[1] = A[1] - y[0] * U[1]; A[2] = A[2] - y[0] * U[2];
         A[3] = A[3] - y[1] * U[1]; A[4] = A[4] - y[1] * U[2]; A[5] = A[5] - y[2] * U[2];
-        for (i = 0; i < 3; i++)
-            for (j = 0; j < 3; j++)
-                B[3 * i + j] = B[3 * i + j] - y[i] * U[3 + j];
+        B[0] = B[0] - y[0] * U[3]; B[1] = B[1] - y[0] * U[4]; B[2] = B[2] - y[0] * U[5];
+        B[3] = B[3] - y[1] * U[3]; B[4] = B[4] - y[1] * U[4]; B[5] = B[5] - y[1] * U[5];
+        B[6] = B[6] - y[2] * U[3]; B[7] = B[7] - y[2] * U[4]; B[8] = B[8] - y[2] * U[5];
         C[0] = C[0] - y[3] * U[3]; C[1] = C[1] - y[3] * U[4]; C[2] = C[2] - y[3] * U[5];
         C[3] = C[3] - y[4] * U[4]; C[4] = C[4] - y[4] * U[5]; C[5] = C[5] - y[5] * U[5];
-        for (i = 0; i < 3; i++)
-            dl[i] = d->bp[k][i] - d->bp[k - 1][i];
         shift(dl, A, B, C);
         /* force to the parent's origin: f_l, f_n + d x f_l */
         f[0] = pa[0];
@@ -393,16 +479,21 @@ static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, co
     if (base_solve(md->planar, IB, d->pA[0], fb, ab) != SR_DYN_OK)
         return SR_DYN_EPD;
     /* pass 3 (base to tip): a = shift(a_p) + c_k, qdd_k = (u_k - U_k^T a) / D_k,
-     * a_k = a + S qdd */
+     * a_k = a + S qdd; with pass 2's uc_k = u_k - U_k^T c_k and Ut_k (U_k moved to the
+     * parent's origin): qdd_k = (uc_k - Ut_k^T a_p) / D_k, off the chain of a's updates */
     for (i = 0; i < 6; i++)
         x[i] = 0.0;
     for (i = 0; i < (md->planar ? 3 : 6); i++)
         x[base_row(md->planar, i)] = ab[i];
     for (k = 1; k < nb; k++) {
-        const double *cb = d->cb[k], *U = d->U[k], *s = d->S[k] + 3;
+        const double *cb = d->cb[k], *Ut = d->U[k], *s = d->S[k] + 3;
         double dl[3], t0, t1, t2, sc, a;
-        for (i = 0; i < 3; i++)
-            dl[i] = d->bp[k][i] - d->bp[k - 1][i];
+        sc = d->Du[k][1] - ((Ut[0] * x[0] + Ut[1] * x[1]) + (Ut[2] * x[2] + Ut[3] * x[3])
+                            + (Ut[4] * x[4] + Ut[5] * x[5]));
+        a = sc * d->Du[k][0];
+        dl[0] = d->bp[k][0] - d->bp[k - 1][0];
+        dl[1] = d->bp[k][1] - d->bp[k - 1][1];
+        dl[2] = d->bp[k][2] - d->bp[k - 1][2];
         t0 = x[0] + (x[4] * dl[2] - x[5] * dl[1]) + cb[0];
         t1 = x[1] + (x[5] * dl[0] - x[3] * dl[2]) + cb[1];
         t2 = x[2] + (x[3] * dl[1] - x[4] * dl[0]) + cb[2];
@@ -412,9 +503,6 @@ static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, co
         x[3] = x[3] + cb[3];
         x[4] = x[4] + cb[4];
         x[5] = x[5] + cb[5];
-        sc = (d->Du[k][1] - U[0] * x[0] - U[1] * x[1] - U[2] * x[2] - U[3] * x[3] - U[4] * x[4]
-              - U[5] * x[5]);
-        a = sc * d->Du[k][0];
         qdd[k - 1] = a;
         x[3] = x[3] + s[0] * a;
         x[4] = x[4] + s[1] * a;
@@ -424,10 +512,11 @@ static int aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa, co
 }
 
 /* CRBA (RBDA Table 6.2), RNEA at zero acceleration (Table 5.1) and the momentum, all in base
- * axes at the base origin S. Writes M (nv x nv, both triangles) and nle (nv) when not NULL,
- * and always hm (6) = the system momentum [h_l; h_n about S] and gm (4) = [total mass,
- * first moment about S (3)], base axes. */
-static void terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa,
+ * axes at the base origin S, sc (n x 2) the sines and cosines of the arm's angles. Writes
+ * M (nv x nv, both triangles) and nle (nv) when not NULL, and always hm (6) = the system
+ * momentum [h_l; h_n about S] and gm (4) = [total mass, first moment about S (3)], base
+ * axes. */
+static void terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
                        const double *qd, const double *vb, double *M, double *nle, double *hm,
                        double *gm)
 {
@@ -447,7 +536,7 @@ static void terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *qa,
         double *S = d->S[k], *gk = d->g[k], *Jk = d->J[k], on[3], s[3], z, hh[3], io[6];
         double mo[3], dd, yv[6], fa[6], cv[6];
         const double m = md->m[k], *h = md->h[k];
-        place(md, k, qa[k - 1], E[cur], o, E[1 - cur], on, s);
+        place(md, k, sc[2 * k - 2], sc[2 * k - 1], E[cur], o, E[1 - cur], on, s);
         cur = 1 - cur;
         o[0] = on[0];
         o[1] = on[1];
@@ -640,7 +729,7 @@ static void to_joint_frame(const double *Q, const double *X, const double *h, do
 
 static int body_ok(const sr_body *b, int allow_zero)
 {
-    return finite_all(&b->m, 1) && finite_all(b->com, 3) && finite_all(b->I, 9)
+    return sr_finite_all(&b->m, 1) && sr_finite_all(b->com, 3) && sr_finite_all(b->I, 9)
         && (allow_zero ? b->m >= 0.0 : b->m > 0.0);
 }
 
@@ -658,7 +747,7 @@ SR_API int sr_dyn_set_base_spatial(sr_dyn_model *model, double m, const double h
                                    const double I_S[9])
 {
     if (model == NULL || h_B == NULL || I_S == NULL || !isfinite(m) || m <= 0.0
-        || !finite_all(h_B, 3) || !finite_all(I_S, 9))
+        || !sr_finite_all(h_B, 3) || !sr_finite_all(I_S, 9))
         return SR_DYN_EARG;
     model->m[0] = m;
     model->h[0][0] = h_B[0];
@@ -691,13 +780,13 @@ SR_API int sr_dyn_model_init(sr_dyn_model *model, const sr_robot *robot, const s
     memset(model, 0, sizeof(*model));
     if (robot == NULL || robot->n < 1 || robot->n > SR_MAX_JOINTS
         || (robot->planar != 0 && robot->planar != 1) || !body_ok(&robot->base, 0)
-        || !finite_all(robot->ee_xyz, 3) || !finite_all(robot->ee_R, 9)
+        || !sr_finite_all(robot->ee_xyz, 3) || !sr_finite_all(robot->ee_R, 9)
         || (target != NULL && !body_ok(target, 1)))
         return SR_DYN_EARG;
     n = robot->n;
     for (k = 0; k < n; k++) {
         const double *ax = robot->axis[k];
-        if (!finite_all(robot->xyz[k], 3) || !finite_all(robot->R[k], 9) || !finite_all(ax, 3)
+        if (!sr_finite_all(robot->xyz[k], 3) || !sr_finite_all(robot->R[k], 9) || !sr_finite_all(ax, 3)
             || !body_ok(&robot->link[k], 0)
             || ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2] <= 0.0)
             return SR_DYN_EARG;
@@ -791,25 +880,52 @@ static void dcm_of_q(const sr_dyn_model *md, const double *q, double *A, double 
 SR_API int sr_dyn_aba(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
                       const double *v, const double *tau, double *ddq)
 {
-    int nr, nq0, st;
-    if (!model_ok(model) || data == NULL || q == NULL || v == NULL || tau == NULL || ddq == NULL)
+    double sc[2 * SR_MAX_JOINTS];
+    if (!model_ok(model) || q == NULL)
+        return SR_DYN_EARG;
+    arm_sincos(model, q + (model->planar ? 4 : 7), sc);
+    return sr_dyn_aba_sc(model, data, q, v, tau, sc, ddq);
+}
+
+SR_API int sr_dyn_aba_sc(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
+                         const double *v, const double *tau, const double *sc, double *ddq)
+{
+    int nr;
+    if (!model_ok(model) || data == NULL || q == NULL || v == NULL || tau == NULL || sc == NULL
+        || ddq == NULL)
         return SR_DYN_EARG;
     nr = model->planar ? 3 : 6;
-    nq0 = model->planar ? 4 : 7;
-    st = aba_core(model, data, q + nq0, v + nr, tau + nr, v, tau, ddq, ddq + nr);
-    return st;
+    return aba_core(model, data, sc, v + nr, tau + nr, v, tau, ddq, ddq + nr);
+}
+
+SR_API int sr_dyn_arm_sincos(const sr_dyn_model *model, const double *q_arm, double *sc)
+{
+    if (!model_ok(model) || q_arm == NULL || sc == NULL)
+        return SR_DYN_EARG;
+    arm_sincos(model, q_arm, sc);
+    return SR_DYN_OK;
 }
 
 SR_API int sr_dyn_terms(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
                         const double *v, double *M, double *nle, double *hg, double *com)
 {
-    int nr, nq0;
+    double sc[2 * SR_MAX_JOINTS];
+    if (!model_ok(model) || q == NULL)
+        return SR_DYN_EARG;
+    arm_sincos(model, q + (model->planar ? 4 : 7), sc);
+    return sr_dyn_terms_sc(model, data, q, v, sc, M, nle, hg, com);
+}
+
+SR_API int sr_dyn_terms_sc(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
+                           const double *v, const double *sc, double *M, double *nle,
+                           double *hg, double *com)
+{
+    int nr;
     double hm[6], gm[4], A[9], r[3], c[3], l[3], nn[3];
-    if (!model_ok(model) || data == NULL || q == NULL || v == NULL)
+    if (!model_ok(model) || data == NULL || q == NULL || v == NULL || sc == NULL)
         return SR_DYN_EARG;
     nr = model->planar ? 3 : 6;
-    nq0 = model->planar ? 4 : 7;
-    terms_core(model, data, q + nq0, v + nr, v, M, nle, hm, gm);
+    terms_core(model, data, sc, v + nr, v, M, nle, hm, gm);
     if (hg == NULL && com == NULL)
         return SR_DYN_OK;
     /* centre of mass (base frame): the composite's first moment over its mass;
@@ -974,7 +1090,7 @@ SR_API int sr_dyn_forward(const sr_dyn_model *model, sr_dyn_data *data, const do
                           const double *qd, const double F[3], const double M_S[3],
                           const double *tau, double a_S[3], double alpha_B[3], double *qdd)
 {
-    double Ae[9], vb[6], fb[6], ab[6], vl[3], w[3], al[3], t[3];
+    double Ae[9], vb[6], fb[6], ab[6], vl[3], w[3], al[3], t[3], sc[2 * SR_MAX_JOINTS];
     int st;
     if (!model_ok(model) || data == NULL || A == NULL || v_S == NULL || omega_B == NULL
         || q_arm == NULL || qd == NULL || F == NULL || M_S == NULL || tau == NULL
@@ -982,7 +1098,8 @@ SR_API int sr_dyn_forward(const sr_dyn_model *model, sr_dyn_data *data, const do
         return SR_DYN_EARG;
     base_velocity(model, A, v_S, omega_B, vb, Ae);
     base_force(model, Ae, F, M_S, fb);
-    st = aba_core(model, data, q_arm, qd, tau, vb, fb, ab, qdd);
+    arm_sincos(model, q_arm, sc);
+    st = aba_core(model, data, sc, qd, tau, vb, fb, ab, qdd);
     if (st != SR_DYN_OK)
         return st;
     /* classical acceleration of S: a_S = A (dv_l/dt + omega_B x v_l) */
@@ -1009,12 +1126,13 @@ SR_API int sr_dyn_mass_bias(const sr_dyn_model *model, sr_dyn_data *data, const 
                             const double v_S[3], const double omega_B[3], const double *q_arm,
                             const double *qd, double *M, double *h)
 {
-    double Ae[9], vb[6], hm[6], gm[4];
+    double Ae[9], vb[6], hm[6], gm[4], sc[2 * SR_MAX_JOINTS];
     if (!model_ok(model) || data == NULL || A == NULL || v_S == NULL || omega_B == NULL
         || q_arm == NULL || qd == NULL)
         return SR_DYN_EARG;
     base_velocity(model, A, v_S, omega_B, vb, Ae);
-    terms_core(model, data, q_arm, qd, vb, M, h, hm, gm);
+    arm_sincos(model, q_arm, sc);
+    terms_core(model, data, sc, qd, vb, M, h, hm, gm);
     return SR_DYN_OK;
 }
 
@@ -1023,12 +1141,13 @@ SR_API int sr_dyn_momentum(const sr_dyn_model *model, sr_dyn_data *data, const d
                            const double *q_arm, const double *qd, double P[3], double L[3],
                            double *com)
 {
-    double Ae[9], vb[6], hm[6], gm[4], t[3];
+    double Ae[9], vb[6], hm[6], gm[4], t[3], sc[2 * SR_MAX_JOINTS];
     if (!model_ok(model) || data == NULL || r_S == NULL || A == NULL || v_S == NULL
         || omega_B == NULL || q_arm == NULL || qd == NULL || P == NULL || L == NULL)
         return SR_DYN_EARG;
     base_velocity(model, A, v_S, omega_B, vb, Ae);
-    terms_core(model, data, q_arm, qd, vb, NULL, NULL, hm, gm);
+    arm_sincos(model, q_arm, sc);
+    terms_core(model, data, sc, qd, vb, NULL, NULL, hm, gm);
     /* P = A h_l;  L about the origin = A h_n (about S) + r_S x P */
     mat3_vec(Ae, hm, P);
     mat3_vec(Ae, hm + 3, L);

@@ -124,6 +124,27 @@ SR_API int sr_dyn_aba(const sr_dyn_model *model, sr_dyn_data *data, const double
 SR_API int sr_dyn_terms(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
                         const double *v, double *M, double *nle, double *hg, double *com);
 
+/* -- the same with the joint placements' sines and cosines supplied ------------------------ */
+
+/** The sines and cosines of the arm's joint angles q_arm (n) [rad]: sc (n x 2, row k =
+ *  (sin q_k, cos q_k)), by sr_sincos (what sr_dyn_aba and sr_dyn_terms compute inside).
+ *  Returns 0 or SR_DYN_EARG. */
+SR_API int sr_dyn_arm_sincos(const sr_dyn_model *model, const double *q_arm, double *sc);
+
+/** sr_dyn_aba with the sines and cosines of q's arm angles given by the caller, sc (n x 2, as
+ *  sr_dyn_arm_sincos; q's arm angles are then not read): for a caller that has them already
+ *  (computed once for several algorithms at one configuration, or stepped from a nearby
+ *  configuration's by the angle-addition formulas as the plant's RK4 stages do). With sc from
+ *  sr_dyn_arm_sincos the result is sr_dyn_aba's, bit for bit. Returns as sr_dyn_aba. */
+SR_API int sr_dyn_aba_sc(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
+                         const double *v, const double *tau, const double *sc, double *ddq);
+
+/** sr_dyn_terms with the sines and cosines of q's arm angles given (sc (n x 2), as
+ *  sr_dyn_aba_sc). Returns as sr_dyn_terms. */
+SR_API int sr_dyn_terms_sc(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
+                           const double *v, const double *sc, double *M, double *nle,
+                           double *hg, double *com);
+
 /* -- the physical state -------------------------------------------------------------------- */
 
 /** The generalised coordinates of a physical state: q (nq) and v (nv) from r_S (3), A (9),

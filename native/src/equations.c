@@ -1,6 +1,7 @@
 /* The identification equations of one sample: a port of spacerobot/estimator/kernels.py
  * (equations, D_of_mu, rotation_error, sample_check) with the same order of operations, so
- * that the C estimator reproduces the Numba one to rounding.
+ * that the C estimator reproduces the Numba one to rounding; and the thrust's consider
+ * sensitivities and integrals (spacerobot/estimator/consider.py).
  *
  * Arm kinematics, revolute joint i with parent frame p (all vectors inertial):
  *   d = A_p xyz_i,  A_i = A_p R_i Rot(axis_i, q_i),  z = A_i axis_i,  w_i = w_p + z qd_i,
@@ -327,4 +328,78 @@ SR_API int sr_sample_check(const double *x, int len, double limit, double tol)
     if (err <= tol && det > 0.0)
         return 0;
     return 2;
+}
+
+/* -- the thrust's consider terms (consider.py) ------------------------------------------------ */
+
+/* out = [v]x (3 x 3, row-major): [v]x u = v x u */
+static void skew3(const double *v, double *out)
+{
+    out[0] = 0.0;   out[1] = -v[2]; out[2] = v[1];
+    out[3] = v[2];  out[4] = 0.0;   out[5] = -v[0];
+    out[6] = -v[1]; out[7] = v[0];  out[8] = 0.0;
+}
+
+void sr_thrust_integrals_add(double *K, int first, double t, const double *r_S, const double *F,
+                             const double *M)
+{
+    if (!K || !r_S || !F || !M)
+        return;
+    if (!first) {                          /* the previous sample's thrust over [t_prev, t] */
+        double dt = t - K[SR_THRUST_T], Rx[9], Fx[9];
+        const double *r = K + 1, *Fp = K + 4, *Mp = K + 7;
+        double *k_s = K + SR_THRUST_K, *k_phi = k_s + 3, *k_M = k_s + 12;
+        skew3(r, Rx);
+        skew3(Fp, Fx);
+        for (int i = 0; i < 3; i++) {
+            /* int r_S x F dt */
+            k_s[i] += dt * (Rx[3 * i] * Fp[0] + Rx[3 * i + 1] * Fp[1] + Rx[3 * i + 2] * Fp[2]);
+            /* -int [r_S]x [F]x dt */
+            for (int j = 0; j < 3; j++)
+                k_phi[3 * i + j] -= dt * (Rx[3 * i] * Fx[j] + Rx[3 * i + 1] * Fx[3 + j]
+                                          + Rx[3 * i + 2] * Fx[6 + j]);
+        }
+        for (int i = 0; i < 3; i++)
+            k_M[i] += dt * Mp[i];          /* int M dt */
+    }
+    K[SR_THRUST_T] = t;
+    for (int i = 0; i < 3; i++) {
+        K[1 + i] = r_S[i];
+        K[4 + i] = F[i];
+        K[7 + i] = M[i];
+    }
+}
+
+/* out[:, col] = v and out[:, col + 1 .. col + 3] = -[v]x (3 rows of stride SR_N_CCOLS): the
+ * sensitivity of a right-hand side v to its scale factor and misalignment,
+ * d((1 + s) v + phi x v) = v ds - [v]x dphi */
+static void scale_and_misalign(const double *v, double *out, int col)
+{
+    double S[9];
+    skew3(v, S);
+    for (int i = 0; i < 3; i++) {
+        out[i * SR_N_CCOLS + col] = v[i];
+        for (int j = 0; j < 3; j++)
+            out[i * SR_N_CCOLS + col + 1 + j] = -S[3 * i + j];
+    }
+}
+
+void sr_thrust_sensitivity(int force, const double *x, int n, const double *k, double *out)
+{
+    if (!x || !out || n < 1 || n > SR_MAX_JOINTS || (!force && !k))
+        return;
+    memset(out, 0, sizeof(double) * 3 * SR_N_CCOLS);
+    const int nc = SR_N_CONSIDER;
+    if (force) {
+        scale_and_misalign(x + SR_X_F(n), out, 0);          /* b = F - F_arm */
+        scale_and_misalign(x + SR_X_M(n), out, nc + 4);     /* y = M - M_arm,S */
+        return;
+    }
+    scale_and_misalign(x + SR_X_J(n), out, 0);              /* b = J - P_arm */
+    for (int i = 0; i < 3; i++) {                           /* y = H - L_arm */
+        out[i * SR_N_CCOLS + nc] = k[i];                    /* dy/ds_F = int r_S x F dt */
+        for (int j = 0; j < 3; j++)                         /* dy/dphi_F = k_phi */
+            out[i * SR_N_CCOLS + nc + 1 + j] = k[3 + 3 * i + j];
+    }
+    scale_and_misalign(k + 12, out, nc + 4);                /* dy/ds_M, dy/dphi_M of int M */
 }

@@ -71,6 +71,43 @@ SR_API void sr_rotation_error(const double *A, double *err, double *det);
  *  len < SR_X_A_B + 9. */
 SR_API int sr_sample_check(const double *x, int len, double limit, double tol);
 
+/* -- the thrust's consider terms (spacerobot/estimator/consider.py, docs/identification.md
+ * section 6): a scale factor error s and a misalignment phi (a small rotation), constant over a
+ * run, turn every measured force and moment x into x + (s + [phi]x) x to first order. The
+ * consider parameters c = [s_F, phi_F (3), s_M, phi_M (3)]; their sensitivities extend E by
+ * SR_N_CCOLS right-hand-side columns per row, [d b / d c (8) | d y / d c (8)], which every
+ * linear step on E (differencing, moving point, weights, planar selection) treats as the
+ * right-hand sides b and y they perturb. */
+#define SR_N_CONSIDER 8
+#define SR_N_CCOLS (2 * SR_N_CONSIDER)
+/* the thrust integrals K of the momentum form (consider.ThrustIntegrals): t [s], r_S (3) [m],
+ * F (3) [N], M (3) [N.m] of the last sample (held until the next), then the integrals
+ * k_s = int r_S x F dt (3) [N.m.s], k_phi = -int [r_S]x [F]x dt (3 x 3, row-major; column i
+ * the angular impulse of e_i x F) [N.m.s], k_M = int M dt (3) [N.m.s] */
+#define SR_THRUST_T 0
+#define SR_THRUST_K 10          /* the 15 integrals k_s, k_phi, k_M start here */
+#define SR_THRUST_NK 15
+#define SR_THRUST_LEN 25
+
+/** The thrust integrals K (SR_THRUST_LEN) with the sample of time t [s] (base position r_S
+ *  (3), force F (3), moment M (3)): the previous sample's thrust integrated over t - t_prev
+ *  (held: a rectangle rule, as the sensors model integrates its error), this sample's held
+ *  from now on. first = 1 for the first sample (nothing integrated; K's integrals are kept,
+ *  0 for a fresh K). In place. */
+SR_API void sr_thrust_integrals_add(double *K, int first, double t, const double *r_S,
+                                    const double *F, const double *M);
+
+/** The right-hand sides' sensitivities to the consider parameters of one sample, out
+ *  (3 x SR_N_CCOLS, row-major): columns 0..7 d b / d c, 8..15 d y / d c.
+ *  force form (moments about S, where the thrust acts): db/ds_F = F, db/dphi_F = -[F]x,
+ *  dy/ds_M = M, dy/dphi_M = -[M]x; momentum form (J = int F dt, H = int (M + r_S x F) dt):
+ *  db/ds_F = J, db/dphi_F = -[J]x, dy/ds_F = k_s, dy/dphi_F = k_phi, dy/ds_M = k_M,
+ *  dy/dphi_M = -[k_M]x. x: the flat sample (n joints: F, M, J from it); k: the 15 thrust
+ *  integrals up to this sample (K + SR_THRUST_K; momentum form only, may be NULL for the
+ *  force form). */
+SR_API void sr_thrust_sensitivity(int force, const double *x, int n, const double *k,
+                                  double *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -11,6 +11,7 @@
 
 #include <stddef.h>
 
+#include "equations.h"
 #include "estimator.h"
 
 #define EST_NMU 8                 /* mu (8) */
@@ -21,11 +22,27 @@
 #define EST_NA (EST_NTH + 1 + EST_ND)  /* largest [phi | y | psi] width */
 #define EST_NJ (EST_NZ + 1)       /* largest [Y | y] width of the joint solver */
 #define EST_MAXK 6                /* most rows of one sample in one RLS update */
+#define EST_MAXCH (6 + SR_MAX_JOINTS)  /* most noisy channels (accelerations or velocities) */
+
+/* The accelerometer bias's running line fit (accel_bias.BiasFit): x(t) = v_S(t) - integral
+ * a_S dt = c - b (t - t0) + noise per axis; t0 the first sample's time [s], t_last and a_last
+ * (3) the last sample's time and measured acceleration (the trapezoid), integral (3) [m/s],
+ * s (3) the sums of 1, tau, tau^2 and sx (2 x 3) of x, tau x over the samples, tau = t - t0. */
+typedef struct est_bias_fit {
+    double t0, t_last, a_last[3], integral[3], s[3], sx[6];
+} est_bias_fit;
 
 /* memory of the drift tracker's rate regression, in multiples of the estimator's
  * (tracking.RATE_MEMORY), and the lag taken as the estimate's own movement (NOISE_LAG) */
 #define EST_RATE_MEMORY 2.0
 #define EST_NOISE_LAG 1.0
+/* the rate regression weighs a point by 1 / sd^2 with sd at least EST_SD_ROUNDOFF times the
+ * estimate's error scale (the round-off of a double estimate: a smaller sd, e.g. the 0 of a
+ * noise-free run's variance that round-off made <= 0, says nothing more) and sd^2 at least
+ * EST_SD2_MIN: the weights stay <= 1e200, so that the regression's sums w, w dt^2, w dt dx
+ * stay finite (a weight of 1 / 1e-300 overflowed them and every such sample was rejected) */
+#define EST_SD_ROUNDOFF 1e-15
+#define EST_SD2_MIN 1e-200
 
 struct sr_estimator_model {
     sr_robot robot;
@@ -35,9 +52,26 @@ struct sr_estimator_model {
     int diffmom;                  /* differenced: the derivative of the momentum equations */
     int eiv;                      /* the accelerations' noise compensated (signal_sd > 0) */
     double accel_sd[6 + SR_MAX_JOINTS];   /* its sd per acceleration channel (differenced:
-                                             of the velocities; times the derivative's gain) */
+                                             of the velocities; times the derivative's gain,
+                                             or with diffmom the derivative's weights) */
     int accel_ch[6 + SR_MAX_JOINTS];      /* a_S, alpha_B, qdd in a flat sample */
-    int slot;                     /* doubles per history sample: t, sample (, own-point rows) */
+    int vel_ch[6 + SR_MAX_JOINTS];        /* v_S, omega_B, qd in a flat sample */
+    int n_used, used[6 + SR_MAX_JOINTS];  /* the channels with sd > 0 (eiv.noise_rows) */
+    int bias;                     /* the accelerometer bias fitted and subtracted (accel_bias,
+                                     force method with measured accelerations; accel_bias.py) */
+    int slot;                     /* doubles per history sample: t, sample (, own-point rows
+                                     and, with the consider term, their consider columns, and
+                                     with eiv their noise rows: n_used blocks of 3 x 42) */
+    int slot_noise;               /* offset of those noise rows in a slot */
+    /* the thrust's consider term (sd_thrust > 0, consider.py): its prior sd per consider
+     * parameter (8), and whether the thrust integrals are kept (the momentum form's
+     * sensitivities: the momentum method, or the differenced momentum equations) */
+    int consider, thrust_int;
+    double sd_c[SR_N_CONSIDER];
+    /* the momentum window (momentum method, momentum_window > 0): its length [s], the
+     * ring's capacity and doubles per sample (t, sample, with thrust_int its 15 integrals) */
+    int window, win_cap, win_slot;
+    double win_len;
     double w_lin, w_ang;          /* row weights 1 / row_sd (1: unweighted) */
     /* the identified parameters and rows (spacerobot.interface.ParameterLayout) */
     int p, r, nl, na;
@@ -56,7 +90,7 @@ struct sr_estimator_model {
     /* layout of the Data block's variable tail (byte offsets from its start) */
     int half;                     /* diff_half_window m: history of 2 m samples */
     int lags;                     /* corr_lags L */
-    size_t off_hist, off_corr_lin, off_corr_ang, size;
+    size_t off_hist, off_corr_lin, off_corr_ang, off_win, size;
 };
 
 /* Everything an accepted sample changes except the variable tail (history, residual ring):
@@ -88,6 +122,9 @@ typedef struct est_core {
     int has_eiv;
     double N_lin[EST_NL * EST_NL], N_ang[EST_NA * EST_NA];
     double mu_c[EST_NMU], th_c[EST_NTH];
+    /* the joint solver's: the expected noise part of S_pi ((q + 1)^2) and the compensated
+     * standard parameters (20; pi stays the RLS's own answer) */
+    double N_pi[EST_NJ * EST_NJ], pi_c[EST_NZ];
     /* residual autocorrelation rings (lin, ang; the joint solver: one): next row, rows stored */
     int corr_head[2], corr_count[2];
     /* what the report reads after the latest accepted sample */
@@ -98,6 +135,22 @@ typedef struct est_core {
     double ref[3 * 42];
     /* differencing history ring (2 m samples of [t, flat]): next slot, samples stored */
     int hist_head, hist_count;
+    /* -- the thrust's consider term (consider.py; in use where the model's consider is set) --
+     * the consider sums sum w H^T R_c of the weighted identified rows H and their consider
+     * right-hand sides R_c: the paper solver's A^T b_c (p x 8) and phi^T y_c (r x 8), the
+     * joint solver's Y^T [b_c; y_c] (q x 8, in cons_lin) */
+    double cons_lin[EST_NZ * SR_N_CONSIDER], cons_ang[EST_NTH * SR_N_CONSIDER];
+    /* the momentum reference's consider columns (3 x 16) */
+    double ref_c[3 * SR_N_CCOLS];
+    /* the thrust integrals (equations.h, SR_THRUST_*; thr_started once a sample came) */
+    int thr_started;
+    double thr[SR_THRUST_LEN];
+    /* the momentum window's ring (win_cap samples of [t, flat (, 15 integrals)]): next slot,
+     * samples stored; the oldest is the reference of the next sample */
+    int win_head, win_count;
+    /* the accelerometer bias's fit (accel_bias; has_bias once a sample came) */
+    int has_bias;
+    est_bias_fit bias;
 } est_core;
 
 /* The Data block's fixed head; the variable tail follows at the model's offsets. */
@@ -140,9 +193,17 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
 int est_joint_lag(const sr_estimator_model *m, const est_core *c, const double *J,
                   const double *rate_x, double growth, double *lag);
 /* est_paper_step for the joint solver: one RLS over the identified standard parameters;
- * e (k1 + k2) the a-priori residuals */
+ * e (k1 + k2) the a-priori residuals; Ec as est_paper_step's; N_pi the noise Gram matrix
+ * after this sample ((q + 1) x (q + 1), est_noise_begin / est_noise_add) or NULL */
 int est_joint_step(const sr_estimator_model *m, const void *data, const est_core *old,
-                   est_core *nw, const double *E, double clock, double *e);
+                   est_core *nw, const double *E, const double *Ec, const double *N_pi,
+                   double clock, double *e);
+/* The joint solver's rows of one block E (3 x 42, full 3D rows; JointSolver._stack of the
+ * identified rows): H (k1 + k2 x q) over the identified standard parameters, yy (k1 + k2)
+ * the right-hand sides (the fixed parameters' columns moved there at c's pi); b (k1, may be
+ * NULL) the weighted linear right-hand sides before that. */
+void est_joint_rows(const sr_estimator_model *m, const est_core *c, const double *E,
+                    double *H, double *yy, double *b);
 /* the joint solver's initial standard parameters and covariance into c */
 void est_joint_init(const sr_estimator_model *m, est_core *c);
 
@@ -184,11 +245,42 @@ void est_core_commit(const sr_estimator_model *m, est_core *dst, const est_core 
  * initialised but for corr_head, corr_count). e_lin (k1), e_ang (k2): the a-priori residuals
  * (for the residual autocorrelation's commit). data: the Data block (read only: the
  * autocorrelation rings). Returns 0 ok, 1 the covariance lost definiteness, 2 non-finite
- * numbers, 3 an eigen-decomposition did not converge. noise (n_noise blocks of 3 x 42):
- * the rows sigma_l C_l whose Gram matrix is the expected noise part of this sample's (eiv.py
- * eq. 1), or NULL. */
+ * numbers, 3 an eigen-decomposition did not converge. N_lin, N_ang: the expected noise parts
+ * of the Gram matrices after this sample (est_noise_begin / est_noise_add), or NULL where no
+ * noise rows came. Ec (3 x 16): E's consider columns (equations.h, SR_N_CCOLS; read only
+ * where the model's consider is set). */
 int est_paper_step(const sr_estimator_model *m, const void *data, const est_core *old,
-                   est_core *nw, const double *E, const double *noise, int n_noise,
-                   double clock, double *e_lin, double *e_ang);
+                   est_core *nw, const double *E, const double *Ec, const double *N_lin,
+                   const double *N_ang, double clock, double *e_lin, double *e_ang);
+
+/* The expected noise part of the Gram matrices after a sample (eiv.py eq. 1,
+ * N = sum_k w_k sum_l sigma_l^2 C_l,k^T C_l,k): est_noise_begin writes lam times the old
+ * ones (zeros before the first noise rows) into N_a, N_b; est_noise_add adds the identified
+ * rows of nblocks (<= EST_MAXCH) blocks sigma_l C_l (3 x 42 each, full 3D rows), weighted
+ * and selected as the sample's rows. The paper solver's N_a (nl x nl) of [A | b] and N_b
+ * (na x na) of [phi | y | psi]; the joint solver's N_a ((q + 1) x (q + 1)) of [H | yy], N_b
+ * unused. */
+void est_noise_begin(const sr_estimator_model *m, const est_core *old, double *N_a,
+                     double *N_b);
+void est_noise_add(const sr_estimator_model *m, const est_core *old, const double *blocks,
+                   int nblocks, double *N_a, double *N_b);
+
+/* K P K^T (q x q) with K = 1 + (S - N)^-1 N in the directions S - N observes
+ * (solvers.compensation_gain): the covariance of a bias-compensated answer. S, N (n x n),
+ * their leading q x q blocks (q <= 20); P (q x q). */
+void est_compensated_covariance(const double *S, const double *N, int n, int q,
+                                const double *P, double *out);
+
+/* The thrust's consider term of the state nw after a step (consider.py; the model's consider
+ * set): the consider sums from the identified rows with their consider columns Ec (3 x 16),
+ * weighted and selected as the rows: R_lin (k1 x nl_rows, the first p entries of each row
+ * the weighted active A) against b_c, R_ang (k2 x ...) against y_c; then, where add_sd,
+ * nw->sd (the tracker's total) gets the consider variance, sd^2 + sum_c (J dz/dc sigma_c)^2,
+ * J (20 x 20) the Jacobian of the estimates in the solver's z.
+ * est_consider_sums: the paper solver's sums from A (k1 x p) and phi (k2 x r); the joint
+ * solver's from H (k1 + k2 rows x q). */
+void est_consider_sums(const sr_estimator_model *m, const est_core *old, est_core *nw,
+                       const double *Ec, const double *A, const double *phi, const double *H);
+void est_consider_sd(const sr_estimator_model *m, est_core *nw, const double *J);
 
 #endif /* SR_EST_INTERNAL_H */

@@ -86,6 +86,9 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
 {
     int q = m->q, nj = q + 1;
     double lam = m->opt.lambda;
+    /* the RLS's answer x (its prior's pull), and what the estimates report: the same, or the
+     * bias-compensated answer where the accelerations' noise is compensated (eiv.py) */
+    const double *pi_rep = c->has_eiv ? c->pi_c : c->pi;
     double x[EST_NZ + 1], x0[EST_NZ], G[EST_NZ * EST_NZ] = {0.0};
     for (int i = 0; i < q; i++) {
         x[i] = c->pi[m->std_active[i]];
@@ -106,7 +109,7 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
         delta[m->std_active[i]] = dx[i];
         unobserved_z[m->std_active[i]] = u[i];
     }
-    memcpy(z, c->pi, sizeof z);
+    memcpy(z, pi_rep, sizeof z);
     joint_jacobian(m->sharp_to_project, z, J);
     joint_vector_of(m->sharp_to_project, z, xv);
     for (int i = 0; i < EST_NZ; i++)
@@ -120,7 +123,17 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
     }
     if (!finite)                                             /* the data-only mass <= 0 */
         sr_matvec(J, delta, EST_NZ, EST_NZ, pull);
-    /* the covariance: the RLS's P times the residual variance, the rest the prior's */
+    /* the covariance: the RLS's P times the residual variance, the rest the prior's; with
+     * the noise compensated K P K^T (solvers.compensation_gain) and the residual variance at
+     * the compensated answer (JointSolver.covariance) */
+    const double *P = c->P_pi;
+    double KPK[EST_NZ * EST_NZ];
+    if (c->has_eiv) {
+        est_compensated_covariance(c->S_pi, c->N_pi, nj, q, c->P_pi, KPK);
+        P = KPK;
+        for (int i = 0; i < q; i++)
+            x[i] = pi_rep[m->std_active[i]];
+    }
     x[q] = -1.0;
     double s2 = est_residual_variance(c->S_pi, x, nj,
                                       est_gram_dof(lam, c->rows_lin, c->n1_lin, c->n2_lin, q));
@@ -133,7 +146,7 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
         C[i * EST_NZ + i] = m->prior[i];
     for (int i = 0; i < q; i++)
         for (int j = 0; j < q; j++)
-            C[m->std_active[i] * EST_NZ + m->std_active[j]] = c->P_pi[i * q + j] * s2;
+            C[m->std_active[i] * EST_NZ + m->std_active[j]] = P[i * q + j] * s2;
     est_scatter_sd(m, J, C, pull, unobserved_z, xv, 0, sd);
     for (int i = 0; i < EST_NZ; i++) {
         data_only[i] = xv[i] - pull[i];
@@ -188,14 +201,13 @@ static double rcond_of(const double *info, int n)
     return sr_rcond_of_spectrum(w, u, n);
 }
 
-int est_joint_step(const sr_estimator_model *m, const void *data, const est_core *old,
-                   est_core *nw, const double *E, double clock, double *e)
+void est_joint_rows(const sr_estimator_model *m, const est_core *c, const double *E,
+                    double *H, double *yy, double *b)
 {
-    int q = m->q, k1 = m->k1, k2 = m->k2, k = k1 + k2, nj = q + 1;
-    double lam = m->opt.lambda;
+    int k1 = m->k1, k2 = m->k2, k = k1 + k2, q = m->q;
     /* the identified rows, weighted (Identifier._identified_rows), over the standard
      * parameters (JointSolver._stack): linear [B, 0], angular [-psi[:, m, m b], phi] */
-    double Y[EST_MAXK * EST_NZ] = {0.0}, yy[EST_MAXK], b[3];
+    double Y[EST_MAXK * EST_NZ] = {0.0};
     for (int a = 0; a < k1; a++) {
         const double *row = E + m->rows_lin[a] * SR_N_COLS;
         double w = m->w_lin;
@@ -203,8 +215,9 @@ int est_joint_step(const sr_estimator_model *m, const void *data, const est_core
             for (int i = 0; i < 4; i++)
                 Y[a * EST_NZ + 10 * body + i] = w != 1.0 ? row[SR_COL_A + 4 * body + i] * w
                                                          : row[SR_COL_A + 4 * body + i];
-        b[a] = w != 1.0 ? row[SR_COL_B] * w : row[SR_COL_B];
-        yy[a] = b[a];
+        yy[a] = w != 1.0 ? row[SR_COL_B] * w : row[SR_COL_B];
+        if (b)
+            b[a] = yy[a];
     }
     for (int a = 0; a < k2; a++) {
         const double *row = E + m->rows_ang[a] * SR_N_COLS;
@@ -225,13 +238,46 @@ int est_joint_step(const sr_estimator_model *m, const void *data, const est_core
         for (int a = 0; a < k; a++) {
             double s = 0.0;
             for (int o = 0; o < m->n_std_out; o++)
-                s += Y[a * EST_NZ + m->std_out[o]] * old->pi[m->std_out[o]];
+                s += Y[a * EST_NZ + m->std_out[o]] * c->pi[m->std_out[o]];
             yy[a] -= s;
         }
-    double H[EST_MAXK * EST_NZ], x[EST_NZ], K[EST_NZ * EST_MAXK];
     for (int a = 0; a < k; a++)
         for (int i = 0; i < q; i++)
             H[a * q + i] = Y[a * EST_NZ + m->std_active[i]];
+}
+
+/* the bias-compensated standard parameters (JointSolver.update, eiv.compensation, eq. 2):
+ * pi_c = x_r + dx, (S_HH - N_HH) dx = N_HH x_r - N_Hy in the directions S - N observes
+ * (a direction the noise swamps is left uncorrected) */
+static void compensate(const sr_estimator_model *m, est_core *nw)
+{
+    int q = m->q, nj = q + 1;
+    double G[EST_NZ * EST_NZ] = {0.0}, rhs[EST_NZ], dx[EST_NZ], lam_e[EST_NZ];
+    double V[EST_NZ * EST_NZ], d[EST_NZ];
+    int un[EST_NZ], u[EST_NZ];
+    for (int i = 0; i < q; i++) {
+        double s = 0.0;
+        for (int j = 0; j < q; j++) {
+            G[i * q + j] = nw->S_pi[i * nj + j] - nw->N_pi[i * nj + j];
+            s += nw->N_pi[i * nj + j] * nw->pi[m->std_active[j]];
+        }
+        rhs[i] = s - nw->N_pi[i * nj + q];
+    }
+    sr_scaled_eigh(G, q, lam_e, V, d, un);
+    sr_eig_solve(lam_e, V, d, un, rhs, q, dx, u);
+    memcpy(nw->pi_c, nw->pi, sizeof nw->pi_c);
+    for (int i = 0; i < q; i++)
+        nw->pi_c[m->std_active[i]] = nw->pi[m->std_active[i]] + dx[i];
+}
+
+int est_joint_step(const sr_estimator_model *m, const void *data, const est_core *old,
+                   est_core *nw, const double *E, const double *Ec, const double *N_pi,
+                   double clock, double *e)
+{
+    int q = m->q, k1 = m->k1, k2 = m->k2, k = k1 + k2, nj = q + 1;
+    double lam = m->opt.lambda;
+    double H[EST_MAXK * EST_NZ], x[EST_NZ], K[EST_NZ * EST_MAXK], yy[EST_MAXK], b[3];
+    est_joint_rows(m, old, E, H, yy, b);
     for (int i = 0; i < q; i++)
         x[i] = old->pi[m->std_active[i]];
     /* one RLS step on H z = yy (eqs. 11/16 or 28/31 over the standard parameters) */
@@ -257,6 +303,17 @@ int est_joint_step(const sr_estimator_model *m, const void *data, const est_core
     info_add(old->info_ang, H + k1 * q, k2, q, m->ang_cols, m->n_ang_cols, lam, nw->info_ang);
     nw->residual_lin = est_relative_norm(e, b, k1);
     nw->residual_ang = est_relative_norm(e + k1, yy + k1, k2);
+    /* the accelerations' noise: its expected part of the Gram matrix, the compensated
+     * answer (eiv.py) */
+    nw->has_eiv = old->has_eiv;
+    if (N_pi) {
+        memcpy(nw->N_pi, N_pi, sizeof(double) * nj * nj);
+        nw->has_eiv = 1;
+        compensate(m, nw);
+    } else if (old->has_eiv) {               /* (a sample without noise rows: none come) */
+        memcpy(nw->N_pi, old->N_pi, sizeof(double) * nj * nj);
+        compensate(m, nw);
+    }
     double infl = m->lags > 0 ? est_corr_inflation(m, data, old, 0, e, k) : 1.0;
     double sd[EST_NZ], data_only[EST_NZ], J[EST_NZ * EST_NZ];
     if (est_joint_std_parts(m, nw, infl, sd, data_only, J, nw->vec) != 0)
@@ -264,5 +321,9 @@ int est_joint_step(const sr_estimator_model *m, const void *data, const est_core
     nw->rcond_mu = rcond_of(nw->info_lin, m->n_lin_cols);
     nw->rcond_theta = rcond_of(nw->info_ang, m->n_ang_cols);
     est_tracker_add(m, old, nw, clock, data_only, sd, J, NULL);
+    if (m->consider) {                       /* the thrust's consider term (consider.py) */
+        est_consider_sums(m, old, nw, Ec, NULL, NULL, H);
+        est_consider_sd(m, nw, J);
+    }
     return 0;
 }

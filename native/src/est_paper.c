@@ -351,12 +351,12 @@ static void observed_solve(const double *G, int q, const double *r, double *x)
 /* K P K^T (q x q) with K = 1 + (S - N)^-1 N in the directions S - N observes
  * (solvers.compensation_gain, PaperSolver._covariances): the bias-compensated answer moves
  * K times as far as the RLS's. S, N (n x n), their leading q x q blocks; P (q x q). */
-static void compensated_covariance(const double *S, const double *N, int n, int q,
-                                   const double *P, double *out)
+void est_compensated_covariance(const double *S, const double *N, int n, int q,
+                                const double *P, double *out)
 {
-    double G[EST_NTH * EST_NTH] = {0.0}, K[EST_NTH * EST_NTH], KP[EST_NTH * EST_NTH];
-    double col[EST_NTH], x[EST_NTH], V[EST_NTH * EST_NTH], lam[EST_NTH], d[EST_NTH];
-    int un[EST_NTH], u[EST_NTH];
+    double G[EST_NZ * EST_NZ] = {0.0}, K[EST_NZ * EST_NZ], KP[EST_NZ * EST_NZ];
+    double col[EST_NZ], x[EST_NZ], V[EST_NZ * EST_NZ], lam[EST_NZ], d[EST_NZ];
+    int un[EST_NZ], u[EST_NZ];
     for (int i = 0; i < q; i++)
         for (int j = 0; j < q; j++)
             G[i * q + j] = S[i * n + j] - N[i * n + j];
@@ -478,7 +478,7 @@ static void covariance(const sr_estimator_model *m, const double *P_mu, const do
 
 static int paper_std_parts(const sr_estimator_model *m, const est_core *c, double infl_lin,
                            double infl_ang, double *sd, double *data_only, double *J,
-                           double *vec, double *rcond)
+                           double *vec, double *rcond, eigs *eig_out)
 {
     int p = m->p, r = m->r, nl = m->nl, na = m->na;
     double lam = m->opt.lambda;
@@ -498,8 +498,8 @@ static int paper_std_parts(const sr_estimator_model *m, const est_core *c, doubl
         for (int i = 0; i < r; i++)
             th_full[m->theta_active[i]] = c->th_c[i];
         sr_D_of_mu(mu_full, D_rep);
-        compensated_covariance(c->S_lin, c->N_lin, nl, p, c->P_mu, KPK_lin);
-        compensated_covariance(c->S_ang, c->N_ang, na, r, c->P_th, KPK_ang);
+        est_compensated_covariance(c->S_lin, c->N_lin, nl, p, c->P_mu, KPK_lin);
+        est_compensated_covariance(c->S_ang, c->N_ang, na, r, c->P_th, KPK_ang);
         P_lin = KPK_lin;
         P_ang = KPK_ang;
     }
@@ -561,6 +561,10 @@ static int paper_std_parts(const sr_estimator_model *m, const est_core *c, doubl
     }
     rcond[0] = sr_rcond_of_spectrum(el.lam, el.unobserved, p);
     rcond[1] = sr_rcond_of_spectrum(ea.lam, ea.unobserved, r);
+    if (eig_out) {                           /* for the consider term's solves */
+        eig_out[0] = el;
+        eig_out[1] = ea;
+    }
     return (st_l != 0 || st_a != 0) ? 3 : 0;
 }
 
@@ -613,7 +617,7 @@ int est_std_parts(const sr_estimator_model *m, const est_core *c, double infl_li
                   double *rcond)
 {
     if (m->opt.solver == 1)
-        return paper_std_parts(m, c, infl_lin, infl_ang, sd, data_only, J, vec, rcond);
+        return paper_std_parts(m, c, infl_lin, infl_ang, sd, data_only, J, vec, rcond, NULL);
     return est_joint_std_parts(m, c, infl_lin, sd, data_only, J, vec);
 }
 
@@ -788,7 +792,8 @@ static void age_step(const double *age, const double *S, int n, double lam, doub
 
 /* The tracker after the sample of clock t (DriftTracker.add, report_kernels.paper_tracker_add
  * and total_sd): the data's weight and mean age, the weighted forgetting line through the
- * data-only estimates x (20) with weights 1 / sd^2 (sd (20)), the age-weighted Gram matrices
+ * data-only estimates x (20) with weights 1 / sd^2 (sd (20), floored at the round-off of the
+ * step's estimates nw->vec, which the step wrote before), the age-weighted Gram matrices
  * stepped with the Gram matrices before the sample (old), the lag (eq. 2 where every line has
  * a spread, else eq. 1) and the total standard deviations into nw->sd. J (20 x 20) the
  * Jacobian of the estimates, mu_full (8) after the sample. */
@@ -806,10 +811,12 @@ void est_tracker_add(const sr_estimator_model *m, const est_core *old, est_core 
     double da_dt = (!first && step > 0.0) ? (a_bar - old->tr_a_bar) / step : 0.0;
     double lam_r = 1.0 - 1.0 / (EST_RATE_MEMORY * s0);
     double lag_factor = a_bar / est_pymax(1.0 - da_dt, 0.1);     /* tracking eq. 1 */
-    double rate[EST_NZ], gain[EST_NZ];
+    double rate[EST_NZ], gain[EST_NZ], scale[EST_NZ];
     int all_positive = 1;
+    sr_error_scale(nw->vec, SR_COM_SCALE_MIN, scale);      /* nw->vec: the step's estimates */
     for (int i = 0; i < EST_NZ; i++) {
-        double v = 1.0 / est_pymax(sd[i] * sd[i], 1e-300);
+        double floor_sd = EST_SD_ROUNDOFF * scale[i];       /* (NaN: no floor but EST_SD2_MIN) */
+        double v = 1.0 / est_pymax(est_pymax(sd[i] * sd[i], floor_sd * floor_sd), EST_SD2_MIN);
         double w_old = lam_r * old->tr_w[i];
         double wi = w_old + v;
         double d_t = t - old->tr_mt[i], d_x = x[i] - old->tr_mx[i];
@@ -961,6 +968,11 @@ void est_core_commit(const sr_estimator_model *m, est_core *dst, const est_core 
         EST_COPY(age_pi, nj * nj);
         EST_COPY(info_lin, m->n_lin_cols * m->n_lin_cols);
         EST_COPY(info_ang, m->n_ang_cols * m->n_ang_cols);
+        if (m->eiv) {
+            EST_COPY(N_pi, nj * nj);
+            EST_COPY(pi_c, EST_NZ);
+            dst->has_eiv = src->has_eiv;
+        }
     }
     EST_COPY(tr_w, EST_NZ);
     EST_COPY(tr_mt, EST_NZ);
@@ -969,6 +981,11 @@ void est_core_commit(const sr_estimator_model *m, est_core *dst, const est_core 
     EST_COPY(tr_ctx, EST_NZ);
     EST_COPY(vec, EST_NZ);
     EST_COPY(sd, EST_NZ);
+    if (m->consider) {
+        EST_COPY(cons_lin, (m->opt.solver == 1 ? p : m->q) * SR_N_CONSIDER);
+        if (m->opt.solver == 1)
+            EST_COPY(cons_ang, r * SR_N_CONSIDER);
+    }
 #undef EST_COPY
     dst->rows_lin = src->rows_lin;
     dst->rows_ang = src->rows_ang;
@@ -1043,6 +1060,46 @@ static void identified_rows(const sr_estimator_model *m, const double *E, int nb
     }
 }
 
+void est_noise_begin(const sr_estimator_model *m, const est_core *old, double *N_a,
+                     double *N_b)
+{
+    double lam = m->opt.lambda;
+    int na_ = m->opt.solver == 1 ? m->nl : m->q + 1, nb_ = m->opt.solver == 1 ? m->na : 0;
+    const double *Oa = m->opt.solver == 1 ? old->N_lin : old->N_pi;
+    for (int i = 0; i < na_ * na_; i++)     /* lam N (Gram.add: lam S + R^T R) */
+        N_a[i] = !old->has_eiv ? 0.0 : lam == 1.0 ? Oa[i] : lam * Oa[i];
+    for (int i = 0; i < nb_ * nb_; i++)
+        N_b[i] = !old->has_eiv ? 0.0 : lam == 1.0 ? old->N_ang[i] : lam * old->N_ang[i];
+}
+
+void est_noise_add(const sr_estimator_model *m, const est_core *old, const double *blocks,
+                   int nblocks, double *N_a, double *N_b)
+{
+    if (nblocks <= 0)
+        return;
+    if (nblocks > EST_MAXCH)                 /* the callers' chunks: never more */
+        nblocks = EST_MAXCH;
+    if (m->opt.solver == 1) {                /* rows [A | b] and [phi | y | psi] */
+        double mu_full[EST_NMU], th_full[EST_NTH];
+        double Rn_lin[3 * EST_MAXCH * EST_NL], Rn_ang[3 * EST_MAXCH * EST_NA];
+        est_full_vectors(m, old, mu_full, th_full);
+        identified_rows(m, blocks, nblocks, mu_full, th_full, Rn_lin, Rn_ang);
+        est_gram_add(N_a, m->nl, Rn_lin, nblocks * m->k1, 1.0, N_a);   /* (in place) */
+        est_gram_add(N_b, m->na, Rn_ang, nblocks * m->k2, 1.0, N_b);
+        return;
+    }
+    int q = m->q, nj = q + 1, k = m->k1 + m->k2;   /* rows [H | yy] (JointSolver._stack) */
+    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], R[3 * EST_MAXCH * EST_NJ];
+    for (int blk = 0; blk < nblocks; blk++) {
+        est_joint_rows(m, old, blocks + 3 * blk * SR_N_COLS, H, yy, NULL);
+        for (int a = 0; a < k; a++) {
+            memcpy(R + (blk * k + a) * nj, H + a * q, sizeof(double) * q);
+            R[(blk * k + a) * nj + q] = yy[a];
+        }
+    }
+    est_gram_add(N_a, nj, R, nblocks * k, 1.0, N_a);
+}
+
 /* the bias-compensated answers (PaperSolver._compensated, eiv.compensation):
  * (S_AA - N_AA) dmu = N_AA mu_r - N_Ab,
  * (S_pp - N_pp) dtheta = N_pp theta_r - N_py - N_ppsi D(mu_c) + S_ppsi (D(mu_c) - D(mu_r)),
@@ -1084,9 +1141,14 @@ static void compensate(const sr_estimator_model *m, est_core *nw)
         nw->th_c[i] = nw->theta[i] + dx[i];
 }
 
+static void paper_consider_shift(const sr_estimator_model *m, const est_core *nw,
+                                 const eigs *el, const eigs *ea, double *shift);
+static void consider_add(const sr_estimator_model *m, est_core *nw, const double *J,
+                         double *shift);
+
 int est_paper_step(const sr_estimator_model *m, const void *data, const est_core *old,
-                   est_core *nw, const double *E, const double *noise, int n_noise,
-                   double clock, double *e_lin, double *e_ang)
+                   est_core *nw, const double *E, const double *Ec, const double *N_lin,
+                   const double *N_ang, double clock, double *e_lin, double *e_ang)
 {
     int p = m->p, r = m->r, k1 = m->k1, k2 = m->k2, nl = m->nl, na = m->na;
     double lam = m->opt.lambda;
@@ -1206,11 +1268,9 @@ int est_paper_step(const sr_estimator_model *m, const void *data, const est_core
     /* the accelerations' noise: its expected part of the Gram matrices, the compensated
      * answers (eiv.py) */
     nw->has_eiv = old->has_eiv;
-    if (noise && n_noise > 0) {
-        double Rn_lin[3 * (6 + SR_MAX_JOINTS) * EST_NL], Rn_ang[3 * (6 + SR_MAX_JOINTS) * EST_NA];
-        identified_rows(m, noise, n_noise, mu_full, th_full, Rn_lin, Rn_ang);
-        est_gram_add(old->N_lin, nl, Rn_lin, n_noise * k1, lam, nw->N_lin);
-        est_gram_add(old->N_ang, na, Rn_ang, n_noise * k2, lam, nw->N_ang);
+    if (N_lin && N_ang) {                    /* eq. 1, est_noise_begin / est_noise_add */
+        memcpy(nw->N_lin, N_lin, sizeof(double) * nl * nl);
+        memcpy(nw->N_ang, N_ang, sizeof(double) * na * na);
         nw->has_eiv = 1;
         compensate(m, nw);
     } else if (old->has_eiv) {               /* (a sample without noise rows: none come) */
@@ -1225,7 +1285,8 @@ int est_paper_step(const sr_estimator_model *m, const void *data, const est_core
         infl_ang = est_corr_inflation(m, data, old, 1, e_ang, k2);
     }
     double sd[EST_NZ], data_only[EST_NZ], J[EST_NZ * EST_NZ], rcond[2];
-    if (paper_std_parts(m, nw, infl_lin, infl_ang, sd, data_only, J, nw->vec, rcond) != 0)
+    eigs eg[2];
+    if (paper_std_parts(m, nw, infl_lin, infl_ang, sd, data_only, J, nw->vec, rcond, eg) != 0)
         return 3;
     nw->rcond_mu = rcond[0];
     nw->rcond_theta = rcond[1];
@@ -1233,5 +1294,164 @@ int est_paper_step(const sr_estimator_model *m, const void *data, const est_core
         for (int i = 0; i < p; i++)
             mu_new[m->mu_active[i]] = nw->mu_c[i];
     est_tracker_add(m, old, nw, clock, data_only, sd, J, mu_new);
+    if (m->consider) {                       /* the thrust's consider term (consider.py) */
+        double shift[EST_NZ * SR_N_CONSIDER];
+        est_consider_sums(m, old, nw, Ec, A, phi, NULL);
+        paper_consider_shift(m, nw, &eg[0], &eg[1], shift);   /* the spectra just taken */
+        consider_add(m, nw, J, shift);
+    }
     return 0;
+}
+
+/* -- the thrust's consider term (consider.py, solvers.ParameterSolver.consider_shift) ------- */
+
+/* X (q x c) = G^-1 R (R q x c) column by column in the directions the information G
+ * observes, from its scaled eigen-decomposition (lam, V, d, unobserved of sr_scaled_eigh; q x q)
+ * (solvers._observed_solve_columns) */
+static void solve_columns(const double *lam, const double *V, const double *d, const int *un,
+                          int q, const double *R, int c, double *X)
+{
+    double col[EST_NZ], x[EST_NZ];
+    int u[EST_NZ];
+    for (int j = 0; j < c; j++) {
+        for (int i = 0; i < q; i++)
+            col[i] = R[i * c + j];
+        sr_eig_solve(lam, V, d, un, col, q, x, u);
+        for (int i = 0; i < q; i++)
+            X[i * c + j] = x[i];
+    }
+}
+
+void est_consider_sums(const sr_estimator_model *m, const est_core *old, est_core *nw,
+                       const double *Ec, const double *A, const double *phi, const double *H)
+{
+    const int nc = SR_N_CONSIDER, k1 = m->k1, k2 = m->k2;
+    double lam = m->opt.lambda;
+    /* the consider right-hand sides of the identified rows, weighted as their rows
+     * (Identifier._identified_rows(b_c, y_c)) */
+    double bc[3 * SR_N_CONSIDER], yc[3 * SR_N_CONSIDER];
+    for (int a = 0; a < k1; a++)
+        for (int c = 0; c < nc; c++) {
+            double v = Ec[m->rows_lin[a] * SR_N_CCOLS + c];
+            bc[a * nc + c] = m->w_lin != 1.0 ? v * m->w_lin : v;
+        }
+    for (int a = 0; a < k2; a++)
+        for (int c = 0; c < nc; c++) {
+            double v = Ec[m->rows_ang[a] * SR_N_CCOLS + nc + c];
+            yc[a * nc + c] = m->w_ang != 1.0 ? v * m->w_ang : v;
+        }
+    if (m->opt.solver == 1) {                /* lam C + A^T b_c, lam C + phi^T y_c */
+        for (int i = 0; i < m->p; i++)
+            for (int c = 0; c < nc; c++) {
+                double s = 0.0;
+                for (int a = 0; a < k1; a++)
+                    s += A[a * m->p + i] * bc[a * nc + c];
+                nw->cons_lin[i * nc + c] = lam * old->cons_lin[i * nc + c] + s;
+            }
+        for (int i = 0; i < m->r; i++)
+            for (int c = 0; c < nc; c++) {
+                double s = 0.0;
+                for (int a = 0; a < k2; a++)
+                    s += phi[a * m->r + i] * yc[a * nc + c];
+                nw->cons_ang[i * nc + c] = lam * old->cons_ang[i * nc + c] + s;
+            }
+        return;
+    }
+    for (int i = 0; i < m->q; i++)           /* lam C + Y^T [b_c; y_c] */
+        for (int c = 0; c < nc; c++) {
+            double s = 0.0;
+            for (int a = 0; a < k1; a++)
+                s += H[a * m->q + i] * bc[a * nc + c];
+            for (int a = 0; a < k2; a++)
+                s += H[(k1 + a) * m->q + i] * yc[a * nc + c];
+            nw->cons_lin[i * nc + c] = lam * old->cons_lin[i * nc + c] + s;
+        }
+}
+
+/* dz/dc (20 x 8) of the paper solver (PaperSolver.consider_shift): mu = G_lin^-1 sum A^T b,
+ * theta = G_ang^-1 sum phi^T (y + psi D(mu)), so dmu/dc = G_lin^-1 C_lin and
+ * dtheta/dc = G_ang^-1 (C_ang + S_phi,psi dD/dmu dmu/dc), at the reported mu; el, ea the
+ * scaled eigen-decompositions of G_lin, G_ang (the p x p, r x r blocks of S_lin, S_ang) */
+static void paper_consider_shift(const sr_estimator_model *m, const est_core *nw,
+                                 const eigs *el, const eigs *ea, double *shift)
+{
+    const int nc = SR_N_CONSIDER, p = m->p, r = m->r, na = m->na;
+    double dmu[EST_NMU * SR_N_CONSIDER], dth[EST_NTH * SR_N_CONSIDER];
+    double rhs[EST_NTH * SR_N_CONSIDER], dDdc[EST_ND * SR_N_CONSIDER];
+    double mu_full[EST_NMU], th_full[EST_NTH], Dj[EST_ND * EST_NMU];
+    memset(shift, 0, sizeof(double) * EST_NZ * SR_N_CONSIDER);
+    solve_columns(el->lam, el->V, el->d, el->unobserved, p, nw->cons_lin, nc, dmu);
+    est_full_vectors(m, nw, mu_full, th_full);
+    if (nw->has_eiv)
+        for (int i = 0; i < p; i++)
+            mu_full[m->mu_active[i]] = nw->mu_c[i];
+    D_jacobian(mu_full, Dj);
+    for (int l = 0; l < EST_ND; l++)                         /* dD/dmu dmu/dc */
+        for (int c = 0; c < nc; c++) {
+            double s = 0.0;
+            for (int i = 0; i < p; i++)
+                s += Dj[l * EST_NMU + m->mu_active[i]] * dmu[i * nc + c];
+            dDdc[l * nc + c] = s;
+        }
+    for (int i = 0; i < r; i++)                              /* C_ang + S_phi,psi dD/dc */
+        for (int c = 0; c < nc; c++) {
+            double s = 0.0;
+            for (int l = 0; l < EST_ND; l++)
+                s += nw->S_ang[i * na + r + 1 + l] * dDdc[l * nc + c];
+            rhs[i * nc + c] = nw->cons_ang[i * nc + c] + s;
+        }
+    solve_columns(ea->lam, ea->V, ea->d, ea->unobserved, r, rhs, nc, dth);
+    for (int i = 0; i < p; i++)
+        memcpy(shift + m->mu_active[i] * nc, dmu + i * nc, sizeof(double) * nc);
+    for (int i = 0; i < r; i++)
+        memcpy(shift + (EST_NMU + m->theta_active[i]) * nc, dth + i * nc, sizeof(double) * nc);
+}
+
+/* nw->sd (the tracker's total) with the consider variance added, sd^2 + sd_c^2,
+ * sd_c,i^2 = sum_c (J dz/dc sigma_c)_ic^2 (consider.consider_sd); shift (20 x 8) dz/dc,
+ * scaled in place */
+static void consider_add(const sr_estimator_model *m, est_core *nw, const double *J,
+                         double *shift)
+{
+    const int nc = SR_N_CONSIDER;
+    for (int k = 0; k < EST_NZ; k++)                         /* each parameter at 1 sigma */
+        for (int c = 0; c < nc; c++)
+            shift[k * nc + c] *= m->sd_c[c];
+    for (int i = 0; i < EST_NZ; i++) {
+        double v = 0.0;
+        for (int c = 0; c < nc; c++) {
+            double dx = 0.0;
+            for (int k = 0; k < EST_NZ; k++)
+                dx += J[i * EST_NZ + k] * shift[k * nc + c];
+            v += dx * dx;
+        }
+        double sdc = sqrt(v), sd = nw->sd[i];
+        nw->sd[i] = sqrt(sd * sd + sdc * sdc);
+    }
+}
+
+void est_consider_sd(const sr_estimator_model *m, est_core *nw, const double *J)
+{
+    double shift[EST_NZ * SR_N_CONSIDER];
+    if (m->opt.solver == 1) {
+        eigs el, ea;
+        block_eigs(nw->S_lin, m->nl, m->p, &el);
+        block_eigs(nw->S_ang, m->na, m->r, &ea);
+        paper_consider_shift(m, nw, &el, &ea, shift);
+    } else {                                 /* d pi / d c = G^-1 C (JointSolver) */
+        int q = m->q, nj = q + 1;
+        double G[EST_NZ * EST_NZ] = {0.0}, lam[EST_NZ], V[EST_NZ * EST_NZ], d[EST_NZ];
+        double dpi[EST_NZ * SR_N_CONSIDER];
+        int un[EST_NZ];
+        for (int i = 0; i < q; i++)
+            for (int j = 0; j < q; j++)
+                G[i * q + j] = nw->S_pi[i * nj + j];
+        sr_scaled_eigh(G, q, lam, V, d, un);
+        solve_columns(lam, V, d, un, q, nw->cons_lin, SR_N_CONSIDER, dpi);
+        memset(shift, 0, sizeof shift);
+        for (int i = 0; i < q; i++)
+            memcpy(shift + m->std_active[i] * SR_N_CONSIDER, dpi + i * SR_N_CONSIDER,
+                   sizeof(double) * SR_N_CONSIDER);
+    }
+    consider_add(m, nw, J, shift);
 }

@@ -1,9 +1,10 @@
 /* The estimator core's Model, Data and the one step path (see estimator.h): options and their
  * validation (the rules and messages of spacerobot.estimator.identifier), the layout of the
  * identified parameters (spacerobot.interface.ParameterLayout), the sample's validation, its
- * equations (momentum form against the reference sample, optionally about the base's position;
- * force form with measured or differenced accelerations, or the derivative of the momentum
- * equations; the accelerations' noise rows), the transaction around the solver's step
+ * equations (momentum form against the reference sample or the sample a window earlier,
+ * optionally about the base's position; force form with measured or differenced
+ * accelerations, or the derivative of the momentum equations; the accelerations' noise rows;
+ * the thrust's consider columns and integrals), the transaction around the solver's step
  * (est_paper.c, est_joint.c) and the report (physical projection, identified flags, excitation
  * request).
  */
@@ -290,21 +291,6 @@ static void bad_code(char *err, size_t errlen, const char *what, int v, const ch
     cat(err, errlen, choices);
 }
 
-/* "name = value is not available in the native core yet" */
-static void not_ported(char *err, size_t errlen, const char *name, double v)
-{
-    set_msg(err, errlen, name);
-    cat(err, errlen, " = ");
-    char num[64];
-    num[0] = '\0';
-    cat_repr(num, sizeof num, v);
-    size_t len = strlen(num);                /* as the FMU parameter's value: 2, 0.01 */
-    if (len > 2 && strcmp(num + len - 2, ".0") == 0)
-        num[len - 2] = '\0';
-    cat(err, errlen, num);
-    cat(err, errlen, " is not available in the native core yet");
-}
-
 /* the options' checks, in the order of identifier_from_values / Identifier.__init__ */
 static int check_options(const sr_estimator_options *o, char *err, size_t errlen)
 {
@@ -364,9 +350,31 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
         cat_repr(err, errlen, o->momentum_window);
         return 1;
     }
+    /* identifier._thrust_sd: each a number from 0 to MAX_THRUST_SD */
+    const double tsd[2] = {o->sd_thrust_scale, o->sd_thrust_misalign};
+    for (int i = 0; i < 2; i++)
+        if (!(tsd[i] >= 0.0 && tsd[i] <= SR_EST_MAX_THRUST_SD)) {
+            set_msg(err, errlen, i ? "ident.sd_thrust.misalign" : "ident.sd_thrust.scale");
+            cat(err, errlen, " must be a number from 0 to 1, got ");
+            cat_repr(err, errlen, tsd[i]);
+            return 1;
+        }
+    if (o->momentum_window_samples != 0 && (o->momentum_window_samples < 2
+                                            || o->momentum_window_samples
+                                                   > SR_EST_MAX_WINDOW_SAMPLES)) {
+        set_msg(err, errlen, "momentum_window_samples (the momentum window's ring) must be 0 "
+                             "(automatic) or an integer from 2 to 100000, got ");
+        cat_int(err, errlen, o->momentum_window_samples);
+        return 1;
+    }
     if (o->momentum_point != 0 && o->momentum_point != 1) {
         set_msg(err, errlen, "ident.momentum_point must be 0 or 1, got ");
         cat_int(err, errlen, o->momentum_point);
+        return 1;
+    }
+    if (o->accel_bias != 0 && o->accel_bias != 1) {
+        set_msg(err, errlen, "ident.accel_bias must be 0 or 1, got ");
+        cat_int(err, errlen, o->accel_bias);
         return 1;
     }
     if (o->diff_momentum != 0 && o->diff_momentum != 1) {
@@ -414,22 +422,6 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
         cat_repr(err, errlen, o->excite_level);
         return 1;
     }
-    /* what the native core does not do yet: refused where it would take effect (the Python
-     * Identifier ignores these options for the other method / acceleration source too) */
-    int momentum = o->method == 1, force = o->method == 2;
-    if (momentum && o->momentum_window > 0.0) {
-        not_ported(err, errlen, "ident.momentum_window", o->momentum_window);
-        return 1;
-    }
-    if (force && (o->solver == 2 || (o->accel_source == 2 && o->diff_momentum)))
-        for (int i = 0; i < 6; i++)
-            if (o->signal_sd[i] > 0.0 && (i < 3) == (o->accel_source == 1)) {
-                static const char *names[6] = {"ident.noise.base.a", "ident.noise.base.alpha",
-                                               "ident.noise.arm.qdd", "ident.noise.base.v",
-                                               "ident.noise.base.omega", "ident.noise.arm.qd"};
-                not_ported(err, errlen, names[i], o->signal_sd[i]);
-                return 1;
-            }
     return 0;
 }
 
@@ -469,20 +461,49 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     m->force = opt->method == 2;
     m->differenced = m->force && opt->accel_source == 2;
     m->diffmom = m->differenced && opt->diff_momentum;
+    /* the thrust's consider term (consider.thrust_sd): the prior sd of
+     * c = [s_F, phi_F (3), s_M, phi_M (3)], the same for force and moment */
+    m->consider = opt->sd_thrust_scale > 0.0 || opt->sd_thrust_misalign > 0.0;
+    for (int i = 0; i < SR_N_CONSIDER; i++)
+        m->sd_c[i] = i % 4 == 0 ? opt->sd_thrust_scale : opt->sd_thrust_misalign;
+    m->thrust_int = m->consider && (!m->force || m->diffmom);
+    /* the momentum window (identifier: window = ident.momentum_window for the momentum
+     * method) and its ring's capacity */
+    m->window = !m->force && opt->momentum_window > 0.0;
+    m->win_len = opt->momentum_window;
+    if (m->window) {
+        double cap = opt->momentum_window_samples > 0
+                         ? (double)opt->momentum_window_samples
+                         : ceil(opt->momentum_window / SR_EST_WINDOW_MIN_STEP) + 2.0;
+        m->win_cap = cap < SR_EST_MAX_WINDOW_SAMPLES ? (int)cap : SR_EST_MAX_WINDOW_SAMPLES;
+        m->win_slot = 1 + m->nflat + (m->thrust_int ? SR_THRUST_NK : 0);
+    }
     /* the accelerations' noise per channel (identifier._channel_sd): the measured
      * accelerations' sd, or the velocities' (times the derivative's gain per sample) */
     for (int i = 0; i < 3; i++) {
         m->accel_ch[i] = SR_X_A_S + i;
         m->accel_ch[3 + i] = SR_X_ALPHA_B + i;
     }
-    for (int i = 0; i < robot->n; i++)
-        m->accel_ch[6 + i] = SR_X_QDD(robot->n) + i;
-    if (m->force && opt->solver == 1 && !m->diffmom) {
-        const double *sd = opt->signal_sd + (m->differenced ? 3 : 0);
-        for (int i = 0; i < 6 + robot->n; i++)
-            m->accel_sd[i] = sd[i < 3 ? 0 : i < 6 ? 1 : 2];
-        m->eiv = sd[0] > 0.0 || sd[1] > 0.0 || sd[2] > 0.0;
+    for (int i = 0; i < 3; i++) {
+        m->vel_ch[i] = SR_X_V_S + i;
+        m->vel_ch[3 + i] = SR_X_OMEGA_B + i;
     }
+    for (int i = 0; i < robot->n; i++) {
+        m->accel_ch[6 + i] = SR_X_QDD(robot->n) + i;
+        m->vel_ch[6 + i] = SR_X_QD(robot->n) + i;
+    }
+    if (m->force) {                          /* either solver; diffmom: the velocities' */
+        const double *sd = opt->signal_sd + (m->differenced ? 3 : 0);
+        for (int i = 0; i < 6 + robot->n; i++) {
+            m->accel_sd[i] = sd[i < 3 ? 0 : i < 6 ? 1 : 2];
+            if (m->accel_sd[i] > 0.0)
+                m->used[m->n_used++] = i;
+        }
+        m->eiv = m->n_used > 0;
+    }
+    /* the accelerometer bias (Identifier: accel_bias with the force method and measured
+     * accelerations; ignored otherwise) */
+    m->bias = m->force && !m->differenced && opt->accel_bias;
     m->w_lin = opt->row_sd_lin > 0.0 ? 1.0 / opt->row_sd_lin : 1.0;
     m->w_ang = opt->row_sd_ang > 0.0 ? 1.0 / opt->row_sd_ang : 1.0;
     memcpy(m->sharp_to_project, S2P, sizeof S2P);
@@ -588,7 +609,9 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     m->lags = opt->corr_lags;
     size_t off = align8(sizeof(est_data));
     m->off_hist = off;
-    m->slot = 1 + m->nflat + (m->diffmom ? 3 * SR_N_COLS : 0);
+    m->slot_noise = 1 + m->nflat + 3 * SR_N_COLS + (m->consider ? 3 * SR_N_CCOLS : 0);
+    m->slot = !m->diffmom ? 1 + m->nflat
+                          : m->slot_noise + (m->eiv ? 3 * m->n_used * SR_N_COLS : 0);
     off += sizeof(double) * (size_t)(2 * m->half) * (size_t)m->slot;
     m->off_corr_lin = off;          /* the joint solver: one ring of both equations' rows */
     int width_lin = opt->solver == 1 ? m->k1 : m->k1 + m->k2;
@@ -596,6 +619,8 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     m->off_corr_ang = off;
     if (opt->solver == 1)
         off += m->lags ? sizeof(double) * (size_t)(m->lags + 1 + m->lags * m->k2) : 0;
+    m->off_win = off;               /* the momentum window's ring */
+    off += sizeof(double) * (size_t)m->win_cap * (size_t)m->win_slot;
     m->size = off;
     return m;
 }
@@ -757,11 +782,58 @@ static void about_point_of(double *E, const double *p, const double *lin, int li
 
 static void about_point(double *E, const double *p) { about_point_of(E, p, E, SR_N_COLS); }
 
+/* The consider columns Ec (3 x 16: [b_c | y_c] per row) of about_point_of: y_c -= [p]x b_c,
+ * b_c taken from src (3 rows of stride src_stride; Ec's own: src = Ec, SR_N_CCOLS) */
+static void about_point_c(double *Ec, const double *p, const double *src, int src_stride)
+{
+    const double P[9] = {0.0, -p[2], p[1], p[2], 0.0, -p[0], -p[1], p[0], 0.0};   /* [p]x */
+    double pb[3][SR_N_CONSIDER];
+    for (int i = 0; i < 3; i++)
+        for (int c = 0; c < SR_N_CONSIDER; c++)
+            pb[i][c] = P[3 * i] * src[c] + P[3 * i + 1] * src[src_stride + c]
+                       + P[3 * i + 2] * src[2 * src_stride + c];
+    for (int i = 0; i < 3; i++)
+        for (int c = 0; c < SR_N_CONSIDER; c++)
+            Ec[i * SR_N_CCOLS + SR_N_CONSIDER + c] -= pb[i][c];
+}
+
+/* the slot (win_slot values: t, sample, with the thrust integrals their 15 integrals) of the
+ * momentum window ring's i-th oldest sample */
+static const double *win_at(const sr_estimator_model *m, const void *data, const est_core *c,
+                            int i)
+{
+    int cap = m->win_cap;
+    int idx = (c->win_head - c->win_count + i + 2 * cap) % cap;
+    return (const double *)((const char *)data + m->off_win) + (size_t)idx * (size_t)m->win_slot;
+}
+
+/* the sample (t, x, its thrust integrals k (15) or NULL) into the window ring's next slot
+ * after dropping its drop oldest samples (the caller checked the capacity) */
+static void win_push(const sr_estimator_model *m, void *data, est_core *c, int drop, double t,
+                     const double *x, const double *k)
+{
+    double *slot = (double *)((char *)data + m->off_win)
+                   + (size_t)c->win_head * (size_t)m->win_slot;
+    c->win_count -= drop;
+    slot[0] = t;
+    memcpy(slot + 1, x, sizeof(double) * m->nflat);
+    if (m->thrust_int)
+        memcpy(slot + 1 + m->nflat, k, sizeof(double) * SR_THRUST_NK);
+    c->win_head = (c->win_head + 1) % m->win_cap;
+    c->win_count++;
+}
+
 /* The momentum equations of the flat sample x with their angular rows about its own r_S
  * (Identifier._own_point_into): L_O - [r]x P, P = the system's momentum (the linear rows
- * without the impulse: [A | b - J]) */
-static void own_point_rows(const sr_estimator_model *m, const double *x, double *own)
+ * without the impulse: [A | b - J]). With the consider term its consider columns follow
+ * (own + 3 SR_N_COLS, 3 x 16): the sample's momentum-form sensitivities with the thrust
+ * integrals k (15) up to it, unchanged by the point (only the impulse depends on the thrust,
+ * and P has none of it: identifier._momentum_part); k NULL: the rows alone. */
+static void own_point_rows(const sr_estimator_model *m, const double *x, const double *k,
+                           double *own)
 {
+    if (m->consider && k)
+        sr_thrust_sensitivity(0, x, m->n, k, own + 3 * SR_N_COLS);
     double mom[3 * 9];
     sr_equations(&m->robot, 0, x, own);                      /* eqs. 11/16 of this sample */
     for (int i = 0; i < 3; i++) {
@@ -769,6 +841,26 @@ static void own_point_rows(const sr_estimator_model *m, const double *x, double 
         mom[9 * i + 8] = own[i * SR_N_COLS + SR_COL_B] - x[SR_X_J(m->n) + i];
     }
     about_point_of(own, x + SR_X_R_S, mom, 9);
+}
+
+/* The noise rows sigma_l C_l of the own-point rows own (3 x 42) of the flat sample x in the
+ * velocity channels with sd > 0 (eiv.noise_rows with Identifier._own_point_into, eq. 1:
+ * C_l = own(x + e_l) - own(x), the rows being affine in the velocities: the [u v]x P(v)
+ * term's quadratic part is [e]x (m e) = 0) into C (n_used blocks of 3 x 42). */
+static void own_point_noise(const sr_estimator_model *m, const double *x, const double *own,
+                            double *C)
+{
+    double xk[SR_X_LEN(SR_MAX_JOINTS)], ok[3 * SR_N_COLS];
+    memcpy(xk, x, sizeof(double) * m->nflat);
+    for (int b = 0; b < m->n_used; b++) {
+        int l = m->used[b], i = m->vel_ch[l];
+        double sd = m->accel_sd[l];
+        xk[i] = x[i] + 1.0;
+        own_point_rows(m, xk, NULL, ok);
+        xk[i] = x[i];
+        for (int a = 0; a < 3 * SR_N_COLS; a++)
+            C[b * 3 * SR_N_COLS + a] = sd * (ok[a] - own[a]);
+    }
 }
 
 /* The momentum equations differentiated at the centre c of the window (the 2 m stored
@@ -782,9 +874,19 @@ static void own_point_rows(const sr_estimator_model *m, const double *x, double 
  *     + [sum_i w_i (r_i - r_c)]x P_c                   = [u . v]x P_c (velocities)
  *     + sum_i w_i [r_i - r_c]x (J_i - J_c)             ~ [v_c]x sum_i w_i tau_i (J_i - J_c)
  *     + [r_c]x sum_i w_i J_i
- * into out (3 x 42). Returns 0 or the weights' status. */
+ * into out (3 x 42); with the consider term its consider columns into out_c (3 x 16), the
+ * own-point rows' (each sample's own_x + 3 x 42) combined the same way. With N_a, N_b (the
+ * noise Gram matrices begun by est_noise_begin) the noise rows of the window's samples
+ * (noise_x the new sample's, own_point_noise) are added, combined as the rows
+ * (Identifier._differenced_momentum): w_j sigma_l C_l,j, with for v_S channels
+ * + [u_j sigma_l e_l]x P_c (the displacement's) and at the centre + [u.v]x dP_c (the
+ * centre's momentum's). Returns 0 or the weights' status. */
+/* the consider columns (3 x 16) that follow own-point rows (3 x 42) */
+static const double *own_c_of(const double *own) { return own + 3 * SR_N_COLS; }
+
 static int momentum_derivative(const sr_estimator_model *m, const void *data, const est_core *c,
-                               double t, const double *x, const double *own_x, double *out)
+                               double t, const double *x, const double *own_x, double *out,
+                               double *out_c, const double *noise_x, double *N_a, double *N_b)
 {
     int half = m->half, k = 2 * half + 1, oJ = SR_X_J(m->n);
     double times[SR_DIFF_MAX_SAMPLES], w[SR_DIFF_MAX_SAMPLES], u[SR_DIFF_MAX_SAMPLES];
@@ -835,20 +937,105 @@ static int momentum_derivative(const sr_estimator_model *m, const void *data, co
         lin[9 * j + 8] = s;
     }
     about_point_of(out, xc + SR_X_V_S, lin, 9);
+    if (m->consider) {
+        /* the consider columns the same way: sum_i w_i C_i of the own-point rows' (their
+         * impulse's, E_i's), y_c -= [r_c]x sum_i w_i b_c,i, and the lever term
+         * y_c -= [v_c]x sum_i w_i tau_i (b_c,i - b_c,c) (P has no consider part) */
+        const int nk = 3 * SR_N_CCOLS;
+        const double *own_cc = own_c_of(own[half]);
+        double imp[3 * SR_N_CCOLS], lev[3 * SR_N_CCOLS];
+        for (int a = 0; a < nk; a++) {
+            double s = 0.0, l = 0.0;
+            for (int i = 0; i < k; i++) {
+                const double *oc = own_c_of(own[i]);
+                s += w[i] * oc[a];
+                l += w[i] * (times[i] - times[half]) * (oc[a] - own_cc[a]);
+            }
+            out_c[a] = s;
+            imp[a] = s;
+            lev[a] = l;
+        }
+        about_point_c(out_c, xc + SR_X_R_S, imp, SR_N_CCOLS);
+        about_point_c(out_c, xc + SR_X_V_S, lev, SR_N_CCOLS);
+    }
+    if (N_a && m->eiv) {                     /* the noise rows, one sample's blocks at a time */
+        const int nb = 3 * SR_N_COLS;
+        double blk[EST_MAXCH * 3 * SR_N_COLS];
+        for (int i = 0; i < k; i++) {
+            const double *Ci = i == k - 1 ? noise_x : own[i] - 1 - m->nflat + m->slot_noise;
+            for (int b = 0; b < m->n_used; b++) {
+                int l = m->used[b];
+                double *B = blk + b * nb;
+                for (int a = 0; a < nb; a++)                 /* w_j sigma_l C_l,j */
+                    B[a] = w[i] * Ci[b * nb + a];
+                if (l < 3) {                                 /* v_S: [u_j sigma e_l]x P_c */
+                    double e[3] = {0.0, 0.0, 0.0};
+                    e[l] = -(u[i] * m->accel_sd[l]);
+                    about_point_of(B, e, mom_c, 9);
+                }
+                if (i == half)                               /* the centre: [u.v]x dP_c */
+                    about_point_of(B, neg_vu, Ci + b * nb, SR_N_COLS);
+            }
+            est_noise_add(m, c, blk, m->n_used, N_a, N_b);
+        }
+    }
     return 0;
 }
 
 /* the sample (t, x, its own-point rows own where the derivative is the momentum
- * equations') into the history ring's next slot (over the oldest once full) */
+ * equations', and their noise rows noise where the noise is compensated) into the history
+ * ring's next slot (over the oldest once full) */
 static void push_history(const sr_estimator_model *m, void *data, est_core *c, double t,
-                         const double *x, const double *own)
+                         const double *x, const double *own, const double *noise)
 {
     double *slot = history(m, data) + (size_t)c->hist_head * (size_t)m->slot;
     slot[0] = t;
     memcpy(slot + 1, x, sizeof(double) * m->nflat);
     if (m->diffmom)
-        memcpy(slot + 1 + m->nflat, own, sizeof(double) * 3 * SR_N_COLS);
+        memcpy(slot + 1 + m->nflat, own,
+               sizeof(double) * (3 * SR_N_COLS + (m->consider ? 3 * SR_N_CCOLS : 0)));
+    if (m->diffmom && m->eiv)
+        memcpy(slot + m->slot_noise, noise, sizeof(double) * 3 * m->n_used * SR_N_COLS);
     c->hist_head = (c->hist_head + 1) % (2 * m->half);
+}
+
+/* The fit f with one more sample (accel_bias.BiasFit.add): time t [s] (after the last),
+ * measured velocity v (3) [m/s] and acceleration a (3) [m/s2], into out; started 0: f is
+ * empty (the first sample sets t0). The trapezoid I += (t - t_last) (a_last + a) / 2, then
+ * x = v - I = c - b tau + noise (tau = t - t0) adds to the sums of 1, tau, tau^2, x, tau x. */
+static void bias_fit_add(const est_bias_fit *f, int started, double t, const double *v,
+                         const double *a, est_bias_fit *out)
+{
+    *out = *f;
+    if (!started) {
+        memset(out, 0, sizeof *out);
+        out->t0 = t;
+    } else {
+        for (int i = 0; i < 3; i++)
+            out->integral[i] = f->integral[i] + 0.5 * (t - f->t_last) * (f->a_last[i] + a[i]);
+    }
+    double tau = t - out->t0;
+    out->t_last = t;
+    for (int i = 0; i < 3; i++) {
+        double x = v[i] - out->integral[i];
+        out->a_last[i] = a[i];
+        out->sx[i] += x;
+        out->sx[3 + i] += tau * x;
+    }
+    out->s[0] += 1.0;
+    out->s[1] += tau;
+    out->s[2] += tau * tau;
+}
+
+/* the bias estimate b (3) [m/s2] of the fit f (accel_bias.BiasFit.bias): minus the
+ * least-squares slope, slope = (n sum tau x - sum tau sum x) / (n sum tau^2 - (sum tau)^2);
+ * 0 before two distinct times */
+static void bias_fit_bias(const est_bias_fit *f, double *b)
+{
+    double n = f->s[0], s1 = f->s[1], s2 = f->s[2];
+    double den = n * s2 - s1 * s1;
+    for (int i = 0; i < 3; i++)
+        b[i] = den > 0.0 ? -(n * f->sx[3 + i] - s1 * f->sx[i]) / den : 0.0;
 }
 
 /* n + 1, saturated at INT_MAX (the counters of a long run, or of a restored block, never
@@ -902,9 +1089,15 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
         {"diag.rejected", d->rejected, 0, 2147483647L},
         {"diag.status", d->status, SR_EST_NO_SAMPLE, SR_EST_REJECT_INCONSISTENT},
         /* the momentum reference exists only for the momentum method */
-        {"the momentum reference flag", c->has_ref, 0, m->force ? 0 : 1},
+        {"the momentum reference flag", c->has_ref, 0, m->force || m->window ? 0 : 1},
+        /* the thrust integrals exist only where the consider term keeps them */
+        {"the thrust integrals' flag", c->thr_started, 0, m->thrust_int ? 1 : 0},
+        {"the momentum window's count", c->win_count, 0, m->win_cap},
+        {"the momentum window's head", c->win_head, 0, m->win_cap > 0 ? m->win_cap - 1 : 0},
         /* the noise parts exist only where the accelerations' noise is compensated */
         {"the noise compensation flag", c->has_eiv, 0, m->eiv ? 1 : 0},
+        /* the accelerometer bias's fit only where it is subtracted */
+        {"the accelerometer bias fit's flag", c->has_bias, 0, m->bias ? 1 : 0},
         {"the differencing history's count", c->hist_count, 0, cap},
         {"the differencing history's head", c->hist_head, 0, cap > 0 ? cap - 1 : 0},
         {"the residual ring's count (linear)", c->corr_count[0], 0, L},
@@ -971,33 +1164,98 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         return reject(d, status != SR_EST_ESTIMATING ? status : SR_EST_REJECT_NONFINITE, why,
                       msg, msglen);
     }
+    /* the differencing history, the momentum window and the thrust integrals need increasing
+     * sample times (Identifier._time_ok: after the newest sample any of them holds) */
+    double last = 0.0;
+    int has_last = 0;
     if (m->differenced && c->hist_count > 0) {
-        double last = hist_slot(m, data, c, c->hist_count - 1)[0];
-        if (!(t > last)) {
-            set_msg(why, sizeof why, "differenced accelerations, the moving reference and the "
-                                     "thrust integrals need increasing sample times: t = ");
-            cat_num(why, sizeof why, t, 6);
-            cat(why, sizeof why, " s after ");
-            cat_num(why, sizeof why, last, 6);
-            cat(why, sizeof why, " s");
-            return reject(d, SR_EST_REJECT_INCONSISTENT, why, msg, msglen);
-        }
+        last = hist_slot(m, data, c, c->hist_count - 1)[0];
+        has_last = 1;
+    }
+    if (m->window && c->win_count > 0) {
+        double tw = win_at(m, data, c, c->win_count - 1)[0];
+        last = has_last ? est_pymax(last, tw) : tw;
+        has_last = 1;
+    }
+    if (m->thrust_int && c->thr_started) {
+        last = has_last ? est_pymax(last, c->thr[SR_THRUST_T]) : c->thr[SR_THRUST_T];
+        has_last = 1;
+    }
+    if (has_last && !(t > last)) {
+        set_msg(why, sizeof why, "differenced accelerations, the moving reference and the "
+                                 "thrust integrals need increasing sample times: t = ");
+        cat_num(why, sizeof why, t, 6);
+        cat(why, sizeof why, " s after ");
+        cat_num(why, sizeof why, last, 6);
+        cat(why, sizeof why, " s");
+        return reject(d, SR_EST_REJECT_INCONSISTENT, why, msg, msglen);
     }
 
     /* the transaction: the new state on the stack, committed only if all came out finite */
-    double E[3 * SR_N_COLS], own[3 * SR_N_COLS];
-    double xc[SR_X_LEN(SR_MAX_JOINTS)];
+    static const char *const overflow_msg = "the update failed: it produced non-finite numbers; "
+                                        "are the inputs in SI units and of physical size?";
+    /* E (3 x 42) and, with the consider term, its consider columns Ec (3 x 16: the
+     * right-hand sides' sensitivities, consider.py), which every linear step on E follows */
+    double E[3 * SR_N_COLS], Ec[3 * SR_N_CCOLS];
+    double own[3 * SR_N_COLS + 3 * SR_N_CCOLS];          /* own-point rows (, consider) */
+    double xc[SR_X_LEN(SR_MAX_JOINTS)], xb[SR_X_LEN(SR_MAX_JOINTS)];
     const double *x = sample;
     int stored = 0, have_E = 0;               /* stored 1: a history sample only */
+    /* the accelerometer bias (accel_bias.py; committed with the sample): the fit with this
+     * sample, and a_S minus the bias estimated so far */
+    est_bias_fit bfit;
+    if (m->bias) {
+        double bias[3];
+        bias_fit_add(&c->bias, c->has_bias, t, sample + SR_X_V_S, sample + SR_X_A_S, &bfit);
+        bias_fit_bias(&bfit, bias);
+        double sum = bfit.t0 + bfit.t_last + bias[0] + bias[1] + bias[2];
+        for (int i = 0; i < 3; i++)
+            sum += bfit.integral[i] + bfit.s[i] + bfit.sx[i] + bfit.sx[3 + i];
+        if (!isfinite(sum))
+            return reject(d, SR_EST_REJECT_NONFINITE, overflow_msg, msg, msglen);
+        memcpy(xb, sample, sizeof(double) * m->nflat);
+        for (int i = 0; i < 3; i++)
+            xb[SR_X_A_S + i] -= bias[i];
+        x = xb;
+    }
+    /* the accelerations' noise (eiv.py): the expected noise parts of the Gram matrices after
+     * this sample (paper: [A | b] and [phi | y | psi]; joint: [H | yy]); with diffmom the
+     * new sample's own-point noise rows (stored with it), else this sample's noise rows */
+    double N_a[EST_NJ * EST_NJ], N_b[EST_NA * EST_NA];
+    double own_noise[EST_MAXCH * 3 * SR_N_COLS];
+    int has_noise = 0;
     double gain = 1.0;                        /* the derivative's noise gain */
+    /* the thrust integrals up to this sample (consider.ThrustIntegrals.add; committed with
+     * the sample, a stored one too) */
+    double thr[SR_THRUST_LEN];
+    const double *kint = NULL;                /* their 15 integrals */
+    if (m->thrust_int) {
+        memcpy(thr, c->thr, sizeof thr);
+        sr_thrust_integrals_add(thr, !c->thr_started, t, sample + SR_X_R_S,
+                                sample + SR_X_F(m->n), sample + SR_X_M(m->n));
+        double sum = 0.0;
+        for (int i = 0; i < SR_THRUST_LEN; i++)
+            sum += thr[i];
+        if (!isfinite(sum))
+            return reject(d, SR_EST_REJECT_NONFINITE, overflow_msg, msg, msglen);
+        kint = thr + SR_THRUST_K;
+    }
+    memset(Ec, 0, sizeof Ec);
     if (m->diffmom)
-        own_point_rows(m, sample, own);
+        own_point_rows(m, sample, kint, own);
+    if (m->diffmom && m->eiv)
+        own_point_noise(m, sample, own, own_noise);
     if (m->differenced) {
         int wst = 0;
         if (c->hist_count < 2 * m->half)
             stored = 1;
-        else if (m->diffmom)                             /* the momentum equations' derivative */
-            have_E = (wst = momentum_derivative(m, data, c, t, sample, own, E)) == 0;
+        else if (m->diffmom) {                           /* the momentum equations' derivative */
+            if (m->eiv)
+                est_noise_begin(m, c, N_a, N_b);
+            have_E = (wst = momentum_derivative(m, data, c, t, sample, own, E, Ec, own_noise,
+                                                m->eiv ? N_a : NULL, N_b)) == 0;
+            has_noise = m->eiv;
+        }
         else if ((wst = centre_sample(m, data, c, t, sample, xc, &gain)) == 0)
             x = xc;                                      /* the centre, its accelerations */
         if (wst != 0)
@@ -1005,54 +1263,102 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
                           "weights are not finite; are the inputs in SI units and of "
                           "physical size?", msg, msglen);
     }
-    if (!stored && !have_E)
+    if (!stored && !have_E) {
         sr_equations(&m->robot, m->force, x, E);         /* eqs. 11/16 or 28/31 */
-    int first_reference = !m->force && !c->has_ref;
-    if (first_reference) {                               /* the momentum reference t0 */
+        if (m->consider)                                 /* d b / d c, d y / d c */
+            sr_thrust_sensitivity(m->force, x, m->n, kint, Ec);
+    }
+    int first_reference = !m->force && !m->window && !c->has_ref;
+    int first_window = m->window && c->win_count == 0;
+    int win_drop = 0;                         /* the ring's samples this one makes obsolete */
+    if (first_reference || first_window) {               /* the momentum reference t0 */
         double s = 0.0;
         for (int i = 0; i < 3 * SR_N_COLS; i++)
             s += E[i];
+        for (int i = 0; i < 3 * SR_N_CCOLS; i++)
+            s += Ec[i];
         if (!isfinite(s))
-            return reject(d, SR_EST_REJECT_NONFINITE, "the update failed: it produced "
-                          "non-finite numbers; are the inputs in SI units and of physical "
-                          "size?", msg, msglen);
-        memcpy(c->ref, E, sizeof E);
-        c->has_ref = 1;
-        stored = 2;
+            return reject(d, SR_EST_REJECT_NONFINITE, overflow_msg, msg, msglen);
+        if (first_reference) {
+            memcpy(c->ref, E, sizeof E);
+            memcpy(c->ref_c, Ec, sizeof Ec);
+            c->has_ref = 1;
+            stored = 2;
+        } else {
+            stored = 3;                                  /* into the window's ring */
+        }
+    } else if (m->window) {
+        /* eqs. 11/16 against the window's reference (Identifier._windowed): the newest stored
+         * sample at least momentum_window older than t ("at least" to within 1e-9 s per
+         * second of t: sample times k h carry round-off), the oldest while the run is
+         * shorter; its equations evaluated again from its sample (and thrust integrals) */
+        double limit = t - m->win_len + 1e-9 * est_pymax(1.0, fabs(t));
+        while (win_drop + 1 < c->win_count && win_at(m, data, c, win_drop + 1)[0] <= limit)
+            win_drop++;
+        if (c->win_count - win_drop + 1 > m->win_cap) {
+            set_msg(why, sizeof why, "the momentum window's ring is full (");
+            cat_int(why, sizeof why, m->win_cap);
+            cat(why, sizeof why, " samples within ident.momentum_window = ");
+            cat_num(why, sizeof why, m->win_len, 6);
+            cat(why, sizeof why, " s; sized for samples at least 1 ms apart unless "
+                                 "momentum_window_samples says otherwise): sample skipped");
+            return reject(d, SR_EST_REJECT_INCONSISTENT, why, msg, msglen);
+        }
+        const double *ref = win_at(m, data, c, win_drop);
+        double Er[3 * SR_N_COLS], Erc[3 * SR_N_CCOLS];
+        sr_equations(&m->robot, 0, ref + 1, Er);
+        for (int i = 0; i < 3 * SR_N_COLS; i++)
+            E[i] -= Er[i];
+        if (m->consider) {
+            sr_thrust_sensitivity(0, ref + 1, m->n, ref + 1 + m->nflat, Erc);
+            for (int i = 0; i < 3 * SR_N_CCOLS; i++)
+                Ec[i] -= Erc[i];
+        }
     } else if (!m->force) {                              /* eqs. 11/16: [.](t) - [.](t0) */
         for (int i = 0; i < 3 * SR_N_COLS; i++)
             E[i] -= c->ref[i];
-        if (m->opt.momentum_point)                       /* about r_S of this sample */
-            about_point(E, sample + SR_X_R_S);
+        for (int i = 0; i < 3 * SR_N_CCOLS; i++)
+            Ec[i] -= c->ref_c[i];
+    }
+    if (!m->force && !stored && m->opt.momentum_point) { /* about r_S of this sample */
+        about_point(E, sample + SR_X_R_S);
+        if (m->consider)
+            about_point_c(Ec, sample + SR_X_R_S, Ec, SR_N_CCOLS);
     }
     if (stored == 1) {                                   /* the differencing history fills */
-        push_history(m, data, c, t, sample, own);
+        push_history(m, data, c, t, sample, own, own_noise);
         c->hist_count++;
     }
+    if (stored == 3)
+        win_push(m, data, c, 0, t, sample, kint);
     if (stored) {
+        if (m->thrust_int) {
+            memcpy(c->thr, thr, sizeof thr);
+            c->thr_started = 1;
+        }
         d->status = SR_EST_REFERENCE;
         d->msg[0] = '\0';
         return d->status;
     }
     /* the noise rows sigma_l C_l, C_l = E(x + e_l) - E(x) (eiv.noise_rows, eq. 1): the
-     * equations are affine in the accelerations */
-    double noise[3 * (6 + SR_MAX_JOINTS) * SR_N_COLS];
-    int n_noise = 0;
-    if (m->eiv) {
+     * equations are affine in the accelerations; their Gram matrix the expected noise part
+     * N = sum_k w_k sum_l sigma_l^2 C_l,k^T C_l,k of this sample's */
+    if (m->eiv && !m->diffmom) {
+        double *noise = own_noise;                       /* (its buffer: unused here) */
         double xk[SR_X_LEN(SR_MAX_JOINTS)], Ek[3 * SR_N_COLS];
         memcpy(xk, x, sizeof(double) * m->nflat);
-        for (int l = 0; l < 6 + m->n; l++) {
-            double sd = m->accel_sd[l] * gain;
-            if (!(sd > 0.0))
-                continue;
-            int i = m->accel_ch[l];
+        for (int b = 0; b < m->n_used; b++) {
+            int l = m->used[b], i = m->accel_ch[l];
+            double sd = m->accel_sd[l] * gain;           /* differenced: the derivative's */
             xk[i] = x[i] + 1.0;
             sr_equations(&m->robot, 1, xk, Ek);
             xk[i] = x[i];
             for (int a = 0; a < 3 * SR_N_COLS; a++)
-                noise[n_noise * 3 * SR_N_COLS + a] = sd * (Ek[a] - E[a]);
-            n_noise++;
+                noise[b * 3 * SR_N_COLS + a] = sd * (Ek[a] - E[a]);
         }
+        est_noise_begin(m, c, N_a, N_b);
+        est_noise_add(m, c, noise, m->n_used, N_a, N_b);
+        has_noise = 1;
     }
     est_core nw;                              /* written by the step, copied by the commit */
     for (int i = 0; i < 2; i++) {
@@ -1063,9 +1369,10 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
     /* the tracker's clock is the sample count: the estimates depend on the samples, not on
      * the step sizes between them */
     int st = m->opt.solver == 1
-                 ? est_paper_step(m, data, c, &nw, E, n_noise ? noise : NULL, n_noise,
-                                  (double)d->samples, e_lin, e_ang)
-                 : est_joint_step(m, data, c, &nw, E, (double)d->samples, e_lin);
+                 ? est_paper_step(m, data, c, &nw, E, Ec, has_noise ? N_a : NULL,
+                                  has_noise ? N_b : NULL, (double)d->samples, e_lin, e_ang)
+                 : est_joint_step(m, data, c, &nw, E, Ec, has_noise ? N_a : NULL,
+                                  (double)d->samples, e_lin);
     if (st == 0 && !outputs_finite(&nw))   /* e.g. a restored block's numbers: never report
                                                them non-finite */
         st = 2;
@@ -1088,7 +1395,17 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         est_corr_commit(m, data, &nw, 0, e_lin, m->k1 + m->k2);
     }
     if (m->differenced)                                  /* the window moves by one sample */
-        push_history(m, data, c, t, sample, own);
+        push_history(m, data, c, t, sample, own, own_noise);
+    if (m->window)                                       /* the momentum window moves on */
+        win_push(m, data, c, win_drop, t, sample, kint);
+    if (m->thrust_int) {
+        memcpy(c->thr, thr, sizeof thr);
+        c->thr_started = 1;
+    }
+    if (m->bias) {
+        c->bias = bfit;
+        c->has_bias = 1;
+    }
     est_core_commit(m, c, &nw);
     d->samples = count_up(d->samples);
     d->status = SR_EST_ESTIMATING;

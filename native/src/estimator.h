@@ -61,6 +61,14 @@ extern "C" {
 #define SR_EST_INERTIA_MAX 1e15
 #define SR_EST_P0_MIN 1e-12
 #define SR_EST_P0_MAX 1e16
+/* the momentum window's ring (sr_estimator_options.momentum_window_samples): the most
+ * samples it may hold, and the sample spacing its automatic size allows for (the plant's
+ * internal step; the project samples every 0.1 s). Its memory: 8 (1 + 24 + 3 n + 12 (+ 15
+ * with sd_thrust)) bytes per sample, 0.9 MB for a 2 s window of a 6-joint arm. */
+#define SR_EST_MAX_WINDOW_SAMPLES 100000
+#define SR_EST_WINDOW_MIN_STEP 1e-3
+/* largest ident.sd_thrust.scale / misalign (identifier.MAX_THRUST_SD) */
+#define SR_EST_MAX_THRUST_SD 1.0
 /* length of the message buffers (rejections, model errors) */
 #define SR_EST_MSG_LEN 256
 
@@ -85,11 +93,31 @@ typedef struct sr_estimator_options {
     int corr_lags;         /* ident.corr_lags: 0..10000 */
     double signal_sd[6];   /* ident.noise.*: a_S, alpha_B, qdd (measured); v_S, omega_B, qd
                               (differenced): white-noise sd per sample; > 0: the force method's
-                              estimates bias-compensated (errors in variables; the paper
-                              solver without diff_momentum) */
-    double momentum_window;/* ident.momentum_window [s] (> 0 not ported yet) */
+                              estimates bias-compensated (errors in variables, eiv.py; either
+                              solver, with diff_momentum too) */
+    double momentum_window;/* ident.momentum_window [s], 0..1e6 (momentum method: each
+                              sample's equations differenced against the newest stored sample
+                              at least this much older, the first until then; 0 = against the
+                              first sample, eqs. 11/16) */
     int momentum_point;    /* ident.momentum_point: 0/1 (momentum method: the angular rows
                               about the base's position at the newer sample) */
+    /* -- added after the first release (defaults 0 = the behaviour before them) -- */
+    double sd_thrust_scale;     /* ident.sd_thrust.scale [1], 0..1: sd of the thrust's scale
+                                   factor error (force and moment, constant over the run) */
+    double sd_thrust_misalign;  /* ident.sd_thrust.misalign [rad], 0..1: sd of its
+                                   misalignment per axis; either > 0: a consider covariance
+                                   adds what they leave in the estimates to the sd (the
+                                   estimates are unchanged; consider.py) */
+    int momentum_window_samples;/* no FMU parameter: the most samples the momentum window's
+                                   ring holds, 2..SR_EST_MAX_WINDOW_SAMPLES; 0 = automatic,
+                                   momentum_window / SR_EST_WINDOW_MIN_STEP + 2 (samples at
+                                   least 1 ms apart). A sample that would overfill it is
+                                   rejected (status 4; the estimates are then those of the
+                                   accepted samples, exactly) */
+    int accel_bias;             /* ident.accel_bias: 0/1 (force method, measured
+                                   accelerations: a_S minus the accelerometer bias estimated
+                                   online from the navigation velocity, the slope of
+                                   v_S - integral a_S dt; accel_bias.py; ignored otherwise) */
 } sr_estimator_options;
 
 /** The defaults of the estimator FMU's parameters (the paper's guesses and covariances of
@@ -102,15 +130,15 @@ typedef struct sr_estimator_model sr_estimator_model;
 /** A new Model, or NULL on invalid options or robot with a one-line message in err (errlen
  *  bytes, NUL-terminated when errlen > 0; err may be NULL) naming the parameter by its FMU name,
  *  e.g. "forgetting factor lambda must satisfy 0 < lambda <= 1, got 1.5" (the rules and
- *  messages of the Python Identifier), or saying that a value is not available in the native
- *  core yet ("ident.diff_momentum = 1 is not available in the native core yet"). The robot is
- *  copied. Free with sr_estimator_model_free. */
+ *  messages of the Python Identifier). The robot is copied. Free with sr_estimator_model_free. */
 SR_API sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
                                                   const sr_estimator_options *opt,
                                                   char *err, size_t errlen);
 SR_API void sr_estimator_model_free(sr_estimator_model *m);
 
-/** Bytes of one Data block of this Model (depends on diff_half_window, corr_lags, n). */
+/** Bytes of one Data block of this Model (depends on diff_half_window, corr_lags, n, the
+ *  momentum window's ring, and with diff_momentum and ident.noise.* the window's noise rows:
+ *  1008 bytes per noisy channel and stored sample). */
 SR_API size_t sr_estimator_data_size(const sr_estimator_model *m);
 
 /** Initialise the Data block data (sr_estimator_data_size(m) bytes, any alignment of a malloc'ed
@@ -126,7 +154,8 @@ SR_API int sr_estimator_sample_length(const sr_estimator_model *m);
  *  estimate, covariance and internal state untouched except the rejected counter, the status
  *  and the message. msg (msglen bytes; may be NULL) gets the reason of a rejection ("" when
  *  accepted), as the Python Identifier.message. Sample times must increase only where the state
- *  depends on them (differenced accelerations), as in the Python Identifier. A Data block
+ *  depends on them (differenced accelerations, the momentum window, the thrust integrals of
+ *  sd_thrust), as in the Python Identifier. A Data block
  *  whose counters are out of range (not initialised, corrupt, or of another Model) is not
  *  used: status 3, nothing written. */
 SR_API int sr_estimator_update(const sr_estimator_model *m, void *data, double t,
@@ -134,8 +163,9 @@ SR_API int sr_estimator_update(const sr_estimator_model *m, void *data, double t
 
 /** Check a Data block restored from outside (FMI set / deserialize state, a file) before it is
  *  used: the magic, every count, index, flag and status within its range for this Model (the
- *  differencing history's and the residual rings' heads and counts, the momentum reference and
- *  noise-compensation flags, the sample counters, the status, the message's terminating NUL).
+ *  differencing history's, the momentum window's and the residual rings' heads and counts,
+ *  the momentum reference, noise-compensation, thrust-integral and accelerometer-bias
+ *  flags, the sample counters, the status, the message's terminating NUL).
  *  Its floating-point values are not judged: whatever they are, an update reads and writes
  *  only within the block and commits only finite numbers (else it rejects the sample). The
  *  block must be sr_estimator_data_size(m) bytes (the caller knows its size). Returns 0 when

@@ -1,4 +1,4 @@
-/* Sensor models (see sensors.h): a port of spacerobot/sensors/models.py (SensorSuite), the same
+/* Sensor models (see sensors.h): the NumPy reference is tests/oracles/sensors.py (SensorSuite), the same
  * equations, units, order of effects and order of random draws per stream. */
 #include "sensors.h"
 
@@ -10,6 +10,21 @@ static const char *const PARAMETER_NAMES[SR_NOISE_COUNT] = {
     "noise.nav.r", "noise.nav.v", "noise.accel.vrw", "noise.accel.bias", "noise.accel.brw",
     "noise.alpha", "noise.enc.resolution", "noise.enc.q", "noise.enc.qd", "noise.enc.qdd",
     "noise.thrust.scale", "noise.thrust.misalign"};
+
+/* Largest magnitude in effect (noise.<name> times noise.scale) of each parameter, so that a
+ * finite true sample always gives a finite measurement: angles' errors up to pi [rad], the
+ * thrust scale factor's up to 10 (1000 %), every other error up to 1e6 (SI units). */
+#define ANGLE_LIMIT 3.141592653589793
+#define SI_LIMIT 1e6
+static const double PARAMETER_LIMITS[SR_NOISE_COUNT] = {
+    SI_LIMIT, SI_LIMIT, SI_LIMIT, ANGLE_LIMIT, ANGLE_LIMIT, SI_LIMIT, SI_LIMIT, SI_LIMIT, SI_LIMIT,
+    SI_LIMIT, SI_LIMIT, ANGLE_LIMIT, SI_LIMIT, SI_LIMIT, SI_LIMIT, 10.0, ANGLE_LIMIT};
+static const char *const LIMIT_TEXT[SR_NOISE_COUNT] = {
+    "1e6 rad/s", "1e6 rad/s", "1e6 rad/s", "pi rad", "pi rad", "1e6 m", "1e6 m/s", "1e6 m/s2",
+    "1e6 m/s2", "1e6 m/s2", "1e6 rad/s2", "pi rad", "1e6 rad", "1e6 rad/s", "1e6 rad/s2", "10",
+    "pi rad"};
+/* the smallest encoder step other than 0 (q / step stays far from overflow) */
+#define MIN_RESOLUTION 1e-9
 
 size_t sr_sensors_model_size(void)
 {
@@ -80,11 +95,17 @@ int sr_sensors_init(sr_sensors_model *model, int n, const double *noise, double 
             set_message(msg, msg_size, PARAMETER_NAMES[i], " must be finite and >= 0", NULL);
             return 1;
         }
-        if (!isfinite(scale * noise[i])) {
-            set_message(msg, msg_size, PARAMETER_NAMES[i], " times noise.scale must be finite",
-                        NULL);
+        if (!(scale * noise[i] <= PARAMETER_LIMITS[i])) {
+            set_message(msg, msg_size, PARAMETER_NAMES[i], " times noise.scale must be at most ",
+                        LIMIT_TEXT[i]);
             return 1;
         }
+    }
+    if (scale * noise[SR_NOISE_ENC_RESOLUTION] > 0.0
+        && scale * noise[SR_NOISE_ENC_RESOLUTION] < MIN_RESOLUTION) {
+        set_message(msg, msg_size, "noise.enc.resolution times noise.scale must be 0 (no "
+                    "quantisation) or at least 1e-9 rad", NULL, NULL);
+        return 1;
     }
     if (seed < 0) {
         set_message(msg, msg_size, "seed must be >= 0", NULL, NULL);

@@ -1,5 +1,5 @@
 /* The sensor models between the plant's true signals and the estimator (a port of
- * spacerobot/sensors/models.py, SensorSuite; docs/sensors.md): gyro (white noise, initial bias,
+ * tests/oracles/sensors.py, SensorSuite; docs/sensors.md): gyro (white noise, initial bias,
  * bias random walk), star tracker, relative navigation, accelerometer / IMU, joint encoders
  * (noise, quantisation), thrust knowledge (scale factor and misalignment drawn once per run),
  * sample delay.
@@ -108,8 +108,10 @@ SR_API const char *sr_sensors_parameter_name(int i);
  *  above (not yet scaled); scale = noise.scale; seed = seed; delay = noise.delay;
  *  imu = noise.imu; dt the communication step [s]. Returns 0, or 1 with model untouched and
  *  a NUL-terminated message naming the FMU parameter in msg (msg_size bytes; msg may be
- *  NULL) for: n outside 1..SR_MAX_JOINTS, a magnitude or noise.scale not finite and >= 0 (or
- *  their product not finite), seed < 0, noise.delay outside 0..SR_SENSORS_MAX_DELAY,
+ *  NULL) for: n outside 1..SR_MAX_JOINTS, a magnitude or noise.scale not finite and >= 0, a
+ *  magnitude times noise.scale above its limit (angles pi rad, the thrust scale factor 10,
+ *  every other 1e6 in SI units: a finite sample then always gives a finite measurement), an
+ *  encoder step times noise.scale in (0, 1e-9) rad, seed < 0, noise.delay outside 0..SR_SENSORS_MAX_DELAY,
  *  noise.imu not 0 or 1, dt not finite and > 0, a NULL model or noise. */
 SR_API int sr_sensors_init(sr_sensors_model *model, int n, const double *noise, double scale,
                            long long seed, int delay, int imu, double dt, char *msg,

@@ -17,6 +17,8 @@
 #ifndef SR_MATH_H
 #define SR_MATH_H
 
+#include <math.h>
+
 #include "sr_api.h"
 
 #ifdef __cplusplus
@@ -35,9 +37,13 @@ extern "C" {
 SR_API double sr_hypot(double x, double y);
 
 /** Sine and cosine of x [rad]: x reduced to r in [-pi/4, pi/4] by x - k pi/2 in double-double
- *  with pi/2 in four parts (152 bits; k pi/2 exact for |k| < 2^20, |x| < 1.6e6), then the
- *  Taylor series of sin r / r and cos r in double-double arithmetic (below 2^-95 relative),
- *  rounded once: correctly rounded in every case checked against 70-digit references
+ *  with pi/2 in four parts (152 bits; k pi/2 exact for |k| < 2^20, |x| < 1.6e6), then
+ *  sin(a + d), cos(a + d) from a table of sin a, cos a (a = i/128, double-double) and short
+ *  polynomials in d (below 2^-64 relative), returned where that error bound proves the
+ *  rounding correct (Ziv's test; ~99.7 % of arguments), else the Taylor series of sin r / r
+ *  and cos r in double-double arithmetic (below 2^-95 relative), rounded once. The two paths
+ *  give the same bits (the fast one only returns what the slow one would): correctly
+ *  rounded in every case checked against 70-digit references
  *  (glibc's sin and cos misround 0.13 % of arguments: the core differs from them there) for
  *  |x| < 1.6e6; deterministic but less accurate up to 1e15; NaN for |x| >= 1e15 (no angle in
  *  the core comes near) and for non-finite x. sin(-0) = -0. s or c may be NULL. */
@@ -72,6 +78,16 @@ SR_API double sr_powi(double x, int n);
 /** 10^n (sr_powi(10, n)): exact for 0 <= n <= 22, correctly rounded for -22 <= n < 0,
  *  below 1 ulp elsewhere; +inf for n > 308, 0 below the subnormal range. */
 SR_API double sr_pow10(int n);
+
+/** 1 if the n numbers at x are all finite, else 0. */
+static inline int sr_finite_all(const double *x, int n)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(x[i]))
+            return 0;
+    return 1;
+}
 
 #ifdef __cplusplus
 }

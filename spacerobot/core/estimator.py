@@ -43,7 +43,9 @@ class SrEstimatorOptions(ctypes.Structure):
         ("row_sd_ang", ctypes.c_double), ("diff_half_window", ctypes.c_int),
         ("diff_momentum", ctypes.c_int), ("corr_lags", ctypes.c_int),
         ("signal_sd", ctypes.c_double * 6), ("momentum_window", ctypes.c_double),
-        ("momentum_point", ctypes.c_int),
+        ("momentum_point", ctypes.c_int), ("sd_thrust_scale", ctypes.c_double),
+        ("sd_thrust_misalign", ctypes.c_double), ("momentum_window_samples", ctypes.c_int),
+        ("accel_bias", ctypes.c_int),
     ]
 
 
@@ -142,6 +144,9 @@ def _options(values: Mapping, L: ctypes.CDLL) -> SrEstimatorOptions:
             o.guess_target[:] = _body10(v.target)
             o.P0_mu, o.P0_theta = float(v.P0_mu), float(v.P0_theta)
             continue
+        if key == "thrust_sd":                               # Identifier(thrust_sd=...)
+            o.sd_thrust_scale, o.sd_thrust_misalign = (float(x) for x in v)
+            continue
         name = _FIELD.get(key, key)
         if name not in dict(SrEstimatorOptions._fields_):
             raise KeyError(f"unknown estimator option {key!r}")
@@ -181,6 +186,9 @@ def options_from_values(values: Mapping[str, float]) -> dict:
                       SIGNAL_NOISE_PARAMETERS],
         "momentum_window": float(v["ident.momentum_window"]),
         "momentum_point": int(v["ident.momentum_point"]),
+        "sd_thrust_scale": float(v["ident.sd_thrust.scale"]),
+        "sd_thrust_misalign": float(v["ident.sd_thrust.misalign"]),
+        "accel_bias": int(v["ident.accel_bias"]),
     }
 
 
@@ -195,8 +203,11 @@ class NativeEstimator:
         ``lambda``, ``P0_mu``, ``P0_theta``, ``guess_base`` / ``guess_target`` (a RigidBody or
         10 numbers), ``sd_rel``, ``excite_mode``, ``excite_level``, ``row_sd_lin``,
         ``row_sd_ang``, ``diff_half_window``, ``diff_momentum``, ``corr_lags``,
-        ``signal_sd`` (6), ``momentum_window``, ``momentum_point``) and ``guess`` (a
-        ``robots.Guess``: both bodies and P0); the rest keep ``sr_estimator_options_default``.
+        ``signal_sd`` (6), ``momentum_window``, ``momentum_point``, ``sd_thrust_scale``,
+        ``sd_thrust_misalign``, ``momentum_window_samples`` (the momentum window's ring
+        capacity, 0 = automatic: samples at least 1 ms apart), ``accel_bias``), ``guess`` (a
+        ``robots.Guess``: both bodies and P0) and ``thrust_sd`` (``(scale, misalignment)``,
+        as the Identifier's); the rest keep ``sr_estimator_options_default``.
     lib : the library (default: :func:`spacerobot.core.lib`)
 
     Raises ``ValueError`` with the core's message for invalid options.

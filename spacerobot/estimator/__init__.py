@@ -1,13 +1,7 @@
-"""Estimator numerical core (no FMI, no plant): the Identifier (validation, equations of a
-sample, bookkeeping, the reported physically consistent estimates and their identified flags),
-the two solvers behind one interface, the RLS filters and the maps
-between parameterisations."""
-from .. import jit
-
-jit.load(__name__, "kernels")   # compiled equations and RLS step (persistent Numba cache)
-jit.load(__name__, "report_kernels", deps=("kernels",))   # compiled standard deviations, projection
-
-from .identifier import BodyEstimate, ExcitationRequest, Identifier, Report  # noqa: E402,F401
-from .physical import is_physical, project_body  # noqa: E402,F401
-from .rls import RLS, ModifiedRLS  # noqa: E402,F401
-from .solvers import JointSolver, PaperSolver, ParameterSolver, make_solver  # noqa: E402,F401
+"""The estimator's Python face (no FMI, no plant): :class:`Identifier` over the native C core
+(``native/src/estimator.h`` through :mod:`spacerobot.core.estimator`), the report types, the
+physical-consistency test and projection (:mod:`.physical`, native) and the maps between
+parameterisations (:mod:`.parameters`, NumPy)."""
+from .identifier import (BodyEstimate, ExcitationRequest, Identifier, Report,  # noqa: F401
+                         identifier_from_values)
+from .physical import is_physical, project_body  # noqa: F401

@@ -17,7 +17,6 @@ import numpy as np
 
 from ..interface import LAYOUT
 from ..robots import Guess
-from . import kernels, report_kernels
 
 #: ``I = I#[SHARP_TO_PROJECT]`` (the paper's order into the project's); ``I# = I[PROJECT_TO_SHARP]``
 SHARP_TO_PROJECT = LAYOUT.sharp_to_project
@@ -41,18 +40,36 @@ def sharp_to_matrix(s: np.ndarray) -> np.ndarray:
 
 
 def D_of_mu(mu: np.ndarray) -> np.ndarray:
-    """``D(mu)`` (20,) from ``mu`` (8,) (compiled: :func:`.kernels.D_of_mu`)."""
-    return kernels.D_of_mu(np.ascontiguousarray(mu, dtype=float))
+    """``D(mu)`` (20,) from ``mu`` (8,): per body ``m J(b) = [m, m b, m b_i b_j (i <= j)]``
+    (eq. 23), with ``c = m b`` the first moment (``m b_i b_j = c_i c_j / m``); each body's
+    block at its estimate positions (``m``, ``first``, ``inertia``)."""
+    mu = np.asarray(mu, dtype=float).reshape(LAYOUT.n_mu)
+    out = np.empty(len(LAYOUT.names))
+    for b in LAYOUT.bodies:
+        m, c = mu[b.mu_m], mu[b.mu_first]
+        out[b.m], out[b.first] = m, c
+        out[b.inertia] = [c[i] * c[j] / m for i, j in SHARP_PAIRS]
+    return out
 
 
 def D_jacobian(mu: np.ndarray) -> np.ndarray:
     """``dD/dmu`` (20, 8), used to propagate the covariance of mu into theta.
 
     Per body with ``c = m b``: ``D = [m, c, c_i c_j / m (i <= j)]``, so
-    ``d(c_i c_j / m) = -c_i c_j / m^2 dm + c_j / m dc_i + c_i / m dc_j`` (compiled:
-    :func:`.report_kernels.D_jacobian`).
+    ``d(c_i c_j / m) = -c_i c_j / m^2 dm + c_j / m dc_i + c_i / m dc_j``.
     """
-    return report_kernels.D_jacobian(np.ascontiguousarray(mu, dtype=float))
+    mu = np.asarray(mu, dtype=float).reshape(LAYOUT.n_mu)
+    out = np.zeros((len(LAYOUT.names), LAYOUT.n_mu))
+    for b in LAYOUT.bodies:
+        m, c = mu[b.mu_m], mu[b.mu_first]
+        first = np.arange(LAYOUT.n_mu)[b.mu_first]
+        out[b.m, b.mu_m] = 1.0
+        out[b.first, b.mu_first] = np.eye(3)
+        for row, (i, j) in zip(np.arange(len(LAYOUT.names))[b.inertia], SHARP_PAIRS):
+            out[row, b.mu_m] = -c[i] * c[j] / (m * m)
+            out[row, first[i]] += c[j] / m
+            out[row, first[j]] += c[i] / m
+    return out
 
 
 def paper_vectors(g: Guess):

@@ -38,7 +38,7 @@ from typing import Tuple
 
 import numpy as np
 
-from . import report_kernels
+from ..core import physical as _native
 
 __all__ = ["second_moment", "inertia_from_second_moment", "pseudo_inertia", "is_physical",
            "project_body", "project_planar_body"]
@@ -57,10 +57,11 @@ def _six(M: np.ndarray) -> np.ndarray:
 def second_moment(I6) -> np.ndarray:
     """``Sigma_c = tr(I_c)/2 * 1 - I_c`` (3, 3) from ``I6 = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``.
 
-    ``Sigma_c = integral of x x^T dm`` about the centre of mass [kg.m2] (compiled:
-    :func:`.report_kernels.second_moment`).
+    ``Sigma_c = integral of x x^T dm`` about the centre of mass [kg.m2].
     """
-    return report_kernels.second_moment(np.ascontiguousarray(I6, dtype=float).reshape(6))
+    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = np.asarray(I6, dtype=float).reshape(6)
+    t = 0.5 * (Ixx + Iyy + Izz)
+    return np.array([[t - Ixx, -Ixy, -Ixz], [-Ixy, t - Iyy, -Iyz], [-Ixz, -Iyz, t - Izz]])
 
 
 def inertia_from_second_moment(S: np.ndarray) -> np.ndarray:
@@ -84,11 +85,9 @@ def is_physical(m: float, b, I6) -> bool:
 
     Equivalent to the pseudo-inertia matrix being positive definite; tested by a Cholesky
     factorisation of ``Sigma_c`` (no tolerance: a body on the boundary, e.g. a rod, is not
-    accepted; compiled: :func:`.report_kernels.is_physical`).
+    accepted; the native core's ``sr_is_physical``).
     """
-    b = np.ascontiguousarray(b, dtype=float).reshape(3)
-    I6 = np.ascontiguousarray(I6, dtype=float).reshape(6)
-    return bool(report_kernels.is_physical(float(m), b, I6))
+    return _native.is_physical(m, b, I6)
 
 
 def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarray, np.ndarray, bool]:
@@ -114,19 +113,18 @@ def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarr
     projected : bool
         False when the input was already physical; the outputs are then the inputs, exactly.
     """
-    return _projected(report_kernels.project_body, _project_body_numpy, m, b, I6, m_scale)
+    return _projected(_native.project_body, _project_body_numpy, m, b, I6, m_scale)
 
 
 def _projected(kernel, reference, m, b, I6, m_scale):
-    """A projection in one compiled call ``kernel`` (:func:`.report_kernels.project_body` or
-    ``project_planar_body``; ``report()`` projects at every sample while an estimate is not
-    physical); its NumPy ``reference`` where the kernel's eigen-decomposition did not converge
-    (non-finite input: as NumPy answers it)."""
+    """A projection in one native call ``kernel`` (``sr_project_body`` or
+    ``sr_project_planar_body``, what the estimator's report uses); its NumPy ``reference``
+    where the core's eigen-decomposition did not converge (non-finite input: as NumPy answers
+    it)."""
     b = np.array(b, dtype=float)
     I6 = np.array(I6, dtype=float)
-    m_out, I_out, projected, ok = kernel(
-        float(m), np.ascontiguousarray(b).reshape(3), np.ascontiguousarray(I6).reshape(6),
-        REL_MASS_MIN * abs(m_scale), REL_SIGMA_MIN)
+    m_out, I_out, projected, ok = kernel(float(m), b, I6, REL_MASS_MIN * abs(m_scale),
+                                         REL_SIGMA_MIN)
     if not projected:
         return float(m), b, I6, False
     if ok:
@@ -136,7 +134,7 @@ def _projected(kernel, reference, m, b, I6, m_scale):
 
 def _project_body_numpy(m: float, b, I6, m_scale: float = 1.0):
     """:func:`project_body` in NumPy (LAPACK's eigen-decomposition): the reference of the
-    compiled :func:`.report_kernels.project_body` and its fallback for non-finite input."""
+    native ``sr_project_body`` and its fallback for non-finite input."""
     b = np.array(b, dtype=float)
     I6 = np.array(I6, dtype=float)
     if is_physical(m, b, I6):
@@ -163,13 +161,13 @@ def project_planar_body(m: float, b, I6, m_scale: float = 1.0
 
     Parameters and returns as :func:`project_body`.
     """
-    return _projected(report_kernels.project_planar_body, _project_planar_body_numpy, m, b, I6,
+    return _projected(_native.project_planar_body, _project_planar_body_numpy, m, b, I6,
                       m_scale)
 
 
 def _project_planar_body_numpy(m: float, b, I6, m_scale: float = 1.0):
-    """:func:`project_planar_body` in NumPy: the reference of the compiled
-    :func:`.report_kernels.project_planar_body` and its fallback for non-finite input."""
+    """:func:`project_planar_body` in NumPy: the reference of the native
+    ``sr_project_planar_body`` and its fallback for non-finite input."""
     b = np.array(b, dtype=float)
     I6 = np.array(I6, dtype=float)
     if is_physical(m, b, I6):

@@ -3,8 +3,9 @@
 Each FMU bundles the script from ``fmu_plant/`` or ``fmu_estimator/`` plus a copy of the parts
 of this library it needs, renamed to a package unique to that FMU (``_spacerobot_plant``,
 ``_spacerobot_estimator``) so that both can run in one Python process. The estimator bundle
-has no plant code and no Pinocchio. The scenario (robot description and defaults) goes into
-``resources/spacerobot_config.json``.
+has no plant code and no Pinocchio. A bundle with ``core`` (the ctypes binding of the native
+core) carries the compiled library itself (``core/lib/libspacerobot.*``) and loads only that.
+The scenario (robot description and defaults) goes into ``resources/spacerobot_config.json``.
 
 pythonfmu's Linux binary is then replaced by the project's front library
 (:mod:`.front_library`), so that any FMI host loads the FMU with no set-up and exits cleanly;
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import shutil
 import sys
 import tempfile
@@ -27,9 +29,10 @@ ROOT = LIB.parent                                   # repository / install root
 
 #: what each FMU bundles from the library (modules and sub-packages)
 BUNDLES = {
-    "plant": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "plant"),
-    "estimator": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "estimator"),
-    "sensors": ("robots.py", "interface.py", "kinematics.py", "jit.py", "fmi", "sensors"),
+    "plant": ("robots.py", "interface.py", "kinematics.py", "fmi", "core", "plant"),
+    "estimator": ("robots.py", "interface.py", "kinematics.py", "fmi", "core",
+                  "estimator"),
+    "sensors": ("robots.py", "interface.py", "kinematics.py", "fmi", "core", "sensors"),
 }
 
 
@@ -42,8 +45,7 @@ def _script(kind: str) -> Path:
 #: how an FMU is built: ``native`` (the C core's binaries, :mod:`.native`; no Python at run
 #: time) or ``pythonfmu`` (the Python core hosted by pythonfmu, for users who extend it in Python)
 BACKENDS = ("native", "pythonfmu")
-#: the backend ``build_fmu`` uses by default (the native estimator becomes the default once it
-#: covers every option of the Python one)
+#: the backend ``build_fmu`` uses by default
 DEFAULT_BACKEND = "native"
 
 
@@ -75,6 +77,22 @@ def backend_of(kind: str, backend: str | None = None) -> str:
     return backend if backend != "native" or kind in native_kinds() else "pythonfmu"
 
 
+def _bundle_core_library(lib_dir: Path) -> None:
+    """Copy the compiled native core (``libspacerobot``, the one this process would load:
+    :func:`spacerobot.core.library_path`) into the bundle's ``core/lib/``, where the bundled
+    ``core`` package finds it at run time (it never looks elsewhere,
+    :data:`spacerobot.core.BUNDLED`). The FMU then runs on the builder's platform only, like
+    the library."""
+    from ..core import CoreUnavailable, library_path
+
+    src = library_path()
+    if not src.is_file():
+        raise CoreUnavailable(f"the native core is not built ({src} is missing): reinstall the "
+                              f"package (pip install -e .) or run python native/build.py")
+    lib_dir.mkdir(parents=True, exist_ok=True)
+    shutil.copy2(src, lib_dir / ("libspacerobot" + src.suffix))   # a name core looks for
+
+
 def build_fmu(kind: str, sc: Scenario, out_dir: str | Path, backend: str | None = None) -> Path:
     """Build one FMU (``kind`` = 'plant', 'estimator' or 'sensors') into ``out_dir``; returns
     its path. ``backend`` (:data:`BACKENDS`; None: :data:`DEFAULT_BACKEND`): ``native`` builds the
@@ -99,11 +117,16 @@ def build_fmu(kind: str, sc: Scenario, out_dir: str | Path, backend: str | None 
             src = LIB / item
             if src.is_dir():
                 shutil.copytree(src, pkg / item, ignore=shutil.ignore_patterns(
-                    "__pycache__", "build.py", "front_library.*"))
+                    "__pycache__", "build.py", "front_library.*", "lib"))
             else:
                 shutil.copy2(src, pkg / item)
+        if "core" in BUNDLES[kind]:
+            _bundle_core_library(pkg / "core" / "lib")
         config = stage / "spacerobot_config.json"
-        config.write_text(json.dumps({"kind": kind, "scenario": scenario_to_dict(sc)}, indent=1))
+        from .native import known_scenario
+        config.write_text(json.dumps({"kind": kind,
+                                      "scenario": scenario_to_dict(known_scenario(kind, sc))},
+                                     indent=1))
         shutil.copy2(script, stage / script.name)
         readme_dir = stage / "doc"
         readme_dir.mkdir()
@@ -123,4 +146,23 @@ def build_fmu(kind: str, sc: Scenario, out_dir: str | Path, backend: str | None 
                 del sys.modules[mod]
     fmu = Path(fmu)
     front_library.install(fmu, fmu.stem)
+    _keep_only_this_platform(fmu)
     return fmu
+
+
+def _keep_only_this_platform(fmu: Path) -> None:
+    """Drop the binaries of other platforms (pythonfmu's stock win64/darwin64 libraries): the
+    bundled core library and the Python runtime record are this machine's, so the FMU claims
+    only the platform it was built on."""
+    import zipfile
+
+    plat = {"linux": "linux64", "win32": "win64", "darwin": "darwin64"}.get(sys.platform)
+    if plat is None:
+        return
+    keep = f"binaries/{plat}/"
+    tmp = fmu.with_suffix(".fmu.tmp")
+    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as dst:
+        for info in src.infolist():
+            if not info.filename.startswith("binaries/") or info.filename.startswith(keep):
+                dst.writestr(info, src.read(info))
+    os.replace(tmp, fmu)

@@ -243,8 +243,8 @@ static int start_python(const Record *r, char *err, size_t n) {
     for (int i = 0; i < r->npaths; i++) {
         if (!is_dir(r->paths[i])) {
             snprintf(err, n, "the Python module search path recorded in %s is incomplete: %s "
-                     "does not exist (numpy, numba and, for the plant, pin must stay installed "
-                     "where they were when the FMU was built)", r->file, r->paths[i]);
+                     "does not exist (numpy must stay installed "
+                     "where it was when the FMU was built)", r->file, r->paths[i]);
             return 0;
         }
     }

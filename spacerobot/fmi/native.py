@@ -12,7 +12,10 @@ A native FMU is a zip of
   layer reads at instantiation;
 * ``resources/robot.txt``: the robot record (:mod:`spacerobot.core.robot_record`); the
   estimator's carries the known arm and, in place of the base body (which it estimates and
-  never reads), a unit placeholder: an estimator FMU carries no truth.
+  never reads), a unit placeholder: an estimator FMU carries no truth; the sensors FMU
+  carries no robot at all;
+* ``resources/scenario.txt``: the scenario's constants a model reads (the sample time; the
+  plant's: also the arm's home posture).
 
 Building one needs no compiler: the binaries are the installed package's.
 """
@@ -25,27 +28,70 @@ import uuid
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
-from typing import Dict, List, Sequence
+from typing import Callable, Dict, List, NamedTuple, Optional, Sequence
 
 from .. import __version__
 from ..core import LIB_DIR
-from ..interface import UNITS, Var, estimator_vars
+from ..interface import (UNITS, Var, estimator_vars, plant_vars, sensors_dependencies,
+                         sensors_vars)
 from ..robots import RigidBody, Robot, Scenario
 
-#: the models with a native FMU: kind -> (model identifier, variables of (robot, scenario),
-#: description)
-MODELS = {
-    "estimator": ("SpaceRobotEstimator", estimator_vars,
-                  "Online one-step identification of the mass, centre of mass and inertia of both "
-                  "the base and the captured target of a space robot, from measurements alone "
-                  "(momentum- or force-based equations, modified RLS; Zhang, Yue, Yuan 2020). "
-                  "Native C core: needs nothing but the C runtime."),
+def _table_key(v: Var) -> str:
+    """The core key of a variable in the variable table (the glue looks variables up by it)."""
+    return key_string(v.key)
+
+
+def _sensors_key(v: Var) -> str:
+    """The sensors' keys: inputs and outputs share the signal's key, so the inputs carry the
+    ``true.`` prefix; parameters go by their names."""
+    if v.causality == "parameter":
+        return v.name
+    return ("true." if v.causality == "input" else "") + key_string(v.key)
+
+
+class NativeModel(NamedTuple):
+    """A model with a native FMU."""
+
+    identifier: str                     #: model identifier (the binaries' file name)
+    variables: Callable                 #: (robot, scenario) -> [Var] (spacerobot.interface)
+    description: str
+    robot: Optional[str]                #: what of the robot travels in resources/robot.txt:
+                                        #: "arm" (the base a placeholder), "all", or None
+    key: Callable[[Var], str] = _table_key
+    #: [Var] -> {output index: [input indices]} (direct feedthrough); None: none
+    dependencies: Optional[Callable] = None
+
+
+#: the models with a native FMU, by kind
+MODELS: Dict[str, NativeModel] = {
+    "estimator": NativeModel(
+        "SpaceRobotEstimator", estimator_vars,
+        "Online one-step identification of the mass, centre of mass and inertia of both "
+        "the base and the captured target of a space robot, from measurements alone "
+        "(momentum- or force-based equations, modified RLS; Zhang, Yue, Yuan 2020). "
+        "Native C core: needs nothing but the C runtime.", robot="arm"),
+    "sensors": NativeModel(
+        "SpaceRobotSensors", sensors_vars,
+        "Sensors of a space robot servicer: gyro (white noise, bias random walk), star "
+        "tracker, relative navigation, accelerometer / IMU, joint encoders (quantisation), "
+        "thrust knowledge (scale factor, misalignment), sample delay. noise.scale = 0: outputs "
+        "equal inputs. Direct feedthrough: the outputs at t measure the inputs set at t. "
+        "Native C core: needs nothing but the C runtime.", robot=None, key=_sensors_key,
+        dependencies=sensors_dependencies),
+    "plant": NativeModel(
+        "SpaceRobotPlant", plant_vars,
+        "Free-floating space robot after capture: base, arm and target (articulated-body "
+        "algorithm), RK4, bounded momentum controller on the base thrusters, arm motion that "
+        "stabilises the base attitude, excitation, propellant depletion (Zhang, Yue, Yuan "
+        "2020). Native C core: needs nothing but the C runtime.", robot="all"),
 }
 
 #: FMI 2.0 platform folder -> binary suffix
 PLATFORMS = {"linux64": ".so", "win64": ".dll"}
 VARIABLES_FILE = "spacerobot_variables.txt"
 ROBOT_FILE = "robot.txt"
+#: the scenario's constants a model reads at instantiation (the sensors: the sample time)
+SCENARIO_FILE = "scenario.txt"
 LOG_CATEGORIES = {
     "logEvents": "Lifecycle: instantiation, initialisation",
     "logStatusWarning": "Samples skipped and other warnings",
@@ -59,10 +105,34 @@ LOG_CATEGORIES = {
 PLACEHOLDER_BODY = RigidBody(1.0, (0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 0.0, 0.0, 0.0))
 
 
-def known_robot(kind: str, robot: Robot) -> Robot:
+def known_robot(kind: str, robot: Robot) -> Optional[Robot]:
     """What the FMU ``kind`` may know of ``robot``: the estimator only the arm (the base body a
-    placeholder), the plant everything."""
-    return dataclasses.replace(robot, base=PLACEHOLDER_BODY) if kind == "estimator" else robot
+    placeholder), the plant everything, the sensors nothing (None)."""
+    what = MODELS[kind].robot
+    if what is None:
+        return None
+    return dataclasses.replace(robot, base=PLACEHOLDER_BODY) if what == "arm" else robot
+
+
+def known_scenario(kind: str, sc: Scenario) -> Scenario:
+    """The scenario as the FMU ``kind`` may carry it (a pythonfmu FMU's defaults): the plant all
+    of it; the estimator and the sensors neither the base nor the target (unit placeholders)
+    nor the initial velocities: no truth (their variables' defaults do not depend on these)."""
+    if kind == "plant":
+        return sc
+    robot = dataclasses.replace(sc.robot, base=PLACEHOLDER_BODY)
+    return dataclasses.replace(sc, robot=robot, target=PLACEHOLDER_BODY, v0=(0.0, 0.0, 0.0),
+                               omega0=(0.0, 0.0, 0.0))
+
+
+def scenario_text(sc: Scenario, home: bool) -> str:
+    """``resources/scenario.txt``: the scenario's constants a model reads at instantiation
+    (IEEE-754 bits: exact and locale-independent): the sample time and, with ``home``, the
+    arm's home posture ``q_home.<i>`` [rad] (the plant's initial posture)."""
+    lines = ["spacerobot-scenario 1", f"sample_time {_hex(sc.sample_time)}"]
+    if home:
+        lines += [f"q_home.{i} {_hex(q)}" for i, q in enumerate(sc.robot.q0)]
+    return "\n".join(lines) + "\n"
 
 
 class NativeUnavailable(RuntimeError):
@@ -88,7 +158,8 @@ def _hex(x: float) -> str:
     return "0x%016x" % struct.unpack("<Q", struct.pack("<d", float(x)))[0]
 
 
-def variable_table(variables: Sequence[Var], model_identifier: str, guid: str) -> str:
+def variable_table(variables: Sequence[Var], model_identifier: str, guid: str,
+                   key: Callable[[Var], str] = _table_key) -> str:
     """``resources/spacerobot_variables.txt``: one line per variable, in value-reference order."""
     lines = ["spacerobot-variables 1",
              "# vr type causality variability start(IEEE-754 bits) key name",
@@ -96,7 +167,7 @@ def variable_table(variables: Sequence[Var], model_identifier: str, guid: str) -
     for vr, v in enumerate(variables):
         start = v.start if v.start is not None else 0.0
         lines.append(f"{vr} {v.type} {v.causality} {v.variability} {_hex(start)} "
-                     f"{key_string(v.key)} {v.name}")
+                     f"{key(v)} {v.name}")
     return "\n".join(lines) + "\n"
 
 
@@ -107,8 +178,11 @@ def _start_text(v: Var) -> str:
 
 
 def model_description(variables: Sequence[Var], model_identifier: str, guid: str,
-                      description: str, sc: Scenario) -> str:
-    """The FMI 2.0 model description of a native co-simulation FMU."""
+                      description: str, sc: Scenario,
+                      dependencies: Optional[Dict[int, List[int]]] = None) -> str:
+    """The FMI 2.0 model description of a native co-simulation FMU; ``dependencies``: ``{output
+    index: [input indices]}`` of a model with direct feedthrough (None: outputs change only in
+    doStep)."""
     root = ET.Element("fmiModelDescription", {
         "fmiVersion": "2.0", "modelName": model_identifier, "guid": guid,
         "description": description, "author": "spacerobot developers",
@@ -149,8 +223,10 @@ def model_description(variables: Sequence[Var], model_identifier: str, guid: str
         ET.SubElement(sv, v.type, t)
     ms = ET.SubElement(root, "ModelStructure")
     outs = ET.SubElement(ms, "Outputs")
-    for i in outputs:                       # outputs change only in doStep: no direct feedthrough
-        ET.SubElement(outs, "Unknown", index=str(i), dependencies="")
+    for i in outputs:                       # without feedthrough, outputs change only in doStep
+        deps = (dependencies or {}).get(i - 1, [])
+        ET.SubElement(outs, "Unknown", index=str(i),
+                      dependencies=" ".join(str(j + 1) for j in deps))
     init = ET.SubElement(ms, "InitialUnknowns")
     for i in outputs:
         ET.SubElement(init, "Unknown", index=str(i))
@@ -174,16 +250,20 @@ def build_native_fmu(kind: str, sc: Scenario, out_dir: str | Path, lib_dir: Path
 
     if kind not in MODELS:
         raise ValueError(f"no native FMU for {kind!r} yet; native: {sorted(MODELS)}")
-    ident, variables_of, description = MODELS[kind]
+    model = MODELS[kind]
+    ident = model.identifier
     bins = binaries(ident, lib_dir)
     if "linux64" not in bins:
         raise NativeUnavailable(
             f"the native {kind} binary is not built ({Path(lib_dir) / 'fmu'} has no linux64/"
             f"{ident}.so): reinstall the package (pip install -e .), which compiles it")
-    variables = variables_of(sc.robot, sc)
-    robot_text = robot_record_text(known_robot(kind, sc.robot))
-    table0 = variable_table(variables, ident, "")
-    digest = hashlib.sha256((ident + table0 + robot_text).encode()).digest()
+    variables = model.variables(sc.robot, sc)
+    robot = known_robot(kind, sc.robot)
+    resources = {SCENARIO_FILE: scenario_text(sc, home=model.robot == "all")}
+    if robot is not None:
+        resources[ROBOT_FILE] = robot_record_text(robot)
+    table0 = variable_table(variables, ident, "", model.key)
+    digest = hashlib.sha256((ident + table0 + "".join(resources.values())).encode()).digest()
     guid = "{%s}" % uuid.UUID(bytes=digest[:16], version=4)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -191,10 +271,12 @@ def build_native_fmu(kind: str, sc: Scenario, out_dir: str | Path, lib_dir: Path
     tmp = path.with_suffix(".fmu.part")
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
         zf.writestr("modelDescription.xml",
-                    model_description(variables, ident, guid, description, sc))
+                    model_description(variables, ident, guid, model.description, sc,
+                                      model.dependencies and model.dependencies(variables)))
         for plat, p in sorted(bins.items()):
             zf.write(p, f"binaries/{plat}/{p.name}")
-        zf.writestr(f"resources/{VARIABLES_FILE}", variable_table(variables, ident, guid))
-        zf.writestr(f"resources/{ROBOT_FILE}", robot_text)
+        zf.writestr(f"resources/{VARIABLES_FILE}", variable_table(variables, ident, guid, model.key))
+        for name, text in resources.items():
+            zf.writestr(f"resources/{name}", text)
     tmp.replace(path)
     return path

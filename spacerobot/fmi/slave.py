@@ -21,7 +21,6 @@ from pythonfmu import Boolean, Fmi2Slave, Integer, Real, String
 from pythonfmu.enums import Fmi2Causality, Fmi2Status, Fmi2Variability
 from xml.etree.ElementTree import Element, SubElement
 
-from .. import jit
 from ..interface import UNITS, Var, body_of
 from ..robots import RigidBody, scenario_from_dict
 from .pythonfmu_compat import binary_hooks, guard_entry_points
@@ -100,8 +99,6 @@ class InterfaceSlave(Fmi2Slave):
                                                     self.scenario.sample_time)
         self._hooks = binary_hooks(self.resources, type(self).__name__)
         self._hooks.guard_exit()
-        for msg in jit.NOTICES:            # kernel cache problems (the FMU runs nevertheless)
-            self.log(_escape(msg), Fmi2Status.warning)
         self._register_interface(variables_of(self.robot, self.scenario))
 
     def _body(self, prefix: str) -> RigidBody:

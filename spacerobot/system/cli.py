@@ -68,53 +68,6 @@ def notice(command: str, text: str) -> None:
     print(f"spacerobot {command}: {text}", file=sys.stderr, flush=True)
 
 
-def kernel_cache() -> str:
-    """The kernel cache folder, as the messages name it."""
-    from ..jit import cache_root
-    return str(cache_root())
-
-
-def kernels_compiled() -> bool:
-    """Whether the kernel cache (:func:`spacerobot.jit.cache_root`) holds any compiled kernel:
-    False on a machine where nothing has run yet, whose first run compiles for minutes."""
-    from ..jit import cache_root
-    try:
-        return any(cache_root().glob("*/__pycache__/*.nbi"))
-    except OSError:
-        return False
-
-
-def library_compiles_kernels() -> bool:
-    """Whether this installation's estimator runs Numba kernels (compiled at their first use on
-    a machine, :func:`kernels_compiled`): Numba installed and ``spacerobot.estimator.kernels``
-    present."""
-    try:
-        return (importlib.util.find_spec("numba") is not None
-                and importlib.util.find_spec("spacerobot.estimator.kernels") is not None)
-    except (ImportError, ValueError):
-        return False
-
-
-def fmus_compile_kernels(ssp: Path) -> bool:
-    """Whether a component FMU of ``ssp`` (an archive or a folder) carries Numba kernels
-    (``.../kernels.py``), which it compiles at its first instantiation on a machine; False for
-    FMUs without them (native ones) and for anything that cannot be read (the run reports
-    that)."""
-    import io
-    import zipfile
-
-    def has_kernels(fmu: zipfile.ZipFile) -> bool:
-        return any(n.endswith("/kernels.py") for n in fmu.namelist())
-    try:
-        if ssp.is_dir():
-            return any(has_kernels(zipfile.ZipFile(f)) for f in ssp.glob("resources/*.fmu"))
-        with zipfile.ZipFile(ssp) as zf:
-            return any(has_kernels(zipfile.ZipFile(io.BytesIO(zf.read(n))))
-                       for n in zf.namelist() if n.endswith(".fmu"))
-    except (OSError, zipfile.BadZipFile, KeyError):
-        return False
-
-
 #: the longest settings tag put into a default file name as NAME=VALUE pairs; longer: a hash
 MAX_TAG = 60
 
@@ -212,8 +165,8 @@ def add_backend_argument(p: argparse.ArgumentParser) -> None:
     from ..fmi.build import BACKENDS, DEFAULT_BACKEND
     p.add_argument("--backend", choices=BACKENDS, default=DEFAULT_BACKEND,
                    help="how the FMUs are built: native (the C core, no Python at run time, "
-                        "linux64 + win64; today the estimator) or pythonfmu (the Python core, "
-                        f"for extending it in Python); default {DEFAULT_BACKEND}")
+                        "linux64 + win64) or pythonfmu (hosted by Python through pythonfmu, "
+                        f"for extending the FMUs in Python); default {DEFAULT_BACKEND}")
 
 
 def warn_missing_platforms(backend: str) -> None:
@@ -285,9 +238,6 @@ def cmd_run(args) -> int:
             "run", f"building the FMUs and the SSP for {robot_label(robot)} into {out}/ ..."),
             backend=args.backend)
     stop_time = args.stop_time if args.stop_time is not None else set_stop_time(robot, target)
-    if not kernels_compiled() and fmus_compile_kernels(Path(ssp)):
-        notice("run", "first run on this machine: the FMUs compile their kernels before the "
-                      f"run starts (minutes, once; cached in {kernel_cache()}) ...")
     res = run_ssp(ssp, parameter_set=args.target, stop_time=stop_time,
                   overrides=overrides, csv_path=csv_path,
                   progress=False if args.no_progress else None)

@@ -203,15 +203,15 @@ def _readme(model: str, robot: str, stop_time: float, step: float, kind: str) ->
               "point (they are sampled, the FMU does not interpolate). Several names contain a "
               "comma (`base.A[1,2]`): read the file with a CSV reader that honours quotes.\n"
               ).format(m=model) if kind == "estimator" else ""
-    return (f"# {model} ({robot} robot), FMI 2.0 co-simulation, pythonfmu 0.7.0\n\n"
+    return (f"# {model} ({robot} robot), FMI 2.0 co-simulation, native C core\n\n"
             f"Reference computed by spacerobot {__version__} (`spacerobot crosscheck`): fixed "
             f"communication step {step} s from 0 to {stop_time} s, default start values "
             f"except the estimator's {OPEN_LOOP[0]} = {OPEN_LOOP[1]} (no excitation request, "
             f"so the plant's input ident.excite stays 0), plant -> estimator wired name to "
             f"name.\n{inputs}\n"
-            "Any FMI host loads the FMU without set-up on a Linux machine that has the Python "
-            "installation recorded in resources/python_runtime.txt, at the same paths, with numpy "
-            "and numba (and pin for the plant): see docs/fmus.md of the spacerobot project.\n")
+            "Any FMI host loads the FMU without set-up: its binaries (linux64, and win64 where "
+            "the package was installed with the mingw cross-compiler) need nothing but the C "
+            "runtime: see docs/fmus.md of the spacerobot project.\n")
 
 
 # -- command line ------------------------------------------------------------------------------------

@@ -265,17 +265,13 @@ def register(subparsers):
 
     @fail_on_errors("identify")
     def cmd_identify(args) -> int:
-        from .cli import (announce_replace, kernel_cache, kernels_compiled,
-                          library_compiles_kernels, notice)
+        from .cli import announce_replace
         overrides = {"method": METHOD_CODES[args.method], "accel_source": ACCEL_CODES[args.accel],
                      "solver": SOLVER_CODES[args.solver]}
         overrides.update(parse_assignments(args.set))
         robot = robot_key(args)
         out = Path(args.out) if args.out else default_output(args.telemetry, args)
         announce_replace("identify", out)
-        if library_compiles_kernels() and not kernels_compiled():
-            notice("identify", "first use on this machine: compiling the estimator's kernels "
-                               f"(minutes, once; cached in {kernel_cache()}) ...")
         res = identify_csv(args.telemetry, robot, out, overrides)
         print(f"{args.telemetry}: robot {robot_label(robot)}, method {args.method}, solver "
               f"{args.solver}, accelerations {args.accel}; {len(res.time)} samples, "

@@ -22,8 +22,9 @@ Layout of a generated system (the same inside ``<robot>.ssp`` and under ``ssp/<r
 The system with the sensors FMU (``sensors=True``, ``<robot>_sensors.ssp``, SSD name
 ``SpaceRobot_<robot>_sensors``) wires plant ``<name>`` -> sensors ``true.<name>``, sensors
 ``<name>`` -> estimator ``<name>``; its parameter sets add ``ideal`` and ``realistic`` (the
-sensors' ``noise.scale`` 0 / 1; bound: ``realistic``), bound to both the plant and the sensors
-component, each taking the names it has. The two-FMU system stays the default and the one the
+sensors' ``noise.scale`` 0 / 1; bound: ``realistic``): the plant's values of a set in
+``resources/<set>.ssv``, the sensors' in ``resources/sensors/<set>.ssv``, so that each
+component is bound only to variables it has. The two-FMU system stays the default and the one the
 paper's parameter sets are made for. docs/sensors.md.
 
 Tool compatibility (what OMSimulator and libcosim need to load the .ssp): ``version="1.0"``; namespace prefixes exactly ``ssd:``,
@@ -84,6 +85,8 @@ ESTIMATOR_SET_PARAMETERS: Tuple[str, ...] = tuple(sorted(
     {k for sets in PARAMETER_SETS.values() for ps in sets.values() for k, _ in ps.estimator}))
 #: folder (inside ``resources/``) of the estimator's files of the parameter sets
 ESTIMATOR_SET_DIR = "estimator"
+#: folder (inside ``resources/``) of the sensors' files of the parameter sets with a noise level
+SENSORS_SET_DIR = "sensors"
 
 
 def _check_robot(robot: str) -> None:
@@ -117,29 +120,34 @@ def _num(x: float) -> str:
     return repr(float(x))
 
 
-def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
-    """``[(variable name, value, unit), ...]`` of parameter set ``name`` of ``robot``: the
-    plant's, then (a sensors set) the sensors FMU's ``noise.scale``. Each FMU takes the names
-    it has (SSP: a bound parameter that a component lacks is ignored)."""
+def _check_set(robot: str, name: str) -> None:
     if name not in parameter_set_names(robot, sensors=True):
         raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
                          f"choose from {parameter_set_names(robot, sensors=True)}")
+
+
+def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
+    """``[(variable name, value, unit), ...]`` of the plant's values of parameter set ``name`` of
+    ``robot`` (:data:`SET_PARAMETERS`)."""
+    _check_set(robot, name)
     sc = parameter_set_scenario(robot, name)
     var = {v.name: v for v in plant_vars(sc.robot, sc)}   # starts = the scenario's values
-    out = [(n, float(var[n].start), var[n].unit) for n in SET_PARAMETERS]
+    return [(n, float(var[n].start), var[n].unit) for n in SET_PARAMETERS]
+
+
+def sensors_parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
+    """``[(variable name, value, unit), ...]`` of the sensors' values of parameter set ``name``:
+    ``noise.scale`` for a set with a noise level, else none (the sensors FMU's defaults)."""
+    _check_set(robot, name)
     noise = PARAMETER_SETS[robot_kind(robot)][name].noise
-    if noise is not None:
-        out.append(("noise.scale", float(noise), "1"))
-    return out
+    return [] if noise is None else [("noise.scale", float(noise), "1")]
 
 
 def estimator_parameter_set(robot: str, name: str) -> List[Tuple[str, str, float, Optional[str]]]:
     """``[(variable name, FMI type, value, unit or None), ...]`` of the estimator's file of
     parameter set ``name`` (:data:`ESTIMATOR_SET_PARAMETERS`): the set's estimator settings,
     the estimator FMU's defaults for the others."""
-    if name not in parameter_set_names(robot, sensors=True):
-        raise ValueError(f"unknown parameter set {name!r} for robot {robot!r}; "
-                         f"choose from {parameter_set_names(robot, sensors=True)}")
+    _check_set(robot, name)
     sc = parameter_set_scenario(robot, name)
     var = {v.name: v for v in estimator_vars(sc.robot, sc)}
     chosen = dict(PARAMETER_SETS[robot_kind(robot)][name].estimator)
@@ -159,34 +167,8 @@ def _units_xml(units, indent: str, prefix: str) -> List[str]:
     return out
 
 
-def ssv_xml(robot: str, name: str) -> str:
-    """Text of the SSP 1.0 parameter values file ``resources/<name>.ssv``."""
-    params = parameter_set(robot, name)
-    pset = PARAMETER_SETS[robot_kind(robot)][name]
-    desc = (f"{robot_label(robot)}-{name}: {pset.description}; plant truth (base, "
-            f"target), initial velocities and excitation bounds"
-            + ("; sensors noise.scale" if pset.noise is not None else ""))
-    lines = ['<?xml version="1.0" encoding="UTF-8"?>',
-             f'<ssv:ParameterSet xmlns:ssv="{NS["ssv"]}" xmlns:ssc="{NS["ssc"]}"',
-             f'    version="1.0" name={quoteattr(name)} generationTool="{GENERATOR}"',
-             f'    description={quoteattr(desc)}>',
-             "  <ssv:Parameters>"]
-    for pname, value, unit in params:
-        lines.append(f"    <ssv:Parameter name={quoteattr(pname)}>")
-        lines.append(f"      <ssv:Real value=\"{_num(value)}\" unit={quoteattr(unit)}/>")
-        lines.append("    </ssv:Parameter>")
-    lines.append("  </ssv:Parameters>")
-    lines += _units_xml({u for _, _, u in params}, "  ", "ssv")
-    lines.append("</ssv:ParameterSet>")
-    return "\n".join(lines) + "\n"
-
-
-def estimator_ssv_xml(robot: str, name: str) -> str:
-    """Text of ``resources/estimator/<name>.ssv``: the estimator settings of parameter set
-    ``name`` (:func:`estimator_parameter_set`), bound to the estimator component."""
-    params = estimator_parameter_set(robot, name)
-    desc = (f"{robot_label(robot)}-{name}: estimator settings of the set "
-            f"({', '.join(n for n, _, _, _ in params)})")
+def _ssv_text(name: str, desc: str, params: List[Tuple[str, str, float, Optional[str]]]) -> str:
+    """An SSP 1.0 parameter values file: ``params`` = ``[(name, FMI type, value, unit)]``."""
     lines = ['<?xml version="1.0" encoding="UTF-8"?>',
              f'<ssv:ParameterSet xmlns:ssv="{NS["ssv"]}" xmlns:ssc="{NS["ssc"]}"',
              f'    version="1.0" name={quoteattr(name)} generationTool="{GENERATOR}"',
@@ -208,9 +190,39 @@ def estimator_ssv_xml(robot: str, name: str) -> str:
     return "\n".join(lines) + "\n"
 
 
+def ssv_xml(robot: str, name: str) -> str:
+    """Text of the SSP 1.0 parameter values file ``resources/<name>.ssv`` (the plant's)."""
+    pset = PARAMETER_SETS[robot_kind(robot)][name]
+    desc = (f"{robot_label(robot)}-{name}: {pset.description}; plant truth (base, "
+            f"target), initial velocities and excitation bounds")
+    return _ssv_text(name, desc, [(n, "Real", v, u) for n, v, u in parameter_set(robot, name)])
+
+
+def sensors_ssv_xml(robot: str, name: str) -> str:
+    """Text of ``resources/sensors/<name>.ssv``: the sensors' values of parameter set ``name``."""
+    pset = PARAMETER_SETS[robot_kind(robot)][name]
+    desc = f"{robot_label(robot)}-{name}: {pset.description}; sensors noise level"
+    return _ssv_text(name, desc,
+                     [(n, "Real", v, u) for n, v, u in sensors_parameter_set(robot, name)])
+
+
+def estimator_ssv_xml(robot: str, name: str) -> str:
+    """Text of ``resources/estimator/<name>.ssv``: the estimator settings of parameter set
+    ``name`` (:func:`estimator_parameter_set`), bound to the estimator component."""
+    params = estimator_parameter_set(robot, name)
+    desc = (f"{robot_label(robot)}-{name}: estimator settings of the set "
+            f"({', '.join(n for n, _, _, _ in params)})")
+    return _ssv_text(name, desc, params)
+
+
 def estimator_ssv_path(name: str) -> str:
     """Path inside the system of the estimator's file of parameter set ``name``."""
     return f"resources/{ESTIMATOR_SET_DIR}/{name}.ssv"
+
+
+def sensors_ssv_path(name: str) -> str:
+    """Path inside the system of the sensors' file of parameter set ``name``."""
+    return f"resources/{SENSORS_SET_DIR}/{name}.ssv"
 
 
 def _connector(var: Var, kind: str, indent: str) -> List[str]:
@@ -305,8 +317,11 @@ def ssd_xml(robot: str, bound_set: Optional[str] = None, sensors: bool = False) 
         for _, kind, var in conns[comp]:
             lines += _connector(var, kind, "          ")
         lines.append("        </ssd:Connectors>")
-        source = (f"resources/{bound_set}.ssv" if comp in (PLANT, SENSORS)
-                  else estimator_ssv_path(bound_set) if ESTIMATOR_SET_PARAMETERS else None)
+        source = {PLANT: f"resources/{bound_set}.ssv",
+                  SENSORS: (sensors_ssv_path(bound_set)
+                            if sensors_parameter_set(robot, bound_set) else None),
+                  ESTIMATOR: estimator_ssv_path(bound_set) if ESTIMATOR_SET_PARAMETERS else None
+                  }[comp]
         if source:
             lines += ["        <ssd:ParameterBindings>",
                       f'          <ssd:ParameterBinding type="application/x-ssp-parameter-set" '
@@ -364,6 +379,8 @@ def generate(robot: str, sensors: bool = False) -> Dict[str, str]:
         files[f"resources/{name}.ssv"] = ssv_xml(robot, name)
         if ESTIMATOR_SET_PARAMETERS:
             files[estimator_ssv_path(name)] = estimator_ssv_xml(robot, name)
+        if sensors and sensors_parameter_set(robot, name):
+            files[sensors_ssv_path(name)] = sensors_ssv_xml(robot, name)
     return files
 
 

@@ -22,11 +22,27 @@
  * running from a damaged state or with random parameters the FMU accepted is only asked not to
  * crash). Log messages are checked (instance name, category, text present).
  *
+ * What a model may legally do differently is told by options, so that the same checks serve
+ * the estimator, the sensors and the plant:
+ *   -T          direct feedthrough (the sensors): the outputs measure the inputs set now, so a
+ *               non-finite or huge input (|x| > 1e6) may give non-finite outputs; the outputs
+ *               are required finite only while every input holds a moderate value.
+ *   -N VRS      inputs whose NaN value makes doStep discard the step (the plant's ident.excite:
+ *               no level to apply); a step while one of them is NaN must be discarded.
+ *   -H MAXSTEP  doStep discards a communication step longer than MAXSTEP seconds (the plant).
+ *   -F          a valid step may be discarded by an instance whose parameters are not the start
+ *               values or that runs from a damaged state (the plant's integration may fail for
+ *               accepted but extreme parameters); with the start parameters it must succeed.
+ *   -w SECONDS  a wild step drawn longer than SECONDS but not longer than -H is shortened to
+ *               SECONDS (the plant's step costs grow with its length: quick under valgrind).
+ *
  * usage: fmu_fuzz [-n CALLS] [-S SEED] [-k INSTANCES] [-L LOGLINES] [-D STEPS [-p VR=INT ...]]
+ *                 [-T] [-N VRS] [-H MAXSTEP] [-F] [-w SECONDS]
  *                 -R VRS -P VRS -I VRS -O VRS -Z VRS [-g GUID2 -u URI2 -m NVARS2]
  *                 BINARY GUID RESOURCE_URI NVARS
  *   -R Real inputs, -P Real parameters (fixed), -I Integer parameters (fixed), -O Real outputs,
- *   -Z Integer outputs (comma-separated value references); NVARS: the number of variables
+ *   -Z Integer outputs (comma-separated value references; any list may be empty, "");
+ *   NVARS: the number of variables
  *   (value references 0..NVARS-1); -g/-u/-m: a model of another robot served by the same
  *   binary, whose states the first model must refuse. -L: print at most this many log lines.
  *   -D STEPS: then the damage sweep: an instance (Integer parameters -p VR=INT) stepped STEPS
@@ -179,7 +195,10 @@ static int any_int(void) {
 #define MAX_SLOTS 8
 #define MAX_STATES 48
 typedef struct { size_t n; fmi2ValueReference vr[MAXV]; } List;
-static List in_real, par_real, par_int, out_real, out_int;
+static List in_real, par_real, par_int, out_real, out_int, nan_discard;
+static int feedthrough, may_fail;              /* -T, -F */
+static double max_step = INFINITY;             /* -H */
+static double wild_max = INFINITY;             /* -w */
 static unsigned nvars, nvars2;
 static const char *guid, *uri, *guid2, *uri2;
 static double start_real[MAXV];
@@ -196,6 +215,8 @@ typedef struct {
     int phase;
     int starts;               /* parameters at their start values: initialisation must succeed */
     int damaged;              /* runs from a damaged state: only "no crash" is checked */
+    int wild_inputs;          /* -T: an input holds a non-finite or huge value */
+    unsigned nan_inputs;      /* -N: bit i set while input nan_discard.vr[i] is NaN */
     double time;
     char name[32];
     fmi2CallbackFunctions cb;
@@ -205,7 +226,8 @@ static int nslots;
 
 typedef struct {
     fmi2FMUstate s;
-    int owner, model, phase, starts, damaged;
+    int owner, model, phase, starts, damaged, wild_inputs;
+    unsigned nan_inputs;
     double time;
 } State;
 static State states[MAX_STATES];
@@ -258,9 +280,11 @@ static fmi2Status count(int f, fmi2Status s) {
 static void expect(int f, fmi2Status s, unsigned mask, int k, const char *why) {
     if ((int)s < 0 || (int)s > 5 || !(mask & (1u << (int)s))) {
         ++violations;
-        printf("VIOLATION at call %ld: fmi2%s on instance %d (%s) returned %d; expected mask 0x%x "
-               "(%s)\n", total, NAME[f], k, k >= 0 && slot[k].c ? PHASE[slot[k].phase] : "-",
-               (int)s, mask, why);
+        printf("VIOLATION at call %ld: fmi2%s on instance %d (%s%s%s) returned %d; expected mask "
+               "0x%x (%s)\n", total, NAME[f], k, k >= 0 && slot[k].c ? PHASE[slot[k].phase] : "-",
+               k >= 0 && slot[k].c && !slot[k].starts ? ", parameters changed" : "",
+               k >= 0 && slot[k].c && slot[k].damaged ? ", from a damaged state" : "", (int)s, mask,
+               why);
     }
 }
 
@@ -289,8 +313,13 @@ static void pick_list(Pick *p, unsigned kinds) {
     for (i = 0; i < p->n; ++i) {
         int kind;
         do kind = below(6); while (!(kinds & (1u << kind)));
-        p->kind[i] = kind;
         p->vr[i] = pick_vr(kind);
+        {   /* a kind whose list is empty picked an out-of-range reference */
+            const List *l = kind == 0 ? &in_real : kind == 1 ? &par_real : kind == 2 ? &par_int
+                          : kind == 3 ? &out_real : kind == 4 ? &out_int : NULL;
+            if (l && l->n == 0) kind = 5;
+        }
+        p->kind[i] = kind;
     }
 }
 
@@ -361,6 +390,8 @@ static void instantiate(int k, int model) {
     s->phase = INSTANTIATED;
     s->starts = 1;
     s->damaged = 0;
+    s->wild_inputs = 0;
+    s->nan_inputs = 0;
     s->time = 0.0;
 }
 
@@ -392,6 +423,13 @@ static void print_changed_parameters(int k) {
             printf("    parameter vr %u = %d (start %d)\n", par_int.vr[i], z[i], start_int[i]);
 }
 
+/* may a valid step of instance k be discarded (-F), or must it be (-N)? */
+static unsigned valid_step_mask(int k) {
+    const Slot *s = &slot[k];
+    if (s->nan_inputs) return M_DISCARD;
+    return may_fail && (s->damaged || !s->starts) ? M_OK | M_DISCARD : M_OK;
+}
+
 /* a valid doStep from the instance's time must work and give finite outputs */
 static void probe(int k, const char *after) {
     static double out[MAXV];
@@ -401,12 +439,16 @@ static void probe(int k, const char *after) {
     if (s->phase != STEPPING || !isfinite(s->time) || !isfinite(s->time + 0.1) || s->model) return;
     st = CALL(K_SetReal, F.SetReal(s->c, in_real.vr, in_real.n, start_in));
     expect(K_SetReal, st, M_OK, k, "probe: the start inputs");
+    if (st == fmi2OK) {
+        s->wild_inputs = 0;
+        s->nan_inputs = 0;
+    }
     st = CALL(K_DoStep, F.DoStep(s->c, s->time, 0.1, fmi2True));
-    expect(K_DoStep, st, M_OK, k, after);
+    expect(K_DoStep, st, valid_step_mask(k), k, after);
     if (st == fmi2OK) s->time += 0.1;
     st = CALL(K_GetReal, F.GetReal(s->c, out_real.vr, out_real.n, out));
     expect(K_GetReal, st, M_OK, k, "probe: the outputs");
-    if (st == fmi2OK && !s->damaged && s->starts)
+    if (st == fmi2OK && !s->damaged && s->starts && !(feedthrough && s->wild_inputs))
         for (i = 0; i < out_real.n; ++i)
             if (!isfinite(out[i])) {
                 ++violations;
@@ -436,6 +478,8 @@ static void save_state(int k) {
     t->phase = slot[k].phase;
     t->starts = slot[k].starts;
     t->damaged = slot[k].damaged;
+    t->wild_inputs = slot[k].wild_inputs;
+    t->nan_inputs = slot[k].nan_inputs;
     t->time = slot[k].time;
     nstates++;
 }
@@ -568,6 +612,8 @@ static void op_lifecycle(int k) {
         s->phase = INSTANTIATED;
         s->starts = 1;
         s->damaged = 0;
+        s->wild_inputs = 0;
+        s->nan_inputs = 0;
         s->time = 0.0;
     }
     after(k, st, "a lifecycle call");
@@ -578,6 +624,21 @@ static int settable(int kind, int phase) {
     if (kind == 5 || kind == 3 || kind == 4 || phase == TERMINATED) return 0;
     if ((kind == 1 || kind == 2) && phase == STEPPING) return 0;
     return 1;
+}
+
+/* after a successful fmi2SetReal on instance k: what the inputs now hold (-T, -N) */
+static void inputs_set(int k, const fmi2ValueReference *vr, size_t n, const double *v) {
+    size_t i, j;
+    for (i = 0; i < n; ++i) {
+        for (j = 0; j < in_real.n && in_real.vr[j] != vr[i]; ++j) {}
+        if (j == in_real.n) continue;                    /* not an input */
+        if (!isfinite(v[i]) || fabs(v[i]) > 1e6) slot[k].wild_inputs = 1;
+        for (j = 0; j < nan_discard.n && j < 32; ++j)
+            if (nan_discard.vr[j] == vr[i]) {
+                if (isnan(v[i])) slot[k].nan_inputs |= 1u << j;
+                else slot[k].nan_inputs &= ~(1u << j);
+            }
+    }
 }
 
 static void op_set(int k, int integer) {
@@ -594,13 +655,15 @@ static void op_set(int k, int integer) {
         else
             st = CALL(K_SetReal, F.SetReal(s->c, par_real.vr, par_real.n, start_real));
         expect(integer ? K_SetInteger : K_SetReal, st,
-               s->phase == INSTANTIATED || s->phase == INITIALIZATION ? M_OK : M_ERROR, k,
-               "parameters may be set before the stepping phase");
+               s->phase == INSTANTIATED || s->phase == INITIALIZATION ||
+               (integer ? par_int.n : par_real.n) == 0 ? M_OK : M_ERROR, k,
+               "parameters may be set before the stepping phase (no parameters: always)");
         if (st == fmi2OK && !integer) {
             /* both types must be at their start values: set the other type too */
             st = CALL(K_SetInteger, F.SetInteger(s->c, par_int.vr, par_int.n, start_int));
             expect(K_SetInteger, st, M_OK, k, "parameters may be set before the stepping phase");
-            if (st == fmi2OK && !s->damaged) s->starts = 1;
+            if (st == fmi2OK && (s->phase == INSTANTIATED || s->phase == INITIALIZATION) &&
+                !s->damaged) s->starts = 1;
         }
         after(k, st, "setting the start values");
         return;
@@ -623,6 +686,7 @@ static void op_set(int k, int integer) {
     expect(integer ? K_SetInteger : K_SetReal, st, valid ? M_OK : M_ERROR, k,
            "valid references of the type, settable in this phase, non-NULL arrays");
     if (st == fmi2OK && params && p.n) s->starts = 0;   /* parameters changed: validity unknown */
+    if (st == fmi2OK && !integer) inputs_set(k, p.vr, p.n, rv);
     after(k, st, "a set call");
 }
 
@@ -676,6 +740,10 @@ static void op_inputs(int k) {
     for (i = 0; i < in_real.n; ++i)
         v[i] = chance(90) ? start_in[i] + (chance(50) ? uniform(-1, 1) : 0.0) : any_real();
     st = CALL(K_SetReal, F.SetReal(slot[k].c, in_real.vr, in_real.n, v));
+    if (st == fmi2OK) {                          /* every input set: the flags start afresh */
+        slot[k].wild_inputs = 0;
+        inputs_set(k, in_real.vr, in_real.n, v);
+    }
     expect(K_SetReal, st, slot[k].phase == TERMINATED ? M_ERROR : M_OK, k, "inputs may be set until terminated");
     after(k, st, "setting the inputs");
 }
@@ -690,14 +758,17 @@ static void op_step(int k, int wild) {
     if (wild) {
         if (chance(50)) t = any_real();
         if (chance(70)) h = any_real();
+        if (h > wild_max && h <= max_step) h = wild_max;
     }
     st = CALL(K_DoStep, F.DoStep(s->c, t, h, chance(50)));
-    mask = s->phase != STEPPING || !isfinite(t) || !(isfinite(h) && h > 0.0) ? M_DISCARD : M_OK;
-    expect(K_DoStep, st, mask, k, "a step while stepping, finite t, finite h > 0");
+    mask = s->phase != STEPPING || !isfinite(t) || !(isfinite(h) && h > 0.0) || h > max_step
+         ? M_DISCARD : valid_step_mask(k);
+    expect(K_DoStep, st, mask, k, "a step while stepping, finite t, finite h > 0 (<= -H), "
+           "no NaN in a -N input");
     if (st == fmi2OK) {
         s->time = t + h;
         if (s->damaged) damaged_steps++;
-        if (!s->model && !s->damaged && s->starts) {
+        if (!s->model && !s->damaged && s->starts && !(feedthrough && s->wild_inputs)) {
             st = CALL(K_GetReal, F.GetReal(s->c, out_real.vr, out_real.n, out));
             expect(K_GetReal, st, M_OK, k, "every output");
             for (i = 0; i < out_real.n; ++i)
@@ -730,6 +801,8 @@ static void op_state(int k) {
             states[i].phase = slot[k].phase;
             states[i].starts = slot[k].starts;
             states[i].damaged = slot[k].damaged;
+            states[i].wild_inputs = slot[k].wild_inputs;
+            states[i].nan_inputs = slot[k].nan_inputs;
             states[i].time = slot[k].time;
         }
         break;
@@ -759,6 +832,8 @@ static void op_state(int k) {
             slot[k].phase = t->phase;
             slot[k].starts = t->starts;
             slot[k].damaged = t->damaged;
+            slot[k].wild_inputs = t->wild_inputs;
+            slot[k].nan_inputs = t->nan_inputs;
             slot[k].time = t->time;
         }
         after(k, st, "restoring a state");
@@ -805,7 +880,7 @@ static void op_state(int k) {
     case 8: {                                    /* random bytes */
         size_t size = (size_t)below(4) == 0 ? 0 : (size_t)below(1 << 14);
         fmi2Byte *bytes = (fmi2Byte *)malloc(size + 1);
-        State like = {NULL, k, slot[k].model, INSTANTIATED, 0, 1, 0.0};
+        State like = {NULL, k, slot[k].model, INSTANTIATED, 0, 1, 0, 0u, 0.0};
         if (!bytes) break;
         for (j = 0; j < (int)size; ++j) bytes[j] = (fmi2Byte)(rnd() & 0xFF);
         deserialise(k, chance(10) ? NULL : bytes, size, M_ERROR, &like, 1, "random bytes");
@@ -1097,7 +1172,7 @@ int main(int argc, char **argv) {
     static const char *int_params[64];
     void *lib;
     nslots = 4;
-    while ((opt = getopt(argc, argv, "n:S:k:L:R:P:I:O:Z:g:u:m:D:p:")) != -1) {
+    while ((opt = getopt(argc, argv, "n:S:k:L:R:P:I:O:Z:g:u:m:D:p:TN:H:Fw:")) != -1) {
         switch (opt) {
         case 'n': ncalls = atol(optarg); break;
         case 'S': seed = strtoull(optarg, NULL, 10); break;
@@ -1115,6 +1190,11 @@ int main(int argc, char **argv) {
         case 'p':
             if (n_int_params < 64) int_params[n_int_params++] = optarg;
             break;
+        case 'T': feedthrough = 1; break;
+        case 'N': parse_list(optarg, &nan_discard); break;
+        case 'H': max_step = strtod(optarg, NULL); break;
+        case 'F': may_fail = 1; break;
+        case 'w': wild_max = strtod(optarg, NULL); break;
         default: return 2;
         }
     }

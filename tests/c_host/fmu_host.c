@@ -33,6 +33,13 @@
  *               also load a second FMU (the estimator) and wire it: before every step its
  *               inputs E_i are set to the first FMU's outputs P_i; its outputs E_OUT are
  *               printed after the first FMU's.
+ *   -b E1:P1,E2:P2,...
+ *               with -e: feedback wires, the second FMU's outputs E_i to the first FMU's inputs
+ *               P_i, set before every step (after the -i row): a closed loop, as the SSP wires
+ *               estimator ident.excite -> plant ident.excite. Neither FMU has direct
+ *               feedthrough, so every input gets its source's value at the communication point
+ *               (a Jacobi exchange, as spacerobot.system.master does), then the first FMU
+ *               steps, then the second.
  *
  * usage: fmu_host [options] BINARY GUID RESOURCE_URI DT NSTEPS VR1,VR2,... [VR=VALUE ...]
  * (VR=VALUE: a Real parameter set in initialisation mode.)
@@ -347,9 +354,10 @@ static Fmu plant, est;
 static int wired;
 static Inputs inputs;
 static int have_inputs;
-static size_t nout, nint, nwire, neout;
+static size_t nout, nint, nwire, neout, nback;
 static fmi2ValueReference out_vr[MAXV], int_vr[MAXV], wire_p[MAXV], wire_e[MAXV], eout_vr[MAXV];
-static double row[2 * MAXV], wire_v[MAXV];
+static fmi2ValueReference back_e[MAXV], back_p[MAXV];
+static double row[2 * MAXV], wire_v[MAXV], back_v[MAXV];
 static fmi2Integer irow[MAXV];
 
 static void print_row(double t) {
@@ -379,6 +387,10 @@ static void step(int k, double t, double dt) {
         CHECK(plant.GetReal(plant.c, wire_p, nwire, wire_v));
         CHECK(est.SetReal(est.c, wire_e, nwire, wire_v));
     }
+    if (nback) {                        /* the feedback: the second FMU's outputs at t */
+        CHECK(est.GetReal(est.c, back_e, nback, back_v));
+        CHECK(plant.SetReal(plant.c, back_p, nback, back_v));
+    }
     CHECK(plant.DoStep(plant.c, t, dt, fmi2True));
     if (wired) CHECK(est.DoStep(est.c, t, dt, fmi2True));
 }
@@ -386,7 +398,7 @@ static void step(int k, double t, double dt) {
 int main(int argc, char **argv) {
     int opt, state_step = -1, cycles = 0, i, k;
     const char *est_so = NULL, *est_guid = NULL, *est_res = NULL, *wires = NULL, *est_out = NULL;
-    const char *exit_mode = "free", *input_file = NULL, *int_out = NULL;
+    const char *exit_mode = "free", *input_file = NULL, *int_out = NULL, *back = NULL;
     static const char *int_params[MAXV];
     int n_int_params = 0;
     double t0 = now();
@@ -394,8 +406,8 @@ int main(int argc, char **argv) {
     memset(&plant, 0, sizeof plant);
     memset(&est, 0, sizeof est);
     wired = have_inputs = 0;
-    nout = nint = nwire = neout = 0;
-    while ((opt = getopt(argc, argv, "c:x:s:i:j:p:e:g:r:w:o:")) != -1) {
+    nout = nint = nwire = neout = nback = 0;
+    while ((opt = getopt(argc, argv, "c:x:s:i:j:p:e:g:r:w:o:b:")) != -1) {
         switch (opt) {
         case 'c': cycles = atoi(optarg); break;
         case 'x': exit_mode = optarg; break;
@@ -411,12 +423,14 @@ int main(int argc, char **argv) {
         case 'r': est_res = optarg; break;
         case 'w': wires = optarg; break;
         case 'o': est_out = optarg; break;
+        case 'b': back = optarg; break;
         default: return 1;
         }
     }
-    if (argc - optind < 6 || (est_so && !(est_guid && est_res && wires && est_out))) {
+    if (argc - optind < 6 || (est_so && !(est_guid && est_res && wires && est_out)) ||
+        (back && !est_so)) {
         fprintf(stderr, "usage: %s [-c N] [-x free|dlclose|none] [-s K] [-i INPUTS.csv] [-j VRS] "
-                        "[-p VR=INT ...] [-e EST -g GUID -r URI -w P:E,... -o E,...] "
+                        "[-p VR=INT ...] [-e EST -g GUID -r URI -w P:E,... -o E,... [-b E:P,...]] "
                         "BINARY GUID RESOURCE_URI DT NSTEPS VRS [VR=VALUE ...]\n", argv[0]);
         return 1;
     }
@@ -452,6 +466,14 @@ int main(int argc, char **argv) {
         }
         neout = parse_list(est_out, tmp, MAXV);
         for (n = 0; n < neout; n++) eout_vr[n] = (fmi2ValueReference)tmp[n];
+        if (back) {
+            m = parse_list(back, tmp, 2 * MAXV);
+            nback = m / 2;
+            for (n = 0; n < nback; n++) {
+                back_e[n] = (fmi2ValueReference)tmp[2 * n];
+                back_p[n] = (fmi2ValueReference)tmp[2 * n + 1];
+            }
+        }
         load(&est, est_so, "c_host_estimator", est_guid, est_res);
     }
 

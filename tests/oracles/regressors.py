@@ -22,7 +22,7 @@ where ``T`` maps the quadratic monomials ``m bb = m [bx^2, bx by, bx bz, by^2, b
           + m rho x a_O + ([rho]x K - [a_O]x) A (m b) + Q_i T (m bb)   -> S_i m J(b)
 
 The identifier evaluates these rows for both bodies at once in compiled code
-(:func:`spacerobot.estimator.kernels.equations`); this module is the NumPy reference it is
+(:func:`oracles.estimator.kernels.equations`); this module is the NumPy reference it is
 tested against (a test oracle, not part of the library: it does not ship in the FMUs). The maps
 between parameterisations (``D(mu)``, ``I#``, standard parameters) are the library's
 (:mod:`spacerobot.estimator.parameters`).

@@ -1,10 +1,10 @@
 """Test oracle: what the estimator reports (standard deviations with the prior's pull, the
 physical projection), in NumPy, as the library computed it before it was compiled.
 
-The library computes these in :mod:`spacerobot.estimator.report_kernels` (Numba); this module is
-the reference they are tested against (a test oracle, not part of the library: it does not ship
-in the FMUs). Formulas: :mod:`spacerobot.estimator.uncertainty` (the prior's pull),
-:class:`spacerobot.estimator.solvers.PaperSolver` (covariance, pull, Jacobian of the paper
+The former Python library computed these in :mod:`oracles.estimator.report_kernels` (then
+Numba; the native core now); this module is the reference they were tested against (a test oracle, not part of the library: it does not ship
+in the FMUs). Formulas: :mod:`oracles.estimator.uncertainty` (the prior's pull),
+:class:`oracles.estimator.solvers.PaperSolver` (covariance, pull, Jacobian of the paper
 solver) and :mod:`spacerobot.estimator.physical` (the projection onto real bodies).
 """
 from __future__ import annotations
@@ -233,7 +233,7 @@ def joint_jacobian(z):
     return J
 
 
-# -- the tracker's lag (spacerobot.estimator.tracking, eq. 2) -------------------------------------
+# -- the tracker's lag (oracles.estimator.tracking, eq. 2) -------------------------------------
 def block_lag(G, M, rate, growth):
     """``(A r, r)``, ``A = G^-1 M``, ``r = (1 - growth A)^-1 rate`` (LAPACK solves)."""
     A = np.linalg.solve(G, M)

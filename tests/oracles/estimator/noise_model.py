@@ -23,8 +23,8 @@ from typing import Iterable, Mapping, Tuple
 
 import numpy as np
 
-from ..interface import AccelSource, Method
-from ..robots import Guess, RigidBody, Robot
+from spacerobot.interface import AccelSource, Method
+from spacerobot.robots import Guess, RigidBody, Robot
 from . import parameters as par
 from .identifier import Identifier
 

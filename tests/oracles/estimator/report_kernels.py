@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from ._nonumba import njit
 
 from .kernels import D_of_mu, modified_rls_update
 
@@ -1229,3 +1229,38 @@ def project_planar_body(m, b, I6, m_min, rel_sigma_min):
     tr = P[0, 0] + P[1, 1] + P[2, 2]
     out = np.array([tr - P[0, 0], tr - P[1, 1], izz, -P[0, 1], -P[0, 2], -P[1, 2]])
     return (m if m >= m_min else m_min), out, True, ok and ok3
+
+
+# -- the oracle: NumPy / LAPACK in place of the hand-written loops above (same contracts) -----------
+def _matmul(A, B):  # noqa: F811
+    """``A B`` (NumPy)."""
+    return np.asarray(A) @ np.asarray(B)
+
+
+def matvec(A, x):  # noqa: F811
+    """``A x`` (NumPy)."""
+    return np.asarray(A) @ np.asarray(x)
+
+
+def eigh(A):  # noqa: F811
+    """``(lam, V, ok)`` by LAPACK (``np.linalg.eigh``: ascending, orthonormal); ok False for a
+    non-finite ``A`` (NaN outputs)."""
+    p = A.shape[0]
+    if not np.all(np.isfinite(A)):
+        return np.full(p, np.nan), np.full((p, p), np.nan), False
+    lam, V = np.linalg.eigh(A)
+    return lam, V, True
+
+
+def lu_solve(A, B):  # noqa: F811
+    """``A^-1 B`` by LAPACK's ``gesv`` (``np.linalg.solve``); all NaN where it is singular."""
+    try:
+        X = np.linalg.solve(A, B)
+    except np.linalg.LinAlgError:
+        return np.full(np.shape(B), np.nan)
+    return X
+
+
+def age_step(M, G, lam, dt):  # noqa: F811
+    """``lam (M + dt G)`` (NumPy)."""
+    return lam * (M + dt * G)

@@ -1,10 +1,9 @@
-"""Free-floating multibody model on Pinocchio: model building and the base conventions.
+"""Test oracle: the free-floating multibody model on Pinocchio (model building and the base
+conventions), the independent reference the native plant's dynamics (native/src/dynamics.c,
+plant.c) are checked against. Not part of the library (the plant runs on the C core).
 
-Model (description) and data (work space) are kept apart as in Pinocchio: :class:`PlantModel`
-is built once from a :class:`~spacerobot.robots.Robot` plus the base and target truth. The
-dynamics that run while stepping (ABA, mass matrix, momentum, the RK4 stages) are the compiled
-kernels of :mod:`.rigid_body` and :mod:`.kernels`, built from this model's arrays and tested
-against Pinocchio.
+:class:`PlantModel` is built once from a :class:`~spacerobot.robots.Robot` plus the base and
+target truth; Pinocchio's algorithms (ABA, CRBA, RNEA, centroidal momentum) run on it.
 
 Generalised coordinates (Pinocchio's):
 
@@ -14,8 +13,8 @@ Generalised coordinates (Pinocchio's):
   omega_z, qd]``.
 
 The ODE is written in these coordinates as an ordinary vector ODE (``dq/dt`` from ``v``
-including the quaternion / (cos, sin) kinematics), so classic RK4 (:mod:`.kernels`) applies
-unchanged and is fourth-order; the unit-norm constraint is restored after each step.
+including the quaternion / (cos, sin) kinematics), so classic RK4 applies
+unchanged and is fourth-order; the native plant uses the same coordinates.
 """
 from __future__ import annotations
 
@@ -24,8 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..robots import RigidBody, Robot
-from .kernels import quat_dcm
+from spacerobot.robots import RigidBody, Robot
 
 
 @dataclass(frozen=True)
@@ -93,9 +91,15 @@ def build_model(robot: Robot, base: RigidBody | None = None, target: RigidBody |
 # -- base conventions ---------------------------------------------------------------------------
 
 
-def quat_to_R(qx, qy, qz, qw) -> np.ndarray:
-    """DCM of a (not necessarily unit) quaternion, normalised on the fly."""
-    return np.array(quat_dcm(qx, qy, qz, qw)).reshape(3, 3)
+def quat_to_R(x, y, z, w) -> np.ndarray:
+    """DCM (body -> inertial) of a (not necessarily unit) quaternion, normalised on the fly."""
+    s = 2.0 / (x * x + y * y + z * z + w * w)
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz = x * y, x * z, y * z
+    xw, yw, zw = x * w, y * w, z * w
+    return np.array([[1.0 - s * (yy + zz), s * (xy - zw), s * (xz + yw)],
+                     [s * (xy + zw), 1.0 - s * (xx + zz), s * (yz - xw)],
+                     [s * (xz - yw), s * (yz + xw), 1.0 - s * (xx + yy)]])
 
 
 def base_rotation(pm: PlantModel, q: np.ndarray) -> np.ndarray:
@@ -123,3 +127,52 @@ def initial_configuration(pm: PlantModel, q_arm=None) -> np.ndarray:
     q_arm = np.asarray(pm.robot.q0 if q_arm is None else q_arm, float)
     head = np.array([0.0, 0.0, 1.0, 0.0]) if pm.planar else np.array([0, 0, 0, 0, 0, 0, 1.0])
     return np.concatenate([head, q_arm])
+
+
+# -- random models and states (the dynamics tests' cases) ---------------------------------------
+
+
+def random_inertia(rng) -> pin.Inertia:
+    """A physically valid random body: mass, CoM, and a rotated diagonal inertia whose principal
+    moments satisfy the triangle inequality."""
+    a, b = np.sort(rng.uniform(0.5, 3.0, 2))
+    c = rng.uniform(b - a + 0.1, a + b)                    # triangle inequality
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    return pin.Inertia(rng.uniform(1.0, 20.0), rng.normal(scale=0.3, size=3),
+                       Q @ np.diag([a, b, c]) @ Q.T)
+
+
+def random_chain(rng, n: int = 7, kinds: str = "uuz") -> pin.Model:
+    """Free-flyer base + ``n`` revolute joints with random placements, axes and inertias, built
+    in Pinocchio; joint ``k`` is of the kind ``kinds[k % len(kinds)]``: ``x``, ``y``, ``z``
+    (``RX``, ``RY``, ``RZ``), ``u`` (unaligned, a random axis) or ``m`` (unaligned along
+    ``-z``)."""
+    model = pin.Model()
+    model.gravity = pin.Motion.Zero()
+    parent = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "base")
+    model.appendBodyToJoint(parent, random_inertia(rng), pin.SE3.Identity())
+    aligned = {"x": pin.JointModelRX, "y": pin.JointModelRY, "z": pin.JointModelRZ}
+    for k in range(n):
+        kind = kinds[k % len(kinds)]
+        if kind in aligned:
+            jm = aligned[kind]()
+        elif kind == "m":
+            jm = pin.JointModelRevoluteUnaligned(np.array([0.0, 0.0, -1.0]))
+        else:
+            ax = rng.normal(size=3)
+            jm = pin.JointModelRevoluteUnaligned(ax / np.linalg.norm(ax))
+        placement = pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(scale=0.5, size=3))
+        parent = model.addJoint(parent, jm, placement, f"j{k}")
+        model.appendBodyToJoint(parent, random_inertia(rng), pin.SE3.Random())
+    return model
+
+
+def random_state(model, rng):
+    """A random configuration (base position ~ N(0, 1)), velocity ~ N(0, 1) and generalised
+    force ~ N(0, 50) of ``model``."""
+    q = pin.randomConfiguration(model, -np.pi * np.ones(model.nq), np.pi * np.ones(model.nq))
+    q[:3 if model.joints[1].shortname() == "JointModelFreeFlyer" else 2] = rng.normal(size=3)[
+        :3 if model.joints[1].shortname() == "JointModelFreeFlyer" else 2]
+    v = rng.normal(size=model.nv)
+    tau = rng.normal(scale=50.0, size=model.nv)
+    return q, v, tau

@@ -25,8 +25,8 @@ from typing import NamedTuple, Optional, Tuple
 
 import numpy as np
 
-from ..interface import COM_SCALE_MIN, ParameterLayout, Solver
-from ..robots import Guess
+from spacerobot.interface import COM_SCALE_MIN, ParameterLayout, Solver
+from spacerobot.robots import Guess
 from . import eiv
 from . import parameters as par
 from . import report_kernels as rk

@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from ._nonumba import njit
 
 _NB = dict(cache=True, nogil=True)
 
@@ -491,3 +491,44 @@ def sample_check(x, limit, tol):
     if err <= tol and det > 0.0:
         return 0
     return 2
+
+
+# -- the oracle: the RLS step in NumPy / LAPACK in place of the loops above (same contract) --------
+def rls_update(x, P, H, y, lam):  # noqa: F811
+    """One RLS step for ``H x = y`` (see the loop version above), NumPy: ``S`` factorised by
+    LAPACK's Cholesky, ``S^-1 [P H^T, e]`` by its solve."""
+    p, k = x.shape[0], y.shape[0]
+    e = y - H @ x
+    PHt = P @ H.T
+    S = lam * np.eye(k) + H @ PHt
+    if not np.all(np.isfinite(S)):
+        return x.copy(), P.copy(), e, np.zeros((p, k)), 0.0, 2
+    try:
+        np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        return x.copy(), P.copy(), e, np.zeros((p, k)), 0.0, 1
+    Kt = np.linalg.solve(S, np.column_stack([PHt.T, e]))
+    K = Kt[:, :p].T.copy()
+    q = float(e @ Kt[:, p])
+    x_new = x + K @ e
+    R = P - K @ PHt.T
+    P_new = 0.5 * (R + R.T) / lam
+    ok = math.isfinite(q) and np.all(np.isfinite(x_new)) and np.all(np.isfinite(P_new))
+    return x_new, P_new, e, K, q, 0 if ok else 2
+
+
+def modified_rls_update(lin_x, lin_P, ang_x, ang_P, M, D_mu, A, b, phi, y, psi, lam,  # noqa: F811
+                        mu_full, active):
+    """One sample of the paper's modified RLS (eqs. 34-38; see the loop version above), NumPy."""
+    x1, P1, e1, K1, q1, st1 = rls_update(lin_x, lin_P, A, b, lam)
+    mu = mu_full.copy()
+    mu[active] = x1
+    D_new = D_of_mu(mu)
+    th = ang_x + M @ (D_new - D_mu)                       # eq. 36: re-referenced theta
+    rhs = y + psi @ D_new
+    x2, P2, e2, K2, q2, st2 = rls_update(th, ang_P, phi, rhs, lam)
+    M2 = M + K2 @ (psi - phi @ M)                         # M+ = M + K (psi - phi M)
+    st = max(st1, st2)
+    if st == 0 and not np.all(np.isfinite(M2)):
+        st = 2
+    return x1, P1, x2, P2, M2, D_new, e1, e2, q1, q2, rhs, st

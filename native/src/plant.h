@@ -1,0 +1,308 @@
+/* The plant: the free-floating space robot after capture, integrated by classic RK4 at the
+ * internal step h, with the paper's controllers held over each internal step (zero-order hold)
+ * (Zhang, Yue, Yuan, IEEE Access 2020; port of spacerobot/plant/simulator.py Plant and
+ * spacerobot/plant/kernels.py):
+ *
+ *   - thrusters: the bounded momentum laws, eq. 41 on the linear momentum P and eq. 40 on the
+ *     angular momentum about the system centre of mass L_c, per inertial axis;
+ *   - arm: the attitude law eq. 39 (e'' + K_D e' + K_P e = 0 through the base rows of the
+ *     dynamics) by an inertia-weighted, selectively damped right pseudo-inverse, a null-space
+ *     posture term towards q_home and a bound qdd_max on the joint accelerations;
+ *   - the optional excitation: eq. 39 about a multi-sine attitude reference and the posture
+ *     term about a multi-sine joint reference, scaled by a level that ramps (quintic) to the
+ *     requested value in excitation.ramp seconds;
+ *   - the optional propellant: a spherical tank in the base emptied by the thrusters
+ *     (dm_p/dt = -(|F_x|+|F_y|+|F_z| + (|M_x|+|M_y|+|M_z|)/arm) / (Isp g0)); the base's inertia
+ *     follows m_p at every RK4 stage; the expelled propellant carries away momentum P_x, L_x.
+ *
+ * Pinocchio's organisation: a constant model (sr_plant_model, built by sr_plant_model_init)
+ * and a data block (sr_plant_data: the state and the work space). Both are plain structs of
+ * fixed size without pointers: FMI get/set/serialize FMU state may memcpy the data block; a
+ * checkpoint is a copy of it. Several data blocks may share one model.
+ *
+ * State vector x (nx = 6 + nq + nv + 7), the layout of simulator.py:
+ *   x = [J (3), H (3), q (nq), v (nv), m_p, P_x (3), L_x (3)]
+ *   J [N.s]   impulse of the thrust, inertial          (dJ/dt = F)
+ *   H [N.m.s] its angular impulse about the inertial origin (dH/dt = M_S + r_S x F)
+ *   q, v      Pinocchio's generalised coordinates (dynamics.h): spatial
+ *             q = [r_S (3) [m], quaternion x y z w (4), q_arm (n) [rad]],
+ *             v = [v_l (3) [m/s] (velocity of S in base axes), omega_B (3) [rad/s], qd (n)];
+ *             planar q = [x, y, cos th, sin th, q_arm], v = [v_l,x, v_l,y, omega_z, qd]
+ *   m_p [kg]  propellant left (0 without propellant model)
+ *   P_x [N.s], L_x [N.m.s]: momentum carried away by the expelled propellant (inertial; L_x
+ *             about the inertial origin): P + P_x - P(0) = J, L + L_x - L(0) = H.
+ *
+ * Output vector y (ny = 63 + 5 n; entry k of the list below starts at sr_plant_output_offsets
+ * [k]; the order of spacerobot.plant.kernels.output_layout and Plant.output_vector):
+ *   SR_PLANT_Y_R_S      r_S (3)        position of the base point S, inertial [m]
+ *   SR_PLANT_Y_V_S      v_S (3)        velocity of S, inertial [m/s] (= A v_l)
+ *   SR_PLANT_Y_A        A (9)          DCM base -> inertial (x_I = A x_B), row-major 3 x 3
+ *   SR_PLANT_Y_OMEGA_B  omega_B (3)    base angular velocity, base frame [rad/s]
+ *   SR_PLANT_Y_A_S      a_S (3)        classical acceleration of S, inertial [m/s2]
+ *                                      (= A (dv_l/dt + omega_B x v_l))
+ *   SR_PLANT_Y_ALPHA_B  alpha_B (3)    base angular acceleration, base frame [rad/s2]
+ *   SR_PLANT_Y_Q        q (n)          joint angles [rad]
+ *   SR_PLANT_Y_QD       qd (n)         joint rates [rad/s]
+ *   SR_PLANT_Y_QDD      qdd (n)        joint accelerations [rad/s2]
+ *   SR_PLANT_Y_F        F (3)          thrust at S, inertial [N]
+ *   SR_PLANT_Y_M        M (3)          thrust moment about S, inertial [N.m]
+ *   SR_PLANT_Y_J        J (3)          impulse of F since t = 0, inertial [N.s]
+ *   SR_PLANT_Y_H        H (3)          angular impulse about the inertial origin [N.m.s]
+ *   SR_PLANT_Y_P        P (3)          system linear momentum, inertial [N.s] (truth)
+ *   SR_PLANT_Y_L        L (3)          system angular momentum about the inertial origin,
+ *                                      inertial [N.m.s] (truth; L_c + c x P)
+ *   SR_PLANT_Y_TAU      tau (n)        joint torques [N.m]
+ *   SR_PLANT_Y_EXCITE   level (1)      excitation level in effect, in [0, 1]
+ *   SR_PLANT_Y_ATT_REF  att_ref (3)    attitude reference (rotation vector) [rad]; planar:
+ *                                      (0, 0, z); zero when no excitation was asked for
+ *   SR_PLANT_Y_QD_REF   qd_ref (n)     rate of the joint reference [rad/s] (zero likewise)
+ *   SR_PLANT_Y_M_P      m_p (1)        propellant left [kg]
+ *   SR_PLANT_Y_P_X      P_x (3)        linear momentum carried away by the propellant [N.s]
+ *   SR_PLANT_Y_L_X      L_x (3)        angular momentum carried away, about the inertial
+ *                                      origin [N.m.s]
+ *   SR_PLANT_Y_BASE_NOW base (10)      the base's truth now: m [kg], b (3) [m] (com, base
+ *                                      frame), Ixx Iyy Izz Ixy Ixz Iyz [kg.m2] (about the com,
+ *                                      base frame): the dry base plus the propellant left
+ * The accelerations, F, M and tau are those of the controls held from this instant over the
+ * next internal step of h (so sum F = sum m a holds exactly at every output).
+ *
+ * Status codes: 0 ok; SR_PLANT_EARG (bad argument: nothing changed); SR_PLANT_ENONFINITE (the
+ * step reached a non-finite state); SR_PLANT_ESINGULAR_* (a singular matrix on the way). Every
+ * failing call leaves the state of the data (t, x, ramp) as it was before the call
+ * (transactional; only the work space may change).
+ *
+ * All angles of the excitation are computed with sr_math's sr_sincos (portable bits): afresh at
+ * the first internal step of a call and every SR_PLANT_TRIG_ANCHOR steps, rotated by h at the
+ * steps in between (kernels.rotate_trig: a few units in the last place from a fresh
+ * evaluation; a run gives the same bits for the same sequence of calls). The sines and
+ * cosines of the joint angles (the joint placements of the rigid-body algorithms) likewise:
+ * sr_sincos at the first internal step of a call and every SR_PLANT_JOINT_ANCHOR steps, at
+ * every other RK4 stage from those by the angle-addition formulas (within about 1 ulp of
+ * sr_sincos). The only libm calls are sqrt, fabs, fmod and floor (exact).
+ */
+#ifndef SR_PLANT_H
+#define SR_PLANT_H
+
+#include <stddef.h>
+
+#include "arm.h"
+#include "dynamics.h"
+#include "sr_api.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Largest configuration, velocity, state and output sizes (spatial, SR_MAX_JOINTS joints). */
+#define SR_PLANT_MAX_NQ (7 + SR_MAX_JOINTS)
+#define SR_PLANT_MAX_NV SR_DYN_MAX_NV
+#define SR_PLANT_MAX_NX (6 + SR_PLANT_MAX_NQ + SR_PLANT_MAX_NV + 7)
+#define SR_PLANT_MAX_NY (63 + 5 * SR_MAX_JOINTS)
+/** Excitation channels: up to 3 attitude axes, then the joints. */
+#define SR_PLANT_MAX_CHANNELS (3 + SR_MAX_JOINTS)
+/** Controller parameters (order of spacerobot.plant.kernels.PARAMS). */
+#define SR_PLANT_NPAR 11
+/** Internal steps between fresh evaluations of the excitation sines (kernels.TRIG_ANCHOR). */
+#define SR_PLANT_TRIG_ANCHOR 20
+/** Internal steps between fresh evaluations (sr_sincos) of the joint angles' sines and cosines
+ *  (the joint placements); in between they are stepped from the last fresh ones by the
+ *  angle-addition formulas (within about 1 ulp of sr_sincos, no accumulation). */
+#define SR_PLANT_JOINT_ANCHOR 20
+/** Length of the message buffers the callers pass (a longer one is fine). */
+#define SR_PLANT_MSG_LEN 256
+
+#define SR_PLANT_OK 0
+#define SR_PLANT_EARG 1                 /* bad argument (named in the message) */
+#define SR_PLANT_ENONFINITE 2           /* the state became non-finite */
+#define SR_PLANT_ESINGULAR_BASE 11      /* singular base inertia (kernels.ERRORS[1]) */
+#define SR_PLANT_ESINGULAR_ARM 12       /* singular arm inertia */
+#define SR_PLANT_ESINGULAR_COUPLING 13  /* singular attitude coupling */
+#define SR_PLANT_ESINGULAR_ABA 14       /* singular articulated base inertia */
+
+/** The outputs, in the order of the output vector (see the table above). */
+enum sr_plant_output {
+    SR_PLANT_Y_R_S = 0, SR_PLANT_Y_V_S, SR_PLANT_Y_A, SR_PLANT_Y_OMEGA_B, SR_PLANT_Y_A_S,
+    SR_PLANT_Y_ALPHA_B, SR_PLANT_Y_Q, SR_PLANT_Y_QD, SR_PLANT_Y_QDD, SR_PLANT_Y_F, SR_PLANT_Y_M,
+    SR_PLANT_Y_J, SR_PLANT_Y_H, SR_PLANT_Y_P, SR_PLANT_Y_L, SR_PLANT_Y_TAU, SR_PLANT_Y_EXCITE,
+    SR_PLANT_Y_ATT_REF, SR_PLANT_Y_QD_REF, SR_PLANT_Y_M_P, SR_PLANT_Y_P_X, SR_PLANT_Y_L_X,
+    SR_PLANT_Y_BASE_NOW,
+    SR_PLANT_Y_COUNT                    /* number of outputs (23) */
+};
+
+/** Controller gains and bounds (spacerobot.robots.Controller; FMU names as the fields).
+ *  Eq. 41: F_i = K_F P_i within |P_i| < P_max, bounded by F_max [N]; eq. 40: M_i = K_M L_c,i
+ *  within |L_c,i| < L_max, bounded by M_max [N.m]; eq. 39 gains K_D [1/s], K_P [1/s2];
+ *  posture gains K_Pn [1/s2], K_Dn [1/s]; qdd_max [rad/s2]. The order of the fields is
+ *  kernels.PARAMS (a double[11] view is valid). */
+typedef struct sr_plant_controller {
+    double K_F, P_max, F_max, K_M, L_max, M_max, K_D, K_P, K_Pn, K_Dn, qdd_max;
+} sr_plant_controller;
+
+/** Excitation (spacerobot.robots.Excitation; FMU names excite.<field>): amplitude bounds
+ *  att_max [rad], q_max [rad], qd_max [rad/s], qdd_max [rad/s2] (>= 0), period of the slowest
+ *  component [s] and duration of a level change ramp [s] (> 0). */
+typedef struct sr_plant_excitation {
+    double att_max, q_max, qd_max, qdd_max, period, ramp;
+} sr_plant_excitation;
+
+/** Propellant (spacerobot.robots.Propellant; FMU names prop.<field>): initial mass m0 [kg]
+ *  (0: no propellant model, constant base), specific impulse Isp [s], tank centre r (base
+ *  frame) [m], tank radius R [m], thruster couple arm [m]. */
+typedef struct sr_plant_propellant {
+    double m0, Isp, r[3], R, arm;
+} sr_plant_propellant;
+
+/** The constant model (filled by sr_plant_model_init; read-only afterwards). */
+typedef struct sr_plant_model {
+    sr_dyn_model dyn;                    /* robot + target on the dry base */
+    int planar, n, nq, nv, nb, nx, ny;   /* nb = 3 planar / 6 spatial */
+    int n_att;                           /* attitude channels: 1 planar (z), 3 spatial */
+    int n_ch;                            /* excitation channels n_att + n */
+    double par[SR_PLANT_NPAR];           /* controller, kernels.PARAMS order */
+    double q_home[SR_MAX_JOINTS];        /* null-space posture, also the initial one [rad] */
+    double h;                            /* internal RK4 step [s] */
+    double ex_tab[SR_PLANT_MAX_CHANNELS][5];  /* channels (a, w1, p1, w2, p2):
+                                            f = a/2 [sin(w1 t + p1) + sin(w2 t + p2)] */
+    double ex_ramp;                      /* duration of a level change [s] */
+    double ex_rot[SR_PLANT_MAX_CHANNELS][4];  /* cos(w1 h), sin(w1 h), cos(w2 h), sin(w2 h):
+                                            the channels' sines stepped by h by rotation */
+    double pp[6];                        /* propellant: 1/(Isp g0) [s/m] (0: model off),
+                                            1/arm [1/m], (2/5) R^2 [m2], tank centre r (3) */
+    double m0;                           /* initial propellant mass [kg] */
+    double dry[10];                      /* dry base: m, b (3), Ixx Iyy Izz Ixy Ixz Iyz */
+    double dry_hB[3], dry_IS[9];         /* dry base first moment m b and inertia about S */
+    double x0[SR_PLANT_MAX_NX];          /* initial state (sr_plant_start) */
+} sr_plant_model;
+
+/** The data block: the state (t, x, ramp) and the work space (scratch between calls). */
+typedef struct sr_plant_data {
+    double t;                            /* time [s] */
+    double x[SR_PLANT_MAX_NX];           /* state vector (first nx entries) */
+    double ramp[4];                      /* excitation level ramp [s0, u, t0, T]: from s0 at t0
+                                            to the requested u in T seconds */
+    /* -- work space ------------------------------------------------------------------- */
+    sr_dyn_model dyn;                    /* the model's dyn with the base of the current
+                                            stage's propellant mass */
+    sr_dyn_data dd;
+    double K[4][SR_PLANT_MAX_NX];        /* RK4 stage derivatives */
+    double xa[SR_PLANT_MAX_NX], xs[SR_PLANT_MAX_NX], xn[SR_PLANT_MAX_NX];
+    double qn[SR_PLANT_MAX_NQ], vs[SR_PLANT_MAX_NV];   /* normalised stage configuration */
+    double gen[SR_PLANT_MAX_NV], acc[SR_PLANT_MAX_NV], ddq[SR_PLANT_MAX_NV];
+    double FM[7];                        /* held thrust [F, M] (inertial), mass flow [kg/s] */
+    double M[SR_PLANT_MAX_NV * SR_PLANT_MAX_NV], nle[SR_PLANT_MAX_NV], hg[6], com[3];
+    double trig[SR_PLANT_MAX_CHANNELS][4];   /* sin, cos of both phases of every channel at
+                                            trig_t (NaN: none) */
+    double trig_t;
+    double q_anc[SR_MAX_JOINTS];         /* arm angles of the last anchor [rad] */
+    double sc_anc[2 * SR_MAX_JOINTS];    /* their sines and cosines (n x 2, sr_sincos) */
+    double sc[2 * SR_MAX_JOINTS];        /* those of the current RK4 stage (n x 2) */
+    double A_s[9];                       /* DCM of the RK4 stage state xs (3 x 3) */
+} sr_plant_data;
+
+/** Build the model. robot: the robot record (its base body is replaced by base); base: the
+ *  dry base (frame B, origin S); target: the grasped target in the end-effector frame E
+ *  (mass > 0); both as sr_body (mass [kg], com [m], inertia about the com (3 x 3, symmetric)
+ *  [kg.m2]) and checked as spacerobot.robots.check_body (finite, m > 0, positive definite,
+ *  triangle inequality). ctrl, ex, prop: as their structs (every field finite; bounds >= 0);
+ *  q_home (n) [rad]: the home posture (robot.q0; NULL: zeros), also the initial arm posture;
+ *  v0 (3): initial velocity of S, inertial [m/s]; w0 (3): initial omega_B, base frame [rad/s]
+ *  (planar: only v0 x, y and w0 z are used); h: internal RK4 step [s], 0 < h <= 1.
+ *  Returns 0, or SR_PLANT_EARG (model zeroed) with a one-line message in err (errlen bytes,
+ *  NUL-terminated when errlen > 0; err may be NULL) naming the bad parameter by its FMU name
+ *  (e.g. "target.m", "F_max", "excite.ramp", "prop.Isp", "base.v0", "h"). */
+SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, const sr_body *base,
+                               const sr_body *target, const sr_plant_controller *ctrl,
+                               const sr_plant_excitation *ex, const sr_plant_propellant *prop,
+                               const double *q_home, const double v0[3], const double w0[3],
+                               double h, char *err, size_t errlen);
+
+/** sizeof(sr_plant_model), sizeof(sr_plant_data), sizeof(the three parameter structs), for
+ *  bindings that allocate them and check their view of the structs. */
+SR_API size_t sr_plant_model_size(void);
+SR_API size_t sr_plant_data_size(void);
+SR_API size_t sr_plant_controller_size(void);
+SR_API size_t sr_plant_excitation_size(void);
+SR_API size_t sr_plant_propellant_size(void);
+
+/** Sizes of the model: nq, nv, nx (state vector), ny (output vector), n (joints); any pointer
+ *  may be NULL. Returns 0 or SR_PLANT_EARG (model NULL or not initialised). */
+SR_API int sr_plant_dims(const sr_plant_model *model, int *nq, int *nv, int *nx, int *ny,
+                         int *n);
+
+/** Where each output starts in the output vector: offsets (SR_PLANT_Y_COUNT + 1), entry k
+ *  (enum sr_plant_output) occupies [offsets[k], offsets[k + 1]); offsets[SR_PLANT_Y_COUNT] =
+ *  ny. Returns 0 or SR_PLANT_EARG. */
+SR_API int sr_plant_output_offsets(const sr_plant_model *model, int *offsets);
+
+/** The key of output k (enum sr_plant_output) as Plant.outputs() names it ("r_S", "v_S",
+ *  "A", ..., "base_now"); NULL for k out of range. Static storage. */
+SR_API const char *sr_plant_output_name(int k);
+
+/** A one-line description of a status code (static storage; never NULL). */
+SR_API const char *sr_plant_status_message(int status);
+
+/** The initial state: t = 0, base at the inertial origin with identity attitude, arm at
+ *  q_home at rest, base velocity from v0, w0; J = H = 0; m_p = prop.m0, P_x = L_x = 0;
+ *  excitation level 0 (ramp [0, 0, 0, excitation.ramp]). Returns 0 or SR_PLANT_EARG. */
+SR_API int sr_plant_start(const sr_plant_model *model, sr_plant_data *data);
+
+/** Ask for the excitation level `level` in [0, 1] from now on (Plant.set_excitation): the
+ *  level in effect moves there from its current value in excitation.ramp seconds along a
+ *  quintic; asking again for the level already requested changes nothing. Returns 0, or
+ *  SR_PLANT_EARG (data unchanged) for a level outside [0, 1] or NaN. */
+SR_API int sr_plant_set_excitation(const sr_plant_model *model, sr_plant_data *data,
+                                   double level);
+
+/** The excitation level in effect now and its first two time derivatives: s (3) =
+ *  (s, ds/dt [1/s], d2s/dt2 [1/s2]). Returns 0 or SR_PLANT_EARG. */
+SR_API int sr_plant_excitation_level(const sr_plant_model *model, const sr_plant_data *data,
+                                     double *s);
+
+/** Integrate over dt [s] (Plant.advance): k = floor(dt / h + 1e-9) RK4 steps of h, then one
+ *  step of the rest dt - k h if that is >= 1e-9 h; the controls of each step are computed at
+ *  its start and held over it. Transactional: returns 0 with (t, x) advanced, or a status
+ *  (SR_PLANT_EARG for dt not finite and > 0; SR_PLANT_ESINGULAR_*; SR_PLANT_ENONFINITE when
+ *  the state reached is not finite) with t, x, ramp as before the call. */
+SR_API int sr_plant_advance(const sr_plant_model *model, sr_plant_data *data, double dt);
+
+/** Every output at the current state, y (ny; the layout above), computed with the controls
+ *  held from this instant over a step of h. Only the work space of data changes. Returns 0,
+ *  SR_PLANT_EARG or SR_PLANT_ESINGULAR_* (y then not to be used). */
+SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, double *y);
+
+/** The controls for the step starting at the current state (Plant.controls): F (3) [N] at S and
+ *  M (3) [N.m] about S, inertial; tau (n) [N.m]; a (nv): the generalised acceleration dv/dt
+ *  they produce (Pinocchio's convention); *flow: propellant mass flow [kg/s]. Any output may
+ *  be NULL. Returns 0, SR_PLANT_EARG or SR_PLANT_ESINGULAR_*. */
+SR_API int sr_plant_controls(const sr_plant_model *model, sr_plant_data *data, double *F,
+                             double *M, double *tau, double *a, double *flow);
+
+/** The base's truth now (Plant.base_now): out (10) = m [kg], b (3) [m], Ixx Iyy Izz Ixy Ixz Iyz
+ *  [kg.m2] (about the com, base frame): the dry base plus the propellant left (parallel axes);
+ *  the dry base without propellant model. Returns 0 or SR_PLANT_EARG. */
+SR_API int sr_plant_base_now(const sr_plant_model *model, const sr_plant_data *data,
+                             double *out);
+
+/** The excitation references now (Plant.references): ref ((n_att + n) x 3, row-major), row c:
+ *  the scaled channel c and its first two time derivatives; rows 0..n_att-1 the attitude axes
+ *  (rotation vector [rad]; planar: z only), then the joint offsets from q_home [rad]. Zero
+ *  when the level and its derivatives are zero. Returns 0 or SR_PLANT_EARG. */
+SR_API int sr_plant_references(const sr_plant_model *model, const sr_plant_data *data,
+                               double *ref);
+
+/** The state: *t [s], x (nx), ramp (4) (any may be NULL). Returns 0 or SR_PLANT_EARG. */
+SR_API int sr_plant_get_state(const sr_plant_model *model, const sr_plant_data *data, double *t,
+                              double *x, double *ramp);
+
+/** Set the state (Plant.set_state): t finite, x (nx) finite with a unit quaternion (planar: a
+ *  unit (cos, sin) pair) within 1e-6 and 0 <= m_p <= m0 (1 + 1e-12), ramp (4) finite with
+ *  T > 0 (NULL: [0, 0, 0, excitation.ramp]). Returns 0, or SR_PLANT_EARG (data unchanged)
+ *  with a message in err (errlen bytes; err may be NULL). */
+SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, double t,
+                              const double *x, const double *ramp, char *err, size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SR_PLANT_H */
