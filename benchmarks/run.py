@@ -66,7 +66,6 @@ VARIANTS = [("momentum", "momentum", "paper", "measured"),
 
 def machine() -> dict:
     import fmpy
-    import numba
     import pinocchio
     cpu = platform.processor() or "?"
     try:
@@ -82,7 +81,7 @@ def machine() -> dict:
     except Exception:  # pragma: no cover
         pfmu = "?"
     return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
-            "numpy": np.__version__, "numba": numba.__version__,
+            "numpy": np.__version__,
             "pinocchio": pinocchio.__version__,
             "fmpy": fmpy.__version__, "pythonfmu": pfmu, "platform": platform.platform(),
             "date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
@@ -682,7 +681,7 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     L.append("## Machine\n")
     L.append(table(["item", "value"], [
         ("CPU", info["cpu"]), ("cores (os.cpu_count)", info["cores"]),
-        ("platform", info["platform"]), ("Python", info["python"]), ("numpy", info["numpy"]), ("numba", info["numba"]),
+        ("platform", info["platform"]), ("Python", info["python"]), ("numpy", info["numpy"]),
         ("pinocchio", info["pinocchio"]), ("fmpy", info["fmpy"]),
         ("pythonfmu", info["pythonfmu"]), ("date", info["date"]),
         ("load average (1/5/15 min) at start", " / ".join(f"{x:.2f}" for x in info["load"])),
