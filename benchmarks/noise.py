@@ -331,10 +331,8 @@ def main(argv=None) -> int:
     t0 = time.time()
     load0 = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
-        # the Python-hosted estimator: the set-ups use options the native core does not have
-        # (ident.momentum_window, ident.accel_bias, ident.sd_thrust.*; fmu_estimator/README.md)
-        ssp = build_system("spatial", Path(tmp) / "spatial", sensors=True,
-                           backend="pythonfmu")["ssp"]
+        # the native FMUs (every estimator option the set-ups use is in the C core)
+        ssp = build_system("spatial", Path(tmp) / "spatial", sensors=True)["ssp"]
         t_pilot = time.time()
         settings = {} if args.paper_equations else SETTINGS
         row_sd = {} if args.defaults else pilot_row_sd(ssp, args.stop_time, Path(tmp), settings)
