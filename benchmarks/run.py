@@ -839,21 +839,17 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
     L.append(table(["robot", "core, momentum [us]", "core, force [us]",
                     "core, momentum, joint RLS [us]", "FMU setReal [us]", "FMU doStep [us]",
                     "FMU getReal estimates [us]"], rows))
-    L.append("\nThe core update is the validation of the sample, the compiled equations "
-             "(`spacerobot/estimator/kernels.py`: arm kinematics, arm momentum or rate of "
-             "momentum, regressors of both bodies) and the compiled modified RLS step, plus its "
-             "safety net (a snapshot of what the update changes, to undo an update that "
-             "overflows; a few us), and since issue #17 the standard deviations of the new "
-             "estimates and the tracker of their lag behind moving parameters "
-             "(`spacerobot/estimator/tracking.py`): for the paper solver all of it after the "
-             "equations is one compiled call (`report_kernels.paper_step`, which also gives the "
-             "excitation diagnostics from the spectra the standard deviations need); the joint "
-             "solver runs them as separate calls. The FMU's `doStep` adds the gathering of the 45 scalar "
-             "inputs into one array (one index into the identifier's signal order) and the refresh of the outputs with the identifier's `report()` "
-             "(physical test and projection, identified flags: section 1 shows "
-             "its cost). Targets of issue #6: core <= 50 us "
-             "(spatial), FMU `doStep` <= 150 us, both exceeded since the standard deviations "
-             "and the tracker run in the update.\n")
+    L.append("\nThe core update is one call of the native C core (`native/src/estimator.c`, "
+             "through `spacerobot.core.estimator.NativeEstimator` in the library): the "
+             "validation of the sample, the equations (`native/src/equations.c`: arm "
+             "kinematics, arm momentum or rate of momentum, regressors of both bodies), the "
+             "modified RLS step, the standard deviations of the new estimates with the prior's "
+             "pull and the eigen-decompositions of the scaled information, and the tracker of "
+             "their lag behind moving parameters, all on a copy of the state committed only when "
+             "every result is finite. The FMU's `doStep` adds the gathering of the scalar inputs "
+             "and the refresh of the outputs with the core's report (physical test and "
+             "projection, identified flags). Targets of issue #6: core <= 50 us (spatial), FMU "
+             "`doStep` <= 150 us; issue #26: native `doStep` <= 20 us (spatial).\n")
     L.append("\n### One-step RLS against a batch re-solve\n")
     L.append("The batch alternative re-solves over all N samples at every new sample: stack the "
              "rows, `lstsq` for mu, then `lstsq` for theta with the right-hand side "

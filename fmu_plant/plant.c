@@ -315,8 +315,14 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     }
     memcpy(s, buf, size);
     /* bytes a host hands back: the core checks them (finite, unit quaternion, m_p range) */
-    if (sr_plant_set_state(core, data, s[0], s + 1, s + 1 + nx, err, sizeof err) != 0 ||
-        bind_outputs(inst, g, core) != 0 || write_outputs(inst, g, core, data) != 0) {
+    err[0] = '\0';
+    if (sr_plant_set_state(core, data, s[0], s + 1, s + 1 + nx, err, sizeof err) == 0) {
+        if (bind_outputs(inst, g, core) != 0)          /* logged by bind_outputs */
+            snprintf(err, sizeof err, "the state does not fit this FMU's variables");
+        else if (write_outputs(inst, g, core, data) != 0)
+            snprintf(err, sizeof err, "the state's outputs are not finite");
+    }
+    if (err[0]) {
         sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: %s", err);
         free(core);
         free(data);

@@ -171,3 +171,17 @@ def test_the_pythonfmu_sensors_fmu_runs_the_same_core(fmu, tmp_path):
         ya, yb = (list(i.values(outs).values()) for i in (a, b))
         assert ya == yb, k
         assert a.step(k * DT, DT) == OK and b.step(k * DT, DT) == OK
+
+
+def test_in_initialisation_mode_outputs_follow_the_inputs(fmu):
+    """A master that settles initial values in initialisation mode reads the measurement of
+    the inputs set so far (noise.scale = 0: the inputs themselves), not of earlier ones."""
+    s = Inst(fmu, "init-feedthrough")
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    s.set("noise.scale", 0.0)
+    for value in (1.0, 2.0):
+        s.set("true.base.r[1]", value)
+        assert s.values(["base.r[1]"])["base.r[1]"] == value
+    s.fmu.exitInitializationMode()
+    assert s.values(["base.r[1]"])["base.r[1]"] == 2.0

@@ -40,7 +40,8 @@ struct sr_instance {
     sr_var *vars;                    /* by value reference */
     double *real;                    /* values by value reference (Real variables) */
     int *integer;                    /* values by value reference (Integer variables) */
-    int preview_dirty;               /* a parameter changed in initialisation mode */
+    int preview_dirty;               /* a parameter (feedthrough: or an input) changed in
+                                        initialisation mode */
     int outputs_dirty;               /* feedthrough: inputs, state or time changed since the
                                         outputs were computed (stepping mode) */
     void *model;
@@ -553,7 +554,9 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     }
     for (size_t i = 0; i < nvr; ++i) {
         inst->real[vr[i]] = value[i];
-        if (inst->vars[vr[i]].causality == SR_PARAMETER) inst->preview_dirty = 1;
+        if (inst->vars[vr[i]].causality == SR_PARAMETER
+            || (SR_MODEL_FEEDTHROUGH && inst->vars[vr[i]].causality == SR_INPUT))
+            inst->preview_dirty = 1;
         inst->outputs_dirty = 1;
     }
     return fmi2OK;
@@ -572,7 +575,9 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     }
     for (size_t i = 0; i < nvr; ++i) {
         inst->integer[vr[i]] = value[i];
-        if (inst->vars[vr[i]].causality == SR_PARAMETER) inst->preview_dirty = 1;
+        if (inst->vars[vr[i]].causality == SR_PARAMETER
+            || (SR_MODEL_FEEDTHROUGH && inst->vars[vr[i]].causality == SR_INPUT))
+            inst->preview_dirty = 1;
         inst->outputs_dirty = 1;
     }
     return fmi2OK;

@@ -1,5 +1,5 @@
-/* Rigid-body dynamics of the free-floating robot: a port of spacerobot/plant/rigid_body.py
- * (aba, terms) with the same order of operations, so that the C plant reproduces the Numba one
+/* Rigid-body dynamics of the free-floating robot: a port of the former spacerobot/plant/rigid_body.py
+ * (aba, terms) with the same order of operations, so that the C plant reproduced the former Numba one
  * to rounding. Conventions in dynamics.h.
  *
  * Source of the equations: R. Featherstone, Rigid Body Dynamics Algorithms (RBDA), Springer

@@ -1,4 +1,4 @@
-/* Rigid-body dynamics of the free-floating robot (port of spacerobot/plant/rigid_body.py):
+/* Rigid-body dynamics of the free-floating robot (port of the former spacerobot/plant/rigid_body.py):
  * forward dynamics (articulated-body algorithm), joint-space inertia (composite-rigid-body
  * algorithm), non-linear effects (recursive Newton-Euler) and the system momentum, for the
  * robot of an sr_robot record (any serial chain of 1..SR_MAX_JOINTS revolute joints on a free
@@ -18,7 +18,7 @@
  *    v_l = A^T v_S is the velocity of the base origin S in base axes, omega_B the base's angular
  *    velocity in base axes. The base's generalised force is [A^T F; A^T M_S] (planar: its
  *    x, y and z rows), F the total thrust applied at S and M_S its moment about S, both
- *    inertial (spacerobot/plant/kernels.py). The acceleration ddq = dv/dt is the time
+ *    inertial (the former spacerobot/plant/kernels.py). The acceleration ddq = dv/dt is the time
  *    derivative of these components (Pinocchio's spatial acceleration in the base frame:
  *    dv_l/dt = A^T a_S - omega_B x v_l), not the classical acceleration.
  *

@@ -1,6 +1,6 @@
-/* The identification equations of one sample: a port of spacerobot/estimator/kernels.py
+/* The identification equations of one sample: a port of tests/oracles/estimator/kernels.py (formerly the library's)
  * (equations, D_of_mu, rotation_error, sample_check) with the same order of operations, so
- * that the C estimator reproduces the Numba one to rounding; and the thrust's consider
+ * that the C estimator reproduced the former Numba one to rounding; and the thrust's consider
  * sensitivities and integrals (spacerobot/estimator/consider.py).
  *
  * Arm kinematics, revolute joint i with parent frame p (all vectors inertial):

@@ -1,4 +1,4 @@
-/* The identification equations of one sample (port of spacerobot/estimator/kernels.py).
+/* The identification equations of one sample (port of tests/oracles/estimator/kernels.py (formerly the library's)).
  *
  * One sample gives, for the base (body 1) and the target held at the end-effector frame E
  * (body n), three rows of

@@ -5,7 +5,7 @@
  * inflation and, with signal_sd, the errors-in-variables compensation (eiv.py). Also the
  * pieces the joint solver (est_joint.c) shares: RLS step, Gram sums, tracker.
  *
- * A port of spacerobot/estimator/kernels.py (rls_update, modified_rls_update),
+ * A port of tests/oracles/estimator/kernels.py (formerly the library's) (rls_update, modified_rls_update),
  * report_kernels.py (paper_step and what it calls), solvers.py and tracking.py, written once:
  * the Python package has a layered and a fused version of the same mathematics; here there is
  * one step path. The operations follow the Python (fused) order: the estimates and standard

@@ -1,6 +1,6 @@
 /* Small dense linear algebra of the native core: the one module every other one uses.
  *
- * A port of the written-out (no LAPACK/BLAS) kernels of spacerobot/estimator/report_kernels.py
+ * A port of the written-out (no LAPACK/BLAS) kernels of tests/oracles/estimator/report_kernels.py (formerly the library's)
  * and kernels.py, with the same algorithms and, where practical, the same operation order, so
  * the C estimator matches the Python one to round-off:
  *   - sr_eigh: Householder tridiagonalisation + implicit QL (EISPACK tred2 / tql2, as JAMA);

@@ -1,4 +1,4 @@
-/* The plant (see plant.h): a port of spacerobot/plant/kernels.py and simulator.py's Plant.
+/* The plant (see plant.h): a port of the former spacerobot/plant/kernels.py and simulator.py's Plant.
  *
  * One step path: sr_plant_advance -> step() per internal step: the rigid-body terms at the
  * step's start feed control() (zero-order hold; its inverse dynamics give the first stage's
@@ -1517,9 +1517,10 @@ SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, 
         rp[0] = rp[1] = rp[2] = 0.0;
         rp[3] = model->ex_ramp;
     }
-    if (!sr_finite_all(rp, 4) || !(rp[3] > 0.0)) {
-        msg3(err, errlen, "excitation ramp state must be 4 finite numbers [s0, u, t0, T > 0]",
-             NULL, NULL);
+    if (!sr_finite_all(rp, 4) || !(rp[3] > 0.0) || !(rp[0] >= 0.0 && rp[0] <= 1.0)
+        || !(rp[1] >= 0.0 && rp[1] <= 1.0)) {
+        msg3(err, errlen, "excitation ramp state must be 4 finite numbers [s0, u, t0, T > 0] "
+             "with the levels s0, u in [0, 1]", NULL, NULL);
         return SR_PLANT_EARG;
     }
     if (!sr_finite_all(x, model->nx)) {

@@ -1,7 +1,7 @@
 /* The plant: the free-floating space robot after capture, integrated by classic RK4 at the
  * internal step h, with the paper's controllers held over each internal step (zero-order hold)
- * (Zhang, Yue, Yuan, IEEE Access 2020; port of spacerobot/plant/simulator.py Plant and
- * spacerobot/plant/kernels.py):
+ * (Zhang, Yue, Yuan, IEEE Access 2020; port of the former spacerobot/plant/simulator.py Plant and
+ * the former spacerobot/plant/kernels.py):
  *
  *   - thrusters: the bounded momentum laws, eq. 41 on the linear momentum P and eq. 40 on the
  *     angular momentum about the system centre of mass L_c, per inertial axis;
@@ -296,7 +296,7 @@ SR_API int sr_plant_get_state(const sr_plant_model *model, const sr_plant_data *
 
 /** Set the state (Plant.set_state): t finite, x (nx) finite with a unit quaternion (planar: a
  *  unit (cos, sin) pair) within 1e-6 and 0 <= m_p <= m0 (1 + 1e-12), ramp (4) finite with
- *  T > 0 (NULL: [0, 0, 0, excitation.ramp]). Returns 0, or SR_PLANT_EARG (data unchanged)
+ *  T > 0 and the levels s0, u in [0, 1] (NULL: [0, 0, 0, excitation.ramp]). Returns 0, or SR_PLANT_EARG (data unchanged)
  *  with a message in err (errlen bytes; err may be NULL). */
 SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, double t,
                               const double *x, const double *ramp, char *err, size_t errlen);

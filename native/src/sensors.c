@@ -12,8 +12,9 @@ static const char *const PARAMETER_NAMES[SR_NOISE_COUNT] = {
     "noise.thrust.scale", "noise.thrust.misalign"};
 
 /* Largest magnitude in effect (noise.<name> times noise.scale) of each parameter, so that a
- * finite true sample always gives a finite measurement: angles' errors up to pi [rad], the
- * thrust scale factor's up to 10 (1000 %), every other error up to 1e6 (SI units). */
+ * true sample within the physical range (|x| <= 1e15, SI) always gives a finite measurement:
+ * angles' errors up to pi [rad], the thrust scale factor's up to 10 (1000 %), every other error
+ * up to 1e6 (SI units). */
 #define ANGLE_LIMIT 3.141592653589793
 #define SI_LIMIT 1e6
 static const double PARAMETER_LIMITS[SR_NOISE_COUNT] = {

@@ -110,7 +110,8 @@ SR_API const char *sr_sensors_parameter_name(int i);
  *  a NUL-terminated message naming the FMU parameter in msg (msg_size bytes; msg may be
  *  NULL) for: n outside 1..SR_MAX_JOINTS, a magnitude or noise.scale not finite and >= 0, a
  *  magnitude times noise.scale above its limit (angles pi rad, the thrust scale factor 10,
- *  every other 1e6 in SI units: a finite sample then always gives a finite measurement), an
+ *  every other 1e6 in SI units: a sample within the physical range, |x| <= 1e15, then
+ *  always gives a finite measurement), an
  *  encoder step times noise.scale in (0, 1e-9) rad, seed < 0, noise.delay outside 0..SR_SENSORS_MAX_DELAY,
  *  noise.imu not 0 or 1, dt not finite and > 0, a NULL model or noise. */
 SR_API int sr_sensors_init(sr_sensors_model *model, int n, const double *noise, double scale,

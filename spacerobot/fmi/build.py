@@ -3,8 +3,9 @@
 Each FMU bundles the script from ``fmu_plant/`` or ``fmu_estimator/`` plus a copy of the parts
 of this library it needs, renamed to a package unique to that FMU (``_spacerobot_plant``,
 ``_spacerobot_estimator``) so that both can run in one Python process. The estimator bundle
-has no plant code and no Pinocchio. A bundle with ``core`` (the ctypes binding of the native
-core) carries the compiled library itself (``core/lib/libspacerobot.*``) and loads only that.
+has no plant package and no truth. A bundle with ``core`` (the ctypes binding of the native
+core) carries the compiled library itself (``core/lib/libspacerobot.*``, the whole core) and
+loads only that.
 The scenario (robot description and defaults) goes into ``resources/spacerobot_config.json``.
 
 pythonfmu's Linux binary is then replaced by the project's front library
