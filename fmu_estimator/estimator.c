@@ -114,6 +114,13 @@ static void drop_core(estimator_glue *g) {
     g->data = NULL;
 }
 
+/* the instance takes a new core (model and data), dropping the one it had */
+static void adopt_core(estimator_glue *g, sr_estimator_model *core, void *data) {
+    drop_core(g);
+    g->core = core;
+    g->data = data;
+}
+
 void sr_model_free(void *model) {
     if (!model) return;
     drop_core(model);
@@ -123,10 +130,7 @@ void sr_model_free(void *model) {
 void sr_model_reset(void *model) { drop_core(model); }
 
 /* ---- parameters -> options ---------------------------------------------------------------- */
-static double real_of(sr_instance *inst, const char *key) {
-    int vr = sr_key_vr(inst, key, 0);
-    return vr < 0 ? NAN : sr_reals(inst)[vr];
-}
+static double real_of(sr_instance *inst, const char *key) { return sr_key_real(inst, key, 0); }
 
 static int int_of(sr_instance *inst, const char *key) {
     int vr = sr_key_vr(inst, key, 0);
@@ -220,9 +224,7 @@ int sr_model_initialize(void *model, sr_instance *inst) {
         sr_log(inst, SR_LOG_ERROR, "invalid estimator parameters: %s", err);
         return 1;
     }
-    drop_core(g);
-    g->core = core;
-    g->data = data;
+    adopt_core(g, core, data);
     write_outputs(inst, g, core, data);
     return 0;
 }
@@ -299,9 +301,7 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
         free(data);
         return 1;
     }
-    drop_core(g);
-    g->core = core;
-    g->data = data;
+    adopt_core(g, core, data);
     return 0;
 }
 

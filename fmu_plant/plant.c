@@ -100,6 +100,13 @@ static void drop_core(plant_glue *g) {
     g->data = NULL;
 }
 
+/* the instance takes a new core (model and data), dropping the one it had */
+static void adopt_core(plant_glue *g, sr_plant_model *core, sr_plant_data *data) {
+    drop_core(g);
+    g->core = core;
+    g->data = data;
+}
+
 void sr_model_free(void *model) {
     if (!model) return;
     drop_core(model);
@@ -109,10 +116,7 @@ void sr_model_free(void *model) {
 void sr_model_reset(void *model) { drop_core(model); }
 
 /* ---- parameters -> core ------------------------------------------------------------------ */
-static double real_of(sr_instance *inst, const char *key) {
-    int vr = sr_key_vr(inst, key, 1);
-    return vr < 0 ? NAN : sr_reals(inst)[vr];
-}
+static double real_of(sr_instance *inst, const char *key) { return sr_key_real(inst, key, 1); }
 
 /* the body held in parameters <prefix>.m, .b.0-2, .I.0-5 (Ixx Iyy Izz Ixy Ixz Iyz) */
 static void body_of(sr_instance *inst, const char *prefix, sr_body *b) {
@@ -184,9 +188,7 @@ static int build_core(sr_instance *inst, plant_glue *g, sr_plant_model **core,
 static int write_outputs(sr_instance *inst, plant_glue *g, const sr_plant_model *core,
                          sr_plant_data *data) {
     double *x = sr_reals(inst);
-    int status = sr_plant_outputs(core, data, g->y);
-    for (int i = 0; i < g->n_out && status == 0; ++i)   /* every output finite, or none set */
-        if (!isfinite(g->y[g->out_at[i]])) status = SR_PLANT_ENONFINITE;
+    int status = sr_plant_outputs(core, data, g->y);   /* non-finite outputs: an error */
     if (status == 0)
         for (int i = 0; i < g->n_out; ++i) x[g->out_vr[i]] = g->y[g->out_at[i]];
     return status;
@@ -210,9 +212,7 @@ int sr_model_initialize(void *model, sr_instance *inst) {
         free(data);
         return 1;
     }
-    drop_core(g);
-    g->core = core;
-    g->data = data;
+    adopt_core(g, core, data);
     return 0;
 }
 
@@ -328,8 +328,6 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
         free(data);
         return 1;
     }
-    drop_core(g);
-    g->core = core;
-    g->data = data;
+    adopt_core(g, core, data);
     return 0;
 }

@@ -387,3 +387,35 @@ def hex_bits(x: float) -> str:
     """The IEEE-754 bits of ``x`` as the host's input files take them (exact, locale-free)."""
     import struct
     return "0x%016x" % struct.unpack("<Q", struct.pack("<d", float(x)))[0]
+
+
+# ---- what the tests share ------------------------------------------------------------------------
+def work_dir(tmp_path_factory) -> Path:
+    """The session's folder for the native hosts' builds, FMUs and Wine prefix (one for every
+    test file, so that they share the builds)."""
+    w = tmp_path_factory.getbasetemp() / "native_hosts"
+    w.mkdir(exist_ok=True)
+    return w
+
+
+def host_binaries(work: Path, kinds, sanitized: bool = True) -> Dict[str, Path]:
+    """:func:`fmu_binaries` of ``kinds``, the Wine prefix started first where Wine and mingw are
+    installed (its creation overlaps the builds)."""
+    if wine() and mingw():
+        wine_prefix(work)
+    return fmu_binaries(work, kinds, sanitized=sanitized)
+
+
+def parse_csv(stdout: str):
+    """A host's CSV output as a 2-D float array."""
+    import numpy as np
+    return np.array([[float(x) for x in line.split(",")] for line in stdout.strip().splitlines()])
+
+
+def worst_relative(a, b) -> float:
+    """Largest |a - b| / |b| (0 where equal; inf where only b is 0)."""
+    import numpy as np
+    assert a.shape == b.shape, (a.shape, b.shape)
+    diff = np.abs(a - b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return float(np.max(np.where(diff == 0, 0.0, diff / np.abs(b))))

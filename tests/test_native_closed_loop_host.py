@@ -44,16 +44,12 @@ PLANT_OUT = ["ident.excite", "excite.level"]
 
 @pytest.fixture(scope="module")
 def work(tmp_path_factory):
-    w = tmp_path_factory.getbasetemp() / "native_hosts"
-    w.mkdir(exist_ok=True)
-    return w
+    return nh.work_dir(tmp_path_factory)
 
 
 @pytest.fixture(scope="module")
 def libs(work):
-    if nh.wine() and nh.mingw():
-        nh.wine_prefix(work)                    # its creation overlaps the builds
-    return nh.fmu_binaries(work, ("plant", "estimator"), sanitized=False)
+    return nh.host_binaries(work, ("plant", "estimator"), sanitized=False)
 
 
 class Loop:
@@ -105,20 +101,11 @@ def host(work, libs):
     return nh.compile_host(nh.HOST_SOURCE, work)
 
 
-def parse(stdout: str) -> np.ndarray:
-    return np.array([[float(x) for x in line.split(",")] for line in stdout.strip().splitlines()])
 
-
-def worst_relative(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest |a - b| / |b| (0 where equal; inf where only b is 0)."""
-    assert a.shape == b.shape, (a.shape, b.shape)
-    diff = np.abs(a - b)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return float(np.max(np.where(diff == 0, 0.0, diff / np.abs(b))))
 
 
 def assert_close(c_rows: np.ndarray, ref: np.ndarray, columns: list, what: str) -> float:
-    err = worst_relative(c_rows, ref)
+    err = nh.worst_relative(c_rows, ref)
     if err > RTOL:
         with np.errstate(divide="ignore", invalid="ignore"):
             rel = np.where(c_rows == ref, 0.0, np.abs(c_rows - ref) / np.abs(ref))
@@ -143,7 +130,7 @@ def linux_run(loop: Loop, host, feedback: bool = True) -> np.ndarray:
         if feedback:
             print(f"closed loop in the C host, {ROBOT}, {STEPS * DT:g} s: wall time {wall:.3f} s "
                   f"(process); {r.stderr.strip().splitlines()[-1]}")
-        _RUNS[feedback] = parse(r.stdout)
+        _RUNS[feedback] = nh.parse_csv(r.stdout)
     return _RUNS[feedback]
 
 
@@ -208,7 +195,7 @@ def test_closed_loop_win64_under_wine_equals_linux64(work, loop, host):
                                         e.wine_uri)], env=env)
     elapsed = time.perf_counter() - t
     assert r.returncode == 0, r.stderr[-3000:]
-    w_rows, l_rows = parse(r.stdout), linux_run(loop, host)
+    w_rows, l_rows = nh.parse_csv(r.stdout), linux_run(loop, host)
     assert w_rows.shape == l_rows.shape, (w_rows.shape, l_rows.shape)
     err = assert_close(w_rows, l_rows, loop.columns(), "win64 vs linux64")
     print(f"closed loop win64 under Wine ({elapsed:.2f} s; {r.stderr.strip().splitlines()[-1]}) "
@@ -232,6 +219,6 @@ def test_closed_loop_sanitized_runs_clean(work, loop, host):
     reports = nh.sanitizer_reports(r.stderr)
     assert not reports, "\n".join(reports[:20]) + "\n" + r.stderr[-3000:]
     assert r.returncode == 0, r.stderr[-3000:]
-    err = assert_close(parse(r.stdout), linux_run(loop, host), loop.columns(), "sanitized")
+    err = assert_close(nh.parse_csv(r.stdout), linux_run(loop, host), loop.columns(), "sanitized")
     print(f"closed loop ASan/UBSan clean in {time.perf_counter() - t:.1f} s; vs linux64 worst "
           f"relative difference {err:.3g}")

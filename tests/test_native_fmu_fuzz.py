@@ -77,16 +77,12 @@ SWEEP = {"estimator": (12, {"method": 2, "accel_source": 2, "ident.diff_half_win
 
 @pytest.fixture(scope="module")
 def work(tmp_path_factory):
-    w = tmp_path_factory.getbasetemp() / "native_hosts"
-    w.mkdir(exist_ok=True)
-    return w
+    return nh.work_dir(tmp_path_factory)
 
 
 @pytest.fixture(scope="module")
 def libs(work):
-    if nh.wine() and nh.mingw():
-        nh.wine_prefix(work)                    # its creation overlaps the builds
-    return nh.fmu_binaries(work, KINDS)
+    return nh.host_binaries(work, KINDS)
 
 
 @pytest.fixture(scope="module", params=KINDS)

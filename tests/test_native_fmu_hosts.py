@@ -57,15 +57,12 @@ RTOL = 1e-12
 
 @pytest.fixture(scope="module")
 def work(tmp_path_factory):
-    return tmp_path_factory.getbasetemp() / "native_hosts"
+    return nh.work_dir(tmp_path_factory)
 
 
 @pytest.fixture(scope="module")
 def libs(work):
-    work.mkdir(exist_ok=True)
-    if nh.wine() and nh.mingw():
-        nh.wine_prefix(work)                    # its creation overlaps the builds
-    return nh.fmu_binaries(work, KINDS)
+    return nh.host_binaries(work, KINDS)
 
 
 def record(robot: str, target, fmu: nh.Extracted):
@@ -157,17 +154,7 @@ def case(request, work, libs) -> Case:
     return _CASES[request.param]
 
 
-def parse(stdout: str) -> np.ndarray:
-    return np.array([[float(x) for x in line.split(",")] for line in stdout.strip().splitlines()])
 
-
-def worst_relative(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest |a - b| / |b| (0 where both are 0; inf where only b is 0)."""
-    assert a.shape == b.shape, (a.shape, b.shape)
-    diff = np.abs(a - b)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.where(diff == 0, 0.0, diff / np.abs(b))
-    return float(np.max(rel))
 
 
 def assert_same_run(c_rows: np.ndarray, ref: np.ndarray, case: "Case", what: str) -> float:
@@ -179,7 +166,7 @@ def assert_same_run(c_rows: np.ndarray, ref: np.ndarray, case: "Case", what: str
     names = case.fmu.names("Real", "output")
     n_real = c_rows.shape[1] - n_int
     a, b = c_rows[:, 1:n_real], ref[:, 1:n_real]
-    err = worst_relative(a, b)
+    err = nh.worst_relative(a, b)
     if err > RTOL:
         with np.errstate(divide="ignore", invalid="ignore"):
             rel = np.where(a == b, 0.0, np.abs(a - b) / np.abs(b))
@@ -206,7 +193,7 @@ def linux_run(case: Case, host) -> np.ndarray:
         assert f"state round trip after step {STATE_STEP}" in r.stderr and "identical" in r.stderr
         print(f"{case.tag}: linux64 host {time.perf_counter() - t:.2f} s; "
               f"{r.stderr.strip().splitlines()[-1]}")
-        _LINUX_RUNS[case.tag] = parse(r.stdout)
+        _LINUX_RUNS[case.tag] = nh.parse_csv(r.stdout)
     return _LINUX_RUNS[case.tag]
 
 
@@ -305,7 +292,7 @@ def test_win64_dll_under_wine_equals_linux64(case, work, host):
     elapsed = time.perf_counter() - t
     assert r.returncode == 0, r.stderr[-3000:]
     assert f"state round trip after step {STATE_STEP}" in r.stderr and "identical" in r.stderr
-    w_rows = parse(r.stdout)
+    w_rows = nh.parse_csv(r.stdout)
     err = assert_same_run(w_rows, linux_run(case, host), case, "win64 vs linux64")
     print(f"{case.tag}: win64 under Wine ({elapsed:.2f} s) vs linux64: worst relative "
           f"difference {err:.3g}; bit-identical rows: "
@@ -340,7 +327,7 @@ def test_sanitized_binary_runs_clean(case, work, libs, host):
     assert not nh.sanitizer_reports(r.stderr), "\n".join(nh.sanitizer_reports(r.stderr)[:20])
     assert r.returncode == 0, r.stderr[-3000:]
     assert "identical" in r.stderr and "5 instantiate/free cycles done" in r.stderr
-    assert_same_run(parse(r.stdout), memory_reference(case, host), case, "sanitized")
+    assert_same_run(nh.parse_csv(r.stdout), memory_reference(case, host), case, "sanitized")
     print(f"{case.tag}: ASan/UBSan clean in {time.perf_counter() - t:.1f} s")
 
 
@@ -353,5 +340,5 @@ def test_valgrind_memcheck_clean(case, host):
     assert r.returncode == 0, r.stderr[-4000:]
     assert not [line for line in r.stderr.splitlines() if line.startswith("==")], r.stderr[-4000:]
     assert "identical" in r.stderr and "5 instantiate/free cycles done" in r.stderr
-    assert_same_run(parse(r.stdout), memory_reference(case, host), case, "valgrind")
+    assert_same_run(nh.parse_csv(r.stdout), memory_reference(case, host), case, "valgrind")
     print(f"{case.tag}: valgrind memcheck clean in {time.perf_counter() - t:.1f} s")

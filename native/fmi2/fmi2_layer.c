@@ -295,6 +295,11 @@ int sr_key_vr(sr_instance *inst, const char *key, int required) {
     return -1;
 }
 
+double sr_key_real(sr_instance *inst, const char *key, int required) {
+    int vr = sr_key_vr(inst, key, required);
+    return vr < 0 ? NAN : inst->real[vr];
+}
+
 double *sr_reals(sr_instance *inst) { return inst->real; }
 int *sr_integers(sr_instance *inst) { return inst->integer; }
 const sr_var *sr_variable(const sr_instance *inst, int vr) {

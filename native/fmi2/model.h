@@ -37,6 +37,9 @@ typedef struct sr_instance sr_instance;
 /* ---- what the layer offers the glue ---------------------------------------------------------- */
 /* Value reference of the variable with core key `key`, or -1 (logged as an error when `required`). */
 int sr_key_vr(sr_instance *inst, const char *key, int required);
+/* The value of the Real variable with core key `key`, NaN if there is none (logged as an
+   error when `required`). */
+double sr_key_real(sr_instance *inst, const char *key, int required);
 /* Values by value reference: Real variables in real[], Integer variables in integer[]. */
 double *sr_reals(sr_instance *inst);
 int *sr_integers(sr_instance *inst);

@@ -1424,7 +1424,7 @@ SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, do
         y[o + i] = x[om + i];
     o += 7;
     base_now(md, x[om], y + o);
-    return SR_PLANT_OK;
+    return sr_finite_all(y, md->ny) ? SR_PLANT_OK : SR_PLANT_ENONFINITE;
 }
 
 SR_API int sr_plant_controls(const sr_plant_model *model, sr_plant_data *data, double *F,

@@ -267,7 +267,8 @@ SR_API int sr_plant_advance(const sr_plant_model *model, sr_plant_data *data, do
 
 /** Every output at the current state, y (ny; the layout above), computed with the controls
  *  held from this instant over a step of h. Only the work space of data changes. Returns 0,
- *  SR_PLANT_EARG or SR_PLANT_ESINGULAR_* (y then not to be used). */
+ *  SR_PLANT_EARG, SR_PLANT_ESINGULAR_* or SR_PLANT_ENONFINITE (an output is not finite; y
+ *  then not to be used). */
 SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, double *y);
 
 /** The controls for the step starting at the current state (Plant.controls): F (3) [N] at S and
