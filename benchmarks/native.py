@@ -19,7 +19,9 @@ REPEATS passes, CPU time per sample:
   steps of 0.1 s, started from an empty environment: the process's wall time and the stepping
   loop's own time (no Python in the process).
 
-Nothing here asserts a timing. Run: ``python benchmarks/native.py [--quick] [--out PATH]``.
+Nothing here asserts a timing. Run: ``python benchmarks/native.py [--quick] [--out PATH]``;
+``--dostep-only`` measures the native FMU's ``doStep`` alone (the figure of issue #26) and
+prints it without writing NATIVE.md (``--robots spatial`` for one robot).
 """
 from __future__ import annotations
 
@@ -110,66 +112,126 @@ def cold_run(fmu: Path, seconds: float) -> float:
     return float(r.stdout.strip().splitlines()[-1])
 
 
-def c_host_closed_loop(tmp: Path, robot: str = "spatial", seconds: float = 60.0,
-                       runs: int = 5):
-    """Wall time [s] of the closed loop in the C host (``tests/c_host/fmu_host.c``), per run:
-    ``(process wall times, stepping-loop times)``, or None where no C compiler is found."""
+def _c_host(tmp: Path):
+    """``tests/c_host/fmu_host.c`` compiled with the system C compiler, or None."""
     import shutil
-    import zipfile
-
-    from spacerobot.system.ssd import ESTIMATOR, PLANT, system_connections
-
     cc = next((shutil.which(c) for c in (os.environ.get("CC", ""), "cc", "gcc", "clang")
                if c and shutil.which(c)), None)
     if cc is None:
         return None
-    src = ROOT / "tests" / "c_host" / "fmu_host.c"
     host = tmp / "fmu_host"
-    subprocess.run([cc, "-std=c99", "-O2", "-o", str(host), str(src), "-ldl", "-lm"], check=True)
+    if not host.exists():
+        subprocess.run([cc, "-std=c99", "-O2", "-o", str(host),
+                        str(ROOT / "tests" / "c_host" / "fmu_host.c"), "-ldl", "-lm"], check=True)
+    return host
+
+
+def _extracted(kind: str, sc, folder: Path) -> dict:
+    """The native FMU of ``kind`` built and extracted into ``folder``: its linux64 binary,
+    resource URI, GUID, value references by name, Real output value references."""
+    import zipfile
+    path = build_fmu(kind, sc, folder, backend="native")
+    d = folder / "x"
+    with zipfile.ZipFile(path) as z:
+        z.extractall(d)
+    table_ = (d / "resources" / "spacerobot_variables.txt").read_text().splitlines()
+    ident = next(line.split()[1] for line in table_ if line.startswith("model "))
+    return {"so": d / "binaries" / "linux64" / f"{ident}.so", "uri": (d / "resources").as_uri(),
+            "guid": next(line.split()[1] for line in table_ if line.startswith("guid ")),
+            "vr": {f[6]: f[0] for f in map(str.split, table_) if f and f[0].isdigit()},
+            "out": [f[0] for f in map(str.split, table_)
+                    if f and f[0].isdigit() and f[1] == "Real" and f[2] == "output"]}
+
+
+def _host_loop_time(args) -> tuple:
+    """(process wall time, the host's own stepping-loop time) [s] of one host run."""
+    t0 = time.perf_counter()
+    r = subprocess.run(args, capture_output=True, text=True, env={"PATH": "/usr/bin:/bin"},
+                       check=True)
+    return time.perf_counter() - t0, float(r.stderr.strip().splitlines()[-1].split()[-2])
+
+
+def c_host_closed_loop(tmp: Path, robot: str = "spatial", seconds: float = 60.0,
+                       runs: int = 5):
+    """Wall time [s] of the closed loop in the C host (``tests/c_host/fmu_host.c``), per run:
+    ``(process wall times, stepping-loop times)``, or None where no C compiler is found."""
+    from spacerobot.system.ssd import ESTIMATOR, PLANT, system_connections
+
+    host = _c_host(tmp)
+    if host is None:
+        return None
     sc = scenario(robot)
-    fmu = {}
-    for kind in (PLANT, ESTIMATOR):
-        path = build_fmu(kind, sc, tmp / f"loop_{kind}", backend="native")
-        d = tmp / f"loop_{kind}" / "x"
-        with zipfile.ZipFile(path) as z:
-            z.extractall(d)
-        table_ = (d / "resources" / "spacerobot_variables.txt").read_text().splitlines()
-        ident = next(line.split()[1] for line in table_ if line.startswith("model "))
-        fmu[kind] = {"so": d / "binaries" / "linux64" / f"{ident}.so",
-                     "uri": (d / "resources").as_uri(),
-                     "guid": next(line.split()[1] for line in table_ if line.startswith("guid ")),
-                     "vr": {f[6]: f[0] for f in map(str.split, table_) if f and f[0].isdigit()},
-                     "out": [f[0] for f in map(str.split, table_)
-                             if f and f[0].isdigit() and f[1] == "Real" and f[2] == "output"]}
-    p, e = fmu[PLANT], fmu[ESTIMATOR]
+    p, e = (_extracted(kind, sc, tmp / f"loop_{kind}") for kind in (PLANT, ESTIMATOR))
     conns = system_connections(robot)
     fwd = [f"{p['vr'][a]}:{e['vr'][b]}" for s, a, t, b in conns if (s, t) == (PLANT, ESTIMATOR)]
     back = [f"{e['vr'][a]}:{p['vr'][b]}" for s, a, t, b in conns if (s, t) == (ESTIMATOR, PLANT)]
     args = [str(host), "-e", str(e["so"]), "-g", e["guid"], "-r", e["uri"], "-w", ",".join(fwd),
             "-b", ",".join(back), "-o", ",".join(e["out"]), str(p["so"]), p["guid"], p["uri"],
             "0.1", str(int(round(seconds / 0.1))), p["vr"]["ident.excite"]]
-    walls, loops = [], []
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        r = subprocess.run(args, capture_output=True, text=True, env={"PATH": "/usr/bin:/bin"},
-                           check=True)
-        walls.append(time.perf_counter() - t0)
-        loops.append(float(r.stderr.strip().splitlines()[-1].split()[-2]))   # "... steps X s"
-    return walls, loops
+    walls, loops = zip(*(_host_loop_time(args) for _ in range(runs)))
+    return list(walls), list(loops)
+
+
+def c_host_estimator(tmp: Path, robot: str, names: list, rows: list, runs: int = 5):
+    """The estimator FMU alone in the C host, fed the recorded samples ``rows`` (its inputs
+    ``names``) as the host's input file: per step [us], the host's stepping-loop time over the
+    steps (fmi2SetReal of the inputs, fmi2DoStep, fmi2GetReal and printing of one output), per
+    run; None without a C compiler."""
+    host = _c_host(tmp)
+    if host is None:
+        return None
+    e = _extracted("estimator", scenario(robot), tmp / f"alone_{robot}")
+    inputs = tmp / f"inputs_{robot}.csv"
+    # the recording LAPS times over (later laps jump back to its start, as a new manoeuvre):
+    # one run's loop long enough that the process's one-off costs (first touches of the
+    # instance's memory, the output buffer) are not the per-step figure
+    steps = rows * LAPS
+    inputs.write_text(",".join(e["vr"][n] for n in names) + "\n"
+                      + "".join(",".join(repr(float(v)) for v in r) + "\n" for r in steps))
+    args = [str(host), "-i", str(inputs), str(e["so"]), e["guid"], e["uri"], "0.1",
+            str(len(steps)), e["vr"]["base.m"]]
+    return [_host_loop_time(args)[1] / len(steps) * 1e6 for _ in range(runs)]
+
+
+#: laps of the recording in the C host's estimator-alone run
+LAPS = 10
 
 
 def spread(xs) -> str:
     return f"{fmt(float(np.median(xs)))} ({fmt(min(xs))}-{fmt(max(xs))})"
 
 
+def dostep_only(robots, rounds: int, repeats: int, seconds: float) -> None:
+    """The native FMU's ``doStep`` alone, per robot: min, median and range over ``rounds``
+    rounds (each the best of ``repeats`` passes), printed."""
+    with tempfile.TemporaryDirectory(prefix="srnative_") as tmp:
+        for robot in robots:
+            sc = scenario(robot)
+            native = build_fmu("estimator", sc, Path(tmp) / robot / "native", backend="native")
+            outs = record_outputs(sc, seconds)
+            rows = input_rows(outs, started(native, "names").names("input"))
+            xs = [dostep_cost(native, rows, repeats) for _ in range(rounds)]
+            print(f"{robot}: native FMU doStep min {min(xs):.2f} us, median "
+                  f"{float(np.median(xs)):.2f} us, range {min(xs):.2f}-{max(xs):.2f} us "
+                  f"({rounds} rounds x best of {repeats} passes, {len(rows)} samples)",
+                  flush=True)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="short runs (smoke test)")
     ap.add_argument("--out", default=str(HERE / "NATIVE.md"))
+    ap.add_argument("--dostep-only", action="store_true",
+                    help="only the native FMU's doStep (printed; NATIVE.md not written)")
+    ap.add_argument("--robots", default="planar,spatial",
+                    help="with --dostep-only: comma-separated robots (default planar,spatial)")
     a = ap.parse_args(argv)
     rounds, repeats, seconds = (2, 1, 10.0) if a.quick else (ROUNDS, REPEATS, 60.0)
+    if a.dostep_only:
+        dostep_only([r for r in a.robots.split(",") if r], rounds, repeats, seconds)
+        return 0
     info = machine()
-    rows_out, cold = [], {}
+    rows_out, cold, host_step = [], {}, {}
     with tempfile.TemporaryDirectory(prefix="srnative_") as tmp:
         res = {}
         for robot in ("planar", "spatial"):
@@ -188,6 +250,7 @@ def main(argv=None) -> int:
                 r["core_p"].append(core_cost(lambda: Identifier(sc.robot, sc.guess), flats,
                                              repeats))
             cold[robot] = [cold_run(native, 60.0) for _ in range(3)]
+            host_step[robot] = c_host_estimator(Path(tmp), robot, names, rows)
             print(robot, {k: round(float(np.median(v)), 1) for k, v in r.items()}, flush=True)
             fr = [p / n for p, n in zip(r["fmu_p"], r["fmu_n"])]
             cr = [p / n for p, n in zip(r["core_p"], r["core_n"])]
@@ -197,6 +260,8 @@ def main(argv=None) -> int:
         loop = c_host_closed_loop(Path(tmp), seconds=seconds)
         if loop is not None:
             print("closed loop in the C host", [round(w, 3) for w in loop[0]], flush=True)
+    alone_rows = [(robot, "n/a (no C compiler)" if xs is None else spread(xs))
+                  for robot, xs in host_step.items()]
     loop_rows = [("closed loop in the C host, spatial, "
                   f"{seconds:g} s", *(("n/a (no C compiler)",) * 2 if loop is None else
                                      (spread([w * 1e3 for w in loop[0]]),
@@ -227,7 +292,14 @@ def main(argv=None) -> int:
             "`ident.excite`), steps of 0.1 s, started from an empty environment; median (range) "
             "of 5 runs. The process time includes loading and instantiating both FMUs; the "
             "stepping time is the host's own measurement of its loop.\n",
-            table(["run", "process wall time [ms]", "stepping [ms]"], loop_rows)]
+            table(["run", "process wall time [ms]", "stepping [ms]"], loop_rows),
+            f"\nThe estimator FMU alone in the same C host, fed the recorded samples above "
+            f"({LAPS} laps of them in one run) from the host's input file: the host's stepping-loop "
+            "time per step (fmi2SetReal of the "
+            "inputs, fmi2DoStep, fmi2GetReal and printing of one output: what a native importer "
+            "pays per communication step, without fmpy's Python per call), median (range) of 5 "
+            "runs.\n",
+            table(["robot", "estimator step in the C host [us]"], alone_rows)]
     Path(a.out).write_text("\n".join(text))
     print(f"wrote {a.out}")
     return 0

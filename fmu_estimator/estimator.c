@@ -17,6 +17,7 @@
 const char *const SR_MODEL_IDENTIFIER = "SpaceRobotEstimator";
 
 #define ROBOT_FILE "robot.txt"
+#define SCENARIO_FILE "scenario.txt"
 #define INPUT_LIMIT 1e15
 #define MAX_SAMPLE (24 + 3 * SR_MAX_JOINTS + 12)
 
@@ -37,6 +38,8 @@ typedef struct {
     int vr_est[2][10], vr_sd[2][10];       /* outputs: estimates and sd per body */
     int vr_samples, vr_rejected, vr_status, vr_res_lin, vr_res_ang, vr_exc_mu, vr_exc_theta;
     int vr_excite, vr_identified[2], vr_physical[2];
+    double sample_time;                    /* the scenario's [s]: the sensors' noise densities
+                                              per sample (ident.noise_profile) */
     sr_estimator_model *core;              /* NULL before initialisation */
     void *data;                            /* the core's state (sr_estimator_data_size bytes) */
     double sample[MAX_SAMPLE];
@@ -100,7 +103,8 @@ void *sr_model_new(sr_instance *inst, const char *resource_dir) {
         free(g);
         return NULL;
     }
-    if (bind(inst, g)) {
+    if (bind(inst, g) || sr_resource_double(inst, resource_dir, SCENARIO_FILE, "sample_time",
+                                            &g->sample_time)) {
         free(g);
         return NULL;
     }
@@ -138,7 +142,7 @@ static int int_of(sr_instance *inst, const char *key) {
 }
 
 /* options from the parameter values (the core checks them: sr_estimator_model_new) */
-static void options_of(sr_instance *inst, sr_estimator_options *o) {
+static void options_of(sr_instance *inst, double sample_time, sr_estimator_options *o) {
     static const char *const SIGNAL_SD[6] = {"signal_sd.a_S", "signal_sd.alpha_B", "signal_sd.qdd",
                                              "signal_sd.v_S", "signal_sd.omega_B", "signal_sd.qd"};
     char key[SR_VAR_KEY_MAX];
@@ -170,13 +174,20 @@ static void options_of(sr_instance *inst, sr_estimator_options *o) {
     o->sd_thrust_scale = real_of(inst, "sd_thrust.scale");
     o->sd_thrust_misalign = real_of(inst, "sd_thrust.misalign");
     o->accel_bias = int_of(inst, "accel_bias");
+    o->noise_profile = int_of(inst, "noise_profile");
+    o->noise_scale = real_of(inst, "noise.scale");
+    for (int i = 0; i < SR_NOISE_COUNT; ++i) {  /* the magnitudes the FMU has (the rest 0) */
+        const char *name = sr_noise_name(i);
+        o->noise[i] = sr_key_vr(inst, name, 0) < 0 ? 0.0 : real_of(inst, name);
+    }
+    o->noise_dt = sample_time;
 }
 
 /* build a core for the current parameters; 0 ok (err untouched), else err says why */
 static int build_core(sr_instance *inst, estimator_glue *g, sr_estimator_model **core, void **data,
                       char *err, size_t errlen) {
     sr_estimator_options o;
-    options_of(inst, &o);
+    options_of(inst, g->sample_time, &o);
     *core = sr_estimator_model_new(&g->robot, &o, err, errlen);
     if (!*core) return 1;
     *data = malloc(sr_estimator_data_size(*core));
@@ -282,11 +293,13 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     char err[512];
     /* the state's parameters are in place: rebuild the core from them, then take its block */
     if (build_core(inst, g, &core, &data, err, sizeof err)) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: the state's parameters are not valid: %s", err);
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: the state's parameters are not valid: %s", err);
         return 1;
     }
     if (size != sr_estimator_data_size(core)) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: the state's estimator block has %lu bytes, "
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: the state's estimator block has %lu bytes, "
                "%lu expected (a state of another robot or build?)", (unsigned long)size,
                (unsigned long)sr_estimator_data_size(core));   /* msvcrt knows no %zu */
         sr_estimator_model_free(core);
@@ -296,7 +309,8 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     memcpy(data, buf, size);
     /* bytes a host hands back: every count and index checked before any is used */
     if (sr_estimator_data_check(core, data, err, sizeof err) != 0) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: %s", err);
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: %s", err);
         sr_estimator_model_free(core);
         free(data);
         return 1;

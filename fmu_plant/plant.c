@@ -301,12 +301,14 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     int nx = 0;
     /* the state's parameters are in place: rebuild the core from them, then take the state */
     if (build_core(inst, g, &core, &data, err, sizeof err)) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: the state's parameters are not valid: %s", err);
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: the state's parameters are not valid: %s", err);
         return 1;
     }
     sr_plant_dims(core, NULL, NULL, &nx, NULL, NULL);
     if (size != state_doubles(core) * sizeof(double)) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: the state's plant block has %lu bytes, %lu "
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: the state's plant block has %lu bytes, %lu "
                "expected (a state of another robot or build?)", (unsigned long)size,
                (unsigned long)(state_doubles(core) * sizeof(double)));
         free(core);
@@ -323,7 +325,8 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
             snprintf(err, sizeof err, "the state's outputs are not finite");
     }
     if (err[0]) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: %s", err);
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: %s", err);
         free(core);
         free(data);
         return 1;

@@ -177,23 +177,27 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     double probe[SR_SENSORS_ROW] = {0.0};
     /* the state's parameters are in place: rebuild the model from them, then take the block */
     if (model_of(inst, g, &m, msg, sizeof msg) != 0) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: the state's parameters are not valid: %s", msg);
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: the state's parameters are not valid: %s", msg);
         return 1;
     }
     if (size != sizeof(sr_sensors_state)) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: the state's sensors block has %lu bytes, %lu "
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: the state's sensors block has %lu bytes, %lu "
                "expected (a state of another build?)", (unsigned long)size,
                (unsigned long)sizeof(sr_sensors_state));
         return 1;
     }
     if ((s = malloc(sizeof *s)) == NULL) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: out of memory");
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: out of memory");
         return 1;
     }
     memcpy(s, buf, size);
     /* bytes a host hands back: the delay ring's indices checked before any is used */
     if (sr_sensors_measure(&m, s, probe, probe) != 0) {
-        sr_log(inst, SR_LOG_ERROR, "fmi2SetFMUstate: the sensors' state is inconsistent "
+        sr_log(inst, SR_LOG_ERROR,
+               "restoring the FMU state: the sensors' state is inconsistent "
                "(delay ring indices out of range)");
         free(s);
         return 1;

@@ -476,7 +476,28 @@ def noise_model_vars() -> List[Var]:
               f"bias that noisy accelerations cause (errors in variables). 0 = no noise",
               0.0, ("signal_sd", key))
           for key, name, unit, source in SIGNAL_NOISE_PARAMETERS]
+    v += [Var("ident.noise_profile", "parameter", "fixed", "Integer", None,
+              "One switch for real sensors: 0 = none (the options as set; by default the "
+              "paper's equations), 1 = sensors: the noise model of the sensors described by "
+              "this FMU's noise.* parameters (the sensors FMU's names, units and realistic "
+              "defaults) sets every ident.* noise option left at its default: the thrust "
+              "errors' consider term, the accelerations' noise compensated, the momentum "
+              "window or the accelerometer bias or the 9-sample derivative in the momentum "
+              "equations (docs/identification.md, 'One switch')", 0, ("noise_profile",))]
+    for name in ("noise.scale",) + PROFILE_MAGNITUDES:
+        unit, default, doc = NOISE_PARAMETERS[name]
+        v.append(Var(name, "parameter", "fixed", "Real", unit,
+                     "With ident.noise_profile = 1: the sensors' " + doc[0].lower() + doc[1:]
+                     + " (as the sensors FMU's parameter of the same name)", default,
+                     ("noise", name[len("noise."):])))
     return v
+
+
+#: the magnitudes the estimator's noise profile reads (native/src/noise_profile.c): the
+#: estimator FMU's ``noise.*`` parameters besides ``noise.scale``
+PROFILE_MAGNITUDES = ("noise.gyro.arw", "noise.nav.v", "noise.accel.vrw", "noise.alpha",
+                      "noise.enc.qd", "noise.enc.qdd", "noise.thrust.scale",
+                      "noise.thrust.misalign")
 
 
 #: the estimator's accelerations' noise parameters (errors in variables): (measurement key,
@@ -765,6 +786,10 @@ NOISE_PARAMETERS: Dict[str, Tuple[str, float, str]] = {
     "noise.thrust.misalign": ("rad", 8.7e-3, "Thrust direction misalignment, standard "
                               "deviation per axis, drawn once per run (0.5 deg)"),
 }
+
+#: the sensors' error magnitudes in the native core's order (native/src/sensor_noise.h): the
+#: sensors FMU's ``noise.*`` parameters but ``noise.scale``
+SENSOR_MAGNITUDES: Tuple[str, ...] = tuple(n for n in NOISE_PARAMETERS if n != "noise.scale")
 
 #: Integer parameters of the sensors FMU: name -> (default, description)
 SENSOR_INTEGER_PARAMETERS: Dict[str, Tuple[int, str]] = {

@@ -637,6 +637,12 @@ DEPLETION_PROPELLANT = Propellant(m0=80.0, Isp=220.0, r=(0.3, 0.2, -0.2), R=0.27
 #: samples; the choice, and why the force-based method, in benchmarks/DEPLETION.md and
 #: docs/identification.md section 7)
 DEPLETION_ESTIMATOR = (("ident.excite_mode", 2), ("lambda", 0.98), ("ident.corr_lags", 50))
+#: the estimator settings of the ``realistic`` sets: the noise profile of the sensors
+#: (``ident.noise_profile`` = 1 with the sensors' realistic defaults, ``noise.scale`` as the
+#: sensors') and the equations the noise benchmark found most accurate under them (force
+#: method, accelerations differenced in the momentum equations; benchmarks/NOISE.md)
+REALISTIC_ESTIMATOR = (("ident.noise_profile", 1), ("noise.scale", 1.0), ("method", 2),
+                       ("accel_source", 2))
 
 
 #: The parameter sets of each robot's SSP (one ``.ssv`` each). The paper's scenarios keep the
@@ -655,7 +661,10 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
         "ideal": ParameterSet("medium", True, "medium target, excitation on request, ideal "
                                               "sensors", noise=0.0),
         "realistic": ParameterSet("medium", True, "medium target, excitation on request, "
-                                                  "realistic sensor noise", noise=1.0),
+                                                  "realistic sensor noise; the estimator's "
+                                                  "noise profile (force method, differenced "
+                                                  "accelerations)",
+                                  estimator=REALISTIC_ESTIMATOR, noise=1.0),
     },
     "spatial": {
         "paper": ParameterSet("default", False, "the paper's spatial scenario, no excitation"),
@@ -672,7 +681,9 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
                                                "excitation on request, ideal sensors", noise=0.0),
         "realistic": ParameterSet("default", True, "the paper's spatial robot and target, "
                                                    "excitation on request, realistic sensor "
-                                                   "noise", noise=1.0),
+                                                   "noise; the estimator's noise profile "
+                                                   "(force method, differenced accelerations)",
+                                  estimator=REALISTIC_ESTIMATOR, noise=1.0),
     },
 }
 

@@ -77,7 +77,12 @@ def test_recorded_run_replayed_gives_the_live_estimates(planar_systems, tmp_path
     run_ssp(planar_systems[system]["ssp"], parameter_set=pset, stop_time=3.0, csv_path=csv,
             overrides=overrides, progress=False)
     out = tmp_path / "est.csv"
-    sets = [a for k, v in model.items() for a in ("--set", f"{k}={v}")]
+    # the estimator as the live run had it: the set's bound settings (the realistic set's noise
+    # profile) under the overrides
+    from spacerobot.robots import PARAMETER_SETS
+    bound = {k: v for k, v in PARAMETER_SETS["planar"][pset].estimator
+             if k not in ("method", "accel_source")}
+    sets = [a for k, v in {**bound, **model}.items() for a in ("--set", f"{k}={v}")]
     assert main(["identify", str(csv), "--robot", "planar", "--method", method, "--accel",
                  accel, "--out", str(out)] + sets) == 0
     printed = capsys.readouterr().out

@@ -54,7 +54,7 @@ def test_native_estimator_sources_include_no_plant_code():
     nb = sys.modules.setdefault("native_build", importlib.util.module_from_spec(spec))
     spec.loader.exec_module(nb)
     sources = [ROOT / "native" / "src" / n for n in nb.MODEL_SOURCES["estimator"]]
-    sources += [ROOT / "fmu_estimator" / "estimator.c", *(ROOT / "native" / "fmi2").glob("*.c")]
+    sources += [ROOT / "fmu_estimator" / "estimator.c", *(ROOT / "native" / "fmi").glob("*.c")]
     for src in sources:
         assert src.stem not in ("dynamics", "sensors", "rng"), src
         for inc in re.findall(r'#include\s+"([^"]+)"', src.read_text()):

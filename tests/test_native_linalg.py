@@ -50,6 +50,7 @@ def lib(tmp_path_factory):
         "sr_rcond_scaled": (c_int, [D, c_int, D]),
         "sr_rcond_of_spectrum": (c_double, [D, I, c_int]),
         "sr_eig_solve": (c_int, [D, D, D, I, D, c_int, D, I]),
+        "sr_eigvalsh_extremes": (c_int, [D, c_int, D, D]),
     }
     for name, (res, args) in sig.items():
         f = getattr(L, name)
@@ -151,6 +152,48 @@ def test_eigh_reads_lower_triangle_and_in_place(lib):
     assert lib.sr_eigh(Vi, 7, wi, Vi) == 0
     assert np.abs(wi - w).max() <= 1e-14 * np.abs(w).max()
     assert np.abs(A @ Vi - Vi * wi).max() <= 1e-13 * np.abs(w).max()
+
+
+def extremes(lib, A):
+    lo, hi = np.empty(1), np.empty(1)
+    st = lib.sr_eigvalsh_extremes(np.ascontiguousarray(A, dtype=float).copy(), A.shape[0], lo, hi)
+    return st, lo[0], hi[0]
+
+
+def test_eigvalsh_extremes_against_lapack(lib):
+    """The smallest and largest eigenvalue alone (the estimator's information spectra, n 1..20)
+    against LAPACK's eigvalsh: within 1e-13 of |A| (documented ~eps |A|; near-multiple extreme
+    eigenvalues 1e-11), or status 1 (the caller then falls back to sr_eigh) where an extreme
+    eigenvalue is multiple (the repeated and rank-deficient cases), never for distinct ones."""
+    rng = np.random.default_rng(7)
+    worst, fallbacks, cases = 0.0, [], 0
+    for n in range(1, 21):
+        for label, A in symmetric_cases(rng, n):
+            A = 0.5 * (A + A.T)
+            st, lo, hi = extremes(lib, A)
+            assert st in (0, 1), (n, label, st)
+            cases += 1
+            if st == 1:
+                fallbacks.append((n, label))
+                continue
+            ref = np.linalg.eigvalsh(A)
+            scale = max(np.abs(ref).max(), 1e-300)
+            gap = min(np.diff(ref[:2]).min(initial=np.inf), np.diff(ref[-2:]).min(initial=np.inf))
+            tol = 1e-13 if gap > 1e-8 * scale else 1e-11
+            err = max(abs(lo - ref[0]), abs(hi - ref[-1])) / scale
+            assert lo <= hi and err <= tol, (n, label, err)
+            worst = max(worst, err)
+    assert all(label in ("repeated", "rank-deficient", "diagonal-repeated")
+               for _, label in fallbacks), fallbacks
+    print(f"extremes worst {worst:.2g} x |A|, {len(fallbacks)} fallbacks in {cases} cases")
+
+
+def test_eigvalsh_extremes_bad_input(lib):
+    A = np.eye(3)
+    A[0, 1] = A[1, 0] = np.nan
+    assert extremes(lib, A)[0] == 1
+    assert lib.sr_eigvalsh_extremes(np.eye(2), 0, np.empty(1), np.empty(1)) == 2
+    assert lib.sr_eigvalsh_extremes(np.eye(65), 65, np.empty(1), np.empty(1)) == 2
 
 
 def test_eigh_bad_input(lib):

@@ -1,7 +1,7 @@
 """The portable elementary functions of the native core (native/src/sr_math.c) and the rule
 that keeps the core's results the same bits on every platform.
 
-1. Sources: no C file of the core (native/src, native/fmi2, fmu_estimator/estimator.c) outside
+1. Sources: no C file of the core (native/src, native/fmi, fmu_estimator/estimator.c) outside
    sr_math.c calls a libm function that IEEE 754 does not round exactly (hypot, sin, cos, tan,
    the inverse and hyperbolic functions, exp, log, pow, ...): the C libraries differ in their
    last bits there (glibc vs mingw's msvcrt), and the estimator's standard deviations amplify a
@@ -50,7 +50,7 @@ CALL = re.compile(r"(?<![\w.>])(" + "|".join(INEXACT) + r")[fl]?\s*\(")
 
 def core_sources():
     """The C files compiled into the core's binaries, except sr_math.c itself."""
-    files = [*sorted(SRC.glob("*.c")), *sorted((ROOT / "native" / "fmi2").glob("*.c")),
+    files = [*sorted(SRC.glob("*.c")), *sorted((ROOT / "native" / "fmi").glob("*.c")),
              ROOT / "fmu_estimator" / "estimator.c"]
     return [f for f in files if f.name != "sr_math.c" and f.exists()]
 

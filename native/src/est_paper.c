@@ -8,10 +8,16 @@
  * A port of tests/oracles/estimator/kernels.py (formerly the library's) (rls_update, modified_rls_update),
  * report_kernels.py (paper_step and what it calls), solvers.py and tracking.py, written once:
  * the Python package has a layered and a fused version of the same mathematics; here there is
- * one step path. The operations follow the Python (fused) order: the estimates and standard
- * deviations of the measured-acceleration runs equal the Python Identifier's bit for bit,
- * which matters because the drift tracker's lag (the slope of converged, round-off-sized
- * data-only estimates) turns any round-off difference into visible sd differences.
+ * one step path. The operations follow the Python (fused) order: the estimates equal the
+ * Python oracle's bit for bit; so do the standard deviations while an information block is
+ * poorly conditioned (the first samples: the drift tracker's lag, the slope of round-off-sized
+ * data-only estimates, turns any round-off difference there into visible sd differences).
+ * Once both blocks are well conditioned (excitation diagnostic > EST_CHOL_RCOND, resp.
+ * EST_LAG_RCOND for the lag) the solves take cheaper routes (issue #26: the extremes of the
+ * spectrum instead of the eigen-decomposition, solves by the Cholesky factor's inverse, the
+ * lag by two one-column solves): the same numbers to round-off (measured: standard deviations
+ * within 5.4e-10 relative over recorded runs, planar and spatial, momentum and force, with
+ * the noise options; estimates unchanged).
  *
  * Notation: z = [mu (8), theta (12)], mu = [m1, m1 b1, mn, mn bn], theta = [I1#, In#]
  * (eq. 21), D(mu) (20, eq. 23); p, r the identified entries of mu and theta; the estimates
@@ -39,6 +45,39 @@ void est_gram_add(const double *S, int n, const double *R, int k, double lam, do
      * symmetric bit for bit (zero at the start, every update writes both triangles with one
      * number), so its upper triangle gives the same numbers: computed once. */
     const double *R0 = R, *R1 = R + n, *R2 = R + 2 * n;
+    if (k == 3) {                  /* whole rows (contiguous, two entries a step): entry (i, j)
+                                      for j > i is the number the mirror of (j, i) would be (S
+                                      symmetric, the products commute); in place too (each
+                                      entry is read by its own row before it is written) */
+        for (int i = 0; i < n; i++) {
+            double *o = out + i * n;
+            const double *Si = S + i * n;
+            const double r0 = R0[i], r1 = R1[i], r2 = R2[i];
+            int j = 0;
+            if (lam == 1.0) {
+                for (; j + 1 < n; j += 2) {
+                    const double v0 = Si[j] + ((r0 * R0[j] + r1 * R1[j]) + r2 * R2[j]);
+                    const double v1 = Si[j + 1]
+                                      + ((r0 * R0[j + 1] + r1 * R1[j + 1]) + r2 * R2[j + 1]);
+                    o[j] = v0;
+                    o[j + 1] = v1;
+                }
+                if (j < n)
+                    o[j] = Si[j] + ((r0 * R0[j] + r1 * R1[j]) + r2 * R2[j]);
+            } else {
+                for (; j + 1 < n; j += 2) {
+                    const double v0 = lam * Si[j] + ((r0 * R0[j] + r1 * R1[j]) + r2 * R2[j]);
+                    const double v1 = lam * Si[j + 1]
+                                      + ((r0 * R0[j + 1] + r1 * R1[j + 1]) + r2 * R2[j + 1]);
+                    o[j] = v0;
+                    o[j + 1] = v1;
+                }
+                if (j < n)
+                    o[j] = lam * Si[j] + ((r0 * R0[j] + r1 * R1[j]) + r2 * R2[j]);
+            }
+        }
+        return;
+    }
     for (int i = 0; i < n; i++) {
         double *lo = out + i * n;
         const double *Slo = S + i * n;
@@ -143,13 +182,18 @@ EST_INLINE int rls_step(const double *x, const double *P, const double *H, const
             s -= H[i * p + j] * x[j];
         e[i] = s;
     }
-    for (int a = 0; a < p; a++)                              /* P H^T */
-        for (int i = 0; i < k; i++) {
-            double s = 0.0;
-            for (int j = 0; j < p; j++)
-                s += P[a * p + j] * H[i * p + j];
-            PHt[a * k + i] = s;
-        }
+    for (int a = 0; a < p; a++) {                            /* P H^T: the k sums of row a
+                                                                side by side, each in its order */
+        double s[EST_MAXK];
+        const double *Pa = P + a * p;
+        for (int i = 0; i < k; i++)
+            s[i] = 0.0;
+        for (int j = 0; j < p; j++)
+            for (int i = 0; i < k; i++)
+                s[i] += Pa[j] * H[i * p + j];
+        for (int i = 0; i < k; i++)
+            PHt[a * k + i] = s[i];
+    }
     for (int i = 0; i < k; i++)                              /* S = lam 1 + H P H^T */
         for (int j = 0; j < k; j++) {
             double s = i == j ? lam : 0.0;
@@ -185,7 +229,9 @@ EST_INLINE int rls_step(const double *x, const double *P, const double *H, const
                 s1 -= K[a * k + i] * PHt[b * k + i];
                 s2 -= K[b * k + i] * PHt[a * k + i];
             }
-            double v = 0.5 * (s1 + s2) / lam;
+            double v = 0.5 * (s1 + s2);
+            if (lam != 1.0)                                  /* (x / 1 is x: skipped) */
+                v /= lam;
             P_new[a * p + b] = v;
             P_new[b * p + a] = v;
             total += v;
@@ -322,20 +368,152 @@ void est_full_vectors(const sr_estimator_model *m, const est_core *c, double *mu
 
 /* -- the standard deviations ------------------------------------------------------------------ */
 
-/* a scaled eigen-decomposition of an information block (uncertainty.eig_scaled) */
+/* a scaled eigen-decomposition of an information block (uncertainty.eig_scaled), or where
+ * every direction is observed well, the extremes of its spectrum and the inverse of the
+ * scaled information from its Cholesky factor (chol = 1: V holds Gs^-1), which solves the
+ * same systems at a fraction of the cost */
 typedef struct eigs {
     double lam[EST_NTH], V[EST_NTH * EST_NTH], d[EST_NTH];
     int unobserved[EST_NTH];
+    int chol;
 } eigs;
 
-/* sr_scaled_eigh of the leading q x q block of S (n x n) */
-static int block_eigs(const double *S, int n, int q, eigs *out)
+/* the Cholesky solve replaces the eigen-decomposition's where the smallest eigenvalue of the
+ * scaled information is above this fraction of the largest: every direction is kept
+ * (SR_REL_EIG_MIN is far below) and the two solves agree to ~ eps / EST_CHOL_RCOND relative
+ * (both backward stable); below it (the first samples, a poorly excited direction) the
+ * eigen-decomposition decides what is observed, as uncertainty.observed_solve */
+#ifndef EST_CHOL_RCOND
+#define EST_CHOL_RCOND 1e-2
+#endif
+
+/* 1 where the spectrum lam (q, ascending) of a scaled information allows the Cholesky solve */
+static int well_conditioned(const double *lam, int q)
 {
-    double G[EST_NTH * EST_NTH];
+    return q > 0 && lam[0] > EST_CHOL_RCOND * lam[q - 1];
+}
+
+/* block_eigs' modes: the eigen-decomposition only (the solves of uncertainty.observed_solve
+ * as they were); the Cholesky solve where the spectrum allows it, the eigenvectors taken
+ * first (expected: the block was poorly conditioned the sample before) or the spectrum alone
+ * first (expected: well conditioned). The two last give the same numbers; the expectation
+ * only decides which work may be wasted. */
+enum { EIGS_EIGEN = 0, EIGS_CHOL_EIGEN_FIRST = 1, EIGS_CHOL_SPECTRUM_FIRST = 2 };
+
+/* Gs^-1 (q x q, symmetric; may be the array L) from the Cholesky factor L of Gs (its lower
+ * triangle, q x q): Li = L^-1 column by column, then Gs^-1 = Li^T Li. Taken once per sample
+ * and block, it makes every solve with Gs a product with a matrix (independent sums, no
+ * serial substitution); Gs is well conditioned where this is used (rcond > EST_CHOL_RCOND):
+ * the inverse is as accurate as the solves. */
+static void inverse_of_cholesky(const double *L, int q, double *Ginv)
+{
+    double Li[EST_NTH * EST_NTH], inv[EST_NTH];
+    for (int j = 0; j < q; j++)
+        inv[j] = 1.0 / L[j * q + j];
+    for (int j = 0; j < q; j++) {
+        Li[j * q + j] = inv[j];
+        for (int i = j + 1; i < q; i++) {
+            double s = 0.0;
+            for (int k = j; k < i; k++)
+                s -= L[i * q + k] * Li[k * q + j];
+            Li[i * q + j] = s * inv[i];
+        }
+    }
     for (int i = 0; i < q; i++)
-        for (int j = 0; j < q; j++)
-            G[i * q + j] = S[i * n + j];
-    return sr_scaled_eigh(G, q, out->lam, out->V, out->d, out->unobserved);
+        for (int j = 0; j <= i; j++) {
+            double s = 0.0;
+            for (int k = i; k < q; k++)             /* Li[k][j] = 0 for k < j <= i */
+                s += Li[k * q + i] * Li[k * q + j];
+            Ginv[i * q + j] = s;
+            Ginv[j * q + i] = s;
+        }
+}
+
+/* the scaled information of the leading q x q block of S (n x n) (uncertainty.eig_scaled):
+ * d, unobserved, and either (mode != EIGS_EIGEN, all observed, well_conditioned) its
+ * inverse (from its Cholesky factor) and the extremes of its spectrum (lam[0], lam[q-1]:
+ * what the excitation diagnostic and the test read; the rest NaN), or its eigenvectors and
+ * whole spectrum (sr_scaled_eigh). The extremes come from sr_eigvalsh_extremes where the
+ * spectrum is taken first, else from sr_eigh: the same numbers to round-off (~1e-14 relative
+ * in the excitation diagnostic). Returns sr_eigh's status (0 in the Cholesky path). */
+static int block_eigs(const double *S, int n, int q, int mode, eigs *out)
+{
+    double G[EST_NTH * EST_NTH] = {0.0};
+    int all = 1, st;
+    for (int i = 0; i < q; i++) {               /* sr_scaled_information of the block */
+        const double g = S[i * n + i];
+        out->unobserved[i] = !(g > 0.0);
+        out->d[i] = sqrt(out->unobserved[i] ? 1.0 : g);
+        if (out->unobserved[i])
+            all = 0;
+    }
+    if (all) {                                  /* the same quotients, two a step (packed) */
+        for (int i = 0; i < q; i++) {
+            const double di = out->d[i], *Si = S + i * n;
+            double *Gi = G + i * q;
+            int j = 0;
+            for (; j + 1 < q; j += 2) {
+                const double g0 = Si[j] / (di * out->d[j]), g1 = Si[j + 1] / (di * out->d[j + 1]);
+                Gi[j] = g0;
+                Gi[j + 1] = g1;
+            }
+            if (j < q)
+                Gi[j] = Si[j] / (di * out->d[j]);
+        }
+    } else {
+        for (int i = 0; i < q; i++)
+            for (int j = 0; j < q; j++)
+                G[i * q + j] = (out->unobserved[i] || out->unobserved[j])
+                                   ? 0.0 : S[i * n + j] / (out->d[i] * out->d[j]);
+    }
+    out->chol = 0;
+    if (mode == EIGS_CHOL_SPECTRUM_FIRST && all && q > 0) {
+        double lo, hi;
+        memcpy(out->V, G, sizeof(double) * q * q);
+        if (sr_eigvalsh_extremes(out->V, q, &lo, &hi) == 0) {
+            for (int i = 0; i < q; i++)         /* the Cholesky path reads no other */
+                out->lam[i] = NAN;
+            out->lam[0] = lo;
+            out->lam[q - 1] = hi;
+            if (well_conditioned(out->lam, q)) {
+                memcpy(out->V, G, sizeof(double) * q * q);     /* G kept for sr_eigh */
+                if (sr_cholesky(out->V, q) == 0) {
+                    inverse_of_cholesky(out->V, q, out->V);
+                    out->chol = 1;
+                    return 0;
+                }
+            }
+        }
+    }
+    st = sr_eigh(G, q, out->lam, out->V);
+    if (mode != EIGS_EIGEN && st == 0 && all && well_conditioned(out->lam, q)
+        && sr_cholesky(G, q) == 0) {
+        inverse_of_cholesky(G, q, out->V);
+        out->chol = 1;
+    }
+    return st;
+}
+
+/* x (q) = G^-1 r in the directions G observes and unobserved (q) the parameters that touch
+ * a direction it does not (sr_eig_solve), from block_eigs' e */
+static void eigs_solve(const eigs *e, int q, const double *r, double *x, int *unobserved)
+{
+    if (!e->chol) {
+        sr_eig_solve(e->lam, e->V, e->d, e->unobserved, r, q, x, unobserved);
+        return;
+    }
+    double rd[EST_NTH];
+    for (int i = 0; i < q; i++) {               /* x = Gs^-1 (r / d) / d */
+        rd[i] = r[i] / e->d[i];
+        unobserved[i] = 0;
+    }
+    for (int i = 0; i < q; i++) {
+        const double *Vi = e->V + i * q;
+        double s = 0.0;
+        for (int k = 0; k < q; k++)
+            s += Vi[k] * rd[k];
+        x[i] = s / e->d[i];
+    }
 }
 
 /* x (q) = G^-1 r in the directions the information G (q x q) observes
@@ -344,8 +522,8 @@ static void observed_solve(const double *G, int q, const double *r, double *x)
 {
     eigs e;
     int u[EST_NTH];
-    block_eigs(G, q, q, &e);
-    sr_eig_solve(e.lam, e.V, e.d, e.unobserved, r, q, x, u);
+    block_eigs(G, q, q, EIGS_EIGEN, &e);
+    eigs_solve(&e, q, r, x, u);
 }
 
 /* K P K^T (q x q) with K = 1 + (S - N)^-1 N in the directions S - N observes
@@ -390,7 +568,7 @@ static void prior_pull(const sr_estimator_model *m, const est_core *c, const dou
     int u_mu[EST_NMU], u_th[EST_NTH];
     for (int i = 0; i < p; i++)                              /* -W0 (x - x0) */
         rhs[i] = -(w_mu * (c->mu[i] - m->mu0[i]));
-    sr_eig_solve(el->lam, el->V, el->d, el->unobserved, rhs, p, d_mu, u_mu);
+    eigs_solve(el, p, rhs, d_mu, u_mu);
     double mu_ls[EST_NMU], D_ls[EST_ND], dD[EST_ND];
     memcpy(mu_ls, mu_full, sizeof mu_ls);
     for (int i = 0; i < p; i++)
@@ -404,7 +582,7 @@ static void prior_pull(const sr_estimator_model *m, const est_core *c, const dou
             s += c->S_ang[i * na + r + 1 + j] * dD[j];
         rhs[i] = -(w_theta * (c->theta[i] - m->th0[i])) + s;
     }
-    sr_eig_solve(ea->lam, ea->V, ea->d, ea->unobserved, rhs, r, d_th, u_th);
+    eigs_solve(ea, r, rhs, d_th, u_th);
     for (int i = 0; i < r; i++)                   /* theta touches an unobserved mu through T */
         for (int j = 0; j < p; j++)
             if (u_mu[j] && Tm[i * EST_NMU + m->mu_active[j]] != 0.0)
@@ -423,12 +601,14 @@ static void prior_pull(const sr_estimator_model *m, const est_core *c, const dou
 
 /* Covariance (20 x 20) of z (report_kernels.paper_covariance): Cov(mu) = s2_lin P_mu;
  * Cov(theta) = s2_ang P_th + T Cov(mu) T^T, Cov(theta, mu) = T Cov(mu), T = M dD/dmu; the
- * parameters not identified keep their prior covariance. */
+ * parameters not identified keep their prior covariance. Of the theta block only the diagonal
+ * is written (the rest is left as it is): the estimates' Jacobian (jacobian) maps each inertia
+ * estimate to one entry of theta, so est_scatter_sd reads no other entry of it. */
 static void covariance(const sr_estimator_model *m, const double *P_mu, const double *P_th,
                        const double *Tm_a, double s2_lin, double s2_ang, double *cov)
 {
     int p = m->p, r = m->r;
-    double Cmu[EST_NMU * EST_NMU] = {0}, Cth[EST_NTH * EST_NTH] = {0};
+    double Cmu[EST_NMU * EST_NMU] = {0}, Cth_diag[EST_NTH];
     double Tm[EST_NTH * EST_NMU] = {0}, TC[EST_NTH * EST_NMU];
     for (int i = 0; i < EST_NMU; i++)
         Cmu[i * EST_NMU + i] = m->opt.P0_mu;
@@ -438,10 +618,9 @@ static void covariance(const sr_estimator_model *m, const double *P_mu, const do
     for (int i = 0; i < r; i++)
         memcpy(Tm + m->theta_active[i] * EST_NMU, Tm_a + i * EST_NMU, sizeof(double) * EST_NMU);
     for (int i = 0; i < EST_NTH; i++)
-        Cth[i * EST_NTH + i] = m->opt.P0_theta;
+        Cth_diag[i] = m->opt.P0_theta;
     for (int i = 0; i < r; i++)
-        for (int j = 0; j < r; j++)
-            Cth[m->theta_active[i] * EST_NTH + m->theta_active[j]] = P_th[i * r + j] * s2_ang;
+        Cth_diag[m->theta_active[i]] = P_th[i * r + i] * s2_ang;
     for (int i = 0; i < EST_NTH; i++) {      /* TC = Tm Cmu: sr_matmul's sums, fixed sizes */
         double acc[EST_NMU] = {0.0};
         for (int l = 0; l < EST_NMU; l++) {
@@ -459,26 +638,24 @@ static void covariance(const sr_estimator_model *m, const double *P_mu, const do
             cov[(EST_NMU + i) * EST_NZ + j] = TC[i * EST_NMU + j];
             cov[j * EST_NZ + EST_NMU + i] = TC[i * EST_NMU + j];
         }
-        const double *ti = TC + i * EST_NMU;
-        for (int j = 0; j < EST_NTH; j++) {
-            const double *tj = Tm + j * EST_NMU;
-            double s = 0.0;                  /* (T C T^T)[i][j]: the sum over l = 0..7 */
-            s += ti[0] * tj[0];
-            s += ti[1] * tj[1];
-            s += ti[2] * tj[2];
-            s += ti[3] * tj[3];
-            s += ti[4] * tj[4];
-            s += ti[5] * tj[5];
-            s += ti[6] * tj[6];
-            s += ti[7] * tj[7];
-            cov[(EST_NMU + i) * EST_NZ + EST_NMU + j] = Cth[i * EST_NTH + j] + s;
-        }
+        const double *ti = TC + i * EST_NMU, *tj = Tm + i * EST_NMU;
+        double s = 0.0;                      /* (T C T^T)[i][i]: the sum over l = 0..7 */
+        s += ti[0] * tj[0];
+        s += ti[1] * tj[1];
+        s += ti[2] * tj[2];
+        s += ti[3] * tj[3];
+        s += ti[4] * tj[4];
+        s += ti[5] * tj[5];
+        s += ti[6] * tj[6];
+        s += ti[7] * tj[7];
+        cov[(EST_NMU + i) * EST_NZ + EST_NMU + i] = Cth_diag[i] + s;
     }
 }
 
 static int paper_std_parts(const sr_estimator_model *m, const est_core *c, double infl_lin,
                            double infl_ang, double *sd, double *data_only, double *J,
-                           double *vec, double *rcond, eigs *eig_out)
+                           double *vec, double *rcond, eigs *eig_out,
+                           const double *expect_rcond)
 {
     int p = m->p, r = m->r, nl = m->nl, na = m->na;
     double lam = m->opt.lambda;
@@ -519,9 +696,14 @@ static int paper_std_parts(const sr_estimator_model *m, const est_core *c, doubl
                                       est_gram_dof(lam, c->rows_ang, c->n1_ang, c->n2_ang, r))
                     * est_gram_var_scale(lam, c->n1_ang, c->n2_ang) * infl_ang;
     /* the scale-free spectra of the information of mu and theta */
-    eigs el, ea;
-    int st_l = block_eigs(c->S_lin, nl, p, &el);
-    int st_a = block_eigs(c->S_ang, na, r, &ea);
+    eigs eg_local[2];                        /* into eig_out where given (no copy) */
+    eigs *el = eig_out ? &eig_out[0] : &eg_local[0], *ea = eig_out ? &eig_out[1] : &eg_local[1];
+    /* expect_rcond (2): the excitation diagnostics of the state before, which say which
+     * work is likely needed (not what is computed) */
+    int st_l = block_eigs(c->S_lin, nl, p, expect_rcond[0] > EST_CHOL_RCOND
+                          ? EIGS_CHOL_SPECTRUM_FIRST : EIGS_CHOL_EIGEN_FIRST, el);
+    int st_a = block_eigs(c->S_ang, na, r, expect_rcond[1] > EST_CHOL_RCOND
+                          ? EIGS_CHOL_SPECTRUM_FIRST : EIGS_CHOL_EIGEN_FIRST, ea);
     double w_mu = c->decay_lin * (1.0 / m->opt.P0_mu);      /* the prior's remaining weight */
     double w_theta = c->decay_ang * (1.0 / m->opt.P0_theta);
     double z[EST_NZ], zd[EST_NZ], delta[EST_NZ], x[EST_NZ], xd[EST_NZ], pull[EST_NZ];
@@ -532,7 +714,7 @@ static int paper_std_parts(const sr_estimator_model *m, const est_core *c, doubl
     double Dj[EST_ND * EST_NMU], Tm[EST_NTH * EST_NMU], Tm_rep[EST_NTH * EST_NMU];
     D_jacobian(mu_rls, Dj);
     theta_of_mu(c->M, Dj, r, Tm);                            /* d theta / d mu = M dD/dmu */
-    prior_pull(m, c, mu_rls, Tm, w_mu, w_theta, &el, &ea, delta, unobserved_z);
+    prior_pull(m, c, mu_rls, Tm, w_mu, w_theta, el, ea, delta, unobserved_z);
     if (c->has_eiv) {                                        /* at the reported mu */
         D_jacobian(mu_full, Dj);
         theta_of_mu(c->M, Dj, r, Tm_rep);
@@ -559,12 +741,8 @@ static int paper_std_parts(const sr_estimator_model *m, const est_core *c, doubl
         data_only[i] = x[i] - pull[i];
         vec[i] = x[i];
     }
-    rcond[0] = sr_rcond_of_spectrum(el.lam, el.unobserved, p);
-    rcond[1] = sr_rcond_of_spectrum(ea.lam, ea.unobserved, r);
-    if (eig_out) {                           /* for the consider term's solves */
-        eig_out[0] = el;
-        eig_out[1] = ea;
-    }
+    rcond[0] = sr_rcond_of_spectrum(el->lam, el->unobserved, p);
+    rcond[1] = sr_rcond_of_spectrum(ea->lam, ea->unobserved, r);
     return (st_l != 0 || st_a != 0) ? 3 : 0;
 }
 
@@ -616,14 +794,16 @@ int est_std_parts(const sr_estimator_model *m, const est_core *c, double infl_li
                   double infl_ang, double *sd, double *data_only, double *J, double *vec,
                   double *rcond)
 {
+    const double expect[2] = {c->rcond_mu, c->rcond_theta};
     if (m->opt.solver == 1)
-        return paper_std_parts(m, c, infl_lin, infl_ang, sd, data_only, J, vec, rcond, NULL);
+        return paper_std_parts(m, c, infl_lin, infl_ang, sd, data_only, J, vec, rcond, NULL,
+                               expect);
     return est_joint_std_parts(m, c, infl_lin, sd, data_only, J, vec);
 }
 
 /* -- the drift tracker (tracking.py, docs/identification.md section 7) --------------------- */
 
-/* x = A^-1 b for A (n x n, n <= 20; overwritten) and b (n; overwritten by x): sr_lu_solve
+/* x = A^-1 b for A (n x n, n <= EST_NZ; overwritten) and b (n; overwritten by x): sr_lu_solve
  * (LU with partial pivoting) skipping the operations with an exact zero, which change
  * nothing (but the sign of a zero): the same numbers for the Jacobian of the estimates, with
  * two entries in a row at most, at a tenth of the cost. All NaN where a pivot column is 0. */
@@ -652,14 +832,17 @@ void est_sparse_lu_solve(double *A, int n, double *b)
             b[j] = b[piv];
             b[piv] = t;
         }
+        int cols[EST_NZ], nc = 0;            /* the pivot row's nonzero columns past j */
+        for (int c = j + 1; c < n; c++)
+            if (A[j * n + c] != 0.0)
+                cols[nc++] = c;
         for (int i = j + 1; i < n; i++) {
             if (A[i * n + j] == 0.0)
                 continue;
             double f = A[i * n + j] / A[j * n + j];
             A[i * n + j] = f;
-            for (int c = j + 1; c < n; c++)
-                if (A[j * n + c] != 0.0)
-                    A[i * n + c] -= f * A[j * n + c];
+            for (int t = 0; t < nc; t++)
+                A[i * n + cols[t]] -= f * A[j * n + cols[t]];
             b[i] -= f * b[j];
         }
     }
@@ -705,24 +888,102 @@ void est_block_lag(const double *G_full, const double *M_full, int n, int q,
     sr_matvec(A, r_out, q, q, Ar);
 }
 
-/* y = J x (J 20 x 20, x 20): sr_matvec's sums over the entries of J that are not 0, the same
- * numbers where x is finite (the products skipped are +-0, and a sum that starts at +0 is
- * never -0: adding +-0 leaves it as it is); with a non-finite x, sr_matvec itself */
-static void sparse_matvec(const double *J, const double *x, double *y)
+/* the excitation diagnostics (of both blocks) above which block_lag_two_solves serves
+ * est_block_lag: measured on recorded runs (planar and spatial, both methods, the noise
+ * options), no standard deviation moves by more than 1e-9 relative down to 1e-4; at 1e-6 the
+ * first samples' (meaningless, ~1e20) ones do */
+#ifndef EST_LAG_RCOND
+#define EST_LAG_RCOND 1e-3
+#endif
+
+/* est_block_lag by two solves of one column instead of a q-column one: (1 - growth A) r =
+ * rate with A = G^-1 M is (G - growth M) r = G rate, and A r = G^-1 (M r): a third of the
+ * work. The same numbers to round-off; taken where both information blocks are well
+ * conditioned (the rounding of est_block_lag's G^-1 M is then what both agree to), never in
+ * the first, poorly excited samples, whose standard deviations amplify any rounding. */
+static void block_lag_two_solves(const double *G_full, const double *M_full, int n, int q,
+                                 const double *rate, double growth, double *Ar,
+                                 double *r_out, double *extra, const eigs *eg)
 {
-    for (int k = 0; k < EST_NZ; k++)
-        if (!isfinite(x[k])) {
-            sr_matvec(J, x, EST_NZ, EST_NZ, y);
-            return;
-        }
-    for (int i = 0; i < EST_NZ; i++) {
-        const double *Ji = J + i * EST_NZ;
+    double G[EST_NZ * EST_NZ], R[EST_NZ * EST_NZ], B[EST_NZ * 2];
+    int w = 1 + (extra != NULL);
+    for (int i = 0; i < q; i++) {
+        const double *Gi = G_full + i * n, *Mi = M_full + i * n;
         double s = 0.0;
-        for (int k = 0; k < EST_NZ; k++)
-            if (Ji[k] != 0.0)
-                s += Ji[k] * x[k];
-        y[i] = s;
+        for (int j = 0; j < q; j++) {
+            G[i * q + j] = Gi[j];
+            R[i * q + j] = Gi[j] - growth * Mi[j];
+            s += Gi[j] * rate[j];
+        }
+        r_out[i] = s;                                        /* G rate */
     }
+    sr_lu_solve(R, q, r_out, 1);                             /* r = (G - growth M)^-1 G rate */
+    for (int i = 0; i < q; i++) {
+        const double *Mi = M_full + i * n;
+        double s = 0.0;
+        for (int j = 0; j < q; j++)
+            s += Mi[j] * r_out[j];
+        B[i * w] = s;                                        /* M r */
+        if (extra)
+            B[i * w + 1] = extra[i];
+    }
+    if (eg && eg->chol) {          /* A r = G^-1 M r (, G^-1 extra): G = D Gs D */
+        double Bd[EST_NTH * 2];
+        for (int i = 0; i < q * w; i++)
+            Bd[i] = B[i] / eg->d[i / w];
+        for (int i = 0; i < q; i++)
+            for (int c = 0; c < w; c++) {
+                const double *Vi = eg->V + i * q;
+                double s = 0.0;
+                for (int k = 0; k < q; k++)
+                    s += Vi[k] * Bd[k * w + c];
+                B[i * w + c] = s / eg->d[i];
+            }
+    } else {
+        sr_lu_solve(G, q, B, w);
+    }
+    for (int i = 0; i < q; i++) {
+        Ar[i] = B[i * w];
+        if (extra)
+            extra[i] = B[i * w + 1];
+    }
+}
+
+/* z = J^-1 x for the Jacobian J (20 x 20) of jacobian(), written out: the operations
+ * est_sparse_lu_solve performs on that pattern, in its order, where its pivots are the
+ * pattern's diagonal (each body's mass row pivots its mass column: |dx_b/dm| = |c_i| / m^2
+ * <= 1 = dx_m/dm; finite nonzero 1 / m). Per body (rows e, columns u of m and c, t of
+ * theta): z_m = x_m / 1, z_ci = (x_bi - f x_m) / (1 / m) with the multiplier f = J_bi,m / 1
+ * (its update skipped for f = 0, as there), z_theta = x_I / 1. Returns 1 done, 0 where the
+ * pattern's pivots would differ (z then not written: est_sparse_lu_solve's case). */
+static int jacobian_solve(const int *s2p, const double *J, const double *x, double *z)
+{
+    for (int k = 0; k < 2; k++) {
+        int e = EST0[k], u = MU0[k];
+        if (J[e * EST_NZ + u] != 1.0)
+            return 0;
+        for (int i = 0; i < 3; i++) {
+            const double f = J[(e + 1 + i) * EST_NZ + u], a = J[(e + 1 + i) * EST_NZ + u + 1 + i];
+            if (!(fabs(f) <= 1.0) || !(fabs(a) > 0.0) || !isfinite(a))
+                return 0;
+        }
+    }
+    for (int k = 0; k < 2; k++) {
+        int e = EST0[k], u = MU0[k], t = ZTH0[k];
+        const double xm = x[e] / J[e * EST_NZ + u];
+        z[u] = xm;
+        for (int i = 0; i < 3; i++) {
+            const double *Ji = J + (e + 1 + i) * EST_NZ;
+            const double f = Ji[u] / J[e * EST_NZ + u];
+            double b = x[e + 1 + i];
+            if (Ji[u] != 0.0)
+                b -= f * x[e];
+            z[u + 1 + i] = b / Ji[u + 1 + i];
+        }
+        for (int i = 0; i < 6; i++)
+            z[t + s2p[i]] = x[e + 4 + i] / J[(e + 4 + i) * EST_NZ + t + s2p[i]];
+    }
+    return 1;
 }
 
 /* The lag (20) of the estimates behind parameters moving at the rate rate_x (20) the
@@ -732,20 +993,28 @@ static void sparse_matvec(const double *J, const double *x, double *y)
  * Returns 1 if finite (else no matrix lag). */
 static int estimates_lag(const sr_estimator_model *m, const est_core *c, const double *J,
                          const double *rate_x, double growth, const double *mu_full,
-                         double *lag)
+                         double *lag, const eigs *eg)
 {
     int p = m->p, r = m->r, nl = m->nl, na = m->na;
     double Jc[EST_NZ * EST_NZ], rate_z[EST_NZ];
-    memcpy(Jc, J, sizeof Jc);
-    memcpy(rate_z, rate_x, sizeof rate_z);
-    est_sparse_lu_solve(Jc, EST_NZ, rate_z);                     /* J^-1 rate_x */
+    if (!jacobian_solve(m->sharp_to_project, J, rate_x, rate_z)) {    /* J^-1 rate_x */
+        memcpy(Jc, J, sizeof Jc);
+        memcpy(rate_z, rate_x, sizeof rate_z);
+        est_sparse_lu_solve(Jc, EST_NZ, rate_z);
+    }
     double rate_mu[EST_NMU], rate_th[EST_NTH], lag_mu[EST_NMU], r_mu[EST_NMU];
     double lag_th[EST_NTH], r_th[EST_NTH];
     for (int i = 0; i < p; i++)
         rate_mu[i] = rate_z[m->mu_active[i]];
     for (int i = 0; i < r; i++)
         rate_th[i] = rate_z[EST_NMU + m->theta_active[i]];
-    est_block_lag(c->S_lin, c->age_lin, nl, p, rate_mu, growth, lag_mu, r_mu, NULL);
+    /* c's excitation diagnostics (the step wrote them before the tracker) */
+    int two_solves = c->rcond_mu > EST_LAG_RCOND && c->rcond_theta > EST_LAG_RCOND;
+    if (two_solves)
+        block_lag_two_solves(c->S_lin, c->age_lin, nl, p, rate_mu, growth, lag_mu, r_mu, NULL,
+                             eg ? &eg[0] : NULL);
+    else
+        est_block_lag(c->S_lin, c->age_lin, nl, p, rate_mu, growth, lag_mu, r_mu, NULL);
     double Dj[EST_ND * EST_NMU], dD_lag[EST_ND] = {0}, dD_r[EST_ND] = {0};
     D_jacobian(mu_full, Dj);
     for (int a = 0; a < EST_ND; a++)
@@ -763,31 +1032,43 @@ static int estimates_lag(const sr_estimator_model *m, const est_core *c, const d
         rhs[i] = s1 - s2;
     }
     /* theta: eq. 2 and G^-1 rhs in one solve */
-    est_block_lag(c->S_ang, c->age_ang, na, r, rate_th, growth, lag_th, r_th, rhs);
+    if (two_solves)
+        block_lag_two_solves(c->S_ang, c->age_ang, na, r, rate_th, growth, lag_th, r_th, rhs,
+                             eg ? &eg[1] : NULL);
+    else
+        est_block_lag(c->S_ang, c->age_ang, na, r, rate_th, growth, lag_th, r_th, rhs);
     double lag_z[EST_NZ] = {0};
     for (int i = 0; i < p; i++)
         lag_z[m->mu_active[i]] = lag_mu[i];
     for (int i = 0; i < r; i++)
         lag_z[EST_NMU + m->theta_active[i]] = lag_th[i] + rhs[i];
-    sparse_matvec(J, lag_z, lag);
+    sr_matvec(J, lag_z, EST_NZ, EST_NZ, lag);
     for (int i = 0; i < EST_NZ; i++)
         if (!isfinite(lag[i]))
             return 0;
     return 1;
 }
 
-/* out = lam (age + step S) (n x n): age and S are symmetric bit for bit (zero at the start,
- * est_gram_add and this write both triangles with one number): the lower triangle computed,
- * mirrored */
-static void age_step(const double *age, const double *S, int n, double lam, double step,
-                     double *out)
+/* out = lam (age + step S) (n x n), its first `rows` rows: what the lag reads of the
+ * age-weighted Gram matrix (est_block_lag: the leading q x q block; estimates_lag: rows < r of
+ * the theta block); the rows below stay as they are (zero) */
+static void age_step(const double *age, const double *S, int n, int rows, double lam,
+                     double step, double *out)
 {
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j <= i; j++) {
-            double v = lam * (age[i * n + j] + step * S[i * n + j]);
-            out[i * n + j] = v;
-            out[j * n + i] = v;
+    /* whole rows, two entries a step (the numbers the lower triangle mirrored gave: S and the
+     * rows of age in use are symmetric bit for bit) */
+    for (int i = 0; i < rows; i++) {
+        const double *a = age + i * n, *g = S + i * n;
+        double *o = out + i * n;
+        int j = 0;
+        for (; j + 1 < n; j += 2) {
+            const double v0 = lam * (a[j] + step * g[j]), v1 = lam * (a[j + 1] + step * g[j + 1]);
+            o[j] = v0;
+            o[j + 1] = v1;
         }
+        if (j < n)
+            o[j] = lam * (a[j] + step * g[j]);
+    }
 }
 
 /* The tracker after the sample of clock t (DriftTracker.add, report_kernels.paper_tracker_add
@@ -797,9 +1078,22 @@ static void age_step(const double *age, const double *S, int n, double lam, doub
  * stepped with the Gram matrices before the sample (old), the lag (eq. 2 where every line has
  * a spread, else eq. 1) and the total standard deviations into nw->sd. J (20 x 20) the
  * Jacobian of the estimates, mu_full (8) after the sample. */
+static void tracker_add(const sr_estimator_model *m, const est_core *old, est_core *nw,
+                        double t, const double *x, const double *sd, const double *J,
+                        const double *mu_full, const eigs *eg);
+
 void est_tracker_add(const sr_estimator_model *m, const est_core *old, est_core *nw,
                         double t, const double *x, const double *sd, const double *J,
                         const double *mu_full)
+{
+    tracker_add(m, old, nw, t, x, sd, J, mu_full, NULL);
+}
+
+/* est_tracker_add; eg (2, may be NULL): the paper solver's block_eigs of nw's information
+ * blocks (their Cholesky factors serve the lag's solves) */
+static void tracker_add(const sr_estimator_model *m, const est_core *old, est_core *nw,
+                        double t, const double *x, const double *sd, const double *J,
+                        const double *mu_full, const eigs *eg)
 {
     double lam = m->opt.lambda;
     int first = old->tr_s0 == 0.0;
@@ -835,16 +1129,16 @@ void est_tracker_add(const sr_estimator_model *m, const est_core *old, est_core 
     step = (!first && step > 0.0) ? step : 0.0;
     /* tracking eq. 2: every old row is step older: M_age <- lam (M_age + step G_before) */
     if (m->opt.solver == 1) {
-        age_step(old->age_lin, old->S_lin, m->nl, lam, step, nw->age_lin);
-        age_step(old->age_ang, old->S_ang, m->na, lam, step, nw->age_ang);
+        age_step(old->age_lin, old->S_lin, m->nl, m->p, lam, step, nw->age_lin);
+        age_step(old->age_ang, old->S_ang, m->na, m->r, lam, step, nw->age_ang);
     } else {
-        age_step(old->age_pi, old->S_pi, m->q + 1, lam, step, nw->age_pi);
+        age_step(old->age_pi, old->S_pi, m->q + 1, m->q, lam, step, nw->age_pi);
     }
     double lag[EST_NZ];
     int has_lag = 0;
     if (all_positive) {
         double growth = a_bar > 0.0 ? da_dt / a_bar : 0.0;
-        has_lag = m->opt.solver == 1 ? estimates_lag(m, nw, J, rate, growth, mu_full, lag)
+        has_lag = m->opt.solver == 1 ? estimates_lag(m, nw, J, rate, growth, mu_full, lag, eg)
                                      : est_joint_lag(m, nw, J, rate, growth, lag);
     }
     double factor = a_bar / est_pymax(1.0 - da_dt, 0.1);
@@ -952,8 +1246,8 @@ void est_core_commit(const sr_estimator_model *m, est_core *dst, const est_core 
         EST_COPY(D, EST_ND);
         EST_COPY(S_lin, nl * nl);
         EST_COPY(S_ang, na * na);
-        EST_COPY(age_lin, nl * nl);
-        EST_COPY(age_ang, na * na);
+        EST_COPY(age_lin, p * nl);           /* (the rows age_step writes) */
+        EST_COPY(age_ang, r * na);
         if (m->eiv) {
             EST_COPY(N_lin, nl * nl);
             EST_COPY(N_ang, na * na);
@@ -965,7 +1259,7 @@ void est_core_commit(const sr_estimator_model *m, est_core *dst, const est_core 
         EST_COPY(pi, EST_NZ);
         EST_COPY(P_pi, m->q * m->q);
         EST_COPY(S_pi, nj * nj);
-        EST_COPY(age_pi, nj * nj);
+        EST_COPY(age_pi, m->q * nj);
         EST_COPY(info_lin, m->n_lin_cols * m->n_lin_cols);
         EST_COPY(info_ang, m->n_ang_cols * m->n_ang_cols);
         if (m->eiv) {
@@ -1220,21 +1514,33 @@ int est_paper_step(const sr_estimator_model *m, const void *data, const est_core
         }
     }
     for (int i = 0; i < r; i++) {            /* M+ = M + K (psi - phi M) = (1 - K phi) M + K psi */
-        const double *Ki = K2 + i * k2;
-        for (int j = 0; j < EST_ND; j++) {
-            double s = 0.0;
-            if (k2 == 3) {                   /* the sum below written out: the same order */
-                s += Ki[0] * W[j];
-                s += Ki[1] * W[EST_ND + j];
-                s += Ki[2] * W[2 * EST_ND + j];
-            } else {
+        const double *Ki = K2 + i * k2, *restrict Mo = old->M + i * EST_ND;
+        double *restrict Mn = nw->M + i * EST_ND;    /* (old and nw are distinct states) */
+        if (k2 == 3) {                       /* the sum below written out: the same order,
+                                                two entries a step (EST_ND even) */
+            const double k0 = Ki[0], k1_ = Ki[1], k2_ = Ki[2];
+            for (int j = 0; j < EST_ND; j += 2) {
+                double s0 = 0.0, s1 = 0.0;
+                s0 += k0 * W[j];
+                s1 += k0 * W[j + 1];
+                s0 += k1_ * W[EST_ND + j];
+                s1 += k1_ * W[EST_ND + j + 1];
+                s0 += k2_ * W[2 * EST_ND + j];
+                s1 += k2_ * W[2 * EST_ND + j + 1];
+                Mn[j] = Mo[j] + s0;
+                Mn[j + 1] = Mo[j + 1] + s1;
+            }
+        } else {
+            for (int j = 0; j < EST_ND; j++) {
+                double s = 0.0;
                 for (int a = 0; a < k2; a++)
                     s += Ki[a] * W[a * EST_ND + j];
+                Mn[j] = Mo[j] + s;
             }
-            nw->M[i * EST_ND + j] = old->M[i * EST_ND + j] + s;
-            total += nw->M[i * EST_ND + j];
         }
     }
+    for (int i = 0; i < r * EST_ND; i++)     /* (apart: the loop above then vectorises) */
+        total += nw->M[i];
     if (!isfinite(total))
         return 2;
     memcpy(nw->D, D_new, sizeof D_new);
@@ -1286,14 +1592,16 @@ int est_paper_step(const sr_estimator_model *m, const void *data, const est_core
     }
     double sd[EST_NZ], data_only[EST_NZ], J[EST_NZ * EST_NZ], rcond[2];
     eigs eg[2];
-    if (paper_std_parts(m, nw, infl_lin, infl_ang, sd, data_only, J, nw->vec, rcond, eg) != 0)
+    const double expect[2] = {old->rcond_mu, old->rcond_theta};
+    if (paper_std_parts(m, nw, infl_lin, infl_ang, sd, data_only, J, nw->vec, rcond, eg,
+                        expect) != 0)
         return 3;
     nw->rcond_mu = rcond[0];
     nw->rcond_theta = rcond[1];
     if (nw->has_eiv)                         /* the tracker's lag at the reported mu */
         for (int i = 0; i < p; i++)
             mu_new[m->mu_active[i]] = nw->mu_c[i];
-    est_tracker_add(m, old, nw, clock, data_only, sd, J, mu_new);
+    tracker_add(m, old, nw, clock, data_only, sd, J, mu_new, eg);
     if (m->consider) {                       /* the thrust's consider term (consider.py) */
         double shift[EST_NZ * SR_N_CONSIDER];
         est_consider_sums(m, old, nw, Ec, A, phi, NULL);
@@ -1317,6 +1625,24 @@ static void solve_columns(const double *lam, const double *V, const double *d, c
         for (int i = 0; i < q; i++)
             col[i] = R[i * c + j];
         sr_eig_solve(lam, V, d, un, col, q, x, u);
+        for (int i = 0; i < q; i++)
+            X[i * c + j] = x[i];
+    }
+}
+
+/* solve_columns from block_eigs' e (q <= EST_NTH) */
+static void eigs_solve_columns(const eigs *e, int q, const double *R, int c, double *X)
+{
+    double col[EST_NTH], x[EST_NTH];
+    int u[EST_NTH];
+    if (!e->chol) {
+        solve_columns(e->lam, e->V, e->d, e->unobserved, q, R, c, X);
+        return;
+    }
+    for (int j = 0; j < c; j++) {
+        for (int i = 0; i < q; i++)
+            col[i] = R[i * c + j];
+        eigs_solve(e, q, col, x, u);
         for (int i = 0; i < q; i++)
             X[i * c + j] = x[i];
     }
@@ -1377,10 +1703,10 @@ static void paper_consider_shift(const sr_estimator_model *m, const est_core *nw
 {
     const int nc = SR_N_CONSIDER, p = m->p, r = m->r, na = m->na;
     double dmu[EST_NMU * SR_N_CONSIDER], dth[EST_NTH * SR_N_CONSIDER];
-    double rhs[EST_NTH * SR_N_CONSIDER], dDdc[EST_ND * SR_N_CONSIDER];
+    double rhs[EST_NTH * SR_N_CONSIDER] = {0.0}, dDdc[EST_ND * SR_N_CONSIDER];
     double mu_full[EST_NMU], th_full[EST_NTH], Dj[EST_ND * EST_NMU];
     memset(shift, 0, sizeof(double) * EST_NZ * SR_N_CONSIDER);
-    solve_columns(el->lam, el->V, el->d, el->unobserved, p, nw->cons_lin, nc, dmu);
+    eigs_solve_columns(el, p, nw->cons_lin, nc, dmu);
     est_full_vectors(m, nw, mu_full, th_full);
     if (nw->has_eiv)
         for (int i = 0; i < p; i++)
@@ -1400,7 +1726,7 @@ static void paper_consider_shift(const sr_estimator_model *m, const est_core *nw
                 s += nw->S_ang[i * na + r + 1 + l] * dDdc[l * nc + c];
             rhs[i * nc + c] = nw->cons_ang[i * nc + c] + s;
         }
-    solve_columns(ea->lam, ea->V, ea->d, ea->unobserved, r, rhs, nc, dth);
+    eigs_solve_columns(ea, r, rhs, nc, dth);
     for (int i = 0; i < p; i++)
         memcpy(shift + m->mu_active[i] * nc, dmu + i * nc, sizeof(double) * nc);
     for (int i = 0; i < r; i++)
@@ -1435,8 +1761,8 @@ void est_consider_sd(const sr_estimator_model *m, est_core *nw, const double *J)
     double shift[EST_NZ * SR_N_CONSIDER];
     if (m->opt.solver == 1) {
         eigs el, ea;
-        block_eigs(nw->S_lin, m->nl, m->p, &el);
-        block_eigs(nw->S_ang, m->na, m->r, &ea);
+        block_eigs(nw->S_lin, m->nl, m->p, EIGS_CHOL_SPECTRUM_FIRST, &el);
+        block_eigs(nw->S_ang, m->na, m->r, EIGS_CHOL_SPECTRUM_FIRST, &ea);
         paper_consider_shift(m, nw, &el, &ea, shift);
     } else {                                 /* d pi / d c = G^-1 C (JointSolver) */
         int q = m->q, nj = q + 1;

@@ -17,6 +17,7 @@
 #include "equations.h"
 #include "est_internal.h"
 #include "linalg.h"
+#include "noise_profile.h"
 #include "physical.h"
 #include "sr_math.h"
 
@@ -210,6 +211,8 @@ void sr_estimator_options_default(sr_estimator_options *o)
     o->diff_half_window = 1;
     o->corr_lags = 0;
     o->momentum_window = 0.0;
+    o->noise_scale = 1.0;
+    o->noise_dt = 0.1;
 }
 
 size_t sr_estimator_options_size(void) { return sizeof(sr_estimator_options); }
@@ -432,6 +435,7 @@ static const int S2P[6] = {0, 3, 5, 1, 2, 4};
 
 static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
 
+
 sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
                                            const sr_estimator_options *opt,
                                            char *err, size_t errlen)
@@ -447,6 +451,17 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         cat_int(err, errlen, robot->n);
         return NULL;
     }
+    sr_estimator_options eff;                /* the options with the noise profile applied */
+    sr_noise_profile_error why;
+    if (sr_noise_profile_apply(opt, &eff, &why)) {
+        set_msg(err, errlen, why.name);
+        cat(err, errlen, " must be ");
+        cat(err, errlen, why.rule);
+        cat(err, errlen, ", got ");
+        cat_repr(err, errlen, why.value);
+        return NULL;
+    }
+    opt = &eff;
     if (check_options(opt, err, errlen))
         return NULL;
     sr_estimator_model *m = (sr_estimator_model *)calloc(1, sizeof *m);
@@ -651,6 +666,12 @@ void sr_estimator_data_init(const sr_estimator_model *m, void *data)
         est_joint_init(m, c);
     c->decay_lin = c->decay_ang = 1.0;
     c->tr_t_ref = c->tr_t = NAN;                              /* DriftTracker.empty */
+}
+
+void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_options *out)
+{
+    if (m && out)
+        *out = m->opt;
 }
 
 /* -- one sample ------------------------------------------------------------------------------- */

@@ -25,6 +25,7 @@
 #include <stddef.h>
 
 #include "arm.h"
+#include "sensor_noise.h"
 #include "sr_api.h"
 
 #ifdef __cplusplus
@@ -118,6 +119,17 @@ typedef struct sr_estimator_options {
                                    accelerations: a_S minus the accelerometer bias estimated
                                    online from the navigation velocity, the slope of
                                    v_S - integral a_S dt; accel_bias.py; ignored otherwise) */
+    /* -- the noise profile (noise_profile.h; docs/identification.md "One switch") -- */
+    int noise_profile;          /* ident.noise_profile: 0 none (the options as given: without
+                                   other settings the paper's equations), 1 sensors: the noise
+                                   model of the sensors described below fills each noise option
+                                   still at its default */
+    double noise_scale;         /* noise.scale >= 0: multiplies every magnitude in noise[] */
+    double noise[SR_NOISE_COUNT]; /* noise.<name>: the sensors' error magnitudes (sensor_noise.h,
+                                     the sensors FMU's parameters and units); default 0 */
+    double noise_dt;            /* the sample interval [s] the sensors draw their white noise at
+                                   (densities over 1 s become d / sqrt(noise_dt) per sample);
+                                   FMU: the scenario's sample time; default 0.1 */
 } sr_estimator_options;
 
 /** The defaults of the estimator FMU's parameters (the paper's guesses and covariances of
@@ -135,6 +147,10 @@ SR_API sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
                                                   const sr_estimator_options *opt,
                                                   char *err, size_t errlen);
 SR_API void sr_estimator_model_free(sr_estimator_model *m);
+
+/** The options in effect in the Model: those given with the noise profile applied
+ *  (noise_profile.h). */
+SR_API void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_options *out);
 
 /** Bytes of one Data block of this Model (depends on diff_half_window, corr_lags, n, the
  *  momentum window's ring, and with diff_momentum and ident.noise.* the window's noise rows:

@@ -9,7 +9,11 @@
  *     solves of kernels.rls_update;
  *   - the scale-free eigen-decomposition of an information matrix and the solve restricted to
  *     its observed directions (report_kernels.scaled_information, eig_scaled, rcond_scaled,
- *     rcond_of_spectrum, eig_solve = uncertainty.observed_solve).
+ *     rcond_of_spectrum, eig_solve = uncertainty.observed_solve);
+ *   - sr_eigvalsh_extremes: the smallest and largest eigenvalue alone (the estimator's
+ *     excitation diagnostic where its information is well conditioned: issue #26's speed).
+ * The kernels keep their operation order and thus their results bit for bit where they are
+ * vectorised (two entries a step, which the compiler packs; no reassociation).
  *
  * All matrices are row-major double arrays; no allocation, no global state. Sizes are bounded
  * by SR_LINALG_MAX_N where a routine needs work space; other routines take any n >= 0.
@@ -50,6 +54,20 @@ SR_API void sr_matvec(const double *A, const double *x, int n, int k, double *y)
  * Returns 0 converged; 1 not converged in 100 iterations or non-finite input (w, V are then
  * written but meaningless); 2 n out of range (n < 0 or n > SR_LINALG_MAX_N; nothing written). */
 SR_API int sr_eigh(const double *A, int n, double *w, double *V);
+
+/* The smallest and the largest eigenvalue of the symmetric A (n x n; only its lower triangle
+ * and diagonal are read; overwritten) without the rest of the spectrum: a Householder
+ * reduction to a tridiagonal T (LAPACK dsytd2's arrangement, on whole rows), then Laguerre's
+ * method on T's characteristic polynomial (its three-term recurrence) from Gershgorin bounds,
+ * which for real roots converges monotonically to the extreme ones, cubically near simple
+ * ones, both side by side, and stops where round-off stops its progress. Accuracy: ~ eps |A|
+ * absolute, as sr_eigh's (the same numbers to round-off, not the same bits: measured
+ * <= 3.1e-15 |A| on random matrices); an extreme eigenvalue in a cluster narrower than ~1e-9
+ * relative (nearly multiple) only to ~1e-11 |A|. About a quarter of sr_eigh's time for
+ * n = 8..12. Returns 0 and *lo <= *hi; 1 non-finite input, or the iteration did not settle
+ * in 60 steps or overflowed (large n with large entries: use sr_eigh); 2 n out of range
+ * (n < 1 or n > SR_LINALG_MAX_N). */
+SR_API int sr_eigvalsh_extremes(double *A, int n, double *lo, double *hi);
 
 /* Cholesky A = L L^T in place: A (n x n) row-major symmetric (its lower triangle is read), on
  * success the lower triangle holds L and the strict upper triangle is set to 0 (the order of

@@ -5,11 +5,6 @@
 #include <math.h>
 #include <string.h>
 
-static const char *const PARAMETER_NAMES[SR_NOISE_COUNT] = {
-    "noise.gyro.arw", "noise.gyro.bias", "noise.gyro.rrw", "noise.star.cross", "noise.star.roll",
-    "noise.nav.r", "noise.nav.v", "noise.accel.vrw", "noise.accel.bias", "noise.accel.brw",
-    "noise.alpha", "noise.enc.resolution", "noise.enc.q", "noise.enc.qd", "noise.enc.qdd",
-    "noise.thrust.scale", "noise.thrust.misalign"};
 
 /* Largest magnitude in effect (noise.<name> times noise.scale) of each parameter, so that a
  * true sample within the physical range (|x| <= 1e15, SI) always gives a finite measurement:
@@ -39,7 +34,7 @@ size_t sr_sensors_state_size(void)
 
 const char *sr_sensors_parameter_name(int i)
 {
-    return (i >= 0 && i < SR_NOISE_COUNT) ? PARAMETER_NAMES[i] : NULL;
+    return (i >= 0 && i < SR_NOISE_COUNT) ? sr_noise_name(i) : NULL;
 }
 
 /* msg = a + b (+ c), truncated to msg_size bytes, NUL-terminated (no locale-dependent call) */
@@ -93,11 +88,11 @@ int sr_sensors_init(sr_sensors_model *model, int n, const double *noise, double 
     }
     for (i = 0; i < SR_NOISE_COUNT; ++i) {
         if (!(isfinite(noise[i]) && noise[i] >= 0.0)) {
-            set_message(msg, msg_size, PARAMETER_NAMES[i], " must be finite and >= 0", NULL);
+            set_message(msg, msg_size, sr_noise_name(i), " must be finite and >= 0", NULL);
             return 1;
         }
         if (!(scale * noise[i] <= PARAMETER_LIMITS[i])) {
-            set_message(msg, msg_size, PARAMETER_NAMES[i], " times noise.scale must be at most ",
+            set_message(msg, msg_size, sr_noise_name(i), " times noise.scale must be at most ",
                         LIMIT_TEXT[i]);
             return 1;
         }

@@ -97,24 +97,6 @@ static double scale2(double x, long long e)
 
 /* -- hypot ------------------------------------------------------------------------------------ */
 
-/* sqrt(ax^2 + ay^2), ax >= ay > 0, squares neither overflowing nor underflowing: the rounded
- * square root h, then h -= (h^2 - ax^2 - ay^2) / (2 h) with the residual rearranged so that it
- * is computed nearly exactly without FMA (Borges 2019, section 3) */
-static double hypot_kernel(double ax, double ay)
-{
-    double h = sqrt(ax * ax + ay * ay), t1, t2, delta;
-    if (h <= 2.0 * ay) {
-        delta = h - ay;
-        t1 = ax * (2.0 * delta - ax);
-        t2 = (delta - 2.0 * (ax - ay)) * delta;
-    } else {
-        delta = h - ax;
-        t1 = 2.0 * delta * (ax - 2.0 * ay);
-        t2 = (4.0 * delta - ay) * ay + delta * delta;
-    }
-    return h - (t1 + t2) / (2.0 * h);
-}
-
 double sr_hypot(double x, double y)
 {
     double ax, ay;
@@ -134,16 +116,16 @@ double sr_hypot(double x, double y)
     if (ax > 0x1.0p+511) {
         if (ay <= ax * 0x1.0p-54)           /* ay^2 below half an ulp of ax^2 */
             return ax + ay;
-        return hypot_kernel(ax * 0x1.0p-600, ay * 0x1.0p-600) * 0x1.0p+600;
+        return sr_hypot_kernel(ax * 0x1.0p-600, ay * 0x1.0p-600) * 0x1.0p+600;
     }
     if (ay < 0x1.0p-459) {
         if (ax >= ay * 0x1.0p+54)           /* also ay = 0 */
             return ax + ay;
-        return hypot_kernel(ax * 0x1.0p+600, ay * 0x1.0p+600) * 0x1.0p-600;
+        return sr_hypot_kernel(ax * 0x1.0p+600, ay * 0x1.0p+600) * 0x1.0p-600;
     }
     if (ay <= ax * 0x1.0p-54)
         return ax + ay;
-    return hypot_kernel(ax, ay);
+    return sr_hypot_kernel(ax, ay);
 }
 
 /* -- sine and cosine -------------------------------------------------------------------------- */

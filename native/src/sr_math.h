@@ -36,6 +36,38 @@ extern "C" {
  *  hypot(x, +-0) = |x|. */
 SR_API double sr_hypot(double x, double y);
 
+/* sr_hypot's kernel: sqrt(ax^2 + ay^2) for ax >= ay > 0 whose squares neither overflow nor
+ * underflow, the rounded square root h corrected by h -= (h^2 - ax^2 - ay^2) / (2 h) with the
+ * residual rearranged to be nearly exact without FMA (Borges 2019, section 3). Inline here so
+ * that sr_hypot_inline shares it (one definition, the same bits). */
+static inline double sr_hypot_kernel(double ax, double ay)
+{
+    /* both arrangements computed and one selected: no branch on the eigen solver's serial
+     * path (which one applies is data-dependent: a branch was mispredicted often) */
+    const double h = sqrt(ax * ax + ay * ay);
+    const double da = h - ay, db = h - ax;
+    const double ra = ax * (2.0 * da - ax) + (da - 2.0 * (ax - ay)) * da;
+    const double rb = 2.0 * db * (ax - 2.0 * ay) + ((4.0 * db - ay) * ay + db * db);
+    return h - (h <= 2.0 * ay ? ra : rb) / (2.0 * h);
+}
+
+/** sr_hypot(x, y), the same bits, with its common case inline (for the hot loops of the
+ *  eigen solver): finite x, y whose squares neither overflow nor underflow and whose ratio
+ *  is above 2^-54 go straight to the kernel; every other case calls sr_hypot. */
+static inline double sr_hypot_inline(double x, double y)
+{
+    double ax = fabs(x), ay = fabs(y);
+    if (ax < ay) {
+        const double t = ax;
+        ax = ay;
+        ay = t;
+    }
+    /* sr_hypot's branches in its order: not huge, not tiny, not negligible (NaN: all false) */
+    if (ax <= 0x1.0p+511 && ay >= 0x1.0p-459 && ay > ax * 0x1.0p-54)
+        return sr_hypot_kernel(ax, ay);
+    return sr_hypot(x, y);
+}
+
 /** Sine and cosine of x [rad]: x reduced to r in [-pi/4, pi/4] by x - k pi/2 in double-double
  *  with pi/2 in four parts (152 bits; k pi/2 exact for |k| < 2^20, |x| < 1.6e6), then
  *  sin(a + d), cos(a + d) from a table of sin a, cos a (a = i/128, double-double) and short

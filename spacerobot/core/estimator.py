@@ -25,10 +25,14 @@ from . import dptr, lib as _default_lib
 from .robot_record import SrRobot, c_read_record, c_robot
 
 __all__ = ["NativeEstimator", "SrEstimatorOptions", "SrEstimatorReport", "default_options",
-           "options_from_values"]
+           "options_from_values", "profile_options", "profile_values"]
 
 #: message buffer length (SR_EST_MSG_LEN)
 MSG_LEN = 256
+#: the sensors' error magnitudes (SR_NOISE_COUNT, native/src/sensor_noise.h): the sensors
+#: FMU's ``noise.*`` parameters but ``noise.scale``, in
+#: :data:`spacerobot.interface.NOISE_PARAMETERS` order
+N_SENSOR_NOISE = 17
 
 
 class SrEstimatorOptions(ctypes.Structure):
@@ -45,8 +49,16 @@ class SrEstimatorOptions(ctypes.Structure):
         ("signal_sd", ctypes.c_double * 6), ("momentum_window", ctypes.c_double),
         ("momentum_point", ctypes.c_int), ("sd_thrust_scale", ctypes.c_double),
         ("sd_thrust_misalign", ctypes.c_double), ("momentum_window_samples", ctypes.c_int),
-        ("accel_bias", ctypes.c_int),
+        ("accel_bias", ctypes.c_int), ("noise_profile", ctypes.c_int),
+        ("noise_scale", ctypes.c_double), ("noise", ctypes.c_double * N_SENSOR_NOISE),
+        ("noise_dt", ctypes.c_double),
     ]
+
+
+class SrNoiseProfileError(ctypes.Structure):
+    """``sr_noise_profile_error`` (native/src/noise_profile.h)."""
+
+    _fields_ = [("name", ctypes.c_char_p), ("rule", ctypes.c_char_p), ("value", ctypes.c_double)]
 
 
 class SrEstimatorReport(ctypes.Structure):
@@ -91,6 +103,12 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     L.sr_estimator_estimates.restype = None
     L.sr_estimator_sd_without_lag.argtypes = [vp, vp, dp]
     L.sr_estimator_sd_without_lag.restype = None
+    L.sr_estimator_model_options.argtypes = [vp, ctypes.POINTER(SrEstimatorOptions)]
+    L.sr_estimator_model_options.restype = None
+    L.sr_noise_profile_apply.argtypes = [ctypes.POINTER(SrEstimatorOptions),
+                                         ctypes.POINTER(SrEstimatorOptions),
+                                         ctypes.POINTER(SrNoiseProfileError)]
+    L.sr_noise_profile_apply.restype = ctypes.c_int
     if hasattr(L, "sr_estimator_data_check"):    # (a library built before it: no check_state)
         L.sr_estimator_data_check.argtypes = [vp, vp, cp, sz]
         L.sr_estimator_data_check.restype = ctypes.c_int
@@ -128,6 +146,44 @@ def _as_dict(o: SrEstimatorOptions) -> dict:
     return out
 
 
+def profile_options(options: Mapping, lib: Optional[ctypes.CDLL] = None) -> dict:
+    """The options (a mapping as :class:`NativeEstimator` takes) with their noise profile
+    applied (``sr_noise_profile_apply``, native/src/noise_profile.h): what the estimator runs
+    with. ``ValueError`` names the parameter a profile cannot be applied with."""
+    L = _bind(lib or _default_lib())
+    o, out, why = _options(options, L), SrEstimatorOptions(), SrNoiseProfileError()
+    if L.sr_noise_profile_apply(ctypes.byref(o), ctypes.byref(out), ctypes.byref(why)):
+        raise ValueError(f"{why.name.decode()} must be {why.rule.decode()}, got {why.value!r}")
+    return _as_dict(out)
+
+
+#: the estimator's scalar noise options (``sr_estimator_options`` fields) the noise profile may
+#: set, by their FMU parameter names
+PROFILE_OPTION_NAMES = {"sd_thrust_scale": "ident.sd_thrust.scale",
+                        "sd_thrust_misalign": "ident.sd_thrust.misalign",
+                        "momentum_window": "ident.momentum_window",
+                        "momentum_point": "ident.momentum_point", "corr_lags": "ident.corr_lags",
+                        "accel_bias": "ident.accel_bias", "diff_momentum": "ident.diff_momentum",
+                        "diff_half_window": "ident.diff_half_window"}
+
+
+def profile_values(values: Mapping[str, float], sample_time: float = 0.1,
+                   lib: Optional[ctypes.CDLL] = None) -> dict:
+    """``{FMU parameter name: value}`` of the estimator options the noise profile of the
+    estimator FMU's parameter ``values`` sets (``ident.noise_profile``, ``noise.*``; the
+    sensors' densities at ``sample_time`` [s]): what ``sr_noise_profile_apply`` changes, by
+    name; empty with ``ident.noise_profile`` = 0."""
+    from ..interface import SIGNAL_NOISE_PARAMETERS
+    given = {**options_from_values(values), "noise_dt": float(sample_time)}
+    used = profile_options(given, lib)
+    out = {name: used[field] for field, name in PROFILE_OPTION_NAMES.items()
+           if used[field] != given[field]}
+    for i, (_, name, _, _) in enumerate(SIGNAL_NOISE_PARAMETERS):
+        if used["signal_sd"][i] != given["signal_sd"][i]:
+            out[f"ident.noise.{name}"] = used["signal_sd"][i]
+    return out
+
+
 def _body10(body) -> list:
     """``[m, b (3), Ixx Iyy Izz Ixy Ixz Iyz]`` of a RigidBody or a sequence of 10."""
     if hasattr(body, "mass"):
@@ -152,8 +208,8 @@ def _options(values: Mapping, L: ctypes.CDLL) -> SrEstimatorOptions:
             raise KeyError(f"unknown estimator option {key!r}")
         if name in ("guess_base", "guess_target"):
             getattr(o, name)[:] = _body10(v)
-        elif name == "signal_sd":
-            o.signal_sd[:] = [float(x) for x in v]
+        elif name in ("signal_sd", "noise"):
+            getattr(o, name)[:] = [float(x) for x in v]
         elif dict(SrEstimatorOptions._fields_)[name] is ctypes.c_int:
             setattr(o, name, int(v))
         else:
@@ -166,7 +222,7 @@ def options_from_values(values: Mapping[str, float]) -> dict:
     :func:`spacerobot.interface.estimator_vars`), as :func:`.identifier_from_values` reads
     them: the row standard deviations of the chosen method, the signal noise in
     ``SIGNAL_NOISE_PARAMETERS`` order."""
-    from ..interface import BODY_PARAMETERS, SIGNAL_NOISE_PARAMETERS
+    from ..interface import BODY_PARAMETERS, SENSOR_MAGNITUDES, SIGNAL_NOISE_PARAMETERS
     v = values
     method = int(v["method"])
     kind = "momentum" if method == 1 else "force"
@@ -189,6 +245,10 @@ def options_from_values(values: Mapping[str, float]) -> dict:
         "sd_thrust_scale": float(v["ident.sd_thrust.scale"]),
         "sd_thrust_misalign": float(v["ident.sd_thrust.misalign"]),
         "accel_bias": int(v["ident.accel_bias"]),
+        "noise_profile": int(v["ident.noise_profile"]),
+        "noise_scale": float(v["noise.scale"]),
+        # the magnitudes the profile reads (the others stay 0: the estimator has no use for them)
+        "noise": [float(v.get(name, 0.0)) for name in SENSOR_MAGNITUDES],
     }
 
 

@@ -541,13 +541,18 @@ class ExcitationRequest:
         return 0.0
 
 
-def identifier_from_values(robot: Robot, values: Mapping[str, float]
+def identifier_from_values(robot: Robot, values: Mapping[str, float], sample_time: float = 0.1
                            ) -> Tuple[Identifier, ExcitationRequest]:
     """The estimator core and its excitation request from the estimator FMU's parameter values
     (names of :func:`spacerobot.interface.estimator_vars`): what the FMU builds at
-    initialisation, and ``spacerobot identify`` on recorded telemetry. Raises ``ValueError``
-    for an invalid value or one the native core does not take."""
-    v = values
+    initialisation, and ``spacerobot identify`` on recorded telemetry; with
+    ``ident.noise_profile`` = 1 the options its profile sets (the sensors' densities at
+    ``sample_time`` [s], the FMU's scenario sample time). Raises ``ValueError`` for an invalid
+    value or one the native core does not take."""
+    from ..core.estimator import profile_values
+    v = dict(values)
+    if v.get("ident.noise_profile", 0) != 0:          # the core names a bad profile value
+        v.update(profile_values(v, sample_time))
     codes = [code.parse(int(v[name]), name) for name, code in (
         ("method", Method), ("solver", Solver), ("accel_source", AccelSource))]
     guess = Guess(body_of(v, "guess.base"), body_of(v, "guess.target"), float(v["P0_mu"]),

@@ -94,14 +94,18 @@ def _bundle_core_library(lib_dir: Path) -> None:
     shutil.copy2(src, lib_dir / ("libspacerobot" + src.suffix))   # a name core looks for
 
 
-def build_fmu(kind: str, sc: Scenario, out_dir: str | Path, backend: str | None = None) -> Path:
+def build_fmu(kind: str, sc: Scenario, out_dir: str | Path, backend: str | None = None,
+              fmi_version: int = 2) -> Path:
     """Build one FMU (``kind`` = 'plant', 'estimator' or 'sensors') into ``out_dir``; returns
     its path. ``backend`` (:data:`BACKENDS`; None: :data:`DEFAULT_BACKEND`): ``native`` builds the
     kinds that have a native build (:func:`native_kinds`) natively and the others with
-    pythonfmu."""
+    pythonfmu. ``fmi_version`` 3: an FMI 3.0 FMU (native kinds only)."""
+    if fmi_version != 2 and backend_of(kind, backend) != "native":
+        raise ValueError(f"FMI {fmi_version}.0 FMUs are built by the native backend only "
+                         f"({kind!r} with backend {backend or DEFAULT_BACKEND!r})")
     if backend_of(kind, backend) == "native":
         from .native import build_native_fmu
-        return build_native_fmu(kind, sc, out_dir)
+        return build_native_fmu(kind, sc, out_dir, fmi_version=fmi_version)
     from pythonfmu.builder import FmuBuilder
 
     if kind not in BUNDLES:

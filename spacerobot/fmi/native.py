@@ -1,12 +1,15 @@
-"""The native FMUs: the C core's FMI 2.0 binaries packaged with data from the interface table.
+"""The native FMUs: the C core's FMI 2.0 or FMI 3.0 binaries packaged with data from the
+interface table.
 
 A native FMU is a zip of
 
 * ``modelDescription.xml``, generated here from :mod:`spacerobot.interface` (the one table of
   every variable: names, units, causality, start values) with ``needsExecutionTool="false"``
   and ``<ModelStructure><Outputs>`` dependencies;
-* ``binaries/<platform>/<model identifier>.{so,dll}``: the binaries the install step compiled
-  (``native/build.py``; linux64 always, win64 where mingw was found), robot-independent;
+* ``binaries/<platform>/<model identifier>.{so,dll,dylib}``: the binaries the install step
+  compiled (``native/build.py``; FMI 2.0: linux64 always, win64 where mingw was found; FMI 3.0:
+  x86_64-linux, x86_64-windows; and the macOS / ARM Linux ones where ``native/build.py --zig``
+  built them), robot-independent;
 * ``resources/spacerobot_variables.txt``: the same table as data (value reference, type,
   causality, variability, exact start value, the core's key, the name), which the shared FMI
   layer reads at instantiation;
@@ -18,6 +21,11 @@ A native FMU is a zip of
   plant's: also the arm's home posture).
 
 Building one needs no compiler: the binaries are the installed package's.
+
+FMI 3.0 (``fmi_version=3``, :func:`model_description3`): the same variables, value references and
+scalar names as FMI 2.0 (``Float64`` for Real, ``Int32`` for Integer; no arrays: SSP 1.0
+connections and the tools wire scalars, and the two versions compare one to one), the same
+binaries' source built with ``-DFMI_VERSION=3``, the instantiation token the GUID.
 """
 from __future__ import annotations
 
@@ -35,6 +43,21 @@ from ..core import LIB_DIR
 from ..interface import (UNITS, Var, estimator_vars, plant_vars, sensors_dependencies,
                          sensors_vars)
 from ..robots import RigidBody, Robot, Scenario
+
+def _units_logs_experiment(root, variables, sc, extra_units=frozenset()) -> None:
+    """The UnitDefinitions, LogCategories and DefaultExperiment elements (the same in FMI 2.0
+    and 3.0 model descriptions)."""
+    units = ET.SubElement(root, "UnitDefinitions")
+    for u in sorted({v.unit for v in variables if v.unit and v.type == "Real"} | set(extra_units)):
+        unit = ET.SubElement(units, "Unit", name=u)
+        if UNITS[u]:
+            ET.SubElement(unit, "BaseUnit", {k: str(e) for k, e in UNITS[u].items()})
+    cats = ET.SubElement(root, "LogCategories")
+    for name, what in LOG_CATEGORIES.items():
+        ET.SubElement(cats, "Category", name=name, description=what)
+    ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime=repr(float(sc.stop_time)),
+                  stepSize=repr(float(sc.sample_time)))
+
 
 def _table_key(v: Var) -> str:
     """The core key of a variable in the variable table (the glue looks variables up by it)."""
@@ -86,8 +109,21 @@ MODELS: Dict[str, NativeModel] = {
         "2020). Native C core: needs nothing but the C runtime.", robot="all"),
 }
 
-#: FMI 2.0 platform folder -> binary suffix
+#: FMI 2.0 platform folder -> binary suffix (the platforms every install should carry)
 PLATFORMS = {"linux64": ".so", "win64": ".dll"}
+#: FMI 3.0 platform folder -> binary suffix (the platforms every install should carry)
+PLATFORMS3 = {"x86_64-linux": ".so", "x86_64-windows": ".dll"}
+#: platforms packaged where their binaries were built (``native/build.py --zig``)
+EXTRA_PLATFORMS = {2: {},
+                   3: {"x86_64-darwin": ".dylib", "aarch64-darwin": ".dylib",
+                       "aarch64-linux": ".so"}}
+#: the FMI versions a native FMU is built for
+FMI_VERSIONS = (2, 3)
+
+
+def platforms(fmi_version: int = 2) -> Dict[str, str]:
+    """``{folder: suffix}`` of the platforms every install should carry for ``fmi_version``."""
+    return dict(PLATFORMS3 if fmi_version == 3 else PLATFORMS)
 VARIABLES_FILE = "spacerobot_variables.txt"
 ROBOT_FILE = "robot.txt"
 #: the scenario's constants a model reads at instantiation (the sensors: the sample time)
@@ -197,16 +233,7 @@ def model_description(variables: Sequence[Var], model_identifier: str, guid: str
         "canNotUseMemoryManagementFunctions": "true",
         "canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true",
         "providesDirectionalDerivative": "false"})
-    units = ET.SubElement(root, "UnitDefinitions")
-    for u in sorted({v.unit for v in variables if v.unit and v.type == "Real"}):
-        unit = ET.SubElement(units, "Unit", name=u)
-        if UNITS[u]:
-            ET.SubElement(unit, "BaseUnit", {k: str(e) for k, e in UNITS[u].items()})
-    cats = ET.SubElement(root, "LogCategories")
-    for name, what in LOG_CATEGORIES.items():
-        ET.SubElement(cats, "Category", name=name, description=what)
-    ET.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime=repr(float(sc.stop_time)),
-                  stepSize=repr(float(sc.sample_time)))
+    _units_logs_experiment(root, variables, sc)
     mv = ET.SubElement(root, "ModelVariables")
     outputs = []
     for vr, v in enumerate(variables):
@@ -234,45 +261,113 @@ def model_description(variables: Sequence[Var], model_identifier: str, guid: str
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
 
-def binaries(model_identifier: str, lib_dir: Path = LIB_DIR) -> Dict[str, Path]:
-    """``{platform: path}`` of the model's binaries the install step built."""
+def model_description3(variables: Sequence[Var], model_identifier: str, token: str,
+                       description: str, sc: Scenario,
+                       dependencies: Optional[Dict[int, List[int]]] = None) -> str:
+    """The FMI 3.0 model description of a native co-simulation FMU: the variables of
+    :func:`model_description` (same names and value references; ``Float64`` / ``Int32``
+    scalars), ``<Output>`` dependencies by value reference (``dependencies``: ``{output index:
+    [input indices]}``; None: outputs change only in doStep), the capabilities the FMI layer
+    delivers (``native/fmi/fmi3_api.c``) and no other."""
+    root = ET.Element("fmiModelDescription", {
+        "fmiVersion": "3.0", "modelName": model_identifier, "instantiationToken": token,
+        "description": description, "author": "spacerobot developers",
+        "version": __version__, "license": "MIT",
+        "generationTool": f"spacerobot {__version__}",
+        "variableNamingConvention": "structured"})
+    ET.SubElement(root, "CoSimulation", {
+        "modelIdentifier": model_identifier, "needsExecutionTool": "false",
+        "canBeInstantiatedOnlyOncePerProcess": "false",
+        "canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
+        "providesDirectionalDerivatives": "false", "providesAdjointDerivatives": "false",
+        "providesPerElementDependencies": "false",
+        "canHandleVariableCommunicationStepSize": "true", "maxOutputDerivativeOrder": "0",
+        "providesIntermediateUpdate": "false", "mightReturnEarlyFromDoStep": "false",
+        "canReturnEarlyAfterIntermediateUpdate": "false", "hasEventMode": "false",
+        "providesEvaluateDiscreteStates": "false"})
+    _units_logs_experiment(root, variables, sc, extra_units={"s"})
+    mv = ET.SubElement(root, "ModelVariables")
+    # FMI 3.0 asks for exactly one independent variable: time, after the table's variables (the
+    # layer serves its value reference, len(variables), from the instance's time)
+    ET.SubElement(mv, "Float64", {"name": "time", "valueReference": str(len(variables)),
+                                  "description": "Simulation time", "causality": "independent",
+                                  "variability": "continuous", "unit": "s"})
+    outputs = []
+    for vr, v in enumerate(variables):
+        attrs = {"name": v.name, "valueReference": str(vr), "description": v.description,
+                 "causality": v.causality, "variability": v.variability}
+        if v.causality in ("parameter", "input"):
+            attrs["start"] = _start_text(v)
+        else:
+            outputs.append(vr)
+        if v.unit and v.type == "Real":
+            attrs["unit"] = v.unit
+        ET.SubElement(mv, FMI3_TYPES[v.type], attrs)
+    ms = ET.SubElement(root, "ModelStructure")
+    for vr in outputs:                      # without feedthrough, outputs change only in doStep
+        deps = (dependencies or {}).get(vr, [])
+        ET.SubElement(ms, "Output", valueReference=str(vr),
+                      dependencies=" ".join(str(j) for j in deps))
+    for vr in outputs:
+        ET.SubElement(ms, "InitialUnknown", valueReference=str(vr))
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+#: the FMI 3.0 element of each interface type
+FMI3_TYPES = {"Real": "Float64", "Integer": "Int32"}
+
+
+def binaries(model_identifier: str, lib_dir: Path = LIB_DIR, fmi_version: int = 2
+             ) -> Dict[str, Path]:
+    """``{platform folder: path}`` of the model's FMI ``fmi_version`` binaries the install step
+    (or ``native/build.py``) built."""
     out = {}
-    for plat, suffix in PLATFORMS.items():
+    for plat, suffix in {**platforms(fmi_version), **EXTRA_PLATFORMS[fmi_version]}.items():
         p = Path(lib_dir) / "fmu" / plat / f"{model_identifier}{suffix}"
         if p.is_file():
             out[plat] = p
     return out
 
 
-def build_native_fmu(kind: str, sc: Scenario, out_dir: str | Path, lib_dir: Path = LIB_DIR) -> Path:
-    """Build the native FMU ``kind`` for the scenario's robot into ``out_dir``; returns its path."""
+def build_native_fmu(kind: str, sc: Scenario, out_dir: str | Path, lib_dir: Path = LIB_DIR,
+                     fmi_version: int = 2) -> Path:
+    """Build the native FMI ``fmi_version`` (2 or 3) FMU ``kind`` for the scenario's robot into
+    ``out_dir``; returns its path."""
     from ..core.robot_record import robot_record_text
 
     if kind not in MODELS:
         raise ValueError(f"no native FMU for {kind!r} yet; native: {sorted(MODELS)}")
+    if fmi_version not in FMI_VERSIONS:
+        raise ValueError(f"fmi_version must be one of {FMI_VERSIONS}, got {fmi_version!r}")
     model = MODELS[kind]
     ident = model.identifier
-    bins = binaries(ident, lib_dir)
-    if "linux64" not in bins:
+    bins = binaries(ident, lib_dir, fmi_version)
+    host = "x86_64-linux" if fmi_version == 3 else "linux64"
+    if host not in bins:
         raise NativeUnavailable(
-            f"the native {kind} binary is not built ({Path(lib_dir) / 'fmu'} has no linux64/"
-            f"{ident}.so): reinstall the package (pip install -e .), which compiles it")
+            f"the native FMI {fmi_version}.0 {kind} binary is not built ({Path(lib_dir) / 'fmu'} "
+            f"has no {host}/{ident}.so): reinstall the package (pip install -e .), which "
+            f"compiles it")
     variables = model.variables(sc.robot, sc)
     robot = known_robot(kind, sc.robot)
     resources = {SCENARIO_FILE: scenario_text(sc, home=model.robot == "all")}
     if robot is not None:
         resources[ROBOT_FILE] = robot_record_text(robot)
     table0 = variable_table(variables, ident, "", model.key)
-    digest = hashlib.sha256((ident + table0 + "".join(resources.values())).encode()).digest()
+    # FMI 2.0's GUID as before; FMI 3.0's token differs (another model description)
+    digest = hashlib.sha256(((ident if fmi_version == 2 else ident + " FMI 3.0") + table0
+                             + "".join(resources.values())).encode()).digest()
     guid = "{%s}" % uuid.UUID(bytes=digest[:16], version=4)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{ident}.fmu"
     tmp = path.with_suffix(".fmu.part")
     with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
+        describe = model_description3 if fmi_version == 3 else model_description
         zf.writestr("modelDescription.xml",
-                    model_description(variables, ident, guid, model.description, sc,
-                                      model.dependencies and model.dependencies(variables)))
+                    describe(variables, ident, guid, model.description, sc,
+                             model.dependencies and model.dependencies(variables)))
         for plat, p in sorted(bins.items()):
             zf.write(p, f"binaries/{plat}/{p.name}")
         zf.writestr(f"resources/{VARIABLES_FILE}", variable_table(variables, ident, guid, model.key))

@@ -8,7 +8,6 @@ measurement_vars`): ``r_S, v_S (3,)``, ``A (3, 3)``, ``omega_B, a_S, alpha_B (3,
 """
 from __future__ import annotations
 
-import math
 from typing import Dict, Mapping, Optional
 
 from ..interface import NOISE_PARAMETERS
@@ -25,12 +24,15 @@ def default_parameters() -> Dict[str, float]:
 
 
 def estimator_noise_settings(params: Optional[Mapping[str, float]] = None, scale: float = 1.0,
-                             dt: float = 0.1) -> Dict[str, float]:
-    """The estimator parameters that describe these sensors' errors to it
-    (docs/identification.md, section 6): the thrust errors' consider covariance
-    (``ident.sd_thrust.*``) and the per-sample white noise of the signals the force method's
-    accelerations come from (``ident.noise.*``: measured ``base.a``, ``base.alpha``,
-    ``arm.qdd``; for differenced accelerations ``base.v``, ``base.omega``, ``arm.qd``).
+                             dt: float = 0.1, method: int = 2,
+                             accel_source: int = 1) -> Dict[str, float]:
+    """The estimator parameters that the noise profile (``ident.noise_profile`` = 1, the
+    native core's ``sr_noise_profile_apply``; docs/identification.md, "One switch") sets for
+    these sensors and the estimator's ``method`` / ``accel_source`` (codes of
+    :class:`spacerobot.interface.Method` / ``AccelSource``): ``{FMU name: value}`` of each
+    option it moves from its default, e.g. the thrust errors' consider covariance
+    (``ident.sd_thrust.*``), the per-sample white noise of the signals the force method's
+    accelerations come from (``ident.noise.*``), the method's windows.
 
     Parameters
     ----------
@@ -38,15 +40,14 @@ def estimator_noise_settings(params: Optional[Mapping[str, float]] = None, scale
     scale : ``noise.scale``;  dt : the sample interval [s] (densities ``d`` give ``d /
         sqrt(dt)`` per sample, as the sensors draw them)
     """
+    from ..core.estimator import profile_values
+    from ..interface import estimator_vars
+    from ..robots import scenario
     p = default_parameters()
     p.update({k: float(v) for k, v in (params or {}).items()})
-    p = {k: scale * v for k, v in p.items()}
-    rt = math.sqrt(dt)
-    return {"ident.sd_thrust.scale": p["thrust.scale"],
-            "ident.sd_thrust.misalign": p["thrust.misalign"],
-            "ident.noise.base.a": p["accel.vrw"] / rt,
-            "ident.noise.base.alpha": p["alpha"],
-            "ident.noise.arm.qdd": p["enc.qdd"],
-            "ident.noise.base.v": p["nav.v"],
-            "ident.noise.base.omega": p["gyro.arw"] / rt,
-            "ident.noise.arm.qd": p["enc.qd"]}
+    sc = scenario("planar")                  # any robot: the profile reads no robot
+    values = {v.name: v.start for v in estimator_vars(sc.robot, sc) if v.causality == "parameter"}
+    values.update({"method": int(method), "accel_source": int(accel_source),
+                   "ident.noise_profile": 1, "noise.scale": float(scale)})
+    values.update({f"noise.{k}": x for k, x in p.items()})
+    return profile_values(values, dt)

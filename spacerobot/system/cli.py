@@ -151,12 +151,17 @@ def robot_key(args) -> Optional[str]:
 def cmd_build(args) -> int:
     from .ssd import build_system
     robot = robot_key(args)
-    out = Path(args.out) if args.out else Path("build") / robot_label(robot)
-    notice("build", f"building the FMUs and the SSP for {robot_label(robot)} into {out}/ ...")
-    for key, path in build_system(robot, out, sensors=args.sensors,
-                                  backend=args.backend).items():
+    fmi3 = args.fmi_version == 3
+    if fmi3 and args.backend != "native":
+        raise CommandError("--fmi-version 3 builds native FMUs only (drop --backend pythonfmu)")
+    out = (Path(args.out) if args.out
+           else Path("build") / (robot_label(robot) + ("-fmi3" if fmi3 else "")))
+    what = "FMI 3.0 FMUs" if fmi3 else "FMUs"
+    notice("build", f"building the {what} and the SSP for {robot_label(robot)} into {out}/ ...")
+    for key, path in build_system(robot, out, sensors=args.sensors, backend=args.backend,
+                                  fmi_version=args.fmi_version).items():
         print(f"{key:<12} {path}")
-    warn_missing_platforms(args.backend)
+    warn_missing_platforms(args.backend, args.fmi_version)
     return 0
 
 
@@ -169,13 +174,14 @@ def add_backend_argument(p: argparse.ArgumentParser) -> None:
                         f"for extending the FMUs in Python); default {DEFAULT_BACKEND}")
 
 
-def warn_missing_platforms(backend: str) -> None:
+def warn_missing_platforms(backend: str, fmi_version: int = 2) -> None:
     """One line on stderr for each platform the native FMUs cannot carry on this install."""
     if backend != "native":
         return
-    from ..fmi.native import MODELS, PLATFORMS, binaries
+    from ..fmi.native import MODELS, binaries, platforms
     for ident, *_ in MODELS.values():
-        missing = sorted(set(PLATFORMS) - set(binaries(ident)))
+        built = binaries(ident, fmi_version=fmi_version)
+        missing = sorted(set(platforms(fmi_version)) - set(built))
         for plat in missing:
             print(f"spacerobot build: {ident}.fmu carries no {plat} binary: it was not compiled "
                   f"when the package was installed (win64 needs x86_64-w64-mingw32-gcc, Debian "
@@ -206,6 +212,19 @@ def set_stop_time(robot: Optional[str], target: Optional[str]) -> Optional[float
     return ps.stop_time if ps else None
 
 
+def set_labels(robot: Optional[str], target: Optional[str], method: Optional[str],
+               accel: Optional[str]) -> tuple:
+    """``(method, accel)`` labels of a run: those given, else those parameter set ``target``
+    binds (the ``realistic`` set: force, differenced, for its noise profile), else momentum
+    and measured."""
+    ps = PARAMETER_SETS[robot_kind(robot)].get(target) if robot and target else None
+    bound = dict(ps.estimator) if ps else {}
+    label = {table: {code: name for name, code in codes.items()}
+             for table, codes in (("method", METHOD_CODES), ("accel_source", ACCEL_CODES))}
+    return (method or label["method"].get(bound.get("method"), "momentum"),
+            accel or label["accel_source"].get(bound.get("accel_source"), "measured"))
+
+
 @fail_on_errors("run")
 def cmd_run(args) -> int:
     from .bindings import parse_assignments
@@ -216,8 +235,6 @@ def cmd_run(args) -> int:
     if args.ssp and args.robot:
         raise CommandError("give either --robot or SSP_FILE, not both")
     key = robot_key(args)
-    overrides = estimator_overrides(args.method, args.accel, args.solver)
-    overrides.update(parse_assignments(args.set))
     if args.ssp:
         ssp = Path(args.ssp)
         if not ssp.exists():
@@ -227,6 +244,9 @@ def cmd_run(args) -> int:
         robot = key or "planar"
         ssp = None
     target = args.target or (default_parameter_set(robot, args.sensors) if robot else None)
+    args.method, args.accel = set_labels(robot, target, args.method, args.accel)
+    overrides = estimator_overrides(args.method, args.accel, args.solver)
+    overrides.update(parse_assignments(args.set))
     csv_path = Path(args.out) if args.out else result_name(robot, ssp or Path(robot), target,
                                                              args)
     check_writable(csv_path)              # before the build and the run: results never lost
@@ -288,6 +308,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--sensors", action="store_true", help="the system with the sensors FMU "
                    "between plant and estimator (<robot>_sensors.ssp, docs/sensors.md)")
     add_backend_argument(p)
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                   help="FMI version of the FMUs: 2 (default) or 3 (native FMUs with the same "
+                        "variables; default folder build/<robot>-fmi3/; docs/fmus.md)")
     p.set_defaults(func=cmd_build)
 
     p = sub.add_parser("run", help="run the co-simulation and print the final estimates",
@@ -300,9 +323,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--target", help="parameter set: small|medium|large|paper|excited (planar "
                                     "robots), paper|default|depletion (spatial robots); "
                                     "default: the one bound in the SSD")
-    p.add_argument("--method", choices=list(METHOD_CODES), default="momentum")
-    p.add_argument("--accel", choices=list(ACCEL_CODES), default="measured",
-                   help="force method: measured accelerations or differenced velocities")
+    p.add_argument("--method", choices=list(METHOD_CODES),
+                   help="identification equations (default: the parameter set's, e.g. force "
+                        "for realistic sensors; else momentum)")
+    p.add_argument("--accel", choices=list(ACCEL_CODES),
+                   help="force method: measured accelerations or differenced velocities "
+                        "(default: the parameter set's; else measured)")
     p.add_argument("--solver", choices=list(SOLVER_CODES), default="paper")
     p.add_argument("--stop-time", type=float, metavar="T",
                    help="stop time [s] (default: the parameter set's own duration, e.g. "

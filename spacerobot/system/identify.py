@@ -137,10 +137,12 @@ def estimator_parameters(robot: str, overrides: Optional[Mapping[str, float]] = 
     return values
 
 
-def identifier_of(robot: str, values: Mapping[str, float]) -> Tuple[Identifier, ExcitationRequest]:
+def identifier_of(robot: str, values: Mapping[str, float], sample_time: float = 0.1
+                  ) -> Tuple[Identifier, ExcitationRequest]:
     """The estimator core and its excitation request as the FMU builds them from its
-    parameters (:func:`estimator_parameters`; :func:`.estimator.identifier.identifier_from_values`)."""
-    return identifier_from_values(get_robot(robot), values)
+    parameters (:func:`estimator_parameters`; :func:`.estimator.identifier.identifier_from_values`;
+    ``sample_time`` [s]: the telemetry's, for the noise profile's per-sample densities)."""
+    return identifier_from_values(get_robot(robot), values, sample_time)
 
 
 def _output_vars(robot: str) -> List[Var]:
@@ -190,7 +192,10 @@ def identify(time: np.ndarray, groups: Mapping[str, np.ndarray], robot: str,
         ``time`` and every estimator output name -> (N,) array; row k after sample k.
     """
     values = dict(parameters) if parameters is not None else estimator_parameters(robot)
-    ident, request = identifier_of(robot, values)
+    steps = np.diff(np.asarray(time, float))
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    ident, request = identifier_of(robot, values,
+                                   float(np.median(steps)) if len(steps) else 0.1)
     outs = _output_vars(robot)
     rows = np.empty((len(time), len(outs)))
     for k, t in enumerate(np.asarray(time, float).tolist()):

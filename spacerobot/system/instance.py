@@ -1,4 +1,5 @@
-"""One FMI 2.0 co-simulation FMU, extracted and instantiated through fmpy, addressed by name.
+"""One FMI 2.0 or 3.0 co-simulation FMU, extracted and instantiated through fmpy, addressed by
+name (FMI 3.0 through :class:`.fmi3.FMU3Adapter`, which offers FMI 2.0's calls and type names).
 
 The one instance wrapper of the project: the co-simulation master (:mod:`.master`), the SSP
 runner, the cross-check writer, the benchmarks and the tests all use :class:`FMUInstance`.
@@ -46,6 +47,7 @@ def logger_callbacks(sink: Callable[[str, int, str, str], None]):
             pass
 
     cb = fmi2CallbackFunctions()
+    cb.sink = sink                      # for FMI 3.0 instances (.fmi3.log_message_callback)
     cb.logger = fmi2CallbackLoggerTYPE(logger)
     cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
     cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
@@ -111,7 +113,10 @@ class ArrayIO:
         if self.values.dtype != dtype or self.values.shape != (self.n,):
             raise ValueError(f"ArrayIO {typ}: values must be ({self.n},) {np.dtype(dtype)}")
         self._raw = isinstance(fmu, FMU2Slave)
-        if self._raw:
+        self._direct = None
+        if not self._raw and hasattr(fmu, "array_io"):        # FMI 3.0 (.fmi3.FMU3Adapter)
+            self._direct = fmu.array_io(typ, vrs, self.values)
+        elif self._raw:
             ctype = fmi2Real if typ == "Real" else fmi2Integer       # fmi2Boolean is an int
             self._vr = (fmi2ValueReference * self.n)(*vrs)
             self._ptr = self.values.ctypes.data_as(ctypes.POINTER(ctype))
@@ -124,6 +129,8 @@ class ArrayIO:
         """Read the variables into :attr:`values` (returned)."""
         if self._raw:
             self._check(self._get_c(self.fmu.component, self._vr, self.n, self._ptr), "Get")
+        elif self._direct:
+            self._direct[0]()
         else:
             self.values[:] = getattr(self.fmu, f"get{self.typ}")(self._vrs)
         return self.values
@@ -132,6 +139,8 @@ class ArrayIO:
         """Write :attr:`values` to the variables."""
         if self._raw:
             self._check(self._set_c(self.fmu.component, self._vr, self.n, self._ptr), "Set")
+        elif self._direct:
+            self._direct[1]()
         else:
             getattr(self.fmu, f"set{self.typ}")(self._vrs, self.values.tolist())
 
@@ -179,7 +188,7 @@ class FMUInstance:
     Raises
     ------
     ValueError
-        The file is not an FMI 2.0 co-simulation FMU (``zipfile.BadZipFile``, a subclass of
+        The file is not an FMI 2.0 or 3.0 co-simulation FMU (``zipfile.BadZipFile``, a subclass of
         Exception, for a file that is not a zip archive at all).
     """
 
@@ -195,17 +204,23 @@ class FMUInstance:
             md = read_model_description(str(path))
         else:
             md = extracted[0]
-        if md.fmiVersion != "2.0" or md.coSimulation is None:
-            raise ValueError(f"{path}: only FMI 2.0 co-simulation FMUs are supported")
+        if md.fmiVersion not in ("2.0", "3.0") or md.coSimulation is None:
+            raise ValueError(f"{path}: only FMI 2.0 and 3.0 co-simulation FMUs are supported")
         if extracted is None:
             self.md, self.dir, self._owns_dir = md, extract(
                 str(path), unzipdir=None if unzipdir is None else str(unzipdir)), True
         else:
             (self.md, self.dir), self._owns_dir = extracted, False
+        self.fmi_version = self.md.fmiVersion
+        if self.fmi_version == "3.0":
+            from .fmi3 import FMU3Adapter, fmi2_view
+            fmi2_view(self.md.modelVariables)    # Float64 -> Real, Int32 -> Integer
+            self.fmu = FMU3Adapter(self.md, self.dir, name)
+        else:
+            self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
+                                 modelIdentifier=self.md.coSimulation.modelIdentifier,
+                                 instanceName=name)
         self.vars = {v.name: v for v in self.md.modelVariables}
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName=name)
         self._callbacks = callbacks              # kept alive as long as the instance
         self._logging_on = logging_on
         self.instantiated = self.initialized = False

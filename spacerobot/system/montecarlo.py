@@ -37,8 +37,8 @@ from .mc_metrics import run_metrics
 from .sweep.execute import Study, run_sweep
 from .sweep.run import DEFAULT_RUNNER, run_guarded
 
-__all__ = ["Case", "make_cases", "run_case", "run_montecarlo", "plot_montecarlo", "COLUMNS",
-           "STUDY", "EXCITE"]
+__all__ = ["Case", "SensorsCase", "make_cases", "run_case", "run_montecarlo", "plot_montecarlo",
+           "COLUMNS", "STUDY", "SENSORS_STUDY", "EXCITE"]
 
 #: excitation modes of a case -> the estimator's ``ident.excite_mode``
 EXCITE = {"closed": ExciteMode.UNTIL_IDENTIFIED, "off": ExciteMode.OFF}
@@ -49,7 +49,7 @@ _CASE_PARAMS = ("base.", "target.", "excite.")
 
 CASE_COLUMNS = ("case_id", "robot", "case", "seed", "method", "accel_source", "solver", "excite",
                 "stop_time", "base_mass", "target_mass", "omega0_norm", "v0_norm")
-METRIC_COLUMNS = ("worst_error", "worst_param", "t_1pct", "t_01pct",
+METRIC_COLUMNS = ("worst_error", "worst_param", "within2sd", "t_1pct", "t_01pct",
                   "identified.base", "identified.target", "t_identified.base",
                   "t_identified.target", "false_identified.base", "false_identified.target",
                   "physical", "excite_mean", "t_excite_off", "max_att_ref", "att_max",
@@ -112,14 +112,56 @@ class Case:
                 "v0_norm": float(np.linalg.norm(sc.v0))}
 
 
+@dataclass(frozen=True)
+class SensorsCase(Case):
+    """A case through plant -> sensors -> estimator (the robot's ``<robot>_sensors.ssp`` with
+    its default parameter set ``realistic``: the sensors' realistic defaults times
+    ``noise_scale``, the estimator's noise profile, ``ident.noise_profile`` = 1, with the same
+    ``noise.scale``), the sensors seeded per case from ``(seed, index)``."""
+
+    noise_scale: float = 1.0
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not (math.isfinite(self.noise_scale) and self.noise_scale >= 0.0):
+            raise ValueError(f"noise scale must be a finite number >= 0, got {self.noise_scale}")
+
+    @property
+    def id(self) -> str:
+        return hashlib.sha256(json.dumps(["sensors", super().id, repr(float(self.noise_scale))]
+                                         ).encode()).hexdigest()[:16]
+
+    @property
+    def sensors_seed(self) -> int:
+        """The sensors FMU's ``seed`` of this case (drawn from ``(seed, index)``)."""
+        return int(np.random.default_rng([self.seed, self.index, 1]).integers(0, 2 ** 31 - 1))
+
+    def fmi_overrides(self) -> Dict[str, float]:
+        ov = super().fmi_overrides()
+        ov["sensors.seed"] = self.sensors_seed
+        ov["sensors.noise.scale"] = float(self.noise_scale)
+        ov["estimator.noise.scale"] = float(self.noise_scale)
+        return ov
+
+    def columns(self) -> Dict[str, object]:
+        return {**super().columns(), "noise_scale": float(self.noise_scale),
+                "sensors_seed": self.sensors_seed}
+
+
 def make_cases(robot: str = "spatial", cases: int = 20, seed: int = 0,
                methods: Sequence[str] = ("momentum", "force"),
-               excite: Sequence[str] = ("closed",), stop_time: float = 60.0) -> List[Case]:
-    """Every index ``0 .. cases-1`` with every method and excitation mode."""
+               excite: Sequence[str] = ("closed",), stop_time: float = 60.0,
+               noise_scale: Optional[float] = None,
+               accel_source: str = "measured") -> List[Case]:
+    """Every index ``0 .. cases-1`` with every method and excitation mode; with a
+    ``noise_scale``, :class:`SensorsCase` s (through the sensors) instead."""
     if cases < 1:
         raise ValueError(f"the number of cases must be >= 1, got {cases}")
-    return [Case(robot, i, seed, m, e, stop_time) for i in range(cases) for m in methods
-            for e in excite]
+    if noise_scale is None:
+        return [Case(robot, i, seed, m, e, stop_time, accel_source) for i in range(cases)
+                for m in methods for e in excite]
+    return [SensorsCase(robot, i, seed, m, e, stop_time, accel_source, noise_scale=noise_scale)
+            for i in range(cases) for m in methods for e in excite]
 
 
 def _series(res, names: Sequence[str], component: str) -> np.ndarray:
@@ -158,6 +200,9 @@ def case_row(case: Case, res) -> Dict[str, object]:
     row["qd_max"], row["att_max"] = ex.qd_max, ex.att_max
     rel = interface.relative_errors(est[-1], truth)
     row.update({f"relerr.{p}": float(r) for p, r in zip(ESTIMATE_NAMES, rel)})
+    sd = _series(res, [f"sd.{p}" for p in ESTIMATE_NAMES], "estimator")[-1]
+    ident = layout.identified
+    row["within2sd"] = float(np.mean(np.abs(est[-1] - truth)[ident] <= 2.0 * sd[ident]))
     return row
 
 
@@ -172,17 +217,34 @@ def run_case(case: Case, ssp_path: str, runner: str = DEFAULT_RUNNER) -> Dict[st
 
 #: the Monte Carlo study for the sweep's executor
 STUDY = Study(name="montecarlo", columns=COLUMNS, key="case_id", task=run_case)
+#: the study through the sensors (:class:`SensorsCase`): the sensors' scale and seed too
+SENSORS_STUDY = Study(name="montecarlo-sensors",
+                      columns=COLUMNS[:len(CASE_COLUMNS)] + ("noise_scale", "sensors_seed")
+                      + COLUMNS[len(CASE_COLUMNS):], key="case_id", task=run_case)
+
+
+def build_sensors_system(robot: str, out_dir):
+    """The sweep's builder of the system with the sensors FMU (``<robot>_sensors.ssp``)."""
+    from .ssd import build_system
+    return build_system(robot, out_dir, sensors=True)
 
 
 def run_montecarlo(cases: Sequence[Case], out_csv, **kwargs):
     """Run every case not yet in ``out_csv`` on Dask (keywords of
     :func:`spacerobot.system.sweep.execute.run_sweep`: ``workers``, ``scheduler``, ``client``,
-    ``build_dir``, ``ssp``, ``progress``). Returns the :class:`SweepSummary`."""
+    ``build_dir``, ``ssp``, ``progress``). Returns the :class:`SweepSummary`. Cases of one
+    kind: :class:`SensorsCase` s run the system with the sensors FMU."""
+    kinds = {isinstance(c, SensorsCase) for c in cases}
+    if len(kinds) > 1:
+        raise ValueError("cases with and without sensors cannot share one table")
+    if kinds == {True}:
+        kwargs.setdefault("builder", "spacerobot.system.montecarlo:build_sensors_system")
+        return run_sweep(cases, out_csv, study=SENSORS_STUDY, **kwargs)
     return run_sweep(cases, out_csv, study=STUDY, **kwargs)
 
 
 def read_results(csv_path) -> List[Dict[str, str]]:
-    """The rows of a Monte Carlo table (complete lines)."""
+    """The rows of a Monte Carlo table (complete lines), with or without sensors."""
     from .sweep.table import read_table
     return read_table(csv_path, STUDY.key)
 
@@ -199,8 +261,8 @@ def summary_table(rows: Sequence[Dict[str, str]]) -> str:
     lines = ["| robot | method | excitation | cases | within 1 % | within 0.1 % | median worst "
              "error/scale | largest worst error/scale | median time to 1 % [s] | median time "
              "to 0.1 % [s] "
-             "| both identified | false flags | impossible estimates |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| both identified | false flags | impossible estimates | within 2 sd |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (robot, method, excite), rs in sorted(groups.items()):
         w = np.array([float(r["worst_error"]) for r in rs])
         t1 = np.array([float(r["t_1pct"]) for r in rs])
@@ -217,8 +279,15 @@ def summary_table(rows: Sequence[Dict[str, str]]) -> str:
         lines.append(f"| {robot} | {method} | {excite} | {n} | {(w < 1e-2).sum()}/{n} | "
                      f"{(w < 1e-3).sum()}/{n} | {100 * np.median(w):.3g} % | "
                      f"{100 * w.max():.3g} % | {med(t1)} | {med(t01)} | {both}/{n} | {false} | "
-                     f"{bad} |")
+                     f"{bad} | {calibration(rs)} |")
     return "\n".join(lines)
+
+
+def calibration(rows: Sequence[Dict[str, str]]) -> str:
+    """The mean fraction of the identified estimates within 2 reported standard deviations of
+    the truth at the end (calibrated: 0.90-0.99), or "-" for a table without the column."""
+    x = [float(r["within2sd"]) for r in rows if r.get("within2sd") not in (None, "")]
+    return f"{np.mean(x):.3f}" if x else "-"
 
 
 def plot_montecarlo(csv_path, out_png: Optional[str] = None) -> Path:
@@ -279,8 +348,15 @@ def register(subparsers):
     add_robot_arguments(p, default="spatial")
     p.add_argument("--cases", type=int, default=20, help="number of random cases")
     p.add_argument("--seed", type=int, default=0, help="seed of the draws")
-    p.add_argument("--method", nargs="+", default=["momentum", "force"],
-                   choices=["momentum", "force"])
+    p.add_argument("--method", nargs="+", choices=["momentum", "force"],
+                   help="identification equations (default: momentum and force; with "
+                        "--sensors: force, the realistic set's)")
+    p.add_argument("--sensors", action="store_true",
+                   help="through the sensors FMU (its realistic defaults, a random seed per "
+                        "case) with the estimator's noise profile: the system's realistic set")
+    p.add_argument("--noise-scale", dest="noise_scale", type=float, default=1.0, metavar="S",
+                   help="with --sensors: noise.scale of the sensors and of the estimator's "
+                        "noise profile (0 = ideal sensors)")
     p.add_argument("--excite", nargs="+", default=["closed"], choices=sorted(EXCITE),
                    help="closed: the estimator requests excitation until both bodies are "
                         "identified; off: no excitation (the paper's behaviour)")
@@ -306,18 +382,26 @@ def cli_montecarlo(args) -> int:
     from .sweep.table import SweepLocked
 
     robot = robot_key(args)
-    out = Path(args.out or f"results/montecarlo-{robot_label(robot)}-seed{args.seed}.csv")
+    tag = (f"-sensors{'' if args.noise_scale == 1.0 else f'{args.noise_scale:g}'}"
+           if args.sensors else "")
+    out = Path(args.out or f"results/montecarlo-{robot_label(robot)}{tag}-seed{args.seed}.csv")
+    methods = args.method or (["force"] if args.sensors else ["momentum", "force"])
     check_writable(out)
     ssp = None
     if args.ssp:
         if not Path(args.ssp).exists():
             raise ValueError(f"{args.ssp} does not exist")
         ssp = {robot: str(Path(args.ssp).resolve())}
-    cases = make_cases(robot, args.cases, args.seed, args.method, args.excite,
-                       args.stop_time)
+    # through the sensors: the realistic set's accelerations (differenced, the noise profile's
+    # 9-sample derivative in the momentum equations)
+    cases = make_cases(robot, args.cases, args.seed, methods, args.excite, args.stop_time,
+                       noise_scale=args.noise_scale if args.sensors else None,
+                       accel_source="differenced" if args.sensors else "measured")
     from .cli import notice
     notice("montecarlo", f"{len(cases)} runs of {args.stop_time:g} s ({args.cases} random "
-           f"cases x {len(args.method)} methods x {len(args.excite)} excitation modes) on "
+           f"cases x {len(methods)} methods x {len(args.excite)} excitation modes"
+           + (f", through the sensors (noise.scale {args.noise_scale:g})" if args.sensors else "")
+           + ") on "
            + (f"the Dask scheduler {args.scheduler}" if args.scheduler else
               f"{args.workers} local Dask workers")
            + (", building the SSP first" if not ssp else "") + f"; results -> {out} ...")

@@ -142,8 +142,8 @@ def _instance(comp: ComponentInfo, root_dir: Path, tmp: Path, log: FMULog) -> FM
         return FMUInstance(fmu_path, comp.name, callbacks=log.callbacks, logging_on=True,
                            unzipdir=tmp / comp.name, instantiate=False)
     except ValueError:
-        raise SimulationError(f"component {comp.name!r}: {comp.source} is not an FMI 2.0 "
-                              f"co-simulation FMU") from None
+        raise SimulationError(f"component {comp.name!r}: {comp.source} is not an FMI 2.0 or "
+                              f"3.0 co-simulation FMU") from None
     except Exception as e:            # zipfile.BadZipFile, a model description fmpy rejects
         raise SimulationError(f"component {comp.name!r}: {comp.source} is not a valid FMU "
                               f"({type(e).__name__}: {e})") from None

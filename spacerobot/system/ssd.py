@@ -406,7 +406,8 @@ def write_ssp_sources(dest: str | Path = SSP_SOURCE_DIR) -> List[Path]:
 
 
 def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]] = None,
-                 sensors: bool = False, backend: Optional[str] = None) -> Dict[str, Path]:
+                 sensors: bool = False, backend: Optional[str] = None,
+                 fmi_version: int = 2) -> Dict[str, Path]:
     """Build the FMUs, the SSD, the SSVs and the packaged ``<robot>.ssp`` into ``out_dir``.
 
     Parameters
@@ -425,6 +426,9 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
         How the FMUs are built (:data:`spacerobot.fmi.build.BACKENDS`): ``native`` builds the
         models that have a native binary (:func:`spacerobot.fmi.build.native_kinds`) natively
         and the others with pythonfmu; default :data:`spacerobot.fmi.build.DEFAULT_BACKEND`.
+    fmi_version : int
+        2 (default) or 3: FMI 3.0 FMUs (native backend only), with the same variable names, so
+        that the SSD and its parameter sets are the same text (docs/fmus.md).
 
     Returns
     -------
@@ -442,7 +446,7 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     fmus = dict(fmus or {})
     for kind in kinds:
         if kind not in fmus:
-            fmus[kind] = build_fmu(kind, scenario(robot), out, backend)
+            fmus[kind] = build_fmu(kind, scenario(robot), out, backend, fmi_version)
     paths: Dict[str, Path] = {k: Path(fmus[k]) for k in kinds}
     files = generate(robot, sensors)
     src_dir = out / system_name(robot, True) if sensors else out

@@ -1,12 +1,12 @@
 /*
- * fmi2_layer.c -- the FMI 2.0 co-simulation layer shared by the project's native FMUs.
+ * fmi_layer.c -- the version-independent part of the FMI layer shared by the project's native
+ * FMUs (fmi_layer.h): the instance, the lifecycle state machine, the checks the standard asks for
+ * (value references, types, causality and variability per phase), the logging core, the variable
+ * storage read from the resources, FMU state get/set/serialise. The thin API files fmi2_api.c
+ * (FMI 2.0) and fmi3_api.c (FMI 3.0) export the standard's functions on top of it; the model's
+ * glue (model.h) maps the variables to the numerical core and steps it.
  *
- * Implements every fmi2 function a co-simulation FMU exports: the lifecycle state machine, the
- * checks the standard asks for (value references, types, causality and variability per phase),
- * logging through the host's callback, the variable storage, FMU state get/set/serialise. The
- * model's glue (model.h) maps the variables to the numerical core and steps it.
- *
- * A refused call returns fmi2Error (fmi2Discard for a step that cannot be taken) with a logged
+ * A refused call returns SR_ERROR (SR_DISCARD for a step that cannot be taken) with a logged
  * reason and leaves the instance as it was; nothing here aborts or exits.
  */
 #include <limits.h>
@@ -17,37 +17,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fmi2.h"
-#include "model.h"
+#include "fmi_layer.h"
 
 #define VARIABLES_FILE "spacerobot_variables.txt"
 #define MAX_VARIABLES 4096
 #define MSG_MAX 1024
 #define STATE_MAGIC 0x53524653u   /* "SRFS" */
 #define STATE_VERSION 1u
+#if FMI_VERSION == 3
+#  define TOKEN_NAME "instantiationToken"
+#else
+#  define TOKEN_NAME "fmuGUID"
+#endif
 
-typedef enum { PHASE_INSTANTIATED, PHASE_INITIALIZATION, PHASE_STEP, PHASE_TERMINATED } phase_t;
 static const char *const PHASE_NAME[] = {"instantiated", "initialization", "stepping", "terminated"};
-
-struct sr_instance {
-    char name[128];
-    fmi2CallbackLogger logger;
-    fmi2ComponentEnvironment env;
-    int log_events;                  /* loggingOn / fmi2SetDebugLogging: logEvents, logAll */
-    phase_t phase;
-    double time;
-    int nvars;
-    sr_var *vars;                    /* by value reference */
-    double *real;                    /* values by value reference (Real variables) */
-    int *integer;                    /* values by value reference (Integer variables) */
-    int preview_dirty;               /* a parameter (feedthrough: or an input) changed in
-                                        initialisation mode */
-    int outputs_dirty;               /* feedthrough: inputs, state or time changed since the
-                                        outputs were computed (stepping mode) */
-    void *model;
-    void **states;                   /* the FMU states handed out and not freed yet */
-    int nstates, cap_states;
-};
 
 /* one saved FMU state: this header, then real[nvars], integer[nvars], the model's block */
 typedef struct {
@@ -63,29 +46,18 @@ typedef struct {
 } saved_state;
 
 /* ---- logging ------------------------------------------------------------------------------- */
-static const char *const CATEGORY[] = {"logEvents", "logStatusWarning", "logStatusError",
-                                       "logStatusDiscard", "logAll"};
+const char *const SR_FMI_CATEGORY[5] = {"logEvents", "logStatusWarning", "logStatusError",
+                                        "logStatusDiscard", "logAll"};
 
 static void vlog(sr_instance *inst, sr_log_category cat, const char *fmt, va_list ap) {
     char msg[MSG_MAX];
-    fmi2Status st = cat == SR_LOG_ERROR ? fmi2Error
-                  : cat == SR_LOG_WARNING ? fmi2Warning
-                  : cat == SR_LOG_DISCARD ? fmi2Discard : fmi2OK;
-    if (!inst || !inst->logger) return;
+    int st = cat == SR_LOG_ERROR ? SR_ERROR
+           : cat == SR_LOG_WARNING ? SR_WARNING
+           : cat == SR_LOG_DISCARD ? SR_DISCARD : SR_OK;
+    if (!inst || !inst->emit) return;
     if ((cat == SR_LOG_EVENTS || cat == SR_LOG_ALL) && !inst->log_events) return;
     vsnprintf(msg, sizeof msg, fmt, ap);
-    /* the message is the format itself with every '%' doubled: a host that formats it prints the
-       text, and one that cannot read C varargs (a ctypes logger, e.g. fmpy's) still gets it */
-    {
-        char fmt_msg[2 * MSG_MAX];
-        size_t i, o = 0;
-        for (i = 0; msg[i] && o + 2 < sizeof fmt_msg; ++i) {
-            if (msg[i] == '%') fmt_msg[o++] = '%';
-            fmt_msg[o++] = msg[i];
-        }
-        fmt_msg[o] = '\0';
-        inst->logger(inst->env, inst->name, st, CATEGORY[cat], fmt_msg);
-    }
+    inst->emit(inst, st, SR_FMI_CATEGORY[cat], msg);
 }
 
 void sr_log(sr_instance *inst, sr_log_category category, const char *fmt, ...) {
@@ -95,18 +67,14 @@ void sr_log(sr_instance *inst, sr_log_category category, const char *fmt, ...) {
     va_end(ap);
 }
 
-static fmi2Status refuse(sr_instance *inst, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-static fmi2Status refuse(sr_instance *inst, const char *fmt, ...) {
+int sr_fmi_refuse(sr_instance *inst, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
     vlog(inst, SR_LOG_ERROR, fmt, ap);
     va_end(ap);
-    return fmi2Error;
+    return SR_ERROR;
 }
+#define refuse sr_fmi_refuse
 
 /* ---- the variable table (resources/spacerobot_variables.txt) -------------------------------- */
 /* Each line after the header: vr type causality variability start key name, with the start as the
@@ -232,7 +200,7 @@ static int load_variables(sr_instance *inst, const char *resources, const char *
         } else if (n == 2 && strcmp(f[0], "guid") == 0) {
             seen_guid = 1;
             if (guid && strcmp(guid, f[1]) != 0) {
-                sr_log(inst, SR_LOG_ERROR, "fmuGUID %s does not match this FMU's %s (a model "
+                sr_log(inst, SR_LOG_ERROR, TOKEN_NAME " %s does not match this FMU's %s (a model "
                        "description of another build?)", guid, f[1]);
                 ok = 0;
             }
@@ -306,11 +274,14 @@ const sr_var *sr_variable(const sr_instance *inst, int vr) {
     return vr >= 0 && vr < inst->nvars ? &inst->vars[vr] : NULL;
 }
 
-/* "file:///C:/x%20y/" or "file:/x/" -> a local path with a trailing '/' */
-static int uri_to_path(const char *uri, char *out, size_t size) {
+/* "file:///C:/x%20y/" or "file:/x/" (FMI 2.0) or, with native_path, a plain path (FMI 3.0)
+   -> a local path ending in a separator */
+int sr_fmi_resource_dir(const char *location, int native_path, char *out, size_t size) {
     size_t n = 0;
-    const char *p = uri;
-    if (!uri) return 1;
+    const char *p = location;
+    int uri;
+    if (!location || size < 2) return 1;
+    uri = strncmp(p, "file:", 5) == 0 || !native_path;   /* FMI 2.0: always a URI */
     if (strncmp(p, "file://", 7) == 0) {
         p += 7;
         if (strncmp(p, "localhost/", 10) == 0) p += 9;
@@ -318,11 +289,11 @@ static int uri_to_path(const char *uri, char *out, size_t size) {
         p += 5;
     }
 #if defined(_WIN32)
-    if (p[0] == '/' && p[1] && p[2] == ':') ++p;     /* /C:/... */
+    if (uri && p[0] == '/' && p[1] && p[2] == ':') ++p;     /* /C:/... */
 #endif
     for (; *p; ++p) {
         int c = (unsigned char)*p;
-        if (c == '%' && p[1] && p[2]) {
+        if (uri && c == '%' && p[1] && p[2]) {       /* a plain path keeps its '%' */
             char hex[3] = {p[1], p[2], 0};
             char *end;
             long v = strtol(hex, &end, 16);
@@ -331,13 +302,26 @@ static int uri_to_path(const char *uri, char *out, size_t size) {
         if (n + 2 >= size) return 1;
         out[n++] = (char)c;
     }
-    if (n == 0 || out[n - 1] != '/') out[n++] = '/';
+    if (n == 0 || (out[n - 1] != '/' && !(native_path && out[n - 1] == '\\'))) out[n++] = '/';
     out[n] = '\0';
     return 0;
 }
 
 /* ---- instance ------------------------------------------------------------------------------ */
-static void free_instance(sr_instance *inst) {
+sr_instance *sr_fmi_new(const char *name, int logging_on, sr_emit_fn emit, sr_host_logger logger,
+                        void *env) {
+    sr_instance *inst = calloc(1, sizeof *inst);
+    if (!inst) return NULL;
+    snprintf(inst->name, sizeof inst->name, "%s", name ? name : "");
+    inst->emit = emit;
+    inst->logger = logger;
+    inst->env = env;
+    inst->log_events = logging_on != 0;
+    inst->phase = PHASE_INSTANTIATED;
+    return inst;
+}
+
+void sr_fmi_free(sr_instance *inst) {
     if (!inst) return;
     for (int i = 0; i < inst->nstates; ++i) free(inst->states[i]);   /* states never freed */
     free(inst->states);
@@ -348,89 +332,54 @@ static void free_instance(sr_instance *inst) {
     free(inst);
 }
 
-const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
-const char *fmi2GetVersion(void) { return fmi2Version; }
-
-fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
-                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
-                              fmi2Boolean visible, fmi2Boolean loggingOn) {
-    char resources[4096];
-    sr_instance *inst;
-    (void)visible;
-    if (!functions || !functions->logger) return NULL;   /* the standard requires a logger */
-    inst = calloc(1, sizeof *inst);
-    if (!inst) return NULL;
-    snprintf(inst->name, sizeof inst->name, "%s", instanceName ? instanceName : "");
-    inst->logger = functions->logger;
-    inst->env = functions->componentEnvironment;
-    inst->log_events = loggingOn != fmi2False;
-    if (!instanceName || !instanceName[0]) {
-        refuse(inst, "fmi2Instantiate: an instance name is required");
-        free_instance(inst);
-        return NULL;
-    }
-    if (fmuType != fmi2CoSimulation) {
-        refuse(inst, "fmi2Instantiate: %s implements co-simulation only", SR_MODEL_IDENTIFIER);
-        free_instance(inst);
-        return NULL;
-    }
-    if (uri_to_path(fmuResourceLocation, resources, sizeof resources)) {
-        refuse(inst, "fmi2Instantiate: the resource location %s is not a file URI",
-               fmuResourceLocation ? fmuResourceLocation : "(null)");
-        free_instance(inst);
-        return NULL;
-    }
-    if (load_variables(inst, resources, fmuGUID) ||
-        (set_starts(inst), (inst->model = sr_model_new(inst, resources)) == NULL)) {
-        free_instance(inst);
-        return NULL;
-    }
+int sr_fmi_load(sr_instance *inst, const char *token, const char *resource_dir) {
+    if (load_variables(inst, resource_dir, token)) return 1;
+    set_starts(inst);
+    if ((inst->model = sr_model_new(inst, resource_dir)) == NULL) return 1;
     inst->phase = PHASE_INSTANTIATED;
     sr_log(inst, SR_LOG_EVENTS, "instantiated %s from %s (%d variables)", SR_MODEL_IDENTIFIER,
-           resources, inst->nvars);
-    return inst;
+           resource_dir, inst->nvars);
+    return 0;
 }
 
-void fmi2FreeInstance(fmi2Component c) { free_instance((sr_instance *)c); }
-
-fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
-                               const fmi2String categories[]) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
-    if (nCategories > 0 && !categories) return refuse(inst, "fmi2SetDebugLogging: categories is NULL");
-    for (size_t i = 0; i < nCategories; ++i) {
+int sr_fmi_set_debug_logging(sr_instance *inst, const char *call, int logging_on,
+                             size_t ncategories, const char *const categories[]) {
+    if (ncategories > 0 && !categories) return refuse(inst, "%s: categories is NULL", call);
+    for (size_t i = 0; i < ncategories; ++i) {
         int known = 0;
-        for (int k = 0; k < 5; ++k) known |= categories[i] && strcmp(categories[i], CATEGORY[k]) == 0;
+        for (int k = 0; k < 5; ++k)
+            known |= categories[i] && strcmp(categories[i], SR_FMI_CATEGORY[k]) == 0;
         if (!known)
-            return refuse(inst, "fmi2SetDebugLogging: unknown category %s",
+            return refuse(inst, "%s: unknown category %s", call,
                           categories[i] ? categories[i] : "(null)");
     }
-    inst->log_events = loggingOn != fmi2False;
-    return fmi2OK;
+    inst->log_events = logging_on != 0;
+    return SR_OK;
 }
 
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
-                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    sr_instance *inst = c;
-    (void)toleranceDefined; (void)tolerance; (void)stopTimeDefined; (void)stopTime;
-    if (!inst) return fmi2Error;
+int sr_fmi_setup(sr_instance *inst, double start_time) {
     if (inst->phase != PHASE_INSTANTIATED)
-        return refuse(inst, "fmi2SetupExperiment called in phase '%s'; it is only allowed after "
-                      "fmi2Instantiate", PHASE_NAME[inst->phase]);
-    if (!isfinite(startTime)) return refuse(inst, "fmi2SetupExperiment: non-finite start time");
-    inst->time = startTime;
-    return fmi2OK;
+        return refuse(inst, FMI_NAME("SetupExperiment") " called in phase '%s'; it is only allowed "
+                      "after " FMI_NAME("Instantiate"), PHASE_NAME[inst->phase]);
+    if (!isfinite(start_time))
+        return refuse(inst, FMI_NAME("SetupExperiment") ": non-finite start time");
+    inst->time = start_time;
+    return SR_OK;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
+int sr_fmi_enter_initialization(sr_instance *inst, int set_start, double start_time) {
     if (inst->phase != PHASE_INSTANTIATED)
-        return refuse(inst, "fmi2EnterInitializationMode called in phase '%s'; it is only allowed "
-                      "once, after fmi2Instantiate (or fmi2Reset)", PHASE_NAME[inst->phase]);
+        return refuse(inst, FMI_NAME("EnterInitializationMode") " called in phase '%s'; it is only "
+                      "allowed once, after " FMI_NAME("Instantiate") " (or " FMI_NAME("Reset") ")",
+                      PHASE_NAME[inst->phase]);
+    if (set_start) {
+        if (!isfinite(start_time))
+            return refuse(inst, FMI_NAME("EnterInitializationMode") ": non-finite start time");
+        inst->time = start_time;
+    }
     inst->phase = PHASE_INITIALIZATION;
     inst->preview_dirty = 1;
-    return fmi2OK;
+    return SR_OK;
 }
 
 /* "nan", "inf", "-inf": the same text on every platform (printf's differs) */
@@ -454,62 +403,75 @@ static int check_finite_parameters(sr_instance *inst) {
     return 1;
 }
 
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
+int sr_fmi_exit_initialization(sr_instance *inst) {
     if (inst->phase != PHASE_INITIALIZATION)
-        return refuse(inst, "fmi2ExitInitializationMode called in phase '%s'; call "
-                      "fmi2EnterInitializationMode first", PHASE_NAME[inst->phase]);
+        return refuse(inst, FMI_NAME("ExitInitializationMode") " called in phase '%s'; call "
+                      FMI_NAME("EnterInitializationMode") " first", PHASE_NAME[inst->phase]);
     if (check_finite_parameters(inst) != 0 || sr_model_initialize(inst->model, inst) != 0)
-        return fmi2Error;
+        return SR_ERROR;
     inst->phase = PHASE_STEP;
     inst->outputs_dirty = 1;
     sr_log(inst, SR_LOG_EVENTS, "initialised at t = %g s", inst->time);
-    return fmi2OK;
+    return SR_OK;
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
+int sr_fmi_terminate(sr_instance *inst) {
     if (inst->phase != PHASE_STEP)
-        return refuse(inst, "fmi2Terminate called in phase '%s'; it is allowed after "
+        return refuse(inst, FMI_NAME("Terminate") " called in phase '%s'; it is allowed after "
                       "initialisation", PHASE_NAME[inst->phase]);
     inst->phase = PHASE_TERMINATED;
-    return fmi2OK;
+    return SR_OK;
 }
 
-fmi2Status fmi2Reset(fmi2Component c) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
+int sr_fmi_reset(sr_instance *inst) {
     sr_model_reset(inst->model);
     set_starts(inst);
     inst->phase = PHASE_INSTANTIATED;
     inst->time = 0.0;
-    return fmi2OK;
+    return SR_OK;
 }
 
 /* ---- get / set ------------------------------------------------------------------------------- */
-static fmi2Status check_refs(sr_instance *inst, const char *call, const fmi2ValueReference vr[],
-                             size_t nvr, sr_type type) {
+static const char *type_name(sr_type type) {
+#if FMI_VERSION == 3
+    return type == SR_REAL ? "Float64" : "Int32";
+#else
+    return type == SR_REAL ? "Real" : "Integer";
+#endif
+}
+
+/* FMI 3.0 declares the independent variable, time, after the table's variables: value
+   reference nvars, a Float64 that can be read (the instance's time) and never set. */
+static int is_time(const sr_instance *inst, unsigned int vr) {
+    return FMI_VERSION == 3 && vr == (unsigned int)inst->nvars;
+}
+
+static int check_refs(sr_instance *inst, const char *call, const unsigned int vr[], size_t nvr,
+                      sr_type type, int get) {
     if (nvr > 0 && !vr) return refuse(inst, "%s: the value reference array is NULL", call);
     for (size_t i = 0; i < nvr; ++i) {
-        if (vr[i] >= (fmi2ValueReference)inst->nvars)
+        if (is_time(inst, vr[i]) && type == SR_REAL) {
+            if (get) continue;
+            return refuse(inst, "%s: time (value reference %u) is the independent variable and "
+                          "cannot be set", call, vr[i]);
+        }
+        if (vr[i] >= (unsigned int)inst->nvars)
             return refuse(inst, "%s: unknown value reference %u", call, vr[i]);
         if (inst->vars[vr[i]].type != type)
             return refuse(inst, "%s: %s (value reference %u) is not of type %s", call,
-                          inst->vars[vr[i]].name, vr[i], type == SR_REAL ? "Real" : "Integer");
+                          inst->vars[vr[i]].name, vr[i], type_name(type));
     }
-    return fmi2OK;
+    return SR_OK;
 }
 
 /* Outputs about to be read: in initialisation mode the preview for the parameters set so far;
    in stepping mode (feedthrough models) the outputs for the current inputs. */
-static void refresh_outputs(sr_instance *inst, const fmi2ValueReference vr[], size_t nvr) {
+static void refresh_outputs(sr_instance *inst, const unsigned int vr[], size_t nvr) {
     int *dirty = inst->phase == PHASE_INITIALIZATION ? &inst->preview_dirty
                : inst->phase == PHASE_STEP && SR_MODEL_FEEDTHROUGH ? &inst->outputs_dirty : NULL;
     if (!dirty || !*dirty) return;
     for (size_t i = 0; i < nvr; ++i)
-        if (inst->vars[vr[i]].causality == SR_OUTPUT) {
+        if (!is_time(inst, vr[i]) && inst->vars[vr[i]].causality == SR_OUTPUT) {
             if (inst->phase == PHASE_INITIALIZATION) sr_model_preview(inst->model, inst);
             else sr_model_outputs(inst->model, inst);
             *dirty = 0;
@@ -517,24 +479,23 @@ static void refresh_outputs(sr_instance *inst, const fmi2ValueReference vr[], si
         }
 }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
-    if (nvr > 0 && !value) return refuse(inst, "fmi2GetReal: the value array is NULL");
-    if (check_refs(inst, "fmi2GetReal", vr, nvr, SR_REAL) != fmi2OK) return fmi2Error;
+int sr_fmi_get_real(sr_instance *inst, const char *call, const unsigned int vr[], size_t nvr,
+                    double value[]) {
+    if (nvr > 0 && !value) return refuse(inst, "%s: the value array is NULL", call);
+    if (check_refs(inst, call, vr, nvr, SR_REAL, 1) != SR_OK) return SR_ERROR;
     refresh_outputs(inst, vr, nvr);
-    for (size_t i = 0; i < nvr; ++i) value[i] = inst->real[vr[i]];
-    return fmi2OK;
+    for (size_t i = 0; i < nvr; ++i)
+        value[i] = is_time(inst, vr[i]) ? inst->time : inst->real[vr[i]];
+    return SR_OK;
 }
 
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
-    if (nvr > 0 && !value) return refuse(inst, "fmi2GetInteger: the value array is NULL");
-    if (check_refs(inst, "fmi2GetInteger", vr, nvr, SR_INTEGER) != fmi2OK) return fmi2Error;
+int sr_fmi_get_integer(sr_instance *inst, const char *call, const unsigned int vr[], size_t nvr,
+                       int value[]) {
+    if (nvr > 0 && !value) return refuse(inst, "%s: the value array is NULL", call);
+    if (check_refs(inst, call, vr, nvr, SR_INTEGER, 1) != SR_OK) return SR_ERROR;
     refresh_outputs(inst, vr, nvr);
     for (size_t i = 0; i < nvr; ++i) value[i] = inst->integer[vr[i]];
-    return fmi2OK;
+    return SR_OK;
 }
 
 /* May variable v be set now? NULL if yes, else why not. */
@@ -546,11 +507,17 @@ static const char *settable(const sr_instance *inst, const sr_var *v) {
     return NULL;
 }
 
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
-    if (nvr > 0 && !value) return refuse(inst, "fmi2SetReal: the value array is NULL");
-    if (check_refs(inst, "fmi2SetReal", vr, nvr, SR_REAL) != fmi2OK) return fmi2Error;
+static void mark_set(sr_instance *inst, unsigned int vr) {
+    if (inst->vars[vr].causality == SR_PARAMETER
+        || (SR_MODEL_FEEDTHROUGH && inst->vars[vr].causality == SR_INPUT))
+        inst->preview_dirty = 1;
+    inst->outputs_dirty = 1;
+}
+
+int sr_fmi_set_real(sr_instance *inst, const char *call, const unsigned int vr[], size_t nvr,
+                    const double value[]) {
+    if (nvr > 0 && !value) return refuse(inst, "%s: the value array is NULL", call);
+    if (check_refs(inst, call, vr, nvr, SR_REAL, 0) != SR_OK) return SR_ERROR;
     for (size_t i = 0; i < nvr; ++i) {             /* all or nothing */
         const char *why = settable(inst, &inst->vars[vr[i]]);
         if (why)
@@ -559,19 +526,15 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     }
     for (size_t i = 0; i < nvr; ++i) {
         inst->real[vr[i]] = value[i];
-        if (inst->vars[vr[i]].causality == SR_PARAMETER
-            || (SR_MODEL_FEEDTHROUGH && inst->vars[vr[i]].causality == SR_INPUT))
-            inst->preview_dirty = 1;
-        inst->outputs_dirty = 1;
+        mark_set(inst, vr[i]);
     }
-    return fmi2OK;
+    return SR_OK;
 }
 
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
-    if (nvr > 0 && !value) return refuse(inst, "fmi2SetInteger: the value array is NULL");
-    if (check_refs(inst, "fmi2SetInteger", vr, nvr, SR_INTEGER) != fmi2OK) return fmi2Error;
+int sr_fmi_set_integer(sr_instance *inst, const char *call, const unsigned int vr[], size_t nvr,
+                       const int value[]) {
+    if (nvr > 0 && !value) return refuse(inst, "%s: the value array is NULL", call);
+    if (check_refs(inst, call, vr, nvr, SR_INTEGER, 0) != SR_OK) return SR_ERROR;
     for (size_t i = 0; i < nvr; ++i) {
         const char *why = settable(inst, &inst->vars[vr[i]]);
         if (why)
@@ -580,126 +543,51 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     }
     for (size_t i = 0; i < nvr; ++i) {
         inst->integer[vr[i]] = value[i];
-        if (inst->vars[vr[i]].causality == SR_PARAMETER
-            || (SR_MODEL_FEEDTHROUGH && inst->vars[vr[i]].causality == SR_INPUT))
-            inst->preview_dirty = 1;
-        inst->outputs_dirty = 1;
+        mark_set(inst, vr[i]);
     }
-    return fmi2OK;
+    return SR_OK;
 }
 
-static fmi2Status no_such_type(sr_instance *inst, const char *call, size_t nvr) {
-    if (!inst) return fmi2Error;
-    if (nvr == 0) return fmi2OK;
+int sr_fmi_no_such_type(sr_instance *inst, const char *call, size_t nvr) {
+    if (nvr == 0) return SR_OK;
     return refuse(inst, "%s: %s has no variables of this type", call, SR_MODEL_IDENTIFIER);
 }
 
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
-    (void)vr; (void)value;
-    return no_such_type(c, "fmi2GetBoolean", nvr);
-}
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    (void)vr; (void)value;
-    return no_such_type(c, "fmi2GetString", nvr);
-}
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
-    (void)vr; (void)value;
-    return no_such_type(c, "fmi2SetBoolean", nvr);
-}
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
-    (void)vr; (void)value;
-    return no_such_type(c, "fmi2SetString", nvr);
-}
-
 /* ---- stepping ------------------------------------------------------------------------------- */
-fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
-    sr_instance *inst = c;
-    (void)noSetFMUStatePriorToCurrentPoint;
-    if (!inst) return fmi2Error;
+int sr_fmi_do_step(sr_instance *inst, double t, double h) {
     if (inst->phase != PHASE_STEP) {
-        sr_log(inst, SR_LOG_DISCARD, "doStep called in phase '%s'; call fmi2ExitInitializationMode "
-               "first", PHASE_NAME[inst->phase]);
-        return fmi2Discard;
+#if FMI_VERSION == 3
+        /* FMI 3.0: an illegal call in this state is an error */
+        return refuse(inst, "fmi3DoStep called in phase '%s'; call fmi3ExitInitializationMode "
+                      "first", PHASE_NAME[inst->phase]);
+#else
+        sr_log(inst, SR_LOG_DISCARD, "doStep called in phase '%s'; call "
+               FMI_NAME("ExitInitializationMode") " first", PHASE_NAME[inst->phase]);
+        return SR_DISCARD;
+#endif
     }
     if (!isfinite(t)) {
         sr_log(inst, SR_LOG_DISCARD, "non-finite communication point %g", t);
-        return fmi2Discard;
+        return SR_DISCARD;
     }
     if (!(isfinite(h) && h > 0.0 && h <= SR_MODEL_MAX_STEP)) {
         char longest[32] = "inf";            /* spelled out: msvcrt prints infinity as 1.#INF */
         if (isfinite(SR_MODEL_MAX_STEP)) snprintf(longest, sizeof longest, "%g", SR_MODEL_MAX_STEP);
         sr_log(inst, SR_LOG_DISCARD, "communication step %g s at t = %g s rejected: it must be "
                "finite and in (0, %s] s", h, t, longest);
-        return fmi2Discard;
+        return SR_DISCARD;
     }
     inst->outputs_dirty = 1;
-    if (sr_model_do_step(inst->model, inst, t, h) != 0) return fmi2Discard;
+    if (sr_model_do_step(inst->model, inst, t, h) != 0) return SR_DISCARD;
     inst->time = t + h;
-    return fmi2OK;
+    return SR_OK;
 }
 
-fmi2Status fmi2CancelStep(fmi2Component c) {
-    return c ? refuse(c, "fmi2CancelStep: steps are synchronous (canRunAsynchronuously is false)")
-             : fmi2Error;
-}
-
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                       const fmi2Integer order[], const fmi2Real value[]) {
-    (void)vr; (void)order; (void)value;
-    if (!c) return fmi2Error;
-    return nvr ? refuse(c, "fmi2SetRealInputDerivatives: canInterpolateInputs is false") : fmi2OK;
-}
-
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
-                                        const fmi2Integer order[], fmi2Real value[]) {
-    (void)vr; (void)order; (void)value;
-    if (!c) return fmi2Error;
-    return nvr ? refuse(c, "fmi2GetRealOutputDerivatives: maxOutputDerivativeOrder is 0") : fmi2OK;
-}
-
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
-                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[],
-                                        size_t nKnown, const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    (void)vUnknown_ref; (void)nUnknown; (void)vKnown_ref; (void)nKnown; (void)dvKnown; (void)dvUnknown;
-    return c ? refuse(c, "fmi2GetDirectionalDerivative: providesDirectionalDerivative is false")
-             : fmi2Error;
-}
-
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-    (void)s; (void)value;
-    return c ? refuse(c, "fmi2GetStatus: steps are synchronous; there is no pending status")
-             : fmi2Error;
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
-    if (s == fmi2LastSuccessfulTime && value) {
-        *value = inst->time;
-        return fmi2OK;
-    }
-    return refuse(inst, "fmi2GetRealStatus: only fmi2LastSuccessfulTime is available");
-}
-
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
-    (void)s; (void)value;
-    return c ? refuse(c, "fmi2GetIntegerStatus: no integer status is defined") : fmi2Error;
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    sr_instance *inst = c;
-    if (!inst) return fmi2Error;
-    if (s == fmi2Terminated && value) {
-        *value = fmi2False;                         /* the FMU never asks to stop */
-        return fmi2OK;
-    }
-    return refuse(inst, "fmi2GetBooleanStatus: only fmi2Terminated is available");
-}
-
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
-    (void)s; (void)value;
-    return c ? refuse(c, "fmi2GetStringStatus: no string status is defined") : fmi2Error;
-}
+#if FMI_VERSION == 3
+#  define SIZE_CALL "fmi3SerializedFMUStateSize"
+#else
+#  define SIZE_CALL "fmi2SerializedFMUstateSize"
+#endif
 
 /* ---- FMU state -------------------------------------------------------------------------------- */
 static int has_core(const sr_instance *inst) {
@@ -730,7 +618,7 @@ static const char *state_mismatch(sr_instance *inst, const saved_state *s, size_
    that a pointer that is not one of them is never dereferenced: not a garbage or freed pointer,
    and not the state itself passed where its address is expected. fmusim 0.0.39 does the latter
    (FMISaveFMUStateToFile and FMIRestoreFMUStateFromFile call fmi2FreeFMUstate(c, state) instead
-   of fmi2FreeFMUstate(c, &state)); fmi2FreeFMUstate frees such a state all the same. */
+   of fmi2FreeFMUstate(c, &state)); the free function frees such a state all the same. */
 static int state_index(const sr_instance *inst, const void *s) {
     for (int i = 0; s && i < inst->nstates; ++i)
         if (inst->states[i] == s) return i;
@@ -772,30 +660,28 @@ static void save_into(sr_instance *inst, saved_state *s) {
     if (with_model) sr_model_state_save(inst->model, p);
 }
 
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    sr_instance *inst = c;
+int sr_fmi_get_state(sr_instance *inst, const char *call, void **state) {
     saved_state *s;
-    if (!inst) return fmi2Error;
-    if (!state) return refuse(inst, "fmi2GetFMUstate: state is NULL");
+    if (!state) return refuse(inst, "%s: state is NULL", call);
     /* a state of ours given back is overwritten (reallocated to the size needed); anything
        else in *state is not read: a new state */
     s = state_index(inst, *state) >= 0 ? *state : NULL;
     if (s && stored_size(inst, s) != current_size(inst)) {
         saved_state *bigger = realloc(s, current_size(inst));
-        if (!bigger) return refuse(inst, "fmi2GetFMUstate: out of memory");
+        if (!bigger) return refuse(inst, "%s: out of memory", call);
         inst->states[state_index(inst, s)] = bigger;
         s = bigger;
     } else if (!s) {
         s = calloc(1, current_size(inst));
-        if (!s) return refuse(inst, "fmi2GetFMUstate: out of memory");
+        if (!s) return refuse(inst, "%s: out of memory", call);
         if (remember_state(inst, s)) {
             free(s);
-            return refuse(inst, "fmi2GetFMUstate: out of memory");
+            return refuse(inst, "%s: out of memory", call);
         }
     }
     save_into(inst, s);
     *state = s;
-    return fmi2OK;
+    return SR_OK;
 }
 
 /* a state's header is consistent with this instance (and its bytes with `size`, if given) */
@@ -815,21 +701,20 @@ static const char *state_mismatch(sr_instance *inst, const saved_state *s, size_
     return NULL;
 }
 
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
-    sr_instance *inst = c;
+int sr_fmi_set_state(sr_instance *inst, const char *call, const void *state) {
     const saved_state *s = state;
     const char *why;
     double *real_before;
     int *int_before;
     const unsigned char *p;
-    if (!inst) return fmi2Error;
-    if ((why = state_mismatch(inst, s, 0)) != NULL) return refuse(inst, "fmi2SetFMUstate: %s", why);
+    if (!inst) return SR_ERROR;
+    if ((why = state_mismatch(inst, s, 0)) != NULL) return refuse(inst, "%s: %s", call, why);
     p = s->bytes;
     real_before = malloc((size_t)inst->nvars * sizeof(double));
     int_before = malloc((size_t)inst->nvars * sizeof(int));
     if (!real_before || !int_before) {
         free(real_before); free(int_before);
-        return refuse(inst, "fmi2SetFMUstate: out of memory");
+        return refuse(inst, "%s: out of memory", call);
     }
     memcpy(real_before, inst->real, (size_t)inst->nvars * sizeof(double));
     memcpy(int_before, inst->integer, (size_t)inst->nvars * sizeof(int));
@@ -843,74 +728,68 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
             memcpy(inst->real, real_before, (size_t)inst->nvars * sizeof(double));
             memcpy(inst->integer, int_before, (size_t)inst->nvars * sizeof(int));
             free(real_before); free(int_before);
-            return fmi2Error;
+            return SR_ERROR;
         }
     } else {
         sr_model_reset(inst->model);
     }
     free(real_before); free(int_before);
-    inst->phase = (phase_t)s->h.phase;
+    inst->phase = (sr_phase)s->h.phase;
     inst->time = s->h.time;
     inst->preview_dirty = 1;
     inst->outputs_dirty = 1;
-    return fmi2OK;
+    return SR_OK;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    sr_instance *inst = c;
+int sr_fmi_free_state(sr_instance *inst, const char *call, void **state) {
     int i;
-    if (!inst) return fmi2Error;
-    if (!state) return fmi2OK;
+    if (!state) return SR_OK;
     if ((i = state_index(inst, state)) >= 0) {      /* the state itself (fmusim 0.0.39) */
         forget_state(inst, i);
-        return fmi2OK;
+        return SR_OK;
     }
-    if (!*state) return fmi2OK;
+    if (!*state) return SR_OK;
     if ((i = state_index(inst, *state)) < 0)
-        return refuse(inst, "fmi2FreeFMUstate: not a state of this instance (freed already?)");
+        return refuse(inst, "%s: not a state of this instance (freed already?)", call);
     forget_state(inst, i);
     *state = NULL;
-    return fmi2OK;
+    return SR_OK;
 }
 
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
-    sr_instance *inst = c;
+int sr_fmi_serialized_size(sr_instance *inst, const char *call, const void *state, size_t *size) {
     const saved_state *s = state;
     const char *why;
-    if (!inst) return fmi2Error;
-    if (!size) return refuse(inst, "fmi2SerializedFMUstateSize: size is NULL");
+    if (!size) return refuse(inst, "%s: size is NULL", call);
     if ((why = state_mismatch(inst, s, 0)) != NULL)
-        return refuse(inst, "fmi2SerializedFMUstateSize: %s", why);
+        return refuse(inst, "%s: %s", call, why);
     *size = stored_size(inst, s);
-    return fmi2OK;
+    return SR_OK;
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
-    sr_instance *inst = c;
-    size_t need;
-    if (!inst) return fmi2Error;
-    if (fmi2SerializedFMUstateSize(c, state, &need) != fmi2OK) return fmi2Error;
+int sr_fmi_serialize(sr_instance *inst, const char *call, const void *state, void *bytes,
+                     size_t size) {
+    size_t need = 0;
+    if (sr_fmi_serialized_size(inst, SIZE_CALL, state, &need) != SR_OK) return SR_ERROR;
     if (!bytes || size < need)
-        return refuse(inst, "fmi2SerializeFMUstate: the buffer holds %lu bytes, %lu needed",
-                      (unsigned long)size, (unsigned long)need);   /* msvcrt knows no %zu */
+        return refuse(inst, "%s: the buffer holds %lu bytes, %lu needed",
+                      call, (unsigned long)size, (unsigned long)need);   /* msvcrt knows no %zu */
     memcpy(bytes, state, need);
-    return fmi2OK;
+    return SR_OK;
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state) {
-    sr_instance *inst = c;
+int sr_fmi_deserialize(sr_instance *inst, const char *call, const void *bytes, size_t size,
+                       void **state) {
     saved_state *s;
     const char *why;
-    if (!inst) return fmi2Error;
     if (!bytes || !state || size < sizeof(saved_state))
-        return refuse(inst, "fmi2DeSerializeFMUstate: not a serialised state of this FMU");
+        return refuse(inst, "%s: not a serialised state of this FMU", call);
     s = malloc(size);
-    if (!s) return refuse(inst, "fmi2DeSerializeFMUstate: out of memory");
+    if (!s) return refuse(inst, "%s: out of memory", call);
     memcpy(s, bytes, size);
     if ((why = state_mismatch(inst, s, size)) != NULL || remember_state(inst, s)) {
         free(s);
-        return refuse(inst, "fmi2DeSerializeFMUstate: %s", why ? why : "out of memory");
+        return refuse(inst, "%s: %s", call, why ? why : "out of memory");
     }
     *state = s;                      /* a new state: *state on entry is not read */
-    return fmi2OK;
+    return SR_OK;
 }

@@ -1,8 +1,9 @@
 /*
- * model.h -- the contract between the shared FMI 2.0 layer (fmi2_layer.c) and one model's glue
- * (fmu_<model>/<model>.c), in the manner of the Reference FMUs: the layer implements every fmi2
+ * model.h -- the contract between the shared FMI layer (fmi_layer.c, with the thin API files
+ * fmi2_api.c for FMI 2.0 and fmi3_api.c for FMI 3.0) and one model's glue
+ * (fmu_<model>/<model>.c), in the manner of the Reference FMUs: the layer implements every FMI
  * function (lifecycle, checks, logging, variable storage, FMU state); the glue only maps
- * variables to the numerical core.
+ * variables to the numerical core and knows nothing of the FMI version.
  *
  * The variables are data: <resources>/spacerobot_variables.txt, generated from
  * spacerobot/interface.py (the one table of every FMU variable) by spacerobot/fmi/native.py,
@@ -10,8 +11,8 @@
  * and name. The layer keeps every value in an array indexed by value reference; the glue looks
  * the keys it needs up once (sr_key_vr) and reads parameters and inputs, writes outputs there.
  */
-#ifndef SR_FMI2_MODEL_H
-#define SR_FMI2_MODEL_H
+#ifndef SR_FMI_MODEL_H
+#define SR_FMI_MODEL_H
 
 #include <stddef.h>
 
@@ -62,12 +63,12 @@ extern const char *const SR_MODEL_IDENTIFIER;
    NULL on failure (logged). */
 void *sr_model_new(sr_instance *inst, const char *resource_dir);
 void sr_model_free(void *model);
-/* Back to the state after sr_model_new (fmi2Reset; the layer restores the start values). */
+/* Back to the state after sr_model_new (Reset; the layer restores the start values). */
 void sr_model_reset(void *model);
-/* fmi2ExitInitializationMode: check the parameters, build the core, set the initial outputs.
+/* ExitInitializationMode: check the parameters, build the core, set the initial outputs.
    0 ok; else the reason is logged as an error and nothing changed. */
 int sr_model_initialize(void *model, sr_instance *inst);
-/* In initialisation mode, outputs read before fmi2ExitInitializationMode: the initial outputs for the
+/* In initialisation mode, outputs read before ExitInitializationMode: the initial outputs for the
    parameters set so far (nothing changes where they are not valid yet). */
 void sr_model_preview(void *model, sr_instance *inst);
 /* Direct feedthrough: nonzero when outputs depend on the current inputs (the layer then calls
@@ -77,7 +78,7 @@ extern const int SR_MODEL_FEEDTHROUGH;
    (the state does not change). Other models: never called. */
 void sr_model_outputs(void *model, sr_instance *inst);
 /* The longest communication step the model takes [s] (INFINITY: no limit); the layer refuses
-   longer ones with fmi2Discard. */
+   longer ones with Discard. */
 extern const double SR_MODEL_MAX_STEP;
 /* One communication step from t by h (both checked finite, h > 0, by the layer).
    0 ok, 1 discard (reason logged; the state must be as before the call). */

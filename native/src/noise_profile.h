@@ -1,0 +1,68 @@
+/* noise_profile.h -- one switch for real sensors (docs/identification.md, "One switch"): the
+ * estimator's noise model set from the sensors' own parameters (the sensors FMU's noise.*
+ * names and units, docs/sensors.md) instead of a dozen hand settings.
+ *
+ * With ident.noise_profile = 1 each noise option of sr_estimator_options still at its default
+ * (sr_estimator_options_default) takes the value below; an option set to anything else is the
+ * user's and kept. Measured on the noise benchmark (benchmarks/NOISE.md, realistic sensors,
+ * 20 random spatial cases, 300 s), these are the settings that gave the smallest errors with
+ * calibrated standard deviations:
+ *   - every method: the thrust's scale and misalignment errors as a consider covariance
+ *     (ident.sd_thrust.* = noise.thrust.*);
+ *   - momentum: equations differenced over a 5 s window with the angular rows about the base
+ *     (ident.momentum_window = 5 s, ident.momentum_point = 1), the residual correlation over
+ *     the window's samples (ident.corr_lags = 5 s / noise_dt);
+ *   - force, measured accelerations: the accelerometer bias estimated from the navigation
+ *     velocity (ident.accel_bias = 1), the accelerations' white noise compensated
+ *     (ident.noise.base.a = noise.accel.vrw / sqrt(dt), base.alpha = noise.alpha,
+ *     arm.qdd = noise.enc.qdd);
+ *   - force, differenced accelerations: the derivative's weights on the momentum equations
+ *     over 9 samples (ident.diff_momentum = 1, ident.diff_half_window = 4), the velocities'
+ *     noise compensated (ident.noise.base.v = noise.nav.v, base.omega = noise.gyro.arw /
+ *     sqrt(dt), arm.qd = noise.enc.qd);
+ *   - row weights: unit (ident.sd_row.* 0). With the paper's solver the weights only set the
+ *     data's weight against the weak prior: a pilot run's row standard deviations changed no
+ *     estimate's worst error nor the calibration on the benchmark's cases.
+ * Every magnitude is multiplied by noise.scale.
+ */
+#ifndef SR_NOISE_PROFILE_H
+#define SR_NOISE_PROFILE_H
+
+#include <stddef.h>
+
+#include "estimator.h"
+#include "sr_api.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SR_NOISE_PROFILE_NONE 0
+#define SR_NOISE_PROFILE_SENSORS 1
+/* the momentum method's window under the profile [s] */
+#define SR_NOISE_PROFILE_WINDOW 5.0
+/* the force method's derivative under the profile: 2 m + 1 samples */
+#define SR_NOISE_PROFILE_HALF_WINDOW 4
+/* largest accepted noise.scale times a magnitude (SI units) and longest noise_dt [s] */
+#define SR_NOISE_PROFILE_MAX 1e6
+
+/** Why a profile cannot be applied: the FMU parameter, the rule it breaks, its value. */
+typedef struct sr_noise_profile_error {
+    const char *name, *rule;
+    double value;
+} sr_noise_profile_error;
+
+/** out = in with the noise profile in->noise_profile applied (out may alias in). Returns 0,
+ *  or 1 with why in *e (the estimator's model_new words the message) for a profile other than
+ *  0 or 1, noise.scale or a magnitude not finite and >= 0 or above SR_NOISE_PROFILE_MAX once
+ *  scaled, noise_dt not finite in (0, SR_NOISE_PROFILE_MAX], or a thrust magnitude times
+ *  noise.scale above SR_EST_MAX_THRUST_SD. With profile 0 the options are copied unchanged
+ *  (the sensors' values are not read). */
+SR_API int sr_noise_profile_apply(const sr_estimator_options *in, sr_estimator_options *out,
+                                  sr_noise_profile_error *e);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
