@@ -267,6 +267,9 @@ def build_all(out_dir: Path = DEFAULT_OUT, strict: bool = False, log=print,
     out_dir = Path(out_dir)
     result = {"library": build_library(out_dir, strict=strict), "fmu": {}, "skipped": {}}
     platforms = {**PLATFORMS, **(ZIG_PLATFORMS if zig else {})}
+    if not zig:
+        log(f"spacerobot: {', '.join(ZIG_PLATFORMS)} FMU binaries not built (only on request: "
+            "pip install ziglang, then python native/build.py --zig)")
     todo = []
     for name, plat in platforms.items():
         if plat.compiler() is None:
