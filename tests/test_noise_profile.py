@@ -192,3 +192,20 @@ def test_estimator_fmu_refuses_a_bad_profile_value(tmp_path):
                          cwd=tmp_path, timeout=600)
     assert out.returncode != 0
     assert "noise.scale must be a finite number in [0, 1e6], got -1" in out.stderr, out.stderr
+
+
+def test_running_the_sensors_ssp_file_uses_its_bound_set(tmp_path):
+    """``spacerobot run <robot>_sensors.ssp``: the set its SSD binds (realistic, with its noise
+    profile, force method, differenced accelerations), as any SSP tool runs it; the header and
+    the result's name say so."""
+    from spacerobot.system.ssd import build_system, has_sensors
+    ssp = build_system("spatial", tmp_path / "s", sensors=True)["ssp"]
+    assert has_sensors(ssp) and not has_sensors(build_system("spatial", tmp_path / "p")["ssp"])
+    out = subprocess.run([sys.executable, "-m", "spacerobot", "run", str(ssp), "--stop-time", "2",
+                          "--no-progress"], capture_output=True, text=True, cwd=tmp_path,
+                         timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert ("parameter set realistic, method force, solver paper, accelerations differenced"
+            in out.stdout), out.stdout
+    assert (tmp_path / "results" / "spatial_sensors-realistic-force-differenced-paper-t2.csv"
+            ).is_file(), sorted(p.name for p in (tmp_path / "results").iterdir())

@@ -194,7 +194,7 @@ def result_name(robot: Optional[str], ssp: Path, target: Optional[str], args) ->
     [-<settings>].csv``, ``<settings>`` the ``--set`` overrides and an explicit ``--stop-time``
     (:func:`settings_tag`), so that runs that differ in any of them do not overwrite each
     other."""
-    sensors = "_sensors" if robot and args.sensors and not args.ssp else ""
+    sensors = "_sensors" if robot and args.sensors else ""
     name = robot_label(robot) + sensors if robot else ssp.stem
     tag = settings_tag(args.set, args.stop_time)
     return Path("results") / (f"{name}-{target or 'bound'}-{args.method}-"
@@ -230,7 +230,7 @@ def cmd_run(args) -> int:
     from .bindings import parse_assignments
     from .recorder import check_writable
     from .runner import format_results, run_ssp
-    from .ssd import default_parameter_set, ensure_ssp, robot_of
+    from .ssd import default_parameter_set, ensure_ssp, has_sensors, robot_of
 
     if args.ssp and args.robot:
         raise CommandError("give either --robot or SSP_FILE, not both")
@@ -243,6 +243,8 @@ def cmd_run(args) -> int:
     else:
         robot = key or "planar"
         ssp = None
+    # an .ssp file: the set its SSD binds (the realistic one with the sensors), as other tools
+    args.sensors = has_sensors(ssp) if ssp is not None else args.sensors
     target = args.target or (default_parameter_set(robot, args.sensors) if robot else None)
     args.method, args.accel = set_labels(robot, target, args.method, args.accel)
     overrides = estimator_overrides(args.method, args.accel, args.solver)

@@ -471,9 +471,8 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     return paths
 
 
-def robot_of(ssp: str | Path) -> Optional[str]:
-    """Robot name of a system built by :func:`build_system` (a .ssp archive or its extracted
-    folder), from the SSD name ``SpaceRobot_<robot>``; None if it is not one of ours."""
+def _system_name(ssp: str | Path) -> str:
+    """The SSD's system name of a .ssp archive or its extracted folder ("" if unreadable)."""
     from lxml import etree
 
     ssp = Path(ssp)
@@ -483,11 +482,22 @@ def robot_of(ssp: str | Path) -> Optional[str]:
         else:
             with zipfile.ZipFile(ssp) as zf:
                 text = zf.read(SSD_NAME)
-        name = etree.fromstring(text).get("name") or ""
+        return etree.fromstring(text).get("name") or ""
     except (OSError, KeyError, zipfile.BadZipFile, etree.XMLSyntaxError):
-        return None
-    robot = name.removeprefix("SpaceRobot_").removesuffix("_sensors")
+        return ""
+
+
+def robot_of(ssp: str | Path) -> Optional[str]:
+    """Robot name of a system built by :func:`build_system` (a .ssp archive or its extracted
+    folder), from the SSD name ``SpaceRobot_<robot>``; None if it is not one of ours."""
+    robot = _system_name(ssp).removeprefix("SpaceRobot_").removesuffix("_sensors")
     return robot if robot in ROBOTS else None
+
+
+def has_sensors(ssp: str | Path) -> bool:
+    """Whether a system built by :func:`build_system` has the sensors FMU (SSD name
+    ``SpaceRobot_<robot>_sensors``)."""
+    return _system_name(ssp).endswith("_sensors")
 
 
 def _newest_source_mtime(robot: Optional[str] = None) -> float:
