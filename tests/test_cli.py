@@ -252,8 +252,14 @@ def test_ctrl_c_stops_cleanly(built, tmp_path, capsys, monkeypatch):
         return orig_step(self, t, dt)
     monkeypatch.setattr(FMU2Slave, "freeInstance", free)
     monkeypatch.setattr(Master, "do_step", do_step)
-    status, err = _main(["run", built["ssp"], "--stop-time", "5", "--out", tmp_path / "x.csv"],
-                        capsys)
+    # Python's own Ctrl-C handler, as in a terminal (a process started in the background by a
+    # non-interactive shell inherits SIGINT ignored, and Python then installs none)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        status, err = _main(["run", built["ssp"], "--stop-time", "5", "--out",
+                             tmp_path / "x.csv"], capsys)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert (status, err) == (130, ["spacerobot run: interrupted"])
     assert len(steps) == 3                              # stopped before the fourth step
     assert sorted(freed) == ["estimator", "plant"]
