@@ -435,7 +435,6 @@ static const int S2P[6] = {0, 3, 5, 1, 2, 4};
 
 static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
 
-
 sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
                                            const sr_estimator_options *opt,
                                            char *err, size_t errlen)
@@ -666,12 +665,6 @@ void sr_estimator_data_init(const sr_estimator_model *m, void *data)
         est_joint_init(m, c);
     c->decay_lin = c->decay_ang = 1.0;
     c->tr_t_ref = c->tr_t = NAN;                              /* DriftTracker.empty */
-}
-
-void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_options *out)
-{
-    if (m && out)
-        *out = m->opt;
 }
 
 /* -- one sample ------------------------------------------------------------------------------- */

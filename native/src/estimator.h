@@ -148,9 +148,6 @@ SR_API sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
                                                   char *err, size_t errlen);
 SR_API void sr_estimator_model_free(sr_estimator_model *m);
 
-/** The options in effect in the Model: those given with the noise profile applied
- *  (noise_profile.h). */
-SR_API void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_options *out);
 
 /** Bytes of one Data block of this Model (depends on diff_half_window, corr_lags, n, the
  *  momentum window's ring, and with diff_momentum and ident.noise.* the window's noise rows:

@@ -103,8 +103,6 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     L.sr_estimator_estimates.restype = None
     L.sr_estimator_sd_without_lag.argtypes = [vp, vp, dp]
     L.sr_estimator_sd_without_lag.restype = None
-    L.sr_estimator_model_options.argtypes = [vp, ctypes.POINTER(SrEstimatorOptions)]
-    L.sr_estimator_model_options.restype = None
     L.sr_noise_profile_apply.argtypes = [ctypes.POINTER(SrEstimatorOptions),
                                          ctypes.POINTER(SrEstimatorOptions),
                                          ctypes.POINTER(SrNoiseProfileError)]
