@@ -117,6 +117,25 @@ def native_build():
     return sys.modules[name]
 
 
+def estimator_library(tmp_dir_factory):
+    """The estimator library under test: $SPACEROBOT_CORE_LIB, or the installed one if it has
+    every function the binding declares (and the state check), else a fresh build of
+    native/src into a directory from ``tmp_dir_factory`` (pytest's tmp_path_factory)."""
+    from spacerobot.core import CoreUnavailable, load_library
+    from spacerobot.core.estimator import _bind
+    try:
+        L = _bind(load_library())
+        L.sr_estimator_data_check                 # (an older build lacks it: build anew)
+    except (CoreUnavailable, AttributeError, OSError, RuntimeError):
+        if os.environ.get("SPACEROBOT_CORE_LIB"):
+            raise
+        out = tmp_dir_factory.mktemp("core")
+        subprocess.run([sys.executable, str(ROOT / "native" / "build.py"), "--out", str(out)],
+                       check=True, capture_output=True)
+        L = _bind(load_library(next(out.glob("libspacerobot.*"))))
+    return L
+
+
 def build_core(tmp_dir: Path, sources: Sequence[str]):
     """The core library under test as a ``ctypes.CDLL``: ``$SPACEROBOT_CORE_LIB``, else the
     modules ``sources`` (names in ``native/src``) built by native/build.py, warnings errors."""

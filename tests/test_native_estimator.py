@@ -25,10 +25,7 @@ from __future__ import annotations
 
 import ctypes
 import dataclasses
-import os
 import struct
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -36,7 +33,6 @@ import numpy as np
 import pytest
 
 from spacerobot import interface
-from spacerobot.core import CoreUnavailable, load_library
 from spacerobot.core.estimator import NativeEstimator
 from oracles.estimator import Identifier
 from oracles.estimator.identifier import KEYS, identifier_from_values
@@ -66,18 +62,8 @@ PORTABLE_TRIG = {"sd_scale_tol": 5e-5, "res_rel": 2e-5}
 def lib(tmp_path_factory):
     """The library under test: $SPACEROBOT_CORE_LIB or the installed one if it has the
     estimator, else a fresh build of native/src."""
-    from spacerobot.core.estimator import _bind
-    try:
-        L = _bind(load_library())                 # every function the binding declares
-        L.sr_estimator_data_check                 # (an older build lacks it: build anew)
-    except (CoreUnavailable, AttributeError, OSError, RuntimeError):
-        if os.environ.get("SPACEROBOT_CORE_LIB"):
-            raise
-        out = tmp_path_factory.mktemp("core")
-        subprocess.run([sys.executable, str(ROOT / "native" / "build.py"), "--out", str(out)],
-                       check=True, capture_output=True)
-        L = load_library(next(out.glob("libspacerobot.*")))
-    return L
+    from native_hosts import estimator_library
+    return estimator_library(tmp_path_factory)
 
 
 _STREAMS: dict = {}

@@ -34,8 +34,6 @@ of the sd.
 """
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -47,7 +45,6 @@ from oracles.estimator import Identifier, consider   # the former Python estimat
 from oracles.estimator.identifier import KEYS
 from oracles.sensors import SensorSuite              # the NumPy sensor models: test data
 from spacerobot import interface
-from spacerobot.core import CoreUnavailable, load_library
 from spacerobot.core.estimator import NativeEstimator
 from spacerobot.plant import Plant
 from spacerobot.robots import scenario
@@ -75,17 +72,8 @@ N_SHORT = 61
 def lib(tmp_path_factory):
     """The library under test: $SPACEROBOT_CORE_LIB or the installed one if it has these
     options, else a fresh build of native/src."""
-    from spacerobot.core.estimator import _bind
-    try:
-        L = _bind(load_library())
-    except (CoreUnavailable, AttributeError, OSError, RuntimeError):
-        if os.environ.get("SPACEROBOT_CORE_LIB"):
-            raise
-        out = tmp_path_factory.mktemp("core")
-        subprocess.run([sys.executable, str(ROOT / "native" / "build.py"), "--out", str(out)],
-                       check=True, capture_output=True)
-        L = load_library(next(out.glob("libspacerobot.*")))
-    return L
+    from native_hosts import estimator_library
+    return estimator_library(tmp_path_factory)
 
 
 @pytest.fixture(scope="module")
