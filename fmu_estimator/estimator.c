@@ -38,6 +38,7 @@ typedef struct {
     int vr_est[2][10], vr_sd[2][10];       /* outputs: estimates and sd per body */
     int vr_samples, vr_rejected, vr_status, vr_res_lin, vr_res_ang, vr_exc_mu, vr_exc_theta;
     int vr_excite, vr_identified[2], vr_physical[2];
+    int vr_crb[2][10], vr_chi2;            /* the information filter's bound and misfit */
     double sample_time;                    /* the scenario's [s]: the sensors' noise densities
                                               per sample (ident.noise_profile) */
     sr_estimator_model *core;              /* NULL before initialisation */
@@ -75,7 +76,11 @@ static int bind(sr_instance *inst, estimator_glue *g) {
             snprintf(prefix, sizeof prefix, "sd_%s", BODY_KEY[b]);
             body_key(key, sizeof key, prefix, i);
             bad |= (g->vr_sd[b][i] = sr_key_vr(inst, key, 1)) < 0;
+            snprintf(prefix, sizeof prefix, "crb_%s", BODY_KEY[b]);
+            body_key(key, sizeof key, prefix, i);
+            bad |= (g->vr_crb[b][i] = sr_key_vr(inst, key, 1)) < 0;
         }
+    bad |= (g->vr_chi2 = sr_key_vr(inst, "info_chi2", 1)) < 0;
     bad |= (g->vr_samples = sr_key_vr(inst, "samples", 1)) < 0;
     bad |= (g->vr_rejected = sr_key_vr(inst, "rejected", 1)) < 0;
     bad |= (g->vr_status = sr_key_vr(inst, "status", 1)) < 0;
@@ -181,6 +186,7 @@ static void options_of(sr_instance *inst, double sample_time, sr_estimator_optio
         o->noise[i] = sr_key_vr(inst, name, 0) < 0 ? 0.0 : real_of(inst, name);
     }
     o->noise_dt = sample_time;
+    o->information = int_of(inst, "information");
 }
 
 /* build a core for the current parameters; 0 ok (err untouched), else err says why */
@@ -212,6 +218,7 @@ static void write_outputs(sr_instance *inst, const estimator_glue *g, const sr_e
         for (int i = 0; i < 10; ++i) {
             x[g->vr_est[b][i]] = r.vector[10 * b + i];
             x[g->vr_sd[b][i]] = r.sd[10 * b + i];
+            x[g->vr_crb[b][i]] = r.crb[10 * b + i];
         }
         z[g->vr_identified[b]] = r.identified[b];
         z[g->vr_physical[b]] = r.physical[b];
@@ -224,6 +231,7 @@ static void write_outputs(sr_instance *inst, const estimator_glue *g, const sr_e
     x[g->vr_exc_mu] = r.excitation_mu;
     x[g->vr_exc_theta] = r.excitation_theta;
     x[g->vr_excite] = r.excite;
+    x[g->vr_chi2] = r.info_chi2;
 }
 
 int sr_model_initialize(void *model, sr_instance *inst) {

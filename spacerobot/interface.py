@@ -346,6 +346,13 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
                                  f"Standard deviation of the {who} estimate:", f"sd_{who}",
                                  "continuous"):
             v.append(Var(x.name, "output", "continuous", "Real", x.unit, x.description, None, x.key))
+    for who in ("base", "target"):
+        for x in body_param_vars(f"crb.{who}", g.base if who == "base" else g.target, "output",
+                                 f"Cramér-Rao bound (first order) of the {who} estimate, as a "
+                                 "standard deviation: what the measurements so far allow any "
+                                 "unbiased estimator (the information filter's; 0 without it, "
+                                 "ident.information):", f"crb_{who}", "continuous"):
+            v.append(Var(x.name, "output", "continuous", "Real", x.unit, x.description, None, x.key))
     for who, body in (("base", g.base), ("target", g.target)):
         for x in body_param_vars(f"guess.{who}", body, "parameter", f"Initial guess of the {who}",
                                  f"guess_{who}"):
@@ -483,7 +490,20 @@ def noise_model_vars() -> List[Var]:
               "defaults) sets every ident.* noise option left at its default: the thrust "
               "errors' consider term, the accelerations' noise compensated, the momentum "
               "window or the accelerometer bias or the 9-sample derivative in the momentum "
-              "equations (docs/identification.md, 'One switch')", 0, ("noise_profile",))]
+              "equations (docs/identification.md, 'One switch')", 0, ("noise_profile",)),
+          Var("ident.information", "parameter", "fixed", "Integer", None,
+              "The information filter (docs/identification.md, 'The information filter'): the "
+              "estimates and standard deviations from the momentum equations weighted by the "
+              "sensors' noise model, with the thrust errors, the gyro bias and the momentum as "
+              "extra unknowns, and the Cramér-Rao bound (outputs crb.*). 0 = automatic (on "
+              "with ident.noise_profile = 1 when the sensors have white noise), 1 = on (needs "
+              "ident.noise_profile = 1), 2 = off (this estimator's own equations report)", 0,
+              ("information",)),
+          Var("diag.info_chi2", "output", "continuous", "Real", "1",
+              "Information filter: the weighted residuals' mean square (1 when the sensors' "
+              "noise model explains the equations' errors; the reported standard deviations "
+              "are the bound times sqrt(max(1, diag.info_chi2))); 0 without the filter", None,
+              ("info_chi2",))]
     for name in ("noise.scale",) + PROFILE_MAGNITUDES:
         unit, default, doc = NOISE_PARAMETERS[name]
         v.append(Var(name, "parameter", "fixed", "Real", unit,
@@ -497,7 +517,9 @@ def noise_model_vars() -> List[Var]:
 #: estimator FMU's ``noise.*`` parameters besides ``noise.scale``
 PROFILE_MAGNITUDES = ("noise.gyro.arw", "noise.nav.v", "noise.accel.vrw", "noise.alpha",
                       "noise.enc.qd", "noise.enc.qdd", "noise.thrust.scale",
-                      "noise.thrust.misalign")
+                      "noise.thrust.misalign", "noise.nav.r", "noise.star.cross",
+                      "noise.star.roll", "noise.enc.q", "noise.enc.resolution",
+                      "noise.gyro.bias")
 
 
 #: the estimator's accelerations' noise parameters (errors in variables): (measurement key,

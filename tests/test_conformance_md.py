@@ -154,9 +154,9 @@ CONTRACT_UNITS = [
     (r"arm\.tau\[\d\]", "N.m"),
     (r"thrust\.F\[\d\]", "N"), (r"thrust\.M\[\d\]", "N.m"), (r"thrust\.J\[\d\]", "N.s"),
     (r"thrust\.H\[\d\]", "N.m.s"), (r"system\.P\[\d\]", "N.s"), (r"system\.L\[\d\]", "N.m.s"),
-    (r"(sd\.|guess\.|truth\.)?(base|target)\.m", "kg"),
-    (r"(sd\.|guess\.|truth\.)?(base|target)\.b\[\d\]", "m"),
-    (r"(sd\.|guess\.|truth\.)?(base|target)\.I(xx|yy|zz|xy|xz|yz)", "kg.m2"),
+    (r"(sd\.|crb\.|guess\.|truth\.)?(base|target)\.m", "kg"),
+    (r"(sd\.|crb\.|guess\.|truth\.)?(base|target)\.b\[\d\]", "m"),
+    (r"(sd\.|crb\.|guess\.|truth\.)?(base|target)\.I(xx|yy|zz|xy|xz|yz)", "kg.m2"),
     (r"prop\.m0?", "kg"), (r"prop\.Isp", "s"), (r"prop\.(R|arm|r\[\d\])", "m"),
     (r"prop\.P\[\d\]", "N.s"), (r"prop\.L\[\d\]", "N.m.s"),
     (r"base\.v0\[\d\]", "m/s"), (r"base\.omega0\[\d\]", "rad/s"),
@@ -164,7 +164,8 @@ CONTRACT_UNITS = [
     (r"K_[FMD]|K_Dn", "1/s"), (r"K_Pn?", "1/s2"), (r"qdd_max", "rad/s2"), (r"h", "s"),
     (r"ident\.excite|excite\.level", "1"), (r"excite\.(att_max|q_max)", "rad"),
     (r"excite\.qd_max", "rad/s"), (r"excite\.qdd_max", "rad/s2"), (r"excite\.(period|ramp)", "s"),
-    (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta)", "1"),
+    (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta"
+     r"|info_chi2)", "1"),
     (r"ident\.(sd_rel|excite_level)", "1"), (r"excite\.att_ref\[\d\]", "rad"),
     # estimator noise model: row standard deviations in the units of each method's equations
     (r"ident\.sd_row\.momentum_lin", "N.s"), (r"ident\.sd_row\.momentum_ang", "N.m.s"),

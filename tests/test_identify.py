@@ -43,8 +43,8 @@ def _assert_replay_equals_live(live, replay, rtol=1e-9, sd_rtol=1e-9):
     assert set(ESTIMATE_NAMES) <= set(outs) and "sd.target.m" in outs and "diag.samples" in outs
     for n in outs:
         a, b = live["estimator." + n][1:], replay[n][:-1]
-        if n.startswith("sd."):
-            est = np.maximum(1.0, np.abs(live["estimator." + n[3:]][1:]))
+        if n.startswith(("sd.", "crb.")):     # the information filter's bound: as the sd
+            est = np.maximum(1.0, np.abs(live["estimator." + n.split(".", 1)[1]][1:]))
             seen = np.abs(a) <= 1e6 * est
             tol = sd_rtol * np.abs(a) + SD_ROUNDOFF * est
             assert np.all(np.abs(a - b)[seen] <= tol[seen]), n

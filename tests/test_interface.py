@@ -25,7 +25,7 @@ def test_identified_estimates_are_as_documented():
 
 def test_estimate_names_are_estimator_outputs():
     outputs = [v.name for v in estimator_vars(PLANAR, scenario("planar"))
-               if v.causality == "output" and not v.name.startswith(("sd.", "diag.", "ident."))]
+               if v.causality == "output" and not v.name.startswith(("sd.", "crb.", "diag.", "ident."))]
     assert outputs == list(ESTIMATE_NAMES)
 
 

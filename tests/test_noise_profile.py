@@ -43,6 +43,8 @@ def expected(method: int, accel: int, scale: float = 1.0, dt: float = DT) -> dic
     out = {"sd_thrust_scale": d["thrust.scale"], "sd_thrust_misalign": d["thrust.misalign"],
            "signal_sd": [d["accel.vrw"] / math.sqrt(dt), d["alpha"], d["enc.qdd"], d["nav.v"],
                          d["gyro.arw"] / math.sqrt(dt), d["enc.qd"]]}
+    # the sensors have white noise: the information filter reports (information.h)
+    out["information"] = 1
     if method == 1:
         out.update(momentum_window=5.0, momentum_point=1, corr_lags=round(5.0 / dt))
     elif accel == 1:
@@ -79,6 +81,21 @@ def test_a_users_setting_wins_and_profile_0_reads_no_sensor():
     base = default_options()
     assert got["sd_thrust_scale"] == base["sd_thrust_scale"] == 0.0
     assert got["signal_sd"] == base["signal_sd"]
+    assert got["information"] == base["information"] == 0
+
+
+def test_information_filter_needs_white_noise_and_the_profile():
+    """With noise.scale 0 (ideal sensors) the profile leaves the information filter off (2: no
+    noise to weigh the rows by); ident.information = 1 without the profile is refused."""
+    assert profile_options({**sensors(0.0)})["information"] == 2
+    assert profile_options({**sensors(), "information": 2})["information"] == 2
+    from spacerobot.core.estimator import NativeEstimator
+    from spacerobot.robots import scenario
+    sc = scenario("spatial", "default")
+    with pytest.raises(ValueError, match=r"ident\.information = 1 needs"):
+        NativeEstimator(sc.robot, {"guess": sc.guess, "information": 1})
+    with pytest.raises(ValueError, match=r"ident\.information = 3 is not one of"):
+        NativeEstimator(sc.robot, {"guess": sc.guess, "information": 3})
 
 
 def test_estimator_noise_settings_are_the_profiles():
@@ -116,8 +133,9 @@ def test_estimator_fmu_parameters_carry_the_sensors_names_units_and_defaults():
     for name in ("noise.scale",) + interface.PROFILE_MAGNITUDES:
         unit, default, _ = NOISE_PARAMETERS[name]
         assert (v[name].unit, v[name].start, v[name].causality) == (unit, default, "parameter")
+    assert v["ident.information"].start == 0 and v["ident.information"].type == "Integer"
     # the sensors FMU's magnitudes the profile does not read are not estimator parameters
-    assert "noise.nav.r" not in v and "noise.accel.bias" not in v
+    assert "noise.gyro.rrw" not in v and "noise.accel.bias" not in v
 
 
 def test_realistic_set_binds_the_profile(tmp_path):
@@ -153,13 +171,13 @@ def _run_sensors(tmp_path, extra=()):
 
 def test_sensors_run_with_no_setting_gives_usable_inertias(tmp_path):
     """The issue's measurement: with realistic sensors the estimator's defaults gave inertia
-    errors of 1e4 % and more. With the realistic set's profile (no --set), every estimate of
-    the default scenario within 5 % (error/scale) after 120 s (measured: 3.4 % worst at 300 s
-    on this scenario and seed); the defaults (profile 0, the momentum method, the paper's
-    equations) far off on the same run."""
+    errors of 1e4 % and more. With the realistic set's profile (no --set: the information
+    filter reports), every estimate of the default scenario within 0.5 % (error/scale) after
+    120 s (measured: 0.025 % worst; 3.4 % at 300 s with the filter off); the defaults
+    (profile 0, the momentum method, the paper's equations) far off on the same run."""
     text, errors = _run_sensors(tmp_path)
     assert "method force" in text and "accelerations differenced" in text
-    assert max(errors.values()) < 0.05, errors
+    assert max(errors.values()) < 0.005, errors
     _, plain = _run_sensors(tmp_path, ["--method", "momentum", "--set",
                                        "estimator.ident.noise_profile=0"])
     assert max(plain.values()) > 1.0, plain                # more than 100 % off

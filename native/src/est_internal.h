@@ -13,6 +13,7 @@
 
 #include "equations.h"
 #include "estimator.h"
+#include "information.h"
 
 #define EST_NMU 8                 /* mu (8) */
 #define EST_NTH 12                /* theta (12) */
@@ -91,6 +92,10 @@ struct sr_estimator_model {
     int half;                     /* diff_half_window m: history of 2 m samples */
     int lags;                     /* corr_lags L */
     size_t off_hist, off_corr_lin, off_corr_ang, off_win, size;
+    /* the information filter (options.information): its model and its Data's offset */
+    int info;
+    sr_info_model info_m;
+    size_t off_info, off_info_buf;   /* its state; its replay buffer (information.h) */
 };
 
 /* Everything an accepted sample changes except the variable tail (history, residual ring):

@@ -415,6 +415,17 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
             cat_repr(err, errlen, o->signal_sd[i]);
             return 1;
         }
+    if (o->information < 0 || o->information > 2) {
+        bad_code(err, errlen, "ident.information", o->information,
+                 "0 (automatic), 1 (on), 2 (off)");
+        return 1;
+    }
+    if (o->information == 1 && o->noise_profile != 1) {
+        set_msg(err, errlen, "ident.information = 1 needs the sensors' noise model: set "
+                             "ident.noise_profile = 1 (which turns it on) and the noise.* "
+                             "parameters");
+        return 1;
+    }
     if (o->excite_mode < 0 || o->excite_mode > 2) {
         bad_code(err, errlen, "ident.excite_mode", o->excite_mode,
                  "0 (off), 1 (until_identified), 2 (always)");
@@ -434,6 +445,35 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
 static const int S2P[6] = {0, 3, 5, 1, 2, 4};
 
 static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
+
+/* the information filter's model from the options (the noise profile applied): the sensors'
+ * white noise per sample (densities over 1 s drawn every noise_dt: d / sqrt(noise_dt)), the
+ * thrust errors' and gyro bias' priors, all times noise.scale; the estimator's guesses and P0 */
+static int info_model(sr_estimator_model *m, const sr_robot *robot,
+                      const sr_estimator_options *o)
+{
+    const double *p = o->noise, s = o->noise_scale;
+    sr_info_noise nz;
+    double res = p[SR_NOISE_ENC_RESOLUTION];
+    nz.r = s * p[SR_NOISE_NAV_R];
+    nz.v = s * p[SR_NOISE_NAV_V];
+    nz.omega = s * p[SR_NOISE_GYRO_ARW] / sqrt(o->noise_dt);
+    nz.att[0] = nz.att[1] = s * p[SR_NOISE_STAR_CROSS];
+    nz.att[2] = s * p[SR_NOISE_STAR_ROLL];
+    /* the encoder: its noise and a uniform quantisation error of step res (variance res^2/12) */
+    nz.q = s * sqrt(p[SR_NOISE_ENC_Q] * p[SR_NOISE_ENC_Q] + res * res / 12.0);
+    nz.qd = s * p[SR_NOISE_ENC_QD];
+    for (int k = 0; k < 2; k++) {
+        nz.thrust[4 * k] = s * p[SR_NOISE_THRUST_SCALE];
+        for (int i = 1; i < 4; i++)
+            nz.thrust[4 * k + i] = s * p[SR_NOISE_THRUST_MISALIGN];
+    }
+    nz.gyro_bias = s * p[SR_NOISE_GYRO_BIAS];
+    double z0[20];
+    memcpy(z0, o->guess_base, sizeof(double) * 10);
+    memcpy(z0 + 10, o->guess_target, sizeof(double) * 10);
+    return sr_info_model_init(&m->info_m, robot, &nz, z0, o->P0_mu, o->P0_theta);
+}
 
 sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
                                            const sr_estimator_options *opt,
@@ -635,6 +675,21 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         off += m->lags ? sizeof(double) * (size_t)(m->lags + 1 + m->lags * m->k2) : 0;
     m->off_win = off;               /* the momentum window's ring */
     off += sizeof(double) * (size_t)m->win_cap * (size_t)m->win_slot;
+    m->info = opt->information == 1;
+    if (m->info) {                  /* the information filter (information.h) */
+        if (info_model(m, robot, opt) != 0) {
+            set_msg(err, errlen, "the information filter cannot use these noise magnitudes "
+                                 "and guesses (noise.* must be finite and >= 0; guessed "
+                                 "masses > 0)");
+            free(m);
+            return NULL;
+        }
+        off = align8(off);
+        m->off_info = off;
+        off += sizeof(sr_info_data);
+        m->off_info_buf = off;
+        off += sizeof(double) * sr_info_buffer_length(m->n);
+    }
     m->size = off;
     return m;
 }
@@ -665,6 +720,8 @@ void sr_estimator_data_init(const sr_estimator_model *m, void *data)
         est_joint_init(m, c);
     c->decay_lin = c->decay_ang = 1.0;
     c->tr_t_ref = c->tr_t = NAN;                              /* DriftTracker.empty */
+    if (m->info)
+        sr_info_data_init(&m->info_m, (sr_info_data *)((char *)data + m->off_info));
 }
 
 /* -- one sample ------------------------------------------------------------------------------- */
@@ -1124,6 +1181,16 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
             bad_count(err, errlen, ranges[i].name, ranges[i].v, ranges[i].lo, ranges[i].hi);
             return 1;
         }
+    if (m->info) {
+        const sr_info_data *f = (const sr_info_data *)((const char *)data + m->off_info);
+        if (f->samples < 0 || f->has_W < 0 || f->has_W > 1 || !(f->rows >= 0.0) ||
+            f->replayed < 0 || f->replayed > 1 ||
+            (!f->replayed && f->samples > SR_INFO_REPLAY)) {
+            set_msg(err, errlen, "the estimator's state block is not valid: the information "
+                                 "filter's counters are out of range");
+            return 1;
+        }
+    }
     if (!memchr(d->msg, '\0', sizeof d->msg)) {
         set_msg(err, errlen, "the estimator's state block is not valid: its message is not "
                              "terminated");
@@ -1147,6 +1214,36 @@ static int outputs_finite(const est_core *nw)
         ok &= isfinite(nw->vec[i]) && isfinite(nw->sd[i]);
     return ok;
 }
+
+static void rls_estimates(const sr_estimator_model *m, const est_data *d, double *vec,
+                          double *sd);
+static void physical_vector(const sr_estimator_model *m, const double *ls, const double *sd,
+                            double *out, int *flags);
+
+/* The information filter's sample (information.h) into *nwi, a copy of the Data's filter,
+ * linearised at this estimator's physical estimates of ls, sd (20 each; the guesses where a
+ * mass is not positive). 0 ok, 1 failed (non-finite numbers: the sample is rejected). */
+static int info_step(const sr_estimator_model *m, void *data, double t,
+                     const double *sample, const double *ls, const double *sd,
+                     sr_info_data *nwi)
+{
+    double z[EST_NZ];
+    int flags[4];
+    physical_vector(m, ls, sd, z, flags);
+    if (!(z[0] > 0.0 && z[10] > 0.0)) {
+        memcpy(z, m->opt.guess_base, sizeof(double) * 10);
+        memcpy(z + 10, m->opt.guess_target, sizeof(double) * 10);
+    }
+    memcpy(nwi, (const char *)data + m->off_info, sizeof *nwi);
+    /* the replay buffer: written at the filter's next slot only, which counts at the commit */
+    double *buffer = (double *)((char *)data + m->off_info_buf);
+    return sr_info_step(&m->info_m, nwi, buffer, t, sample, z);
+}
+
+static const char *const info_fail_msg =
+    "the information filter's update failed (non-finite numbers or a noise covariance that is "
+    "not positive definite); are the inputs in SI units and of physical size, the noise.* "
+    "magnitudes those of the sensors?";
 
 int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const double *sample,
                         char *msg, size_t msglen)
@@ -1195,6 +1292,13 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         last = has_last ? est_pymax(last, c->thr[SR_THRUST_T]) : c->thr[SR_THRUST_T];
         has_last = 1;
     }
+    if (m->info) {                           /* the information filter's thrust integrals */
+        const sr_info_data *f = (const sr_info_data *)((const char *)data + m->off_info);
+        if (f->samples > 0) {
+            last = has_last ? est_pymax(last, f->K[SR_THRUST_T]) : f->K[SR_THRUST_T];
+            has_last = 1;
+        }
+    }
     if (has_last && !(t > last)) {
         set_msg(why, sizeof why, "differenced accelerations, the moving reference and the "
                                  "thrust integrals need increasing sample times: t = ");
@@ -1205,6 +1309,15 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         return reject(d, SR_EST_REJECT_INCONSISTENT, why, msg, msglen);
     }
 
+    /* the information filter's sample, linearised at this estimator's estimates so far (its
+     * own can run away while it is poorly informed); committed with the sample */
+    sr_info_data nwi;
+    if (m->info) {
+        double ls[EST_NZ], sdv[EST_NZ];
+        rls_estimates(m, d, ls, sdv);
+        if (info_step(m, data, t, sample, ls, sdv, &nwi) != 0)
+            return reject(d, SR_EST_REJECT_NONFINITE, info_fail_msg, msg, msglen);
+    }
     /* the transaction: the new state on the stack, committed only if all came out finite */
     static const char *const overflow_msg = "the update failed: it produced non-finite numbers; "
                                         "are the inputs in SI units and of physical size?";
@@ -1346,6 +1459,8 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
     if (stored == 3)
         win_push(m, data, c, 0, t, sample, kint);
     if (stored) {
+        if (m->info)
+            memcpy((char *)data + m->off_info, &nwi, sizeof nwi);
         if (m->thrust_int) {
             memcpy(c->thr, thr, sizeof thr);
             c->thr_started = 1;
@@ -1402,6 +1517,8 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         return reject(d, SR_EST_REJECT_NONFINITE, what, msg, msglen);
     }
     /* commit */
+    if (m->info)
+        memcpy((char *)data + m->off_info, &nwi, sizeof nwi);
     if (m->lags > 0 && m->opt.solver == 1) {
         est_corr_commit(m, data, &nw, 0, e_lin, m->k1);
         est_corr_commit(m, data, &nw, 1, e_ang, m->k2);
@@ -1429,9 +1546,42 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
 
 /* -- the report ------------------------------------------------------------------------------ */
 
-/* the least-squares estimates and standard deviations: after a sample as the step left them,
- * before any the prior's (solvers.ParameterSolver.std) */
-static void estimates(const sr_estimator_model *m, const est_data *d, double *vec, double *sd)
+/* the reported vector out (20) of the least-squares estimates ls (20) and their sds: physical
+ * flags (flags[0..1]); identified (flags[2..3]): small sd and the reported value the
+ * estimate's (Identifier.report); the projection onto real bodies where needed */
+static void physical_vector(const sr_estimator_model *m, const double *ls, const double *sd,
+                            double *out, int *flags)
+{
+    /* the information filter's sds are calibrated (an error beyond 2 sd in 1 of 20): its flag
+       asks 2 sd below the threshold, so that a flagged estimate is within it at 95 % */
+    double sd_rel = m->info ? 0.5 * m->opt.sd_rel : m->opt.sd_rel;
+    memcpy(out, ls, sizeof(double) * EST_NZ);
+    if (sr_report_flags(ls, sd, SR_COM_SCALE_MIN, sd_rel, m->identified, flags))
+        return;
+    const double *g[2] = {m->opt.guess_base, m->opt.guess_target};
+    for (int k = 0; k < 2; k++) {
+        if (flags[k])
+            continue;
+        double *body = out + 10 * k, m_out;
+        int projected;
+        double m_min = SR_REL_MASS_MIN * fabs(g[k][0]);
+        if (m->robot.planar)
+            sr_project_planar_body(body[0], body + 1, body + 4, m_min, SR_REL_SIGMA_MIN,
+                                   &m_out, body + 4, &projected);
+        else
+            sr_project_body(body[0], body + 1, body + 4, m_min, SR_REL_SIGMA_MIN, &m_out,
+                            body + 4, &projected);
+        body[0] = m_out;
+    }
+    double scale[EST_NZ];
+    sr_error_scale(out, SR_COM_SCALE_MIN, scale);
+    sr_identified_bodies(sd, out, ls, scale, sd_rel, m->identified, flags + 2);
+}
+
+/* the least-squares estimates and standard deviations of this estimator's equations: after a
+ * sample as the step left them, before any the prior's (solvers.ParameterSolver.std) */
+static void rls_estimates(const sr_estimator_model *m, const est_data *d, double *vec,
+                          double *sd)
 {
     if (d->samples > 0) {
         memcpy(vec, d->core.vec, sizeof(double) * EST_NZ);
@@ -1440,6 +1590,35 @@ static void estimates(const sr_estimator_model *m, const est_data *d, double *ve
     }
     double data_only[EST_NZ], J[EST_NZ * EST_NZ], rcond[2];
     est_std_parts(m, &d->core, 1.0, 1.0, sd, data_only, J, vec, rcond);
+}
+
+/* the reported least-squares estimates and standard deviations: the information filter's
+ * (its bound times sqrt(max(1, chi2)): the misfit the noise model did not foresee widens them)
+ * where it runs, else the equations' own; crb (20) and chi2 (may be NULL) the filter's bound
+ * and misfit, 0 without it */
+static void estimates_info(const sr_estimator_model *m, const est_data *d, double *vec,
+                           double *sd, double *crb, double *chi2)
+{
+    double bound[EST_NZ], x2 = 0.0;
+    if (!m->info) {
+        rls_estimates(m, d, vec, sd);
+        memset(bound, 0, sizeof bound);
+    } else {
+        const sr_info_data *f = (const sr_info_data *)((const char *)d + m->off_info);
+        sr_info_estimate(&m->info_m, f, 2, vec, bound, &x2);
+        double k = sqrt(x2 > 1.0 ? x2 : 1.0);
+        for (int i = 0; i < EST_NZ; i++)
+            sd[i] = k * bound[i];
+    }
+    if (crb)
+        memcpy(crb, bound, sizeof bound);
+    if (chi2)
+        *chi2 = x2;
+}
+
+static void estimates(const sr_estimator_model *m, const est_data *d, double *vec, double *sd)
+{
+    estimates_info(m, d, vec, sd, NULL, NULL);
 }
 
 void sr_estimator_estimates(const sr_estimator_model *m, const void *data, double *vec,
@@ -1495,32 +1674,9 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
         r->status = SR_EST_REJECT_NONFINITE;
         return;
     }
-    estimates(m, d, ls, r->sd);
-    memcpy(r->vector, ls, sizeof ls);
-    /* physical flags; identified: small sd and the reported value the estimate's
-     * (Identifier.report), the projection onto real bodies where needed */
+    estimates_info(m, d, ls, r->sd, r->crb, &r->info_chi2);
     int flags[4];
-    if (!sr_report_flags(ls, r->sd, SR_COM_SCALE_MIN, m->opt.sd_rel, m->identified, flags)) {
-        const double *g[2] = {m->opt.guess_base, m->opt.guess_target};
-        for (int k = 0; k < 2; k++) {
-            if (flags[k])
-                continue;
-            double *body = r->vector + 10 * k, m_out;
-            int projected;
-            double m_min = SR_REL_MASS_MIN * fabs(g[k][0]);
-            if (m->robot.planar)
-                sr_project_planar_body(body[0], body + 1, body + 4, m_min, SR_REL_SIGMA_MIN,
-                                       &m_out, body + 4, &projected);
-            else
-                sr_project_body(body[0], body + 1, body + 4, m_min, SR_REL_SIGMA_MIN, &m_out,
-                                body + 4, &projected);
-            body[0] = m_out;
-        }
-        double scale[EST_NZ];
-        sr_error_scale(r->vector, SR_COM_SCALE_MIN, scale);
-        sr_identified_bodies(r->sd, r->vector, ls, scale, m->opt.sd_rel, m->identified,
-                             flags + 2);
-    }
+    physical_vector(m, ls, r->sd, r->vector, flags);
     for (int k = 0; k < 2; k++) {
         r->physical[k] = flags[k];
         r->identified[k] = d->samples > 0 && flags[2 + k];

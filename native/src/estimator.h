@@ -130,6 +130,13 @@ typedef struct sr_estimator_options {
     double noise_dt;            /* the sample interval [s] the sensors draw their white noise at
                                    (densities over 1 s become d / sqrt(noise_dt) per sample);
                                    FMU: the scenario's sample time; default 0.1 */
+    int information;            /* ident.information: 1 on: the reported estimates and sds from
+                                   the information filter (information.h: the momentum
+                                   equations with the sensors' noise model, linearised at this
+                                   estimator's own estimates) and the Cramer-Rao bound as
+                                   report.crb; needs noise_profile 1; 2 off; 0 (default)
+                                   automatic: noise_profile 1 turns it on where the sensors
+                                   have white noise */
 } sr_estimator_options;
 
 /** The defaults of the estimator FMU's parameters (the paper's guesses and covariances of
@@ -196,6 +203,12 @@ typedef struct sr_estimator_report {
     int samples, rejected, status;    /* diag.samples, diag.rejected, diag.status (the
                                          counters saturate at INT_MAX) */
     double excite;                    /* the excitation level requested (output ident.excite) */
+    /* -- the information filter (options.information; else 0) -- */
+    double crb[20];                   /* crb.<estimate>: the first-order Cramer-Rao bound's
+                                         standard deviations of the data so far */
+    double info_chi2;                 /* diag.info_chi2: its weighted residuals' mean square
+                                         (1 where the noise model is right; the sds are the
+                                         bound times sqrt(max(1, info_chi2))) */
 } sr_estimator_report;
 
 /** The report of the Data block (reads it only). */

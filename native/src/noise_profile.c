@@ -7,7 +7,9 @@
 /* the magnitudes the profile reads */
 static const int READ[] = {SR_NOISE_GYRO_ARW, SR_NOISE_NAV_V, SR_NOISE_ACCEL_VRW, SR_NOISE_ALPHA,
                            SR_NOISE_ENC_QD, SR_NOISE_ENC_QDD, SR_NOISE_THRUST_SCALE,
-                           SR_NOISE_THRUST_MISALIGN};
+                           SR_NOISE_THRUST_MISALIGN, SR_NOISE_NAV_R, SR_NOISE_STAR_CROSS,
+                           SR_NOISE_STAR_ROLL, SR_NOISE_ENC_Q, SR_NOISE_ENC_RESOLUTION,
+                           SR_NOISE_GYRO_BIAS};
 
 static int fail(sr_noise_profile_error *e, const char *name, const char *rule, double value)
 {
@@ -53,6 +55,12 @@ int sr_noise_profile_apply(const sr_estimator_options *in, sr_estimator_options 
 #define FILL(field, value) do { if (o.field == d.field) o.field = (value); } while (0)
     FILL(sd_thrust_scale, p[SR_NOISE_THRUST_SCALE]);
     FILL(sd_thrust_misalign, p[SR_NOISE_THRUST_MISALIGN]);
+    /* the information filter weighs the rows by the sensors' white noise: with none (e.g.
+       noise.scale 0) there is nothing to weigh by, and the estimator's own equations serve */
+    double white = p[SR_NOISE_NAV_R] + p[SR_NOISE_NAV_V] + p[SR_NOISE_GYRO_ARW] +
+                   p[SR_NOISE_STAR_CROSS] + p[SR_NOISE_STAR_ROLL] + p[SR_NOISE_ENC_Q] +
+                   p[SR_NOISE_ENC_RESOLUTION] + p[SR_NOISE_ENC_QD];
+    FILL(information, white > 0.0 ? 1 : 2);
     /* white noise per sample of the accelerations (measured) and velocities (differenced);
        a density over 1 s drawn every dt has the sd d / sqrt(dt) (docs/sensors.md) */
     FILL(signal_sd[0], p[SR_NOISE_ACCEL_VRW] / rt);          /* a_S */

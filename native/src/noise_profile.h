@@ -20,6 +20,9 @@
  *     over 9 samples (ident.diff_momentum = 1, ident.diff_half_window = 4), the velocities'
  *     noise compensated (ident.noise.base.v = noise.nav.v, base.omega = noise.gyro.arw /
  *     sqrt(dt), arm.qd = noise.enc.qd);
+ *   - the information filter (ident.information = 1, information.h) where the sensors have
+ *     white noise (2, off, where they have none, e.g. noise.scale 0): its estimates and
+ *     standard deviations are reported, the estimator's own equations linearise its weights;
  *   - row weights: unit (ident.sd_row.* 0). With the paper's solver the weights only set the
  *     data's weight against the weak prior: a pilot run's row standard deviations changed no
  *     estimate's worst error nor the calibration on the benchmark's cases.

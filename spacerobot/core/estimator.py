@@ -51,7 +51,7 @@ class SrEstimatorOptions(ctypes.Structure):
         ("sd_thrust_misalign", ctypes.c_double), ("momentum_window_samples", ctypes.c_int),
         ("accel_bias", ctypes.c_int), ("noise_profile", ctypes.c_int),
         ("noise_scale", ctypes.c_double), ("noise", ctypes.c_double * N_SENSOR_NOISE),
-        ("noise_dt", ctypes.c_double),
+        ("noise_dt", ctypes.c_double), ("information", ctypes.c_int),
     ]
 
 
@@ -70,7 +70,8 @@ class SrEstimatorReport(ctypes.Structure):
         ("residual_lin", ctypes.c_double), ("residual_ang", ctypes.c_double),
         ("excitation_mu", ctypes.c_double), ("excitation_theta", ctypes.c_double),
         ("samples", ctypes.c_int), ("rejected", ctypes.c_int), ("status", ctypes.c_int),
-        ("excite", ctypes.c_double),
+        ("excite", ctypes.c_double), ("crb", ctypes.c_double * 20),
+        ("info_chi2", ctypes.c_double),
     ]
 
 
@@ -245,6 +246,7 @@ def options_from_values(values: Mapping[str, float]) -> dict:
         "accel_bias": int(v["ident.accel_bias"]),
         "noise_profile": int(v["ident.noise_profile"]),
         "noise_scale": float(v["noise.scale"]),
+        "information": int(v.get("ident.information", 0)),
         # the magnitudes the profile reads (the others stay 0: the estimator has no use for them)
         "noise": [float(v.get(name, 0.0)) for name in SENSOR_MAGNITUDES],
     }
@@ -341,7 +343,8 @@ class NativeEstimator:
         """What the estimator FMU outputs: ``vector``, ``sd`` (20,), ``identified`` and
         ``physical`` (``{'base': bool, 'target': bool}``), ``residual_lin``, ``residual_ang``,
         ``excitation_mu``, ``excitation_theta``, ``samples``, ``rejected``, ``status``,
-        ``excite``."""
+        ``excite``; the information filter's ``crb`` (20,: the Cramér-Rao bound's standard
+        deviations, 0 without the filter) and ``info_chi2`` (its misfit)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
         return {
@@ -351,7 +354,7 @@ class NativeEstimator:
             "residual_lin": r.residual_lin, "residual_ang": r.residual_ang,
             "excitation_mu": r.excitation_mu, "excitation_theta": r.excitation_theta,
             "samples": r.samples, "rejected": r.rejected, "status": r.status,
-            "excite": r.excite,
+            "excite": r.excite, "crb": np.array(r.crb[:]), "info_chi2": r.info_chi2,
         }
 
     def get_state(self) -> bytes:

@@ -71,12 +71,17 @@ class Report:
         estimate (and at least one sample was used)
     physical : {'base': bool, 'target': bool}, the least-squares estimate of the body was a
         real body already (False: ``vector`` holds its projection)
+    crb : (20,) the information filter's first-order Cramér-Rao bound, as standard deviations
+        (``crb.*``; 0 without the filter, ``ident.information``)
+    info_chi2 : its weighted residuals' mean square (``diag.info_chi2``; 0 without it)
     """
 
     vector: np.ndarray
     std: np.ndarray
     identified: dict
     physical: dict
+    crb: np.ndarray = None
+    info_chi2: float = 0.0
 
 
 @dataclass
@@ -189,7 +194,7 @@ class Identifier:
                  diff_half_window: int = 1, corr_lags: int = 0, window: float = 0.0,
                  moving_point: bool = False, accel_bias: bool = False, thrust_sd=(0.0, 0.0),
                  signal_sd: Mapping[str, float] | None = None, diff_momentum: bool = False,
-                 lib=None):
+                 sensors_noise: Mapping | None = None, lib=None):
         from ..core.estimator import NativeEstimator
 
         self._args = (robot, guess, dict(method=method, solver=solver, accel_source=accel_source,
@@ -197,7 +202,8 @@ class Identifier:
                                          diff_half_window=diff_half_window, corr_lags=corr_lags,
                                          window=window, moving_point=moving_point,
                                          accel_bias=accel_bias, thrust_sd=thrust_sd,
-                                         signal_sd=signal_sd, diff_momentum=diff_momentum))
+                                         signal_sd=signal_sd, diff_momentum=diff_momentum,
+                                         sensors_noise=sensors_noise))
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
@@ -258,6 +264,9 @@ class Identifier:
             "sd_thrust_scale": thrust_sd[0], "sd_thrust_misalign": thrust_sd[1],
             "accel_bias": int(self.accel_bias),
         }
+        # the sensors' noise model (the core's noise_profile, noise_scale, noise, noise_dt,
+        # information): what the information filter weighs the rows by
+        options.update(sensors_noise or {})
         self.core = NativeEstimator(robot, options, lib=lib)
         self._zero = np.zeros(self._n_flat)       # a sample the core rejects (base.A = 0)
         self._note = None       # a rejection decided here (shape, type): its message
@@ -399,7 +408,7 @@ class Identifier:
         output only: the core keeps the exact least-squares state."""
         r = self._report()
         return Report(r["vector"].copy(), r["sd"].copy(), dict(r["identified"]),
-                      dict(r["physical"]))
+                      dict(r["physical"]), r["crb"].copy(), float(r["info_chi2"]))
 
     def estimates(self) -> dict:
         """``{'base': BodyEstimate, 'target': BodyEstimate}`` (the least-squares estimates;
@@ -549,10 +558,15 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float], sample_tim
     ``ident.noise_profile`` = 1 the options its profile sets (the sensors' densities at
     ``sample_time`` [s], the FMU's scenario sample time). Raises ``ValueError`` for an invalid
     value or one the native core does not take."""
-    from ..core.estimator import profile_values
+    from ..core.estimator import options_from_values, profile_values
     v = dict(values)
+    sensors_noise = None
     if v.get("ident.noise_profile", 0) != 0:          # the core names a bad profile value
         v.update(profile_values(v, sample_time))
+        o = options_from_values(v)
+        sensors_noise = {k: o[k] for k in ("noise_profile", "noise_scale", "noise",
+                                           "information")}
+        sensors_noise["noise_dt"] = float(sample_time)
     codes = [code.parse(int(v[name]), name) for name, code in (
         ("method", Method), ("solver", Solver), ("accel_source", AccelSource))]
     guess = Guess(body_of(v, "guess.base"), body_of(v, "guess.target"), float(v["P0_mu"]),
@@ -567,5 +581,6 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float], sample_tim
                        thrust_sd=_thrust_sd([v[n] for n in THRUST_SD_NAMES], THRUST_SD_NAMES),
                        diff_momentum=_flag(v["ident.diff_momentum"], "ident.diff_momentum"),
                        signal_sd={key: v[f"ident.noise.{name}"]
-                                  for key, name, _, _ in SIGNAL_NOISE_PARAMETERS})
+                                  for key, name, _, _ in SIGNAL_NOISE_PARAMETERS},
+                       sensors_noise=sensors_noise)
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))

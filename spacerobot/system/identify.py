@@ -161,6 +161,10 @@ def _row(ident: Identifier, request: ExcitationRequest, outs: List[Var]) -> List
             row.append(float(rep.vector[ESTIMATE_NAMES.index(v.name)]))
         elif group in ("sd_base", "sd_target"):
             row.append(float(rep.std[ESTIMATE_NAMES.index(v.name[len("sd."):])]))
+        elif group in ("crb_base", "crb_target"):
+            row.append(float(rep.crb[ESTIMATE_NAMES.index(v.name[len("crb."):])]))
+        elif group == "info_chi2":
+            row.append(float(rep.info_chi2))
         elif group in ("identified", "physical"):
             row.append(float(getattr(rep, group)[v.key[1]]))
         elif group == "excite":

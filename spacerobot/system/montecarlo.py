@@ -203,6 +203,10 @@ def case_row(case: Case, res) -> Dict[str, object]:
     sd = _series(res, [f"sd.{p}" for p in ESTIMATE_NAMES], "estimator")[-1]
     ident = layout.identified
     row["within2sd"] = float(np.mean(np.abs(est[-1] - truth)[ident] <= 2.0 * sd[ident]))
+    if f"estimator.crb.{ESTIMATE_NAMES[0]}" in res.data:      # the information filter's bound
+        crb = _series(res, [f"crb.{p}" for p in ESTIMATE_NAMES], "estimator")[-1]
+        row.update({f"crb.{p}": float(c) for p, c in
+                    zip(ESTIMATE_NAMES, crb / interface.error_scale(truth))})
     return row
 
 
@@ -218,9 +222,12 @@ def run_case(case: Case, ssp_path: str, runner: str = DEFAULT_RUNNER) -> Dict[st
 #: the Monte Carlo study for the sweep's executor
 STUDY = Study(name="montecarlo", columns=COLUMNS, key="case_id", task=run_case)
 #: the study through the sensors (:class:`SensorsCase`): the sensors' scale and seed too
+#: (and the information filter's Cramér-Rao bound per estimate, relative to its error scale as
+#: the ``relerr`` columns: the efficiency's denominator)
 SENSORS_STUDY = Study(name="montecarlo-sensors",
                       columns=COLUMNS[:len(CASE_COLUMNS)] + ("noise_scale", "sensors_seed")
-                      + COLUMNS[len(CASE_COLUMNS):], key="case_id", task=run_case)
+                      + COLUMNS[len(CASE_COLUMNS):] + tuple(f"crb.{p}" for p in ESTIMATE_NAMES),
+                      key="case_id", task=run_case)
 
 
 def build_sensors_system(robot: str, out_dir):
@@ -261,8 +268,9 @@ def summary_table(rows: Sequence[Dict[str, str]]) -> str:
     lines = ["| robot | method | excitation | cases | within 1 % | within 0.1 % | median worst "
              "error/scale | largest worst error/scale | median time to 1 % [s] | median time "
              "to 0.1 % [s] "
-             "| both identified | false flags | impossible estimates | within 2 sd |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| both identified | false flags | impossible estimates | within 2 sd "
+             "| efficiency (median, lowest) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (robot, method, excite), rs in sorted(groups.items()):
         w = np.array([float(r["worst_error"]) for r in rs])
         t1 = np.array([float(r["t_1pct"]) for r in rs])
@@ -279,7 +287,43 @@ def summary_table(rows: Sequence[Dict[str, str]]) -> str:
         lines.append(f"| {robot} | {method} | {excite} | {n} | {(w < 1e-2).sum()}/{n} | "
                      f"{(w < 1e-3).sum()}/{n} | {100 * np.median(w):.3g} % | "
                      f"{100 * w.max():.3g} % | {med(t1)} | {med(t01)} | {both}/{n} | {false} | "
-                     f"{bad} | {calibration(rs)} |")
+                     f"{bad} | {calibration(rs)} | {efficiency_text(rs)} |")
+    return "\n".join(lines)
+
+
+def efficiency_text(rows: Sequence[Dict[str, str]]) -> str:
+    """"median, lowest" of :func:`efficiencies` over the estimates, or "-" without the bound."""
+    e = list(efficiencies(rows).values())
+    return f"{np.median(e):.2f}, {min(e):.2f}" if e else "-"
+
+
+def efficiencies(rows: Sequence[Dict[str, str]]) -> Dict[str, float]:
+    """Per estimate, the Cramér-Rao bound over the observed scatter across the cases,
+    ``sqrt(mean crb^2) / sqrt(mean error^2)`` (1: as good as any unbiased estimator can be;
+    both relative to the error scale); empty for rows without the bound (no information
+    filter) or where an estimate is not identified (bound 0)."""
+    out: Dict[str, float] = {}
+    for p in ESTIMATE_NAMES:
+        c = [float(r[f"crb.{p}"]) for r in rows if r.get(f"crb.{p}") not in (None, "")]
+        e = [float(r[f"relerr.{p}"]) for r in rows if r.get(f"crb.{p}") not in (None, "")]
+        if c and max(c) > 0 and max(e) > 0:
+            out[p] = float(np.sqrt(np.mean(np.square(c))) / np.sqrt(np.mean(np.square(e))))
+    return out
+
+
+def efficiency_table(rows: Sequence[Dict[str, str]]) -> str:
+    """A Markdown table of :func:`efficiencies` with the bound's median (of the error scale),
+    or "" without the bound."""
+    ok = [r for r in rows if r["status"] == "ok"]
+    eff = efficiencies(ok)
+    if not eff:
+        return ""
+    lines = ["| estimate | bound, median over cases (of its scale) | RMS error (of its scale) | "
+             "efficiency (bound / RMS error) |", "|---|---|---|---|"]
+    for p, e in eff.items():
+        c = np.median([float(r[f"crb.{p}"]) for r in ok])
+        rms = np.sqrt(np.mean([float(r[f"relerr.{p}"]) ** 2 for r in ok]))
+        lines.append(f"| {p} | {100 * c:.2g} % | {100 * rms:.2g} % | {e:.2f} |")
     return "\n".join(lines)
 
 
@@ -412,6 +456,11 @@ def cli_montecarlo(args) -> int:
     except SweepLocked as e:
         raise ValueError(str(e)) from None
     print(summary)
-    print(summary_table(read_results(out)))
+    rows = read_results(out)
+    print(summary_table(rows))
+    eff = efficiency_table(rows)
+    if eff:
+        print("the information filter's Cramér-Rao bound against the observed scatter:")
+        print(eff)
     print("plot:", plot_montecarlo(out, args.plot))
     return 1 if summary.failed else 0

@@ -1,0 +1,633 @@
+/* information.c -- the information filter and the bound (information.h). */
+#include "information.h"
+
+#include "linalg.h"
+#include "sr_math.h"
+
+#include <math.h>
+#include <string.h>
+
+#define MU SR_INFO_MAX_U             /* row stride of R, N_HH */
+#define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
+
+/* reported I (Ixx Iyy Izz Ixy Ixz Iyz) -> I# (xx xy xz yy yz zz, eq. 21) */
+static const int S2P[6] = {0, 3, 5, 1, 2, 4};
+/* I_O# - I_c# = P_AXES [c_i c_j / m] (#-ordered; m ([b]x^T [b]x) = (|c|^2 1 - c c^T) / m) */
+static const double P_AXES[6][6] = {{0, 0, 0, 1, 0, 1}, {0, -1, 0, 0, 0, 0},
+                                    {0, 0, -1, 0, 0, 0}, {1, 0, 0, 0, 0, 1},
+                                    {0, 0, 0, 0, -1, 0}, {1, 0, 0, 1, 0, 0}};
+
+/* z = [mu (8), I# per body (12)] of the reported x (20) */
+static void z_of_reported(const double *x, double *z)
+{
+    for (int k = 0; k < 2; k++) {
+        const double *b = x + 10 * k;
+        z[4 * k] = b[0];
+        for (int i = 0; i < 3; i++)
+            z[4 * k + 1 + i] = b[0] * b[1 + i];
+        for (int i = 0; i < 6; i++)
+            z[8 + 6 * k + S2P[i]] = b[4 + i];
+    }
+}
+
+static void reported_of_z(const double *z, double *x)
+{
+    for (int k = 0; k < 2; k++) {
+        double m = z[4 * k];
+        x[10 * k] = m;
+        for (int i = 0; i < 3; i++)
+            x[10 * k + 1 + i] = z[4 * k + 1 + i] / m;
+        for (int i = 0; i < 6; i++)
+            x[10 * k + 4 + i] = z[8 + 6 * k + S2P[i]];
+    }
+}
+
+/* sign = +1: z (about the coms) -> z_O (about the origins); -1 the inverse (mu is shared) */
+static void shift_axes(double *z, double sign)
+{
+    double D[20];
+    sr_D_of_mu(z, D);
+    for (int k = 0; k < 2; k++)
+        for (int i = 0; i < 6; i++) {
+            double s = 0.0;
+            for (int j = 0; j < 6; j++)
+                s += P_AXES[i][j] * D[10 * k + 4 + j];
+            z[8 + 6 * k + i] += sign * s;
+        }
+}
+
+int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_noise *noise,
+                       const double *z0, double P0_mu, double P0_theta)
+{
+    if (!m || !robot || !noise || !z0 || robot->n < 1 || robot->n > SR_MAX_JOINTS)
+        return 1;
+    if (!(P0_mu > 0.0 && P0_theta > 0.0 && isfinite(P0_mu) && isfinite(P0_theta)))
+        return 1;
+    const double *s = &noise->r;
+    for (size_t i = 0; i < sizeof(sr_info_noise) / sizeof(double); i++)
+        if (!(isfinite(s[i]) && s[i] >= 0.0))
+            return 1;
+    for (int i = 0; i < 20; i++)
+        if (!isfinite(z0[i]))
+            return 1;
+    if (!(z0[0] > 0.0 && z0[10] > 0.0))
+        return 1;
+    memset(m, 0, sizeof *m);
+    m->robot = *robot;
+    m->n = robot->n;
+    m->planar = robot->planar;
+    m->noise = *noise;
+    m->nz = 0;
+    for (int i = 0; i < 8; i++)
+        if (!m->planar || i % 4 < 3)
+            m->zi[m->nz++] = i;
+    for (int k = 0; k < 2; k++)
+        for (int i = 0; i < 6; i++)
+            if (!m->planar || i == 5)
+                m->zi[m->nz++] = 8 + 6 * k + i;
+    static const int planar_rows[3] = {0, 1, 5};
+    m->nr = m->planar ? 3 : 6;
+    for (int i = 0; i < m->nr; i++)
+        m->rows[i] = m->planar ? planar_rows[i] : i;
+    m->nb = noise->gyro_bias > 0.0 ? 3 : 0;
+    m->nu = m->nz + m->nr + SR_N_CONSIDER + m->nb;
+    z_of_reported(z0, m->zO0);
+    shift_axes(m->zO0, 1.0);
+    /* the prior: P0 on z_O, none on c0 (1e-12 keeps R invertible before the first rows: the
+       momentum is unknown), the thrust errors' and gyro bias' own sds (an sd of 0: the
+       unknown held at 0 by a prior information of 1e150) */
+    int at = 0;
+    for (int q = 0; q < m->nz; q++, at++) {
+        m->prior_sqrt[at] = 1.0 / sqrt(m->zi[q] < 8 ? P0_mu : P0_theta);
+        m->u0[at] = m->zO0[m->zi[q]];
+    }
+    for (int q = 0; q < m->nr; q++, at++)
+        m->prior_sqrt[at] = 1e-12;
+    for (int q = 0; q < SR_N_CONSIDER; q++, at++)
+        m->prior_sqrt[at] = noise->thrust[q] > 0.0 ? 1.0 / noise->thrust[q] : 1e150;
+    for (int q = 0; q < m->nb; q++, at++)
+        m->prior_sqrt[at] = 1.0 / noise->gyro_bias;
+    return 0;
+}
+
+void sr_info_data_init(const sr_info_model *m, sr_info_data *d)
+{
+    if (!m || !d)
+        return;
+    memset(d, 0, sizeof *d);
+    for (int i = 0; i < m->nu; i++) {
+        d->R[i * MU + i] = m->prior_sqrt[i];
+        d->d[i] = m->prior_sqrt[i] * m->u0[i];
+    }
+}
+
+/* the used rows' residuals of the momentum equations of x at z (20, about the coms):
+   [A mu - b; phi theta - psi D(mu) - y] */
+static void rows_at(const sr_info_model *m, const double *x, const double *z, double *r)
+{
+    double E[3 * SR_N_COLS], D[20], full[6];
+    sr_equations(&m->robot, 0, x, E);
+    sr_D_of_mu(z, D);
+    for (int i = 0; i < 3; i++) {
+        const double *e = E + i * SR_N_COLS;
+        double a = -e[SR_COL_B], b = -e[SR_COL_Y];
+        for (int j = 0; j < 8; j++)
+            a += e[SR_COL_A + j] * z[j];
+        for (int j = 0; j < 12; j++)
+            b += e[SR_COL_PHI + j] * z[8 + j];
+        for (int j = 0; j < 20; j++)
+            b -= e[SR_COL_PSI + j] * D[j];
+        full[i] = a;
+        full[3 + i] = b;
+    }
+    for (int i = 0; i < m->nr; i++)
+        r[i] = full[m->rows[i]];
+}
+
+/* The rows H u = y of x exactly (H: nr x nu, row stride HS; the gyro bias columns not
+   written): linear rows A mu = b; angular phi theta_O - psi_lin [m, c] = y (psi's quadratic
+   columns are -phi P_AXES); minus c0 and the thrust errors' sensitivities on the left. The
+   unidentified z (planar) at their guesses move to y. k: the thrust integrals (15). */
+static void linear_rows(const sr_info_model *m, const double *x, const double *k, double *H,
+                        double *y)
+{
+    double E[3 * SR_N_COLS], S[3 * SR_N_CCOLS], full[6][20], yf[6];
+    sr_equations(&m->robot, 0, x, E);
+    sr_thrust_sensitivity(0, x, m->n, k, S);
+    memset(full, 0, sizeof full);
+    for (int i = 0; i < 3; i++) {
+        const double *e = E + i * SR_N_COLS;
+        for (int j = 0; j < 8; j++)
+            full[i][j] = e[SR_COL_A + j];
+        for (int b = 0; b < 2; b++)
+            for (int j = 0; j < 4; j++)
+                full[3 + i][4 * b + j] = -e[SR_COL_PSI + 10 * b + j];
+        for (int j = 0; j < 12; j++)
+            full[3 + i][8 + j] = e[SR_COL_PHI + j];
+        yf[i] = e[SR_COL_B];
+        yf[3 + i] = e[SR_COL_Y];
+    }
+    int used[20] = {0};
+    for (int q = 0; q < m->nz; q++)
+        used[m->zi[q]] = 1;
+    for (int a = 0; a < m->nr; a++) {
+        int row = m->rows[a];
+        double *h = H + a * HS;
+        memset(h, 0, sizeof(double) * m->nu);
+        for (int q = 0; q < m->nz; q++)
+            h[q] = full[row][m->zi[q]];
+        h[m->nz + a] = -1.0;                                  /* c0 */
+        const double *s = S + (row % 3) * SR_N_CCOLS + (row < 3 ? 0 : SR_N_CONSIDER);
+        for (int j = 0; j < SR_N_CONSIDER; j++)
+            h[m->nz + m->nr + j] = -s[j];                      /* d (b, y) / d c */
+        double v = yf[row];
+        for (int j = 0; j < 20; j++)
+            if (!used[j])
+                v -= full[row][j] * m->zO0[j];
+        y[a] = v;
+    }
+}
+
+/* the channels whose white noise enters the rows linearly (not the attitude): index, sd */
+static int channels(const sr_info_model *m, int *idx, double *sd)
+{
+    int c = 0, n = m->n;
+    const struct { int at, count; double sd; } g[5] = {
+        {SR_X_R_S, 3, m->noise.r}, {SR_X_V_S, 3, m->noise.v}, {SR_X_OMEGA_B, 3, m->noise.omega},
+        {SR_X_QD(n), n, m->noise.qd}, {SR_X_Q, n, m->noise.q}};
+    for (int k = 0; k < 5; k++)
+        for (int i = 0; i < g[k].count && g[k].sd > 0.0; i++) {
+            idx[c] = g[k].at + i;
+            sd[c++] = g[k].sd;
+        }
+    return c;
+}
+
+/* R_k^-1/2 (lower triangular nr x nr) of the rows' noise covariance at x, z: the channels'
+   white noise through central differences of the rows, the attitude's as small rotations
+   about the base axes; 0, or 1 when R_k is not positive definite */
+static int noise_weight(const sr_info_model *m, const double *x, const double *z, double *W)
+{
+    int nr = m->nr, idx[12 + 2 * SR_MAX_JOINTS];
+    double sd[12 + 2 * SR_MAX_JOINTS], Rk[36] = {0}, xs[SR_X_LEN(SR_MAX_JOINTS)];
+    double rp[6], rm[6], g[6];
+    int nx = SR_X_LEN(m->n);
+    memcpy(xs, x, sizeof(double) * nx);
+    int nc = channels(m, idx, sd);
+    for (int c = 0; c < nc; c++) {
+        const double h = 1e-4;
+        int i = idx[c];
+        xs[i] = x[i] + h;
+        rows_at(m, xs, z, rp);
+        xs[i] = x[i] - h;
+        rows_at(m, xs, z, rm);
+        xs[i] = x[i];
+        for (int a = 0; a < nr; a++)
+            g[a] = (rp[a] - rm[a]) / (2 * h);
+        for (int a = 0; a < nr; a++)
+            for (int b = 0; b < nr; b++)
+                Rk[a * 6 + b] += sd[c] * sd[c] * g[a] * g[b];
+    }
+    for (int i = 0; i < 3; i++) {                   /* the star tracker: A R(w) */
+        if (!(m->noise.att[i] > 0.0))
+            continue;
+        const double h = 1e-5;
+        for (int sgn = -1; sgn <= 1; sgn += 2) {
+            /* R(w) for w = sgn h e_i: rotation by sgn h about axis i */
+            double Rw[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, c, s;
+            sr_sincos(h, &s, &c);                   /* the portable one: same bits anywhere */
+            s *= sgn;
+            int j = (i + 1) % 3, k = (i + 2) % 3;
+            Rw[j * 3 + j] = c;
+            Rw[k * 3 + k] = c;
+            Rw[k * 3 + j] = s;
+            Rw[j * 3 + k] = -s;
+            for (int r = 0; r < 3; r++)
+                for (int col = 0; col < 3; col++) {
+                    double v = 0.0;
+                    for (int l = 0; l < 3; l++)
+                        v += x[SR_X_A_B + 3 * r + l] * Rw[3 * l + col];
+                    xs[SR_X_A_B + 3 * r + col] = v;
+                }
+            rows_at(m, xs, z, sgn > 0 ? rp : rm);
+        }
+        memcpy(xs + SR_X_A_B, x + SR_X_A_B, sizeof(double) * 9);
+        double s2 = m->noise.att[i] * m->noise.att[i];
+        for (int a = 0; a < nr; a++)
+            g[a] = (rp[a] - rm[a]) / (2 * h);
+        for (int a = 0; a < nr; a++)
+            for (int b = 0; b < nr; b++)
+                Rk[a * 6 + b] += s2 * g[a] * g[b];
+    }
+    double tr = 0.0;
+    for (int a = 0; a < nr; a++)
+        tr += Rk[a * 6 + a];
+    if (!(tr > 0.0) || !isfinite(tr))
+        return 1;
+    /* a floor for rows the noise misses: tiny, since the near-null directions of R_k are real
+       information (a floor of 1e-6 of the trace instead made the errors several times worse) */
+    for (int a = 0; a < nr; a++)
+        Rk[a * 6 + a] += 1e-12 * tr / nr;
+    /* Cholesky L L^T = Rk, then W = L^-1 (lower triangular) */
+    double L[36] = {0};
+    for (int a = 0; a < nr; a++)
+        for (int b = 0; b <= a; b++) {
+            double s = Rk[a * 6 + b];
+            for (int l = 0; l < b; l++)
+                s -= L[a * 6 + l] * L[b * 6 + l];
+            if (a == b) {
+                if (!(s > 0.0))
+                    return 1;
+                L[a * 6 + a] = sqrt(s);
+            } else {
+                L[a * 6 + b] = s / L[b * 6 + b];
+            }
+        }
+    memset(W, 0, sizeof(double) * 36);
+    for (int col = 0; col < nr; col++) {
+        W[col * nr + col] = 1.0 / L[col * 6 + col];
+        for (int a = col + 1; a < nr; a++) {
+            double s = 0.0;
+            for (int l = col; l < a; l++)
+                s += L[a * 6 + l] * W[l * nr + col];
+            W[a * nr + col] = -s / L[a * 6 + a];
+        }
+    }
+    return 0;
+}
+
+/* out (nr x ncol, row stride HS) = W (nr x nr lower) times in (same shape) */
+static void weigh(const double *W, int nr, const double *in, int ncol, double *out)
+{
+    for (int a = nr - 1; a >= 0; a--)
+        for (int j = 0; j < ncol; j++) {
+            double s = 0.0;
+            for (int b = 0; b <= a; b++)
+                s += W[a * nr + b] * in[b * HS + j];
+            out[a * HS + j] = s;
+        }
+}
+
+int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
+                const double *z_lin)
+{
+    if (!m || !d || !x || !z_lin || !(z_lin[0] > 0.0) || !(z_lin[10] > 0.0))
+        return 1;
+    int nr = m->nr, nu = m->nu, nz = m->nz, n = m->n;
+    double K[SR_THRUST_LEN], W[36], z[20];
+    memcpy(K, d->K, sizeof K);
+    sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(n), x + SR_X_M(n));
+    z_of_reported(z_lin, z);
+    memcpy(W, d->W, sizeof W);
+    if (!d->has_W || d->samples % SR_INFO_REFRESH == 0)
+        if (noise_weight(m, x, z, W) != 0)
+            return 1;
+    /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
+    double Hy[6 * HS], r0[6], rb[6], xs[SR_X_LEN(SR_MAX_JOINTS)], y[6];
+    memset(Hy, 0, sizeof Hy);
+    linear_rows(m, x, K + SR_THRUST_K, Hy, y);
+    int nx = SR_X_LEN(n);
+    memcpy(xs, x, sizeof(double) * nx);
+    if (m->nb) {                       /* the gyro reads omega + b: the rows' d / d b */
+        rows_at(m, x, z, r0);
+        for (int i = 0; i < 3; i++) {
+            xs[SR_X_OMEGA_B + i] = x[SR_X_OMEGA_B + i] + 1.0;   /* the rows are linear in it */
+            rows_at(m, xs, z, rb);
+            xs[SR_X_OMEGA_B + i] = x[SR_X_OMEGA_B + i];
+            for (int a = 0; a < nr; a++)
+                Hy[a * HS + nu - 3 + i] = -(rb[a] - r0[a]);
+        }
+    }
+    for (int a = 0; a < nr; a++)
+        Hy[a * HS + nu] = y[a];
+    double Wt[6 * HS];
+    weigh(W, nr, Hy, nu + 1, Wt);
+    /* errors in variables: N += sum_l sigma_l^2 (W dH_l)^T (W [dH_l dy_l]) */
+    double N_HH[MU * MU], N_Hy[MU];
+    memcpy(N_HH, d->N_HH, sizeof N_HH);
+    memcpy(N_Hy, d->N_Hy, sizeof N_Hy);
+    int idx[12 + 2 * SR_MAX_JOINTS];
+    double sd[12 + 2 * SR_MAX_JOINTS];
+    int nc = channels(m, idx, sd);
+    for (int c = 0; c < nc; c++) {
+        int i = idx[c];
+        double h = 1e-4 * (fabs(x[i]) > 1.0 ? fabs(x[i]) : 1.0);
+        double Hp[6 * HS], yp[6], dH[6 * HS], wdH[6 * HS];
+        memset(Hp, 0, sizeof Hp);
+        xs[i] = x[i] + h;
+        linear_rows(m, xs, K + SR_THRUST_K, Hp, yp);
+        xs[i] = x[i];
+        for (int a = 0; a < nr; a++) {
+            for (int j = 0; j < nz; j++)     /* only z_O's columns move with the channels */
+                dH[a * HS + j] = (Hp[a * HS + j] - Hy[a * HS + j]) / h;
+            for (int j = nz; j < nu; j++)
+                dH[a * HS + j] = 0.0;
+            dH[a * HS + nu] = (yp[a] - y[a]) / h;
+        }
+        weigh(W, nr, dH, nu + 1, wdH);
+        double s2 = sd[c] * sd[c];
+        for (int p = 0; p < nz; p++)
+            for (int q = 0; q < nz; q++) {
+                double s = 0.0;
+                for (int a = 0; a < nr; a++)
+                    s += wdH[a * HS + p] * wdH[a * HS + q];
+                N_HH[p * MU + q] += s2 * s;
+            }
+        for (int p = 0; p < nz; p++) {
+            double s = 0.0;
+            for (int a = 0; a < nr; a++)
+                s += wdH[a * HS + p] * wdH[a * HS + nu];
+            N_Hy[p] += s2 * s;
+        }
+    }
+    /* the QR update of [[R d]; [W H  W y]] (Householder, column by column: R's rows below
+       the diagonal are zero, so each reflection touches R's row j and the nr new rows) */
+    double R[MU * MU], dv[MU], v[6];
+    memcpy(R, d->R, sizeof R);
+    memcpy(dv, d->d, sizeof dv);
+    for (int j = 0; j < nu; j++) {
+        double sigma = 0.0, alpha = R[j * MU + j];
+        for (int a = 0; a < nr; a++)
+            sigma += Wt[a * HS + j] * Wt[a * HS + j];
+        if (sigma == 0.0)
+            continue;
+        double norm = sqrt(alpha * alpha + sigma);
+        double beta = alpha >= 0.0 ? -norm : norm;
+        double v0 = alpha - beta, tau = (beta - alpha) / beta;
+        for (int a = 0; a < nr; a++)
+            v[a] = Wt[a * HS + j] / v0;
+        for (int k = j + 1; k <= nu; k++) {
+            double *rk = k < nu ? &R[j * MU + k] : &dv[j];
+            double s = *rk;
+            for (int a = 0; a < nr; a++)
+                s += v[a] * Wt[a * HS + k];
+            s *= tau;
+            *rk -= s;
+            for (int a = 0; a < nr; a++)
+                Wt[a * HS + k] -= s * v[a];
+        }
+        R[j * MU + j] = beta;
+        for (int a = 0; a < nr; a++)
+            Wt[a * HS + j] = 0.0;
+    }
+    double rss = d->rss;
+    for (int a = 0; a < nr; a++)
+        rss += Wt[a * HS + nu] * Wt[a * HS + nu];
+    /* commit only finite numbers */
+    double s = rss;
+    for (int i = 0; i < nu; i++) {
+        s += dv[i] + N_Hy[i];
+        for (int j = 0; j < nu; j++)
+            s += R[i * MU + j] + N_HH[i * MU + j];
+    }
+    for (int i = 0; i < SR_THRUST_LEN; i++)
+        s += K[i];
+    if (!isfinite(s))
+        return 1;
+    memcpy(d->R, R, sizeof R);
+    memcpy(d->d, dv, sizeof dv);
+    memcpy(d->N_HH, N_HH, sizeof N_HH);
+    memcpy(d->N_Hy, N_Hy, sizeof N_Hy);
+    memcpy(d->K, K, sizeof K);
+    memcpy(d->W, W, sizeof W);
+    d->has_W = 1;
+    d->rss = rss;
+    d->rows += nr;
+    d->samples++;
+    return 0;
+}
+
+/* the reported parameters (20) of the identified z_O entries u (nz) */
+static void reported_of_u(const sr_info_model *m, const double *u, double *x)
+{
+    double z[20];
+    memcpy(z, m->zO0, sizeof z);
+    for (int q = 0; q < m->nz; q++)
+        z[m->zi[q]] = u[q];
+    shift_axes(z, -1.0);
+    reported_of_z(z, x);
+}
+
+int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
+                     double *vec, double *bound, double *chi2)
+{
+    if (!m || !d || !vec || !bound)
+        return 1;
+    int nu = m->nu, nz = m->nz;
+    double u[MU] = {0}, Ri[MU * MU];
+    /* R u = d (back substitution); Ri = R^-1 (upper triangular) */
+    for (int i = nu - 1; i >= 0; i--) {
+        double s = d->d[i];
+        for (int j = i + 1; j < nu; j++)
+            s -= d->R[i * MU + j] * u[j];
+        u[i] = s / d->R[i * MU + i];
+    }
+    memset(Ri, 0, sizeof Ri);
+    for (int col = 0; col < nu; col++) {
+        Ri[col * MU + col] = 1.0 / d->R[col * MU + col];
+        for (int i = col - 1; i >= 0; i--) {
+            double s = 0.0;
+            for (int j = i + 1; j <= col; j++)
+                s += d->R[i * MU + j] * Ri[j * MU + col];
+            Ri[i * MU + col] = -s / d->R[i * MU + i];
+        }
+    }
+    /* the covariance of z_O's entries: (Ri Ri^T)[:nz, :nz]; z_O's are the leading unknowns */
+    double C[20 * 20];
+    for (int p = 0; p < nz; p++)
+        for (int q = 0; q <= p; q++) {
+            double s = 0.0;
+            for (int j = (p > q ? p : q); j < nu; j++)
+                s += Ri[p * MU + j] * Ri[q * MU + j];
+            C[p * 20 + q] = C[q * 20 + p] = s;
+        }
+    double u_raw[MU];
+    memcpy(u_raw, u, sizeof u_raw);
+    if (compensated == 1 || compensated == 2) {  /* first order: u + S^-1 (N u - n_y) */
+        double g[MU], h[MU];
+        for (int p = 0; p < nu; p++) {
+            double s = -d->N_Hy[p];
+            for (int q = 0; q < nu; q++)
+                s += d->N_HH[p * MU + q] * u[q];
+            g[p] = s;
+        }
+        for (int j = 0; j < nu; j++) {           /* h = Ri^T g */
+            double s = 0.0;
+            for (int p = 0; p <= j; p++)
+                s += Ri[p * MU + j] * g[p];
+            h[j] = s;
+        }
+        for (int p = 0; p < nu; p++) {           /* u += Ri h */
+            double s = 0.0;
+            for (int j = p; j < nu; j++)
+                s += Ri[p * MU + j] * h[j];
+            u[p] += s;
+        }
+    }
+    if (compensated == 2) {        /* exact: (S - N) u_c = s - n_y, as (1 - S^-1 N) u_c =
+                                      u - S^-1 n_y (S^-1 = Ri Ri^T: no normal equations) */
+        double Si[MU * MU], A[MU * MU], b[MU];
+        for (int p = 0; p < nu; p++)
+            for (int q = 0; q < nu; q++) {
+                double s = 0.0;
+                for (int j = (p > q ? p : q); j < nu; j++)
+                    s += Ri[p * MU + j] * Ri[q * MU + j];
+                Si[p * MU + q] = s;
+            }
+        for (int p = 0; p < nu; p++) {
+            double s = u_raw[p];
+            for (int q = 0; q < nu; q++)
+                s -= Si[p * MU + q] * d->N_Hy[q];
+            b[p] = s;
+            for (int q = 0; q < nu; q++) {
+                double a = p == q ? 1.0 : 0.0;
+                for (int j = 0; j < nu; j++)
+                    a -= Si[p * MU + j] * d->N_HH[j * MU + q];
+                A[p * nu + q] = a;
+            }
+        }
+        int finite = sr_lu_solve(A, nu, b, 1) == 0;
+        for (int p = 0; p < nu; p++)
+            finite = finite && isfinite(b[p]);
+        if (finite)                  /* else the first order's answer stays */
+            memcpy(u, b, sizeof(double) * nu);
+    }
+    reported_of_u(m, u, vec);
+    /* the bound: J C J^T, J = d reported / d z_O (central differences) */
+    double J[20 * 20], xp[20], xm[20];
+    for (int q = 0; q < nz; q++) {
+        double h = 1e-6 * (fabs(u[q]) > 1.0 ? fabs(u[q]) : 1.0), keep = u[q];
+        u[q] = keep + h;
+        reported_of_u(m, u, xp);
+        u[q] = keep - h;
+        reported_of_u(m, u, xm);
+        u[q] = keep;
+        for (int i = 0; i < 20; i++)
+            J[i * 20 + q] = (xp[i] - xm[i]) / (2 * h);
+    }
+    int ok = 1;
+    for (int i = 0; i < 20; i++) {
+        double var = 0.0, touched = 0.0;
+        for (int p = 0; p < nz; p++) {
+            double s = 0.0;
+            for (int q = 0; q < nz; q++)
+                s += C[p * 20 + q] * J[i * 20 + q];
+            var += J[i * 20 + p] * s;
+            touched += fabs(J[i * 20 + p]);
+        }
+        bound[i] = touched > 0.0 ? sqrt(var > 0.0 ? var : 0.0) : 0.0;
+        if (!isfinite(bound[i]) || !isfinite(vec[i]))
+            ok = 0;
+    }
+    if (chi2) {
+        double dof = d->rows - nu;
+        *chi2 = dof > 0.0 ? d->rss / dof : 0.0;
+    }
+    if (!ok) {
+        for (int i = 0; i < 20; i++)
+            vec[i] = bound[i] = NAN;
+        return 1;
+    }
+    return 0;
+}
+
+size_t sr_info_buffer_length(int n)
+{
+    return n >= 1 && n <= SR_MAX_JOINTS ? (size_t)SR_INFO_REPLAY * (size_t)(1 + SR_X_LEN(n)) : 0;
+}
+
+/* the filter's own estimate as a linearisation point into z (20), or 1 where it is not one
+   (not finite, a mass <= 0) */
+static int own_point(const sr_info_model *m, const sr_info_data *d, double *z)
+{
+    double bound[20];
+    if (sr_info_estimate(m, d, 2, z, bound, NULL) != 0 || !(z[0] > 0.0 && z[10] > 0.0))
+        return 1;
+    return 0;
+}
+
+int sr_info_step(const sr_info_model *m, sr_info_data *d, double *buffer, double t,
+                 const double *x, const double *z_est)
+{
+    if (!m || !d || !buffer || !x || !z_est)
+        return 1;
+    int slot = 1 + SR_X_LEN(m->n);
+    if (d->replayed) {                       /* its own estimate, refreshed now and then */
+        double z[20];
+        const double *zl = d->z_lin;
+        if (d->samples % SR_INFO_RELIN == 0 && own_point(m, d, z) == 0)
+            zl = z;
+        double keep[20];
+        memcpy(keep, zl, sizeof keep);
+        if (sr_info_add(m, d, t, x, keep) != 0)
+            return 1;
+        memcpy(d->z_lin, keep, sizeof keep);
+        return 0;
+    }
+    if (d->samples < 0 || d->samples > SR_INFO_REPLAY)
+        return 1;
+    if (d->samples < SR_INFO_REPLAY) {       /* kept for the replay, linearised at z_est */
+        double *s = buffer + (size_t)d->samples * (size_t)slot;
+        s[0] = t;
+        memcpy(s + 1, x, sizeof(double) * (size_t)(slot - 1));
+        return sr_info_add(m, d, t, x, z_est);
+    }
+    /* the replay: the kept samples and this one again from the prior, at the own estimate */
+    double z[20];
+    if (own_point(m, d, z) != 0)
+        memcpy(z, z_est, sizeof z);
+    sr_info_data_init(m, d);
+    for (int k = 0; k < SR_INFO_REPLAY; k++) {
+        const double *s = buffer + (size_t)k * (size_t)slot;
+        if (sr_info_add(m, d, s[0], s + 1, z) != 0)
+            return 1;                         /* the caller keeps its copy */
+    }
+    if (sr_info_add(m, d, t, x, z) != 0)
+        return 1;
+    d->replayed = 1;
+    memcpy(d->z_lin, z, sizeof z);
+    return 0;
+}
+
+size_t sr_info_model_size(void) { return sizeof(sr_info_model); }
+size_t sr_info_data_size(void) { return sizeof(sr_info_data); }
