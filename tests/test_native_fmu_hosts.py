@@ -299,6 +299,57 @@ def test_win64_dll_under_wine_equals_linux64(case, work, host):
           f"{int(np.all(w_rows == linux_run(case, host), axis=1).sum())}/{w_rows.shape[0]}")
 
 
+def test_information_filter_under_wine_equals_linux64(work, libs, host):
+    """The estimator FMU with the noise profile (ident.noise_profile = 1: the information
+    filter, native/src/information.c) on 70 s of the spatial default scenario through the
+    realistic sensors: past the filter's replay at sample 600, with its state saved,
+    serialised and restored after it (step 650); the win64 DLL under Wine gives what linux64
+    gives, within 1e-12 relative (the core's results do not depend on the compiler or its
+    libm), and the bound outputs crb.* are set."""
+    from spacerobot.plant import Plant
+    from spacerobot.robots import scenario
+    from spacerobot.sensors import SensorSuite
+    from spacerobot.interface import estimator_vars
+
+    nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
+    nh.require(nh.wine(), "Wine")
+    n, state_step = 700, 650
+    fmu = nh.native_fmu(work, "estimator", "spatial", None, libs["plain"], "plain")
+    sc = scenario("spatial")
+    keys = {v.name: v.key for v in estimator_vars(sc.robot, sc)}
+    names = fmu.names("Real", "input")
+    plant = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
+                  excitation=sc.excitation)
+    plant.set_excitation(1.0)
+    sensors = SensorSuite(sc.robot.n_joints, seed=3, dt=DT)
+    rows = []
+    for _ in range(n):
+        y = sensors.update(plant.outputs(), DT)
+        rows.append([float(np.asarray(y[keys[nm][0]])[keys[nm][1]]) for nm in names])
+        plant.advance(DT)
+    csv = work / "inputs_information.csv"
+    csv.write_text(",".join(str(fmu.vr[nm]) for nm in names) + "\n" + "".join(
+        ",".join(nh.hex_bits(x) for x in row) + "\n" for row in rows))
+    reals, ints = fmu.vrs("Real", "output"), fmu.vrs("Integer", "output")
+
+    def args(binary, uri, path):
+        return ["-s", state_step, "-p", f"{fmu.vr['ident.noise_profile']}=1", "-i", path, "-j",
+                ",".join(map(str, ints)), binary, fmu.guid, uri, DT, n,
+                ",".join(map(str, reals))]
+    lin = nh.run([host, *args(fmu.so, fmu.uri, csv)], env=nh.empty_env())
+    assert lin.returncode == 0, lin.stderr[-3000:]
+    assert f"state round trip after step {state_step}" in lin.stderr and "identical" in lin.stderr
+    exe = nh.compile_host(nh.HOST_SOURCE, work, "win64")
+    win = nh.run(["wine", exe, *args(nh.wine_path(fmu.dll), fmu.wine_uri, nh.wine_path(csv))],
+                 env=nh.wine_prefix(work).env())
+    assert win.returncode == 0, win.stderr[-3000:]
+    a, b = nh.parse_csv(lin.stdout), nh.parse_csv(win.stdout)
+    assert a.shape == b.shape == (n + 1, 1 + len(reals) + len(ints))
+    assert np.all(np.abs(a - b) <= RTOL * np.maximum(1.0, np.abs(a)))
+    crb = [1 + reals.index(fmu.vr[f"crb.{nm}"]) for nm in ("base.m", "target.Izz")]
+    assert np.all(a[-1, crb] > 0)
+
+
 # ---- 3. memory safety -------------------------------------------------------------------------
 #: one run: 5 create/free cycles, the run (30 s; the plant's first 5 s) with its state saved,
 #: serialised and restored half-way, then terminate, free and unload the library
