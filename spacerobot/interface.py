@@ -413,7 +413,9 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
     for who in BODIES:
         v += [Var(f"diag.identified.{who}", "output", "discrete", "Integer", None,
                   f"1 when every identified estimate of the {who} has a standard deviation below "
-                  f"ident.sd_rel of its error scale, else 0", None, ("identified", who)),
+                  f"ident.sd_rel of its error scale (with the information filter, "
+                  f"ident.information: 2 standard deviations), else 0", None,
+                  ("identified", who)),
               Var(f"diag.physical.{who}", "output", "discrete", "Integer", None,
                   f"1 when the least-squares estimate of the {who} is a real rigid body; 0 when "
                   f"the reported {who} estimate is its projection onto real bodies", None,

@@ -366,13 +366,17 @@ def small(lib):
 
 
 def test_model_init_refuses_bad_input(lib, small):
-    """Negative or non-finite sds, a guess mass <= 0 or non-finite guess, P0 <= 0 or
-    non-finite, n out of range: status 1; the good inputs: 0."""
+    """Negative or non-finite sds, no white noise at all (nothing to weigh the rows by), a
+    guess mass <= 0 or non-finite guess, P0 <= 0 or non-finite, n out of range: status 1; the
+    good inputs: 0."""
     sc, rob, nv, _, _ = small
     g, z0 = sc.guess, guess_of(sc)
     f = CFilter(lib, rob, nv, z0, g.P0_mu, g.P0_theta)
     assert f.status == 0
-    assert f.init(np.zeros(N_NOISE), z0, 1.0, 1.0) == 0       # noise-free channels allowed
+    assert f.init(np.zeros(N_NOISE), z0, 1.0, 1.0) == 1       # no white noise: refused
+    one = np.zeros(N_NOISE)
+    one[0] = 0.01                                           # navigation position only
+    assert f.init(one, z0, 1.0, 1.0) == 0                   # noise-free channels allowed
     for i in range(N_NOISE):
         for bad in (-1e-9, -1.0, math.nan, math.inf):
             v = nv.copy()
@@ -469,6 +473,27 @@ def _estimator_values(sc, **extra) -> dict:
     return vals
 
 
+def _on_off_and_twin(lib, sc, dt: float):
+    """The estimator's options with the noise profile (the filter automatic), the guesses
+    (20), the estimator with the filter (on) and off (``ident.information`` = 2), and a native
+    filter with the noise model those options imply (computed here from the sensor
+    magnitudes, noise.scale and the sample interval) to drive by hand (twin)."""
+    from spacerobot.core.estimator import NativeEstimator, options_from_values
+    from spacerobot.interface import SENSOR_MAGNITUDES
+    opts = {**options_from_values(_estimator_values(sc)), "noise_dt": dt}
+    off_opts = {**options_from_values(_estimator_values(sc, **{"ident.information": 2})),
+                "noise_dt": dt}
+    on = NativeEstimator(sc.robot, opts, lib=lib)
+    off = NativeEstimator(sc.robot, off_opts, lib=lib)
+    mags = {name[len("noise."):]: v for name, v in zip(SENSOR_MAGNITUDES, opts["noise"])}
+    sd, sd_c, sd_b = sensor_noise(mags, dt, opts["noise_scale"])
+    guess = np.array(opts["guess_base"] + opts["guess_target"])
+    twin = CFilter(lib, c_robot(sc.robot, lib), noise_vector(sd, sd_c, sd_b), guess,
+                   opts["P0_mu"], opts["P0_theta"])
+    assert twin.status == 0
+    return opts, guess, on, off, twin
+
+
 def test_estimator_reports_the_filter(lib):
     """``ident.information`` automatic (on with the noise profile and white noise): the
     estimator's ``crb`` is the bound of a native filter driven beside it with the noise model
@@ -480,29 +505,19 @@ def test_estimator_reports_the_filter(lib):
     (``ident.information`` = 2): crb and info_chi2 0, and the estimates those of an estimator
     without the profile given the profile's options explicitly (the equations' own)."""
     from spacerobot.core.estimator import NativeEstimator, options_from_values, profile_values
-    from spacerobot.interface import SENSOR_MAGNITUDES
     dt = 0.1
     sc = scenario("spatial")
     ts, X = record(sc, dt, 8.0, sensors_seed=1)
-    opts = {**options_from_values(_estimator_values(sc)), "noise_dt": dt}
-    off_opts = {**options_from_values(_estimator_values(sc, **{"ident.information": 2})),
-                "noise_dt": dt}
-    on, off = NativeEstimator(sc.robot, opts, lib=lib), NativeEstimator(sc.robot, off_opts, lib=lib)
+    opts, guess, on, off, twin = _on_off_and_twin(lib, sc, dt)
     # the equations' own estimator: the profile's options given explicitly, no profile
     plain_vals = {**_estimator_values(sc), **profile_values(_estimator_values(sc), dt, lib),
-                  "ident.noise_profile": 0}
+                  "ident.noise_profile": 0, "ident.information": 0}   # (the filter needs it)
     plain = NativeEstimator(sc.robot, {**options_from_values(plain_vals), "noise_dt": dt},
                             lib=lib)
-    mags = {name[len("noise."):]: v for name, v in zip(SENSOR_MAGNITUDES, opts["noise"])}
-    sd, sd_c, sd_b = sensor_noise(mags, dt, opts["noise_scale"])
-    twin = CFilter(lib, c_robot(sc.robot, lib), noise_vector(sd, sd_c, sd_b),
-                   np.array(opts["guess_base"] + opts["guess_target"]), opts["P0_mu"],
-                   opts["P0_theta"])
-    assert twin.status == 0
     for t, x in zip(ts, X):
         z_lin = off.report()["vector"]
         if not (z_lin[0] > 0 and z_lin[10] > 0):
-            z_lin = np.array(opts["guess_base"] + opts["guess_target"])
+            z_lin = guess
         assert twin.add(t, x, z_lin) == 0
         for e in (on, off, plain):
             assert e.update(t, x) in (1, 2), e.message      # accepted
@@ -534,20 +549,10 @@ def test_the_replay_relinearises_the_first_samples(lib):
     samples (SR_INFO_RELIN). Driven here by hand with ``sr_info_add`` on a twin filter over
     65 s of the default scenario with realistic sensors: the estimator's bound and estimates
     equal the twin's within 1e-9 (relative; of the bound)."""
-    from spacerobot.core.estimator import NativeEstimator, options_from_values
-    from spacerobot.interface import SENSOR_MAGNITUDES
     dt, replay, relin = 0.1, 600, 10
     sc = scenario("spatial")
     ts, X = record(sc, dt, 65.0, sensors_seed=2)
-    opts = {**options_from_values(_estimator_values(sc)), "noise_dt": dt}
-    off_opts = {**options_from_values(_estimator_values(sc, **{"ident.information": 2})),
-                "noise_dt": dt}
-    on, off = NativeEstimator(sc.robot, opts, lib=lib), NativeEstimator(sc.robot, off_opts, lib=lib)
-    mags = {name[len("noise."):]: v for name, v in zip(SENSOR_MAGNITUDES, opts["noise"])}
-    sd, sd_c, sd_b = sensor_noise(mags, dt, opts["noise_scale"])
-    guess = np.array(opts["guess_base"] + opts["guess_target"])
-    twin = CFilter(lib, c_robot(sc.robot, lib), noise_vector(sd, sd_c, sd_b), guess,
-                   opts["P0_mu"], opts["P0_theta"])
+    opts, guess, on, off, twin = _on_off_and_twin(lib, sc, dt)
     kept, z_lin = [], None
     for k, (t, x) in enumerate(zip(ts, X)):
         if k < replay:
@@ -573,3 +578,37 @@ def test_the_replay_relinearises_the_first_samples(lib):
     assert np.all(np.abs(r["crb"] - bound) <= 1e-9 * bound), np.max(np.abs(r["crb"] / bound - 1))
     ls, _ = on.estimates()
     assert np.all(np.abs(ls - vec) <= 1e-9 * bound), np.max(np.abs(ls - vec) / bound)
+
+
+def test_information_on_needs_white_noise():
+    """ident.information = 1 with the sensors' noise scaled to 0: refused at creation with the
+    reason (every sample would otherwise be rejected: no noise to weigh the rows by)."""
+    from spacerobot.core.estimator import NativeEstimator, options_from_values
+    sc = scenario("spatial")
+    opts = options_from_values(_estimator_values(sc, **{"ident.information": 1,
+                                                        "noise.scale": 0.0}))
+    with pytest.raises(ValueError, match="ident.information = 1 needs white sensor noise"):
+        NativeEstimator(sc.robot, opts)
+
+
+def test_a_corrupted_replay_buffer_costs_the_replay_not_the_filter(lib):
+    """A restored state whose kept samples hold a NaN (the buffer is not checked sample by
+    sample): the replaying sample is accepted without the replay (the filter goes on from its
+    state before), and so are the samples after it; their bound stays finite."""
+    from spacerobot.core.estimator import NativeEstimator, options_from_values
+    dt = 0.1
+    sc = scenario("spatial")
+    ts, X = record(sc, dt, 61.0, sensors_seed=4)
+    est = NativeEstimator(sc.robot, {**options_from_values(_estimator_values(sc)),
+                                     "noise_dt": dt}, lib=lib)
+    for t, x in zip(ts[:600], X[:600]):
+        assert est.update(t, x) in (1, 2), est.message
+    state = bytearray(est.get_state())
+    kept = np.concatenate([[ts[5]], X[5]]).tobytes()       # the kept sample 5: [t, x]
+    at = bytes(state).find(kept)
+    assert at >= 0 and bytes(state).find(kept, at + 1) < 0
+    state[at + 8:at + 16] = np.array([math.nan]).tobytes()   # its r_S[0]
+    est.set_state(bytes(state))
+    for t, x in zip(ts[600:], X[600:]):
+        assert est.update(t, x) in (1, 2), est.message
+    assert np.all(np.isfinite(est.report()["crb"])) and np.all(est.report()["crb"] > 0)

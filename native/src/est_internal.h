@@ -190,6 +190,16 @@ void est_scatter_sd(const sr_estimator_model *m, const double *J, const double *
                     int nan_to_zero, double *sd);
 
 /* -- the joint solver (est_joint.c) -- */
+/* ParameterLayout.sharp_to_project: I = I#[s2p] (I# = I11 I12 I13 I22 I23 I33) */
+extern const int EST_S2P[6];
+/* The standard parameters z (20: per body m, c = m b (3), I_O# (6), the inertia about the body
+ * frame's origin) of the reported x (20: per body m, b, Ixx Iyy Izz Ixy Ixz Iyz about the com;
+ * parameters.standard_from_physical: I_O = I_c + m (|b|^2 1 - b b^T)). */
+void est_standard_of_reported(const double *x, double *z);
+/* Its inverse, the reported x (20) of z (report_kernels.joint_vector_of), and that map's
+ * Jacobian d x / d z (20 x 20, report_kernels.joint_jacobian); s2p: EST_S2P. */
+void est_joint_vector_of(const int *s2p, const double *z, double *out);
+void est_joint_jacobian(const int *s2p, const double *z, double *J);
 /* sd, data_only, J, vec as est_std_parts, for the joint solver (its covariance scaled by the
  * residual variance times the autocorrelation inflation infl). 0, or 3 not converged. */
 int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double infl,

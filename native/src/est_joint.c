@@ -21,9 +21,28 @@
 /* index pairs (i, j) of the entries of I# (eq. 21) */
 static const int SHARP_I[6] = {0, 0, 0, 1, 1, 2}, SHARP_J[6] = {0, 1, 2, 1, 2, 2};
 
+const int EST_S2P[6] = {0, 3, 5, 1, 2, 4};
+
+void est_standard_of_reported(const double *x, double *z)
+{
+    for (int k = 0; k < 2; k++) {
+        const double *g = x + 10 * k;
+        double mk = g[0], bb = g[1] * g[1] + g[2] * g[2] + g[3] * g[3];
+        double Ic[9] = {g[4], g[7], g[8], g[7], g[5], g[9], g[8], g[9], g[6]};
+        z[10 * k] = mk;
+        for (int i = 0; i < 3; i++)
+            z[10 * k + 1 + i] = mk * g[1 + i];
+        for (int q = 0; q < 6; q++) {
+            int i = SHARP_I[q], j = SHARP_J[q];
+            double par = (i == j ? bb * 1.0 : bb * 0.0) - g[1 + i] * g[1 + j];
+            z[10 * k + 4 + q] = Ic[3 * i + j] + mk * par;
+        }
+    }
+}
+
 /* The 20 estimates from the standard parameters z (report_kernels.joint_vector_of): b = c / m,
  * I_c = I_O - m (|b|^2 1 - b b^T), I = I_c#[sharp_to_project]. */
-static void joint_vector_of(const int *s2p, const double *z, double *out)
+void est_joint_vector_of(const int *s2p, const double *z, double *out)
 {
     for (int k = 0; k < 2; k++) {
         int e = 10 * k;
@@ -46,7 +65,7 @@ static void joint_vector_of(const int *s2p, const double *z, double *out)
 /* d joint_vector_of / d z (20 x 20) (report_kernels.joint_jacobian): db/dc = 1 / m,
  * db/dm = -c / m^2; I_c = I_O - S(c) / m, S(c) = |c|^2 1 - c c^T: dI_c/dI_O = 1,
  * dI_c/dm = S / m^2, dI_c,ij/dc_k = -(2 c_k d_ij - d_ik c_j - c_i d_jk) / m */
-static void joint_jacobian(const int *s2p, const double *z, double *J)
+void est_joint_jacobian(const int *s2p, const double *z, double *J)
 {
     memset(J, 0, sizeof(double) * EST_NZ * EST_NZ);
     for (int k = 0; k < 2; k++) {
@@ -110,11 +129,11 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
         unobserved_z[m->std_active[i]] = u[i];
     }
     memcpy(z, pi_rep, sizeof z);
-    joint_jacobian(m->sharp_to_project, z, J);
-    joint_vector_of(m->sharp_to_project, z, xv);
+    est_joint_jacobian(m->sharp_to_project, z, J);
+    est_joint_vector_of(m->sharp_to_project, z, xv);
     for (int i = 0; i < EST_NZ; i++)
         zd[i] = z[i] - delta[i];
-    joint_vector_of(m->sharp_to_project, zd, xd);
+    est_joint_vector_of(m->sharp_to_project, zd, xd);
     int finite = 1;
     for (int i = 0; i < EST_NZ; i++) {                       /* the pull through the map */
         pull[i] = xv[i] - xd[i];

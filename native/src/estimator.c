@@ -441,14 +441,14 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
 
 /* -- the model ----------------------------------------------------------------------------------- */
 
-/* ParameterLayout.sharp_to_project: I = I#[s2p] (I# = I11 I12 I13 I22 I23 I33) */
-static const int S2P[6] = {0, 3, 5, 1, 2, 4};
+#define S2P EST_S2P           /* ParameterLayout.sharp_to_project (est_joint.c) */
 
 static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
 
 /* the information filter's model from the options (the noise profile applied): the sensors'
- * white noise per sample (densities over 1 s drawn every noise_dt: d / sqrt(noise_dt)), the
- * thrust errors' and gyro bias' priors, all times noise.scale; the estimator's guesses and P0 */
+ * white noise per sample (densities over 1 s drawn every noise_dt: d / sqrt(noise_dt)) and the
+ * gyro bias' prior, all times noise.scale; the thrust errors' prior the consider term's
+ * (ident.sd_thrust.*); the estimator's guesses and P0 */
 static int info_model(sr_estimator_model *m, const sr_robot *robot,
                       const sr_estimator_options *o)
 {
@@ -464,9 +464,10 @@ static int info_model(sr_estimator_model *m, const sr_robot *robot,
     nz.q = s * sqrt(p[SR_NOISE_ENC_Q] * p[SR_NOISE_ENC_Q] + res * res / 12.0);
     nz.qd = s * p[SR_NOISE_ENC_QD];
     for (int k = 0; k < 2; k++) {
-        nz.thrust[4 * k] = s * p[SR_NOISE_THRUST_SCALE];
+        nz.thrust[4 * k] = o->sd_thrust_scale;   /* the consider term's (the profile's
+                                                    noise.thrust.* unless the user set them) */
         for (int i = 1; i < 4; i++)
-            nz.thrust[4 * k + i] = s * p[SR_NOISE_THRUST_MISALIGN];
+            nz.thrust[4 * k + i] = o->sd_thrust_misalign;
     }
     nz.gyro_bias = s * p[SR_NOISE_GYRO_BIAS];
     double z0[20];
@@ -614,24 +615,16 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         for (int i = 0; i < 6; i++)
             m->th0_full[6 * k + S2P[i]] = g[k][4 + i];
     }
-    /* the joint solver's standard parameters [m, m b, I_O#] per body
-     * (parameters.standard_from_physical: I_O = I_c + m (|b|^2 1 - b b^T)) */
-    for (int k = 0; k < 2; k++) {
-        const double *gb = g[k];
-        double mk = gb[0], bb = gb[1] * gb[1] + gb[2] * gb[2] + gb[3] * gb[3];
-        double Ic[9] = {gb[4], gb[7], gb[8], gb[7], gb[5], gb[9], gb[8], gb[9], gb[6]};
-        static const int SI[6] = {0, 0, 0, 1, 1, 2}, SJ[6] = {0, 1, 2, 1, 2, 2};
-        m->pi0_full[10 * k] = mk;
-        for (int i = 0; i < 3; i++)
-            m->pi0_full[10 * k + 1 + i] = mk * gb[1 + i];
-        for (int q = 0; q < 6; q++) {
-            int i = SI[q], j = SJ[q];
-            double par = (i == j ? bb * 1.0 : bb * 0.0) - gb[1 + i] * gb[1 + j];
-            m->pi0_full[10 * k + 4 + q] = Ic[3 * i + j] + mk * par;
-        }
+    /* the joint solver's standard parameters [m, m b, I_O#] per body */
+    {
+        double x[EST_NZ];
+        memcpy(x, opt->guess_base, sizeof(double) * 10);
+        memcpy(x + 10, opt->guess_target, sizeof(double) * 10);
+        est_standard_of_reported(x, m->pi0_full);
+    }
+    for (int k = 0; k < 2; k++)
         for (int i = 0; i < 10; i++)
             m->prior[10 * k + i] = i < 4 ? opt->P0_mu : opt->P0_theta;
-    }
     m->q = 0;                                    /* ParameterLayout.standard_active */
     for (int k = 0; k < 2; k++) {
         for (int i = 0; i < 4; i++)
@@ -678,9 +671,10 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     m->info = opt->information == 1;
     if (m->info) {                  /* the information filter (information.h) */
         if (info_model(m, robot, opt) != 0) {
-            set_msg(err, errlen, "the information filter cannot use these noise magnitudes "
-                                 "and guesses (noise.* must be finite and >= 0; guessed "
-                                 "masses > 0)");
+            set_msg(err, errlen, "ident.information = 1 needs white sensor noise to weigh "
+                                 "the equations by (noise.scale > 0 and one of noise.nav.r, "
+                                 "nav.v, gyro.arw, star.cross, star.roll, enc.q, "
+                                 "enc.resolution, enc.qd > 0)");
             free(m);
             return NULL;
         }
@@ -1183,11 +1177,13 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
         }
     if (m->info) {
         const sr_info_data *f = (const sr_info_data *)((const char *)data + m->off_info);
-        if (f->samples < 0 || f->has_W < 0 || f->has_W > 1 || !(f->rows >= 0.0) ||
+        if (f->samples < 0 || !(f->rows >= 0.0) ||
             f->replayed < 0 || f->replayed > 1 ||
-            (!f->replayed && f->samples > SR_INFO_REPLAY)) {
+            (!f->replayed && f->samples > SR_INFO_REPLAY) ||
+            !sr_info_data_finite(&m->info_m, f)) {
             set_msg(err, errlen, "the estimator's state block is not valid: the information "
-                                 "filter's counters are out of range");
+                                 "filter's counters are out of range or its numbers not "
+                                 "finite");
             return 1;
         }
     }
@@ -1234,10 +1230,10 @@ static int info_step(const sr_estimator_model *m, void *data, double t,
         memcpy(z, m->opt.guess_base, sizeof(double) * 10);
         memcpy(z + 10, m->opt.guess_target, sizeof(double) * 10);
     }
-    memcpy(nwi, (const char *)data + m->off_info, sizeof *nwi);
     /* the replay buffer: written at the filter's next slot only, which counts at the commit */
     double *buffer = (double *)((char *)data + m->off_info_buf);
-    return sr_info_step(&m->info_m, nwi, buffer, t, sample, z);
+    return sr_info_step(&m->info_m, (const sr_info_data *)((const char *)data + m->off_info),
+                        nwi, buffer, t, sample, z);
 }
 
 static const char *const info_fail_msg =
@@ -1605,10 +1601,15 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, doubl
         memset(bound, 0, sizeof bound);
     } else {
         const sr_info_data *f = (const sr_info_data *)((const char *)d + m->off_info);
-        sr_info_estimate(&m->info_m, f, 2, vec, bound, &x2);
-        double k = sqrt(x2 > 1.0 ? x2 : 1.0);
-        for (int i = 0; i < EST_NZ; i++)
-            sd[i] = k * bound[i];
+        if (sr_info_estimate(&m->info_m, f, 2, vec, bound, &x2) == 0) {
+            double k = sqrt(x2 > 1.0 ? x2 : 1.0);
+            for (int i = 0; i < EST_NZ; i++)
+                sd[i] = k * bound[i];
+        } else {                          /* a singular information: the equations' own */
+            rls_estimates(m, d, vec, sd);
+            memset(bound, 0, sizeof bound);
+            x2 = 0.0;
+        }
     }
     if (crb)
         memcpy(crb, bound, sizeof bound);

@@ -1,9 +1,12 @@
 /* information.c -- the information filter and the bound (information.h). */
 #include "information.h"
 
+#include "est_internal.h"
+
 #include "linalg.h"
 #include "sr_math.h"
 
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -11,49 +14,23 @@
 #define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
 
 /* reported I (Ixx Iyy Izz Ixy Ixz Iyz) -> I# (xx xy xz yy yz zz, eq. 21) */
-static const int S2P[6] = {0, 3, 5, 1, 2, 4};
-/* I_O# - I_c# = P_AXES [c_i c_j / m] (#-ordered; m ([b]x^T [b]x) = (|c|^2 1 - c c^T) / m) */
-static const double P_AXES[6][6] = {{0, 0, 0, 1, 0, 1}, {0, -1, 0, 0, 0, 0},
-                                    {0, 0, -1, 0, 0, 0}, {1, 0, 0, 0, 0, 1},
-                                    {0, 0, 0, 0, -1, 0}, {1, 0, 0, 1, 0, 0}};
+/* The unknowns' z part is in the standard layout of est_internal.h: per body m, c = m b (3),
+ * I_O# (6, about the body frame's origin); est_standard_of_reported / est_joint_vector_of map
+ * it from / to the reported parameters. */
 
-/* z = [mu (8), I# per body (12)] of the reported x (20) */
-static void z_of_reported(const double *x, double *z)
+/* the sr_info_noise magnitudes as one list, for the checks */
+static int noise_valid(const sr_info_noise *n, int *white)
 {
-    for (int k = 0; k < 2; k++) {
-        const double *b = x + 10 * k;
-        z[4 * k] = b[0];
-        for (int i = 0; i < 3; i++)
-            z[4 * k + 1 + i] = b[0] * b[1 + i];
-        for (int i = 0; i < 6; i++)
-            z[8 + 6 * k + S2P[i]] = b[4 + i];
+    const double w[] = {n->r, n->v, n->omega, n->att[0], n->att[1], n->att[2], n->q, n->qd};
+    int ok = isfinite(n->gyro_bias) && n->gyro_bias >= 0.0;
+    *white = 0;
+    for (size_t i = 0; i < sizeof w / sizeof w[0]; i++) {
+        ok = ok && isfinite(w[i]) && w[i] >= 0.0;
+        *white = *white || w[i] > 0.0;
     }
-}
-
-static void reported_of_z(const double *z, double *x)
-{
-    for (int k = 0; k < 2; k++) {
-        double m = z[4 * k];
-        x[10 * k] = m;
-        for (int i = 0; i < 3; i++)
-            x[10 * k + 1 + i] = z[4 * k + 1 + i] / m;
-        for (int i = 0; i < 6; i++)
-            x[10 * k + 4 + i] = z[8 + 6 * k + S2P[i]];
-    }
-}
-
-/* sign = +1: z (about the coms) -> z_O (about the origins); -1 the inverse (mu is shared) */
-static void shift_axes(double *z, double sign)
-{
-    double D[20];
-    sr_D_of_mu(z, D);
-    for (int k = 0; k < 2; k++)
-        for (int i = 0; i < 6; i++) {
-            double s = 0.0;
-            for (int j = 0; j < 6; j++)
-                s += P_AXES[i][j] * D[10 * k + 4 + j];
-            z[8 + 6 * k + i] += sign * s;
-        }
+    for (int i = 0; i < SR_N_CONSIDER; i++)
+        ok = ok && isfinite(n->thrust[i]) && n->thrust[i] >= 0.0;
+    return ok;
 }
 
 int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_noise *noise,
@@ -63,10 +40,9 @@ int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_no
         return 1;
     if (!(P0_mu > 0.0 && P0_theta > 0.0 && isfinite(P0_mu) && isfinite(P0_theta)))
         return 1;
-    const double *s = &noise->r;
-    for (size_t i = 0; i < sizeof(sr_info_noise) / sizeof(double); i++)
-        if (!(isfinite(s[i]) && s[i] >= 0.0))
-            return 1;
+    int white;
+    if (!noise_valid(noise, &white) || !white)     /* nothing to weigh the rows by */
+        return 1;
     for (int i = 0; i < 20; i++)
         if (!isfinite(z0[i]))
             return 1;
@@ -77,28 +53,24 @@ int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_no
     m->n = robot->n;
     m->planar = robot->planar;
     m->noise = *noise;
-    m->nz = 0;
-    for (int i = 0; i < 8; i++)
-        if (!m->planar || i % 4 < 3)
-            m->zi[m->nz++] = i;
+    m->nz = 0;                        /* planar: m, c_x, c_y, I_zz of each body */
     for (int k = 0; k < 2; k++)
-        for (int i = 0; i < 6; i++)
-            if (!m->planar || i == 5)
-                m->zi[m->nz++] = 8 + 6 * k + i;
+        for (int i = 0; i < 10; i++)
+            if (!m->planar || i == 0 || i == 1 || i == 2 || i == 9)
+                m->zi[m->nz++] = 10 * k + i;
     static const int planar_rows[3] = {0, 1, 5};
     m->nr = m->planar ? 3 : 6;
     for (int i = 0; i < m->nr; i++)
         m->rows[i] = m->planar ? planar_rows[i] : i;
     m->nb = noise->gyro_bias > 0.0 ? 3 : 0;
     m->nu = m->nz + m->nr + SR_N_CONSIDER + m->nb;
-    z_of_reported(z0, m->zO0);
-    shift_axes(m->zO0, 1.0);
+    est_standard_of_reported(z0, m->zO0);
     /* the prior: P0 on z_O, none on c0 (1e-12 keeps R invertible before the first rows: the
        momentum is unknown), the thrust errors' and gyro bias' own sds (an sd of 0: the
        unknown held at 0 by a prior information of 1e150) */
     int at = 0;
     for (int q = 0; q < m->nz; q++, at++) {
-        m->prior_sqrt[at] = 1.0 / sqrt(m->zi[q] < 8 ? P0_mu : P0_theta);
+        m->prior_sqrt[at] = 1.0 / sqrt(m->zi[q] % 10 < 4 ? P0_mu : P0_theta);
         m->u0[at] = m->zO0[m->zi[q]];
     }
     for (int q = 0; q < m->nr; q++, at++)
@@ -121,52 +93,53 @@ void sr_info_data_init(const sr_info_model *m, sr_info_data *d)
     }
 }
 
-/* the used rows' residuals of the momentum equations of x at z (20, about the coms):
-   [A mu - b; phi theta - psi D(mu) - y] */
-static void rows_at(const sr_info_model *m, const double *x, const double *z, double *r)
+/* The momentum equations of x as rows linear in the standard parameters z_O (20): full
+   (6 x 20) z_O = y (6), exactly. Linear rows A mu = b; angular rows phi theta_O - psi_lin
+   [m, c] = y: the quadratic part of psi D(mu) is -phi P times c_i c_j / m (the parallel-axis
+   terms), which the inertias about the frames' origins absorb. */
+static void rows_full(const sr_info_model *m, const double *x, double full[6][20], double *y)
 {
-    double E[3 * SR_N_COLS], D[20], full[6];
+    double E[3 * SR_N_COLS];
     sr_equations(&m->robot, 0, x, E);
-    sr_D_of_mu(z, D);
+    memset(full, 0, sizeof(double) * 6 * 20);
     for (int i = 0; i < 3; i++) {
         const double *e = E + i * SR_N_COLS;
-        double a = -e[SR_COL_B], b = -e[SR_COL_Y];
-        for (int j = 0; j < 8; j++)
-            a += e[SR_COL_A + j] * z[j];
-        for (int j = 0; j < 12; j++)
-            b += e[SR_COL_PHI + j] * z[8 + j];
-        for (int j = 0; j < 20; j++)
-            b -= e[SR_COL_PSI + j] * D[j];
-        full[i] = a;
-        full[3 + i] = b;
+        for (int k = 0; k < 2; k++) {
+            for (int j = 0; j < 4; j++) {
+                full[i][10 * k + j] = e[SR_COL_A + 4 * k + j];
+                full[3 + i][10 * k + j] = -e[SR_COL_PSI + 10 * k + j];
+            }
+            for (int j = 0; j < 6; j++)
+                full[3 + i][10 * k + 4 + j] = e[SR_COL_PHI + 6 * k + j];
+        }
+        y[i] = e[SR_COL_B];
+        y[3 + i] = e[SR_COL_Y];
     }
-    for (int i = 0; i < m->nr; i++)
-        r[i] = full[m->rows[i]];
+}
+
+/* the used rows' residuals full z_O - y of x at z_O (20) */
+static void rows_at(const sr_info_model *m, const double *x, const double *zO, double *r)
+{
+    double full[6][20], y[6];
+    rows_full(m, x, full, y);
+    for (int a = 0; a < m->nr; a++) {
+        int row = m->rows[a];
+        double v = -y[row];
+        for (int j = 0; j < 20; j++)
+            v += full[row][j] * zO[j];
+        r[a] = v;
+    }
 }
 
 /* The rows H u = y of x exactly (H: nr x nu, row stride HS; the gyro bias columns not
-   written): linear rows A mu = b; angular phi theta_O - psi_lin [m, c] = y (psi's quadratic
-   columns are -phi P_AXES); minus c0 and the thrust errors' sensitivities on the left. The
+   written): rows_full's, minus c0 and the thrust errors' sensitivities on the left; the
    unidentified z (planar) at their guesses move to y. k: the thrust integrals (15). */
 static void linear_rows(const sr_info_model *m, const double *x, const double *k, double *H,
                         double *y)
 {
-    double E[3 * SR_N_COLS], S[3 * SR_N_CCOLS], full[6][20], yf[6];
-    sr_equations(&m->robot, 0, x, E);
+    double full[6][20], yf[6], S[3 * SR_N_CCOLS];
+    rows_full(m, x, full, yf);
     sr_thrust_sensitivity(0, x, m->n, k, S);
-    memset(full, 0, sizeof full);
-    for (int i = 0; i < 3; i++) {
-        const double *e = E + i * SR_N_COLS;
-        for (int j = 0; j < 8; j++)
-            full[i][j] = e[SR_COL_A + j];
-        for (int b = 0; b < 2; b++)
-            for (int j = 0; j < 4; j++)
-                full[3 + i][4 * b + j] = -e[SR_COL_PSI + 10 * b + j];
-        for (int j = 0; j < 12; j++)
-            full[3 + i][8 + j] = e[SR_COL_PHI + j];
-        yf[i] = e[SR_COL_B];
-        yf[3 + i] = e[SR_COL_Y];
-    }
     int used[20] = {0};
     for (int q = 0; q < m->nz; q++)
         used[m->zi[q]] = 1;
@@ -268,29 +241,21 @@ static int noise_weight(const sr_info_model *m, const double *x, const double *z
        information (a floor of 1e-6 of the trace instead made the errors several times worse) */
     for (int a = 0; a < nr; a++)
         Rk[a * 6 + a] += 1e-12 * tr / nr;
-    /* Cholesky L L^T = Rk, then W = L^-1 (lower triangular) */
-    double L[36] = {0};
+    /* Cholesky L L^T = Rk (linalg), then W = L^-1 (lower triangular) */
+    double L[36];
     for (int a = 0; a < nr; a++)
-        for (int b = 0; b <= a; b++) {
-            double s = Rk[a * 6 + b];
-            for (int l = 0; l < b; l++)
-                s -= L[a * 6 + l] * L[b * 6 + l];
-            if (a == b) {
-                if (!(s > 0.0))
-                    return 1;
-                L[a * 6 + a] = sqrt(s);
-            } else {
-                L[a * 6 + b] = s / L[b * 6 + b];
-            }
-        }
+        for (int b = 0; b < nr; b++)
+            L[a * nr + b] = Rk[a * 6 + b];
+    if (sr_cholesky(L, nr) != 0)
+        return 1;
     memset(W, 0, sizeof(double) * 36);
     for (int col = 0; col < nr; col++) {
-        W[col * nr + col] = 1.0 / L[col * 6 + col];
+        W[col * nr + col] = 1.0 / L[col * nr + col];
         for (int a = col + 1; a < nr; a++) {
             double s = 0.0;
             for (int l = col; l < a; l++)
-                s += L[a * 6 + l] * W[l * nr + col];
-            W[a * nr + col] = -s / L[a * 6 + a];
+                s += L[a * nr + l] * W[l * nr + col];
+            W[a * nr + col] = -s / L[a * nr + a];
         }
     }
     return 0;
@@ -317,11 +282,9 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     double K[SR_THRUST_LEN], W[36], z[20];
     memcpy(K, d->K, sizeof K);
     sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(n), x + SR_X_M(n));
-    z_of_reported(z_lin, z);
-    memcpy(W, d->W, sizeof W);
-    if (!d->has_W || d->samples % SR_INFO_REFRESH == 0)
-        if (noise_weight(m, x, z, W) != 0)
-            return 1;
+    est_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
+    if (noise_weight(m, x, z, W) != 0)               /* every sample */
+        return 1;
     /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
     double Hy[6 * HS], r0[6], rb[6], xs[SR_X_LEN(SR_MAX_JOINTS)], y[6];
     memset(Hy, 0, sizeof Hy);
@@ -429,11 +392,10 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     memcpy(d->N_HH, N_HH, sizeof N_HH);
     memcpy(d->N_Hy, N_Hy, sizeof N_Hy);
     memcpy(d->K, K, sizeof K);
-    memcpy(d->W, W, sizeof W);
-    d->has_W = 1;
     d->rss = rss;
     d->rows += nr;
-    d->samples++;
+    if (d->samples < INT_MAX)                        /* saturates (~7 years at 10 Hz) */
+        d->samples++;
     return 0;
 }
 
@@ -444,8 +406,7 @@ static void reported_of_u(const sr_info_model *m, const double *u, double *x)
     memcpy(z, m->zO0, sizeof z);
     for (int q = 0; q < m->nz; q++)
         z[m->zi[q]] = u[q];
-    shift_axes(z, -1.0);
-    reported_of_z(z, x);
+    est_joint_vector_of(EST_S2P, z, x);
 }
 
 int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
@@ -533,18 +494,15 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
             memcpy(u, b, sizeof(double) * nu);
     }
     reported_of_u(m, u, vec);
-    /* the bound: J C J^T, J = d reported / d z_O (central differences) */
-    double J[20 * 20], xp[20], xm[20];
-    for (int q = 0; q < nz; q++) {
-        double h = 1e-6 * (fabs(u[q]) > 1.0 ? fabs(u[q]) : 1.0), keep = u[q];
-        u[q] = keep + h;
-        reported_of_u(m, u, xp);
-        u[q] = keep - h;
-        reported_of_u(m, u, xm);
-        u[q] = keep;
-        for (int i = 0; i < 20; i++)
-            J[i * 20 + q] = (xp[i] - xm[i]) / (2 * h);
-    }
+    /* the bound: J C J^T, J = d reported / d z_O at the estimate (its identified columns) */
+    double J[20 * 20], Jz[20 * 20], zO[20];
+    memcpy(zO, m->zO0, sizeof zO);
+    for (int q = 0; q < nz; q++)
+        zO[m->zi[q]] = u[q];
+    est_joint_jacobian(EST_S2P, zO, Jz);
+    for (int i = 0; i < 20; i++)
+        for (int q = 0; q < nz; q++)
+            J[i * 20 + q] = Jz[i * 20 + m->zi[q]];
     int ok = 1;
     for (int i = 0; i < 20; i++) {
         double var = 0.0, touched = 0.0;
@@ -571,6 +529,23 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
     return 0;
 }
 
+int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d)
+{
+    if (!m || !d)
+        return 0;
+    double s = d->rss + d->rows;
+    for (int i = 0; i < m->nu; i++) {
+        s += d->d[i] + d->N_Hy[i];
+        for (int j = 0; j < m->nu; j++)
+            s += d->R[i * MU + j] + d->N_HH[i * MU + j];
+    }
+    for (int i = 0; i < SR_THRUST_LEN; i++)
+        s += d->K[i];
+    for (int i = 0; i < 20; i++)
+        s += d->z_lin[i];
+    return isfinite(s);
+}
+
 size_t sr_info_buffer_length(int n)
 {
     return n >= 1 && n <= SR_MAX_JOINTS ? (size_t)SR_INFO_REPLAY * (size_t)(1 + SR_X_LEN(n)) : 0;
@@ -586,22 +561,22 @@ static int own_point(const sr_info_model *m, const sr_info_data *d, double *z)
     return 0;
 }
 
-int sr_info_step(const sr_info_model *m, sr_info_data *d, double *buffer, double t,
-                 const double *x, const double *z_est)
+int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_data *d,
+                 double *buffer, double t, const double *x, const double *z_est)
 {
-    if (!m || !d || !buffer || !x || !z_est)
+    if (!m || !before || !d || before == d || !buffer || !x || !z_est)
         return 1;
+    memcpy(d, before, sizeof *d);
     int slot = 1 + SR_X_LEN(m->n);
     if (d->replayed) {                       /* its own estimate, refreshed now and then */
         double z[20];
-        const double *zl = d->z_lin;
         if (d->samples % SR_INFO_RELIN == 0 && own_point(m, d, z) == 0)
-            zl = z;
-        double keep[20];
-        memcpy(keep, zl, sizeof keep);
-        if (sr_info_add(m, d, t, x, keep) != 0)
+            memcpy(d->z_lin, z, sizeof z);
+        memcpy(z, d->z_lin, sizeof z);
+        if (sr_info_add(m, d, t, x, z) != 0) {
+            memcpy(d, before, sizeof *d);
             return 1;
-        memcpy(d->z_lin, keep, sizeof keep);
+        }
         return 0;
     }
     if (d->samples < 0 || d->samples > SR_INFO_REPLAY)
@@ -617,13 +592,18 @@ int sr_info_step(const sr_info_model *m, sr_info_data *d, double *buffer, double
     if (own_point(m, d, z) != 0)
         memcpy(z, z_est, sizeof z);
     sr_info_data_init(m, d);
-    for (int k = 0; k < SR_INFO_REPLAY; k++) {
+    int ok = 1;
+    for (int k = 0; k < SR_INFO_REPLAY && ok; k++) {
         const double *s = buffer + (size_t)k * (size_t)slot;
-        if (sr_info_add(m, d, s[0], s + 1, z) != 0)
-            return 1;                         /* the caller keeps its copy */
+        ok = sr_info_add(m, d, s[0], s + 1, z) == 0;
     }
-    if (sr_info_add(m, d, t, x, z) != 0)
+    if (!ok)                                 /* no replay rather than no filter: go on from the
+                                                state before, at the point the replay chose */
+        memcpy(d, before, sizeof *d);
+    if (sr_info_add(m, d, t, x, z) != 0) {
+        memcpy(d, before, sizeof *d);
         return 1;
+    }
     d->replayed = 1;
     memcpy(d->z_lin, z, sizeof z);
     return 0;

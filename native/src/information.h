@@ -14,7 +14,7 @@
  * exactly, and the only approximations are the first-order noise terms:
  *   - the rows' noise covariance R_k: the sensors' white noise (navigation position and
  *     velocity, star tracker, gyro, joint angles and rates) propagated through the rows at the
- *     linearisation point z_lin (recomputed every SR_INFO_REFRESH samples);
+ *     linearisation point z_lin (recomputed every sample);
  *   - the regressors' noise (errors in variables): the expected noise part of the weighted
  *     normal equations, N = sum_k sum_l sigma_l^2 dH_l^T dH_l, taken out of the answer
  *     (bias-compensated least squares, (S - N) u_c = s - n_y, S the information; or to first
@@ -48,15 +48,14 @@ extern "C" {
  * the errors grew 10-fold). The first SR_INFO_REPLAY samples are linearised at the caller's
  * estimate (the estimator's own equations) and kept; at sample SR_INFO_REPLAY the filter
  * starts again from its prior and adds them once more, linearised at its own estimate by then
- * (errors as linearised at the truth: 0.27-0.46 % where they were 0.3-2.0 %, four hardest
+ * (errors as linearised at the truth: 0.25-0.56 % where they were 0.3-2.0 %, four hardest
  * random cases); afterwards its own estimate, refreshed every SR_INFO_RELIN samples, is the
  * point. */
 #define SR_INFO_REPLAY 600
 #define SR_INFO_RELIN 10
-/* the rows' noise covariance is recomputed every this many samples: every one (its square
- * root held over 10 samples of 0.1 s left the whitened rows' covariance between 0.5 and 1.7
- * and the bound optimistic by up to 1.5x: tests/test_information.py) */
-#define SR_INFO_REFRESH 1
+/* The rows' noise covariance is recomputed at every sample: its square root held over 10
+ * samples of 0.1 s left the whitened rows' covariance between 0.5 and 1.7 and the bound
+ * optimistic by up to 1.5x (tests/test_information.py). */
 
 /** The sensors' white noise per sample and the priors of the nuisance unknowns (SI units; a
  *  zero sd: that channel noise-free, or that nuisance unknown absent). */
@@ -84,9 +83,8 @@ typedef struct sr_info_model {
 /** The state: the square-root information [R d] (R upper triangular nu x nu, row stride
  *  SR_INFO_MAX_U), the errors-in-variables sums, the thrust integrals, the rows' weight. */
 typedef struct sr_info_data {
-    int samples, has_W;
+    int samples;
     double K[SR_THRUST_LEN];              /* thrust integrals (equations.h) */
-    double W[36];                         /* R_k^-1/2 (nr x nr, lower triangular) */
     double R[SR_INFO_MAX_U * SR_INFO_MAX_U], d[SR_INFO_MAX_U];
     double N_HH[SR_INFO_MAX_U * SR_INFO_MAX_U], N_Hy[SR_INFO_MAX_U];
     double rss, rows;                     /* weighted residual sum of squares, rows added */
@@ -98,16 +96,21 @@ typedef struct sr_info_data {
 /** Fill *m for robot (copied) with the noise model, the guesses z0 (20, reported form) and the
  *  estimator's prior covariances P0_mu, P0_theta (> 0). Planar robots: the in-plane unknowns
  *  (m, b_x, b_y, I_zz per body) and rows (linear x, y, angular z). Returns 0, or 1 for a NULL
- *  pointer, n out of range, a non-finite or negative sd, a guess with m <= 0, P0 <= 0. */
+ *  pointer, n out of range, a non-finite or negative sd, no white noise at all (r, v, omega,
+ *  att, q, qd all 0: nothing to weigh the rows by), a guess with m <= 0, P0 <= 0. */
+
+/** 1 if every number of the state d is finite (what a restored state must satisfy), else 0. */
+SR_API int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d);
 SR_API int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_noise *noise,
                               const double *z0, double P0_mu, double P0_theta);
 
 /** The state before any sample (the prior). */
 SR_API void sr_info_data_init(const sr_info_model *m, sr_info_data *d);
 
-/** Add the sample x (flat, SR_X_LEN(n)) taken at t [s] (increasing), linearised at z_lin (20,
- *  reported form: its masses > 0). In place; returns 0, or 1 (d unchanged) for a NULL
- *  pointer, a z_lin with a mass <= 0, or non-finite numbers (d unchanged). */
+/** Add the sample x (flat, SR_X_LEN(n)) taken at t [s] (the caller keeps the times
+ *  increasing), linearised at z_lin (20, reported form: its masses > 0). In place; returns 0,
+ *  or 1 (d unchanged) for a NULL pointer, a z_lin with a mass <= 0, a rows' noise covariance
+ *  that is not positive definite, or non-finite numbers. */
 SR_API int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
                        const double *z_lin);
 
@@ -115,14 +118,16 @@ SR_API int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const 
  *  [t, x (SR_X_LEN(n))]. */
 SR_API size_t sr_info_buffer_length(int n);
 
-/** One sample with the replay (SR_INFO_REPLAY): as sr_info_add, linearised at the caller's
- *  estimate z_est (20, reported form) before the replay and at the filter's own after it.
- *  buffer (sr_info_buffer_length(n) doubles, owned by the caller, kept across calls): before
- *  the replay the sample is written at slot d->samples (a step the caller does not commit
- *  leaves only that slot, which the next sample overwrites). The replaying sample costs
- *  SR_INFO_REPLAY + 1 adds. Returns as sr_info_add (d unchanged on failure). */
-SR_API int sr_info_step(const sr_info_model *m, sr_info_data *d, double *buffer, double t,
-                        const double *x, const double *z_est);
+/** One sample with the replay (SR_INFO_REPLAY): d = before with the sample x taken at t,
+ *  linearised at the caller's estimate z_est (20, reported form) before the replay and at the
+ *  filter's own after it. buffer (sr_info_buffer_length(n) doubles, owned by the caller, kept
+ *  across calls): before the replay the sample is written at slot before->samples (a step the
+ *  caller does not commit leaves only that slot, which the next sample overwrites). The
+ *  replaying sample costs SR_INFO_REPLAY + 1 adds; where a kept sample cannot be added again
+ *  (a corrupted buffer), the filter goes on from before without the replay. before and d must
+ *  not overlap. Returns as sr_info_add (d = before on failure). */
+SR_API int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_data *d,
+                        double *buffer, double t, const double *x, const double *z_est);
 
 /** What the filter says (reads d only; work space on the stack): vec (20) the estimates
  *  (compensated for the noise in the regressors (errors in variables): 0 not, 1 to first

@@ -163,7 +163,8 @@ PROFILE_OPTION_NAMES = {"sd_thrust_scale": "ident.sd_thrust.scale",
                         "momentum_window": "ident.momentum_window",
                         "momentum_point": "ident.momentum_point", "corr_lags": "ident.corr_lags",
                         "accel_bias": "ident.accel_bias", "diff_momentum": "ident.diff_momentum",
-                        "diff_half_window": "ident.diff_half_window"}
+                        "diff_half_window": "ident.diff_half_window",
+                        "information": "ident.information"}
 
 
 def profile_values(values: Mapping[str, float], sample_time: float = 0.1,

@@ -395,11 +395,14 @@ class Identifier:
         """Standard deviations of :meth:`vector` (20,): the data's scatter and the prior's
         pull through the delta method, the estimates' lag behind moving parameters, the
         thrust errors' consider variance (``thrust_sd``); the prior's sd before any sample and
-        for parameters that are not identified (docs/identification.md)."""
+        for parameters that are not identified (docs/identification.md). With the information
+        filter (``ident.information``): its bound times ``sqrt(max(1, chi2))``, and
+        :meth:`vector` its estimates."""
         return self.core.estimates()[1]
 
     def std_without_lag(self) -> np.ndarray:
-        """:meth:`std` without the drift tracker's lag term (20,)."""
+        """The equations' own :meth:`std` without the drift tracker's lag term (20,) (with the
+        information filter too: a diagnostic of the estimator underneath)."""
         return self.core.sd_without_lag()
 
     def report(self) -> Report:

@@ -313,4 +313,12 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
                 out.append(f"{text}: " + ", ".join(f"{b} {'yes' if c[-1] > 0.5 else 'no'}"
                                                    for b, c in cols))
                 break
+    for prefix in ("estimator.", ""):
+        chi2 = data.get(f"{prefix}diag.info_chi2")
+        if chi2 is not None and len(chi2) and chi2[-1] > 0:
+            out.append(f"the information filter reported (ident.information): diag.info_chi2 "
+                       f"{chi2[-1]:.3g} (from its 600th sample on about 1 where the noise.* "
+                       f"values fit the sensors); its flags need 2 sd below ident.sd_rel; its "
+                       f"Cramer-Rao bound: the crb.* columns")
+            break
     return out
