@@ -65,14 +65,16 @@ def libs(work):
     return nh.host_binaries(work, KINDS)
 
 
-def record(robot: str, target, fmu: nh.Extracted):
-    """The plant's outputs at t = 0, DT, ..., SECONDS - DT as the estimator's (or the sensors'
+def record(robot: str, target, fmu: nh.Extracted, samples: int = N, sensors_seed=None):
+    """The plant's outputs at t = 0, DT, ..., (samples - 1) DT as the estimator's (or the sensors'
     ``true.<name>``) inputs: (value references, rows of values) and the truth of the 20
-    estimates."""
+    estimates. With a ``sensors_seed``: through the realistic sensors, the plant excited
+    (level 1)."""
     from spacerobot import interface
     from spacerobot.interface import estimator_vars
     from spacerobot.plant import Plant
     from spacerobot.robots import scenario
+    from spacerobot.sensors import SensorSuite
 
     sc = scenario(robot, target)
     keys = {v.name: v.key for v in estimator_vars(sc.robot, sc)}
@@ -80,14 +82,25 @@ def record(robot: str, target, fmu: nh.Extracted):
     names = fmu.names("Real", "input")
     p = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
               excitation=sc.excitation)
+    sensors = None
+    if sensors_seed is not None:
+        p.set_excitation(1.0)
+        sensors = SensorSuite(sc.robot.n_joints, seed=sensors_seed, dt=DT)
     rows = []
-    for _ in range(N):
-        out = p.outputs()
+    for _ in range(samples):
+        out = p.outputs() if sensors is None else sensors.update(p.outputs(), DT)
         rows.append([float(np.asarray(out[keys[n][0]])[keys[n][1]]) for n in names])
         p.advance(DT)
     rows = np.array(rows)
     assert np.all(np.isfinite(rows)) and np.ptp(rows, axis=0).max() > 0.1     # it moved
     return [fmu.vr[n] for n in names], rows, interface.estimate_vector(sc.robot.base, sc.target)
+
+
+def write_inputs(path, vrs, rows):
+    """The host's input file: the value references, then each row's values as exact bits."""
+    path.write_text(",".join(map(str, vrs)) + "\n" + "".join(
+        ",".join(nh.hex_bits(x) for x in row) + "\n" for row in rows))
+    return path
 
 
 def excitation_levels(fmu: nh.Extracted):
@@ -109,8 +122,7 @@ class Case:
                                                 else record(robot, target, self.fmu))
         self.memory_steps = MEMORY_STEPS[kind]
         self.csv = work / f"inputs_{self.tag}.csv"
-        self.csv.write_text(",".join(map(str, self.in_vr)) + "\n" + "".join(
-            ",".join(nh.hex_bits(x) for x in row) + "\n" for row in self.samples))
+        write_inputs(self.csv, self.in_vr, self.samples)
         self.real_out = self.fmu.vrs("Real", "output")
         self.int_out = self.fmu.vrs("Integer", "output")
         self.fmpy = self.run_fmpy()
@@ -306,30 +318,12 @@ def test_information_filter_under_wine_equals_linux64(work, libs, host):
     serialised and restored after it (step 650); the win64 DLL under Wine gives what linux64
     gives, within 1e-12 relative (the core's results do not depend on the compiler or its
     libm), and the bound outputs crb.* are set."""
-    from spacerobot.plant import Plant
-    from spacerobot.robots import scenario
-    from spacerobot.sensors import SensorSuite
-    from spacerobot.interface import estimator_vars
-
     nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
     nh.require(nh.wine(), "Wine")
     n, state_step = 700, 650
     fmu = nh.native_fmu(work, "estimator", "spatial", None, libs["plain"], "plain")
-    sc = scenario("spatial")
-    keys = {v.name: v.key for v in estimator_vars(sc.robot, sc)}
-    names = fmu.names("Real", "input")
-    plant = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
-                  excitation=sc.excitation)
-    plant.set_excitation(1.0)
-    sensors = SensorSuite(sc.robot.n_joints, seed=3, dt=DT)
-    rows = []
-    for _ in range(n):
-        y = sensors.update(plant.outputs(), DT)
-        rows.append([float(np.asarray(y[keys[nm][0]])[keys[nm][1]]) for nm in names])
-        plant.advance(DT)
-    csv = work / "inputs_information.csv"
-    csv.write_text(",".join(str(fmu.vr[nm]) for nm in names) + "\n" + "".join(
-        ",".join(nh.hex_bits(x) for x in row) + "\n" for row in rows))
+    in_vr, rows, _ = record("spatial", None, fmu, n, sensors_seed=3)
+    csv = write_inputs(work / "inputs_information.csv", in_vr, rows)
     reals, ints = fmu.vrs("Real", "output"), fmu.vrs("Integer", "output")
 
     def args(binary, uri, path):

@@ -445,31 +445,13 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
 
 static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
 
-/* the information filter's model from the options (the noise profile applied): the sensors'
- * white noise per sample (densities over 1 s drawn every noise_dt: d / sqrt(noise_dt)) and the
- * gyro bias' prior, all times noise.scale; the thrust errors' prior the consider term's
- * (ident.sd_thrust.*); the estimator's guesses and P0 */
+/* the information filter's model from the options (the noise profile applied): its noise
+ * model (sr_noise_profile_info_noise), the estimator's guesses and P0 */
 static int info_model(sr_estimator_model *m, const sr_robot *robot,
                       const sr_estimator_options *o)
 {
-    const double *p = o->noise, s = o->noise_scale;
     sr_info_noise nz;
-    double res = p[SR_NOISE_ENC_RESOLUTION];
-    nz.r = s * p[SR_NOISE_NAV_R];
-    nz.v = s * p[SR_NOISE_NAV_V];
-    nz.omega = s * p[SR_NOISE_GYRO_ARW] / sqrt(o->noise_dt);
-    nz.att[0] = nz.att[1] = s * p[SR_NOISE_STAR_CROSS];
-    nz.att[2] = s * p[SR_NOISE_STAR_ROLL];
-    /* the encoder: its noise and a uniform quantisation error of step res (variance res^2/12) */
-    nz.q = s * sqrt(p[SR_NOISE_ENC_Q] * p[SR_NOISE_ENC_Q] + res * res / 12.0);
-    nz.qd = s * p[SR_NOISE_ENC_QD];
-    for (int k = 0; k < 2; k++) {
-        nz.thrust[4 * k] = o->sd_thrust_scale;   /* the consider term's (the profile's
-                                                    noise.thrust.* unless the user set them) */
-        for (int i = 1; i < 4; i++)
-            nz.thrust[4 * k + i] = o->sd_thrust_misalign;
-    }
-    nz.gyro_bias = s * p[SR_NOISE_GYRO_BIAS];
+    sr_noise_profile_info_noise(o, &nz);
     double z0[20];
     memcpy(z0, o->guess_base, sizeof(double) * 10);
     memcpy(z0 + 10, o->guess_target, sizeof(double) * 10);

@@ -13,21 +13,35 @@
 #define MU SR_INFO_MAX_U             /* row stride of R, N_HH */
 #define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
 
-/* reported I (Ixx Iyy Izz Ixy Ixz Iyz) -> I# (xx xy xz yy yz zz, eq. 21) */
 /* The unknowns' z part is in the standard layout of est_internal.h: per body m, c = m b (3),
  * I_O# (6, about the body frame's origin); est_standard_of_reported / est_joint_vector_of map
  * it from / to the reported parameters. */
 
-/* the sr_info_noise magnitudes as one list, for the checks */
-static int noise_valid(const sr_info_noise *n, int *white)
+/* the white-noise sds of n (8), the channels the rows are weighed by */
+static void white_sds(const sr_info_noise *n, double *w)
 {
-    const double w[] = {n->r, n->v, n->omega, n->att[0], n->att[1], n->att[2], n->q, n->qd};
+    const double v[8] = {n->r, n->v, n->omega, n->att[0], n->att[1], n->att[2], n->q, n->qd};
+    memcpy(w, v, sizeof v);
+}
+
+int sr_info_noise_white(const sr_info_noise *n)
+{
+    double w[8];
+    int white = 0;
+    white_sds(n, w);
+    for (int i = 0; i < 8; i++)
+        white = white || w[i] > 0.0;
+    return white;
+}
+
+/* 1 if every sd of n is finite and >= 0 */
+static int noise_valid(const sr_info_noise *n)
+{
+    double w[8];
     int ok = isfinite(n->gyro_bias) && n->gyro_bias >= 0.0;
-    *white = 0;
-    for (size_t i = 0; i < sizeof w / sizeof w[0]; i++) {
+    white_sds(n, w);
+    for (int i = 0; i < 8; i++)
         ok = ok && isfinite(w[i]) && w[i] >= 0.0;
-        *white = *white || w[i] > 0.0;
-    }
     for (int i = 0; i < SR_N_CONSIDER; i++)
         ok = ok && isfinite(n->thrust[i]) && n->thrust[i] >= 0.0;
     return ok;
@@ -40,8 +54,7 @@ int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_no
         return 1;
     if (!(P0_mu > 0.0 && P0_theta > 0.0 && isfinite(P0_mu) && isfinite(P0_theta)))
         return 1;
-    int white;
-    if (!noise_valid(noise, &white) || !white)     /* nothing to weigh the rows by */
+    if (!noise_valid(noise) || !sr_info_noise_white(noise))   /* nothing to weigh by */
         return 1;
     for (int i = 0; i < 20; i++)
         if (!isfinite(z0[i]))
@@ -261,6 +274,31 @@ static int noise_weight(const sr_info_model *m, const double *x, const double *z
     return 0;
 }
 
+/* the sum of the filter's numbers (R, d, N_HH, N_Hy over nu unknowns; the thrust integrals
+   K): finite iff every one of them is */
+static double numbers_sum(int nu, const double *R, const double *d, const double *N_HH,
+                          const double *N_Hy, const double *K)
+{
+    double s = 0.0;
+    for (int i = 0; i < nu; i++) {
+        s += d[i] + N_Hy[i];
+        for (int j = 0; j < nu; j++)
+            s += R[i * MU + j] + N_HH[i * MU + j];
+    }
+    for (int i = 0; i < SR_THRUST_LEN; i++)
+        s += K[i];
+    return s;
+}
+
+/* entry (p, q) of the inverse information S^-1 = Ri Ri^T (Ri = R^-1 upper triangular, nu) */
+static double inverse_entry(const double *Ri, int nu, int p, int q)
+{
+    double s = 0.0;
+    for (int j = (p > q ? p : q); j < nu; j++)
+        s += Ri[p * MU + j] * Ri[q * MU + j];
+    return s;
+}
+
 /* out (nr x ncol, row stride HS) = W (nr x nr lower) times in (same shape) */
 static void weigh(const double *W, int nr, const double *in, int ncol, double *out)
 {
@@ -376,16 +414,7 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     double rss = d->rss;
     for (int a = 0; a < nr; a++)
         rss += Wt[a * HS + nu] * Wt[a * HS + nu];
-    /* commit only finite numbers */
-    double s = rss;
-    for (int i = 0; i < nu; i++) {
-        s += dv[i] + N_Hy[i];
-        for (int j = 0; j < nu; j++)
-            s += R[i * MU + j] + N_HH[i * MU + j];
-    }
-    for (int i = 0; i < SR_THRUST_LEN; i++)
-        s += K[i];
-    if (!isfinite(s))
+    if (!isfinite(numbers_sum(nu, R, dv, N_HH, N_Hy, K) + rss))   /* commit finite only */
         return 1;
     memcpy(d->R, R, sizeof R);
     memcpy(d->d, dv, sizeof dv);
@@ -436,12 +465,8 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
     /* the covariance of z_O's entries: (Ri Ri^T)[:nz, :nz]; z_O's are the leading unknowns */
     double C[20 * 20];
     for (int p = 0; p < nz; p++)
-        for (int q = 0; q <= p; q++) {
-            double s = 0.0;
-            for (int j = (p > q ? p : q); j < nu; j++)
-                s += Ri[p * MU + j] * Ri[q * MU + j];
-            C[p * 20 + q] = C[q * 20 + p] = s;
-        }
+        for (int q = 0; q <= p; q++)
+            C[p * 20 + q] = C[q * 20 + p] = inverse_entry(Ri, nu, p, q);
     double u_raw[MU];
     memcpy(u_raw, u, sizeof u_raw);
     if (compensated == 1 || compensated == 2) {  /* first order: u + S^-1 (N u - n_y) */
@@ -469,12 +494,8 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
                                       u - S^-1 n_y (S^-1 = Ri Ri^T: no normal equations) */
         double Si[MU * MU], A[MU * MU], b[MU];
         for (int p = 0; p < nu; p++)
-            for (int q = 0; q < nu; q++) {
-                double s = 0.0;
-                for (int j = (p > q ? p : q); j < nu; j++)
-                    s += Ri[p * MU + j] * Ri[q * MU + j];
-                Si[p * MU + q] = s;
-            }
+            for (int q = 0; q < nu; q++)
+                Si[p * MU + q] = inverse_entry(Ri, nu, p, q);
         for (int p = 0; p < nu; p++) {
             double s = u_raw[p];
             for (int q = 0; q < nu; q++)
@@ -533,14 +554,7 @@ int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d)
 {
     if (!m || !d)
         return 0;
-    double s = d->rss + d->rows;
-    for (int i = 0; i < m->nu; i++) {
-        s += d->d[i] + d->N_Hy[i];
-        for (int j = 0; j < m->nu; j++)
-            s += d->R[i * MU + j] + d->N_HH[i * MU + j];
-    }
-    for (int i = 0; i < SR_THRUST_LEN; i++)
-        s += d->K[i];
+    double s = numbers_sum(m->nu, d->R, d->d, d->N_HH, d->N_Hy, d->K) + d->rss + d->rows;
     for (int i = 0; i < 20; i++)
         s += d->z_lin[i];
     return isfinite(s);

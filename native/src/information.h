@@ -99,6 +99,10 @@ typedef struct sr_info_data {
  *  pointer, n out of range, a non-finite or negative sd, no white noise at all (r, v, omega,
  *  att, q, qd all 0: nothing to weigh the rows by), a guess with m <= 0, P0 <= 0. */
 
+/** 1 if any of the white-noise sds of n (r, v, omega, att, q, qd) is > 0: something to weigh
+ *  the rows by (the filter needs it), else 0. */
+SR_API int sr_info_noise_white(const sr_info_noise *n);
+
 /** 1 if every number of the state d is finite (what a restored state must satisfy), else 0. */
 SR_API int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d);
 SR_API int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_noise *noise,

@@ -57,10 +57,9 @@ int sr_noise_profile_apply(const sr_estimator_options *in, sr_estimator_options 
     FILL(sd_thrust_misalign, p[SR_NOISE_THRUST_MISALIGN]);
     /* the information filter weighs the rows by the sensors' white noise: with none (e.g.
        noise.scale 0) there is nothing to weigh by, and the estimator's own equations serve */
-    double white = p[SR_NOISE_NAV_R] + p[SR_NOISE_NAV_V] + p[SR_NOISE_GYRO_ARW] +
-                   p[SR_NOISE_STAR_CROSS] + p[SR_NOISE_STAR_ROLL] + p[SR_NOISE_ENC_Q] +
-                   p[SR_NOISE_ENC_RESOLUTION] + p[SR_NOISE_ENC_QD];
-    FILL(information, white > 0.0 ? 1 : 2);
+    sr_info_noise nz;
+    sr_noise_profile_info_noise(&o, &nz);
+    FILL(information, sr_info_noise_white(&nz) ? 1 : 2);
     /* white noise per sample of the accelerations (measured) and velocities (differenced);
        a density over 1 s drawn every dt has the sd d / sqrt(dt) (docs/sensors.md) */
     FILL(signal_sd[0], p[SR_NOISE_ACCEL_VRW] / rt);          /* a_S */
@@ -84,4 +83,23 @@ int sr_noise_profile_apply(const sr_estimator_options *in, sr_estimator_options 
 #undef FILL
     *out = o;
     return 0;
+}
+
+void sr_noise_profile_info_noise(const sr_estimator_options *o, sr_info_noise *nz)
+{
+    const double *p = o->noise, s = o->noise_scale;
+    double res = p[SR_NOISE_ENC_RESOLUTION];
+    nz->r = s * p[SR_NOISE_NAV_R];
+    nz->v = s * p[SR_NOISE_NAV_V];
+    nz->omega = s * p[SR_NOISE_GYRO_ARW] / sqrt(o->noise_dt);
+    nz->att[0] = nz->att[1] = s * p[SR_NOISE_STAR_CROSS];
+    nz->att[2] = s * p[SR_NOISE_STAR_ROLL];
+    nz->q = s * sqrt(p[SR_NOISE_ENC_Q] * p[SR_NOISE_ENC_Q] + res * res / 12.0);
+    nz->qd = s * p[SR_NOISE_ENC_QD];
+    for (int k = 0; k < 2; k++) {
+        nz->thrust[4 * k] = o->sd_thrust_scale;
+        for (int i = 1; i < 4; i++)
+            nz->thrust[4 * k + i] = o->sd_thrust_misalign;
+    }
+    nz->gyro_bias = s * p[SR_NOISE_GYRO_BIAS];
 }

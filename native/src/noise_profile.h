@@ -34,6 +34,7 @@
 #include <stddef.h>
 
 #include "estimator.h"
+#include "information.h"
 #include "sr_api.h"
 
 #ifdef __cplusplus
@@ -63,6 +64,13 @@ typedef struct sr_noise_profile_error {
  *  (the sensors' values are not read). */
 SR_API int sr_noise_profile_apply(const sr_estimator_options *in, sr_estimator_options *out,
                                   sr_noise_profile_error *e);
+
+/** The information filter's noise model (information.h) of the options o (the profile
+ *  applied): the sensors' white noise per sample (densities over 1 s drawn every noise_dt:
+ *  d / sqrt(noise_dt); the encoder's angle with its quantisation, variance res^2 / 12) and the
+ *  gyro bias' prior, all times noise.scale; the thrust errors' prior the consider term's
+ *  (ident.sd_thrust.*, the profile's noise.thrust.* unless the user set them). */
+SR_API void sr_noise_profile_info_noise(const sr_estimator_options *o, sr_info_noise *out);
 
 #ifdef __cplusplus
 }

@@ -297,32 +297,37 @@ def efficiency_text(rows: Sequence[Dict[str, str]]) -> str:
     return f"{np.median(e):.2f}, {min(e):.2f}" if e else "-"
 
 
-def efficiencies(rows: Sequence[Dict[str, str]]) -> Dict[str, float]:
-    """Per estimate, the Cramér-Rao bound over the observed scatter across the cases,
-    ``sqrt(mean crb^2) / sqrt(mean error^2)`` (1: as good as any unbiased estimator can be;
-    both relative to the error scale); empty for rows without the bound (no information
-    filter) or where an estimate is not identified (bound 0)."""
-    out: Dict[str, float] = {}
+def bound_stats(rows: Sequence[Dict[str, str]]) -> Dict[str, tuple]:
+    """Per estimate, over the rows that carry the information filter's bound: (the bound's
+    median, the RMS error, the efficiency ``sqrt(mean crb^2) / sqrt(mean error^2)``), all
+    relative to the error scale (efficiency 1: as good as any unbiased estimator can be);
+    empty for rows without the bound, and no entry where an estimate is not identified
+    (bound 0)."""
+    out: Dict[str, tuple] = {}
     for p in ESTIMATE_NAMES:
-        c = [float(r[f"crb.{p}"]) for r in rows if r.get(f"crb.{p}") not in (None, "")]
-        e = [float(r[f"relerr.{p}"]) for r in rows if r.get(f"crb.{p}") not in (None, "")]
-        if c and max(c) > 0 and max(e) > 0:
-            out[p] = float(np.sqrt(np.mean(np.square(c))) / np.sqrt(np.mean(np.square(e))))
+        have = [r for r in rows if r.get(f"crb.{p}") not in (None, "")]
+        c = np.array([float(r[f"crb.{p}"]) for r in have])
+        e = np.array([float(r[f"relerr.{p}"]) for r in have])
+        if len(c) and c.max() > 0 and e.max() > 0:
+            rms = float(np.sqrt(np.mean(e ** 2)))
+            out[p] = (float(np.median(c)), rms, float(np.sqrt(np.mean(c ** 2)) / rms))
     return out
 
 
+def efficiencies(rows: Sequence[Dict[str, str]]) -> Dict[str, float]:
+    """Per estimate, the efficiency of :func:`bound_stats`."""
+    return {p: v[2] for p, v in bound_stats(rows).items()}
+
+
 def efficiency_table(rows: Sequence[Dict[str, str]]) -> str:
-    """A Markdown table of :func:`efficiencies` with the bound's median (of the error scale),
-    or "" without the bound."""
-    ok = [r for r in rows if r["status"] == "ok"]
-    eff = efficiencies(ok)
-    if not eff:
+    """A Markdown table of :func:`bound_stats` over the finished rows, or "" without the
+    bound."""
+    stats = bound_stats([r for r in rows if r["status"] == "ok"])
+    if not stats:
         return ""
     lines = ["| estimate | bound, median over cases (of its scale) | RMS error (of its scale) | "
              "efficiency (bound / RMS error) |", "|---|---|---|---|"]
-    for p, e in eff.items():
-        c = np.median([float(r[f"crb.{p}"]) for r in ok])
-        rms = np.sqrt(np.mean([float(r[f"relerr.{p}"]) ** 2 for r in ok]))
+    for p, (c, rms, e) in stats.items():
         lines.append(f"| {p} | {100 * c:.2g} % | {100 * rms:.2g} % | {e:.2f} |")
     return "\n".join(lines)
 
