@@ -421,7 +421,8 @@ def test_prior_before_any_sample(lib, small):
 
 def test_add_refuses_bad_input_and_keeps_the_state(lib, small):
     """A linearisation point with a mass <= 0 or non-finite numbers, a sample with a NaN or an
-    infinity in any channel the rows read: status 1 and the Data bytes unchanged; the run then
+    infinity in any channel the rows read, a time not after the last one's: status 1 and the
+    Data bytes unchanged; the run then
     goes on as if those calls had not been made (the same bytes as a run without them)."""
     sc, rob, nv, ts, X = small
     g, truth = sc.guess, truth_of(sc)
@@ -450,6 +451,11 @@ def test_add_refuses_bad_input_and_keeps_the_state(lib, small):
                     xb[i] = bad
                     assert f.add(t, xb, truth) == 1, (k, i, bad)
                     assert f.data.raw == before
+            # a time not after the last sample's (the thrust integrals' step), or not finite
+            for bad_t in ((math.nan, math.inf) if k == 0 else (ts[k - 1], ts[k - 1] - 1.0,
+                                                                math.nan)):
+                assert f.add(bad_t, x, truth) == 1, (k, bad_t)
+                assert f.data.raw == before
         assert f.add(t, x, truth) == 0
         assert ref.add(t, x, truth) == 0
     assert f.data.raw == ref.data.raw

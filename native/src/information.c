@@ -316,6 +316,8 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
 {
     if (!m || !d || !x || !z_lin || !(z_lin[0] > 0.0) || !(z_lin[10] > 0.0))
         return 1;
+    if (!isfinite(t) || (d->samples > 0 && !(t > d->K[SR_THRUST_T])))
+        return 1;                      /* the thrust integrals need increasing times */
     int nr = m->nr, nu = m->nu, nz = m->nz, n = m->n;
     double K[SR_THRUST_LEN], W[36], z[20];
     memcpy(K, d->K, sizeof K);

@@ -111,9 +111,9 @@ SR_API int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_
 /** The state before any sample (the prior). */
 SR_API void sr_info_data_init(const sr_info_model *m, sr_info_data *d);
 
-/** Add the sample x (flat, SR_X_LEN(n)) taken at t [s] (the caller keeps the times
- *  increasing), linearised at z_lin (20, reported form: its masses > 0). In place; returns 0,
- *  or 1 (d unchanged) for a NULL pointer, a z_lin with a mass <= 0, a rows' noise covariance
+/** Add the sample x (flat, SR_X_LEN(n)) taken at t [s], linearised at z_lin (20, reported
+ *  form: its masses > 0). In place; returns 0, or 1 (d unchanged) for a NULL pointer, a t not
+ *  finite or not after the last sample's, a z_lin with a mass <= 0, a rows' noise covariance
  *  that is not positive definite, or non-finite numbers. */
 SR_API int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
                        const double *z_lin);
