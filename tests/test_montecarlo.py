@@ -88,9 +88,34 @@ def test_same_draw_for_every_method_and_excitation():
     assert off.fmi_overrides()["estimator.ident.excite_mode"] == 0
 
 
+def test_overrides_apply_last_and_key_the_case():
+    """``--set``: the value reaches the FMU over the drawn case's own (plant.excite.period is a
+    case parameter), the case id changes with it and only with it (tables of runs without
+    ``--set`` stay resumable), and the sensors' cases carry it too."""
+    plain = make_cases("spatial", 2, seed=5, methods=("force",))
+    fast = make_cases("spatial", 2, seed=5, methods=("force",),
+                      overrides={"plant.excite.period": 7.5, "estimator.ident.sd_rel": 0.005})
+    assert plain[0].fmi_overrides()["plant.excite.period"] == 30.0
+    for p, f in zip(plain, fast):
+        ov = f.fmi_overrides()
+        assert ov["plant.excite.period"] == 7.5 and ov["estimator.ident.sd_rel"] == 0.005
+        assert {k: v for k, v in ov.items() if k not in ("plant.excite.period",
+                                                         "estimator.ident.sd_rel")} == \
+            {k: v for k, v in p.fmi_overrides().items() if k != "plant.excite.period"}
+        assert f.id != p.id
+    assert Case("spatial", 0, 5, "force").id == plain[0].id
+    sens = make_cases("spatial", 1, seed=5, methods=("force",), noise_scale=1.0,
+                      overrides={"sensors.seed": 7.0})
+    assert sens[0].fmi_overrides()["sensors.seed"] == 7.0
+
+
 @pytest.mark.parametrize("args, words", [
     (["--cases", "0"], "number of cases must be >= 1"),
     (["--ssp", "/nonexistent/x.ssp"], "does not exist"),
+    (["--set", "plant.nosuch=1"], "--set plant.nosuch: not a parameter of the system's FMUs"),
+    (["--set", "sensors.seed=1"], "--set sensors.seed: not a parameter"),   # no --sensors
+    (["--set", "plant.excite.period=nan"], "must be a finite number"),
+    (["--set", "plant.excite.period"], "--set expects NAME=VALUE"),
 ])
 def test_bad_arguments(args, words, tmp_path, capsys):
     code = cli.main(["montecarlo", "--out", str(tmp_path / "x.csv"), "--no-progress", *args])

@@ -291,8 +291,8 @@ def cmd_plot(args) -> int:
 # ----------------------------------------------------------------------------------------------
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser (with ``sweep``/``montecarlo``/``crosscheck``/``identify`` if those
-    modules are installed)."""
+    """The argument parser (with ``sweep``/``montecarlo``/``crosscheck``/``identify``/
+    ``design-excitation`` if those modules are installed)."""
     parser = argparse.ArgumentParser(
         prog="spacerobot",
         description="Online identification of base and target inertial parameters of a space "
@@ -358,7 +358,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="PNG", help="output PNG (default: CSV with .png suffix)")
     p.set_defaults(func=cmd_plot)
 
-    for mod in ("sweep", "montecarlo", "crosscheck", "identify"):
+    for mod in ("sweep", "montecarlo", "crosscheck", "identify", "design"):
         name = f"{__package__}.{mod}"
         if importlib.util.find_spec(name) is not None:
             importlib.import_module(name).register(sub)

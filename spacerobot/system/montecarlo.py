@@ -24,7 +24,7 @@ import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -70,6 +70,9 @@ class Case:
     stop_time: float = 60.0
     accel_source: str = "measured"
     solver: str = "paper"
+    #: FMU parameter overrides applied last (``("plant.excite.period", 7.5)``, ...; the
+    #: ``--set NAME=VALUE`` of the command)
+    overrides: Tuple[Tuple[str, float], ...] = ()
 
     def __post_init__(self):
         check_robot(self.robot)          # a built-in name or a URDF robot key (made absolute)
@@ -83,8 +86,11 @@ class Case:
     @property
     def id(self) -> str:
         """Stable 16-hex-digit hash of the case's parameters."""
-        text = json.dumps([self.robot, self.index, self.seed, self.method, self.excite,
-                           repr(float(self.stop_time)), self.accel_source, self.solver])
+        key = [self.robot, self.index, self.seed, self.method, self.excite,
+               repr(float(self.stop_time)), self.accel_source, self.solver]
+        if self.overrides:            # without: the ids (and resumable tables) of before
+            key.append(sorted([k, repr(float(v))] for k, v in self.overrides))
+        text = json.dumps(key)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def scenario(self) -> Scenario:
@@ -100,6 +106,7 @@ class Case:
                                 if v.causality == "parameter" and v.name.startswith(_CASE_PARAMS)}
         ov.update(estimator_overrides(self.method, self.accel_source, self.solver))
         ov["estimator.ident.excite_mode"] = int(EXCITE[self.excite])
+        ov.update(self.overrides)
         return ov
 
     def columns(self) -> Dict[str, object]:
@@ -141,6 +148,7 @@ class SensorsCase(Case):
         ov["sensors.seed"] = self.sensors_seed
         ov["sensors.noise.scale"] = float(self.noise_scale)
         ov["estimator.noise.scale"] = float(self.noise_scale)
+        ov.update(self.overrides)
         return ov
 
     def columns(self) -> Dict[str, object]:
@@ -148,19 +156,42 @@ class SensorsCase(Case):
                 "sensors_seed": self.sensors_seed}
 
 
+def check_overrides(robot: str, overrides: Dict[str, float], sensors: bool = False) -> None:
+    """``ValueError`` naming the first override that is not ``<component>.<parameter>`` of the
+    system's FMUs (plant, estimator; sensors with ``sensors``), before any case runs."""
+    sc = random_scenario(robot, np.random.default_rng(0))
+    params = {"plant": interface.plant_vars(sc.robot, sc),
+              "estimator": interface.estimator_vars(sc.robot, sc)}
+    if sensors:
+        params["sensors"] = interface.sensors_vars(sc.robot, sc)
+    names = {f"{c}.{v.name}" for c, vs in params.items() for v in vs
+             if v.causality == "parameter"}
+    for name, value in overrides.items():
+        if name not in names:
+            raise ValueError(f"--set {name}: not a parameter of the system's FMUs (names are "
+                             f"<component>.<parameter>, components {', '.join(params)})")
+        if not math.isfinite(value):
+            raise ValueError(f"--set {name}: the value must be a finite number, got {value}")
+
+
 def make_cases(robot: str = "spatial", cases: int = 20, seed: int = 0,
                methods: Sequence[str] = ("momentum", "force"),
                excite: Sequence[str] = ("closed",), stop_time: float = 60.0,
                noise_scale: Optional[float] = None,
-               accel_source: str = "measured") -> List[Case]:
+               accel_source: str = "measured",
+               overrides: Optional[Dict[str, float]] = None) -> List[Case]:
     """Every index ``0 .. cases-1`` with every method and excitation mode; with a
-    ``noise_scale``, :class:`SensorsCase` s (through the sensors) instead."""
+    ``noise_scale``, :class:`SensorsCase` s (through the sensors) instead; ``overrides``: FMU
+    parameter values every case sets last (``{"plant.excite.period": 7.5}``)."""
     if cases < 1:
         raise ValueError(f"the number of cases must be >= 1, got {cases}")
+    ov = tuple(sorted((str(k), float(v)) for k, v in (overrides or {}).items()))
+    check_overrides(robot, dict(ov), sensors=noise_scale is not None)
     if noise_scale is None:
-        return [Case(robot, i, seed, m, e, stop_time, accel_source) for i in range(cases)
-                for m in methods for e in excite]
-    return [SensorsCase(robot, i, seed, m, e, stop_time, accel_source, noise_scale=noise_scale)
+        return [Case(robot, i, seed, m, e, stop_time, accel_source, overrides=ov)
+                for i in range(cases) for m in methods for e in excite]
+    return [SensorsCase(robot, i, seed, m, e, stop_time, accel_source, overrides=ov,
+                        noise_scale=noise_scale)
             for i in range(cases) for m in methods for e in excite]
 
 
@@ -410,6 +441,9 @@ def register(subparsers):
                    help="closed: the estimator requests excitation until both bodies are "
                         "identified; off: no excitation (the paper's behaviour)")
     p.add_argument("--stop-time", dest="stop_time", type=float, default=60.0, metavar="T")
+    p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help="FMU parameter every case sets last, e.g. plant.excite.period=7.5 "
+                        "(repeatable; in the default results name)")
     p.add_argument("--workers", type=int, default=2, help="local cluster worker processes")
     p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler")
     p.add_argument("--build-dir", dest="build_dir", metavar="DIR",
@@ -430,9 +464,14 @@ def cli_montecarlo(args) -> int:
     from .recorder import check_writable
     from .sweep.table import SweepLocked
 
+    from .bindings import parse_assignments
+    from .cli import settings_tag
+
     robot = robot_key(args)
+    overrides = parse_assignments(args.set)
     tag = (f"-sensors{'' if args.noise_scale == 1.0 else f'{args.noise_scale:g}'}"
            if args.sensors else "")
+    tag += f"-{settings_tag(args.set)}" if overrides else ""
     out = Path(args.out or f"results/montecarlo-{robot_label(robot)}{tag}-seed{args.seed}.csv")
     methods = args.method or (["force"] if args.sensors else ["momentum", "force"])
     check_writable(out)
@@ -445,7 +484,8 @@ def cli_montecarlo(args) -> int:
     # 9-sample derivative in the momentum equations)
     cases = make_cases(robot, args.cases, args.seed, methods, args.excite, args.stop_time,
                        noise_scale=args.noise_scale if args.sensors else None,
-                       accel_source="differenced" if args.sensors else "measured")
+                       accel_source="differenced" if args.sensors else "measured",
+                       overrides=overrides)
     from .cli import notice
     notice("montecarlo", f"{len(cases)} runs of {args.stop_time:g} s ({args.cases} random "
            f"cases x {len(methods)} methods x {len(args.excite)} excitation modes"
