@@ -16,18 +16,19 @@ score. Two criteria on that scaled bound:
 * ``A``: the root mean square of the scaled bounds (A-optimal: the trace of the scaled
   covariance).
 
-Every candidate keeps the plant's limits: the attitude amplitude stays ``excite.att_max``, the
-joint references stay within ``excite.q_max``, ``qd_max`` and ``qdd_max`` (a faster excitation
-gets smaller joint amplitudes, :meth:`Excitation.channels`), and the controller's bounds
-(``F_max``, ``M_max``, ``qdd_max``) hold whatever the excitation asks. The table also prints
-the largest base rate and joint rate each candidate produced, for limits the plant does not
-enforce (a slew-rate limit of the spacecraft).
+Every candidate keeps the plant's bounds on its references: the attitude amplitude stays
+``excite.att_max``, the joints' posture references stay within ``excite.q_max``, ``qd_max``
+and ``qdd_max`` (a faster excitation gets smaller joint amplitudes,
+:meth:`Excitation.channels`), and the controller's bounds (``F_max``, ``M_max``, ``qdd_max``)
+hold whatever the excitation asks. The joints also move to turn the base, beyond the posture
+references' bounds, and nothing bounds the base's rate: the table prints the largest base rate
+and joint rate each candidate produced (a spacecraft's slew-rate limit: ``omega_limit``).
 
 The cases are random targets (the draws of ``spacerobot montecarlo``) or, with ``target``, one
 named target of the robot's scenario under a different sensor seed each. The best excitation
 depends on the target: docs/identification.md, "Excitation that buys information", has the
 measured tables (on random spatial targets a 7.5 s period leaves a bound four times smaller
-than the plant's default 30 s; on the paper's spatial target the default is better), which is
+than the plant's default 30 s; on the paper's spatial target the default period is best), which is
 why the parameter sets keep the plant's default and this tool is how to choose for a mission.
 """
 from __future__ import annotations
@@ -82,8 +83,9 @@ SETTLE = 60.0
 @dataclass
 class Outcome:
     """One candidate on one case: the scaled bound of every estimate (20; 0 where not
-    identified), the largest |omega_B| [rad/s] and |qd| [rad/s] the run produced after its
-    settling time (:data:`SETTLE`: the initial tumbling damped)."""
+    identified), the largest base rate ``|omega_B|`` (the vector's norm) [rad/s] and joint rate
+    ``|qd_i|`` [rad/s] the run produced after its settling time (:data:`SETTLE`: the initial
+    tumbling damped)."""
 
     scaled_bound: np.ndarray
     omega_max: float
@@ -133,11 +135,11 @@ def closed_loop_bound(sc: Scenario, sensors_seed: int, stop_time: float,
     w_max = qd_max = 0.0
     level = request({"base": False, "target": False})
     settle = min(SETTLE, 0.5 * stop_time)
-    for k in range(int(round(stop_time / dt)) + 1):
+    for k in range(int(round(stop_time / dt))):     # the samples the SSP's estimator takes
         plant.set_excitation(level)
         y = plant.outputs()
         if k * dt >= settle:
-            w_max = max(w_max, float(np.max(np.abs(y["omega_B"]))))
+            w_max = max(w_max, float(np.linalg.norm(y["omega_B"])))    # the slew rate
             qd_max = max(qd_max, float(np.max(np.abs(y["qd"]))))
         meas = sensors.update(y, dt)
         ident.update(k * dt, {key: meas[key] for key in KEYS})
@@ -232,24 +234,9 @@ def design(robot: str, candidates: Sequence[Candidate], cases: int = 4, seed: in
     exceeds it in any case is not chosen. ``progress(done, total)`` is called after each run."""
     from multiprocessing import get_context
 
-    check_robot(robot)
-    robot = robot_spec(robot)
-    if criterion not in CRITERIA:
-        raise ValueError(f"criterion must be one of {sorted(CRITERIA)}, got {criterion!r}")
-    if not candidates:
-        raise ValueError("no candidate excitation to try")
-    if cases < 1 or workers < 1:
-        raise ValueError(f"cases and workers must be >= 1, got {cases}, {workers}")
-    if not (math.isfinite(noise_scale) and noise_scale > 0.0):
-        raise ValueError(f"noise scale must be a finite number > 0 (the bound comes from the "
-                         f"sensors' noise), got {noise_scale}")
-    if not omega_limit > 0.0:
-        raise ValueError(f"base rate limit must be > 0 rad/s, got {omega_limit}")
-    if not (math.isfinite(stop_time) and stop_time > 0.0):
-        raise ValueError(f"stop time must be a finite number > 0 s, got {stop_time}")
-    case_scenario(robot, 0, seed, target)                  # an unknown target named here
+    robot = check_arguments(robot, candidates, cases, stop_time, criterion, noise_scale,
+                            omega_limit, target, noise, workers)
     noise = {k.removeprefix("noise."): v for k, v in (noise or {}).items()}
-    sensor_magnitudes(noise)                               # and an unknown magnitude
     jobs = [(robot, i, seed, ci, c, float(stop_time), float(noise_scale), noise, base, target)
             for ci, c in enumerate(candidates) for i in range(cases)]
     out: Dict[Tuple[int, int], Outcome] = {}
@@ -269,6 +256,38 @@ def design(robot: str, candidates: Sequence[Candidate], cases: int = 4, seed: in
     return Design(list(candidates), out, criterion, omega_limit)
 
 
+def check_arguments(robot: str, candidates: Sequence[Candidate], cases: int, stop_time: float,
+                    criterion: str = "largest", noise_scale: float = 1.0,
+                    omega_limit: float = math.inf, target: Optional[str] = None,
+                    noise: Optional[Mapping[str, float]] = None, workers: int = 1) -> str:
+    """The robot key of :func:`design`'s arguments, or ``ValueError`` naming the first bad one,
+    before any run; among them a candidate period the sample time cannot resolve (its fastest
+    component, 3 x 2 pi / period, must stay below the sampling's pi / dt)."""
+    check_robot(robot)
+    robot = robot_spec(robot)
+    if criterion not in CRITERIA:
+        raise ValueError(f"criterion must be one of {sorted(CRITERIA)}, got {criterion!r}")
+    if not candidates:
+        raise ValueError("no candidate excitation to try")
+    if cases < 1 or workers < 1:
+        raise ValueError(f"cases and workers must be >= 1, got {cases}, {workers}")
+    if not (math.isfinite(noise_scale) and noise_scale > 0.0):
+        raise ValueError(f"noise scale must be a finite number > 0 (the bound comes from the "
+                         f"sensors' noise), got {noise_scale}")
+    if not omega_limit > 0.0:
+        raise ValueError(f"base rate limit must be > 0 rad/s, got {omega_limit}")
+    if not (math.isfinite(stop_time) and stop_time > 0.0):
+        raise ValueError(f"stop time must be a finite number > 0 s, got {stop_time}")
+    dt = case_scenario(robot, 0, 0, target).sample_time    # an unknown target named here
+    sensor_magnitudes({k.removeprefix("noise."): v for k, v in (noise or {}).items()})
+    for c in candidates:
+        if not c.period > 6.0 * dt:
+            raise ValueError(f"excitation period {c.period:g} s is too short for the sample "
+                             f"time {dt:g} s: its fastest component (3 x 2 pi / period) must "
+                             f"stay below pi / dt, so the period above {6.0 * dt:g} s")
+    return robot
+
+
 # ----------------------------------------------------------------------------------------------
 # command line
 # ----------------------------------------------------------------------------------------------
@@ -279,22 +298,23 @@ def _print_progress(done: int, total: int) -> None:
 
 
 def cmd_design(args) -> int:
+    from .bindings import parse_assignments
     from .cli import robot_key
     args.robot = robot_key(args)
-    from .bindings import parse_assignments
-    case_scenario(args.robot, 0, args.seed, args.target)  # an unknown target: before any run
     try:
         noise = parse_assignments(args.noise)
     except ValueError as e:
         raise ValueError(str(e).replace("--set", "--noise")) from None
-    sensor_magnitudes(noise)
     if args.cases is None:
         args.cases = 4 if args.target is None else 1
     cands = [Candidate(p, a) for p in args.periods for a in args.arm]
+    check_arguments(args.robot, cands, args.cases, args.stop_time, args.criterion,
+                    args.noise_scale, args.omega_limit, args.target, noise, args.workers)
     t0 = time.time()
-    what = "random" if args.target is None else f"target {args.target!r},"
-    print(f"{robot_label(args.robot)}: {len(cands)} candidate(s) x {args.cases} {what} "
-          f"case(s), {args.stop_time:g} s each, plant -> sensors (noise.scale "
+    what = ("random targets" if args.target is None
+            else f"runs of the target {args.target!r}")
+    print(f"{robot_label(args.robot)}: {len(cands)} candidate(s) x {args.cases} {what}, "
+          f"{args.stop_time:g} s each, plant -> sensors (noise.scale "
           f"{args.noise_scale:g}) -> estimator (realistic set)", file=sys.stderr)
     d = design(args.robot, cands, args.cases, args.seed, args.stop_time, args.criterion,
                args.noise_scale, omega_limit=args.omega_limit, workers=args.workers,
@@ -319,7 +339,8 @@ def register(subparsers):
     p = subparsers.add_parser(
         "design-excitation", help="choose the plant's excitation from the estimator's bound",
         description="Run plant -> sensors -> estimator (the realistic set) for each candidate "
-                    "excitation (period x arm share) on random targets and print the "
+                    "excitation (period x arm share) on random targets (or the scenario's "
+                    "target with --target) and print the "
                     "Cramer-Rao bound each leaves at the horizon, scaled by the error scale; "
                     "the candidate with the smallest mean criterion is marked best.")
     add_robot_arguments(p, default="spatial")

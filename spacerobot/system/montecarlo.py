@@ -156,9 +156,17 @@ class SensorsCase(Case):
                 "sensors_seed": self.sensors_seed}
 
 
+#: what a case sets from its own fields (its draw, method, excitation mode, sensors' seed and
+#: scale): a ``--set`` of these would contradict the table's columns, so it is refused
+CASE_OWNED = ("plant.base.", "plant.target.", "estimator.method", "estimator.accel_source",
+              "estimator.solver", "estimator.ident.excite_mode", "sensors.seed",
+              "sensors.noise.scale", "estimator.noise.scale")
+
+
 def check_overrides(robot: str, overrides: Dict[str, float], sensors: bool = False) -> None:
     """``ValueError`` naming the first override that is not ``<component>.<parameter>`` of the
-    system's FMUs (plant, estimator; sensors with ``sensors``), before any case runs."""
+    system's FMUs (plant, estimator; sensors with ``sensors``) or that a case sets itself
+    (:data:`CASE_OWNED`), before any case runs."""
     sc = random_scenario(robot, np.random.default_rng(0))
     params = {"plant": interface.plant_vars(sc.robot, sc),
               "estimator": interface.estimator_vars(sc.robot, sc)}
@@ -170,6 +178,9 @@ def check_overrides(robot: str, overrides: Dict[str, float], sensors: bool = Fal
         if name not in names:
             raise ValueError(f"--set {name}: not a parameter of the system's FMUs (names are "
                              f"<component>.<parameter>, components {', '.join(params)})")
+        if name.startswith(CASE_OWNED):
+            raise ValueError(f"--set {name}: each case sets it itself (its draw, --method, "
+                             f"--excite, --noise-scale, its sensors' seed)")
         if not math.isfinite(value):
             raise ValueError(f"--set {name}: the value must be a finite number, got {value}")
 
@@ -227,8 +238,9 @@ def case_row(case: Case, res) -> Dict[str, object]:
                                               "plant")).max())
     row["max_att_ref"] = float(np.abs(_series(res, [f"excite.att_ref[{k + 1}]" for k in range(3)],
                                                "plant")).max())
-    ex = case.scenario().excitation
-    row["qd_max"], row["att_max"] = ex.qd_max, ex.att_max
+    ex, ov = case.scenario().excitation, case.fmi_overrides()     # bounds as run (--set too)
+    row["qd_max"] = ov.get("plant.excite.qd_max", ex.qd_max)
+    row["att_max"] = ov.get("plant.excite.att_max", ex.att_max)
     rel = interface.relative_errors(est[-1], truth)
     row.update({f"relerr.{p}": float(r) for p, r in zip(ESTIMATE_NAMES, rel)})
     sd = _series(res, [f"sd.{p}" for p in ESTIMATE_NAMES], "estimator")[-1]
@@ -443,7 +455,8 @@ def register(subparsers):
     p.add_argument("--stop-time", dest="stop_time", type=float, default=60.0, metavar="T")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="FMU parameter every case sets last, e.g. plant.excite.period=7.5 "
-                        "(repeatable; in the default results name)")
+                        "(repeatable; not the case's own draw or options; in the default "
+                        "results name, not in the table's rows: one table per setting)")
     p.add_argument("--workers", type=int, default=2, help="local cluster worker processes")
     p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler")
     p.add_argument("--build-dir", dest="build_dir", metavar="DIR",
