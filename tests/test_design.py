@@ -92,7 +92,8 @@ def test_criteria_and_choice_by_hand():
 def test_design_refuses_bad_arguments():
     with pytest.raises(ValueError, match="period 0.5 s is too short for the sample time 0.1 s"):
         design("spatial", [Candidate(30.0), Candidate(0.5)])
-    for kw, match in ((dict(criterion="D"), "criterion"), (dict(cases=0), "cases"),
+    for kw, match in ((dict(criterion="D"), "criterion"), (dict(cases=0), "number of cases"),
+                      (dict(workers=0), "number of workers"),
                       (dict(stop_time=-1.0), "stop time"), (dict(omega_limit=0.0), "rate limit"),
                       (dict(noise_scale=0.0), "noise scale")):
         with pytest.raises(ValueError, match=match):
@@ -158,7 +159,8 @@ def test_cli(capsys):
     status = cli.main(["design-excitation", "--cases", "1", "--stop-time", "60", "--periods",
                        "30", "7.5", "--arm", "1", "--workers", "2", "--no-progress"])
     out = capsys.readouterr().out
-    assert status == 0 and "best: period 7.5 s, arm share 1" in out, out
+    assert status == 0 and "best: period 7.5 s, arm share 1: --set plant.excite.period=7.5 (" \
+        in out, out
     lines = [ln for ln in out.splitlines() if ln.strip().startswith(("30 ", "7.5 "))]
     assert len(lines) == 2 and lines[1].endswith("<- best") and "<-" not in lines[0]
     status = cli.main(["design-excitation", "--arm", "2", "--no-progress"])

@@ -72,6 +72,24 @@ def test_summary_and_plot_written(study, capsys):
     assert header[0] == "case_id" and "worst_error" in header
 
 
+def test_summary_counts_only_this_commands_cases(spatial_ssp, tmp_path, monkeypatch, capsys):
+    """An explicit --stop-time is in the default results name; a table that holds other rows
+    (another stop time, written with --out) is resumed, but the summary counts only the cases
+    of this command (a new user pooled 60 s and 120 s runs before)."""
+    monkeypatch.chdir(tmp_path)
+    common = ["montecarlo", "--robot", "spatial", "--cases", "1", "--method", "force",
+              "--ssp", str(spatial_ssp), "--workers", "1", "--no-progress"]
+    assert cli.main(common + ["--stop-time", "2"]) == 0
+    out = tmp_path / "results" / "montecarlo-spatial-t2-seed0.csv"
+    assert out.is_file(), sorted(p.name for p in (tmp_path / "results").iterdir())
+    capsys.readouterr()
+    assert cli.main(common + ["--stop-time", "3", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert len(read_results(out)) == 2                      # both kept in the file
+    line = [ln for ln in text.splitlines() if ln.startswith("| spatial | force")]
+    assert len(line) == 1 and line[0].split("|")[4].strip() == "1", text
+
+
 def test_same_draw_for_every_method_and_excitation():
     cases = make_cases("spatial", 3, seed=5, methods=("momentum", "force"),
                        excite=("closed", "off"))

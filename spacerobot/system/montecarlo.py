@@ -341,8 +341,8 @@ def efficiency_text(rows: Sequence[Dict[str, str]]) -> str:
 
 
 def bound_stats(rows: Sequence[Dict[str, str]]) -> Dict[str, tuple]:
-    """Per estimate, over the rows that carry the information filter's bound: (the bound's
-    median, the RMS error, the efficiency ``sqrt(mean crb^2) / sqrt(mean error^2)``), all
+    """Per estimate, over the rows that carry the information filter's bound: (the bound's RMS
+    ``sqrt(mean crb^2)``, the RMS error ``sqrt(mean error^2)``, the efficiency, their ratio), all
     relative to the error scale (efficiency 1: as good as any unbiased estimator can be);
     empty for rows without the bound, and no entry where an estimate is not identified
     (bound 0)."""
@@ -352,8 +352,8 @@ def bound_stats(rows: Sequence[Dict[str, str]]) -> Dict[str, tuple]:
         c = np.array([float(r[f"crb.{p}"]) for r in have])
         e = np.array([float(r[f"relerr.{p}"]) for r in have])
         if len(c) and c.max() > 0 and e.max() > 0:
-            rms = float(np.sqrt(np.mean(e ** 2)))
-            out[p] = (float(np.median(c)), rms, float(np.sqrt(np.mean(c ** 2)) / rms))
+            bound, rms = float(np.sqrt(np.mean(c ** 2))), float(np.sqrt(np.mean(e ** 2)))
+            out[p] = (bound, rms, bound / rms)
     return out
 
 
@@ -368,7 +368,7 @@ def efficiency_table(rows: Sequence[Dict[str, str]]) -> str:
     stats = bound_stats([r for r in rows if r["status"] == "ok"])
     if not stats:
         return ""
-    lines = ["| estimate | bound, median over cases (of its scale) | RMS error (of its scale) | "
+    lines = ["| estimate | bound, RMS over cases (of its scale) | RMS error (of its scale) | "
              "efficiency (bound / RMS error) |", "|---|---|---|---|"]
     for p, (c, rms, e) in stats.items():
         lines.append(f"| {p} | {100 * c:.2g} % | {100 * rms:.2g} % | {e:.2f} |")
@@ -382,14 +382,17 @@ def calibration(rows: Sequence[Dict[str, str]]) -> str:
     return f"{np.mean(x):.3f}" if x else "-"
 
 
-def plot_montecarlo(csv_path, out_png: Optional[str] = None) -> Path:
+def plot_montecarlo(csv_path, out_png: Optional[str] = None,
+                    ids: Optional[Sequence[str]] = None) -> Path:
     """Distribution of the worst error per method and excitation: the fraction of cases whose
-    worst error at the end is below x, with the 1 % and 0.1 % lines."""
+    worst error at the end is below x, with the 1 % and 0.1 % lines (``ids``: only the rows
+    of these case ids)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = [r for r in read_results(csv_path) if r["status"] == "ok"]
+    rows = [r for r in read_results(csv_path) if r["status"] == "ok"
+            and (ids is None or r["case_id"] in ids)]
     if not rows:
         raise ValueError(f"{csv_path} has no finished case to plot")
     groups: Dict[tuple, List[float]] = {}
@@ -452,7 +455,9 @@ def register(subparsers):
     p.add_argument("--excite", nargs="+", default=["closed"], choices=sorted(EXCITE),
                    help="closed: the estimator requests excitation until both bodies are "
                         "identified; off: no excitation (the paper's behaviour)")
-    p.add_argument("--stop-time", dest="stop_time", type=float, default=60.0, metavar="T")
+    p.add_argument("--stop-time", dest="stop_time", type=float, metavar="T",
+                   help="duration of each run [s] (default 60; an explicit one is in the "
+                        "default results name)")
     p.add_argument("--set", action="append", metavar="NAME=VALUE",
                    help="FMU parameter every case sets last, e.g. plant.excite.period=7.5 "
                         "(repeatable; not the case's own draw or options; in the default "
@@ -464,7 +469,9 @@ def register(subparsers):
     p.add_argument("--ssp", metavar="SSP_FILE", help="run this .ssp of the robot instead of "
                    "building one")
     p.add_argument("--out", metavar="CSV", help="results table (default "
-                   "results/montecarlo-<robot>-seed<S>.csv; resumed if it exists)")
+                   "results/montecarlo-<robot>[-sensors[<S>]][-<settings>]-seed<S>.csv, "
+                   "<settings> the --set overrides and an explicit --stop-time; resumed if it "
+                   "exists, the summary over this command's cases only)")
     p.add_argument("--plot", metavar="PNG", help="plot (default: the CSV with .png)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=fail_on_errors("montecarlo")(cli_montecarlo))
@@ -484,7 +491,10 @@ def cli_montecarlo(args) -> int:
     overrides = parse_assignments(args.set)
     tag = (f"-sensors{'' if args.noise_scale == 1.0 else f'{args.noise_scale:g}'}"
            if args.sensors else "")
-    tag += f"-{settings_tag(args.set)}" if overrides else ""
+    settings = settings_tag(args.set, args.stop_time)
+    tag += f"-{settings}" if settings else ""
+    if args.stop_time is None:
+        args.stop_time = 60.0
     out = Path(args.out or f"results/montecarlo-{robot_label(robot)}{tag}-seed{args.seed}.csv")
     methods = args.method or (["force"] if args.sensors else ["momentum", "force"])
     check_writable(out)
@@ -514,11 +524,12 @@ def cli_montecarlo(args) -> int:
     except SweepLocked as e:
         raise ValueError(str(e)) from None
     print(summary)
-    rows = read_results(out)
+    ids = {c.id for c in cases}           # this command's cases: not other rows of the file
+    rows = [r for r in read_results(out) if r["case_id"] in ids]
     print(summary_table(rows))
     eff = efficiency_table(rows)
     if eff:
         print("the information filter's Cramér-Rao bound against the observed scatter:")
         print(eff)
-    print("plot:", plot_montecarlo(out, args.plot))
+    print("plot:", plot_montecarlo(out, args.plot, ids))
     return 1 if summary.failed else 0
