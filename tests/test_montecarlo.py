@@ -90,6 +90,17 @@ def test_summary_counts_only_this_commands_cases(spatial_ssp, tmp_path, monkeypa
     assert len(line) == 1 and line[0].split("|")[4].strip() == "1", text
 
 
+def test_a_value_every_case_refuses_names_the_cause(spatial_ssp, tmp_path, capsys):
+    """A --set value the plant FMU refuses at initialisation (a negative period): every case
+    fails, and the command ends with the FMU's reason, not with an empty plot's."""
+    code = cli.main(["montecarlo", "--robot", "spatial", "--cases", "1", "--method", "force",
+                     "--ssp", str(spatial_ssp), "--workers", "1", "--no-progress", "--stop-time",
+                     "1", "--set", "plant.excite.period=-1", "--out", str(tmp_path / "x.csv")])
+    err = capsys.readouterr().err
+    assert code == 1 and "error: no case finished (the first failure: " in err
+    assert "excite.period must be in [1e-3, 1e9] s" in err and "to plot" not in err
+
+
 def test_same_draw_for_every_method_and_excitation():
     cases = make_cases("spatial", 3, seed=5, methods=("momentum", "force"),
                        excite=("closed", "off"))

@@ -531,5 +531,8 @@ def cli_montecarlo(args) -> int:
     if eff:
         print("the information filter's Cramér-Rao bound against the observed scatter:")
         print(eff)
+    if not any(r["status"] == "ok" for r in rows):
+        raise ValueError(f"no case finished (the first failure: "
+                         f"{next((r['error'] for r in rows if r['error']), 'unknown')})")
     print("plot:", plot_montecarlo(out, args.plot, ids))
     return 1 if summary.failed else 0
