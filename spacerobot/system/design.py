@@ -43,8 +43,9 @@ import numpy as np
 
 from ..interface import (ESTIMATE_NAMES, error_scale, estimator_vars, identified_estimates,
                          plant_vars)
-from ..robots import (REALISTIC_ESTIMATOR, Excitation, Scenario, check_robot, random_scenario,
-                      robot_label, robot_spec, scenario)
+from ..robots import (REALISTIC_ESTIMATOR, Excitation, Scenario, check_robot, robot_label,
+                      robot_spec, scenario)
+from .montecarlo import SensorsCase
 
 #: the criteria on the scaled bound b (identified estimates): name -> (description, function)
 CRITERIA = {
@@ -156,18 +157,18 @@ def closed_loop_bound(sc: Scenario, sensors_seed: int, stop_time: float,
 
 
 def case_scenario(robot: str, index: int, seed: int, target: Optional[str] = None) -> Scenario:
-    """Case ``index``: the random draw ``(seed, index)`` (as ``spacerobot montecarlo``), or
-    the robot's scenario with the named ``target``."""
+    """Case ``index``: the random draw ``(seed, index)`` of ``spacerobot montecarlo``, or the
+    robot's scenario with the named ``target``."""
     if target is not None:
         return scenario(robot, target)
-    return random_scenario(robot, np.random.default_rng([seed, index]))
+    return SensorsCase(robot, index, seed).scenario()
 
 
 def _job(args) -> Tuple[int, int, Outcome]:
     robot, index, seed, ci, cand, stop_time, noise_scale, noise, base, target = args
     sc = case_scenario(robot, index, seed, target)
     sc = replace(sc, excitation=cand.excitation(base or sc.excitation))
-    sensors_seed = int(np.random.default_rng([seed, index, 1]).integers(0, 2 ** 31 - 1))
+    sensors_seed = SensorsCase(robot, index, seed).sensors_seed   # montecarlo's, per case
     return ci, index, closed_loop_bound(sc, sensors_seed, stop_time, noise_scale, noise)
 
 
@@ -236,7 +237,6 @@ def design(robot: str, candidates: Sequence[Candidate], cases: int = 4, seed: in
 
     robot = check_arguments(robot, candidates, cases, stop_time, criterion, noise_scale,
                             omega_limit, target, noise, workers)
-    noise = {k.removeprefix("noise."): v for k, v in (noise or {}).items()}
     jobs = [(robot, i, seed, ci, c, float(stop_time), float(noise_scale), noise, base, target)
             for ci, c in enumerate(candidates) for i in range(cases)]
     out: Dict[Tuple[int, int], Outcome] = {}
@@ -281,7 +281,7 @@ def check_arguments(robot: str, candidates: Sequence[Candidate], cases: int, sto
     if not (math.isfinite(stop_time) and stop_time > 0.0):
         raise ValueError(f"stop time must be a finite number > 0 s, got {stop_time}")
     dt = case_scenario(robot, 0, 0, target).sample_time    # an unknown target named here
-    sensor_magnitudes({k.removeprefix("noise."): v for k, v in (noise or {}).items()})
+    sensor_magnitudes(noise)                               # an unknown magnitude named here
     for c in candidates:
         if not c.period > 6.0 * dt:
             raise ValueError(f"excitation period {c.period:g} s is too short for the sample "

@@ -70,8 +70,8 @@ class Case:
     stop_time: float = 60.0
     accel_source: str = "measured"
     solver: str = "paper"
-    #: FMU parameter overrides applied last (``("plant.excite.period", 7.5)``, ...; the
-    #: ``--set NAME=VALUE`` of the command)
+    #: FMU parameter overrides over the drawn case's (``("plant.excite.period", 7.5)``, ...;
+    #: the ``--set NAME=VALUE`` of the command; names a case sets itself: CASE_OWNED, refused)
     overrides: Tuple[Tuple[str, float], ...] = ()
 
     def __post_init__(self):
@@ -148,7 +148,6 @@ class SensorsCase(Case):
         ov["sensors.seed"] = self.sensors_seed
         ov["sensors.noise.scale"] = float(self.noise_scale)
         ov["estimator.noise.scale"] = float(self.noise_scale)
-        ov.update(self.overrides)
         return ov
 
     def columns(self) -> Dict[str, object]:
@@ -480,12 +479,10 @@ def register(subparsers):
 
 def cli_montecarlo(args) -> int:
     """The ``spacerobot montecarlo`` command; exit status 1 if a case failed."""
-    from .cli import robot_key
+    from .bindings import parse_assignments
+    from .cli import notice, robot_key, settings_tag
     from .recorder import check_writable
     from .sweep.table import SweepLocked
-
-    from .bindings import parse_assignments
-    from .cli import settings_tag
 
     robot = robot_key(args)
     overrides = parse_assignments(args.set)
@@ -509,7 +506,6 @@ def cli_montecarlo(args) -> int:
                        noise_scale=args.noise_scale if args.sensors else None,
                        accel_source="differenced" if args.sensors else "measured",
                        overrides=overrides)
-    from .cli import notice
     notice("montecarlo", f"{len(cases)} runs of {args.stop_time:g} s ({args.cases} random "
            f"cases x {len(methods)} methods x {len(args.excite)} excitation modes"
            + (f", through the sensors (noise.scale {args.noise_scale:g})" if args.sensors else "")
