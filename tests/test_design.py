@@ -16,7 +16,6 @@ import math
 import numpy as np
 import pytest
 
-from spacerobot.robots import Excitation
 from spacerobot.system import cli
 from spacerobot.system.design import CRITERIA, Candidate, Design, Outcome, design
 

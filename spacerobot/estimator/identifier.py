@@ -457,15 +457,6 @@ class Identifier:
         return out
 
 
-@dataclass
-class BodyEstimate:
-    """Mass [kg], CoM offset b (3,) [m] and CoM inertia (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) [kg.m2]."""
-
-    m: float
-    b: np.ndarray
-    I: np.ndarray
-
-
 def _windows(values: Mapping[str, float]) -> dict:
     """``{Method: window [s]}``: ``ident.momentum_window`` (checked) for the momentum method,
     0 for the force method."""
