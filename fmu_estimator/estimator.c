@@ -39,6 +39,7 @@ typedef struct {
     int vr_samples, vr_rejected, vr_status, vr_res_lin, vr_res_ang, vr_exc_mu, vr_exc_theta;
     int vr_excite, vr_identified[2], vr_physical[2];
     int vr_crb[2][10], vr_chi2;            /* the information filter's bound and misfit */
+    int vr_rate, vr_score[2];              /* the excitation's rate and the choice's scores */
     double sample_time;                    /* the scenario's [s]: the sensors' noise densities
                                               per sample (ident.noise_profile) */
     sr_estimator_model *core;              /* NULL before initialisation */
@@ -89,6 +90,9 @@ static int bind(sr_instance *inst, estimator_glue *g) {
     bad |= (g->vr_exc_mu = sr_key_vr(inst, "excitation_mu", 1)) < 0;
     bad |= (g->vr_exc_theta = sr_key_vr(inst, "excitation_theta", 1)) < 0;
     bad |= (g->vr_excite = sr_key_vr(inst, "excite", 1)) < 0;
+    bad |= (g->vr_rate = sr_key_vr(inst, "excite_rate", 1)) < 0;
+    bad |= (g->vr_score[0] = sr_key_vr(inst, "excite_score.rate_1", 1)) < 0;
+    bad |= (g->vr_score[1] = sr_key_vr(inst, "excite_score.rate_try", 1)) < 0;
     for (int b = 0; b < 2; ++b) {
         snprintf(key, sizeof key, "identified.%s", BODY_KEY[b]);
         bad |= (g->vr_identified[b] = sr_key_vr(inst, key, 1)) < 0;
@@ -187,6 +191,11 @@ static void options_of(sr_instance *inst, double sample_time, sr_estimator_optio
     }
     o->noise_dt = sample_time;
     o->information = int_of(inst, "information");
+    o->excite_adapt = int_of(inst, "excite_adapt");
+    o->excite_rate_try = real_of(inst, "excite_rate_try");
+    o->excite_window = real_of(inst, "excite_window");
+    o->excite_settle = real_of(inst, "excite_settle");
+    o->excite_horizon = real_of(inst, "excite_horizon");
 }
 
 /* build a core for the current parameters; 0 ok (err untouched), else err says why */
@@ -232,6 +241,9 @@ static void write_outputs(sr_instance *inst, const estimator_glue *g, const sr_e
     x[g->vr_exc_theta] = r.excitation_theta;
     x[g->vr_excite] = r.excite;
     x[g->vr_chi2] = r.info_chi2;
+    x[g->vr_rate] = r.excite_rate;
+    x[g->vr_score[0]] = r.excite_score[0];
+    x[g->vr_score[1]] = r.excite_score[1];
 }
 
 int sr_model_initialize(void *model, sr_instance *inst) {

@@ -53,6 +53,11 @@ class SpaceRobotEstimator(InterfaceSlave):
         get = operator.attrgetter(*(a for _, a in self._scalar_outputs))
         self._scalars = get if len(self._scalar_outputs) > 1 else (lambda x: (get(x),))
         self._flag_outputs = [(n, k) for n, k in outs if k[0] in _FLAGS]
+        # the information filter's bound (crb.<estimate>) and the report's other scalars
+        self._crb_names = [n for n, k in outs if k[0] in _CRBS]
+        self._crb_pos = np.array([LAYOUT.index(n[len(_CRB):]) for n in self._crb_names],
+                                 dtype=int)
+        self._report_outputs = [(n, k) for n, k in outs if k[0] in _REPORT]
         self._lazy_outputs = {n: None for n, k in outs if k[0] in _LAZY}
 
     def _initialise(self) -> None:
@@ -72,6 +77,10 @@ class SpaceRobotEstimator(InterfaceSlave):
         for name, (kind, who) in self._flag_outputs:
             o[name] = int(getattr(rep, kind)[who])
         o[_EXCITE] = self.request(rep.identified)
+        o.update(zip(self._crb_names, rep.crb.take(self._crb_pos).tolist()))
+        for name, key in self._report_outputs:
+            val = getattr(rep, key[0])
+            o[name] = float(val if len(key) == 1 else val[_REPORT[key[0]].index(key[1])])
         o.update(self._lazy_outputs)
         self._outputs = o
 
@@ -121,6 +130,11 @@ _SD = "sd."
 _FLAGS = ("identified", "physical")
 #: the excitation request output
 _EXCITE = "ident.excite"
+#: the information filter's bound outputs (``crb.<estimate>``)
+_CRBS = ("crb_base", "crb_target")
+_CRB = "crb."
+#: report scalars (Report attribute: element names of a vector attribute)
+_REPORT = {"info_chi2": (), "excite_rate": (), "excite_score": ("rate_1", "rate_try")}
 #: outputs computed when read: the excitation diagnostics (mu, theta)
 _LAZY = ("excitation_mu", "excitation_theta")
 

@@ -4,8 +4,8 @@
  * The robot comes from resources/robot.txt, its home posture from resources/scenario.txt; the
  * truth (base, target), controller, excitation and propellant are parameters.
  *
- * Outputs change only in doStep (no direct feedthrough): the input ident.excite is the level
- * asked for from the next step on.
+ * Outputs change only in doStep (no direct feedthrough): the inputs ident.excite (level) and
+ * ident.excite_rate (rate) are what is asked for from the next step on.
  */
 #include <math.h>
 #include <stdio.h>
@@ -33,7 +33,7 @@ typedef struct {
     double q_home[SR_MAX_JOINTS];
     int n_out;                             /* outputs mapped */
     int out_vr[SR_PLANT_MAX_NY], out_at[SR_PLANT_MAX_NY];   /* value reference <- y[out_at] */
-    int vr_excite;
+    int vr_excite, vr_rate;
     sr_plant_model *core;                  /* NULL before initialisation */
     sr_plant_data *data;
     double y[SR_PLANT_MAX_NY];
@@ -86,7 +86,8 @@ void *sr_model_new(sr_instance *inst, const char *resource_dir) {
         snprintf(key, sizeof key, "q_home.%d", i);
         bad = sr_resource_double(inst, resource_dir, SCENARIO_FILE, key, &g->q_home[i]);
     }
-    if (bad || (g->vr_excite = sr_key_vr(inst, "excite", 1)) < 0) {
+    if (bad || (g->vr_excite = sr_key_vr(inst, "excite", 1)) < 0
+        || (g->vr_rate = sr_key_vr(inst, "excite_rate", 1)) < 0) {
         free(g);
         return NULL;
     }
@@ -230,14 +231,16 @@ void sr_model_preview(void *model, sr_instance *inst) {
 
 void sr_model_outputs(void *model, sr_instance *inst) { (void)model; (void)inst; }
 
-/* the input ident.excite as a level in [0, 1] (clipped with a warning), or NaN */
-static double excite_input(sr_instance *inst, plant_glue *g, double t) {
-    double u = sr_reals(inst)[g->vr_excite];
+/* an excitation input (value reference vr, FMI name) within [lo, hi] (clipped with a
+ * warning), or NaN */
+static double excite_input(sr_instance *inst, int vr, const char *name, double lo, double hi,
+                           double t) {
+    double u = sr_reals(inst)[vr];
     if (isnan(u)) return u;
-    if (!(u >= 0.0 && u <= 1.0)) {
-        double clipped = u < 0.0 ? 0.0 : 1.0;
-        sr_log(inst, SR_LOG_WARNING, "ident.excite = %.17g at t = %.6g s is outside [0, 1]; "
-               "using %g", u, t, clipped);
+    if (!(u >= lo && u <= hi)) {
+        double clipped = u < lo ? lo : hi;
+        sr_log(inst, SR_LOG_WARNING, "%s = %.17g at t = %.6g s is outside [%g, %g]; using %g",
+               name, u, t, lo, hi, clipped);
         return clipped;
     }
     return u;
@@ -245,23 +248,26 @@ static double excite_input(sr_instance *inst, plant_glue *g, double t) {
 
 int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     plant_glue *g = model;
-    double x0[SR_PLANT_MAX_NX], ramp0[4], t0, level;
+    double x0[SR_PLANT_MAX_NX], ex0[SR_PLANT_EXCITE_STATE], t0, level, rate;
     int status;
-    sr_plant_get_state(g->core, g->data, &t0, x0, ramp0);
+    sr_plant_get_state(g->core, g->data, &t0, x0, ex0);
     if (fabs(t - t0) > 1e-9 * (fabs(t) > 1.0 ? fabs(t) : 1.0))
         sr_log(inst, SR_LOG_WARNING, "communication point %.17g s differs from the plant time "
                "%.17g s; continuing from the plant state", t, t0);
-    level = excite_input(inst, g, t);
-    if (isnan(level)) {
-        sr_log(inst, SR_LOG_DISCARD, "ident.excite is NaN at t = %.6g s: step discarded, state "
-               "kept at t = %.6g s", t, t0);
+    level = excite_input(inst, g->vr_excite, "ident.excite", 0.0, 1.0, t);
+    rate = excite_input(inst, g->vr_rate, "ident.excite_rate", SR_PLANT_RATE_MIN,
+                        SR_PLANT_RATE_MAX, t);
+    if (isnan(level) || isnan(rate)) {
+        sr_log(inst, SR_LOG_DISCARD, "%s is NaN at t = %.6g s: step discarded, state kept at "
+               "t = %.6g s", isnan(level) ? "ident.excite" : "ident.excite_rate", t, t0);
         return 1;
     }
+    sr_plant_set_excitation_rate(g->core, g->data, rate);
     sr_plant_set_excitation(g->core, g->data, level);
     status = sr_plant_advance(g->core, g->data, h);
     if (status == 0) status = write_outputs(inst, g, g->core, g->data);
     if (status != 0) {                     /* back to the state before the call, outputs too */
-        sr_plant_set_state(g->core, g->data, t0, x0, ramp0, NULL, 0);
+        sr_plant_set_state(g->core, g->data, t0, x0, ex0, NULL, 0);
         write_outputs(inst, g, g->core, g->data);
         sr_log(inst, SR_LOG_DISCARD, "step from t = %.6g s by %.6g s failed: %s; state kept at "
                "t = %.6g s", t, h, sr_plant_status_message(status), t0);
@@ -270,11 +276,11 @@ int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     return 0;
 }
 
-/* ---- FMU state: t, x (nx), ramp (4) ---------------------------------------------------- */
+/* ---- FMU state: t, x (nx), the excitation state (SR_PLANT_EXCITE_STATE) ----------------- */
 static size_t state_doubles(const sr_plant_model *core) {
     int nx = 0;
     sr_plant_dims(core, NULL, NULL, &nx, NULL, NULL);
-    return (size_t)(1 + nx + 4);
+    return (size_t)(1 + nx + SR_PLANT_EXCITE_STATE);
 }
 
 size_t sr_model_state_size(void *model) {
@@ -284,7 +290,7 @@ size_t sr_model_state_size(void *model) {
 
 void sr_model_state_save(void *model, void *buf) {
     plant_glue *g = model;
-    double s[1 + SR_PLANT_MAX_NX + 4];
+    double s[1 + SR_PLANT_MAX_NX + SR_PLANT_EXCITE_STATE];
     int nx = 0;
     if (!g->core) return;
     sr_plant_dims(g->core, NULL, NULL, &nx, NULL, NULL);
@@ -296,7 +302,7 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     plant_glue *g = model;
     sr_plant_model *core;
     sr_plant_data *data;
-    double s[1 + SR_PLANT_MAX_NX + 4];
+    double s[1 + SR_PLANT_MAX_NX + SR_PLANT_EXCITE_STATE];
     char err[512];
     int nx = 0;
     /* the state's parameters are in place: rebuild the core from them, then take the state */

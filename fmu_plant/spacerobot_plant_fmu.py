@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from _spacerobot_plant.fmi.slave import InterfaceSlave, _escape
+from _spacerobot_plant.core.plant import RATE_MAX, RATE_MIN
 from _spacerobot_plant.interface import plant_vars
 from _spacerobot_plant.plant import Plant
 from _spacerobot_plant.robots import Controller, Excitation, Propellant
@@ -68,11 +69,13 @@ class SpaceRobotPlant(InterfaceSlave):
             self.log(_escape(f"communication point {current_time!r} s differs from the plant "
                              f"time {self.plant.t!r} s; continuing from the plant state"),
                      Fmi2Status.warning)
-        level = self._excite_input(current_time)
-        if level is None:
+        level = self._excite_input("ident.excite", 0.0, 1.0, current_time)
+        rate = self._excite_input("ident.excite_rate", RATE_MIN, RATE_MAX, current_time)
+        if level is None or rate is None:
             return False
         before = self.plant.checkpoint()
         try:
+            self.plant.set_excitation_rate(rate)
             self.plant.set_excitation(level)
             self.plant.advance(step_size)
             self._refresh()
@@ -84,18 +87,18 @@ class SpaceRobotPlant(InterfaceSlave):
             return False
         return True
 
-    def _excite_input(self, current_time: float):
-        """The input ``ident.excite`` as a level in [0, 1]: clipped with a warning when outside,
+    def _excite_input(self, name: str, lo: float, hi: float, current_time: float):
+        """The excitation input ``name`` within [lo, hi]: clipped with a warning when outside,
         ``None`` (the step is discarded, state unchanged) when it is not a number."""
-        u = float(self.values["ident.excite"])
+        u = float(self.values[name])
         if math.isnan(u):
-            self.log(_escape(f"ident.excite is NaN at t = {current_time:.6g} s: step discarded, "
+            self.log(_escape(f"{name} is NaN at t = {current_time:.6g} s: step discarded, "
                              f"state kept at t = {self.plant.t:.6g} s"), Fmi2Status.discard)
             return None
-        if not 0.0 <= u <= 1.0:
-            clipped = min(max(u, 0.0), 1.0)
-            self.log(_escape(f"ident.excite = {u!r} at t = {current_time:.6g} s is outside "
-                             f"[0, 1]; using {clipped}"), Fmi2Status.warning)
+        if not lo <= u <= hi:
+            clipped = min(max(u, lo), hi)
+            self.log(_escape(f"{name} = {u!r} at t = {current_time:.6g} s is outside "
+                             f"[{lo:g}, {hi:g}]; using {clipped}"), Fmi2Status.warning)
             return clipped
         return u
 

@@ -55,6 +55,7 @@ MODELS = {"estimator": "SpaceRobotEstimator", "sensors": "SpaceRobotSensors",
 #: the core modules each model's binary is built from (the estimator carries no plant code)
 MODEL_SOURCES = {"estimator": ("sr_math.c", "linalg.c", "arm.c", "equations.c", "differencing.c",
                                "physical.c", "sensor_noise.c", "noise_profile.c", "information.c",
+                               "excite_design.c",
                                "estimator.c", "est_paper.c", "est_joint.c"),
                  "sensors": ("sr_math.c", "rng.c", "sensor_noise.c", "sensors.c"),
                  "plant": ("sr_math.c", "linalg.c", "arm.c", "dynamics.c", "plant.c")}

@@ -232,14 +232,25 @@ EXCITATION_DOC = {
 
 
 def plant_excitation_vars(sc: Scenario) -> List[Var]:
-    """The plant's excitation input ``ident.excite``, its level output and parameters."""
+    """The plant's excitation inputs ``ident.excite`` (level) and ``ident.excite_rate``, the
+    level and rate in effect, the references and the parameters."""
     ex = sc.excitation
     v = [Var("ident.excite", "input", "continuous", "Real", "1",
              "Requested excitation level, 0..1 (0 = none: the paper's motion; values outside "
              "are clipped with a warning, NaN makes the step fail with Discard)", 0.0, ("excite",)),
+         Var("ident.excite_rate", "input", "continuous", "Real", "1",
+             "Requested excitation rate: frequency multiplier of every excitation component "
+             "(1 = excite.period as set; the joint amplitudes re-bounded for the new "
+             "frequencies). A change is made through a dip of the level: it ramps to 0, the "
+             "new rate takes over there, it ramps back (2 excite.ramp). Values outside "
+             "[0.1, 10] are clipped with a warning, NaN makes the step fail with Discard", 1.0,
+             ("excite_rate",)),
          Var("excite.level", "output", "continuous", "Real", "1",
              "Excitation level in effect (follows ident.excite along a quintic ramp)", None,
-             ("excite_level", 0))]
+             ("excite_level", 0)),
+         Var("excite.rate", "output", "continuous", "Real", "1",
+             "Excitation rate in effect (follows ident.excite_rate through a dip of the level)",
+             None, ("excite_rate", 0))]
     v += _vec("excite.att_ref", "att_ref", "rad", "Base attitude excitation reference (rotation "
               "vector about the initial attitude; within excite.att_max per axis)", "output")
     v += _joint("excite.qd_ref", "qd_ref", "rad/s", "Joint rate excitation reference (within "
@@ -506,6 +517,7 @@ def noise_model_vars() -> List[Var]:
               "noise model explains the equations' errors; the reported standard deviations "
               "are the bound times sqrt(max(1, diag.info_chi2))); 0 without the filter", None,
               ("info_chi2",))]
+    v += excite_design_vars()
     for name in ("noise.scale",) + PROFILE_MAGNITUDES:
         unit, default, doc = NOISE_PARAMETERS[name]
         v.append(Var(name, "parameter", "fixed", "Real", unit,
@@ -513,6 +525,45 @@ def noise_model_vars() -> List[Var]:
                      + " (as the sensors FMU's parameter of the same name)", default,
                      ("noise", name[len("noise."):])))
     return v
+
+
+def excite_design_vars() -> List[Var]:
+    """The estimator's choice of the excitation's rate (native/src/excite_design.h;
+    docs/identification.md, 'Excitation that buys information'): its parameters, the rate it
+    asks of the plant and the scores it chose by."""
+    return [
+        Var("ident.excite_adapt", "parameter", "fixed", "Integer", None,
+            "The excitation's rate chosen from the information: after the information filter's "
+            "replay the estimator measures the information one window (ident.excite_window) "
+            "adds at the plant's own rate, then asks for ident.excite_rate_try and measures "
+            "again, and keeps the rate whose predicted largest scaled Cramér-Rao bound at "
+            "ident.excite_horizon is smaller (output ident.excite_rate). 0 = automatic (on "
+            "where the information filter runs and ident.excite_mode asks for excitation), "
+            "1 = on (needs the information filter), 2 = off (rate 1)", 0, ("excite_adapt",)),
+        Var("ident.excite_rate_try", "parameter", "fixed", "Real", "1",
+            "The candidate rate tried against the plant's own (frequency multiplier of its "
+            "excitation, in [0.1, 10], not 1)", 4.0, ("excite_rate_try",)),
+        Var("ident.excite_window", "parameter", "fixed", "Real", "s",
+            "Length of each window the information is measured over (> 0)", 30.0,
+            ("excite_window",)),
+        Var("ident.excite_settle", "parameter", "fixed", "Real", "s",
+            "Time the plant takes to switch rates, not measured (>= 0; the project's plant "
+            "switches through a dip of its level: 2 excite.ramp)", 20.0, ("excite_settle",)),
+        Var("ident.excite_horizon", "parameter", "fixed", "Real", "s",
+            "The run's length the bound is predicted for (> 0)", 300.0, ("excite_horizon",)),
+        Var("ident.excite_rate", "output", "continuous", "Real", "1",
+            "Excitation rate requested from the plant (wire to the plant input of the same "
+            "name): frequency multiplier of its excitation, 1 = its own; "
+            "ident.excite_rate_try while that is tried or chosen (ident.excite_adapt)", None,
+            ("excite_rate",)),
+        Var("diag.excite_score.rate_1", "output", "continuous", "Real", "1",
+            "The choice of the excitation's rate: predicted largest Cramér-Rao bound (relative "
+            "to each estimate's error scale) at ident.excite_horizon with the rest of the run "
+            "at rate 1; 0 before the choice", None, ("excite_score", "rate_1")),
+        Var("diag.excite_score.rate_try", "output", "continuous", "Real", "1",
+            "As diag.excite_score.rate_1, at ident.excite_rate_try", None,
+            ("excite_score", "rate_try")),
+    ]
 
 
 #: the magnitudes the estimator's noise profile reads (native/src/noise_profile.c): the
@@ -755,7 +806,7 @@ def connections(robot: Robot) -> List[str]:
 
 def feedback_connections() -> List[str]:
     """Names wired estimator output -> plant input of the same name (the excitation loop)."""
-    return ["ident.excite"]
+    return ["ident.excite", "ident.excite_rate"]
 
 
 # ---------------------------------------------------------------------------------------------

@@ -95,6 +95,7 @@ def test_plant_lifecycle_and_outputs_equal_the_core(robot_fmus):
         for j in range(3):
             expected[f"base.A[{i + 1},{j + 1}]"] = out["A"][i][j]
     expected["excite.level"] = out["excite_level"][0]     # issue #12 (excitation off: 0)
+    expected["excite.rate"] = out["excite_rate"][0]       # issue #29 (the plant's own: 1)
     for i in range(3):
         expected[f"excite.att_ref[{i + 1}]"] = out["att_ref"][i]
     # issue #17 (no propellant model: m = 0, nothing expelled, the base is the dry base)

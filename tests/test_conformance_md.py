@@ -167,6 +167,9 @@ CONTRACT_UNITS = [
     (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta"
      r"|info_chi2)", "1"),
     (r"ident\.(sd_rel|excite_level)", "1"), (r"excite\.att_ref\[\d\]", "rad"),
+    # the excitation's rate: a frequency multiplier; the choice's times and scores
+    (r"ident\.excite_(rate|rate_try)|excite\.rate|diag\.excite_score\.rate_(1|try)", "1"),
+    (r"ident\.excite_(window|settle|horizon)", "s"),
     # estimator noise model: row standard deviations in the units of each method's equations
     (r"ident\.sd_row\.momentum_lin", "N.s"), (r"ident\.sd_row\.momentum_ang", "N.m.s"),
     (r"ident\.sd_row\.force_lin", "N"), (r"ident\.sd_row\.force_ang", "N.m"),

@@ -50,6 +50,8 @@ TRUTH_BASE = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "I
 def core_value(out: dict, name: str) -> float:
     if name == "excite.level":
         return float(out["excite_level"][0])
+    if name == "excite.rate":
+        return float(out["excite_rate"][0])
     if name == "prop.m":
         return float(out["m_p"][0])
     if name.startswith("truth.base."):
@@ -106,8 +108,8 @@ def test_fmu_outputs_equal_core(spatial_fmus):
     s = started_slave(spatial_fmus["plant"], _params(case), "plant")
     outs = s.names("output")
     # 14 three-vectors (r v omega a alpha F M J H P L att_ref, prop.P prop.L), the DCM,
-    # q qd qdd tau qd_ref, excite.level, prop.m, the 10 truth.base parameters
-    assert len(outs) == 14 * 3 + 9 + 5 * sc.robot.n_joints + 1 + 1 + 10
+    # q qd qdd tau qd_ref, excite.level, excite.rate, prop.m, the 10 truth.base parameters
+    assert len(outs) == 14 * 3 + 9 + 5 * sc.robot.n_joints + 1 + 1 + 1 + 10
     t = 0.0
     try:
         for dt in (None, 0.1005, 0.2995, 0.1):

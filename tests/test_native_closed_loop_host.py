@@ -4,7 +4,8 @@ The native plant and estimator FMUs of the spatial robot's default scenario, bui
 tree's sources (``native/build.py``, packaged by ``spacerobot.fmi.native.build_native_fmu``),
 are wired in ``tests/c_host/fmu_host.c`` as the SSP wires them
 (:func:`spacerobot.system.ssd.system_connections`): every plant output the estimator has as an
-input (same name), and the feedback estimator ``ident.excite`` -> plant ``ident.excite`` (the
+input (same name), and the feedback estimator ``ident.excite`` (and ``ident.excite_rate``, 1
+here: no information filter without sensors) -> plant inputs of the same names (the
 estimator asks for excitation until the target is identified). The host runs 60 s (600 steps of
 0.1 s) from an EMPTY environment (``PATH=/usr/bin:/bin`` only):
 
@@ -67,7 +68,8 @@ class Loop:
         # every estimator input is fed, by the plant output of the same name
         assert sorted(b for _, b in self.forward) == sorted(self.est.names("Real", "input"))
         assert all(a == b for a, b in self.forward)
-        assert self.back == [("ident.excite", "ident.excite")], self.back
+        assert self.back == [("ident.excite", "ident.excite"),
+                             ("ident.excite_rate", "ident.excite_rate")], self.back
         self.est_out = self.est.names("Real", "output")
 
     def args(self, plant_bin, est_bin, plant_uri, est_uri, feedback: bool = True,

@@ -12,7 +12,8 @@ refused call leaves the instance as it was: a later valid doStep works and the o
 finite) and ends with every instance freed. What each model may legally do is told to the
 fuzzer (:data:`MODEL_FLAGS`): the sensors are a direct feedthrough (``-T``: their outputs
 measure the inputs set now, so a non-finite or huge input may give non-finite outputs); the
-plant discards a step while its input ``ident.excite`` is NaN (``-N``) or one longer than
+plant discards a step while its input ``ident.excite`` or ``ident.excite_rate`` is NaN
+(``-N``) or one longer than
 100 s (``-H``), and a valid step of an instance with changed parameters or from a damaged
 state may fail its integration and be discarded (``-F``; with the start parameters it must
 succeed). Run, for each model:
@@ -64,7 +65,8 @@ def model_flags(fmu: nh.Extracted) -> list:
     if fmu.kind == "sensors":
         return ["-T"]                                  # direct feedthrough
     if fmu.kind == "plant":
-        return ["-N", fmu.vr["ident.excite"], "-H", 100, "-F"]
+        return ["-N", f'{fmu.vr["ident.excite"]},{fmu.vr["ident.excite_rate"]}', "-H", 100,
+                "-F"]
     return []
 
 
@@ -149,7 +151,9 @@ def check_summary(r, what: str, calls: int = CALLS) -> dict:
     f = calls / CALLS                           # the thresholds of 2 x 10^4 calls, scaled
     assert fn["fmi2DoStep"][1] > 500 * f and fn["fmi2DoStep"][3] > 100 * f, fn["fmi2DoStep"]
     assert fn["fmi2SetReal"][4] > 100 * f and fn["fmi2ExitInitializationMode"][1] > 50 * f
-    assert s["damaged_restored"] > 10 * f and s["damaged_steps"] > 10 * f, s
+    # (the plant's valgrind run, 2000 calls: 11 damaged states restored, 1 step from one: its
+    # state's excitation rates, checked since issue #29, refuse more of the damaged states)
+    assert s["damaged_restored"] > 10 * f and s["damaged_steps"] >= max(1.0, 10 * f), s
     assert s["foreign_refused"] > 10 * f, s
     return s
 

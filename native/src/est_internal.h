@@ -13,6 +13,7 @@
 
 #include "equations.h"
 #include "estimator.h"
+#include "excite_design.h"
 #include "information.h"
 
 #define EST_NMU 8                 /* mu (8) */
@@ -96,6 +97,9 @@ struct sr_estimator_model {
     int info;
     sr_info_model info_m;
     size_t off_info, off_info_buf;   /* its state; its replay buffer (information.h) */
+    int adapt;                    /* the excitation's rate chosen (excite_design.h) */
+    sr_exd_options exd;
+    size_t off_exd;               /* its state (sr_exd_data) */
 };
 
 /* Everything an accepted sample changes except the variable tail (history, residual ring):

@@ -213,11 +213,23 @@ void sr_estimator_options_default(sr_estimator_options *o)
     o->momentum_window = 0.0;
     o->noise_scale = 1.0;
     o->noise_dt = 0.1;
+    o->excite_rate_try = 4.0;
+    o->excite_window = 30.0;
+    o->excite_settle = 20.0;
+    o->excite_horizon = 300.0;
 }
 
 size_t sr_estimator_options_size(void) { return sizeof(sr_estimator_options); }
 size_t sr_estimator_data_head_size(void) { return offsetof(est_data, core); }
 size_t sr_estimator_report_size(void) { return sizeof(sr_estimator_report); }
+
+/* the excitation design's options of the estimator's */
+static sr_exd_options exd_options(const sr_estimator_options *o)
+{
+    sr_exd_options x = {o->excite_rate_try, o->excite_window, o->excite_settle,
+                        o->excite_horizon};
+    return x;
+}
 
 /* robots.check_body of a guess (name "guess.base" / "guess.target"): 0 ok, else a message */
 static int check_body(const char *name, const double *g, char *err, size_t errlen)
@@ -434,6 +446,27 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
     if (!(o->excite_level >= 0.0 && o->excite_level <= 1.0)) {
         set_msg(err, errlen, "ident.excite_level must be in [0, 1], got ");
         cat_repr(err, errlen, o->excite_level);
+        return 1;
+    }
+    if (o->excite_adapt < 0 || o->excite_adapt > 2) {
+        bad_code(err, errlen, "ident.excite_adapt", o->excite_adapt,
+                 "0 (automatic), 1 (on), 2 (off)");
+        return 1;
+    }
+    const sr_exd_options exd = exd_options(o);
+    const char *bad;
+    if (sr_exd_options_check(&exd, &bad)) {
+        const struct { const char *name, *rule; double v; } rules[4] = {
+            {"ident.excite_rate_try", " must be in [0.1, 10] and not 1, got ", exd.rate},
+            {"ident.excite_window", " must be > 0 s and <= 1e7 s, got ", exd.window},
+            {"ident.excite_settle", " must be >= 0 s and <= 1e7 s, got ", exd.settle},
+            {"ident.excite_horizon", " must be > 0 s and <= 1e7 s, got ", exd.horizon}};
+        for (int i = 0; i < 4; i++)
+            if (strcmp(bad, rules[i].name) == 0) {
+                set_msg(err, errlen, rules[i].name);
+                cat(err, errlen, rules[i].rule);
+                cat_repr(err, errlen, rules[i].v);
+            }
         return 1;
     }
     return 0;
@@ -666,6 +699,23 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         m->off_info_buf = off;
         off += sizeof(double) * sr_info_buffer_length(m->n);
     }
+    /* the excitation's rate (excite_design.h): automatic where the filter runs and excitation
+     * is requested */
+    m->exd = exd_options(opt);
+    m->adapt = opt->excite_adapt == 1 || (opt->excite_adapt == 0 && m->info
+                                          && opt->excite_mode != 0);
+    if (m->adapt && !m->info) {
+        set_msg(err, errlen, "ident.excite_adapt = 1 needs the information filter: set "
+                             "ident.noise_profile = 1 and the sensors' noise.* parameters "
+                             "(ident.information 0 or 1)");
+        free(m);
+        return NULL;
+    }
+    if (m->adapt) {
+        off = align8(off);
+        m->off_exd = off;
+        off += sizeof(sr_exd_data);
+    }
     m->size = off;
     return m;
 }
@@ -698,6 +748,8 @@ void sr_estimator_data_init(const sr_estimator_model *m, void *data)
     c->tr_t_ref = c->tr_t = NAN;                              /* DriftTracker.empty */
     if (m->info)
         sr_info_data_init(&m->info_m, (sr_info_data *)((char *)data + m->off_info));
+    if (m->adapt)
+        sr_exd_init((sr_exd_data *)((char *)data + m->off_exd));
 }
 
 /* -- one sample ------------------------------------------------------------------------------- */
@@ -1169,6 +1221,13 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
             return 1;
         }
     }
+    if (m->adapt && !sr_exd_data_valid(&m->exd, (const sr_exd_data *)((const char *)data
+                                                                      + m->off_exd))) {
+        set_msg(err, errlen, "the estimator's state block is not valid: the excitation "
+                             "design's phase or rate is out of range or its numbers not "
+                             "finite");
+        return 1;
+    }
     if (!memchr(d->msg, '\0', sizeof d->msg)) {
         set_msg(err, errlen, "the estimator's state block is not valid: its message is not "
                              "terminated");
@@ -1216,6 +1275,33 @@ static int info_step(const sr_estimator_model *m, void *data, double t,
     double *buffer = (double *)((char *)data + m->off_info_buf);
     return sr_info_step(&m->info_m, (const sr_info_data *)((const char *)data + m->off_info),
                         nwi, buffer, t, sample, z);
+}
+
+/* the excitation's rate (excite_design.h), after a committed sample at t: the estimator
+ * still asks for excitation where a window ends (the report's ident.excite) */
+typedef struct {
+    const sr_estimator_model *m;
+    const void *data;
+} excite_ctx;
+
+static int excite_wanted(void *ctx)
+{
+    const excite_ctx *x = (const excite_ctx *)ctx;
+    sr_estimator_report r;
+    memset(&r, 0, sizeof r);               /* report_get writes it: for the compiler */
+    sr_estimator_report_get(x->m, x->data, &r);
+    return r.excite > 0.0;
+}
+
+static void design_step(const sr_estimator_model *m, void *data, double t)
+{
+    if (!m->adapt)
+        return;
+    excite_ctx ctx = {m, data};
+    /* a failed prediction leaves the rate at 1 (the plant's own): nothing to reject */
+    (void)sr_exd_step(&m->exd, (sr_exd_data *)((char *)data + m->off_exd), &m->info_m,
+                      (const sr_info_data *)((const char *)data + m->off_info), t,
+                      excite_wanted, &ctx);
 }
 
 static const char *const info_fail_msg =
@@ -1445,6 +1531,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         }
         d->status = SR_EST_REFERENCE;
         d->msg[0] = '\0';
+        design_step(m, data, t);
         return d->status;
     }
     /* the noise rows sigma_l C_l, C_l = E(x + e_l) - E(x) (eiv.noise_rows, eq. 1): the
@@ -1519,6 +1606,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
     d->samples = count_up(d->samples);
     d->status = SR_EST_ESTIMATING;
     d->msg[0] = '\0';
+    design_step(m, data, t);
     return d->status;
 }
 
@@ -1653,6 +1741,7 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
     const est_data *d = (const est_data *)data;
     double ls[EST_NZ];
     memset(r, 0, sizeof *r);
+    r->excite_rate = 1.0;                    /* the plant's own rate unless chosen */
     if (!data_valid(m, d)) {                 /* a corrupt block: nothing but the status */
         r->status = SR_EST_REJECT_NONFINITE;
         return;
@@ -1675,4 +1764,11 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
     int mode = m->opt.excite_mode;
     r->excite = (mode == 2 || (mode == 1 && !(r->identified[0] && r->identified[1])))
                     ? m->opt.excite_level : 0.0;
+    r->excite_rate = 1.0;
+    if (m->adapt) {
+        const sr_exd_data *x = (const sr_exd_data *)((const char *)data + m->off_exd);
+        r->excite_rate = x->rate;
+        r->excite_score[0] = x->score[0];
+        r->excite_score[1] = x->score[1];
+    }
 }

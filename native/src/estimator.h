@@ -137,6 +137,22 @@ typedef struct sr_estimator_options {
                                    report.crb; needs noise_profile 1; 2 off; 0 (default)
                                    automatic: noise_profile 1 turns it on where the sensors
                                    have white noise */
+    /* -- the excitation's rate (excite_design.h; docs/identification.md "Excitation that
+     *    buys information") -- */
+    int excite_adapt;           /* ident.excite_adapt: 1 the estimator tries excite_rate_try
+                                   against the plant's own rate and keeps the one whose bound
+                                   shrinks faster (output ident.excite_rate); needs the
+                                   information filter; 2 off (rate 1); 0 (default) automatic:
+                                   on where the information filter runs and excitation is
+                                   requested (ident.excite_mode 1 or 2) */
+    double excite_rate_try;     /* ident.excite_rate_try: the candidate rate, in
+                                   [SR_EXD_RATE_MIN, SR_EXD_RATE_MAX], != 1 (4) */
+    double excite_window;       /* ident.excite_window [s] > 0: the information measured over
+                                   (30) */
+    double excite_settle;       /* ident.excite_settle [s] >= 0: the plant's time to switch
+                                   rates (20: 2 excite.ramp of the project's plant) */
+    double excite_horizon;      /* ident.excite_horizon [s] > 0: the run's length the bound is
+                                   predicted for (300) */
 } sr_estimator_options;
 
 /** The defaults of the estimator FMU's parameters (the paper's guesses and covariances of
@@ -209,6 +225,11 @@ typedef struct sr_estimator_report {
     double info_chi2;                 /* diag.info_chi2: its weighted residuals' mean square
                                          (1 where the noise model is right; the sds are the
                                          bound times sqrt(max(1, info_chi2))) */
+    /* -- the excitation's rate (options.excite_adapt; else 1, 0, 0) -- */
+    double excite_rate;               /* ident.excite_rate: the rate requested from the plant */
+    double excite_score[2];           /* diag.excite_score.rate_1 / .rate_try: the predicted
+                                         largest scaled bound at the horizon of each (0 before
+                                         the choice) */
 } sr_estimator_report;
 
 /** The report of the Data block (reads it only). */

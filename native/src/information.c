@@ -440,13 +440,61 @@ static void reported_of_u(const sr_info_model *m, const double *u, double *x)
     est_joint_vector_of(EST_S2P, z, x);
 }
 
-int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
-                     double *vec, double *bound, double *chi2)
+/* Ri = R^-1 (R upper triangular nu x nu with a nonzero diagonal, row stride MU; Ri upper) */
+static void upper_inverse(const double *R, int nu, double *Ri)
 {
-    if (!m || !d || !vec || !bound)
-        return 1;
+    memset(Ri, 0, sizeof(double) * MU * MU);
+    for (int col = 0; col < nu; col++) {
+        Ri[col * MU + col] = 1.0 / R[col * MU + col];
+        for (int i = col - 1; i >= 0; i--) {
+            double s = 0.0;
+            for (int j = i + 1; j <= col; j++)
+                s += R[i * MU + j] * Ri[j * MU + col];
+            Ri[i * MU + col] = -s / R[i * MU + i];
+        }
+    }
+}
+
+/* The first-order Cramér-Rao bound (20; 0 for a parameter not identified) of the reported
+ * parameters: J C J^T, C = (Ri Ri^T)[:nz, :nz] the covariance of z_O's entries (the leading
+ * unknowns), J = d reported / d z_O at the unknowns u (their identified columns). 1 where a
+ * bound is not finite. */
+static int bound_of(const sr_info_model *m, const double *Ri, const double *u, double *bound)
+{
     int nu = m->nu, nz = m->nz;
-    double u[MU] = {0}, Ri[MU * MU];
+    double C[20 * 20], J[20 * 20], Jz[20 * 20], zO[20];
+    for (int p = 0; p < nz; p++)
+        for (int q = 0; q <= p; q++)
+            C[p * 20 + q] = C[q * 20 + p] = inverse_entry(Ri, nu, p, q);
+    memcpy(zO, m->zO0, sizeof zO);
+    for (int q = 0; q < nz; q++)
+        zO[m->zi[q]] = u[q];
+    est_joint_jacobian(EST_S2P, zO, Jz);
+    for (int i = 0; i < 20; i++)
+        for (int q = 0; q < nz; q++)
+            J[i * 20 + q] = Jz[i * 20 + m->zi[q]];
+    int ok = 1;
+    for (int i = 0; i < 20; i++) {
+        double var = 0.0, touched = 0.0;
+        for (int p = 0; p < nz; p++) {
+            double s = 0.0;
+            for (int q = 0; q < nz; q++)
+                s += C[p * 20 + q] * J[i * 20 + q];
+            var += J[i * 20 + p] * s;
+            touched += fabs(J[i * 20 + p]);
+        }
+        bound[i] = touched > 0.0 ? sqrt(var > 0.0 ? var : 0.0) : 0.0;
+        if (!isfinite(bound[i]))
+            ok = 0;
+    }
+    return ok ? 0 : 1;
+}
+
+/* The unknowns u (nu) of the state d (compensated as sr_info_estimate) and Ri = R^-1 */
+static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
+                           double *u, double *Ri)
+{
+    int nu = m->nu;
     /* R u = d (back substitution); Ri = R^-1 (upper triangular) */
     for (int i = nu - 1; i >= 0; i--) {
         double s = d->d[i];
@@ -454,23 +502,9 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
             s -= d->R[i * MU + j] * u[j];
         u[i] = s / d->R[i * MU + i];
     }
-    memset(Ri, 0, sizeof Ri);
-    for (int col = 0; col < nu; col++) {
-        Ri[col * MU + col] = 1.0 / d->R[col * MU + col];
-        for (int i = col - 1; i >= 0; i--) {
-            double s = 0.0;
-            for (int j = i + 1; j <= col; j++)
-                s += d->R[i * MU + j] * Ri[j * MU + col];
-            Ri[i * MU + col] = -s / d->R[i * MU + i];
-        }
-    }
-    /* the covariance of z_O's entries: (Ri Ri^T)[:nz, :nz]; z_O's are the leading unknowns */
-    double C[20 * 20];
-    for (int p = 0; p < nz; p++)
-        for (int q = 0; q <= p; q++)
-            C[p * 20 + q] = C[q * 20 + p] = inverse_entry(Ri, nu, p, q);
+    upper_inverse(d->R, nu, Ri);
     double u_raw[MU];
-    memcpy(u_raw, u, sizeof u_raw);
+    memcpy(u_raw, u, sizeof(double) * nu);
     if (compensated == 1 || compensated == 2) {  /* first order: u + S^-1 (N u - n_y) */
         double g[MU], h[MU];
         for (int p = 0; p < nu; p++) {
@@ -516,32 +550,22 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
         if (finite)                  /* else the first order's answer stays */
             memcpy(u, b, sizeof(double) * nu);
     }
+}
+
+int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
+                     double *vec, double *bound, double *chi2)
+{
+    if (!m || !d || !vec || !bound)
+        return 1;
+    double u[MU] = {0}, Ri[MU * MU];
+    solve_unknowns(m, d, compensated, u, Ri);
     reported_of_u(m, u, vec);
-    /* the bound: J C J^T, J = d reported / d z_O at the estimate (its identified columns) */
-    double J[20 * 20], Jz[20 * 20], zO[20];
-    memcpy(zO, m->zO0, sizeof zO);
-    for (int q = 0; q < nz; q++)
-        zO[m->zi[q]] = u[q];
-    est_joint_jacobian(EST_S2P, zO, Jz);
+    int ok = bound_of(m, Ri, u, bound) == 0;
     for (int i = 0; i < 20; i++)
-        for (int q = 0; q < nz; q++)
-            J[i * 20 + q] = Jz[i * 20 + m->zi[q]];
-    int ok = 1;
-    for (int i = 0; i < 20; i++) {
-        double var = 0.0, touched = 0.0;
-        for (int p = 0; p < nz; p++) {
-            double s = 0.0;
-            for (int q = 0; q < nz; q++)
-                s += C[p * 20 + q] * J[i * 20 + q];
-            var += J[i * 20 + p] * s;
-            touched += fabs(J[i * 20 + p]);
-        }
-        bound[i] = touched > 0.0 ? sqrt(var > 0.0 ? var : 0.0) : 0.0;
-        if (!isfinite(bound[i]) || !isfinite(vec[i]))
+        if (!isfinite(vec[i]))
             ok = 0;
-    }
     if (chi2) {
-        double dof = d->rows - nu;
+        double dof = d->rows - m->nu;
         *chi2 = dof > 0.0 ? d->rss / dof : 0.0;
     }
     if (!ok) {
@@ -550,6 +574,51 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
         return 1;
     }
     return 0;
+}
+
+void sr_info_information(const sr_info_model *m, const sr_info_data *d, double *S)
+{
+    if (!m || !d || !S)
+        return;
+    int nu = m->nu;
+    for (int p = 0; p < nu; p++)                 /* S = R^T R (R upper triangular) */
+        for (int q = 0; q <= p; q++) {
+            double s = 0.0;
+            for (int k = 0; k <= q; k++)
+                s += d->R[k * MU + p] * d->R[k * MU + q];
+            S[p * MU + q] = S[q * MU + p] = s;
+        }
+}
+
+int sr_info_predict(const sr_info_model *m, const sr_info_data *d, const double *dS,
+                    double factor, double *bound)
+{
+    if (!m || !d || !dS || !bound || !(factor >= 0.0 && isfinite(factor))) {
+        for (int i = 0; bound && i < 20; i++)
+            bound[i] = NAN;
+        return 1;
+    }
+    int nu = m->nu;
+    double u[MU] = {0}, Ri[MU * MU], S[MU * MU], R[MU * MU];
+    solve_unknowns(m, d, 2, u, Ri);              /* the point the bound is mapped at */
+    sr_info_information(m, d, S);
+    double L[MU * MU];
+    for (int p = 0; p < nu; p++)                 /* S + factor dS, packed nu x nu */
+        for (int q = 0; q < nu; q++)
+            L[p * nu + q] = S[p * MU + q] + factor * dS[p * MU + q];
+    int fail = sr_cholesky(L, nu) != 0;          /* = L L^T: R = L^T, S = R^T R */
+    if (!fail) {
+        memset(R, 0, sizeof R);
+        for (int p = 0; p < nu; p++)
+            for (int q = p; q < nu; q++)
+                R[p * MU + q] = L[q * nu + p];
+        upper_inverse(R, nu, Ri);
+        fail = bound_of(m, Ri, u, bound) != 0;
+    }
+    if (fail)
+        for (int i = 0; i < 20; i++)
+            bound[i] = NAN;
+    return fail;
 }
 
 int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d)

@@ -143,6 +143,17 @@ SR_API int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_i
 SR_API int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
                             double *vec, double *bound, double *chi2);
 
+/** The information of the state d: S = R^T R (nu x nu, the unknowns u; row stride
+ *  SR_INFO_MAX_U), the prior's included. Differences of two states' S are the information the
+ *  samples between them added (the filter never re-weighs a sample once added). */
+SR_API void sr_info_information(const sr_info_model *m, const sr_info_data *d, double *S);
+
+/** The bound (20, as sr_info_estimate's) that the information S(d) + factor dS would give,
+ *  mapped at d's own estimate: dS (nu x nu, row stride SR_INFO_MAX_U) e.g. what a window of
+ *  samples added, factor >= 0 how many such windows are to come. Returns 0, or 1 (bound NaN)
+ *  for a NULL pointer, a factor not finite or < 0, a sum that is not positive definite. */
+SR_API int sr_info_predict(const sr_info_model *m, const sr_info_data *d, const double *dS,
+                           double factor, double *bound);
 
 /** sizeof(sr_info_model), sizeof(sr_info_data), for bindings that check their view. */
 SR_API size_t sr_info_model_size(void);

@@ -311,11 +311,12 @@ static void ramp_level(double t, const double *ramp, double *s)
 
 /* the sines and cosines of both phases of every channel at t: trig[c] = [sin(w1 t + p1),
  * cos(w1 t + p1), sin(w2 t + p2), cos(w2 t + p2)] (kernels.fill_trig) */
-static void fill_trig(const sr_plant_model *md, double t, double (*trig)[4])
+static void fill_trig(const sr_plant_model *md, const sr_plant_data *d, double t,
+                      double (*trig)[4])
 {
     int c;
     for (c = 0; c < md->n_ch; c++) {
-        const double *row = md->ex_tab[c];
+        const double *row = d->ex_tab[c];
         sr_sincos(row[1] * t + row[2], &trig[c][0], &trig[c][1]);
         sr_sincos(row[3] * t + row[4], &trig[c][2], &trig[c][3]);
     }
@@ -328,7 +329,7 @@ static void rotate_trig(const sr_plant_model *md, sr_plant_data *d)
     for (c = 0; c < md->n_ch; c++)
         for (j = 0; j < 4; j += 2) {
             const double sn = d->trig[c][j], cs = d->trig[c][j + 1];
-            const double ch = md->ex_rot[c][j], sh = md->ex_rot[c][j + 1];
+            const double ch = d->ex_rot[c][j], sh = d->ex_rot[c][j + 1];
             d->trig[c][j] = sn * ch + cs * sh;
             d->trig[c][j + 1] = cs * ch - sn * sh;
         }
@@ -351,6 +352,67 @@ static void level_times(const double *s, const double *f, double *out)
     out[0] = s[0] * f[0];
     out[1] = s[1] * f[0] + s[0] * f[1];
     out[2] = s[2] * f[0] + 2.0 * s[1] * f[1] + s[0] * f[2];
+}
+
+/* The excitation channels at `rate` times the excitation's frequencies into d->ex_tab,
+ * d->ex_rot (spacerobot.robots.Excitation.channels of period / rate): two sines per channel
+ * at frequencies in [w_f, 3 w_f), spread by the golden ratio and sqrt(2); the joint
+ * amplitudes the largest keeping |q_ref - q_home| <= q_max, |qd_ref| <= qd_max,
+ * |qdd_ref| <= qdd_max with the level's ramp included. */
+static void excitation_table(const sr_plant_model *md, double rate, sr_plant_data *d)
+{
+    const sr_plant_excitation *ex = &md->ex;
+    const double phi = (sqrt(5.0) - 1.0) / 2.0, sq2 = sqrt(2.0);
+    const double wf = 2.0 * PI * rate / ex->period;
+    const double S1 = 15.0 / 8.0 / ex->ramp, S2 = 10.0 / sqrt(3.0) / (ex->ramp * ex->ramp);
+    int c;
+    for (c = 0; c < md->n_ch; c++) {
+        const int k = 2 * c + 1;
+        const double w1 = wf * (1.0 + 2.0 * fmod(phi * k, 1.0));
+        const double w2 = wf * (1.0 + 2.0 * fmod(phi * (k + 1), 1.0));
+        const double p1 = 2.0 * PI * fmod(sq2 * k, 1.0);
+        const double p2 = 2.0 * PI * fmod(sq2 * (k + 1), 1.0);
+        double a;
+        if (c < md->n_att) {
+            a = ex->att_max;
+        } else {
+            const double qd = S1 + 0.5 * (w1 + w2);
+            const double qdd = S2 + S1 * (w1 + w2) + 0.5 * (w1 * w1 + w2 * w2);
+            const double a2 = ex->qd_max / qd, a3 = ex->qdd_max / qdd;
+            a = ex->q_max;
+            if (a2 < a)
+                a = a2;
+            if (a3 < a)
+                a = a3;
+        }
+        d->ex_tab[c][0] = a;
+        d->ex_tab[c][1] = w1;
+        d->ex_tab[c][2] = p1;
+        d->ex_tab[c][3] = w2;
+        d->ex_tab[c][4] = p2;
+        sr_sincos(w1 * md->h, &d->ex_rot[c][1], &d->ex_rot[c][0]);
+        sr_sincos(w2 * md->h, &d->ex_rot[c][3], &d->ex_rot[c][2]);
+    }
+    d->ex_rate[1] = rate;
+    d->trig_t = NAN;                       /* the cached sines were of the old table */
+}
+
+/* The level targeted now: the one requested, or 0 while a change of rate is pending; where
+ * the level has settled at 0 the new rate takes over (its table) and the requested level is
+ * targeted. A new target starts a ramp from the level in effect at d->t. */
+static void excitation_update(const sr_plant_model *md, sr_plant_data *d)
+{
+    double s[3], target;
+    ramp_level(d->t, d->ramp, s);
+    if (d->ex_rate[2] != d->ex_rate[1] && s[0] == 0.0 && s[1] == 0.0 && s[2] == 0.0)
+        excitation_table(md, d->ex_rate[2], d);
+    target = d->ex_rate[2] != d->ex_rate[1] ? 0.0 : d->ex_rate[0];
+    if (target == d->ramp[1])
+        return;
+    d->ramp[0] = s[0];
+    d->ramp[1] = target;
+    d->ramp[2] = d->t;
+    d->ramp[3] = md->ex_ramp;
 }
 
 /* -- the controllers ----------------------------------------------------------------------- */
@@ -438,16 +500,16 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
          * alpha_des = e_r'' - K_D (omega - e_r') - K_P (e - e_r) */
         double f[3], g[3];
         if (!(d->trig_t == t)) {
-            fill_trig(md, t, d->trig);
+            fill_trig(md, d, t, d->trig);
             d->trig_t = t;
         }
         for (i = 0; i < n; i++) {
-            channel(md->ex_tab[r + i], d->trig[r + i], f);
+            channel(d->ex_tab[r + i], d->trig[r + i], f);
             level_times(lev, f, g);
             post[i] += g[2] + KPn * g[0] + KDn * g[1];
         }
         for (j = 0; j < r; j++) {
-            channel(md->ex_tab[j], d->trig[j], f);
+            channel(d->ex_tab[j], d->trig[j], f);
             level_times(lev, f, g);
             rhs[j] -= g[2] + KD * g[1] + KP * g[0];
         }
@@ -880,7 +942,7 @@ static int model_ok(const sr_plant_model *md)
         return 0;
     return md->nb == (md->planar ? 3 : 6) && md->nq == (md->planar ? 4 : 7) + md->n
            && md->nv == md->nb + md->n && md->nx == 6 + md->nq + md->nv + 7
-           && md->ny == 63 + 5 * md->n && md->n_att == (md->planar ? 1 : 3)
+           && md->ny == 64 + 5 * md->n && md->n_att == (md->planar ? 1 : 3)
            && md->n_ch == md->n_att + md->n && md->h > 0.0 && md->h <= 1.0
            && md->ex_ramp > 0.0;
 }
@@ -941,8 +1003,8 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
                                double h, char *err, size_t errlen)
 {
     const double *par;
-    double vb[3], wb[3], wf, S1, S2, I[9];
-    int i, j, n, nq, c;
+    double vb[3], wb[3], I[9];
+    int i, j, n, nq;
     if (err != NULL && errlen > 0)
         err[0] = '\0';
     if (model == NULL) {
@@ -1015,7 +1077,7 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
     model->nb = robot->planar ? 3 : 6;
     model->nv = model->nb + n;
     model->nx = 6 + nq + model->nv + 7;
-    model->ny = 63 + 5 * n;
+    model->ny = 64 + 5 * n;
     model->n_att = robot->planar ? 1 : 3;
     model->n_ch = model->n_att + n;
     for (i = 0; i < SR_PLANT_NPAR; i++)
@@ -1023,42 +1085,8 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
     for (i = 0; i < n; i++)
         model->q_home[i] = q_home != NULL ? q_home[i] : 0.0;
     model->h = h;
-    /* excitation channels (spacerobot.robots.Excitation.channels): two sines per channel at
-     * frequencies in [w_f, 3 w_f), spread by the golden ratio and sqrt(2) */
-    {
-        const double phi = (sqrt(5.0) - 1.0) / 2.0, sq2 = sqrt(2.0);
-        wf = 2.0 * PI / ex->period;
-        S1 = 15.0 / 8.0 / ex->ramp;
-        S2 = 10.0 / sqrt(3.0) / (ex->ramp * ex->ramp);
-        for (c = 0; c < model->n_ch; c++) {
-            const int k = 2 * c + 1;
-            const double w1 = wf * (1.0 + 2.0 * fmod(phi * k, 1.0));
-            const double w2 = wf * (1.0 + 2.0 * fmod(phi * (k + 1), 1.0));
-            const double p1 = 2.0 * PI * fmod(sq2 * k, 1.0);
-            const double p2 = 2.0 * PI * fmod(sq2 * (k + 1), 1.0);
-            double a;
-            if (c < model->n_att) {
-                a = ex->att_max;
-            } else {
-                const double rate = S1 + 0.5 * (w1 + w2);
-                const double acc = S2 + S1 * (w1 + w2) + 0.5 * (w1 * w1 + w2 * w2);
-                const double a2 = ex->qd_max / rate, a3 = ex->qdd_max / acc;
-                a = ex->q_max;
-                if (a2 < a)
-                    a = a2;
-                if (a3 < a)
-                    a = a3;
-            }
-            model->ex_tab[c][0] = a;
-            model->ex_tab[c][1] = w1;
-            model->ex_tab[c][2] = p1;
-            model->ex_tab[c][3] = w2;
-            model->ex_tab[c][4] = p2;
-            sr_sincos(w1 * h, &model->ex_rot[c][1], &model->ex_rot[c][0]);
-            sr_sincos(w2 * h, &model->ex_rot[c][3], &model->ex_rot[c][2]);
-        }
-        model->ex_ramp = ex->ramp;
-    }
+    model->ex = *ex;
+    model->ex_ramp = ex->ramp;
     /* propellant (simulator.propellant_array): all zero when its model is off */
     model->m0 = prop->m0;
     if (prop->m0 > 0.0) {
@@ -1149,13 +1177,14 @@ SR_API int sr_plant_dims(const sr_plant_model *model, int *nq, int *nv, int *nx,
 
 static const char *const OUTPUT_NAMES[SR_PLANT_Y_COUNT] = {
     "r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H", "P",
-    "L", "tau", "excite_level", "att_ref", "qd_ref", "m_p", "P_x", "L_x", "base_now"};
+    "L", "tau", "excite_level", "att_ref", "qd_ref", "m_p", "P_x", "L_x", "base_now",
+    "excite_rate"};
 
 SR_API int sr_plant_output_offsets(const sr_plant_model *model, int *offsets)
 {
     /* sizes, -1 for n */
     static const int size[SR_PLANT_Y_COUNT] = {3, 3, 9, 3, 3, 3, -1, -1, -1, 3, 3, 3, 3, 3, 3,
-                                               -1, 1, 3, -1, 1, 3, 3, 10};
+                                               -1, 1, 3, -1, 1, 3, 3, 10, 1};
     int k, o = 0;
     if (!model_ok(model) || offsets == NULL)
         return SR_PLANT_EARG;
@@ -1200,23 +1229,40 @@ SR_API int sr_plant_start(const sr_plant_model *model, sr_plant_data *data)
     data->ramp[2] = 0.0;
     data->ramp[3] = model->ex_ramp;
     data->dyn = model->dyn;
-    data->trig_t = NAN;
+    data->ex_rate[0] = 0.0;                         /* no level requested, the own rate */
+    data->ex_rate[2] = 1.0;
+    excitation_table(model, 1.0, data);
     return SR_PLANT_OK;
 }
 
 SR_API int sr_plant_set_excitation(const sr_plant_model *model, sr_plant_data *data,
                                    double level)
 {
-    double s[3];
     if (!model_ok(model) || data == NULL || !(level >= 0.0 && level <= 1.0))
         return SR_PLANT_EARG;
-    if (level == data->ramp[1])
-        return SR_PLANT_OK;
-    ramp_level(data->t, data->ramp, s);
-    data->ramp[0] = s[0];
-    data->ramp[1] = level;
-    data->ramp[2] = data->t;
-    data->ramp[3] = model->ex_ramp;
+    data->ex_rate[0] = level;
+    excitation_update(model, data);
+    return SR_PLANT_OK;
+}
+
+SR_API int sr_plant_set_excitation_rate(const sr_plant_model *model, sr_plant_data *data,
+                                        double rate)
+{
+    if (!model_ok(model) || data == NULL
+        || !(rate >= SR_PLANT_RATE_MIN && rate <= SR_PLANT_RATE_MAX))
+        return SR_PLANT_EARG;
+    data->ex_rate[2] = rate;
+    excitation_update(model, data);
+    return SR_PLANT_OK;
+}
+
+SR_API int sr_plant_excitation_rate(const sr_plant_model *model, const sr_plant_data *data,
+                                    double *rate)
+{
+    if (!model_ok(model) || data == NULL || rate == NULL)
+        return SR_PLANT_EARG;
+    rate[0] = data->ex_rate[1];
+    rate[1] = data->ex_rate[2];
     return SR_PLANT_OK;
 }
 
@@ -1248,6 +1294,7 @@ SR_API int sr_plant_advance(const sr_plant_model *model, sr_plant_data *data, do
     total = n + (rest > 0.0 ? 1 : 0);
     nx = md->nx;
     d->dyn = md->dyn;
+    excitation_update(md, d);                       /* a pending rate whose dip has ended */
     /* work on a copy: d->x, d->t change only when every step succeeded */
     for (j = 0; j < nx; j++)
         d->xa[j] = d->x[j];
@@ -1405,16 +1452,16 @@ SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, do
     if (d->ramp[0] != 0.0 || d->ramp[1] != 0.0) {
         double f[3], g[3];
         if (!(d->trig_t == d->t)) {
-            fill_trig(md, d->t, d->trig);
+            fill_trig(md, d, d->t, d->trig);
             d->trig_t = d->t;
         }
         for (j = 0; j < ra; j++) {
-            channel(md->ex_tab[j], d->trig[j], f);
+            channel(d->ex_tab[j], d->trig[j], f);
             level_times(lev, f, g);
             y[o + 3 - ra + j] = g[0];
         }
         for (i = 0; i < n; i++) {
-            channel(md->ex_tab[ra + i], d->trig[ra + i], f);
+            channel(d->ex_tab[ra + i], d->trig[ra + i], f);
             level_times(lev, f, g);
             y[o + 3 + i] = g[1];
         }
@@ -1424,6 +1471,8 @@ SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, do
         y[o + i] = x[om + i];
     o += 7;
     base_now(md, x[om], y + o);
+    o += 10;
+    y[o] = d->ex_rate[1];
     return sr_finite_all(y, md->ny) ? SR_PLANT_OK : SR_PLANT_ENONFINITE;
 }
 
@@ -1471,16 +1520,16 @@ SR_API int sr_plant_references(const sr_plant_model *model, const sr_plant_data 
     if (!model_ok(model) || data == NULL || ref == NULL)
         return SR_PLANT_EARG;
     ramp_level(data->t, data->ramp, lev);
-    fill_trig(model, data->t, trig);
+    fill_trig(model, data, data->t, trig);
     for (c = 0; c < model->n_ch; c++) {
-        channel(model->ex_tab[c], trig[c], f);
+        channel(data->ex_tab[c], trig[c], f);
         level_times(lev, f, ref + 3 * c);
     }
     return SR_PLANT_OK;
 }
 
 SR_API int sr_plant_get_state(const sr_plant_model *model, const sr_plant_data *data, double *t,
-                              double *x, double *ramp)
+                              double *x, double *ex)
 {
     int j;
     if (!model_ok(model) || data == NULL)
@@ -1489,15 +1538,17 @@ SR_API int sr_plant_get_state(const sr_plant_model *model, const sr_plant_data *
         *t = data->t;
     for (j = 0; x != NULL && j < model->nx; j++)
         x[j] = data->x[j];
-    for (j = 0; ramp != NULL && j < 4; j++)
-        ramp[j] = data->ramp[j];
+    for (j = 0; ex != NULL && j < 4; j++)
+        ex[j] = data->ramp[j];
+    for (j = 0; ex != NULL && j < 3; j++)
+        ex[4 + j] = data->ex_rate[j];
     return SR_PLANT_OK;
 }
 
 SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, double t,
-                              const double *x, const double *ramp, char *err, size_t errlen)
+                              const double *x, const double *ex, char *err, size_t errlen)
 {
-    double rp[4], nrm, mp;
+    double rp[SR_PLANT_EXCITE_STATE], nrm, mp;
     const double *qb;
     int j, om;
     if (err != NULL && errlen > 0)
@@ -1510,19 +1561,27 @@ SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, 
         msg3(err, errlen, "state time must be finite", NULL, NULL);
         return SR_PLANT_EARG;
     }
-    if (ramp != NULL) {
-        for (j = 0; j < 4; j++)
-            rp[j] = ramp[j];
+    if (ex != NULL) {
+        for (j = 0; j < SR_PLANT_EXCITE_STATE; j++)
+            rp[j] = ex[j];
     } else {
-        rp[0] = rp[1] = rp[2] = 0.0;
+        rp[0] = rp[1] = rp[2] = rp[4] = 0.0;
         rp[3] = model->ex_ramp;
+        rp[5] = rp[6] = 1.0;
     }
-    if (!sr_finite_all(rp, 4) || !(rp[3] > 0.0) || !(rp[0] >= 0.0 && rp[0] <= 1.0)
-        || !(rp[1] >= 0.0 && rp[1] <= 1.0)) {
-        msg3(err, errlen, "excitation ramp state must be 4 finite numbers [s0, u, t0, T > 0] "
-             "with the levels s0, u in [0, 1]", NULL, NULL);
+    if (!sr_finite_all(rp, SR_PLANT_EXCITE_STATE) || !(rp[3] > 0.0)
+        || !(rp[0] >= 0.0 && rp[0] <= 1.0) || !(rp[1] >= 0.0 && rp[1] <= 1.0)
+        || !(rp[4] >= 0.0 && rp[4] <= 1.0)) {
+        msg3(err, errlen, "excitation state must be finite numbers [s0, u, t0, T > 0, level "
+             "requested, rate in effect, rate requested] with the levels in [0, 1]", NULL,
+             NULL);
         return SR_PLANT_EARG;
     }
+    for (j = 5; j < 7; j++)
+        if (!(rp[j] >= SR_PLANT_RATE_MIN && rp[j] <= SR_PLANT_RATE_MAX)) {
+            msg3(err, errlen, "excitation state: the rates must be in [0.1, 10]", NULL, NULL);
+            return SR_PLANT_EARG;
+        }
     if (!sr_finite_all(x, model->nx)) {
         msg3(err, errlen, "state x must be finite", NULL, NULL);
         return SR_PLANT_EARG;
@@ -1546,5 +1605,8 @@ SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, 
         data->x[j] = x[j];
     for (j = 0; j < 4; j++)
         data->ramp[j] = rp[j];
+    data->ex_rate[0] = rp[4];
+    data->ex_rate[2] = rp[6];
+    excitation_table(model, rp[5], data);
     return SR_PLANT_OK;
 }

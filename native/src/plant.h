@@ -32,7 +32,7 @@
  *   P_x [N.s], L_x [N.m.s]: momentum carried away by the expelled propellant (inertial; L_x
  *             about the inertial origin): P + P_x - P(0) = J, L + L_x - L(0) = H.
  *
- * Output vector y (ny = 63 + 5 n; entry k of the list below starts at sr_plant_output_offsets
+ * Output vector y (ny = 64 + 5 n; entry k of the list below starts at sr_plant_output_offsets
  * [k]; the order of spacerobot.plant.kernels.output_layout and Plant.output_vector):
  *   SR_PLANT_Y_R_S      r_S (3)        position of the base point S, inertial [m]
  *   SR_PLANT_Y_V_S      v_S (3)        velocity of S, inertial [m/s] (= A v_l)
@@ -63,6 +63,7 @@
  *   SR_PLANT_Y_BASE_NOW base (10)      the base's truth now: m [kg], b (3) [m] (com, base
  *                                      frame), Ixx Iyy Izz Ixy Ixz Iyz [kg.m2] (about the com,
  *                                      base frame): the dry base plus the propellant left
+ *   SR_PLANT_Y_EXCITE_RATE rate (1)    excitation rate in effect (frequency multiplier)
  * The accelerations, F, M and tau are those of the controls held from this instant over the
  * next internal step of h (so sum F = sum m a holds exactly at every output).
  *
@@ -97,7 +98,7 @@ extern "C" {
 #define SR_PLANT_MAX_NQ (7 + SR_MAX_JOINTS)
 #define SR_PLANT_MAX_NV SR_DYN_MAX_NV
 #define SR_PLANT_MAX_NX (6 + SR_PLANT_MAX_NQ + SR_PLANT_MAX_NV + 7)
-#define SR_PLANT_MAX_NY (63 + 5 * SR_MAX_JOINTS)
+#define SR_PLANT_MAX_NY (64 + 5 * SR_MAX_JOINTS)
 /** Excitation channels: up to 3 attitude axes, then the joints. */
 #define SR_PLANT_MAX_CHANNELS (3 + SR_MAX_JOINTS)
 /** Controller parameters (order of spacerobot.plant.kernels.PARAMS). */
@@ -125,8 +126,8 @@ enum sr_plant_output {
     SR_PLANT_Y_ALPHA_B, SR_PLANT_Y_Q, SR_PLANT_Y_QD, SR_PLANT_Y_QDD, SR_PLANT_Y_F, SR_PLANT_Y_M,
     SR_PLANT_Y_J, SR_PLANT_Y_H, SR_PLANT_Y_P, SR_PLANT_Y_L, SR_PLANT_Y_TAU, SR_PLANT_Y_EXCITE,
     SR_PLANT_Y_ATT_REF, SR_PLANT_Y_QD_REF, SR_PLANT_Y_M_P, SR_PLANT_Y_P_X, SR_PLANT_Y_L_X,
-    SR_PLANT_Y_BASE_NOW,
-    SR_PLANT_Y_COUNT                    /* number of outputs (23) */
+    SR_PLANT_Y_BASE_NOW, SR_PLANT_Y_EXCITE_RATE,
+    SR_PLANT_Y_COUNT                    /* number of outputs (24) */
 };
 
 /** Controller gains and bounds (spacerobot.robots.Controller; FMU names as the fields).
@@ -161,11 +162,8 @@ typedef struct sr_plant_model {
     double par[SR_PLANT_NPAR];           /* controller, kernels.PARAMS order */
     double q_home[SR_MAX_JOINTS];        /* null-space posture, also the initial one [rad] */
     double h;                            /* internal RK4 step [s] */
-    double ex_tab[SR_PLANT_MAX_CHANNELS][5];  /* channels (a, w1, p1, w2, p2):
-                                            f = a/2 [sin(w1 t + p1) + sin(w2 t + p2)] */
+    sr_plant_excitation ex;              /* the excitation's bounds, period, ramp */
     double ex_ramp;                      /* duration of a level change [s] */
-    double ex_rot[SR_PLANT_MAX_CHANNELS][4];  /* cos(w1 h), sin(w1 h), cos(w2 h), sin(w2 h):
-                                            the channels' sines stepped by h by rotation */
     double pp[6];                        /* propellant: 1/(Isp g0) [s/m] (0: model off),
                                             1/arm [1/m], (2/5) R^2 [m2], tank centre r (3) */
     double m0;                           /* initial propellant mass [kg] */
@@ -179,7 +177,13 @@ typedef struct sr_plant_data {
     double t;                            /* time [s] */
     double x[SR_PLANT_MAX_NX];           /* state vector (first nx entries) */
     double ramp[4];                      /* excitation level ramp [s0, u, t0, T]: from s0 at t0
-                                            to the requested u in T seconds */
+                                            to the targeted u in T seconds */
+    double ex_rate[3];                   /* [level requested, rate in effect, rate requested]
+                                            (while the rates differ the ramp targets 0) */
+    double ex_tab[SR_PLANT_MAX_CHANNELS][5];  /* channels at the rate in effect (a, w1, p1,
+                                            w2, p2): f = a/2 [sin(w1 t + p1) + sin(w2 t + p2)] */
+    double ex_rot[SR_PLANT_MAX_CHANNELS][4];  /* cos(w1 h), sin(w1 h), cos(w2 h), sin(w2 h):
+                                            the channels' sines stepped by h by rotation */
     /* -- work space ------------------------------------------------------------------- */
     sr_dyn_model dyn;                    /* the model's dyn with the base of the current
                                             stage's propellant mass */
@@ -248,10 +252,33 @@ SR_API int sr_plant_start(const sr_plant_model *model, sr_plant_data *data);
 
 /** Ask for the excitation level `level` in [0, 1] from now on (Plant.set_excitation): the
  *  level in effect moves there from its current value in excitation.ramp seconds along a
- *  quintic; asking again for the level already requested changes nothing. Returns 0, or
- *  SR_PLANT_EARG (data unchanged) for a level outside [0, 1] or NaN. */
+ *  quintic (to 0 first while a change of rate is pending); asking again for the level already
+ *  requested changes nothing. Returns 0, or SR_PLANT_EARG (data unchanged) for a level outside
+ *  [0, 1] or NaN. */
 SR_API int sr_plant_set_excitation(const sr_plant_model *model, sr_plant_data *data,
                                    double level);
+
+/* the excitation rate's range (input ident.excite_rate) */
+#define SR_PLANT_RATE_MIN 0.1
+#define SR_PLANT_RATE_MAX 10.0
+/* doubles of the excitation state (sr_plant_get_state / set_state): the ramp [s0, u, t0, T],
+ * the level requested, the rate in effect, the rate requested */
+#define SR_PLANT_EXCITE_STATE 7
+
+/** Ask for the excitation rate `rate` in [SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX]: every
+ *  component at rate times its frequency (as if excite.period were period / rate), the joint
+ *  amplitudes re-bounded for those frequencies by the rule of sr_plant_model_init, the
+ *  attitude amplitude kept. A new rate takes over without breaking a bound: the level ramps to
+ *  0, the table changes at the first step boundary where the level has settled at 0 (at
+ *  once where it is 0 already), and the level then ramps to the one requested; asking for the
+ *  rate in effect cancels a pending change. Returns 0, or SR_PLANT_EARG (data unchanged) for a
+ *  rate out of range or NaN. */
+SR_API int sr_plant_set_excitation_rate(const sr_plant_model *model, sr_plant_data *data,
+                                        double rate);
+
+/** The rate in effect and the rate requested: rate (2). Returns 0 or SR_PLANT_EARG. */
+SR_API int sr_plant_excitation_rate(const sr_plant_model *model, const sr_plant_data *data,
+                                    double *rate);
 
 /** The excitation level in effect now and its first two time derivatives: s (3) =
  *  (s, ds/dt [1/s], d2s/dt2 [1/s2]). Returns 0 or SR_PLANT_EARG. */
@@ -260,9 +287,11 @@ SR_API int sr_plant_excitation_level(const sr_plant_model *model, const sr_plant
 
 /** Integrate over dt [s] (Plant.advance): k = floor(dt / h + 1e-9) RK4 steps of h, then one
  *  step of the rest dt - k h if that is >= 1e-9 h; the controls of each step are computed at
- *  its start and held over it. Transactional: returns 0 with (t, x) advanced, or a status
- *  (SR_PLANT_EARG for dt not finite and > 0; SR_PLANT_ESINGULAR_*; SR_PLANT_ENONFINITE when
- *  the state reached is not finite) with t, x, ramp as before the call. */
+ *  its start and held over it. A pending change of rate whose level has settled at 0 takes
+ *  effect first (sr_plant_set_excitation_rate; it stays on failure). Transactional otherwise:
+ *  returns 0 with (t, x) advanced, or a status (SR_PLANT_EARG for dt not finite and > 0;
+ *  SR_PLANT_ESINGULAR_*; SR_PLANT_ENONFINITE when the state reached is not finite) with t, x
+ *  as before the call. */
 SR_API int sr_plant_advance(const sr_plant_model *model, sr_plant_data *data, double dt);
 
 /** Every output at the current state, y (ny; the layout above), computed with the controls
@@ -291,16 +320,20 @@ SR_API int sr_plant_base_now(const sr_plant_model *model, const sr_plant_data *d
 SR_API int sr_plant_references(const sr_plant_model *model, const sr_plant_data *data,
                                double *ref);
 
-/** The state: *t [s], x (nx), ramp (4) (any may be NULL). Returns 0 or SR_PLANT_EARG. */
+/** The state: *t [s], x (nx), ex (SR_PLANT_EXCITE_STATE: the ramp [s0, u, t0, T], the level
+ *  requested, the rate in effect, the rate requested) (any may be NULL). Returns 0 or
+ *  SR_PLANT_EARG. */
 SR_API int sr_plant_get_state(const sr_plant_model *model, const sr_plant_data *data, double *t,
-                              double *x, double *ramp);
+                              double *x, double *ex);
 
 /** Set the state (Plant.set_state): t finite, x (nx) finite with a unit quaternion (planar: a
- *  unit (cos, sin) pair) within 1e-6 and 0 <= m_p <= m0 (1 + 1e-12), ramp (4) finite with
- *  T > 0 and the levels s0, u in [0, 1] (NULL: [0, 0, 0, excitation.ramp]). Returns 0, or SR_PLANT_EARG (data unchanged)
- *  with a message in err (errlen bytes; err may be NULL). */
+ *  unit (cos, sin) pair) within 1e-6 and 0 <= m_p <= m0 (1 + 1e-12), ex (as
+ *  sr_plant_get_state's) finite with T > 0, the levels s0, u, requested in [0, 1] and both
+ *  rates in [SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX] (NULL: [0, 0, 0, excitation.ramp, 0, 1,
+ *  1]). Returns 0, or SR_PLANT_EARG (data unchanged) with a message in err (errlen bytes; err
+ *  may be NULL). */
 SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, double t,
-                              const double *x, const double *ramp, char *err, size_t errlen);
+                              const double *x, const double *ex, char *err, size_t errlen);
 
 #ifdef __cplusplus
 }

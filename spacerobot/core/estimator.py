@@ -52,6 +52,9 @@ class SrEstimatorOptions(ctypes.Structure):
         ("accel_bias", ctypes.c_int), ("noise_profile", ctypes.c_int),
         ("noise_scale", ctypes.c_double), ("noise", ctypes.c_double * N_SENSOR_NOISE),
         ("noise_dt", ctypes.c_double), ("information", ctypes.c_int),
+        ("excite_adapt", ctypes.c_int), ("excite_rate_try", ctypes.c_double),
+        ("excite_window", ctypes.c_double), ("excite_settle", ctypes.c_double),
+        ("excite_horizon", ctypes.c_double),
     ]
 
 
@@ -71,7 +74,8 @@ class SrEstimatorReport(ctypes.Structure):
         ("excitation_mu", ctypes.c_double), ("excitation_theta", ctypes.c_double),
         ("samples", ctypes.c_int), ("rejected", ctypes.c_int), ("status", ctypes.c_int),
         ("excite", ctypes.c_double), ("crb", ctypes.c_double * 20),
-        ("info_chi2", ctypes.c_double),
+        ("info_chi2", ctypes.c_double), ("excite_rate", ctypes.c_double),
+        ("excite_score", ctypes.c_double * 2),
     ]
 
 
@@ -167,6 +171,22 @@ PROFILE_OPTION_NAMES = {"sd_thrust_scale": "ident.sd_thrust.scale",
                         "information": "ident.information"}
 
 
+#: the excitation design's options (``sr_estimator_options`` fields) by their FMU parameter
+#: names and types
+EXCITE_DESIGN_OPTIONS = {"excite_adapt": ("ident.excite_adapt", int),
+                         "excite_rate_try": ("ident.excite_rate_try", float),
+                         "excite_window": ("ident.excite_window", float),
+                         "excite_settle": ("ident.excite_settle", float),
+                         "excite_horizon": ("ident.excite_horizon", float)}
+
+
+def excite_design_values(values: Mapping[str, float]) -> dict:
+    """The excitation design's options of the estimator FMU's parameter ``values`` (those
+    absent keep the core's defaults)."""
+    return {field: kind(values[name]) for field, (name, kind) in EXCITE_DESIGN_OPTIONS.items()
+            if name in values}
+
+
 def profile_values(values: Mapping[str, float], sample_time: float = 0.1,
                    lib: Optional[ctypes.CDLL] = None) -> dict:
     """``{FMU parameter name: value}`` of the estimator options the noise profile of the
@@ -250,6 +270,7 @@ def options_from_values(values: Mapping[str, float]) -> dict:
         "information": int(v.get("ident.information", 0)),
         # the magnitudes the profile reads (the others stay 0: the estimator has no use for them)
         "noise": [float(v.get(name, 0.0)) for name in SENSOR_MAGNITUDES],
+        **excite_design_values(v),
     }
 
 
@@ -345,7 +366,9 @@ class NativeEstimator:
         ``physical`` (``{'base': bool, 'target': bool}``), ``residual_lin``, ``residual_ang``,
         ``excitation_mu``, ``excitation_theta``, ``samples``, ``rejected``, ``status``,
         ``excite``; the information filter's ``crb`` (20,: the Cramér-Rao bound's standard
-        deviations, 0 without the filter) and ``info_chi2`` (its misfit)."""
+        deviations, 0 without the filter) and ``info_chi2`` (its misfit); ``excite_rate`` (the
+        rate asked of the plant) and ``excite_score`` (2,: the choice's predicted largest scaled
+        bounds at rate 1 and at the candidate; 0 before the choice)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
         return {
@@ -356,6 +379,7 @@ class NativeEstimator:
             "excitation_mu": r.excitation_mu, "excitation_theta": r.excitation_theta,
             "samples": r.samples, "rejected": r.rejected, "status": r.status,
             "excite": r.excite, "crb": np.array(r.crb[:]), "info_chi2": r.info_chi2,
+            "excite_rate": r.excite_rate, "excite_score": np.array(r.excite_score[:]),
         }
 
     def get_state(self) -> bytes:

@@ -38,11 +38,16 @@ __all__ = ["NativePlant", "Controls", "SrPlantController", "SrPlantExcitation",
            "SrPlantPropellant", "STATUS_OK", "OUTPUT_COUNT"]
 
 MSG_LEN = 256
+#: the excitation rate's range (SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX) and the doubles of the
+#: excitation state (SR_PLANT_EXCITE_STATE: ramp (4), level requested, rates in effect and
+#: requested)
+RATE_MIN, RATE_MAX = 0.1, 10.0
+EXCITE_STATE = 7
 STATUS_OK = 0
 EARG = 1
 ENONFINITE = 2
 #: number of outputs (SR_PLANT_Y_COUNT)
-OUTPUT_COUNT = 23
+OUTPUT_COUNT = 24
 #: controller parameters, the order of sr_plant_controller (plant.h)
 PARAMS = ("K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn", "K_Dn",
           "qdd_max")
@@ -99,6 +104,8 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
         "sr_plant_start": ([vp, vp], ci),
         "sr_plant_set_excitation": ([vp, vp, cd], ci),
         "sr_plant_excitation_level": ([vp, vp, dp], ci),
+        "sr_plant_set_excitation_rate": ([vp, vp, cd], ci),
+        "sr_plant_excitation_rate": ([vp, vp, dp], ci),
         "sr_plant_advance": ([vp, vp, cd], ci),
         "sr_plant_outputs": ([vp, vp, dp], ci),
         "sr_plant_controls": ([vp, vp, dp, dp, dp, dp, dp], ci),
@@ -215,7 +222,7 @@ class NativePlant:
             self._layout.append((key, a, b, (3, 3) if key == "A" else (b - a,)))
         self._y = np.empty(self._ny)
         self._xbuf = np.empty(self._nx)
-        self._rbuf = np.empty(4)
+        self._rbuf = np.empty(EXCITE_STATE)
         self._tbuf = ctypes.c_double()
         if L.sr_plant_start(self._model, self._data) != STATUS_OK:
             raise RuntimeError("sr_plant_start failed")
@@ -289,7 +296,8 @@ class NativePlant:
         t, x, ramp = self._state()
         nq, om = self._nq, self._om
         return {"t": t, "q": x[6:6 + nq].copy(), "v": x[6 + nq:om].copy(), "J": x[0:3].copy(),
-                "H": x[3:6].copy(), "excite_ramp": ramp.copy(), "prop": x[om:om + 7].copy()}
+                "H": x[3:6].copy(), "excite_ramp": ramp[:4].copy(),
+                "excite_rate": ramp[4:].copy(), "prop": x[om:om + 7].copy()}
 
     def set_state(self, s: dict) -> None:
         """Restore a state of :meth:`get_state` (of this plant or of another plant of the same
@@ -301,12 +309,18 @@ class NativePlant:
         H = np.array(s["H"], float)
         ramp = np.array(s.get("excite_ramp", [0.0, 0.0, 0.0, self.excitation.ramp]), float)
         prop = np.array(s.get("prop", [self.propellant.m0, 0, 0, 0, 0, 0, 0]), float)
+        # [level requested, rate in effect, rate requested]; a state without: the ramp's
+        # level at the plant's own rate
+        rate = np.array(s.get("excite_rate", [ramp[1] if ramp.shape == (4,) else 0.0, 1.0, 1.0]),
+                        float)
         if (q.shape != (self._nq,) or v.shape != (self._nv,) or J.shape != (3,)
-                or H.shape != (3,) or prop.shape != (7,) or ramp.shape != (4,)):
+                or H.shape != (3,) or prop.shape != (7,) or ramp.shape != (4,)
+                or rate.shape != (3,)):
             raise ValueError(f"state shapes q {q.shape}, v {v.shape}, J {J.shape}, H {H.shape}, "
-                             f"prop {prop.shape}, excite_ramp {ramp.shape} do not fit this "
-                             f"plant (nq = {self._nq}, nv = {self._nv})")
-        self._set(t, np.concatenate([J, H, q, v, prop]), ramp)
+                             f"prop {prop.shape}, excite_ramp {ramp.shape}, excite_rate "
+                             f"{rate.shape} do not fit this plant (nq = {self._nq}, "
+                             f"nv = {self._nv})")
+        self._set(t, np.concatenate([J, H, q, v, prop]), np.concatenate([ramp, rate]))
 
     def checkpoint(self) -> bytes:
         """A copy of the data block (the whole state), for :meth:`rollback`."""
@@ -325,6 +339,22 @@ class NativePlant:
         level = float(level)
         if self._lib.sr_plant_set_excitation(self._model, self._data, level) != STATUS_OK:
             raise ValueError(f"excitation level must be in [0, 1], got {level}")
+
+    def set_excitation_rate(self, rate: float) -> None:
+        """Ask for the excitation rate ``rate`` (frequency multiplier, 1 = the plant's own;
+        in [RATE_MIN, RATE_MAX]): the level dips to 0, the new frequencies take over there and
+        the level returns (``sr_plant_set_excitation_rate``); ``ValueError`` (plant unchanged)
+        out of range or NaN."""
+        rate = float(rate)
+        if self._lib.sr_plant_set_excitation_rate(self._model, self._data, rate) != STATUS_OK:
+            raise ValueError(f"excitation rate must be in [{RATE_MIN:g}, {RATE_MAX:g}], got "
+                             f"{rate}")
+
+    def excitation_rate(self) -> tuple:
+        """``(rate in effect, rate requested)``."""
+        out = np.empty(2)
+        self._lib.sr_plant_excitation_rate(self._model, self._data, dptr(out))
+        return float(out[0]), float(out[1])
 
     def excitation_level(self) -> tuple:
         """``(s, ds/dt, d2s/dt2)``: the excitation level in effect now and its derivatives."""

@@ -74,6 +74,9 @@ class Report:
     crb : (20,) the information filter's first-order Cramér-Rao bound, as standard deviations
         (``crb.*``; 0 without the filter, ``ident.information``)
     info_chi2 : its weighted residuals' mean square (``diag.info_chi2``; 0 without it)
+    excite_rate : the excitation rate asked of the plant (``ident.excite_rate``; 1 = its own)
+    excite_score : (2,) the rate choice's predicted largest scaled bounds at rate 1 and at the
+        candidate (``diag.excite_score.*``; 0 before the choice)
     """
 
     vector: np.ndarray
@@ -82,6 +85,8 @@ class Report:
     physical: dict
     crb: np.ndarray = None
     info_chi2: float = 0.0
+    excite_rate: float = 1.0
+    excite_score: np.ndarray = None
 
 
 @dataclass
@@ -168,6 +173,12 @@ class Identifier:
         change between samples; :meth:`_differenced_momentum`, docs/identification.md,
         section 6). False = the force equations at the centre with the velocities'
         derivatives (exact only where the velocities are quadratic over the window).
+    excite : mapping
+        The excitation request and the choice of its rate, as the core's options
+        ``excite_mode``, ``excite_level``, ``excite_adapt``, ``excite_rate_try``,
+        ``excite_window``, ``excite_settle``, ``excite_horizon`` (the estimator FMU's
+        ``ident.excite_*``; absent: their defaults). The rate is chosen only with the
+        information filter (``sensors_noise``).
 
     lib : ctypes.CDLL, optional
         The native library (default: :func:`spacerobot.core.lib`, ``$SPACEROBOT_CORE_LIB``).
@@ -194,7 +205,7 @@ class Identifier:
                  diff_half_window: int = 1, corr_lags: int = 0, window: float = 0.0,
                  moving_point: bool = False, accel_bias: bool = False, thrust_sd=(0.0, 0.0),
                  signal_sd: Mapping[str, float] | None = None, diff_momentum: bool = False,
-                 sensors_noise: Mapping | None = None, lib=None):
+                 sensors_noise: Mapping | None = None, excite: Mapping | None = None, lib=None):
         from ..core.estimator import NativeEstimator
 
         self._args = (robot, guess, dict(method=method, solver=solver, accel_source=accel_source,
@@ -203,7 +214,7 @@ class Identifier:
                                          window=window, moving_point=moving_point,
                                          accel_bias=accel_bias, thrust_sd=thrust_sd,
                                          signal_sd=signal_sd, diff_momentum=diff_momentum,
-                                         sensors_noise=sensors_noise))
+                                         sensors_noise=sensors_noise, excite=excite))
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
@@ -267,6 +278,10 @@ class Identifier:
         # the sensors' noise model (the core's noise_profile, noise_scale, noise, noise_dt,
         # information): what the information filter weighs the rows by
         options.update(sensors_noise or {})
+        # the excitation request and the choice of its rate (the core's excite_mode,
+        # excite_level, excite_adapt, excite_rate_try, excite_window, excite_settle,
+        # excite_horizon): the core chooses the rate with the information filter
+        options.update(excite or {})
         self.core = NativeEstimator(robot, options, lib=lib)
         self._zero = np.zeros(self._n_flat)       # a sample the core rejects (base.A = 0)
         self._note = None       # a rejection decided here (shape, type): its message
@@ -411,7 +426,8 @@ class Identifier:
         output only: the core keeps the exact least-squares state."""
         r = self._report()
         return Report(r["vector"].copy(), r["sd"].copy(), dict(r["identified"]),
-                      dict(r["physical"]), r["crb"].copy(), float(r["info_chi2"]))
+                      dict(r["physical"]), r["crb"].copy(), float(r["info_chi2"]),
+                      float(r["excite_rate"]), r["excite_score"].copy())
 
     def estimates(self) -> dict:
         """``{'base': BodyEstimate, 'target': BodyEstimate}`` (the least-squares estimates;
@@ -576,5 +592,13 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float], sample_tim
                        diff_momentum=_flag(v["ident.diff_momentum"], "ident.diff_momentum"),
                        signal_sd={key: v[f"ident.noise.{name}"]
                                   for key, name, _, _ in SIGNAL_NOISE_PARAMETERS},
-                       sensors_noise=sensors_noise)
+                       sensors_noise=sensors_noise, excite=_excite_options(v))
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))
+
+
+def _excite_options(v: Mapping[str, float]) -> dict:
+    """The core's excitation options (request and rate choice) of the FMU parameter values
+    ``v`` (those absent keep the core's defaults)."""
+    from ..core.estimator import excite_design_values
+    return {"excite_mode": int(v["ident.excite_mode"]),
+            "excite_level": float(v["ident.excite_level"]), **excite_design_values(v)}

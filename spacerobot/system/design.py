@@ -127,6 +127,7 @@ def closed_loop_bound(sc: Scenario, sensors_seed: int, stop_time: float,
               if v.causality == "parameter"}
     values.update(dict(REALISTIC_ESTIMATOR))
     values["noise.scale"] = float(noise_scale)
+    values["ident.excite_adapt"] = 2         # the candidate as given: no rate of its own
     values.update({f"noise.{k}": v for k, v in magnitudes.items() if f"noise.{k}" in values})
     ident, request = identifier_from_values(sc.robot, values, dt)
     plant = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,

@@ -165,6 +165,10 @@ def _row(ident: Identifier, request: ExcitationRequest, outs: List[Var]) -> List
             row.append(float(rep.crb[ESTIMATE_NAMES.index(v.name[len("crb."):])]))
         elif group == "info_chi2":
             row.append(float(rep.info_chi2))
+        elif group == "excite_rate":
+            row.append(float(rep.excite_rate))
+        elif group == "excite_score":
+            row.append(float(rep.excite_score[("rate_1", "rate_try").index(v.key[1])]))
         elif group in ("identified", "physical"):
             row.append(float(getattr(rep, group)[v.key[1]]))
         elif group == "excite":

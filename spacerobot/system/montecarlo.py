@@ -249,6 +249,8 @@ def case_row(case: Case, res) -> Dict[str, object]:
         crb = _series(res, [f"crb.{p}" for p in ESTIMATE_NAMES], "estimator")[-1]
         row.update({f"crb.{p}": float(c) for p, c in
                     zip(ESTIMATE_NAMES, crb / interface.error_scale(truth))})
+    if "estimator.ident.excite_rate" in res.data:       # the estimator's choice of the rate
+        row["excite_rate"] = float(res.data["estimator.ident.excite_rate"][-1])
     return row
 
 
@@ -265,11 +267,12 @@ def run_case(case: Case, ssp_path: str, runner: str = DEFAULT_RUNNER) -> Dict[st
 STUDY = Study(name="montecarlo", columns=COLUMNS, key="case_id", task=run_case)
 #: the study through the sensors (:class:`SensorsCase`): the sensors' scale and seed too
 #: (and the information filter's Cramér-Rao bound per estimate, relative to its error scale as
-#: the ``relerr`` columns: the efficiency's denominator)
+#: the ``relerr`` columns: the efficiency's denominator; the excitation rate the estimator
+#: asked for at the end, ``ident.excite_rate``)
 SENSORS_STUDY = Study(name="montecarlo-sensors",
                       columns=COLUMNS[:len(CASE_COLUMNS)] + ("noise_scale", "sensors_seed")
-                      + COLUMNS[len(CASE_COLUMNS):] + tuple(f"crb.{p}" for p in ESTIMATE_NAMES),
-                      key="case_id", task=run_case)
+                      + COLUMNS[len(CASE_COLUMNS):] + tuple(f"crb.{p}" for p in ESTIMATE_NAMES)
+                      + ("excite_rate",), key="case_id", task=run_case)
 
 
 def build_sensors_system(robot: str, out_dir):
@@ -344,10 +347,15 @@ def bound_stats(rows: Sequence[Dict[str, str]]) -> Dict[str, tuple]:
     ``sqrt(mean crb^2)``, the RMS error ``sqrt(mean error^2)``, the efficiency, their ratio), all
     relative to the error scale (efficiency 1: as good as any unbiased estimator can be);
     empty for rows without the bound, and no entry where an estimate is not identified
-    (bound 0)."""
+    (:func:`spacerobot.interface.identified_estimates` of the row's robot)."""
     out: Dict[str, tuple] = {}
+    identified = {name: set(interface.identified_estimates(get_robot(name)))
+                  for name in {r["robot"] for r in rows}}
     for p in ESTIMATE_NAMES:
-        have = [r for r in rows if r.get(f"crb.{p}") not in (None, "")]
+        # a planar robot's out-of-plane entries keep their guesses: bound > 0 through the
+        # parallel axes, but no estimate of theirs to be efficient
+        have = [r for r in rows if r.get(f"crb.{p}") not in (None, "")
+                and p in identified[r["robot"]]]
         c = np.array([float(r[f"crb.{p}"]) for r in have])
         e = np.array([float(r[f"relerr.{p}"]) for r in have])
         if len(c) and c.max() > 0 and e.max() > 0:
@@ -372,6 +380,18 @@ def efficiency_table(rows: Sequence[Dict[str, str]]) -> str:
     for p, (c, rms, e) in stats.items():
         lines.append(f"| {p} | {100 * c:.2g} % | {100 * rms:.2g} % | {e:.2f} |")
     return "\n".join(lines)
+
+
+def rate_text(rows: Sequence[Dict[str, str]]) -> str:
+    """How often each excitation rate was the estimator's at the end (``ident.excite_rate``,
+    its choice: docs/identification.md, 'Excitation that buys information'), or "" for a
+    table without the column."""
+    r = [float(x["excite_rate"]) for x in rows
+         if x["status"] == "ok" and x.get("excite_rate") not in (None, "")]
+    if not r:
+        return ""
+    counts = ", ".join(f"{v:g}: {r.count(v)}" for v in sorted(set(r)))
+    return f"the excitation rate the estimator chose (rate: cases): {counts} of {len(r)}"
 
 
 def calibration(rows: Sequence[Dict[str, str]]) -> str:
@@ -523,6 +543,9 @@ def cli_montecarlo(args) -> int:
     ids = {c.id for c in cases}           # this command's cases: not other rows of the file
     rows = [r for r in read_results(out) if r["case_id"] in ids]
     print(summary_table(rows))
+    rates = rate_text(rows)
+    if rates:
+        print(rates)
     eff = efficiency_table(rows)
     if eff:
         print("the information filter's Cramér-Rao bound against the observed scatter:")

@@ -321,4 +321,17 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
                        f"values fit the sensors); its flags need 2 sd below ident.sd_rel; its "
                        f"Cramer-Rao bound: the crb.* columns")
             break
+    for prefix in ("estimator.", ""):
+        rate = data.get(f"{prefix}ident.excite_rate")
+        score = [data.get(f"{prefix}diag.excite_score.rate_{k}") for k in ("1", "try")]
+        if rate is not None and len(rate) and all(s is not None and len(s) for s in score):
+            if score[0][-1] > 0:
+                out.append(f"the excitation rate the estimator chose (ident.excite_adapt): "
+                           f"{rate[-1]:g} (predicted largest bound at ident.excite_horizon: "
+                           f"rate 1 {100 * score[0][-1]:.3g} %, rate_try "
+                           f"{100 * score[1][-1]:.3g} % of the scale)")
+            elif rate[-1] != 1.0:
+                out.append(f"the excitation rate the estimator asks for (ident.excite_adapt): "
+                           f"{rate[-1]:g}, on trial (no choice yet)")
+            break
     return out

@@ -27,8 +27,9 @@
  *   -T          direct feedthrough (the sensors): the outputs measure the inputs set now, so a
  *               non-finite or huge input (|x| > 1e6) may give non-finite outputs; the outputs
  *               are required finite only while every input holds a moderate value.
- *   -N VRS      inputs whose NaN value makes doStep discard the step (the plant's ident.excite:
- *               no level to apply); a step while one of them is NaN must be discarded.
+ *   -N VRS      inputs whose NaN value makes doStep discard the step (the plant's
+ *               excitation inputs: no level or rate to apply); a step while one of them is
+ *               NaN must be discarded.
  *   -H MAXSTEP  doStep discards a communication step longer than MAXSTEP seconds (the plant).
  *   -F          a valid step may be discarded by an instance whose parameters are not the start
  *               values or that runs from a damaged state (the plant's integration may fail for
