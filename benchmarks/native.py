@@ -14,8 +14,8 @@ REPEATS passes, CPU time per sample:
 * instantiation + 60 s of estimation of the native FMU in a fresh process started from an empty
   environment (wall time, fmpy's ``simulate_fmu``, which extracts the FMU first);
 * the closed loop in the C host, spatial, 60 s: the native plant and estimator FMUs wired as the
-  SSP wires them (plant outputs -> estimator inputs, estimator ``ident.excite`` -> plant
-  ``ident.excite``) in ``tests/c_host/fmu_host.c`` (compiled with the system C compiler), 600
+  SSP wires them (plant outputs -> estimator inputs, estimator ``ident.excite`` and
+  ``ident.excite_rate`` -> plant) in ``tests/c_host/fmu_host.c`` (compiled with the system C compiler), 600
   steps of 0.1 s, started from an empty environment: the process's wall time and the stepping
   loop's own time (no Python in the process).
 
@@ -288,8 +288,8 @@ def main(argv=None) -> int:
             "<= 20 us (spatial), cold run under 1 s.\n",
             "\nNo Python at all: the native plant and estimator FMUs in the C host "
             "`tests/c_host/fmu_host.c` (system C compiler, -O2), wired as the SSP wires them "
-            "(plant outputs -> estimator inputs, estimator `ident.excite` -> plant "
-            "`ident.excite`), steps of 0.1 s, started from an empty environment; median (range) "
+            "(plant outputs -> estimator inputs, estimator `ident.excite` and "
+            "`ident.excite_rate` -> plant), steps of 0.1 s, started from an empty environment; median (range) "
             "of 5 runs. The process time includes loading and instantiating both FMUs; the "
             "stepping time is the host's own measurement of its loop.\n",
             table(["run", "process wall time [ms]", "stepping [ms]"], loop_rows),

@@ -241,8 +241,9 @@ def plant_excitation_vars(sc: Scenario) -> List[Var]:
          Var("ident.excite_rate", "input", "continuous", "Real", "1",
              "Requested excitation rate: frequency multiplier of every excitation component "
              "(1 = excite.period as set; the joint amplitudes re-bounded for the new "
-             "frequencies). A change is made through a dip of the level: it ramps to 0, the "
-             "new rate takes over there, it ramps back (2 excite.ramp). Values outside "
+             "frequencies; the attitude amplitude kept, so the base turns faster). A change "
+             "is made through a dip of the level: it ramps to 0, the new rate takes over "
+             "there, it ramps back (2 excite.ramp). Values outside "
              "[0.1, 10] are clipped with a warning, NaN makes the step fail with Discard", 1.0,
              ("excite_rate",)),
          Var("excite.level", "output", "continuous", "Real", "1",

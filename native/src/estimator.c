@@ -706,8 +706,8 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
                                           && opt->excite_mode != 0);
     if (m->adapt && !m->info) {
         set_msg(err, errlen, "ident.excite_adapt = 1 needs the information filter: set "
-                             "ident.noise_profile = 1 and the sensors' noise.* parameters "
-                             "(ident.information 0 or 1)");
+                             "ident.noise_profile = 1 with the sensors' noise.* magnitudes, "
+                             "and leave ident.information at 0 (automatic) or 1");
         free(m);
         return NULL;
     }

@@ -33,6 +33,7 @@ void sr_exd_init(sr_exd_data *x)
     memset(x, 0, sizeof *x);
     x->phase = SR_EXD_WAIT;
     x->rate = 1.0;
+    x->t_first = NAN;
 }
 
 /* the predicted largest scaled bound (bound / error scale at the filter's estimate, over the
@@ -45,9 +46,15 @@ static double predicted(const sr_info_model *im, const sr_info_data *fd, const d
         sr_info_predict(im, fd, dS, factor, bound) != 0)
         return NAN;
     sr_error_scale(vec, SR_COM_SCALE_MIN, scale);
-    for (int i = 0; i < 20; i++)
+    for (int i = 0; i < 20; i++) {
+        /* a planar robot identifies m, b_x, b_y, I_zz per body (the others move with them
+           through the parallel axes, bound > 0, but keep their guesses) */
+        const int k = i % 10;
+        if (im->planar && !(k == 0 || k == 1 || k == 2 || k == 6))
+            continue;
         if (bound[i] > 0.0 && bound[i] / scale[i] > worst)
             worst = bound[i] / scale[i];
+    }
     return isfinite(worst) ? worst : NAN;
 }
 
@@ -69,7 +76,13 @@ int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im
         return 1;
     switch (x->phase) {
     case SR_EXD_WAIT:
+        if (isnan(x->t_first))                    /* no sample yet */
+            x->t_first = t;
         if (fd->replayed) {
+            if (t + 2.0 * o->window + o->settle >= x->t_first + o->horizon) {
+                x->phase = SR_EXD_DONE;           /* the trial would not end in time */
+                return 0;
+            }
             sr_info_information(im, fd, x->S_mark);
             x->t_mark = t;
             x->phase = SR_EXD_MEASURE;
@@ -85,7 +98,6 @@ int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im
             return 0;
         }
         x->rate = o->rate;                        /* try the candidate */
-        x->tried = 1;
         x->t_mark = t;
         x->phase = SR_EXD_SETTLE;
         return 0;
@@ -99,7 +111,7 @@ int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im
     case SR_EXD_MEASURE_FAST: {
         if (t - x->t_mark < o->window)
             return 0;
-        double dS_fast[MU * MU], left = o->horizon - t;
+        double dS_fast[MU * MU], left = x->t_first + o->horizon - t;
         added(im, fd, x->S_mark, dS_fast);
         if (left < 0.0)
             left = 0.0;
@@ -114,7 +126,7 @@ int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im
             x->rate = 1.0;
             return 1;
         }
-        x->rate = x->score[1] < x->score[0] ? o->rate : 1.0;
+        x->rate = x->score[1] < SR_EXD_MARGIN * x->score[0] ? o->rate : 1.0;
         return 0;
     }
     default:
@@ -126,9 +138,12 @@ int sr_exd_data_valid(const sr_exd_options *o, const sr_exd_data *x)
 {
     if (!o || !x || x->phase < SR_EXD_WAIT || x->phase > SR_EXD_DONE)
         return 0;
-    if (!(x->rate == 1.0 || x->rate == o->rate) || (x->tried != 0 && x->tried != 1))
+    if (!(x->rate == 1.0 || x->rate == o->rate))
         return 0;
-    double s = x->t_mark + x->w_slow + x->score[0] + x->score[1];
+    if (isnan(x->t_first) && x->phase != SR_EXD_WAIT)   /* NaN only before a sample */
+        return 0;
+    double s = x->t_mark + x->w_slow + x->score[0] + x->score[1]
+               + (isnan(x->t_first) ? 0.0 : x->t_first);
     for (int i = 0; i < MU * MU; i++)
         s += x->S_mark[i] + x->dS[i];
     return isfinite(s);

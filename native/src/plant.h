@@ -268,10 +268,12 @@ SR_API int sr_plant_set_excitation(const sr_plant_model *model, sr_plant_data *d
 /** Ask for the excitation rate `rate` in [SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX]: every
  *  component at rate times its frequency (as if excite.period were period / rate), the joint
  *  amplitudes re-bounded for those frequencies by the rule of sr_plant_model_init, the
- *  attitude amplitude kept. A new rate takes over without breaking a bound: the level ramps to
- *  0, the table changes at the first step boundary where the level has settled at 0 (at
- *  once where it is 0 already), and the level then ramps to the one requested; asking for the
- *  rate in effect cancels a pending change. Returns 0, or SR_PLANT_EARG (data unchanged) for a
+ *  attitude amplitude kept (its reference's rate grows with the rate). A new rate takes over
+ *  without breaking a bound when asked for at a settled level: the level ramps to 0, the
+ *  table changes at the first step boundary where the level has settled at 0 (at once where
+ *  it is 0 already), and the level then ramps to the one requested; asking for the rate in
+ *  effect cancels a pending change. (A request during a ramp restarts it from the level in
+ *  effect with zero slope, as sr_plant_set_excitation does: the references' rates jump.) Returns 0, or SR_PLANT_EARG (data unchanged) for a
  *  rate out of range or NaN. */
 SR_API int sr_plant_set_excitation_rate(const sr_plant_model *model, sr_plant_data *data,
                                         double rate);

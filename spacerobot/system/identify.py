@@ -125,9 +125,12 @@ def read_truth(path_or_data, names=ESTIMATE_NAMES) -> Dict[str, float]:
 def estimator_parameters(robot: str, overrides: Optional[Mapping[str, float]] = None
                          ) -> Dict[str, float]:
     """The estimator FMU's parameters (its defaults for ``robot``) with ``overrides``
-    (``name`` or ``estimator.name``); KeyError for a name the estimator does not have."""
+    (``name`` or ``estimator.name``); KeyError for a name the estimator does not have. The
+    choice of the excitation's rate is off (``ident.excite_adapt`` = 2): recorded telemetry
+    cannot follow it (an override turns it on, e.g. to see what it would have asked for)."""
     sc = scenario(robot)
     values = {v.name: v.start for v in estimator_vars(sc.robot, sc) if v.causality == "parameter"}
+    values["ident.excite_adapt"] = 2
     for key, val in (overrides or {}).items():
         name = key.removeprefix("estimator.")
         if name not in values:

@@ -249,7 +249,8 @@ def case_row(case: Case, res) -> Dict[str, object]:
         crb = _series(res, [f"crb.{p}" for p in ESTIMATE_NAMES], "estimator")[-1]
         row.update({f"crb.{p}": float(c) for p, c in
                     zip(ESTIMATE_NAMES, crb / interface.error_scale(truth))})
-    if "estimator.ident.excite_rate" in res.data:       # the estimator's choice of the rate
+    score = res.data.get("estimator.diag.excite_score.rate_1")
+    if score is not None and len(score) and score[-1] > 0:   # the estimator chose the rate
         row["excite_rate"] = float(res.data["estimator.ident.excite_rate"][-1])
     return row
 
@@ -268,7 +269,7 @@ STUDY = Study(name="montecarlo", columns=COLUMNS, key="case_id", task=run_case)
 #: the study through the sensors (:class:`SensorsCase`): the sensors' scale and seed too
 #: (and the information filter's Cramér-Rao bound per estimate, relative to its error scale as
 #: the ``relerr`` columns: the efficiency's denominator; the excitation rate the estimator
-#: asked for at the end, ``ident.excite_rate``)
+#: chose, ``ident.excite_rate``, empty where it made no choice)
 SENSORS_STUDY = Study(name="montecarlo-sensors",
                       columns=COLUMNS[:len(CASE_COLUMNS)] + ("noise_scale", "sensors_seed")
                       + COLUMNS[len(CASE_COLUMNS):] + tuple(f"crb.{p}" for p in ESTIMATE_NAMES)
@@ -383,15 +384,17 @@ def efficiency_table(rows: Sequence[Dict[str, str]]) -> str:
 
 
 def rate_text(rows: Sequence[Dict[str, str]]) -> str:
-    """How often each excitation rate was the estimator's at the end (``ident.excite_rate``,
-    its choice: docs/identification.md, 'Excitation that buys information'), or "" for a
-    table without the column."""
-    r = [float(x["excite_rate"]) for x in rows
-         if x["status"] == "ok" and x.get("excite_rate") not in (None, "")]
+    """How often the estimator chose each excitation rate (``ident.excite_rate`` where it made
+    the choice: docs/identification.md, 'Excitation that buys information'), or "" where it
+    chose in no case (the choice off, or a table without the column)."""
+    ok = [x for x in rows if x["status"] == "ok"]
+    r = [float(x["excite_rate"]) for x in ok if x.get("excite_rate") not in (None, "")]
     if not r:
         return ""
     counts = ", ".join(f"{v:g}: {r.count(v)}" for v in sorted(set(r)))
-    return f"the excitation rate the estimator chose (rate: cases): {counts} of {len(r)}"
+    none = f" (no choice made in {len(ok) - len(r)})" if len(ok) > len(r) else ""
+    return (f"the excitation rate the estimator chose (rate: cases): {counts} of "
+            f"{len(ok)}{none}")
 
 
 def calibration(rows: Sequence[Dict[str, str]]) -> str:

@@ -36,8 +36,9 @@
  *   -b E1:P1,E2:P2,...
  *               with -e: feedback wires, the second FMU's outputs E_i to the first FMU's inputs
  *               P_i, set before every step (after the -i row): a closed loop, as the SSP wires
- *               estimator ident.excite -> plant ident.excite. Neither FMU has direct
- *               feedthrough, so every input gets its source's value at the communication point
+ *               estimator ident.excite, ident.excite_rate -> plant inputs of the same names.
+ *               Neither FMU has direct feedthrough, so every input gets its source's value at
+ *               the communication point
  *               (a Jacobi exchange, as spacerobot.system.master does), then the first FMU
  *               steps, then the second.
  *
