@@ -537,8 +537,9 @@ def excite_design_vars() -> List[Var]:
             "The excitation's rate chosen from the information: after the information filter's "
             "replay the estimator measures the information one window (ident.excite_window) "
             "adds at the plant's own rate, then asks for ident.excite_rate_try and measures "
-            "again, and keeps the rate whose predicted largest scaled Cramér-Rao bound at "
-            "ident.excite_horizon is smaller (output ident.excite_rate). 0 = automatic (on "
+            "again, and keeps the candidate where its predicted largest scaled Cramér-Rao "
+            "bound at ident.excite_horizon (from the first sample) is below 0.85 times rate "
+            "1's (output ident.excite_rate). 0 = automatic (on "
             "where the information filter runs and ident.excite_mode asks for excitation), "
             "1 = on (needs the information filter), 2 = off (rate 1)", 0, ("excite_adapt",)),
         Var("ident.excite_rate_try", "parameter", "fixed", "Real", "1",

@@ -140,8 +140,9 @@ typedef struct sr_estimator_options {
     /* -- the excitation's rate (excite_design.h; docs/identification.md "Excitation that
      *    buys information") -- */
     int excite_adapt;           /* ident.excite_adapt: 1 the estimator tries excite_rate_try
-                                   against the plant's own rate and keeps the one whose bound
-                                   shrinks faster (output ident.excite_rate); needs the
+                                   against the plant's own rate and keeps it where its bound
+                                   shrinks clearly faster (SR_EXD_MARGIN; output
+                                   ident.excite_rate); needs the
                                    information filter; 2 off (rate 1); 0 (default) automatic:
                                    on where the information filter runs and excitation is
                                    requested (ident.excite_mode 1 or 2) */
