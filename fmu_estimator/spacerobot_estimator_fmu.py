@@ -12,7 +12,7 @@ import numpy as np
 
 from _spacerobot_estimator.estimator.identifier import INPUT_LIMIT, KEYS, identifier_from_values
 from _spacerobot_estimator.fmi.slave import InterfaceSlave, _escape
-from _spacerobot_estimator.interface import LAYOUT, STATUS, estimator_vars
+from _spacerobot_estimator.interface import EXCITE_SCORES, LAYOUT, STATUS, estimator_vars
 from pythonfmu.enums import Fmi2Status
 
 
@@ -134,7 +134,7 @@ _EXCITE = "ident.excite"
 _CRBS = ("crb_base", "crb_target")
 _CRB = "crb."
 #: report scalars (Report attribute: element names of a vector attribute)
-_REPORT = {"info_chi2": (), "excite_rate": (), "excite_score": ("rate_1", "rate_try")}
+_REPORT = {"info_chi2": (), "excite_rate": (), "excite_score": EXCITE_SCORES}
 #: outputs computed when read: the excitation diagnostics (mu, theta)
 _LAZY = ("excitation_mu", "excitation_theta")
 

@@ -528,6 +528,11 @@ def noise_model_vars() -> List[Var]:
     return v
 
 
+#: the rate choice's two scores (``diag.excite_score.<name>``), in the order of the core's
+#: ``excite_score``: rate 1, the candidate
+EXCITE_SCORES = ("rate_1", "rate_try")
+
+
 def excite_design_vars() -> List[Var]:
     """The estimator's choice of the excitation's rate (native/src/excite_design.h;
     docs/identification.md, 'Excitation that buys information'): its parameters, the rate it
@@ -558,13 +563,13 @@ def excite_design_vars() -> List[Var]:
             "name): frequency multiplier of its excitation, 1 = its own; "
             "ident.excite_rate_try while that is tried or chosen (ident.excite_adapt)", None,
             ("excite_rate",)),
-        Var("diag.excite_score.rate_1", "output", "continuous", "Real", "1",
+        Var(f"diag.excite_score.{EXCITE_SCORES[0]}", "output", "continuous", "Real", "1",
             "The choice of the excitation's rate: predicted largest Cramér-Rao bound (relative "
             "to each estimate's error scale) at ident.excite_horizon with the rest of the run "
-            "at rate 1; 0 before the choice", None, ("excite_score", "rate_1")),
-        Var("diag.excite_score.rate_try", "output", "continuous", "Real", "1",
+            "at rate 1; 0 before the choice", None, ("excite_score", EXCITE_SCORES[0])),
+        Var(f"diag.excite_score.{EXCITE_SCORES[1]}", "output", "continuous", "Real", "1",
             "As diag.excite_score.rate_1, at ident.excite_rate_try", None,
-            ("excite_score", "rate_try")),
+            ("excite_score", EXCITE_SCORES[1])),
     ]
 
 

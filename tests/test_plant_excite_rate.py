@@ -293,17 +293,23 @@ def test_asking_for_the_rate_in_effect_cancels_a_pending_switch():
 # 4. state round trip with a switch pending; bad excitation-state entries
 # ------------------------------------------------------------------------------------------------
 
+def pending_switch(rate: float):
+    """A plant at level 1 (2.5 s in), 0.3 s after asking for ``rate`` (dipping), and its
+    state."""
+    p, _, _, _ = make_plant()
+    p.set_excitation(1.0)
+    p.advance(2.5)
+    p.set_excitation_rate(rate)
+    p.advance(0.3)
+    return p, p.get_state()
+
+
 def test_state_round_trip_with_a_switch_pending():
     """A state taken 0.3 s after asking for rate 0.5 (level 1, dipping) carries
     excite_rate = [level requested 1, rate in effect 1, rate requested 0.5]; running 5 s from it
     (the switch happens inside), restoring it into the same plant and into a fresh one and
     running again gives the same outputs to 1e-12 relative (measured 0)."""
-    p, ex, _, _ = make_plant()
-    p.set_excitation(1.0)
-    p.advance(2.5)
-    p.set_excitation_rate(0.5)
-    p.advance(0.3)
-    s = p.get_state()
+    p, s = pending_switch(0.5)
     assert s["excite_rate"].tolist() == [1.0, 1.0, 0.5]
     assert s["excite_ramp"].shape == (4,) and s["excite_ramp"][3] == RAMP
     assert 0.0 < p.excitation_level()[0] < 1.0
@@ -343,12 +349,7 @@ def test_set_state_refuses_bad_excitation_entries(key, i, value):
     """A bad entry of the excitation state (rates outside [0.1, 10] or NaN, levels outside
     [0, 1], ramp duration <= 0 or not finite, NaN start time) raises ValueError and leaves
     the plant's data block unchanged (checkpoint bytes); the unaltered state is accepted."""
-    p, _, _, _ = make_plant()
-    p.set_excitation(1.0)
-    p.advance(2.5)
-    p.set_excitation_rate(3.0)
-    p.advance(0.3)
-    s = p.get_state()
+    p, s = pending_switch(3.0)
     cp = p.checkpoint()
     bad = {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in s.items()}
     bad[key][i] = value

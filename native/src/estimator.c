@@ -223,11 +223,16 @@ size_t sr_estimator_options_size(void) { return sizeof(sr_estimator_options); }
 size_t sr_estimator_data_head_size(void) { return offsetof(est_data, core); }
 size_t sr_estimator_report_size(void) { return sizeof(sr_estimator_report); }
 
-/* the excitation design's options of the estimator's */
+/* the excitation design's options of the estimator's (its identified estimates: the model's,
+ * set where the model is built) */
 static sr_exd_options exd_options(const sr_estimator_options *o)
 {
-    sr_exd_options x = {o->excite_rate_try, o->excite_window, o->excite_settle,
-                        o->excite_horizon};
+    sr_exd_options x;
+    memset(&x, 0, sizeof x);
+    x.rate = o->excite_rate_try;
+    x.window = o->excite_window;
+    x.settle = o->excite_settle;
+    x.horizon = o->excite_horizon;
     return x;
 }
 
@@ -454,19 +459,14 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
         return 1;
     }
     const sr_exd_options exd = exd_options(o);
-    const char *bad;
-    if (sr_exd_options_check(&exd, &bad)) {
-        const struct { const char *name, *rule; double v; } rules[4] = {
-            {"ident.excite_rate_try", " must be in [0.1, 10] and not 1, got ", exd.rate},
-            {"ident.excite_window", " must be > 0 s and <= 1e7 s, got ", exd.window},
-            {"ident.excite_settle", " must be >= 0 s and <= 1e7 s, got ", exd.settle},
-            {"ident.excite_horizon", " must be > 0 s and <= 1e7 s, got ", exd.horizon}};
-        for (int i = 0; i < 4; i++)
-            if (strcmp(bad, rules[i].name) == 0) {
-                set_msg(err, errlen, rules[i].name);
-                cat(err, errlen, rules[i].rule);
-                cat_repr(err, errlen, rules[i].v);
-            }
+    const char *bad, *rule;
+    double value;
+    if (sr_exd_options_check(&exd, &bad, &rule, &value)) {
+        set_msg(err, errlen, bad);
+        cat(err, errlen, " must be ");
+        cat(err, errlen, rule);
+        cat(err, errlen, ", got ");
+        cat_repr(err, errlen, value);
         return 1;
     }
     return 0;
@@ -702,6 +702,7 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     /* the excitation's rate (excite_design.h): automatic where the filter runs and excitation
      * is requested */
     m->exd = exd_options(opt);
+    memcpy(m->exd.identified, m->identified, sizeof m->exd.identified);
     m->adapt = opt->excite_adapt == 1 || (opt->excite_adapt == 0 && m->info
                                           && opt->excite_mode != 0);
     if (m->adapt && !m->info) {
@@ -1764,7 +1765,6 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
     int mode = m->opt.excite_mode;
     r->excite = (mode == 2 || (mode == 1 && !(r->identified[0] && r->identified[1])))
                     ? m->opt.excite_level : 0.0;
-    r->excite_rate = 1.0;
     if (m->adapt) {
         const sr_exd_data *x = (const sr_exd_data *)((const char *)data + m->off_exd);
         r->excite_rate = x->rate;

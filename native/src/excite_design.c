@@ -8,21 +8,37 @@
 
 #define MU SR_INFO_MAX_U
 
-int sr_exd_options_check(const sr_exd_options *o, const char **name)
+int sr_exd_options_check(const sr_exd_options *o, const char **name, const char **rule,
+                         double *value)
 {
-    const char *bad = NULL;
-    if (!o)
+    const char *bad = NULL, *why = NULL;
+    double v = NAN;
+    if (!o) {
         bad = "ident.excite_rate_try";
-    else if (!(o->rate >= SR_EXD_RATE_MIN && o->rate <= SR_EXD_RATE_MAX) || o->rate == 1.0)
+        why = "given";
+    } else if (!(o->rate >= SR_EXD_RATE_MIN && o->rate <= SR_EXD_RATE_MAX) || o->rate == 1.0) {
         bad = "ident.excite_rate_try";
-    else if (!(o->window > 0.0 && o->window <= SR_EXD_TIME_MAX))
+        why = "in [0.1, 10] and not 1";
+        v = o->rate;
+    } else if (!(o->window > 0.0 && o->window <= SR_EXD_TIME_MAX)) {
         bad = "ident.excite_window";
-    else if (!(o->settle >= 0.0 && o->settle <= SR_EXD_TIME_MAX))
+        why = "> 0 s and <= 1e7 s";
+        v = o->window;
+    } else if (!(o->settle >= 0.0 && o->settle <= SR_EXD_TIME_MAX)) {
         bad = "ident.excite_settle";
-    else if (!(o->horizon > 0.0 && o->horizon <= SR_EXD_TIME_MAX))
+        why = ">= 0 s and <= 1e7 s";
+        v = o->settle;
+    } else if (!(o->horizon > 0.0 && o->horizon <= SR_EXD_TIME_MAX)) {
         bad = "ident.excite_horizon";
+        why = "> 0 s and <= 1e7 s";
+        v = o->horizon;
+    }
     if (name)
         *name = bad;
+    if (rule)
+        *rule = why;
+    if (value)
+        *value = v;
     return bad != NULL;
 }
 
@@ -37,24 +53,20 @@ void sr_exd_init(sr_exd_data *x)
 }
 
 /* the predicted largest scaled bound (bound / error scale at the filter's estimate, over the
- * identified estimates) of S(fd) + factor dS; NaN where the prediction fails */
-static double predicted(const sr_info_model *im, const sr_info_data *fd, const double *dS,
-                        double factor)
+ * estimates o identifies) of S(fd) + factor dS; NaN where the prediction fails */
+static double predicted(const sr_exd_options *o, const sr_info_model *im,
+                        const sr_info_data *fd, const double *dS, double factor)
 {
     double vec[20], bound[20], scale[20], worst = 0.0;
     if (sr_info_estimate(im, fd, 2, vec, bound, NULL) != 0 ||
         sr_info_predict(im, fd, dS, factor, bound) != 0)
         return NAN;
     sr_error_scale(vec, SR_COM_SCALE_MIN, scale);
-    for (int i = 0; i < 20; i++) {
-        /* a planar robot identifies m, b_x, b_y, I_zz per body (the others move with them
-           through the parallel axes, bound > 0, but keep their guesses) */
-        const int k = i % 10;
-        if (im->planar && !(k == 0 || k == 1 || k == 2 || k == 6))
-            continue;
-        if (bound[i] > 0.0 && bound[i] / scale[i] > worst)
+    /* (a planar robot's out-of-plane entries move with the identified ones through the
+       parallel axes, bound > 0, but keep their guesses) */
+    for (int i = 0; i < 20; i++)
+        if (o->identified[i] && bound[i] > 0.0 && bound[i] / scale[i] > worst)
             worst = bound[i] / scale[i];
-    }
     return isfinite(worst) ? worst : NAN;
 }
 
@@ -118,8 +130,8 @@ int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im
         /* each rate's bound at the horizon if the rest of the run added what its window did;
          * back at rate 1 after one more settle */
         double back = left - o->settle > 0.0 ? left - o->settle : 0.0;
-        x->score[0] = predicted(im, fd, x->dS, back / x->w_slow);
-        x->score[1] = predicted(im, fd, dS_fast, left / (t - x->t_mark));
+        x->score[0] = predicted(o, im, fd, x->dS, back / x->w_slow);
+        x->score[1] = predicted(o, im, fd, dS_fast, left / (t - x->t_mark));
         x->phase = SR_EXD_DONE;
         if (!isfinite(x->score[0]) || !isfinite(x->score[1])) {
             x->score[0] = x->score[1] = 0.0;     /* no prediction: the rate stays 1 */

@@ -63,6 +63,8 @@ typedef struct sr_exd_options {
                                to switch (the project's plant: 2 excite.ramp) */
     double horizon;         /* ident.excite_horizon [s] > 0: the time the bound is predicted
                                for (the run's length) */
+    int identified[20];     /* 1 for the reported estimates the robot identifies (the
+                               estimator's layout): the score's maximum runs over these */
 } sr_exd_options;
 
 /** The state. S_mark and dS are nu x nu, row stride SR_INFO_MAX_U (the filter's unknowns). */
@@ -78,8 +80,11 @@ typedef struct sr_exd_data {
     double dS[SR_INFO_MAX_U * SR_INFO_MAX_U];       /* information the rate-1 window added */
 } sr_exd_data;
 
-/** 0 when o is valid, else 1 with the offending FMU parameter's name in *name (static). */
-SR_API int sr_exd_options_check(const sr_exd_options *o, const char **name);
+/** 0 when o's numbers are valid, else 1 with why: the offending FMU parameter's name, the rule
+ *  it breaks ("in [0.1, 10] and not 1", static strings) and its value (any pointer may be
+ *  NULL). */
+SR_API int sr_exd_options_check(const sr_exd_options *o, const char **name, const char **rule,
+                                double *value);
 
 /** The state before any sample: phase SR_EXD_WAIT, rate 1. */
 SR_API void sr_exd_init(sr_exd_data *x);

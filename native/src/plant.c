@@ -412,7 +412,7 @@ static void excitation_update(const sr_plant_model *md, sr_plant_data *d)
     d->ramp[0] = s[0];
     d->ramp[1] = target;
     d->ramp[2] = d->t;
-    d->ramp[3] = md->ex_ramp;
+    d->ramp[3] = md->ex.ramp;
 }
 
 /* -- the controllers ----------------------------------------------------------------------- */
@@ -944,7 +944,7 @@ static int model_ok(const sr_plant_model *md)
            && md->nv == md->nb + md->n && md->nx == 6 + md->nq + md->nv + 7
            && md->ny == 64 + 5 * md->n && md->n_att == (md->planar ? 1 : 3)
            && md->n_ch == md->n_att + md->n && md->h > 0.0 && md->h <= 1.0
-           && md->ex_ramp > 0.0;
+           && md->ex.ramp > 0.0;
 }
 
 /* spacerobot.robots.check_body: finite, m > 0, symmetric positive definite inertia whose
@@ -1086,7 +1086,6 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
         model->q_home[i] = q_home != NULL ? q_home[i] : 0.0;
     model->h = h;
     model->ex = *ex;
-    model->ex_ramp = ex->ramp;
     /* propellant (simulator.propellant_array): all zero when its model is off */
     model->m0 = prop->m0;
     if (prop->m0 > 0.0) {
@@ -1227,7 +1226,7 @@ SR_API int sr_plant_start(const sr_plant_model *model, sr_plant_data *data)
     data->ramp[0] = 0.0;
     data->ramp[1] = 0.0;
     data->ramp[2] = 0.0;
-    data->ramp[3] = model->ex_ramp;
+    data->ramp[3] = model->ex.ramp;
     data->dyn = model->dyn;
     data->ex_rate[0] = 0.0;                         /* no level requested, the own rate */
     data->ex_rate[2] = 1.0;
@@ -1566,7 +1565,7 @@ SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, 
             rp[j] = ex[j];
     } else {
         rp[0] = rp[1] = rp[2] = rp[4] = 0.0;
-        rp[3] = model->ex_ramp;
+        rp[3] = model->ex.ramp;
         rp[5] = rp[6] = 1.0;
     }
     if (!sr_finite_all(rp, SR_PLANT_EXCITE_STATE) || !(rp[3] > 0.0)

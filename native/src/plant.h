@@ -163,7 +163,6 @@ typedef struct sr_plant_model {
     double q_home[SR_MAX_JOINTS];        /* null-space posture, also the initial one [rad] */
     double h;                            /* internal RK4 step [s] */
     sr_plant_excitation ex;              /* the excitation's bounds, period, ramp */
-    double ex_ramp;                      /* duration of a level change [s] */
     double pp[6];                        /* propellant: 1/(Isp g0) [s/m] (0: model off),
                                             1/arm [1/m], (2/5) R^2 [m2], tank centre r (3) */
     double m0;                           /* initial propellant mass [kg] */

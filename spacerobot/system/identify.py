@@ -33,8 +33,8 @@ import numpy as np
 
 from ..estimator import ExcitationRequest, Identifier
 from ..estimator.identifier import identifier_from_values
-from ..interface import (ESTIMATE_NAMES, Var, estimator_vars, identified_estimates,
-                         measurement_vars)
+from ..interface import (ESTIMATE_NAMES, EXCITE_SCORES, Var, estimator_vars,
+                         identified_estimates, measurement_vars)
 from ..robots import check_robot, get_robot, robot_label, scenario
 from .recorder import read_csv, write_csv
 from .runner import RunResult, format_results
@@ -171,7 +171,7 @@ def _row(ident: Identifier, request: ExcitationRequest, outs: List[Var]) -> List
         elif group == "excite_rate":
             row.append(float(rep.excite_rate))
         elif group == "excite_score":
-            row.append(float(rep.excite_score[("rate_1", "rate_try").index(v.key[1])]))
+            row.append(float(rep.excite_score[EXCITE_SCORES.index(v.key[1])]))
         elif group in ("identified", "physical"):
             row.append(float(getattr(rep, group)[v.key[1]]))
         elif group == "excite":

@@ -323,7 +323,7 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
             break
     for prefix in ("estimator.", ""):
         rate = data.get(f"{prefix}ident.excite_rate")
-        score = [data.get(f"{prefix}diag.excite_score.rate_{k}") for k in ("1", "try")]
+        score = [data.get(f"{prefix}diag.excite_score.{k}") for k in interface.EXCITE_SCORES]
         if rate is not None and len(rate) and all(s is not None and len(s) for s in score):
             if score[0][-1] > 0:
                 out.append(f"the excitation rate the estimator chose (ident.excite_adapt): "
