@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "fmi_layer.h"
+#include "sr_text.h"
 
 #define VARIABLES_FILE "spacerobot_variables.txt"
 #define MAX_VARIABLES 4096
@@ -56,7 +57,7 @@ static void vlog(sr_instance *inst, sr_log_category cat, const char *fmt, va_lis
            : cat == SR_LOG_DISCARD ? SR_DISCARD : SR_OK;
     if (!inst || !inst->emit) return;
     if ((cat == SR_LOG_EVENTS || cat == SR_LOG_ALL) && !inst->log_events) return;
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    sr_text_vformat(msg, sizeof msg, fmt, ap);      /* numbers independent of the locale */
     inst->emit(inst, st, SR_FMI_CATEGORY[cat], msg);
 }
 

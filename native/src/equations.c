@@ -130,11 +130,6 @@ static void body_rows(int force, int k, const double *r_O, const double *A, cons
     shift(E, cP, cS + 4, -1.0);                          /* -(D or Q) T: eq. 22 */
 }
 
-SR_API int sr_sample_length(int n)
-{
-    return SR_X_LEN(n);
-}
-
 SR_API int sr_equations(const sr_robot *robot, int force, const double *x, double *E)
 {
     const double *r_S, *v_S, *a_S, *q, *qd, *qdd, *Fm, *Mm, *Jm, *Hm;

@@ -19,6 +19,7 @@
 #define SR_EQUATIONS_H
 
 #include "arm.h"
+#include "sample.h"
 #include "sr_api.h"
 
 #ifdef __cplusplus
@@ -33,24 +34,7 @@ extern "C" {
 #define SR_COL_PSI 22     /* psi: 20 columns, multiplies D(mu) */
 #define SR_N_COLS 42
 
-/* layout of the flat sample x (spacerobot.estimator.identifier.KEYS order) */
-#define SR_X_R_S 0        /* r_S (3) base sensor point position [m] */
-#define SR_X_V_S 3        /* v_S (3) its velocity [m/s] */
-#define SR_X_A_B 6        /* A (9) base DCM body -> inertial, row-major */
-#define SR_X_OMEGA_B 15   /* omega_B (3) base angular velocity, base frame [rad/s] */
-#define SR_X_A_S 18       /* a_S (3) acceleration of S [m/s2] */
-#define SR_X_ALPHA_B 21   /* alpha_B (3) base angular acceleration, base frame [rad/s2] */
-#define SR_X_Q 24                          /* q (n) joint angles [rad] */
-#define SR_X_QD(n) (SR_X_Q + (n))          /* qd (n) joint rates [rad/s] */
-#define SR_X_QDD(n) (SR_X_Q + 2 * (n))     /* qdd (n) joint accelerations [rad/s2] */
-#define SR_X_F(n) (SR_X_Q + 3 * (n))       /* F (3) total external force (thrust) [N] */
-#define SR_X_M(n) (SR_X_Q + 3 * (n) + 3)   /* M (3) its moment about S [N.m] */
-#define SR_X_J(n) (SR_X_Q + 3 * (n) + 6)   /* J (3) linear momentum of the system [N.s] */
-#define SR_X_H(n) (SR_X_Q + 3 * (n) + 9)   /* H (3) angular momentum about the origin [N.m.s] */
-#define SR_X_LEN(n) (SR_X_Q + 3 * (n) + 12)
-
-/** Length of the flat sample of a robot with n joints: 24 + 3 n + 12. */
-SR_API int sr_sample_length(int n);
+/* the flat sample x: sample.h (SR_X_*) */
 
 /** The equations of one sample into E (3 x SR_N_COLS, row-major), see the top of this file.
  *  force: 1 force form (eqs. 28/31), 0 momentum form (eqs. 11/16); x: the flat sample

@@ -20,173 +20,7 @@
 #include "noise_profile.h"
 #include "physical.h"
 #include "sr_math.h"
-
-/* -- messages (locale-independent number formatting) ------------------------------------------ */
-
-/* append the string s to buf (size n, NUL-terminated) */
-static void cat(char *buf, size_t n, const char *s)
-{
-    size_t len = strlen(buf);
-    while (*s && len + 1 < n)
-        buf[len++] = *s++;
-    buf[len] = '\0';
-}
-
-/* append the integer v */
-static void cat_int(char *buf, size_t n, long v)
-{
-    char tmp[24];
-    int i = 0, neg = v < 0;
-    unsigned long u = neg ? 0UL - (unsigned long)v : (unsigned long)v;
-    do {
-        tmp[i++] = (char)('0' + (int)(u % 10));
-        u /= 10;
-    } while (u && i < 22);
-    if (neg)
-        tmp[i++] = '-';
-    char out[24];
-    for (int j = 0; j < i; j++)
-        out[j] = tmp[i - 1 - j];
-    out[i] = '\0';
-    cat(buf, n, out);
-}
-
-/* append x as C's "%.{sig}g" would in the "C" locale (never the C library's formatting) */
-static void cat_num(char *buf, size_t n, double x, int sig)
-{
-    if (x != x) {
-        cat(buf, n, "nan");
-        return;
-    }
-    if (isinf(x)) {
-        cat(buf, n, x > 0 ? "inf" : "-inf");
-        return;
-    }
-    if (x == 0.0) {
-        cat(buf, n, signbit(x) ? "-0" : "0");
-        return;
-    }
-    if (sig < 1)
-        sig = 1;
-    if (sig > 17)
-        sig = 17;
-    char out[64];
-    int o = 0;
-    if (x < 0) {
-        out[o++] = '-';
-        x = -x;
-    }
-    int e10 = (int)floor(sr_log10(x));
-    int shift = sig - 1 - e10;
-    if (shift > 300) {                       /* below ~1e-284: 10^shift overflows; two steps */
-        x *= 1e300;
-        shift -= 300;
-    }
-    double scale = sr_pow10(shift);
-    double dig = floor(x * scale + 0.5);                     /* sig digits as an integer */
-    double top = sr_pow10(sig);
-    if (dig >= top) {
-        dig = floor(dig / 10.0 + 0.5);
-        e10++;
-    }
-    char d[20];
-    for (int i = sig - 1; i >= 0; i--) {
-        d[i] = (char)('0' + (int)fmod(dig, 10.0));
-        dig = floor(dig / 10.0);
-    }
-    int nd = sig;
-    while (nd > 1 && d[nd - 1] == '0')                       /* strip trailing zeros */
-        nd--;
-    if (e10 < -4 || e10 >= sig) {                            /* d.ddde+XX */
-        out[o++] = d[0];
-        if (nd > 1) {
-            out[o++] = '.';
-            for (int i = 1; i < nd; i++)
-                out[o++] = d[i];
-        }
-        out[o++] = 'e';
-        out[o++] = e10 < 0 ? '-' : '+';
-        int ae = e10 < 0 ? -e10 : e10;
-        if (ae >= 100)
-            out[o++] = (char)('0' + ae / 100);
-        out[o++] = (char)('0' + (ae / 10) % 10);
-        out[o++] = (char)('0' + ae % 10);
-    } else if (e10 < 0) {                                    /* 0.000ddd */
-        out[o++] = '0';
-        out[o++] = '.';
-        for (int i = 0; i < -e10 - 1; i++)
-            out[o++] = '0';
-        for (int i = 0; i < nd; i++)
-            out[o++] = d[i];
-    } else {                                                 /* ddd.ddd */
-        for (int i = 0; i <= e10; i++)
-            out[o++] = i < nd ? d[i] : '0';
-        if (nd > e10 + 1) {
-            out[o++] = '.';
-            for (int i = e10 + 1; i < nd; i++)
-                out[o++] = d[i];
-        }
-    }
-    out[o] = '\0';
-    cat(buf, n, out);
-}
-
-/* append x as Python's repr of a float: the shortest digits that give x back (checked in
- * double arithmetic, good for messages), "1.5", "-1.0", "1e+16", "1e-05", "nan", "inf" */
-static void cat_repr(char *buf, size_t n, double x)
-{
-    if (!isfinite(x) || x == 0.0) {
-        cat_num(buf, n, x, 1);
-        if (x == 0.0)
-            cat(buf, n, ".0");
-        return;
-    }
-    double ax = fabs(x);
-    int e10 = (int)floor(sr_log10(ax)), sig = 17;
-    for (int s = 1; s <= 17; s++) {                          /* the shortest round trip */
-        double scale = sr_pow10(s - 1 - e10);
-        double dig = floor(ax * scale + 0.5);
-        if (dig / scale == ax || dig * sr_pow10(e10 + 1 - s) == ax) {
-            sig = s;
-            break;
-        }
-    }
-    char tmp[64];
-    tmp[0] = '\0';
-    if (e10 >= -5 && e10 < 16) {                             /* fixed notation */
-        /* %.{sig}g switches to exponents at e10 >= sig: pad with the integer digits */
-        cat_num(tmp, sizeof tmp, x, e10 + 1 > sig ? e10 + 1 : sig);
-        if (e10 == -5) {                                     /* repr: 1e-05, not 0.00001 */
-            tmp[0] = '\0';
-            cat_num(tmp, sizeof tmp, x, sig);
-        }
-        if (!strchr(tmp, '.') && !strchr(tmp, 'e'))
-            cat(tmp, sizeof tmp, ".0");
-    } else {
-        cat_num(tmp, sizeof tmp, x, sig);
-    }
-    cat(buf, n, tmp);
-}
-
-/* append "[a b c]" of v (k values, 4 significant digits, as NumPy's array2string precision=4) */
-static void cat_vec(char *buf, size_t n, const double *v, int k)
-{
-    cat(buf, n, "[");
-    for (int i = 0; i < k; i++) {
-        if (i)
-            cat(buf, n, " ");
-        cat_num(buf, n, v[i], 4);
-    }
-    cat(buf, n, "]");
-}
-
-static void set_msg(char *buf, size_t n, const char *s)
-{
-    if (n) {
-        buf[0] = '\0';
-        cat(buf, n, s);
-    }
-}
+#include "sr_text.h"
 
 /* -- options ------------------------------------------------------------------------------------ */
 
@@ -241,61 +75,61 @@ static int check_body(const char *name, const double *g, char *err, size_t errle
 {
     for (int i = 0; i < 10; i++)
         if (!isfinite(g[i])) {
-            set_msg(err, errlen, name);
-            cat(err, errlen, ": parameters must be finite numbers, got mass=");
-            cat_num(err, errlen, g[0], 6);
-            cat(err, errlen, ", b=");
-            cat_vec(err, errlen, g + 1, 3);
-            cat(err, errlen, ", inertia=");
-            cat_vec(err, errlen, g + 4, 6);
+            sr_text_set(err, errlen, name);
+            sr_text_cat(err, errlen, ": parameters must be finite numbers, got mass=");
+            sr_text_num(err, errlen, g[0], 6);
+            sr_text_cat(err, errlen, ", b=");
+            sr_text_vec(err, errlen, g + 1, 3);
+            sr_text_cat(err, errlen, ", inertia=");
+            sr_text_vec(err, errlen, g + 4, 6);
             return 1;
         }
     if (g[0] <= 0.0) {
-        set_msg(err, errlen, name);
-        cat(err, errlen, ".m must be > 0 kg, got ");
-        cat_repr(err, errlen, g[0]);
+        sr_text_set(err, errlen, name);
+        sr_text_cat(err, errlen, ".m must be > 0 kg, got ");
+        sr_text_repr(err, errlen, g[0]);
         return 1;
     }
     /* Ixx Iyy Izz Ixy Ixz Iyz -> the tensor; its principal moments */
     double I[9] = {g[4], g[7], g[8], g[7], g[5], g[9], g[8], g[9], g[6]}, w[3], V[9];
     if (sr_eigh(I, 3, w, V) != 0 || w[0] <= 0.0) {
-        set_msg(err, errlen, name);
-        cat(err, errlen, " inertia must be positive definite; principal moments ");
-        cat_vec(err, errlen, w, 3);
-        cat(err, errlen, " kg.m2");
+        sr_text_set(err, errlen, name);
+        sr_text_cat(err, errlen, " inertia must be positive definite; principal moments ");
+        sr_text_vec(err, errlen, w, 3);
+        sr_text_cat(err, errlen, " kg.m2");
         return 1;
     }
     if (w[2] > w[0] + w[1] + 1e-12 * w[2]) {
-        set_msg(err, errlen, name);
-        cat(err, errlen, " inertia violates the triangle inequality: principal moments ");
-        cat_vec(err, errlen, w, 3);
-        cat(err, errlen, " kg.m2 (largest must not exceed the sum of the other two)");
+        sr_text_set(err, errlen, name);
+        sr_text_cat(err, errlen, " inertia violates the triangle inequality: principal moments ");
+        sr_text_vec(err, errlen, w, 3);
+        sr_text_cat(err, errlen, " kg.m2 (largest must not exceed the sum of the other two)");
         return 1;
     }
     /* the physical ranges (beyond the Python Identifier's rules, which hold above): values
      * outside them are no real body, and in them every product the estimator forms stays far
      * from overflow (m |b|^2 <= 1e21, D(mu); the sd of b ~ sqrt(P0) / m <= 1e21) */
     if (!(g[0] >= SR_EST_MASS_MIN && g[0] <= SR_EST_MASS_MAX)) {
-        set_msg(err, errlen, name);
-        cat(err, errlen, ".m must be within [1e-06, 1e+15] kg, got ");
-        cat_repr(err, errlen, g[0]);
+        sr_text_set(err, errlen, name);
+        sr_text_cat(err, errlen, ".m must be within [1e-06, 1e+15] kg, got ");
+        sr_text_repr(err, errlen, g[0]);
         return 1;
     }
     for (int i = 0; i < 3; i++)
         if (!(fabs(g[1 + i]) <= SR_EST_COM_MAX)) {
-            set_msg(err, errlen, name);
-            cat(err, errlen, ".b[");
-            cat_int(err, errlen, i + 1);
-            cat(err, errlen, "] must be within [-1000, 1000] m (a centre of mass within 1 km "
+            sr_text_set(err, errlen, name);
+            sr_text_cat(err, errlen, ".b[");
+            sr_text_int(err, errlen, i + 1);
+            sr_text_cat(err, errlen, "] must be within [-1000, 1000] m (a centre of mass within 1 km "
                              "of the body frame's origin), got ");
-            cat_repr(err, errlen, g[1 + i]);
+            sr_text_repr(err, errlen, g[1 + i]);
             return 1;
         }
     if (!(w[0] >= SR_EST_INERTIA_MIN && w[2] <= SR_EST_INERTIA_MAX)) {
-        set_msg(err, errlen, name);
-        cat(err, errlen, " inertia: principal moments must be within [1e-06, 1e+15] kg.m2, "
+        sr_text_set(err, errlen, name);
+        sr_text_cat(err, errlen, " inertia: principal moments must be within [1e-06, 1e+15] kg.m2, "
                          "got ");
-        cat_vec(err, errlen, w, 3);
+        sr_text_vec(err, errlen, w, 3);
         return 1;
     }
     return 0;
@@ -304,11 +138,11 @@ static int check_body(const char *name, const double *g, char *err, size_t errle
 /* "what = v is not one of choices" (Code.parse) */
 static void bad_code(char *err, size_t errlen, const char *what, int v, const char *choices)
 {
-    set_msg(err, errlen, what);
-    cat(err, errlen, " = ");
-    cat_int(err, errlen, v);
-    cat(err, errlen, " is not one of ");
-    cat(err, errlen, choices);
+    sr_text_set(err, errlen, what);
+    sr_text_cat(err, errlen, " = ");
+    sr_text_int(err, errlen, v);
+    sr_text_cat(err, errlen, " is not one of ");
+    sr_text_cat(err, errlen, choices);
 }
 
 /* the options' checks, in the order of identifier_from_values / Identifier.__init__ */
@@ -337,82 +171,82 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
     double rs[2] = {o->row_sd_lin, o->row_sd_ang};
     for (int i = 0; i < 2; i++)
         if (!(isfinite(rs[i]) && rs[i] >= 0.0)) {
-            set_msg(err, errlen, row_names[o->method - 1][i]);
-            cat(err, errlen, " must be a finite number >= 0 (0 = unit weight), got ");
-            cat_repr(err, errlen, rs[i]);
+            sr_text_set(err, errlen, row_names[o->method - 1][i]);
+            sr_text_cat(err, errlen, " must be a finite number >= 0 (0 = unit weight), got ");
+            sr_text_repr(err, errlen, rs[i]);
             return 1;
         }
     if (!(o->lambda > 0.0 && o->lambda <= 1.0)) {
-        set_msg(err, errlen, "forgetting factor lambda must satisfy 0 < lambda <= 1, got ");
-        cat_repr(err, errlen, o->lambda);
+        sr_text_set(err, errlen, "forgetting factor lambda must satisfy 0 < lambda <= 1, got ");
+        sr_text_repr(err, errlen, o->lambda);
         return 1;
     }
     if (!(o->sd_rel > 0.0 && o->sd_rel < 1.0)) {
-        set_msg(err, errlen, "relative standard deviation threshold ident.sd_rel must satisfy "
+        sr_text_set(err, errlen, "relative standard deviation threshold ident.sd_rel must satisfy "
                              "0 < sd_rel < 1, got ");
-        cat_repr(err, errlen, o->sd_rel);
+        sr_text_repr(err, errlen, o->sd_rel);
         return 1;
     }
     if (o->diff_half_window < 1 || o->diff_half_window > SR_EST_MAX_HALF_WINDOW) {
-        set_msg(err, errlen, "ident.diff_half_window must be an integer from 1 to 50, got ");
-        cat_int(err, errlen, o->diff_half_window);
+        sr_text_set(err, errlen, "ident.diff_half_window must be an integer from 1 to 50, got ");
+        sr_text_int(err, errlen, o->diff_half_window);
         return 1;
     }
     if (o->corr_lags < 0 || o->corr_lags > SR_EST_MAX_CORR_LAGS) {
-        set_msg(err, errlen, "ident.corr_lags must be an integer from 0 to 10000, got ");
-        cat_int(err, errlen, o->corr_lags);
+        sr_text_set(err, errlen, "ident.corr_lags must be an integer from 0 to 10000, got ");
+        sr_text_int(err, errlen, o->corr_lags);
         return 1;
     }
     if (!(isfinite(o->momentum_window) && o->momentum_window >= 0.0
           && o->momentum_window <= 1e6)) {
-        set_msg(err, errlen, "ident.momentum_window must be a number of seconds from 0 to "
+        sr_text_set(err, errlen, "ident.momentum_window must be a number of seconds from 0 to "
                              "1e+06, got ");
-        cat_repr(err, errlen, o->momentum_window);
+        sr_text_repr(err, errlen, o->momentum_window);
         return 1;
     }
     /* identifier._thrust_sd: each a number from 0 to MAX_THRUST_SD */
     const double tsd[2] = {o->sd_thrust_scale, o->sd_thrust_misalign};
     for (int i = 0; i < 2; i++)
         if (!(tsd[i] >= 0.0 && tsd[i] <= SR_EST_MAX_THRUST_SD)) {
-            set_msg(err, errlen, i ? "ident.sd_thrust.misalign" : "ident.sd_thrust.scale");
-            cat(err, errlen, " must be a number from 0 to 1, got ");
-            cat_repr(err, errlen, tsd[i]);
+            sr_text_set(err, errlen, i ? "ident.sd_thrust.misalign" : "ident.sd_thrust.scale");
+            sr_text_cat(err, errlen, " must be a number from 0 to 1, got ");
+            sr_text_repr(err, errlen, tsd[i]);
             return 1;
         }
     if (o->momentum_window_samples != 0 && (o->momentum_window_samples < 2
                                             || o->momentum_window_samples
                                                    > SR_EST_MAX_WINDOW_SAMPLES)) {
-        set_msg(err, errlen, "momentum_window_samples (the momentum window's ring) must be 0 "
+        sr_text_set(err, errlen, "momentum_window_samples (the momentum window's ring) must be 0 "
                              "(automatic) or an integer from 2 to 100000, got ");
-        cat_int(err, errlen, o->momentum_window_samples);
+        sr_text_int(err, errlen, o->momentum_window_samples);
         return 1;
     }
     if (o->momentum_point != 0 && o->momentum_point != 1) {
-        set_msg(err, errlen, "ident.momentum_point must be 0 or 1, got ");
-        cat_int(err, errlen, o->momentum_point);
+        sr_text_set(err, errlen, "ident.momentum_point must be 0 or 1, got ");
+        sr_text_int(err, errlen, o->momentum_point);
         return 1;
     }
     if (o->accel_bias != 0 && o->accel_bias != 1) {
-        set_msg(err, errlen, "ident.accel_bias must be 0 or 1, got ");
-        cat_int(err, errlen, o->accel_bias);
+        sr_text_set(err, errlen, "ident.accel_bias must be 0 or 1, got ");
+        sr_text_int(err, errlen, o->accel_bias);
         return 1;
     }
     if (o->diff_momentum != 0 && o->diff_momentum != 1) {
-        set_msg(err, errlen, "ident.diff_momentum must be 0 or 1, got ");
-        cat_int(err, errlen, o->diff_momentum);
+        sr_text_set(err, errlen, "ident.diff_momentum must be 0 or 1, got ");
+        sr_text_int(err, errlen, o->diff_momentum);
         return 1;
     }
     if (check_body("guess.base", o->guess_base, err, errlen)
         || check_body("guess.target", o->guess_target, err, errlen))
         return 1;
     if (!(o->P0_mu > 0.0 && isfinite(o->P0_mu))) {
-        set_msg(err, errlen, "P0_mu must be a finite covariance > 0, got ");
-        cat_repr(err, errlen, o->P0_mu);
+        sr_text_set(err, errlen, "P0_mu must be a finite covariance > 0, got ");
+        sr_text_repr(err, errlen, o->P0_mu);
         return 1;
     }
     if (!(o->P0_theta > 0.0 && isfinite(o->P0_theta))) {
-        set_msg(err, errlen, "P0_theta must be a finite covariance > 0, got ");
-        cat_repr(err, errlen, o->P0_theta);
+        sr_text_set(err, errlen, "P0_theta must be a finite covariance > 0, got ");
+        sr_text_repr(err, errlen, o->P0_theta);
         return 1;
     }
     /* beyond the Python rules: the prior's weight 1 / P0 and the covariances' products stay
@@ -420,16 +254,16 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
     const double P0[2] = {o->P0_mu, o->P0_theta};
     for (int i = 0; i < 2; i++)
         if (!(P0[i] >= SR_EST_P0_MIN && P0[i] <= SR_EST_P0_MAX)) {
-            set_msg(err, errlen, i ? "P0_theta" : "P0_mu");
-            cat(err, errlen, " must be a covariance within [1e-12, 1e+16] (SI units), got ");
-            cat_repr(err, errlen, P0[i]);
+            sr_text_set(err, errlen, i ? "P0_theta" : "P0_mu");
+            sr_text_cat(err, errlen, " must be a covariance within [1e-12, 1e+16] (SI units), got ");
+            sr_text_repr(err, errlen, P0[i]);
             return 1;
         }
     for (int i = 0; i < 6; i++)
         if (!(isfinite(o->signal_sd[i]) && o->signal_sd[i] >= 0.0)) {
-            set_msg(err, errlen, noise_names[i]);
-            cat(err, errlen, " must be a finite number >= 0, got ");
-            cat_repr(err, errlen, o->signal_sd[i]);
+            sr_text_set(err, errlen, noise_names[i]);
+            sr_text_cat(err, errlen, " must be a finite number >= 0, got ");
+            sr_text_repr(err, errlen, o->signal_sd[i]);
             return 1;
         }
     if (o->information < 0 || o->information > 2) {
@@ -438,7 +272,7 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
         return 1;
     }
     if (o->information == 1 && o->noise_profile != 1) {
-        set_msg(err, errlen, "ident.information = 1 needs the sensors' noise model: set "
+        sr_text_set(err, errlen, "ident.information = 1 needs the sensors' noise model: set "
                              "ident.noise_profile = 1 (which turns it on) and the noise.* "
                              "parameters");
         return 1;
@@ -449,8 +283,8 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
         return 1;
     }
     if (!(o->excite_level >= 0.0 && o->excite_level <= 1.0)) {
-        set_msg(err, errlen, "ident.excite_level must be in [0, 1], got ");
-        cat_repr(err, errlen, o->excite_level);
+        sr_text_set(err, errlen, "ident.excite_level must be in [0, 1], got ");
+        sr_text_repr(err, errlen, o->excite_level);
         return 1;
     }
     if (o->excite_adapt < 0 || o->excite_adapt > 2) {
@@ -462,11 +296,11 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
     const char *bad, *rule;
     double value;
     if (sr_exd_options_check(&exd, &bad, &rule, &value)) {
-        set_msg(err, errlen, bad);
-        cat(err, errlen, " must be ");
-        cat(err, errlen, rule);
-        cat(err, errlen, ", got ");
-        cat_repr(err, errlen, value);
+        sr_text_set(err, errlen, bad);
+        sr_text_cat(err, errlen, " must be ");
+        sr_text_cat(err, errlen, rule);
+        sr_text_cat(err, errlen, ", got ");
+        sr_text_repr(err, errlen, value);
         return 1;
     }
     return 0;
@@ -498,22 +332,22 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     if (err && errlen)
         err[0] = '\0';
     if (!robot || !opt) {
-        set_msg(err, errlen, "sr_estimator_model_new: robot and options are required");
+        sr_text_set(err, errlen, "sr_estimator_model_new: robot and options are required");
         return NULL;
     }
     if (robot->n < 1 || robot->n > SR_MAX_JOINTS) {
-        set_msg(err, errlen, "the robot must have 1 to 12 joints, got ");
-        cat_int(err, errlen, robot->n);
+        sr_text_set(err, errlen, "the robot must have 1 to 12 joints, got ");
+        sr_text_int(err, errlen, robot->n);
         return NULL;
     }
     sr_estimator_options eff;                /* the options with the noise profile applied */
     sr_noise_profile_error why;
     if (sr_noise_profile_apply(opt, &eff, &why)) {
-        set_msg(err, errlen, why.name);
-        cat(err, errlen, " must be ");
-        cat(err, errlen, why.rule);
-        cat(err, errlen, ", got ");
-        cat_repr(err, errlen, why.value);
+        sr_text_set(err, errlen, why.name);
+        sr_text_cat(err, errlen, " must be ");
+        sr_text_cat(err, errlen, why.rule);
+        sr_text_cat(err, errlen, ", got ");
+        sr_text_repr(err, errlen, why.value);
         return NULL;
     }
     opt = &eff;
@@ -521,7 +355,7 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         return NULL;
     sr_estimator_model *m = (sr_estimator_model *)calloc(1, sizeof *m);
     if (!m) {
-        set_msg(err, errlen, "out of memory");
+        sr_text_set(err, errlen, "out of memory");
         return NULL;
     }
     m->robot = *robot;
@@ -686,7 +520,7 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     m->info = opt->information == 1;
     if (m->info) {                  /* the information filter (information.h) */
         if (info_model(m, robot, opt) != 0) {
-            set_msg(err, errlen, "ident.information = 1 needs white sensor noise to weigh "
+            sr_text_set(err, errlen, "ident.information = 1 needs white sensor noise to weigh "
                                  "the equations by (noise.scale > 0 and one of noise.nav.r, "
                                  "nav.v, gyro.arw, star.cross, star.roll, enc.q, "
                                  "enc.resolution, enc.qd > 0)");
@@ -706,7 +540,7 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     m->adapt = opt->excite_adapt == 1 || (opt->excite_adapt == 0 && m->info
                                           && opt->excite_mode != 0);
     if (m->adapt && !m->info) {
-        set_msg(err, errlen, "ident.excite_adapt = 1 needs the information filter: set "
+        sr_text_set(err, errlen, "ident.excite_adapt = 1 needs the information filter: set "
                              "ident.noise_profile = 1 with the sensors' noise.* magnitudes, "
                              "and leave ident.information at 0 (automatic) or 1");
         free(m);
@@ -773,28 +607,28 @@ static int explain_rejection(const sr_estimator_model *m, const double *x, char 
                 inrange = 0;
         }
         if (!finite) {
-            set_msg(msg, n, "non-finite input ");
-            cat(msg, n, KEYS[k]);
-            cat(msg, n, " = ");
-            cat_vec(msg, n, x + o, sizes[k]);
+            sr_text_set(msg, n, "non-finite input ");
+            sr_text_cat(msg, n, KEYS[k]);
+            sr_text_cat(msg, n, " = ");
+            sr_text_vec(msg, n, x + o, sizes[k]);
             return SR_EST_REJECT_NONFINITE;
         }
         if (!inrange) {
-            set_msg(msg, n, "input ");
-            cat(msg, n, KEYS[k]);
-            cat(msg, n, " = ");
-            cat_vec(msg, n, x + o, sizes[k]);
-            cat(msg, n, " is beyond the physical range |x| <= 1e+15 (SI units?)");
+            sr_text_set(msg, n, "input ");
+            sr_text_cat(msg, n, KEYS[k]);
+            sr_text_cat(msg, n, " = ");
+            sr_text_vec(msg, n, x + o, sizes[k]);
+            sr_text_cat(msg, n, " is beyond the physical range |x| <= 1e+15 (SI units?)");
             return SR_EST_REJECT_NONFINITE;
         }
     }
     double err, det;
     sr_rotation_error(x + SR_X_A_B, &err, &det);
-    set_msg(msg, n, "base.A is not a rotation matrix (|A^T A - I| = ");
-    cat_num(msg, n, err, 3);
-    cat(msg, n, " > 1e-06 or det = ");
-    cat_num(msg, n, det, 6);
-    cat(msg, n, " <= 0)");
+    sr_text_set(msg, n, "base.A is not a rotation matrix (|A^T A - I| = ");
+    sr_text_num(msg, n, err, 3);
+    sr_text_cat(msg, n, " > 1e-06 or det = ");
+    sr_text_num(msg, n, det, 6);
+    sr_text_cat(msg, n, " <= 0)");
     return SR_EST_REJECT_INCONSISTENT;
 }
 
@@ -1147,23 +981,23 @@ static int reject(est_data *d, int status, const char *why, char *msg, size_t ms
 {
     d->rejected = count_up(d->rejected);
     d->status = status;
-    set_msg(d->msg, sizeof d->msg, why);
+    sr_text_set(d->msg, sizeof d->msg, why);
     if (msg && msglen)
-        set_msg(msg, msglen, d->msg);
+        sr_text_set(msg, msglen, d->msg);
     return status;
 }
 
 /* "name = v is out of range lo..hi" (a Data block's count or index) */
 static void bad_count(char *err, size_t errlen, const char *name, long v, long lo, long hi)
 {
-    set_msg(err, errlen, "the estimator's state block is not valid: ");
-    cat(err, errlen, name);
-    cat(err, errlen, " = ");
-    cat_int(err, errlen, v);
-    cat(err, errlen, " is out of its range ");
-    cat_int(err, errlen, lo);
-    cat(err, errlen, "..");
-    cat_int(err, errlen, hi);
+    sr_text_set(err, errlen, "the estimator's state block is not valid: ");
+    sr_text_cat(err, errlen, name);
+    sr_text_cat(err, errlen, " = ");
+    sr_text_int(err, errlen, v);
+    sr_text_cat(err, errlen, " is out of its range ");
+    sr_text_int(err, errlen, lo);
+    sr_text_cat(err, errlen, "..");
+    sr_text_int(err, errlen, hi);
 }
 
 int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char *err,
@@ -1172,7 +1006,7 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
     if (err && errlen)
         err[0] = '\0';
     if (!m || !data) {
-        set_msg(err, errlen, "the estimator's state block is not valid: no model or no block");
+        sr_text_set(err, errlen, "the estimator's state block is not valid: no model or no block");
         return 1;
     }
     const est_data *d = (const est_data *)data;
@@ -1180,7 +1014,7 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
     /* the history holds 2 m samples (none without differenced accelerations), each ring L */
     int cap = 2 * m->half, L = m->lags;
     if (d->magic != EST_MAGIC) {
-        set_msg(err, errlen, "the estimator's state block is not valid (not initialised, or "
+        sr_text_set(err, errlen, "the estimator's state block is not valid (not initialised, or "
                              "not an estimator's state)");
         return 1;
     }
@@ -1216,7 +1050,7 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
             f->replayed < 0 || f->replayed > 1 ||
             (!f->replayed && f->samples > SR_INFO_REPLAY) ||
             !sr_info_data_finite(&m->info_m, f)) {
-            set_msg(err, errlen, "the estimator's state block is not valid: the information "
+            sr_text_set(err, errlen, "the estimator's state block is not valid: the information "
                                  "filter's counters are out of range or its numbers not "
                                  "finite");
             return 1;
@@ -1224,13 +1058,13 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
     }
     if (m->adapt && !sr_exd_data_valid(&m->exd, (const sr_exd_data *)((const char *)data
                                                                       + m->off_exd))) {
-        set_msg(err, errlen, "the estimator's state block is not valid: the excitation "
+        sr_text_set(err, errlen, "the estimator's state block is not valid: the excitation "
                              "design's phase or rate is out of range or its numbers not "
                              "finite");
         return 1;
     }
     if (!memchr(d->msg, '\0', sizeof d->msg)) {
-        set_msg(err, errlen, "the estimator's state block is not valid: its message is not "
+        sr_text_set(err, errlen, "the estimator's state block is not valid: its message is not "
                              "terminated");
         return 1;
     }
@@ -1328,14 +1162,14 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
     int status = SR_EST_ESTIMATING;
     if (!sample) {
         status = SR_EST_REJECT_INCONSISTENT;
-        set_msg(why, sizeof why, "no sample given");
+        sr_text_set(why, sizeof why, "no sample given");
     } else if (sr_sample_check(sample, m->nflat, SR_EST_INPUT_LIMIT, SR_EST_ROTATION_TOL) != 0) {
         status = explain_rejection(m, sample, why, sizeof why);
     }
     if (status != SR_EST_ESTIMATING || !isfinite(t)) {
         if (!isfinite(t)) {
-            set_msg(why, sizeof why, "non-finite sample time ");
-            cat_num(why, sizeof why, t, 6);
+            sr_text_set(why, sizeof why, "non-finite sample time ");
+            sr_text_num(why, sizeof why, t, 6);
         }
         return reject(d, status != SR_EST_ESTIMATING ? status : SR_EST_REJECT_NONFINITE, why,
                       msg, msglen);
@@ -1365,12 +1199,12 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         }
     }
     if (has_last && !(t > last)) {
-        set_msg(why, sizeof why, "differenced accelerations, the moving reference and the "
+        sr_text_set(why, sizeof why, "differenced accelerations, the moving reference and the "
                                  "thrust integrals need increasing sample times: t = ");
-        cat_num(why, sizeof why, t, 6);
-        cat(why, sizeof why, " s after ");
-        cat_num(why, sizeof why, last, 6);
-        cat(why, sizeof why, " s");
+        sr_text_num(why, sizeof why, t, 6);
+        sr_text_cat(why, sizeof why, " s after ");
+        sr_text_num(why, sizeof why, last, 6);
+        sr_text_cat(why, sizeof why, " s");
         return reject(d, SR_EST_REJECT_INCONSISTENT, why, msg, msglen);
     }
 
@@ -1488,11 +1322,11 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         while (win_drop + 1 < c->win_count && win_at(m, data, c, win_drop + 1)[0] <= limit)
             win_drop++;
         if (c->win_count - win_drop + 1 > m->win_cap) {
-            set_msg(why, sizeof why, "the momentum window's ring is full (");
-            cat_int(why, sizeof why, m->win_cap);
-            cat(why, sizeof why, " samples within ident.momentum_window = ");
-            cat_num(why, sizeof why, m->win_len, 6);
-            cat(why, sizeof why, " s; sized for samples at least 1 ms apart unless "
+            sr_text_set(why, sizeof why, "the momentum window's ring is full (");
+            sr_text_int(why, sizeof why, m->win_cap);
+            sr_text_cat(why, sizeof why, " samples within ident.momentum_window = ");
+            sr_text_num(why, sizeof why, m->win_len, 6);
+            sr_text_cat(why, sizeof why, " s; sized for samples at least 1 ms apart unless "
                                  "momentum_window_samples says otherwise): sample skipped");
             return reject(d, SR_EST_REJECT_INCONSISTENT, why, msg, msglen);
         }
@@ -1731,7 +1565,7 @@ void sr_estimator_message(const sr_estimator_model *m, const void *data, char *m
     char buf[SR_EST_MSG_LEN];
     memcpy(buf, d->msg, sizeof buf);         /* NUL-terminated even in a corrupt block */
     buf[SR_EST_MSG_LEN - 1] = '\0';
-    set_msg(msg, msglen, buf);
+    sr_text_set(msg, msglen, buf);
 }
 
 void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
