@@ -53,12 +53,12 @@ DEFAULT_OUT = ROOT / "spacerobot" / "core" / "lib"
 MODELS = {"estimator": "SpaceRobotEstimator", "sensors": "SpaceRobotSensors",
           "plant": "SpaceRobotPlant"}
 #: the core modules each model's binary is built from (the estimator carries no plant code)
-MODEL_SOURCES = {"estimator": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "sample.c", "equations.c", "differencing.c",
+MODEL_SOURCES = {"estimator": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c", "equations.c", "differencing.c",
                                "physical.c", "sensor_noise.c", "noise_profile.c", "information.c",
                                "excite_design.c",
                                "estimator.c", "est_paper.c", "est_joint.c"),
                  "sensors": ("sr_math.c", "sr_text.c", "sample.c", "rng.c", "sensor_noise.c", "sensors.c"),
-                 "plant": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "sample.c", "dynamics.c", "plant.c")}
+                 "plant": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c", "dynamics.c", "plant.c")}
 
 #: flags of every compilation: C99, optimised (-O3: 9 % fewer instructions per estimator sample
 #: than -O2, the same results bit for bit: no reassociation without -ffast-math), no contraction

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "body.h"
 #include "differencing.h"
 #include "equations.h"
 #include "est_internal.h"
@@ -68,71 +69,6 @@ static sr_exd_options exd_options(const sr_estimator_options *o)
     x.settle = o->excite_settle;
     x.horizon = o->excite_horizon;
     return x;
-}
-
-/* robots.check_body of a guess (name "guess.base" / "guess.target"): 0 ok, else a message */
-static int check_body(const char *name, const double *g, char *err, size_t errlen)
-{
-    for (int i = 0; i < 10; i++)
-        if (!isfinite(g[i])) {
-            sr_text_set(err, errlen, name);
-            sr_text_cat(err, errlen, ": parameters must be finite numbers, got mass=");
-            sr_text_num(err, errlen, g[0], 6);
-            sr_text_cat(err, errlen, ", b=");
-            sr_text_vec(err, errlen, g + 1, 3);
-            sr_text_cat(err, errlen, ", inertia=");
-            sr_text_vec(err, errlen, g + 4, 6);
-            return 1;
-        }
-    if (g[0] <= 0.0) {
-        sr_text_set(err, errlen, name);
-        sr_text_cat(err, errlen, ".m must be > 0 kg, got ");
-        sr_text_repr(err, errlen, g[0]);
-        return 1;
-    }
-    /* Ixx Iyy Izz Ixy Ixz Iyz -> the tensor; its principal moments */
-    double I[9] = {g[4], g[7], g[8], g[7], g[5], g[9], g[8], g[9], g[6]}, w[3], V[9];
-    if (sr_eigh(I, 3, w, V) != 0 || w[0] <= 0.0) {
-        sr_text_set(err, errlen, name);
-        sr_text_cat(err, errlen, " inertia must be positive definite; principal moments ");
-        sr_text_vec(err, errlen, w, 3);
-        sr_text_cat(err, errlen, " kg.m2");
-        return 1;
-    }
-    if (w[2] > w[0] + w[1] + 1e-12 * w[2]) {
-        sr_text_set(err, errlen, name);
-        sr_text_cat(err, errlen, " inertia violates the triangle inequality: principal moments ");
-        sr_text_vec(err, errlen, w, 3);
-        sr_text_cat(err, errlen, " kg.m2 (largest must not exceed the sum of the other two)");
-        return 1;
-    }
-    /* the physical ranges (beyond the Python Identifier's rules, which hold above): values
-     * outside them are no real body, and in them every product the estimator forms stays far
-     * from overflow (m |b|^2 <= 1e21, D(mu); the sd of b ~ sqrt(P0) / m <= 1e21) */
-    if (!(g[0] >= SR_EST_MASS_MIN && g[0] <= SR_EST_MASS_MAX)) {
-        sr_text_set(err, errlen, name);
-        sr_text_cat(err, errlen, ".m must be within [1e-06, 1e+15] kg, got ");
-        sr_text_repr(err, errlen, g[0]);
-        return 1;
-    }
-    for (int i = 0; i < 3; i++)
-        if (!(fabs(g[1 + i]) <= SR_EST_COM_MAX)) {
-            sr_text_set(err, errlen, name);
-            sr_text_cat(err, errlen, ".b[");
-            sr_text_int(err, errlen, i + 1);
-            sr_text_cat(err, errlen, "] must be within [-1000, 1000] m (a centre of mass within 1 km "
-                             "of the body frame's origin), got ");
-            sr_text_repr(err, errlen, g[1 + i]);
-            return 1;
-        }
-    if (!(w[0] >= SR_EST_INERTIA_MIN && w[2] <= SR_EST_INERTIA_MAX)) {
-        sr_text_set(err, errlen, name);
-        sr_text_cat(err, errlen, " inertia: principal moments must be within [1e-06, 1e+15] kg.m2, "
-                         "got ");
-        sr_text_vec(err, errlen, w, 3);
-        return 1;
-    }
-    return 0;
 }
 
 /* "what = v is not one of choices" (Code.parse) */
@@ -236,8 +172,8 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
         sr_text_int(err, errlen, o->diff_momentum);
         return 1;
     }
-    if (check_body("guess.base", o->guess_base, err, errlen)
-        || check_body("guess.target", o->guess_target, err, errlen))
+    if (sr_body_check("guess.base", o->guess_base, err, errlen)
+        || sr_body_check("guess.target", o->guess_target, err, errlen))
         return 1;
     if (!(o->P0_mu > 0.0 && isfinite(o->P0_mu))) {
         sr_text_set(err, errlen, "P0_mu must be a finite covariance > 0, got ");

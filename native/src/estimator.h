@@ -46,20 +46,10 @@ extern "C" {
 /* largest ident.diff_half_window and ident.corr_lags */
 #define SR_EST_MAX_HALF_WINDOW 50
 #define SR_EST_MAX_CORR_LAGS 10000
-/* the accepted ranges of the guesses and initial covariances (beyond the Python Identifier's
- * rules: finite, m > 0, inertia a real body's, P0 > 0): a body of 1 mg to 1e15 kg (the input
- * limit), its centre of mass within 1 km of its frame's origin, principal moments of 1e-6 to
- * 1e15 kg.m2; covariances of 1e-12 to 1e16 (SI units; a prior sd of 1e8 kg or kg.m2 says no
- * more than "unknown", and beyond it the covariance update P - K H P cancels every digit of a
- * double: the samples are then rejected). Every product the estimator forms of values in these
- * ranges stays finite (m |b|^2 <= 1e21; 1 / P0 <= 1e12; sd of b ~ sqrt(P0) / m <= 1e14); the
- * project's parameter sets lie well inside (m 100..600 kg, |b| <= 0.2 m, moments 10..100
- * kg.m2, P0 1..1e12). */
-#define SR_EST_MASS_MIN 1e-6
-#define SR_EST_MASS_MAX 1e15
-#define SR_EST_COM_MAX 1e3
-#define SR_EST_INERTIA_MIN 1e-6
-#define SR_EST_INERTIA_MAX 1e15
+/* the accepted range of the initial covariances: 1e-12 to 1e16 (SI units; a prior sd of 1e8 kg
+ * or kg.m2 says no more than "unknown", and beyond it the covariance update P - K H P cancels
+ * every digit of a double: the samples are then rejected; 1 / P0 <= 1e12). The guesses' ranges:
+ * body.h. */
 #define SR_EST_P0_MIN 1e-12
 #define SR_EST_P0_MAX 1e16
 /* the momentum window's ring (sr_estimator_options.momentum_window_samples): the most
