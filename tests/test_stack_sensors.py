@@ -1,8 +1,10 @@
-"""The sensors FMU's stack: every function of its binary's sources (the sensor models, the glue, the
-FMI layer of both versions) has a frame of at most 16 kB (gcc -O3 -fstack-usage, the build's
-flags), and a whole run of the FMU (instantiate, initialise, 20 steps with the realistic noise,
-read every output, free) works in a thread with a 64 KiB stack (tests/c_host/stack_host.c)
-with the outputs of the same run on an 8 MiB stack.
+"""The sensors FMU's stack and heap: every function of its binary's sources (the sensor models, the
+glue, the FMI layer of both versions) has a frame of at most 16 kB (gcc -O3 -fstack-usage, the
+build's flags); a whole run of the FMU (instantiate, initialise, 20 steps with the realistic
+noise, read every output, free) works in a thread with a 64 KiB stack (tests/c_host/stack_host.c)
+with the outputs of the same run on an 8 MiB stack; and an instance takes the heap its
+variables and its state need (glibc's mallinfo2 around fmi2Instantiate), not fixed slots for
+4096 variables (688 kB).
 """
 from __future__ import annotations
 
@@ -84,12 +86,15 @@ def sensors_fmu(tmp_path_factory):
     return work, nh.native_fmu(work, MODEL, "spatial", None, lib, "stack")
 
 
-def _run(exe: Path, fmu, stack: int, outputs) -> np.ndarray:
+def _run(exe: Path, fmu, stack: int, outputs):
+    """(the outputs after 20 steps, the heap bytes of the instance)."""
     cmd = [str(exe), str(fmu.so), fmu.guid, fmu.uri, str(stack), "20", "0.1",
            ",".join(str(vr) for vr in outputs)]
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=nh.empty_env())
     assert r.returncode == 0, f"stack {stack}: exit status {r.returncode}\n{r.stderr[-2000:]}"
-    return np.array([float(x) for x in r.stdout.split()])
+    lines = r.stdout.split("\n")
+    assert lines[0].startswith("heap "), r.stdout[:200]
+    return np.array([float(x) for x in lines[1:] if x]), int(lines[0].split()[1])
 
 
 def test_a_run_in_a_thread_with_a_64_KiB_stack(sensors_fmu, tmp_path):
@@ -100,10 +105,28 @@ def test_a_run_in_a_thread_with_a_64_KiB_stack(sensors_fmu, tmp_path):
                         str(exe), str(STACK_HOST), "-ldl"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     outputs = fmu.vrs("Real", "output")
-    small = _run(exe, fmu, THREAD_STACK, outputs)
-    large = _run(exe, fmu, 8 << 20, outputs)
+    small, heap = _run(exe, fmu, THREAD_STACK, outputs)
+    large, _ = _run(exe, fmu, 8 << 20, outputs)
     assert small.shape == (len(outputs),) and np.all(np.isfinite(small))
     assert np.array_equal(small, large)
     # the measurements differ from the inputs' start values: the noise was drawn and applied
     start = np.array([fmu.start["true." + fmu.variables[vr].name] for vr in outputs])
     assert np.count_nonzero(small != start) > len(outputs) // 2
+
+
+def test_an_instance_takes_the_heap_its_variables_need(sensors_fmu, tmp_path):
+    """The variable slots follow the table: the whole instance (variables, values, the sensors'
+    state with its 100-sample delay ring, 57.6 kB) within 200 kB, where 4096 fixed slots
+    alone took 688 kB."""
+    import ctypes.util
+    if not ctypes.util.find_library("c") or nh.c_compiler() is None:
+        pytest.skip("no C library or compiler")
+    work, fmu = sensors_fmu
+    exe = tmp_path / "stack_host"
+    subprocess.run([nh.c_compiler(), "-std=c99", "-O1", "-pthread", "-o", str(exe),
+                    str(STACK_HOST), "-ldl"], check=True)
+    _, heap = _run(exe, fmu, THREAD_STACK, fmu.vrs("Real", "output")[:1])
+    if heap < 0:
+        pytest.skip("mallinfo2 is glibc's (2.33 or later)")
+    print(f"the sensors instance ({len(fmu.variables)} variables): {heap} bytes of heap")
+    assert 57_600 < heap < 200_000

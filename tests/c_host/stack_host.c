@@ -6,15 +6,17 @@
  *
  * In the thread: instantiate, set Real variables (VR=VALUE, before initialisation), set up at
  * t = 0, initialise, NSTEPS steps of H seconds (each from the end of the last), read the Real
- * variables READ_VRS, free. Prints the values read, one per line as %.17g, and exits 0; exits
- * 1 if a call did not return fmi2OK (the FMU's messages go to stderr), 2 on a usage or loading
- * error.
+ * variables READ_VRS, free. Prints "heap <bytes>", the heap an instance takes (glibc's
+ * mallinfo2 around fmi2Instantiate; -1 elsewhere), then the values read, one per line as
+ * %.17g, and exits 0; exits 1 if a call did not return fmi2OK (the FMU's messages go to
+ * stderr), 2 on a usage or loading error.
  *
  * usage: stack_host BINARY GUID RESOURCE_URI STACK_BYTES NSTEPS H READ_VRS [VR=VALUE ...]
  *        (READ_VRS: comma-separated value references)
  */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE
 #include <dlfcn.h>
+#include <malloc.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -44,6 +46,7 @@ static struct {
     fmi2ValueReference read[MAXV], set[MAXV];
     double set_value[MAXV], out[MAXV];
     size_t nread, nset;
+    long long heap;
     int failed;
 } run;
 
@@ -76,15 +79,28 @@ static void *sym(const char *name) {
         }                                                                                    \
     } while (0)
 
+/* bytes allocated on the heap now (-1: unknown) */
+static long long heap_in_use(void) {
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || __GLIBC_MINOR__ >= 33)
+    struct mallinfo2 m = mallinfo2();
+    return (long long)(m.uordblks + m.hblkhd);
+#else
+    return -1;
+#endif
+}
+
 /* the whole life of one instance, on the thread's stack */
 static void *simulate(void *arg) {
     static fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2Component c;
     double t = 0.0;
     int k;
+    long long before;
     (void)arg;
+    before = heap_in_use();
     c = ((instantiate_fn)sym("fmi2Instantiate"))("stack", fmi2CoSimulation, run.guid, run.uri, &cb,
                                                   fmi2False, fmi2False);
+    run.heap = before < 0 ? -1 : heap_in_use() - before;
     if (!c) {
         fprintf(stderr, "stack_host: fmi2Instantiate returned NULL\n");
         run.failed = 1;
@@ -157,6 +173,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (run.failed) return 1;
+    printf("heap %lld\n", run.heap);
     for (i = 0; i < run.nread; ++i) printf("%.17g\n", run.out[i]);
     return 0;
 }
