@@ -141,6 +141,29 @@ def test_bad_parameters_are_refused_by_name(fmu, name, value, says):
     assert status == ERROR and any(says in m[2] for m in msgs), msgs
 
 
+def test_every_declared_bound_is_accepted(fmu):
+    """The declared min / max are not narrower than the core's checks: each parameter at either
+    bound initialises (the magnitudes 0 when noise.scale is at its max: their products with it
+    have the magnitudes' own limits); tests/test_conformance_ranges.py: not wider either."""
+    from fmpy import read_model_description
+
+    params = [v for v in read_model_description(str(fmu)).modelVariables
+              if v.causality == "parameter"]
+    magnitudes = {v.name: 0.0 for v in params if v.type == "Real" and v.name != "noise.scale"}
+    for v in params:
+        for bound in (v.min, v.max):
+            values = {**(magnitudes if v.name == "noise.scale" else {}), v.name: bound}
+            s = Inst(fmu, "bound")
+            s.fmu.setupExperiment(startTime=0.0)
+            s.fmu.enterInitializationMode()
+            for name, x in values.items():
+                assert s.set(name, x) == OK
+            status, msgs = s.call(s.fmu.exitInitializationMode)
+            assert status == OK, (v.name, bound, msgs)
+            assert s.step(0.0, DT) == OK
+            s.free()
+
+
 def test_a_nan_input_is_passed_on_with_a_warning(fmu):
     s = Inst(fmu, "nan").init({"seed": 1})
     ins, outs = _inputs(s)
