@@ -26,7 +26,7 @@ SDS = [f"sd.{n}" for n in ESTIMATES]
 @pytest.fixture(scope="module")
 def native_fmus(tmp_path_factory):
     out = tmp_path_factory.mktemp("native")
-    return {r: build_fmu("estimator", scenario(r), out / r, backend="native")
+    return {r: build_fmu("estimator", scenario(r), out / r)
             for r in ("planar", "spatial")}
 
 

@@ -178,24 +178,6 @@ def test_a_nan_input_is_passed_on_with_a_warning(fmu):
     assert np.all(np.isfinite(list(s.values(outs).values())))
 
 
-def test_the_pythonfmu_sensors_fmu_runs_the_same_core(fmu, tmp_path):
-    """``--backend pythonfmu``: the Python-hosted FMU over the same native core gives the
-    native FMU's outputs bit for bit (realistic noise, a delay, a seed)."""
-    from spacerobot.fmi.build import build_fmu
-
-    py = build_fmu("sensors", scenario("spatial"), tmp_path, backend="pythonfmu")
-    params = {"seed": 9, "noise.delay": 1}
-    a, b = Inst(fmu, "native").init(params), Inst(py, "python").init(params)
-    ins, outs = _inputs(a)
-    xs = np.random.default_rng(8).normal(size=(6, len(ins)))
-    for k, x in enumerate(xs):
-        for inst in (a, b):
-            inst.set_many(ins, x)
-        ya, yb = (list(i.values(outs).values()) for i in (a, b))
-        assert ya == yb, k
-        assert a.step(k * DT, DT) == OK and b.step(k * DT, DT) == OK
-
-
 def test_in_initialisation_mode_outputs_follow_the_inputs(fmu):
     """A master that settles initial values in initialisation mode reads the measurement of
     the inputs set so far (noise.scale = 0: the inputs themselves), not of earlier ones."""

@@ -155,17 +155,6 @@ def known_robot(kind: str, robot: Robot) -> Optional[Robot]:
     return dataclasses.replace(robot, base=PLACEHOLDER_BODY) if what == "arm" else robot
 
 
-def known_scenario(kind: str, sc: Scenario) -> Scenario:
-    """The scenario as the FMU ``kind`` may carry it (a pythonfmu FMU's defaults): the plant all
-    of it; the estimator and the sensors neither the base nor the target (unit placeholders)
-    nor the initial velocities: no truth (their variables' defaults do not depend on these)."""
-    if kind == "plant":
-        return sc
-    robot = dataclasses.replace(sc.robot, base=PLACEHOLDER_BODY)
-    return dataclasses.replace(sc, robot=robot, target=PLACEHOLDER_BODY, v0=(0.0, 0.0, 0.0),
-                               omega0=(0.0, 0.0, 0.0))
-
-
 def scenario_text(sc: Scenario, home: bool) -> str:
     """``resources/scenario.txt``: the scenario's constants a model reads at instantiation
     (IEEE-754 bits: exact and locale-independent): the sample time and, with ``home``, the
