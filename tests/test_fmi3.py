@@ -1,4 +1,4 @@
-"""FMI 3.0 FMUs from the same core and FMI layer as the FMI 2.0 ones (issue #30).
+"""FMI 3.0 FMUs from the same core and FMI layer as the FMI 2.0 ones.
 
 The binaries under test are built from this tree (``native/build.py``: ``fmi_layer.c`` with
 ``fmi3_api.c``, ``-DFMI_VERSION=3``; the FMI 2.0 ones for the comparison with ``fmi2_api.c``)

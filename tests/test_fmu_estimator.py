@@ -1,4 +1,4 @@
-"""The estimator FMU through fmpy, wired to the plant FMU (issue #3).
+"""The estimator FMU through fmpy, wired to the plant FMU.
 
 * Spatial default scenario, noise-free, measured accelerations: every one of the 20 estimates
   within 0.1 % of truth by 60 s, momentum- and force-based, paper and joint solvers, through

@@ -7,7 +7,7 @@ parameters and bad steps.
 * Each invalid parameter makes fmi2ExitInitializationMode fail (fmi2Error) with a readable
   message naming the parameter; the instance can be freed and a fresh one runs.
 * A bad communication step is discarded with the state unchanged.
-* Excitation (issue #12): ``ident.excite`` reaches the core (the FMU equals the core with the
+* Excitation: ``ident.excite`` reaches the core (the FMU equals the core with the
   same level requests); a value outside [0, 1] is clipped with a warning; NaN discards the
   step with the state unchanged; a bad ``excite.*`` parameter fails initialisation by name.
 """
@@ -40,7 +40,7 @@ OUTPUT_KEYS = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "o
                "thrust.H": "H", "system.P": "P", "system.L": "L", "arm.tau": "tau",
                "excite.att_ref": "att_ref", "excite.qd_ref": "qd_ref", "prop.P": "P_x",
                "prop.L": "L_x"}
-#: the base's current truth (issue #17): core ``base_now`` = [m, b (3), Ixx .. Iyz]
+#: the base's current truth: core ``base_now`` = [m, b (3), Ixx .. Iyz]
 TRUTH_BASE = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 
