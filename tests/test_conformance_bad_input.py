@@ -30,6 +30,8 @@ from typing import Optional
 import numpy as np
 import pytest
 
+from spacerobot.fmi.native import LOG_CATEGORIES
+
 from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
 from test_conformance_util import (DISCARD, DT, ERROR, FATAL, OK, ROBOTS, WARNING, Inst,
                                    assert_same, fed_inputs, fmus_for, plant_samples)
@@ -372,6 +374,7 @@ def _check(bad, status, msgs):
     assert status == bad.status, f"status {names.get(status)} (expected {names[bad.status]}); {msgs}"
     assert _matching(msgs, bad.message, bad.log_status), (bad.message, msgs)
     assert all(st < FATAL for st, _, _ in msgs), f"a message logged as Fatal: {msgs}"
+    assert {c for _, c, _ in msgs} <= set(LOG_CATEGORIES), msgs   # declared categories only
 
 
 def test_catalogue_covers_every_category():

@@ -253,6 +253,33 @@ def test_capability_flags(fmu):
     assert _xml(path).get("fmiVersion") == "2.0"
 
 
+# -- log categories ------------------------------------------------------------------------------
+def test_the_declared_log_categories_are_the_layers(fmu):
+    """The model description's categories (spacerobot.fmi.native.LOG_CATEGORIES) are the FMI
+    layer's (native/fmi/fmi_layer.c): fmi2SetDebugLogging accepts each and all of them, refuses
+    one it does not declare; the categories the layer logs with are declared
+    (tests/test_conformance_bad_input.py checks every message it sees)."""
+    from fmpy import read_model_description
+    from fmpy.fmi2 import fmi2String
+
+    from test_conformance_util import ERROR, OK, Inst
+
+    robot, kind, path = fmu
+    declared = [c.name for c in read_model_description(str(path)).logCategories]
+    assert declared == ["logEvents", "logStatusWarning", "logStatusDiscard", "logStatusError",
+                        "logAll"]
+    inst = Inst(path, "categories")
+    try:
+        for names in ([[c] for c in declared] + [declared]):
+            arr = (fmi2String * len(names))(*(n.encode() for n in names))
+            assert inst.fmu.fmi2SetDebugLogging(inst.fmu.component, 1, len(names), arr) == OK
+        arr = (fmi2String * 1)(b"logNothingSuch")
+        status, msgs = inst.call(inst.fmu.fmi2SetDebugLogging, inst.fmu.component, 1, 1, arr)
+        assert status == ERROR and any("unknown category logNothingSuch" in m for _, _, m in msgs)
+    finally:
+        inst.free()
+
+
 # -- docs/fmus.md ---------------------------------------------------------------------------------
 def _expand(pattern: str, n: int):
     """`base.A[1..3,1..3]`, `arm.q[1..n]`, `base.{Ixx,Iyy}` -> the scalar names."""
