@@ -291,13 +291,17 @@ def test_bad_input(request, robot, bad):
     advance(0, K)
     before = inst.outputs()
 
-    if bad.stage == "sample":
+    def bad_sample_step():
+        """Sample K with the bad value, one step: the status and messages checked."""
         name, value = bad.arg
         s = samples[K].copy()
-        s[names.index(name)] = value
-        inst.set_many(names, s)
+        s[fed.index(name)] = value
+        inst.set_many(fed, s)
         status, msgs = inst.call(inst.step, K * DT, DT)
         _check(bad, status, msgs)
+
+    if bad.stage == "sample":
+        bad_sample_step()
         after = inst.outputs()
         assert after["diag.status"] == bad.diag
         assert after["diag.rejected"] == before["diag.rejected"] + 1
@@ -332,12 +336,7 @@ def test_bad_input(request, robot, bad):
         return
 
     if bad.stage == "input":
-        name, value = bad.arg
-        s = samples[K].copy()
-        s[fed.index(name)] = value
-        inst.set_many(fed, s)
-        status, msgs = inst.call(inst.step, K * DT, DT)
-        _check(bad, status, msgs)
+        bad_sample_step()
         advance(K + 1, N)                          # the run goes on
         inst.free()
         return

@@ -94,38 +94,32 @@ def _beyond(v, bound: str):
     return float(np.nextafter(x, -math.inf if bound == "min" else math.inf))
 
 
+def _outside(path, causality):
+    """(variable, value one step beyond one of its bounds) of every parameter or input."""
+    cases = [(v, _beyond(v, bound)) for v in _declared(path) if v.causality == causality
+             for bound in ("min", "max")]
+    cases = [(v, x) for v, x in cases if x is not None]
+    assert cases
+    return cases
+
+
 def test_a_parameter_outside_its_range_is_refused_with_its_name(kind, fmus):
-    cases = 0
-    for v in _declared(fmus[2]):
-        if v.causality != "parameter":
-            continue
-        for bound in ("min", "max"):
-            value = _beyond(v, bound)
-            if value is None:
-                continue
-            inst = Inst(fmus[2], "range")
-            inst.fmu.setupExperiment(startTime=0.0)
-            inst.fmu.enterInitializationMode()
-            assert inst.set(v.name, value) == OK
-            status, msgs = inst.call(inst.fmu.fmi2ExitInitializationMode, inst.fmu.component)
-            assert status == ERROR, (v.name, bound, value, msgs)
-            assert any(st == ERROR and v.name in m for st, _, m in msgs), (v.name, msgs)
-            inst.free()
-            cases += 1
-    assert cases > 0
+    for v, value in _outside(fmus[2], "parameter"):
+        inst = Inst(fmus[2], "range")
+        inst.fmu.setupExperiment(startTime=0.0)
+        inst.fmu.enterInitializationMode()
+        assert inst.set(v.name, value) == OK
+        status, msgs = inst.call(inst.fmu.fmi2ExitInitializationMode, inst.fmu.component)
+        assert status == ERROR, (v.name, value, msgs)
+        assert any(st == ERROR and v.name in m for st, _, m in msgs), (v.name, msgs)
+        inst.free()
 
 
 def test_an_input_outside_its_range_is_reported_with_its_name(kind, fmus):
-    cases = 0
-    for v in _declared(fmus[2]):
-        if v.causality != "input":
-            continue
-        for bound in ("min", "max"):
-            inst = Inst(fmus[2], "range").init()
-            assert inst.set(v.name, _beyond(v, bound)) == OK
-            status, msgs = inst.call(inst.step, 0.0, 0.1)
-            assert any(st in (WARNING, ERROR) and v.name in m for st, _, m in msgs), \
-                (v.name, bound, status, msgs)
-            inst.free()
-            cases += 1
-    assert cases > 0
+    for v, value in _outside(fmus[2], "input"):
+        inst = Inst(fmus[2], "range").init()
+        assert inst.set(v.name, value) == OK
+        status, msgs = inst.call(inst.step, 0.0, 0.1)
+        assert any(st in (WARNING, ERROR) and v.name in m for st, _, m in msgs), \
+            (v.name, value, status, msgs)
+        inst.free()
