@@ -6,7 +6,8 @@ into a cache keyed by the sources, then packaged by :func:`spacerobot.fmi.native
 
 * fmpy validates every FMI 3.0 FMU and simulates it; the outputs equal the FMI 2.0 FMU's (the
   independent computation: the FMI 2.0 layer and fmpy's FMI 2.0 path) to 1e-12 relative;
-* fmusim (FMI 3.0, built from the Reference FMUs in /tmp/h4/hosts) runs each FMU;
+* fmusim (FMI 3.0, the Reference FMUs' host: ``$SPACEROBOT_FMUSIM``, else
+  /tmp/h4/hosts/fmusim/bin/fmusim, as shared/tools/build-hosts.sh builds it) runs each FMU;
 * the closed loop plant + estimator (spatial, 60 s) in the project's runner and in a loop over
   fmpy's FMU3Slave equals the FMI 2.0 loop to 1e-12 relative;
 * the win64 FMI 3.0 binaries under Wine (a C host, tests/c_host/fmu_host3.c, one source with
@@ -20,6 +21,7 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import importlib.util
+import os
 import shutil
 import subprocess
 import sys
@@ -35,7 +37,7 @@ import pytest
 import native_hosts as nh
 
 ROOT = Path(__file__).resolve().parents[1]
-FMUSIM = Path("/tmp/h4/hosts/fmusim/bin/fmusim")
+FMUSIM = Path(os.environ.get("SPACEROBOT_FMUSIM", "/tmp/h4/hosts/fmusim/bin/fmusim"))
 HOST3 = Path(__file__).resolve().parent / "c_host" / "fmu_host3.c"
 KINDS = ("plant", "estimator", "sensors")
 ROBOT = "spatial"
@@ -238,7 +240,8 @@ def test_runner_sensors_system_fmi3_equals_fmi2(fmus, tmp_path):
     assert np.ptp(res[3].data["sensors.base.omega[1]"]) > 0
 
 
-OMSIMULATOR = Path("/tmp/h4/hosts/OMSimulator/install/bin/OMSimulator")
+OMSIMULATOR = Path(os.environ.get("SPACEROBOT_OMSIMULATOR",
+                                  "/tmp/h4/hosts/OMSimulator/install/bin/OMSimulator"))
 
 
 def test_omsimulator_runs_the_fmi3_ssp_equal_to_fmi2(ssps, tmp_path):
