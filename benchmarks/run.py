@@ -75,15 +75,10 @@ def machine() -> dict:
                 break
     except OSError:
         pass
-    try:
-        import pythonfmu
-        pfmu = pythonfmu.__version__
-    except Exception:  # pragma: no cover
-        pfmu = "?"
     return {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version(),
             "numpy": np.__version__,
             "pinocchio": pinocchio.__version__,
-            "fmpy": fmpy.__version__, "pythonfmu": pfmu, "platform": platform.platform(),
+            "fmpy": fmpy.__version__, "platform": platform.platform(),
             "date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
             "load": os.getloadavg()}
 
@@ -683,7 +678,7 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
         ("CPU", info["cpu"]), ("cores (os.cpu_count)", info["cores"]),
         ("platform", info["platform"]), ("Python", info["python"]), ("numpy", info["numpy"]),
         ("pinocchio", info["pinocchio"]), ("fmpy", info["fmpy"]),
-        ("pythonfmu", info["pythonfmu"]), ("date", info["date"]),
+        ("date", info["date"]),
         ("load average (1/5/15 min) at start", " / ".join(f"{x:.2f}" for x in info["load"])),
         ("load average at end", " / ".join(f"{x:.2f}" for x in info["load_end"])),
         ("benchmark run time", f"{info['runtime_s']:.0f} s")]))
@@ -813,8 +808,7 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
              "tracker of the estimates' lag) and its report (physical test and identified flags), every step, "
              "since the excitation request and the identified flags depend on them; the FMI "
              "layer serves `fmi2GetReal` / `fmi2SetReal` from arrays indexed by value reference "
-             "(native/fmi/fmi_layer.c). Section 2 compares it with the pythonfmu-hosted "
-             "estimator (benchmarks/native.py: the same in one run). The master reads and writes every connected "
+             "(native/fmi/fmi_layer.c). The master reads and writes every connected "
              "variable and every recorded output with one FMI call per component and type "
              "through preallocated arrays (`spacerobot/system/instance.py` `ArrayIO`). For "
              f"the ratio target 0.3 the whole communication step would have to cost "
@@ -825,11 +819,11 @@ def render(info, speed, prof, est_cost, batch, acc, mem, quick) -> str:
 
     # 2
     L.append("## 2. Estimator cost per sample\n")
-    L.append("Core = `Identifier.update` (the library's Python class over the native C core, "
-             "which the pythonfmu-hosted estimator FMU runs too) on recorded plant outputs (60 s, CPU time per sample, "
+    L.append("Core = `Identifier.update` (the library's Python class over the native C core) "
+             "on recorded plant outputs (60 s, CPU time per sample, "
              "best of 5 passes, paper solver unless stated). FMU = the estimator FMU of the "
-             "system (the native one since issue #26; `benchmarks/NATIVE.md` compares both "
-             "FMUs and both cores in one run) alone through fmpy: "
+             "system (`benchmarks/NATIVE.md` compares the FMU and both cores in one run) "
+             "alone through fmpy: "
              "`setReal` of the inputs, `doStep` (which runs `update` and refreshes the outputs), "
              "`getReal` of the 20 estimates.\n")
     rows = []

@@ -8,23 +8,18 @@
  * the scenario's sample time (resources/scenario.txt: the first white-noise draws).
  */
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "model.h"
 #include "sensors.h"
+#include "sr_text.h"
 
 const char *const SR_MODEL_IDENTIFIER = "SpaceRobotSensors";
 const int SR_MODEL_FEEDTHROUGH = 1;
 const double SR_MODEL_MAX_STEP = INFINITY;      /* the noise processes take any step */
 
 #define SCENARIO_FILE "scenario.txt"
-
-/* the signals of a sample in the core's order (equations.h), with their element counts (-1: n) */
-static const struct { const char *key; int size; } SIGNALS[] = {
-    {"r_S", 3}, {"v_S", 3}, {"A", 9}, {"omega_B", 3}, {"a_S", 3}, {"alpha_B", 3},
-    {"q", -1}, {"qd", -1}, {"qdd", -1}, {"F", 3}, {"M", 3}, {"J", 3}, {"H", 3}};
 
 typedef struct {
     int n, len;                                   /* joints; sample length SR_X_LEN(n) */
@@ -42,21 +37,23 @@ static int joints(sr_instance *inst) {
     char key[SR_VAR_KEY_MAX];
     int n = 0;
     for (;;) {
-        snprintf(key, sizeof key, "true.q.%d", n);
+        sr_text_format(key, sizeof key, SR_SENSORS_TRUE_PREFIX "q.%d", n);
         if (sr_key_vr(inst, key, 0) < 0 || n == SR_MAX_JOINTS) return n;
         ++n;
     }
 }
 
+/* the sample's values in the order of sample.h, each by its key ("A.<row>.<column>" for the
+   DCM, "<signal>.<index>" for the others): outputs by the key, inputs by true.<key> */
 static int bind(sr_instance *inst, sensors_glue *g) {
-    char key[SR_VAR_KEY_MAX + 8], name[SR_VAR_KEY_MAX];
+    char key[SR_VAR_KEY_MAX], name[SR_VAR_KEY_MAX];
     int k = 0, bad = 0;
-    for (size_t s = 0; s < sizeof SIGNALS / sizeof SIGNALS[0]; ++s) {
-        int size = SIGNALS[s].size < 0 ? g->n : SIGNALS[s].size;
-        for (int i = 0; i < size; ++i, ++k) {
-            if (SIGNALS[s].size == 9) snprintf(name, sizeof name, "A.%d.%d", i / 3, i % 3);
-            else snprintf(name, sizeof name, "%s.%d", SIGNALS[s].key, i);
-            snprintf(key, sizeof key, "true.%s", name);
+    for (int s = 0; s < SR_SIG_COUNT; ++s) {
+        const char *signal = sr_sample_signal_key(s);
+        for (int i = 0; i < sr_sample_signal_size(s, g->n); ++i, ++k) {
+            if (s == SR_SIG_A_B) sr_text_format(name, sizeof name, "%s.%d.%d", signal, i / 3, i % 3);
+            else sr_text_format(name, sizeof name, "%s.%d", signal, i);
+            sr_text_format(key, sizeof key, SR_SENSORS_TRUE_PREFIX "%s", name);
             bad |= (g->vr_in[k] = sr_key_vr(inst, key, 1)) < 0;
             bad |= (g->vr_out[k] = sr_key_vr(inst, name, 1)) < 0;
         }
@@ -142,16 +139,16 @@ int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     sensors_glue *g = model;
     const double *x = sr_reals(inst);
     char where[512] = "";
-    size_t used = 0;
     for (int k = 0; k < g->len; ++k) {
         g->x[k] = x[g->vr_in[k]];
-        if (!isfinite(g->x[k]) && used + SR_VAR_NAME_MAX + 4 < sizeof where)
-            used += (size_t)snprintf(where + used, sizeof where - used, "%s%s", used ? ", " : "",
-                                     sr_variable(inst, g->vr_in[k])->name);
+        if (!(fabs(g->x[k]) <= SR_SAMPLE_LIMIT) && strlen(where) + SR_VAR_NAME_MAX + 4 < sizeof where) {
+            sr_text_cat(where, sizeof where, where[0] ? ", " : "");
+            sr_text_cat(where, sizeof where, sr_variable(inst, g->vr_in[k])->name);
+        }
     }
-    if (used)   /* the estimator rejects such a sample; the sensors pass it on */
-        sr_log(inst, SR_LOG_WARNING, "t = %.6g s: non-finite input(s) %s: passed on unchanged",
-               t, where);
+    if (where[0])   /* the estimator skips such a sample; the sensors measure it as it is */
+        sr_log(inst, SR_LOG_WARNING, "t = %.6g s: input(s) %s non-finite or beyond the physical "
+               "range |x| <= %g (SI units?): measured as they are", t, where, SR_SAMPLE_LIMIT);
     if (sr_sensors_advance(&g->core, &g->state, g->x, h) != 0) {
         sr_log(inst, SR_LOG_DISCARD, "t = %.6g s: the sensors' state is inconsistent; step "
                "refused, state unchanged", t);

@@ -1,4 +1,4 @@
-"""The interface contract: every FMI variable of both FMUs, defined once.
+"""The interface contract: every FMI variable of the three FMUs, defined once.
 
 The FMU wrappers register exactly these variables, the SSD generator wires exactly these
 connectors, and the tests check both against this table. Names are 1-based structured names
@@ -869,9 +869,6 @@ NOISE_PARAMETERS: Dict[str, Tuple[str, float, str]] = {
                               "deviation per axis, drawn once per run (0.5 deg)"),
 }
 
-#: the sensors' error magnitudes in the native core's order (native/src/sensor_noise.h): the
-#: sensors FMU's ``noise.*`` parameters but ``noise.scale``
-SENSOR_MAGNITUDES: Tuple[str, ...] = tuple(n for n in NOISE_PARAMETERS if n != "noise.scale")
 
 #: Integer parameters of the sensors FMU: name -> (default, description)
 SENSOR_INTEGER_PARAMETERS: Dict[str, Tuple[int, str]] = {
@@ -928,3 +925,12 @@ def sensors_dependencies(variables: Sequence[Var]) -> Dict[int, List[int]]:
         deps[i] = [index[("input", k)] for k in keys]
     return deps
 
+
+def __getattr__(name: str):
+    # SENSOR_MAGNITUDES: the sensors' error magnitudes (the ``noise.*`` parameters but
+    # ``noise.scale``) in the native core's order (native/src/sensor_noise.h), read from the core
+    # when first used (this module imports no library)
+    if name == "SENSOR_MAGNITUDES":
+        from .core.sensors import parameter_names
+        return tuple("noise." + n for n in parameter_names())
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

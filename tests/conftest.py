@@ -7,10 +7,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-# pythonfmu from site-packages, before any FMU runs in this process: a pythonfmu FMU loaded
-# in-process puts its resources/ (which bundles a copy of pythonfmu without the binaries) on
-# sys.path, and an FMU built after that would get no binaries/
-import pythonfmu.builder  # noqa: F401
 from fmpy import extract, read_model_description
 
 from spacerobot import interface
@@ -78,9 +74,8 @@ FMI_ERROR = 3
 
 
 def assert_initialisation_fails(path, params: dict, words) -> None:
-    """Setting ``params`` makes fmi2ExitInitializationMode fail with fmi2Error (the front
-    library's status for a refusal the FMU's Python code flags) and a logged error containing every one of ``words``; the
-    instance is freed afterwards."""
+    """Setting ``params`` makes fmi2ExitInitializationMode fail with fmi2Error and a logged
+    error containing every one of ``words``; the instance is freed afterwards."""
     from fmpy.fmi1 import FMICallException
 
     s = logged_slave(path, "bad")

@@ -112,6 +112,42 @@ def test_run_robot_builds_if_needed_and_uses_default_csv_name(workdir):
     assert all(pv is None for _, _, pv in table.values())       # no paper values for small
 
 
+def test_run_fmi3_builds_and_runs_in_one_step(workdir):
+    """``run --robot R --fmi-version 3``: the FMI 3.0 FMUs and their .ssp are built into
+    build/<robot>-fmi3/ and run; the results equal the FMI 2.0 system's (the same core and
+    layer); a second run finds the .ssp fresh (no build); an FMI 2.0 .ssp in that folder is
+    rebuilt as FMI 3.0; --fmi-version with an SSP_FILE is refused."""
+    from lxml import etree
+
+    d = workdir / "fmi3"
+    d.mkdir()
+    args = ["run", "--robot", "planar", "--stop-time", "1", "--no-progress"]
+    p3 = _run([*args, "--fmi-version", "3", "--out", "r3.csv"], cwd=d)
+    assert "building the FMI 3.0 FMUs" in p3.stderr
+    ssp = d / "build" / "planar-fmi3" / "planar.ssp"
+    with zipfile.ZipFile(ssp) as zf:
+        fmus = [n for n in zf.namelist() if n.endswith(".fmu")]
+        for n in fmus:
+            inner = zipfile.ZipFile(zf.open(n))
+            assert etree.fromstring(inner.read("modelDescription.xml")).get("fmiVersion") == "3.0"
+    assert len(fmus) == 2
+    p2 = _run([*args, "--out", "r2.csv"], cwd=d)
+    assert (d / "build" / "planar" / "planar.ssp").is_file()
+    a, b = read_csv(d / "r3.csv"), read_csv(d / "r2.csv")
+    assert list(a) == list(b) and len(a["time"]) == 11
+    for name in a:
+        assert np.array_equal(a[name], b[name]), name
+    assert _table(p3.stdout) == _table(p2.stdout)
+    again = _run([*args, "--fmi-version", "3", "--out", "r3.csv"], cwd=d)
+    assert "building" not in again.stderr
+    shutil.copy2(d / "build" / "planar" / "planar.ssp", ssp)          # an FMI 2.0 system there
+    os.utime(ssp)
+    again = _run([*args, "--fmi-version", "3", "--out", "r3.csv"], cwd=d)
+    assert "building the FMI 3.0 FMUs" in again.stderr
+    bad = _run(["run", str(ssp), "--fmi-version", "3"], cwd=d, check=False)
+    assert bad.returncode != 0 and "--fmi-version goes with --robot" in bad.stderr
+
+
 def test_run_reports_fmu_errors(built, workdir):
     p = _run(["run", built["ssp"], "--stop-time", "1", "--out", workdir / "bad.csv",
               "--set", "plant.base.m=-1"], cwd=workdir, check=False)

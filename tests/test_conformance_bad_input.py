@@ -1,24 +1,25 @@
-"""Interface conformance (issue #5), part 4: the bad-input catalogue.
+"""Interface conformance: the bad-input catalogue of the FMI 2.0 FMUs.
 
 One table (CATALOGUE) of bad inputs, each with the FMI status it must get, the message the FMU
-must log, and what must survive. pythonfmu 0.7.0 can only return OK, Discard (do_step returns
-False) and Fatal (any Python exception); the FMUs' front library returns Error for the exceptions
-the Python side marks as refusals (docs/fmus.md, "Status mapping"), so:
+must log, and what must survive (docs/fmus.md, "Status mapping"); nothing is ever logged with
+status Fatal:
 
 - estimator samples that are non-finite, not a rotation, or so large that the update would
   overflow: OK, a logged warning, ``diag.status`` 3/4, ``diag.rejected`` + 1, every other output
   bit-identical to before, and the run continues exactly as the estimator core run without that
   sample (an independent computation with spacerobot.estimator.Identifier);
+- a sensors input beyond the range the FMU declares: OK with a warning naming it, the run goes
+  on;
 - invalid parameters (masses <= 0, inertias not positive definite or violating the triangle
   inequality, non-finite values, h, bounds, lambda, covariances, unknown method/solver/
   accel_source): Error at fmi2ExitInitializationMode with a logged error naming the parameter;
   the instance can be freed and a new instance in the same process runs normally;
 - communication steps that are zero, negative, non-finite or (plant) longer than 100 s, and
-  non-finite communication points: Discard with a message, every output unchanged, and the run
+  non-finite communication points: Discard with a message; a communication point other than
+  the FMU's time: Error with a message; in both cases every output unchanged, and the run
   continues exactly as a run that never saw the call;
 - calls out of lifecycle order, setting an output, a wrong type or an unknown value reference:
-  Discard (doStep) or Error (the others) with a message, state unchanged; nothing is logged
-  with status Fatal.
+  Discard (doStep) or Error (the others) with a message, state unchanged.
 """
 from __future__ import annotations
 
@@ -28,6 +29,8 @@ from typing import Optional
 
 import numpy as np
 import pytest
+
+from spacerobot.fmi.native import LOG_CATEGORIES
 
 from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
 from test_conformance_util import (DISCARD, DT, ERROR, FATAL, OK, ROBOTS, WARNING, Inst,
@@ -41,7 +44,7 @@ NAN, INF = float("nan"), float("inf")
 class Bad:
     id: str
     kind: str                    # plant | estimator | sensors
-    stage: str                   # param | sample | step | order
+    stage: str                   # param | sample | input | step | order | running
     arg: object                  # see the runners below
     status: int                  # FMI status of the offending call
     message: str                 # regex the logged message must match
@@ -147,10 +150,18 @@ CATALOGUE = [
         r"non-finite communication point nan", DISCARD),
     Bad("estimator-nan-communication-point", "estimator", "step", (NAN, DT), DISCARD,
         r"non-finite communication point nan", DISCARD),
-    # accepted, documented: the plant warns and continues from its own time
-    Bad("plant-communication-point-off", "plant", "step", (5.0, DT), OK,
-        r"communication point .* differs from the plant time .* continuing from the plant state",
-        WARNING),
+    # a step from another time than the FMU's: refused by the layer, every model alike
+    *[Bad(f"{kind}-communication-point-off", kind, "step", (5.0, DT), ERROR,
+          r"fmi2DoStep: the communication point 5 s differs from the FMU's time 0\.4\d* s .*"
+          r"step refused, state unchanged", ERROR)
+      for kind in ("plant", "estimator", "sensors")],
+    *[Bad(f"{kind}-communication-point-a-hair-off", kind, "step", (K * DT * (1 + 1e-6), DT),
+          ERROR, r"differs from the FMU's time", ERROR)
+      for kind in ("plant", "estimator", "sensors")],
+    # sensors inputs outside the range they declare: measured as they are, with a warning
+    Bad("sensors-input-beyond-range", "sensors", "input", ("true.base.r[2]", 1e300), OK,
+        r"t = 0\.4 s: input\(s\) true\.base\.r\[2\] non-finite or beyond the physical range "
+        r"\|x\| <= 1e\+15", WARNING),
     # accepted, documented: the estimator has no longest step (it works per sample)
     Bad("estimator-step-1e9s", "estimator", "step", (0.0, 1e9), OK, r"^$"),
     # -- lifecycle order ----------------------------------------------------------------------
@@ -244,11 +255,13 @@ def test_bad_input(request, robot, bad):
 
     fed = fed_inputs(kind, names)
 
-    def advance(k0, k1):
+    def advance(k0, k1, t0=None):
+        """Samples k0..k1-1 in good steps of DT, from k0 DT (or from t0)."""
         for k in range(k0, k1):
             if fed is not None:
                 inst.set_many(fed, samples[k])
-            assert inst.step(k * DT, DT) == OK
+            t = k * DT if t0 is None else t0 + (k - k0) * DT
+            assert inst.step(t, DT) == OK
 
     if bad.stage == "param":
         fresh = _reference(fmus, kind, names, samples, n=2)
@@ -278,13 +291,17 @@ def test_bad_input(request, robot, bad):
     advance(0, K)
     before = inst.outputs()
 
-    if bad.stage == "sample":
+    def bad_sample_step():
+        """Sample K with the bad value, one step: the status and messages checked."""
         name, value = bad.arg
         s = samples[K].copy()
-        s[names.index(name)] = value
-        inst.set_many(names, s)
+        s[fed.index(name)] = value
+        inst.set_many(fed, s)
         status, msgs = inst.call(inst.step, K * DT, DT)
         _check(bad, status, msgs)
+
+    if bad.stage == "sample":
+        bad_sample_step()
         after = inst.outputs()
         assert after["diag.status"] == bad.diag
         assert after["diag.rejected"] == before["diag.rejected"] + 1
@@ -308,14 +325,20 @@ def test_bad_input(request, robot, bad):
             before = inst.outputs()      # a direct feedthrough (sensors) follows its inputs
         status, msgs = inst.call(inst.step, t, dt)
         _check(bad, status, msgs)
-        if status == DISCARD:
-            assert_same(inst.outputs(), before, "outputs after the discarded step")
+        if status in (DISCARD, ERROR):
+            assert_same(inst.outputs(), before, "outputs after the refused step")
             advance(K, N)                          # retry from t_K with good steps
-        else:
-            advance(K + 1, N)                      # the accepted step consumed step K
+        else:                                      # the accepted step consumed sample K
+            advance(K + 1, N, t0=t + dt)           # and the next step starts where it ended
         got = inst.outputs()
         inst.free()
         assert_same(got, _reference(fmus, kind, names, samples), "run after the bad step")
+        return
+
+    if bad.stage == "input":
+        bad_sample_step()
+        advance(K + 1, N)                          # the run goes on
+        inst.free()
         return
 
     assert bad.stage == "running"
@@ -350,9 +373,10 @@ def _check(bad, status, msgs):
     assert status == bad.status, f"status {names.get(status)} (expected {names[bad.status]}); {msgs}"
     assert _matching(msgs, bad.message, bad.log_status), (bad.message, msgs)
     assert all(st < FATAL for st, _, _ in msgs), f"a message logged as Fatal: {msgs}"
+    assert {c for _, c, _ in msgs} <= set(LOG_CATEGORIES), msgs   # declared categories only
 
 
 def test_catalogue_covers_every_category():
     stages = {b.stage for b in CATALOGUE}
-    assert stages == {"param", "sample", "step", "order", "running"}
+    assert stages == {"param", "sample", "input", "step", "order", "running"}
     assert len({b.id for b in CATALOGUE}) == len(CATALOGUE)

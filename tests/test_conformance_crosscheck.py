@@ -1,11 +1,16 @@
-"""Interface conformance (issue #5), part 6: FMI cross-check artifacts.
+"""Interface conformance: FMI cross-check files.
 
-spacerobot.system.crosscheck writes, per FMU, <Model>.fmu, <Model>_ref.opt, <Model>_ref.csv and
-(estimator) <Model>_in.csv in the fmi-cross-check layout. Here they are
+spacerobot.system.crosscheck writes, per FMU (plant, estimator, sensors), <Model>.fmu,
+<Model>_ref.opt, <Model>_ref.csv and (estimator, sensors) <Model>_in.csv in the fmi-cross-check
+layout. Here they are
 
+- validated by the cross-check's own validator (fmpy.cross_check.validate_vendor_repo.
+  validate_test_fmu, what the cross-check repository runs): no problem for any of the three,
+  while a file with the comma-bearing input names is rejected (negative control);
 - checked against the cross-check rules (opt entries via fmpy's reader, quoted header, time
-  first and monotonic, names that exist in the FMU, every input in _in.csv, at most 10 reference
-  variables, files under 1 MB, start and stop time present);
+  first and monotonic, names that exist in the FMU, every input whose name the validator can
+  read in _in.csv, at most 10 reference variables, files under 1 MB, start and stop time
+  present);
 - checked for content: _in.csv equals the plant outputs from an independent fmpy simulate_fmu
   run of the plant FMU;
 - re-simulated with fmpy.simulate_fmu (input from _in.csv, output interval = StepSize) and
@@ -55,7 +60,7 @@ def test_layout_and_files(artifacts):
         model = xc.MODELS[kind]
         assert folder.parts[-7:] == ("fmus", "2.0", "cs", platform, "spacerobot", "0.1.0", model)
         expected = {f"{model}.fmu", f"{model}_ref.csv", f"{model}_ref.opt", "ReadMe.md"}
-        if kind == "estimator":
+        if kind != "plant":
             expected.add(f"{model}_in.csv")
         assert {p.name for p in folder.iterdir()} == expected
         assert (folder / f"{model}.fmu").read_bytes() == Path(fmus[kind]).read_bytes()
@@ -73,7 +78,7 @@ def test_files_follow_the_cross_check_rules(artifacts):
         opts = xc.read_ref_opt(folder / f"{model}_ref.opt")       # fmpy checks the required keys
         assert (opts["StartTime"], opts["StopTime"], opts["StepSize"]) == (0.0, STOP, STEP)
         assert 0 < opts["RelTol"] < 1e-3
-        files = [("ref", causal["output"])] + ([("in", causal["input"])] if kind == "estimator"
+        files = [("ref", causal["output"])] + ([("in", causal["input"])] if kind != "plant"
                                                else [])
         for suffix, allowed in files:
             path = folder / f"{model}_{suffix}.csv"
@@ -83,8 +88,9 @@ def test_files_follow_the_cross_check_rules(artifacts):
             assert lines[0] == ",".join(f'"{h}"' for h in header)   # every name double-quoted
             assert header[0] == "time"
             assert set(header[1:]) <= set(allowed), set(header[1:]) - set(allowed)
-            if suffix == "in":
-                assert header[1:] == allowed                 # every input, in FMU order
+            if suffix == "in":                               # every input the validator
+                assert header[1:] == [n for n in allowed if "," not in n]   # reads, in order
+                assert len(header) - 1 == len(allowed) - 9    # all but base.A's nine
             else:
                 assert 1 <= len(header) - 1 <= 10            # "at most 10 important variables"
             for line in lines[1:]:
@@ -96,17 +102,44 @@ def test_files_follow_the_cross_check_rules(artifacts):
             assert np.all(np.isfinite(data.view((float, len(header)))))
 
 
-def test_inputs_are_the_plant_outputs(artifacts):
+@pytest.mark.parametrize("kind", ["estimator", "sensors"])
+def test_inputs_are_the_plant_outputs(artifacts, kind):
     from fmpy import simulate_fmu
 
     robot, fmus, folders = artifacts
-    est = folders["estimator"]
-    inputs = xc.read_crosscheck_csv(est / f"{_model(est)}_in.csv")
+    folder = folders[kind]
+    inputs = xc.read_crosscheck_csv(folder / f"{_model(folder)}_in.csv")
     names = list(inputs.dtype.names[1:])
-    plant = simulate_fmu(str(fmus["plant"]), stop_time=STOP, output_interval=STEP, output=names)
+    plant_names = [n.removeprefix("true.") if kind == "sensors" else n for n in names]
+    plant = simulate_fmu(str(fmus["plant"]), stop_time=STOP, output_interval=STEP,
+                         output=plant_names)
     assert np.allclose(plant["time"], inputs["time"], rtol=0, atol=1e-12)
-    for n in names:
-        assert np.array_equal(plant[n], inputs[n]), n
+    for n, pn in zip(names, plant_names):
+        assert np.array_equal(plant[pn], inputs[n]), n
+
+
+def test_the_cross_check_validator_passes_every_fmu(artifacts, tmp_path):
+    """fmpy's validate_test_fmu, as the cross-check repository runs it, on each folder; and a
+    negative control: the estimator's inputs with the nine base.A columns added (quoted, as the
+    rules write them) are rejected, so the pass above means something."""
+    import shutil
+
+    from fmpy.cross_check.validate_vendor_repo import validate_test_fmu
+
+    robot, fmus, folders = artifacts
+    for kind, folder in folders.items():
+        assert validate_test_fmu(str(folder)) == [], kind
+    est = folders["estimator"]
+    bad = tmp_path / Path(*est.parts[-7:])
+    shutil.copytree(est, bad)
+    model = _model(est)
+    inputs = xc.read_crosscheck_csv(bad / f"{model}_in.csv")
+    names = [*inputs.dtype.names[1:], *(f"base.A[{i},{j}]" for i in (1, 2, 3) for j in (1, 2, 3))]
+    data = np.column_stack([*(inputs[n] for n in inputs.dtype.names[1:]),
+                            *([np.zeros(len(inputs))] * 9)])
+    xc.write_crosscheck_csv(bad / f"{model}_in.csv", inputs["time"], names, data)
+    problems = validate_test_fmu(str(bad))
+    assert problems and "columns instead of" in problems[0], problems
 
 
 def _resimulate(kind, folder, start_values=None, input_scale=None):
@@ -116,7 +149,7 @@ def _resimulate(kind, folder, start_values=None, input_scale=None):
     opts = xc.read_ref_opt(folder / f"{model}_ref.opt")
     ref = xc.read_crosscheck_csv(folder / f"{model}_ref.csv")
     inputs = None
-    if kind == "estimator":
+    if kind != "plant":
         inputs = xc.read_crosscheck_csv(folder / f"{model}_in.csv")
         if input_scale:
             name, factor = input_scale
@@ -128,7 +161,7 @@ def _resimulate(kind, folder, start_values=None, input_scale=None):
     return ref, res, opts
 
 
-@pytest.mark.parametrize("kind", ["plant", "estimator"])
+@pytest.mark.parametrize("kind", ["plant", "estimator", "sensors"])
 def test_resimulation_passes_fmpy_cross_check_validation(artifacts, kind):
     from fmpy.cross_check import validate_result as cross_check_rule
     from fmpy.util import validate_result as outliers
@@ -147,7 +180,10 @@ def test_resimulation_passes_fmpy_cross_check_validation(artifacts, kind):
     ("plant", {"start_values": {"target.m": 100.0}}),
     ("estimator", {"start_values": {"guess.target.m": 400.0, "guess.base.m": 300.0}}),
     ("estimator", {"input_scale": ("thrust.J[1]", 1.5)}),
-], ids=["plant-other-target", "estimator-other-guess", "estimator-other-input"])
+    ("sensors", {"start_values": {"seed": 7}}),
+    ("sensors", {"input_scale": ("true.thrust.J[1]", 1.5)}),
+], ids=["plant-other-target", "estimator-other-guess", "estimator-other-input",
+        "sensors-other-seed", "sensors-other-input"])
 def test_validation_rejects_a_different_run(artifacts, kind, change):
     """Negative control: the validation is discriminating."""
     from fmpy.util import validate_result as outliers
@@ -167,7 +203,7 @@ def test_register_adds_the_crosscheck_subcommand(tmp_path, monkeypatch):
     assert args.func is xc.run_cli
     assert args.func(args) == 0
     folder = out / "fmus" / "2.0" / "cs"
-    assert len(list(folder.rglob("*_ref.csv"))) == 2
+    assert len(list(folder.rglob("*_ref.csv"))) == 3
     assert not (out / "_build").exists()
 
 

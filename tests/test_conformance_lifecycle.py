@@ -1,4 +1,4 @@
-"""Interface conformance (issue #5), part 2: lifecycle through fmpy's low-level API (FMU2Slave).
+"""Interface conformance: lifecycle through fmpy's low-level API (FMU2Slave).
 
 - instantiate, setupExperiment, enter/exitInitializationMode, doStep, terminate, freeInstance
   all return OK, and the plant FMU's outputs equal the plant core (spacerobot.plant.Plant) run
@@ -94,11 +94,11 @@ def test_plant_lifecycle_and_outputs_equal_the_core(robot_fmus):
     for i in range(3):
         for j in range(3):
             expected[f"base.A[{i + 1},{j + 1}]"] = out["A"][i][j]
-    expected["excite.level"] = out["excite_level"][0]     # issue #12 (excitation off: 0)
-    expected["excite.rate"] = out["excite_rate"][0]       # issue #29 (the plant's own: 1)
+    expected["excite.level"] = out["excite_level"][0]     # excitation off: 0
+    expected["excite.rate"] = out["excite_rate"][0]       # the plant's own rate: 1
     for i in range(3):
         expected[f"excite.att_ref[{i + 1}]"] = out["att_ref"][i]
-    # issue #17 (no propellant model: m = 0, nothing expelled, the base is the dry base)
+    # no propellant model: m = 0, nothing expelled, the base is the dry base
     expected["prop.m"] = out["m_p"][0]
     for i in range(3):
         expected[f"prop.P[{i + 1}]"] = out["P_x"][i]

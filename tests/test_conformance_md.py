@@ -1,6 +1,6 @@
-"""Interface conformance (issue #5), part 1: what the FMUs declare.
+"""Interface conformance: what the FMUs declare.
 
-- fmpy's validator (API and ``python -m fmpy validate``) finds no problem in any of the four FMUs,
+- fmpy's validator (API and ``python -m fmpy validate``) finds no problem in any of the FMUs,
   and it does find the problems we claim it checks when they are injected (so a pass means
   something);
 - every variable has a description, every Real a unit defined in UnitDefinitions, and each unit's
@@ -240,24 +240,44 @@ EXPECTED_FLAGS = {
     "canSerializeFMUstate": "true",
     "canBeInstantiatedOnlyOncePerProcess": "false",
     "canInterpolateInputs": "false",
-    "needsExecutionTool": "true",
+    "needsExecutionTool": "false",          # nothing but the C runtime
 }
-#: what differs in a native FMU (C core, nothing but the C runtime needed)
-NATIVE_FLAGS = {"needsExecutionTool": "false"}
-
-
-def expected_flags(path) -> dict:
-    from spacerobot.fmi.build import fmu_backend
-    return {**EXPECTED_FLAGS, **(NATIVE_FLAGS if fmu_backend(path) == "native" else {})}
 
 
 def test_capability_flags(fmu):
     robot, kind, path = fmu
     cs = _xml(path).find("CoSimulation")
     assert cs.get("modelIdentifier") == MODEL[kind]
-    for flag, value in expected_flags(path).items():
+    for flag, value in EXPECTED_FLAGS.items():
         assert cs.get(flag) == value, flag
     assert _xml(path).get("fmiVersion") == "2.0"
+
+
+# -- log categories ------------------------------------------------------------------------------
+def test_the_declared_log_categories_are_the_layers(fmu):
+    """The model description's categories (spacerobot.fmi.native.LOG_CATEGORIES) are the FMI
+    layer's (native/fmi/fmi_layer.c): fmi2SetDebugLogging accepts each and all of them, refuses
+    one it does not declare; the categories the layer logs with are declared
+    (tests/test_conformance_bad_input.py checks every message it sees)."""
+    from fmpy import read_model_description
+    from fmpy.fmi2 import fmi2String
+
+    from test_conformance_util import ERROR, OK, Inst
+
+    robot, kind, path = fmu
+    declared = [c.name for c in read_model_description(str(path)).logCategories]
+    assert declared == ["logEvents", "logStatusWarning", "logStatusDiscard", "logStatusError",
+                        "logAll"]
+    inst = Inst(path, "categories")
+    try:
+        for names in ([[c] for c in declared] + [declared]):
+            arr = (fmi2String * len(names))(*(n.encode() for n in names))
+            assert inst.fmu.fmi2SetDebugLogging(inst.fmu.component, 1, len(names), arr) == OK
+        arr = (fmi2String * 1)(b"logNothingSuch")
+        status, msgs = inst.call(inst.fmu.fmi2SetDebugLogging, inst.fmu.component, 1, 1, arr)
+        assert status == ERROR and any("unknown category logNothingSuch" in m for _, _, m in msgs)
+    finally:
+        inst.free()
 
 
 # -- docs/fmus.md ---------------------------------------------------------------------------------
@@ -314,13 +334,11 @@ def test_docs_capability_table_matches_the_model_description(planar_fmus, spatia
     text = DOCS.read_text()
     for fmus in (planar_fmus, spatial_fmus):
         for kind in KINDS:
-            from spacerobot.fmi.build import fmu_backend
             cs = _xml(fmus[kind]).find("CoSimulation")
-            col = 1 if fmu_backend(fmus[kind]) == "native" else 2
-            for flag in EXPECTED_FLAGS:        # | flag | native FMUs | pythonfmu-hosted FMUs |
-                m = re.search(rf"\|\s*`{flag}`\s*\|\s*(\w+)\s*\|\s*(\w+)\s*\|", text)
+            for flag in EXPECTED_FLAGS:        # | flag | every FMU |
+                m = re.search(rf"\|\s*`{flag}`\s*\|\s*(\w+)\s*\|", text)
                 assert m, f"{flag} not in docs/fmus.md"
-                assert m.group(col) == cs.get(flag), flag
+                assert m.group(1) == cs.get(flag), flag
 
 
 # -- generator of the docs tables (run this file as a script) -------------------------------------

@@ -1,4 +1,4 @@
-"""Interface conformance (issue #5), part 3: FMU state.
+"""Interface conformance: FMU state.
 
 For every FMU (plant, estimator, sensors) of both robots: save the state at t, continue to t_end, restore, continue again:
 every output (estimates, standard deviations, diagnostics) is identical bit for bit. Through

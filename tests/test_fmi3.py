@@ -1,4 +1,4 @@
-"""FMI 3.0 FMUs from the same core and FMI layer as the FMI 2.0 ones (issue #30).
+"""FMI 3.0 FMUs from the same core and FMI layer as the FMI 2.0 ones.
 
 The binaries under test are built from this tree (``native/build.py``: ``fmi_layer.c`` with
 ``fmi3_api.c``, ``-DFMI_VERSION=3``; the FMI 2.0 ones for the comparison with ``fmi2_api.c``)
@@ -6,7 +6,8 @@ into a cache keyed by the sources, then packaged by :func:`spacerobot.fmi.native
 
 * fmpy validates every FMI 3.0 FMU and simulates it; the outputs equal the FMI 2.0 FMU's (the
   independent computation: the FMI 2.0 layer and fmpy's FMI 2.0 path) to 1e-12 relative;
-* fmusim (FMI 3.0, built from the Reference FMUs in /tmp/h4/hosts) runs each FMU;
+* fmusim (FMI 3.0, the Reference FMUs' host: ``$SPACEROBOT_FMUSIM``, else
+  /tmp/h4/hosts/fmusim/bin/fmusim, as shared/tools/build-hosts.sh builds it) runs each FMU;
 * the closed loop plant + estimator (spatial, 60 s) in the project's runner and in a loop over
   fmpy's FMU3Slave equals the FMI 2.0 loop to 1e-12 relative;
 * the win64 FMI 3.0 binaries under Wine (a C host, tests/c_host/fmu_host3.c, one source with
@@ -20,6 +21,7 @@ from __future__ import annotations
 import ctypes
 import hashlib
 import importlib.util
+import os
 import shutil
 import subprocess
 import sys
@@ -35,7 +37,7 @@ import pytest
 import native_hosts as nh
 
 ROOT = Path(__file__).resolve().parents[1]
-FMUSIM = Path("/tmp/h4/hosts/fmusim/bin/fmusim")
+FMUSIM = Path(os.environ.get("SPACEROBOT_FMUSIM", "/tmp/h4/hosts/fmusim/bin/fmusim"))
 HOST3 = Path(__file__).resolve().parent / "c_host" / "fmu_host3.c"
 KINDS = ("plant", "estimator", "sensors")
 ROBOT = "spatial"
@@ -238,7 +240,8 @@ def test_runner_sensors_system_fmi3_equals_fmi2(fmus, tmp_path):
     assert np.ptp(res[3].data["sensors.base.omega[1]"]) > 0
 
 
-OMSIMULATOR = Path("/tmp/h4/hosts/OMSimulator/install/bin/OMSimulator")
+OMSIMULATOR = Path(os.environ.get("SPACEROBOT_OMSIMULATOR",
+                                  "/tmp/h4/hosts/OMSimulator/install/bin/OMSimulator"))
 
 
 def test_omsimulator_runs_the_fmi3_ssp_equal_to_fmi2(ssps, tmp_path):
@@ -549,6 +552,85 @@ def test_fmu_state_round_trip(fmus):
     fmu.freeInstance()
 
 
+# ---- the communication point -------------------------------------------------------------------
+def _stepped(fmus, kind, version, steps=3, h=0.1):
+    """An instance of ``kind`` (FMI ``version``) initialised at t = 0 and stepped ``steps`` times by
+    ``h`` (each step from the end of the last); returns (fmu, log, time, the output value
+    references, state) where ``state()`` serialises the FMU state."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.fmi3 import FMU3Slave
+
+    from spacerobot import logger_callbacks
+
+    path = str(fmus[(kind, version)])
+    md = read_model_description(path)
+    cls = FMU3Slave if version == 3 else FMU2Slave
+    fmu = cls(guid=md.guid, unzipDirectory=extract(path),
+              modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t")
+    log = Log()
+    if version == 3:
+        fmu.instantiate(loggingOn=True, logMessage=log)
+        fmu.enterInitializationMode(startTime=0.0)
+        get, getstate, serialise, free = (fmu.getFloat64, fmu.getFMUState,
+                                          fmu.serializeFMUState, fmu.freeFMUState)
+    else:
+        fmu._cb = logger_callbacks(lambda _i, st, cat, msg: log.append((st, cat, msg)))
+        fmu.instantiate(callbacks=fmu._cb, loggingOn=True)
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        get, getstate, serialise, free = (fmu.getReal, fmu.getFMUstate, fmu.serializeFMUstate,
+                                          fmu.freeFMUstate)
+    fmu.exitInitializationMode()
+    t = 0.0
+    for _ in range(steps):
+        fmu.doStep(t, h)
+        t = t + h
+
+    def state():
+        s = getstate()
+        blob = serialise(s)
+        free(s)
+        return bytes(blob)
+    outs = [v.valueReference for v in md.modelVariables
+            if v.causality == "output" and v.type in ("Real", "Float64")]
+    return fmu, log, t, outs, get, state
+
+
+@pytest.mark.parametrize("version", (2, 3))
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_step_from_another_time_is_refused_and_changes_nothing(fmus, kind, version):
+    """doStep from a communication point other than the instance's time (ahead, behind, a
+    millionth of the step off) is an illegal argument: fmi<V>Error with a logged error that
+    names both times, and the FMU state (its serialised bytes: values, time, the core's state)
+    and every output are as before. A point off by round-off only (a unit in the last place)
+    is the instance's time; after the refusals the run goes on as one that never saw them."""
+    from fmpy.fmi1 import FMICallException
+
+    h = 0.1
+    fmu, log, t, outs, get, state = _stepped(fmus, kind, version)
+    ref, rlog, _, _, rget, _ = _stepped(fmus, kind, version, steps=5)
+    y0 = get(outs)                     # the outputs first: the sensors' are computed when read
+    before = state()
+    for bad in (t + 1.0, t - h, t + 1.5e-6 * h, 0.0):
+        n = len(log)
+        with pytest.raises(FMICallException) as e:
+            fmu.doStep(bad, h)
+        assert e.value.status == 3, (bad, log[n:])
+        st, cat, msg = log[-1]
+        assert (st, cat) == (3, "logStatusError"), log[n:]
+        assert f"fmi{version}DoStep: the communication point" in msg and "differs from the " \
+            "FMU's time" in msg and "step refused, state unchanged" in msg, msg
+        assert repr(float(t)) in msg or f"{t:.17g}" in msg, msg
+        assert state() == before and get(outs) == y0, bad
+    fmu.doStep(float(np.nextafter(t, np.inf)), h)          # round-off: the same point
+    fmu.doStep(t + h, h)
+    assert get(outs) == rget(outs)                          # as if nothing had been refused
+    for f in (fmu, ref):
+        f.terminate()
+        f.freeInstance()
+
+
 # ---- exported symbols --------------------------------------------------------------------------
 def _standard_fmi3_functions():
     """The FMI 3.0 functions, from fmpy (which resolves every one of them)."""
@@ -620,7 +702,8 @@ def test_fmi3_api_matches_the_standards_declarations(tmp_path):
     obj = tmp_path / "fmi3_api.o"
     fmi = ROOT / "native" / "fmi"
     r = subprocess.run([cc, "-std=c99", "-O1", "-Wall", "-Wextra", "-Werror", "-fPIC",
-                        "-DFMI_VERSION=3", f"-I{tmp_path}", f"-I{inc}", f"-I{fmi}", "-c",
+                        "-DFMI_VERSION=3", f"-I{tmp_path}", f"-I{inc}", f"-I{fmi}",
+                        f"-I{ROOT / 'native' / 'src'}", "-c",
                         str(fmi / "fmi3_api.c"), "-o", str(obj)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     if shutil.which("nm"):

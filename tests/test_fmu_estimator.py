@@ -1,4 +1,4 @@
-"""The estimator FMU through fmpy, wired to the plant FMU (issue #3).
+"""The estimator FMU through fmpy, wired to the plant FMU.
 
 * Spatial default scenario, noise-free, measured accelerations: every one of the 20 estimates
   within 0.1 % of truth by 60 s, momentum- and force-based, paper and joint solvers, through
@@ -250,23 +250,10 @@ def _meas(names, x, sc) -> dict:
     return out
 
 
-@pytest.fixture(scope="module")
-def pythonfmu_estimator_fmus(planar_fmus, tmp_path_factory):
-    """The native plant with the pythonfmu-hosted estimator (the native-backed Identifier)."""
-    from spacerobot.fmi.build import build_fmu
-    from spacerobot.robots import scenario as _scenario
-    return {"plant": planar_fmus["plant"],
-            "estimator": build_fmu("estimator", _scenario("planar"),
-                                   tmp_path_factory.mktemp("pyest"), backend="pythonfmu")}
-
-
-@pytest.mark.parametrize("backend", ["native", "pythonfmu"])
-def test_fmu_state_round_trip(planar_fmus, pythonfmu_estimator_fmus, backend):
+def test_fmu_state_round_trip(planar_fmus):
     """Save at 10 s, run 3 s, restore (get/set and via bytes, also into fresh instances),
     run 3 s again: bit-identical outputs of the plant, a momentum and a force/differenced
-    estimator (the latter keeps a differencing history in its state); the native estimator FMU
-    and the pythonfmu-hosted one (its state: the Identifier's core Data block)."""
-    planar_fmus = planar_fmus if backend == "native" else pythonfmu_estimator_fmus
+    estimator (the latter keeps a differencing history in its state)."""
     pair = Pair(planar_fmus)
     extra = started_slave(planar_fmus["estimator"], {"method": 2, "accel_source": 2}, "extra")
     evr = [pair.est.vars[n].valueReference for n in pair.inputs]
@@ -356,21 +343,11 @@ def test_bad_parameter_fails_initialisation_with_message(planar_fmus, params, wo
 
 def test_fmus_do_not_bundle_the_test_oracles(planar_fmus):
     """The NumPy reference kinematics and regressors (tests/oracles) are for the tests only:
-    neither FMU carries them, while the estimator carries what it runs."""
+    neither FMU carries any Python, only the C core's binaries."""
     import zipfile
 
-    from spacerobot.fmi.build import fmu_backend
     for kind in ("plant", "estimator"):
         z = zipfile.ZipFile(planar_fmus[kind])
-        sources = {n: z.read(n).decode() for n in z.namelist()
-                   if n.endswith(".py") and "pythonfmu/" not in n}
-        for name, src in sources.items():
-            for oracle in ("def momentum_terms", "def force_terms", "class ArmKinematics",
-                           "def body_momentum", "from oracles", "import oracles"):
-                assert oracle not in src, (kind, name, oracle)
-        if kind == "estimator" and fmu_backend(planar_fmus[kind]) == "native":
-            assert not sources                          # no Python: the C core is the binary
-            assert "binaries/linux64/SpaceRobotEstimator.so" in z.namelist()
-        elif kind == "estimator":
-            assert any(n.endswith("/estimator/solvers.py") for n in sources)
-            assert not any(n.endswith("/regressors.py") for n in sources)
+        assert not [n for n in z.namelist() if n.endswith(".py")]   # no Python at all
+        ident = {"plant": "SpaceRobotPlant", "estimator": "SpaceRobotEstimator"}[kind]
+        assert f"binaries/linux64/{ident}.so" in z.namelist()       # the C core is the binary

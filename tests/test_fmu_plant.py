@@ -1,16 +1,13 @@
-"""The plant FMU through fmpy (issue #2): variables map to the core, partial steps, bad
+"""The plant FMU through fmpy: variables map to the core, partial steps, bad
 parameters and bad steps.
 
 * Every output of the FMU equals the core ``Plant`` run with the same (non-default)
   parameters; names are parsed here, independently of ``spacerobot.interface``.
-* The pythonfmu-hosted plant FMU (``--backend pythonfmu``) runs the same native core, from
-  the library it carries (not the builder's): its outputs equal the native plant FMU's to
-  1e-12.
 * A communication step that is not a multiple of h ends with one shorter internal step.
 * Each invalid parameter makes fmi2ExitInitializationMode fail (fmi2Error) with a readable
   message naming the parameter; the instance can be freed and a fresh one runs.
 * A bad communication step is discarded with the state unchanged.
-* Excitation (issue #12): ``ident.excite`` reaches the core (the FMU equals the core with the
+* Excitation: ``ident.excite`` reaches the core (the FMU equals the core with the
   same level requests); a value outside [0, 1] is clipped with a warning; NaN discards the
   step with the state unchanged; a bad ``excite.*`` parameter fails initialisation by name.
 """
@@ -43,7 +40,7 @@ OUTPUT_KEYS = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "o
                "thrust.H": "H", "system.P": "P", "system.L": "L", "arm.tau": "tau",
                "excite.att_ref": "att_ref", "excite.qd_ref": "qd_ref", "prop.P": "P_x",
                "prop.L": "L_x"}
-#: the base's current truth (issue #17): core ``base_now`` = [m, b (3), Ixx .. Iyz]
+#: the base's current truth: core ``base_now`` = [m, b (3), Ixx .. Iyz]
 TRUTH_BASE = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 
@@ -298,68 +295,3 @@ def test_fmu_state_carries_the_excitation_ramp(planar_fmus):
     finally:
         a.free()
         b.free()
-
-
-# ------------------------------------------------------------------------------------------------
-# the pythonfmu-hosted plant: the same core, carried inside the FMU
-# ------------------------------------------------------------------------------------------------
-
-def test_pythonfmu_plant_runs_the_bundled_core_and_equals_the_native_fmu(planar_fmus, tmp_path,
-                                                                        monkeypatch):
-    """``build --backend pythonfmu``: the FMU carries libspacerobot beside its bundled library
-    and loads it from there even when SPACEROBOT_CORE_LIB names something else (here: nothing
-    that exists); with the excitation on and the propellant depleting, every output equals the
-    native plant FMU's to 1e-12 (the same C plant), through partial steps."""
-    import zipfile
-
-    from spacerobot.fmi.build import build_fmu, fmu_backend
-
-    sc = scenario("planar")
-    path = build_fmu("plant", sc, tmp_path, backend="pythonfmu")
-    assert fmu_backend(path) == "pythonfmu" and fmu_backend(planar_fmus["plant"]) == "native"
-    with zipfile.ZipFile(path) as zf:
-        names = zf.namelist()
-    assert "resources/_spacerobot_plant/core/lib/libspacerobot.so" in names
-    assert not [n for n in names if "/plant/kernels" in n or "rigid_body" in n]
-    monkeypatch.setenv("SPACEROBOT_CORE_LIB", str(tmp_path / "no" / "libspacerobot.so"))
-    params = {"excite.ramp": 1.0, "prop.m0": 30.0, "prop.Isp": 200.0, "prop.R": 0.2}
-    py = started_slave(path, params, "py")
-    nat = started_slave(planar_fmus["plant"], params, "native")
-    try:
-        outs = nat.names("output")
-        assert set(py.names("output")) == set(outs)
-        t, worst = 0.0, 0.0
-        for k, dt in enumerate((0.1, 0.1005, 0.2995, 0.5, 0.25)):
-            for s in (py, nat):
-                s.set("ident.excite", 1.0 if k < 3 else 0.4)
-                s.fmu.doStep(t, dt)
-            t += dt
-            a = np.array(py.fmu.getReal([py.vars[n].valueReference for n in outs]))
-            b = np.array(nat.fmu.getReal([nat.vars[n].valueReference for n in outs]))
-            np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12, err_msg=f"t = {t}")
-            worst = max(worst, float(np.max(np.abs(a - b) / np.maximum(1.0, np.abs(b)))))
-        print(f"pythonfmu vs native plant FMU: max difference {worst:.1e} (relative, >= 1 abs)")
-        assert py.get("prop.m") < 30.0 and py.get("excite.level") > 0.0    # not vacuous
-        assert not [m for m in py.messages if m[0] >= FMI_WARNING], py.messages
-        # its serialised state restores into another instance, which goes on as the first
-        st = py.fmu.getFMUstate()
-        data = py.fmu.serializeFMUstate(st)
-        py.fmu.freeFMUstate(st)
-        py.fmu.doStep(t, 0.2)
-        ref = py.fmu.getReal([py.vars[n].valueReference for n in outs])
-        twin = started_slave(path, params, "twin")
-        try:
-            st = twin.fmu.deSerializeFMUstate(data)
-            twin.fmu.setFMUstate(st)
-            twin.fmu.freeFMUstate(st)
-            twin.fmu.doStep(t, 0.2)
-            assert twin.fmu.getReal([twin.vars[n].valueReference for n in outs]) == ref
-        finally:
-            twin.free()
-        # the library the FMU loaded is the one it carries (mapped from its extraction folder)
-        if Path("/proc/self/maps").is_file():                  # Linux
-            maps = [ln.split()[-1] for ln in open("/proc/self/maps") if "libspacerobot" in ln]
-            assert any("_spacerobot_plant/core/lib/" in m for m in maps), sorted(set(maps))
-    finally:
-        py.free()
-        nat.free()

@@ -170,7 +170,6 @@ def test_no_bare_parameter_offsets_outside_the_layout_and_the_kernels():
     package (the native core keeps its own, native/src)."""
     root = Path(__file__).resolve().parents[1]
     files = list((root / "spacerobot" / "estimator").glob("*.py"))
-    files.append(root / "fmu_estimator" / "spacerobot_estimator_fmu.py")
     pattern = re.compile(r"\b(10|4|6) \* k\b|\b8 \+ 6\b|% 10\b|\[5, 11\]|\[0, 1, 2, 9\]")
     hits = [f"{p.name}:{i + 1}: {line.strip()}" for p in files
             for i, line in enumerate(p.read_text().splitlines()) if pattern.search(line)]

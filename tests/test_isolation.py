@@ -1,5 +1,4 @@
-"""The estimator never imports plant code or Pinocchio, in the library and in its FMUs (native
-and pythonfmu-hosted)."""
+"""The estimator never imports plant code or Pinocchio, in the library and in its FMU."""
 import ast
 import re
 import zipfile
@@ -7,13 +6,12 @@ from pathlib import Path
 
 import pytest
 
-from spacerobot.fmi.build import BUNDLES, build_fmu
-from spacerobot.robots import scenario
-
 ROOT = Path(__file__).resolve().parents[1]
 
 LIB = Path(__file__).resolve().parents[1] / "spacerobot"
 FORBIDDEN = ("pinocchio", "plant")
+#: the library the estimator runs on (``spacerobot.estimator`` and what it imports)
+ESTIMATOR_LIBRARY = ("robots.py", "interface.py", "kinematics.py", "core", "estimator")
 
 
 def imported_modules(path: Path):
@@ -26,7 +24,7 @@ def imported_modules(path: Path):
 
 
 def estimator_sources():
-    for item in BUNDLES["estimator"]:
+    for item in ESTIMATOR_LIBRARY:
         p = LIB / item
         yield from (sorted(p.rglob("*.py")) if p.is_dir() else [p])
 
@@ -36,13 +34,6 @@ def test_estimator_bundle_sources_do_not_import_plant_or_pinocchio(path):
     for mod in imported_modules(path):
         parts = mod.lstrip(".").split(".")
         assert not any(p in FORBIDDEN for p in parts), f"{path} imports {mod}"
-
-
-@pytest.fixture(scope="module")
-def python_estimator(tmp_path_factory):
-    """The pythonfmu-hosted estimator FMU (``--backend pythonfmu``)."""
-    return build_fmu("estimator", scenario("planar"), tmp_path_factory.mktemp("py"),
-                     backend="pythonfmu")
 
 
 def test_native_estimator_sources_include_no_plant_code():
@@ -69,27 +60,3 @@ def test_native_estimator_fmu_contains_no_plant_code(planar_fmus):
         if n.startswith("binaries/"):
             data = z.read(n)
             assert data and b"sr_dyn_" not in data and b"sr_sensors_" not in data, n
-
-
-def test_estimator_fmu_contains_no_plant_code(python_estimator):
-    names = zipfile.ZipFile(python_estimator).namelist()
-    assert any(n.endswith("_spacerobot_estimator/estimator/identifier.py") for n in names)
-    assert not any("/plant/" in n or n.endswith("/plant") for n in names), names
-    for n in names:
-        if n.endswith(".py") and "pythonfmu/" not in n:
-            src = zipfile.ZipFile(python_estimator).read(n).decode()
-            assert "pinocchio" not in src.replace("Pinocchio", ""), n
-
-
-def test_the_two_fmus_bundle_their_library_under_distinct_names(python_estimator,
-                                                                tmp_path_factory):
-    """The pythonfmu-hosted plant and estimator each bundle the library under their own name;
-    the plant carries the native core's library (its plant runs on it)."""
-    python_plant = build_fmu("plant", scenario("planar"), tmp_path_factory.mktemp("pyplant"),
-                             backend="pythonfmu")
-    plant_names = zipfile.ZipFile(python_plant).namelist()
-    est_names = zipfile.ZipFile(python_estimator).namelist()
-    plant = {n.split("/")[1] for n in plant_names if n.startswith("resources/_spacerobot")}
-    est = {n.split("/")[1] for n in est_names if n.startswith("resources/_spacerobot")}
-    assert plant == {"_spacerobot_plant"} and est == {"_spacerobot_estimator"}
-    assert "resources/_spacerobot_plant/core/lib/libspacerobot.so" in plant_names

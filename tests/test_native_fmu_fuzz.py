@@ -152,7 +152,7 @@ def check_summary(r, what: str, calls: int = CALLS) -> dict:
     assert fn["fmi2DoStep"][1] > 500 * f and fn["fmi2DoStep"][3] > 100 * f, fn["fmi2DoStep"]
     assert fn["fmi2SetReal"][4] > 100 * f and fn["fmi2ExitInitializationMode"][1] > 50 * f
     # (the plant's valgrind run, 2000 calls: 11 damaged states restored, 1 step from one: its
-    # state's excitation rates, checked since issue #29, refuse more of the damaged states)
+    # state's excitation rates, checked too, refuse more of the damaged states)
     assert s["damaged_restored"] > 10 * f and s["damaged_steps"] >= max(1.0, 10 * f), s
     assert s["foreign_refused"] > 10 * f, s
     return s

@@ -45,8 +45,7 @@ from spacerobot.sensors import SIGNALS, default_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "native" / "src"
-SOURCES = ["rng.c", "sensor_noise.c", "sensors.c", "arm.c", "equations.c", "linalg.c",
-           "sr_math.c"]
+SOURCES = ["sr_math.c", "sr_text.c", "sample.c", "rng.c", "sensor_noise.c", "sensors.c"]
 N_JOINTS, DT = 6, 0.1
 MAX_JOINTS, MAX_DELAY = 12, 100
 M64 = (1 << 64) - 1
@@ -704,8 +703,7 @@ def test_mingw_build_under_wine_gives_the_same_bits(tmp_path):
     src = tmp_path / "prog.c"
     src.write_text("#include <string.h>\n" + PROGRAM)
     flags = ["-std=c99", "-O2", "-ffp-contract=off", "-Wall", "-Wextra", "-Werror", f"-I{SRC}"]
-    files = [str(src), str(SRC / "rng.c"), str(SRC / "sensor_noise.c"), str(SRC / "sensors.c"),
-             str(SRC / "sr_math.c")]
+    files = [str(src), *(str(SRC / f) for f in SOURCES)]
     subprocess.run([cc, *flags, *files, "-o", str(tmp_path / "prog"), "-lm"], check=True)
     subprocess.run([mingw, *flags, *files, "-o", str(tmp_path / "prog.exe"), "-static-libgcc"],
                    check=True)

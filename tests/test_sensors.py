@@ -234,27 +234,6 @@ def test_thrust_scale_factor_and_misalignment_over_seeds():
     assert all(_std_ok(phis[:, i].std(), mis, runs, k=6) for i in range(3))
 
 
-def test_impulses_are_integrated_from_the_known_thrust():
-    rng = np.random.default_rng(12)
-    s = SensorSuite(N_JOINTS, zero_except(**{"thrust.scale": 0.05, "thrust.misalign": 0.02}),
-                    seed=8)
-    x = true_sample(rng)
-    x["J"], x["H"] = np.zeros(3), np.zeros(3)
-    n = 25
-    for k in range(n + 1):
-        y = s.measure(x)
-        if k == n:
-            break
-        s.advance(x, DT)
-        x = dict(x, J=x["J"] + DT * x["F"], H=x["H"] + DT * (x["M"] + np.cross(x["r_S"], x["F"])))
-    # with the thrust held, the known impulses are those of the known thrust
-    dF, dM = y["F"] - x["F"], y["M"] - x["M"]
-    assert np.allclose(y["J"] - x["J"], n * DT * dF, rtol=1e-12, atol=1e-15)
-    assert np.allclose(y["H"] - x["H"], n * DT * (dM + np.cross(x["r_S"], dF)), rtol=1e-10,
-                       atol=1e-13)
-    assert np.abs(dF).max() > 1e-4 * np.abs(x["F"]).max()    # the errors are there
-
-
 def test_delay_returns_the_measurement_of_earlier_samples():
     rng = np.random.default_rng(13)
     xs = [true_sample(rng, k) for k in range(20)]
@@ -272,3 +251,24 @@ def test_no_imu_outputs_zero_accelerations():
         y = SensorSuite(N_JOINTS, scale=scale, imu=False).measure(x)
         assert not y["a_S"].any() and not y["alpha_B"].any()
         assert np.array_equal(y["q"], x["q"]) or scale
+
+
+@pytest.mark.parametrize("n", [1, 3, 12])
+def test_the_sample_layout_is_the_core_table_and_the_fmu_variables(n):
+    """spacerobot.core.sample reads the core's table (sample.h): the FMU variables of a sample
+    (spacerobot.interface.measurement_vars) come in its order, with its units and sizes, and
+    the flat sample is 24 + 3 n + 12 values long; SensorSuite splits it the same way."""
+    from spacerobot.core import sample
+    from spacerobot.interface import measurement_vars
+
+    variables = measurement_vars(n, "input")
+    groups = list(dict.fromkeys(v.key[0] for v in variables))
+    assert list(sample.signals()) == groups == list(SIGNALS)
+    assert list(sample.units()) == [next(v.unit for v in variables if v.key[0] == g)
+                                    for g in groups]
+    assert sample.sizes(n) == [(g, sum(v.key[0] == g for v in variables)) for g in groups]
+    assert sample.length(n) == len(variables) == 24 + 3 * n + 12
+    x = {g: np.arange(k, dtype=float).reshape((3, 3) if g == "A" else (k,))
+         for g, k in sample.sizes(n)}
+    y = SensorSuite(n, scale=0.0).measure(x)
+    assert all(np.array_equal(y[g], x[g]) for g in groups)

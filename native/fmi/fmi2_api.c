@@ -6,9 +6,6 @@
  * exchange, Boolean and String variables, input/output derivatives, directional derivatives,
  * asynchronous steps) is refused with fmi2Error and a logged reason.
  */
-#include <stdio.h>
-#include <string.h>
-
 #include "fmi2.h"
 #include "fmi_layer.h"
 

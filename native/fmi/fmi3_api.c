@@ -9,10 +9,9 @@
  * scheduled execution, event and configuration mode, clocks, other variable types, derivatives,
  * per-element dependencies. The model description claims none of these.
  */
-#include <stdio.h>
-
 #include "fmi3.h"
 #include "fmi_layer.h"
+#include "sr_text.h"
 
 #if FMI_VERSION != 3
 #  error "fmi3_api.c is the FMI 3.0 API: build it with -DFMI_VERSION=3"
@@ -39,8 +38,8 @@ static void log_without_instance(fmi3InstanceEnvironment env, fmi3LogMessageCall
                                  const char *call) {
     char msg[256];
     if (!logMessage) return;
-    snprintf(msg, sizeof msg, "%s: %s implements co-simulation only (fmi3InstantiateCoSimulation)",
-             call, SR_MODEL_IDENTIFIER);
+    sr_text_format(msg, sizeof msg, "%s: %s implements co-simulation only "
+                   "(fmi3InstantiateCoSimulation)", call, SR_MODEL_IDENTIFIER);
     logMessage(env, fmi3Error, "logStatusError", msg);
 }
 

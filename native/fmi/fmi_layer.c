@@ -9,6 +9,7 @@
  * A refused call returns SR_ERROR (SR_DISCARD for a step that cannot be taken) with a logged
  * reason and leaves the instance as it was; nothing here aborts or exits.
  */
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
@@ -21,7 +22,6 @@
 #include "sr_text.h"
 
 #define VARIABLES_FILE "spacerobot_variables.txt"
-#define MAX_VARIABLES 4096
 #define MSG_MAX 1024
 #define STATE_MAGIC 0x53524653u   /* "SRFS" */
 #define STATE_VERSION 1u
@@ -148,7 +148,7 @@ int sr_resource_double(sr_instance *inst, const char *resource_dir, const char *
     char path[4096], *text, *line, *next;
     size_t len = 0;
     int found = 0;
-    snprintf(path, sizeof path, "%s%s", resource_dir, file);
+    sr_text_format(path, sizeof path, "%s%s", resource_dir, file);
     if ((text = read_file(path, &len)) == NULL) {
         sr_log(inst, SR_LOG_ERROR, "cannot read %s", path);
         return 1;
@@ -175,16 +175,18 @@ static int load_variables(sr_instance *inst, const char *resources, const char *
     static const char *const CAUS[] = {"parameter", "input", "output"};
     static const char *const VARY[] = {"fixed", "tunable", "continuous", "discrete"};
     char path[4096 + sizeof VARIABLES_FILE];
-    size_t len = 0;
+    size_t len = 0, nlines = 1;
     char *text, *line, *next;
     int lineno = 0, ok = 1, seen_guid = 0;
-    snprintf(path, sizeof path, "%s%s", resources, VARIABLES_FILE);   /* resources < 4096 */
+    sr_text_format(path, sizeof path, "%s%s", resources, VARIABLES_FILE);   /* resources < 4096 */
     text = read_file(path, &len);
     if (!text) {
         sr_log(inst, SR_LOG_ERROR, "cannot read the FMU's variable table %s", path);
         return 1;
     }
-    inst->vars = calloc(MAX_VARIABLES, sizeof *inst->vars);
+    /* at most one variable per line: slots for that many, trimmed to the count below */
+    for (size_t i = 0; i < len; ++i) nlines += text[i] == '\n';
+    inst->vars = calloc(nlines, sizeof *inst->vars);
     if (!inst->vars) { free(text); return 1; }
     for (line = text; ok && line && *line; line = next) {
         char *f[8];
@@ -215,7 +217,7 @@ static int load_variables(sr_instance *inst, const char *resources, const char *
             long vr;
             sr_var *v;
             int t, c, va;
-            if (n != 7 || parse_uint(f[0], &vr) || vr != inst->nvars || vr >= MAX_VARIABLES ||
+            if (n != 7 || parse_uint(f[0], &vr) || vr != inst->nvars || (size_t)vr >= nlines ||
                 (t = word_index(f[1], TYPES, 2)) < 0 || (c = word_index(f[2], CAUS, 3)) < 0 ||
                 (va = word_index(f[3], VARY, 4)) < 0 || strlen(f[5]) >= SR_VAR_KEY_MAX ||
                 strlen(f[6]) >= SR_VAR_NAME_MAX) {
@@ -243,6 +245,8 @@ static int load_variables(sr_instance *inst, const char *resources, const char *
         ok = 0;
     }
     if (ok) {
+        sr_var *fit = realloc(inst->vars, (size_t)inst->nvars * sizeof *inst->vars);
+        if (fit) inst->vars = fit;                  /* a failed shrink keeps the larger block */
         inst->real = calloc((size_t)inst->nvars, sizeof *inst->real);
         inst->integer = calloc((size_t)inst->nvars, sizeof *inst->integer);
         ok = inst->real && inst->integer;
@@ -313,7 +317,7 @@ sr_instance *sr_fmi_new(const char *name, int logging_on, sr_emit_fn emit, sr_ho
                         void *env) {
     sr_instance *inst = calloc(1, sizeof *inst);
     if (!inst) return NULL;
-    snprintf(inst->name, sizeof inst->name, "%s", name ? name : "");
+    sr_text_set(inst->name, sizeof inst->name, name);
     inst->emit = emit;
     inst->logger = logger;
     inst->env = env;
@@ -383,11 +387,6 @@ int sr_fmi_enter_initialization(sr_instance *inst, int set_start, double start_t
     return SR_OK;
 }
 
-/* "nan", "inf", "-inf": the same text on every platform (printf's differs) */
-static const char *nonfinite_text(double x) {
-    return isnan(x) ? "nan" : x > 0 ? "inf" : "-inf";
-}
-
 /* every Real parameter finite, else one error naming them all; 0 ok */
 static int check_finite_parameters(sr_instance *inst) {
     char msg[MSG_MAX] = "";
@@ -396,8 +395,8 @@ static int check_finite_parameters(sr_instance *inst) {
         const sr_var *v = &inst->vars[i];
         if (v->causality == SR_PARAMETER && v->type == SR_REAL && !isfinite(inst->real[i]) &&
             used + SR_VAR_NAME_MAX + 16 < sizeof msg)
-            used += (size_t)snprintf(msg + used, sizeof msg - used, "%s%s = %s", used ? ", " : "",
-                                     v->name, nonfinite_text(inst->real[i]));
+            used = sr_text_format(msg + used, sizeof msg - used, "%s%s = %g", used ? ", " : "",
+                                  v->name, inst->real[i]) + used;
     }
     if (!used) return 0;
     sr_log(inst, SR_LOG_ERROR, "invalid parameters: non-finite parameter value(s): %s", msg);
@@ -555,7 +554,14 @@ int sr_fmi_no_such_type(sr_instance *inst, const char *call, size_t nvr) {
 }
 
 /* ---- stepping ------------------------------------------------------------------------------- */
+/* How far a step's communication point may lie from the instance's time: a millionth of the
+   step, plus the round-off of the time itself (a master that computes t = k h, or t + h, lands
+   within a few units in the last place of it). */
+#define STEP_TIME_TOLERANCE 1e-6
+#define TIME_ROUNDOFF (8.0 * DBL_EPSILON)
+
 int sr_fmi_do_step(sr_instance *inst, double t, double h) {
+    double off, tol;
     if (inst->phase != PHASE_STEP) {
 #if FMI_VERSION == 3
         /* FMI 3.0: an illegal call in this state is an error */
@@ -572,12 +578,19 @@ int sr_fmi_do_step(sr_instance *inst, double t, double h) {
         return SR_DISCARD;
     }
     if (!(isfinite(h) && h > 0.0 && h <= SR_MODEL_MAX_STEP)) {
-        char longest[32] = "inf";            /* spelled out: msvcrt prints infinity as 1.#INF */
-        if (isfinite(SR_MODEL_MAX_STEP)) snprintf(longest, sizeof longest, "%g", SR_MODEL_MAX_STEP);
         sr_log(inst, SR_LOG_DISCARD, "communication step %g s at t = %g s rejected: it must be "
-               "finite and in (0, %s] s", h, t, longest);
+               "finite and in (0, %g] s", h, t, SR_MODEL_MAX_STEP);
         return SR_DISCARD;
     }
+    /* a step starts where the last one ended (or at the start time): another communication
+       point is an illegal argument, as in the Reference FMUs (FMI 3.0, 2.2.3: fmi3Error) */
+    off = fabs(t - inst->time);
+    tol = STEP_TIME_TOLERANCE * h + TIME_ROUNDOFF * fmax(fabs(t), fabs(inst->time));
+    if (!(off <= tol))
+        return refuse(inst, FMI_NAME("DoStep") ": the communication point %.17g s differs from "
+                      "the FMU's time %.17g s by %g s (more than 1e-6 of the step %g s): a step "
+                      "must start where the last one ended; step refused, state unchanged",
+                      t, inst->time, off, h);
     inst->outputs_dirty = 1;
     if (sr_model_do_step(inst->model, inst, t, h) != 0) return SR_DISCARD;
     inst->time = t + h;

@@ -84,8 +84,9 @@ int sr_fmi_enter_initialization(sr_instance *inst, int set_start, double start_t
 int sr_fmi_exit_initialization(sr_instance *inst);
 int sr_fmi_terminate(sr_instance *inst);
 int sr_fmi_reset(sr_instance *inst);
-/* One communication step: SR_OK, SR_DISCARD (logged: bad phase, time or step, or the model
-   refused; the state is as before) or SR_ERROR. */
+/* One communication step: SR_OK, SR_DISCARD (logged: a non-finite time, a bad step, the
+   model refused, FMI 2.0: a bad phase; the state is as before) or SR_ERROR (logged: a time other
+   than the instance's, FMI 3.0: a bad phase; nothing changed). */
 int sr_fmi_do_step(sr_instance *inst, double t, double h);
 
 /* ---- variables ---------------------------------------------------------------------------- */

@@ -80,7 +80,8 @@ void sr_model_outputs(void *model, sr_instance *inst);
 /* The longest communication step the model takes [s] (INFINITY: no limit); the layer refuses
    longer ones with Discard. */
 extern const double SR_MODEL_MAX_STEP;
-/* One communication step from t by h (both checked finite, h > 0, by the layer).
+/* One communication step from t by h (checked by the layer: t finite and the instance's time, h
+   finite and in (0, SR_MODEL_MAX_STEP]).
    0 ok, 1 discard (reason logged; the state must be as before the call). */
 int sr_model_do_step(void *model, sr_instance *inst, double t, double h);
 /* The core's state as a flat block of sr_model_state_size bytes (no pointers), and back. */

@@ -12,7 +12,7 @@
  *   libraries, so sr_ln (sr_math.h) computes it with +, -, *, / only (below 1 ulp from the true
  *   value). With IEEE 754 doubles and no contraction into FMA (-ffp-contract=off, as
  *   native/build.py compiles) every result is then the same bits everywhere.
- * - sr_portable_sincos: sine and cosine by the same rules (the sensors' rotation vectors).
+ * - sr_portable_sincos: sine and cosine by the same rules.
  *
  * A generator is a plain struct (no pointers): copy it to save or restore its state.
  * No global state; thread-safe per generator.
@@ -74,12 +74,12 @@ SR_API void sr_rng_uniforms(sr_rng *g, int n, double *out);
 SR_API void sr_rng_normals(sr_rng *g, int n, double *out);
 
 /** Natural logarithm: sr_ln of sr_math.h (+, -, *, / only: the same bits on every IEEE 754
- *  platform; below 1 ulp), kept under this name for existing callers. x > 0 finite
+ *  platform; below 1 ulp). x > 0 finite
  *  (subnormals included); log(+0) = -inf, log(+inf) = +inf, NaN for x < 0 or NaN. */
 SR_API double sr_portable_log(double x);
 
 /** Sine and cosine of x [rad]: sr_sincos of sr_math.h (+, -, *, / and floor only: the same
- *  bits on every IEEE 754 platform), kept under this name for existing callers. Correctly
+ *  bits on every IEEE 754 platform). Correctly
  *  rounded for |x| < 1.6e6 (deterministic, less accurate beyond); NaN for
  *  non-finite x or |x| >= 1e15. s or c may be NULL. */
 SR_API void sr_portable_sincos(double x, double *s, double *c);

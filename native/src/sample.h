@@ -59,6 +59,10 @@ enum sr_sample_signal {
 #define SR_X_H(n) (SR_X_Q + 3 * (n) + 9)
 #define SR_X_LEN(n) (SR_X_Q + 3 * (n) + 12)
 
+/* The physical range of every value of a sample in SI units: |x| <= SR_SAMPLE_LIMIT (beyond it
+ * no quantity of a space robot lies, and products of two such values stay finite). */
+#define SR_SAMPLE_LIMIT 1e15
+
 /** Number of signals (SR_SIG_COUNT). */
 SR_API int sr_sample_signal_count(void);
 /** Signal i's key ("r_S", ...), unit and description; NULL for i out of range. */

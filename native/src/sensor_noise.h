@@ -28,6 +28,10 @@ enum {
 };
 
 
+/* noise.scale, the factor of every magnitude, is at most this (a million times the magnitudes as
+   set) */
+#define SR_NOISE_SCALE_MAX 1e6
+
 /* The FMU parameter name of magnitude i ("noise.gyro.arw", ...), NULL for i out of
    0..SR_NOISE_COUNT-1. */
 const char *sr_noise_name(int i);

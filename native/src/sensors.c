@@ -1,26 +1,33 @@
-/* Sensor models (see sensors.h): the NumPy reference is tests/oracles/sensors.py (SensorSuite), the same
- * equations, units, order of effects and order of random draws per stream. */
+/* The sensor models (sensors.h): the measurement of a true sample, the noise processes' state and
+ * the checks of the noise parameters, whose limits are also the FMU's declared ranges
+ * (sr_sensors_param_range). */
 #include "sensors.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
+#include "sr_math.h"
+#include "sr_text.h"
 
-/* Largest magnitude in effect (noise.<name> times noise.scale) of each parameter, so that a
- * true sample within the physical range (|x| <= 1e15, SI) always gives a finite measurement:
- * angles' errors up to pi [rad], the thrust scale factor's up to 10 (1000 %), every other error
- * up to 1e6 (SI units). */
+/* The largest magnitude in effect (noise.<name> times noise.scale, and each of the two alone) of
+ * each parameter, so that a true sample within the physical range (|x| <= SR_SAMPLE_LIMIT, SI)
+ * always gives a finite measurement: angles' errors up to pi [rad], the thrust scale factor's up
+ * to 10 (1000 %), every other error up to 1e6 (SI units). */
 #define ANGLE_LIMIT 3.141592653589793
 #define SI_LIMIT 1e6
-static const double PARAMETER_LIMITS[SR_NOISE_COUNT] = {
-    SI_LIMIT, SI_LIMIT, SI_LIMIT, ANGLE_LIMIT, ANGLE_LIMIT, SI_LIMIT, SI_LIMIT, SI_LIMIT, SI_LIMIT,
-    SI_LIMIT, SI_LIMIT, ANGLE_LIMIT, SI_LIMIT, SI_LIMIT, SI_LIMIT, 10.0, ANGLE_LIMIT};
-static const char *const LIMIT_TEXT[SR_NOISE_COUNT] = {
-    "1e6 rad/s", "1e6 rad/s", "1e6 rad/s", "pi rad", "pi rad", "1e6 m", "1e6 m/s", "1e6 m/s2",
-    "1e6 m/s2", "1e6 m/s2", "1e6 rad/s2", "pi rad", "1e6 rad", "1e6 rad/s", "1e6 rad/s2", "10",
-    "pi rad"};
+static const struct {
+    double max;
+    const char *unit;
+} LIMIT[SR_NOISE_COUNT] = {
+    {SI_LIMIT, "rad/s"}, {SI_LIMIT, "rad/s"}, {SI_LIMIT, "rad/s"}, {ANGLE_LIMIT, "rad"},
+    {ANGLE_LIMIT, "rad"}, {SI_LIMIT, "m"}, {SI_LIMIT, "m/s"}, {SI_LIMIT, "m/s2"},
+    {SI_LIMIT, "m/s2"}, {SI_LIMIT, "m/s2"}, {SI_LIMIT, "rad/s2"}, {ANGLE_LIMIT, "rad"},
+    {SI_LIMIT, "rad"}, {SI_LIMIT, "rad/s"}, {SI_LIMIT, "rad/s2"}, {10.0, ""}, {ANGLE_LIMIT, "rad"}};
 /* the smallest encoder step other than 0 (q / step stays far from overflow) */
 #define MIN_RESOLUTION 1e-9
+/* seed: the FMU's Integer (Int32) variables hold 0..2^31 - 1 */
+#define SEED_MAX 2147483647.0
 
 size_t sr_sensors_model_size(void)
 {
@@ -37,22 +44,46 @@ const char *sr_sensors_parameter_name(int i)
     return (i >= 0 && i < SR_NOISE_COUNT) ? sr_noise_name(i) : NULL;
 }
 
-/* msg = a + b (+ c), truncated to msg_size bytes, NUL-terminated (no locale-dependent call) */
-static void set_message(char *msg, int msg_size, const char *a, const char *b, const char *c)
+int sr_sensors_param_range(const char *fmi_name, double *min, double *max)
 {
-    const char *parts[3];
-    int k = 0, i;
-    if (msg == NULL || msg_size <= 0)
-        return;
-    parts[0] = a;
-    parts[1] = b;
-    parts[2] = c;
-    for (i = 0; i < 3; ++i) {
-        const char *p = parts[i];
-        while (p && *p && k < msg_size - 1)
-            msg[k++] = *p++;
+    double lo = 0.0, hi;
+    int i;
+    if (fmi_name == NULL || min == NULL || max == NULL)
+        return 1;
+    if (strncmp(fmi_name, SR_SENSORS_TRUE_PREFIX, sizeof SR_SENSORS_TRUE_PREFIX - 1) == 0) {
+        lo = -SR_SAMPLE_LIMIT;                     /* an input true.<signal> */
+        hi = SR_SAMPLE_LIMIT;
+    } else if (strcmp(fmi_name, "noise.scale") == 0) {
+        hi = SR_NOISE_SCALE_MAX;
+    } else if (strcmp(fmi_name, "seed") == 0) {
+        hi = SEED_MAX;
+    } else if (strcmp(fmi_name, "noise.delay") == 0) {
+        hi = SR_SENSORS_MAX_DELAY;
+    } else if (strcmp(fmi_name, "noise.imu") == 0) {
+        hi = 1.0;
+    } else {
+        for (i = 0; i < SR_NOISE_COUNT && strcmp(fmi_name, sr_noise_name(i)) != 0; ++i) {
+        }
+        if (i == SR_NOISE_COUNT)
+            return 1;
+        hi = LIMIT[i].max;
     }
-    msg[k] = '\0';
+    *min = lo;
+    *max = hi;
+    return 0;
+}
+
+/* "at most <limit> <unit>", pi spelled out (the angles' limit) */
+static void limit_text(char *msg, size_t n, double limit, const char *unit)
+{
+    if (limit == ANGLE_LIMIT)
+        sr_text_cat(msg, n, "pi");
+    else
+        sr_text_num(msg, n, limit, 6);
+    if (unit[0]) {
+        sr_text_cat(msg, n, " ");
+        sr_text_cat(msg, n, unit);
+    }
 }
 
 static int model_ok(const sr_sensors_model *m)
@@ -72,53 +103,58 @@ int sr_sensors_init(sr_sensors_model *model, int n, const double *noise, double 
                     long long seed, int delay, int imu, double dt, char *msg, int msg_size)
 {
     sr_sensors_model m;
+    const size_t size = msg_size > 0 ? (size_t)msg_size : 0;
     int i;
-    set_message(msg, msg_size, "", NULL, NULL);
+    sr_text_set(msg, size, "");
     if (model == NULL || noise == NULL) {
-        set_message(msg, msg_size, "sensors: NULL model or noise parameters", NULL, NULL);
+        sr_text_set(msg, size, "sensors: NULL model or noise parameters");
         return 1;
     }
     if (n < 1 || n > SR_MAX_JOINTS) {
-        set_message(msg, msg_size, "sensors: the number of joints must be 1..12", NULL, NULL);
+        sr_text_format(msg, size, "sensors: the number of joints must be 1..%d", SR_MAX_JOINTS);
         return 1;
     }
-    if (!(isfinite(scale) && scale >= 0.0)) {
-        set_message(msg, msg_size, "noise.scale must be finite and >= 0", NULL, NULL);
+    if (!(isfinite(scale) && scale >= 0.0 && scale <= SR_NOISE_SCALE_MAX)) {
+        sr_text_format(msg, size, "noise.scale must be finite and in [0, %g], got %g",
+                       SR_NOISE_SCALE_MAX, scale);
         return 1;
     }
     for (i = 0; i < SR_NOISE_COUNT; ++i) {
         if (!(isfinite(noise[i]) && noise[i] >= 0.0)) {
-            set_message(msg, msg_size, sr_noise_name(i), " must be finite and >= 0", NULL);
+            sr_text_format(msg, size, "%s must be finite and >= 0, got %g", sr_noise_name(i),
+                           noise[i]);
             return 1;
         }
-        if (!(scale * noise[i] <= PARAMETER_LIMITS[i])) {
-            set_message(msg, msg_size, sr_noise_name(i), " times noise.scale must be at most ",
-                        LIMIT_TEXT[i]);
+        if (!(noise[i] <= LIMIT[i].max && scale * noise[i] <= LIMIT[i].max)) {
+            sr_text_format(msg, size, "%s (%g) and %s times noise.scale (%g) must be at most ",
+                           sr_noise_name(i), noise[i], sr_noise_name(i), scale * noise[i]);
+            limit_text(msg, size, LIMIT[i].max, LIMIT[i].unit);
             return 1;
         }
     }
     if (scale * noise[SR_NOISE_ENC_RESOLUTION] > 0.0
         && scale * noise[SR_NOISE_ENC_RESOLUTION] < MIN_RESOLUTION) {
-        set_message(msg, msg_size, "noise.enc.resolution times noise.scale must be 0 (no "
-                    "quantisation) or at least 1e-9 rad", NULL, NULL);
+        sr_text_format(msg, size, "noise.enc.resolution times noise.scale must be 0 (no "
+                       "quantisation) or at least %g rad", MIN_RESOLUTION);
         return 1;
     }
-    if (seed < 0) {
-        set_message(msg, msg_size, "seed must be >= 0", NULL, NULL);
+    if (seed < 0 || (double)seed > SEED_MAX) {
+        sr_text_format(msg, size, "seed must be in [0, %lld], got %lld", (long long)SEED_MAX,
+                       seed);
         return 1;
     }
     if (delay < 0 || delay > SR_SENSORS_MAX_DELAY) {
-        set_message(msg, msg_size, "noise.delay must be an integer in 0..100 (samples)", NULL,
-                    NULL);
+        sr_text_format(msg, size, "noise.delay must be an integer in 0..%d (samples), got %d",
+                       SR_SENSORS_MAX_DELAY, delay);
         return 1;
     }
     if (imu != 0 && imu != 1) {
-        set_message(msg, msg_size, "noise.imu must be 0 or 1", NULL, NULL);
+        sr_text_format(msg, size, "noise.imu must be 0 or 1, got %d", imu);
         return 1;
     }
     if (!(isfinite(dt) && dt > 0.0)) {
-        set_message(msg, msg_size, "sensors: the communication step must be finite and > 0",
-                    NULL, NULL);
+        sr_text_format(msg, size, "sensors: the communication step must be finite and > 0, "
+                       "got %g s", dt);
         return 1;
     }
     memset(&m, 0, sizeof m);
@@ -173,7 +209,7 @@ void sr_rotation_vector_to_matrix(const double *phi, double *R)
          * sin(a)/a = (sin h / h) cos h, (1 - cos a)/a^2 = (sin h / h)^2 / 2 (no cancellation) */
         double sh, ch, t;
         const double h = 0.5 * angle;
-        sr_portable_sincos(h, &sh, &ch);
+        sr_sincos(h, &sh, &ch);
         t = sh / h;
         c1 = t * ch;
         c2 = 0.5 * t * t;
@@ -186,7 +222,7 @@ void sr_rotation_vector_to_matrix(const double *phi, double *R)
 }
 
 /* (1 + s) R(phi) - I with scale factor error s ~ N(0, thrust.scale^2) and misalignment
- * phi ~ N(0, thrust.misalign^2) per axis (SensorSuite._thrust_error) */
+ * phi ~ N(0, thrust.misalign^2) per axis */
 static void thrust_error(const sr_sensors_model *m, sr_rng *g, double E[9])
 {
     double phi[3], R[9];
@@ -199,7 +235,7 @@ static void thrust_error(const sr_sensors_model *m, sr_rng *g, double E[9])
         E[i] = (1.0 + s) * R[i] - ((i % 4 == 0) ? 1.0 : 0.0);
 }
 
-/* the white-noise draws of one sample (SensorSuite._draw): a density d (its sd over 1 s)
+/* the white-noise draws of one sample: a density d (its sd over 1 s)
  * sampled at interval dt has sd d / sqrt(dt) */
 static void draw(const sr_sensors_model *m, sr_sensors_state *s, double dt)
 {
@@ -249,7 +285,7 @@ int sr_sensors_start(const sr_sensors_model *model, sr_sensors_state *state)
     return 0;
 }
 
-/* the measurement of the true sample x now, without delay (SensorSuite._corrupt), into y
+/* the measurement of the true sample x now, without delay, into y
  * (may alias x: written through a local copy) */
 static void corrupt(const sr_sensors_model *m, const sr_sensors_state *s, const double *x,
                     double *y)

@@ -5,10 +5,6 @@ The install step (``setup.py`` -> ``native/build.py``) compiles ``libspacerobot`
 library, the command line and the FMUs run one implementation of the mathematics.
 
 ``SPACEROBOT_CORE_LIB`` names another build of the library (tests of a fresh build).
-
-A pythonfmu-hosted FMU carries a copy of this package renamed (``_spacerobot_plant.core``,
-:mod:`spacerobot.fmi.build`) with the library in its own ``lib/``: that copy loads only the
-library beside it (never ``SPACEROBOT_CORE_LIB`` or a path of the machine that built the FMU).
 """
 from __future__ import annotations
 
@@ -24,9 +20,6 @@ LIB_DIR = Path(__file__).resolve().parent / "lib"
 
 _DOUBLE_P = ctypes.POINTER(ctypes.c_double)
 
-#: whether this is the copy bundled into an FMU (a package renamed by spacerobot.fmi.build)
-BUNDLED = not __name__.startswith("spacerobot.")
-
 #: the library's file name on each platform, in the order looked for
 LIB_NAMES = ("libspacerobot.so", "libspacerobot.dylib", "libspacerobot.dll")
 
@@ -36,10 +29,9 @@ class CoreUnavailable(ImportError):
 
 
 def library_path() -> Path:
-    """The library to load: ``$SPACEROBOT_CORE_LIB``, else the installed build; in a copy
-    bundled into an FMU (:data:`BUNDLED`) always the library beside it."""
+    """The library to load: ``$SPACEROBOT_CORE_LIB``, else the installed build."""
     env = os.environ.get("SPACEROBOT_CORE_LIB")
-    if env and not BUNDLED:
+    if env:
         return Path(env)
     for name in LIB_NAMES:
         if (LIB_DIR / name).is_file():

@@ -1,21 +1,22 @@
 """The sensor models of the native core (``native/src/sensors.h``) through ctypes.
 
-:class:`NativeSensors` has the interface of :class:`spacerobot.sensors.SensorSuite` (samples as
-``{signal: array}`` of :data:`spacerobot.sensors.SIGNALS`) and draws its noise from the core's
-portable generator: the same seed gives the same bits on every platform and in the native
-sensors FMU, the same statistics as SensorSuite (NumPy's generator: not the same numbers).
+:class:`NativeSensors` (exported as :class:`spacerobot.sensors.SensorSuite`) takes samples as
+``{signal: array}`` of the core's sample table (:mod:`spacerobot.core.sample`) and draws its
+noise from the core's portable generator: the same seed gives the same bits on every platform
+and in the sensors FMU. :func:`parameter_ranges` gives the ranges the core accepts, which the
+FMU's model description declares as ``min`` / ``max``.
 """
 from __future__ import annotations
 
 import ctypes
-from typing import Dict, Mapping, Optional
+from typing import Dict, Mapping, Optional, Tuple
 
 import numpy as np
 
 from . import dptr, lib
-from ..sensors.models import SIGNALS, default_parameters
+from . import sample
+from ..sensors.models import default_parameters
 
-_SIZES = {"A": 9, "q": -1, "qd": -1, "qdd": -1}
 _bound = set()
 
 
@@ -33,8 +34,28 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     L.sr_sensors_start.argtypes = [vp, vp]
     L.sr_sensors_measure.argtypes = [vp, vp, dp, dp]
     L.sr_sensors_advance.argtypes = [vp, vp, dp, ctypes.c_double]
+    L.sr_sensors_param_range.argtypes = [ctypes.c_char_p, dp, dp]
     _bound.add(id(L))
     return L
+
+
+def parameter_ranges(L: Optional[ctypes.CDLL] = None) -> Dict[str, Tuple[float, float]]:
+    """``{FMU name: (min, max)}`` the sensors core accepts (``sr_sensors_param_range``) for every
+    parameter of the sensors FMU and every input ``true.<name>`` of a robot with the most joints
+    the core takes; the model description declares them."""
+    from ..interface import NOISE_PARAMETERS, SENSOR_INTEGER_PARAMETERS, TRUE_PREFIX
+    from ..interface import measurement_vars
+    from .robot_record import MAX_JOINTS
+
+    L = _bind(L or lib())
+    names = [*NOISE_PARAMETERS, *SENSOR_INTEGER_PARAMETERS,
+             *(TRUE_PREFIX + v.name for v in measurement_vars(MAX_JOINTS, "input"))]
+    lo, hi, out = ctypes.c_double(), ctypes.c_double(), {}
+    for name in names:
+        if L.sr_sensors_param_range(name.encode(), ctypes.byref(lo), ctypes.byref(hi)) != 0:
+            raise ValueError(f"the sensors core knows no range of {name}")
+        out[name] = (lo.value, hi.value)
+    return out
 
 
 def parameter_names(L: Optional[ctypes.CDLL] = None) -> list:
@@ -89,8 +110,8 @@ class NativeSensors:
                              int(delay), int(bool(imu)), float(dt), msg, len(msg)) != 0:
             raise ValueError(msg.value.decode())
         L.sr_sensors_start(self._model, self._state)
-        self._sizes = [(s, self.n if _SIZES.get(s, 3) < 0 else _SIZES.get(s, 3)) for s in SIGNALS]
-        self._len = sum(k for _, k in self._sizes)
+        self._sizes = sample.sizes(self.n, L)
+        self._len = sample.length(self.n, L)
 
     def flat(self, x: Mapping[str, np.ndarray]) -> np.ndarray:
         """The flat sample (the core's order) of ``x``."""

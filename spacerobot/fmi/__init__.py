@@ -1,1 +1,2 @@
-"""FMI layer: the shared pythonfmu slave base class and the FMU/SSP build."""
+"""The FMUs: their model descriptions and variable tables from the interface, packaged with the
+native core's binaries (:mod:`.native`), and the build entry point (:mod:`.build`)."""

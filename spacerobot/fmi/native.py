@@ -31,12 +31,13 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import math
 import struct
 import uuid
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
-from typing import Callable, Dict, List, NamedTuple, Optional, Sequence
+from typing import Callable, Dict, List, NamedTuple, Optional, Sequence, Tuple
 
 from .. import __version__
 from ..core import LIB_DIR
@@ -83,6 +84,10 @@ class NativeModel(NamedTuple):
     key: Callable[[Var], str] = _table_key
     #: [Var] -> {output index: [input indices]} (direct feedthrough); None: none
     dependencies: Optional[Callable] = None
+    #: the core module ``spacerobot.core.<ranges>`` whose ``parameter_ranges()`` gives the
+    #: ``(min, max)`` its checks accept for the parameters and inputs (declared in the model
+    #: description); None: the model declares none
+    ranges: Optional[str] = None
 
 
 #: the models with a native FMU, by kind
@@ -100,7 +105,7 @@ MODELS: Dict[str, NativeModel] = {
         "thrust knowledge (scale factor, misalignment), sample delay. noise.scale = 0: outputs "
         "equal inputs. Direct feedthrough: the outputs at t measure the inputs set at t. "
         "Native C core: needs nothing but the C runtime.", robot=None, key=_sensors_key,
-        dependencies=sensors_dependencies),
+        dependencies=sensors_dependencies, ranges="sensors"),
     "plant": NativeModel(
         "SpaceRobotPlant", plant_vars,
         "Free-floating space robot after capture: base, arm and target (articulated-body "
@@ -150,17 +155,6 @@ def known_robot(kind: str, robot: Robot) -> Optional[Robot]:
     return dataclasses.replace(robot, base=PLACEHOLDER_BODY) if what == "arm" else robot
 
 
-def known_scenario(kind: str, sc: Scenario) -> Scenario:
-    """The scenario as the FMU ``kind`` may carry it (a pythonfmu FMU's defaults): the plant all
-    of it; the estimator and the sensors neither the base nor the target (unit placeholders)
-    nor the initial velocities: no truth (their variables' defaults do not depend on these)."""
-    if kind == "plant":
-        return sc
-    robot = dataclasses.replace(sc.robot, base=PLACEHOLDER_BODY)
-    return dataclasses.replace(sc, robot=robot, target=PLACEHOLDER_BODY, v0=(0.0, 0.0, 0.0),
-                               omega0=(0.0, 0.0, 0.0))
-
-
 def scenario_text(sc: Scenario, home: bool) -> str:
     """``resources/scenario.txt``: the scenario's constants a model reads at instantiation
     (IEEE-754 bits: exact and locale-independent): the sample time and, with ``home``, the
@@ -208,17 +202,48 @@ def variable_table(variables: Sequence[Var], model_identifier: str, guid: str,
 
 
 def _start_text(v: Var) -> str:
-    if v.type == "Integer":
-        return str(int(v.start))
-    return repr(float(v.start))
+    return _value_text(v, v.start)
+
+
+def _value_text(v: Var, x: float) -> str:
+    """A value of ``v`` as the model description writes it (exact: the shortest repr)."""
+    return str(int(x)) if v.type == "Integer" else repr(float(x))
+
+
+Ranges = Dict[str, Tuple[float, float]]
+
+
+def variable_ranges(kind: str) -> Ranges:
+    """``{name: (min, max)}`` of the FMU ``kind``'s parameters and inputs: what its core's checks
+    accept (``spacerobot.core.<module>.parameter_ranges()``, :attr:`NativeModel.ranges`)."""
+    module = MODELS[kind].ranges
+    if module is None:
+        return {}
+    import importlib
+    return importlib.import_module(f"{__package__.rsplit('.', 1)[0]}.core.{module}") \
+        .parameter_ranges()
+
+
+def _range_attributes(v: Var, ranges: Optional[Ranges]) -> Dict[str, str]:
+    """``min`` / ``max`` of a parameter or input (finite bounds only), checked to hold its
+    start value (FMI 2.0 / 3.0: min <= start <= max)."""
+    if not ranges or v.name not in ranges or v.causality not in ("parameter", "input"):
+        return {}
+    lo, hi = ranges[v.name]
+    if v.start is not None and not lo <= v.start <= hi:
+        raise ValueError(f"{v.name}: the start value {v.start!r} is outside the range "
+                         f"[{lo!r}, {hi!r}] the core accepts")
+    return {k: _value_text(v, x) for k, x in (("min", lo), ("max", hi)) if math.isfinite(x)}
 
 
 def model_description(variables: Sequence[Var], model_identifier: str, guid: str,
                       description: str, sc: Scenario,
-                      dependencies: Optional[Dict[int, List[int]]] = None) -> str:
+                      dependencies: Optional[Dict[int, List[int]]] = None,
+                      ranges: Optional[Ranges] = None) -> str:
     """The FMI 2.0 model description of a native co-simulation FMU; ``dependencies``: ``{output
     index: [input indices]}`` of a model with direct feedthrough (None: outputs change only in
-    doStep)."""
+    doStep); ``ranges``: ``{name: (min, max)}`` of parameters and inputs
+    (:func:`variable_ranges`)."""
     root = ET.Element("fmiModelDescription", {
         "fmiVersion": "2.0", "modelName": model_identifier, "guid": guid,
         "description": description, "author": "spacerobot developers",
@@ -245,6 +270,7 @@ def model_description(variables: Sequence[Var], model_identifier: str, guid: str
             t["unit"] = v.unit
         if v.causality in ("parameter", "input"):
             t["start"] = _start_text(v)
+            t.update(_range_attributes(v, ranges))
         else:
             outputs.append(vr + 1)
         ET.SubElement(sv, v.type, t)
@@ -263,12 +289,13 @@ def model_description(variables: Sequence[Var], model_identifier: str, guid: str
 
 def model_description3(variables: Sequence[Var], model_identifier: str, token: str,
                        description: str, sc: Scenario,
-                       dependencies: Optional[Dict[int, List[int]]] = None) -> str:
+                       dependencies: Optional[Dict[int, List[int]]] = None,
+                       ranges: Optional[Ranges] = None) -> str:
     """The FMI 3.0 model description of a native co-simulation FMU: the variables of
     :func:`model_description` (same names and value references; ``Float64`` / ``Int32``
     scalars), ``<Output>`` dependencies by value reference (``dependencies``: ``{output index:
-    [input indices]}``; None: outputs change only in doStep), the capabilities the FMI layer
-    delivers (``native/fmi/fmi3_api.c``) and no other."""
+    [input indices]}``; None: outputs change only in doStep), ``min`` / ``max`` of ``ranges``, the
+    capabilities the FMI layer delivers (``native/fmi/fmi3_api.c``) and no other."""
     root = ET.Element("fmiModelDescription", {
         "fmiVersion": "3.0", "modelName": model_identifier, "instantiationToken": token,
         "description": description, "author": "spacerobot developers",
@@ -298,6 +325,7 @@ def model_description3(variables: Sequence[Var], model_identifier: str, token: s
                  "causality": v.causality, "variability": v.variability}
         if v.causality in ("parameter", "input"):
             attrs["start"] = _start_text(v)
+            attrs.update(_range_attributes(v, ranges))
         else:
             outputs.append(vr)
         if v.unit and v.type == "Real":
@@ -367,7 +395,8 @@ def build_native_fmu(kind: str, sc: Scenario, out_dir: str | Path, lib_dir: Path
         describe = model_description3 if fmi_version == 3 else model_description
         zf.writestr("modelDescription.xml",
                     describe(variables, ident, guid, model.description, sc,
-                             model.dependencies and model.dependencies(variables)))
+                             model.dependencies and model.dependencies(variables),
+                             variable_ranges(kind)))
         for plat, p in sorted(bins.items()):
             zf.write(p, f"binaries/{plat}/{p.name}")
         zf.writestr(f"resources/{VARIABLES_FILE}", variable_table(variables, ident, guid, model.key))

@@ -12,8 +12,14 @@ from typing import Dict, Mapping, Optional
 
 from ..interface import NOISE_PARAMETERS
 
-#: the measurement groups, in the interface's order (and the core's flat sample's)
-SIGNALS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
+
+def __getattr__(name: str):
+    # SIGNALS: the measurement groups in the core's flat sample's order, read from the native
+    # core's sample table (spacerobot.core.sample) when first used
+    if name == "SIGNALS":
+        from ..core.sample import signals
+        return signals()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def default_parameters() -> Dict[str, float]:

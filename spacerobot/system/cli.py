@@ -149,35 +149,27 @@ def robot_key(args) -> Optional[str]:
 
 @fail_on_errors("build")
 def cmd_build(args) -> int:
-    from .ssd import build_system
+    from .ssd import build_system, default_build_dir
     robot = robot_key(args)
-    fmi3 = args.fmi_version == 3
-    if fmi3 and args.backend != "native":
-        raise CommandError("--fmi-version 3 builds native FMUs only (drop --backend pythonfmu)")
-    out = (Path(args.out) if args.out
-           else Path("build") / (robot_label(robot) + ("-fmi3" if fmi3 else "")))
-    what = "FMI 3.0 FMUs" if fmi3 else "FMUs"
+    out = Path(args.out) if args.out else default_build_dir(robot, args.fmi_version)
+    what = "FMI 3.0 FMUs" if args.fmi_version == 3 else "FMUs"
     notice("build", f"building the {what} and the SSP for {robot_label(robot)} into {out}/ ...")
-    for key, path in build_system(robot, out, sensors=args.sensors, backend=args.backend,
+    for key, path in build_system(robot, out, sensors=args.sensors,
                                   fmi_version=args.fmi_version).items():
         print(f"{key:<12} {path}")
-    warn_missing_platforms(args.backend, args.fmi_version)
+    warn_missing_platforms(args.fmi_version)
     return 0
 
 
-def add_backend_argument(p: argparse.ArgumentParser) -> None:
-    """``--backend native|pythonfmu``."""
-    from ..fmi.build import BACKENDS, DEFAULT_BACKEND
-    p.add_argument("--backend", choices=BACKENDS, default=DEFAULT_BACKEND,
-                   help="how the FMUs are built: native (the C core, no Python at run time, "
-                        "linux64 + win64) or pythonfmu (hosted by Python through pythonfmu, "
-                        f"for extending the FMUs in Python); default {DEFAULT_BACKEND}")
+def add_fmi_version_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """``--fmi-version 2|3``."""
+    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
+                   help=f"FMI version of the FMUs {what}: 2 (default) or 3 (the same variables; "
+                        "default folder build/<robot>-fmi3/; docs/fmus.md)")
 
 
-def warn_missing_platforms(backend: str, fmi_version: int = 2) -> None:
-    """One line on stderr for each platform the native FMUs cannot carry on this install."""
-    if backend != "native":
-        return
+def warn_missing_platforms(fmi_version: int = 2) -> None:
+    """One line on stderr for each platform the FMUs cannot carry on this install."""
     from ..fmi.native import MODELS, binaries, platforms
     for ident, *_ in MODELS.values():
         built = binaries(ident, fmi_version=fmi_version)
@@ -234,6 +226,9 @@ def cmd_run(args) -> int:
 
     if args.ssp and args.robot:
         raise CommandError("give either --robot or SSP_FILE, not both")
+    if args.ssp and args.fmi_version != 2:
+        raise CommandError("--fmi-version goes with --robot: an SSP_FILE's FMUs are of the "
+                           "version it was built with")
     key = robot_key(args)
     if args.ssp:
         ssp = Path(args.ssp)
@@ -256,9 +251,10 @@ def cmd_run(args) -> int:
         raise CommandError(f"--out {csv_path}: the result file must end in .csv")
     announce_replace("run", csv_path)
     if ssp is None:
+        what = "FMI 3.0 FMUs" if args.fmi_version == 3 else "FMUs"
         ssp = ensure_ssp(robot, args.build_dir, sensors=args.sensors, on_build=lambda out: notice(
-            "run", f"building the FMUs and the SSP for {robot_label(robot)} into {out}/ ..."),
-            backend=args.backend)
+            "run", f"building the {what} and the SSP for {robot_label(robot)} into {out}/ ..."),
+            fmi_version=args.fmi_version)
     stop_time = args.stop_time if args.stop_time is not None else set_stop_time(robot, target)
     res = run_ssp(ssp, parameter_set=args.target, stop_time=stop_time,
                   overrides=overrides, csv_path=csv_path,
@@ -309,14 +305,12 @@ def build_parser() -> argparse.ArgumentParser:
                                                 "<robot> the URDF's robot name)")
     p.add_argument("--sensors", action="store_true", help="the system with the sensors FMU "
                    "between plant and estimator (<robot>_sensors.ssp, docs/sensors.md)")
-    add_backend_argument(p)
-    p.add_argument("--fmi-version", type=int, choices=(2, 3), default=2,
-                   help="FMI version of the FMUs: 2 (default) or 3 (native FMUs with the same "
-                        "variables; default folder build/<robot>-fmi3/; docs/fmus.md)")
+    add_fmi_version_argument(p, "built")
     p.set_defaults(func=cmd_build)
 
     p = sub.add_parser("run", help="run the co-simulation and print the final estimates",
-                       description="Run the SSP system (built into build/<robot>/ if needed) "
+                       description="Run the SSP system (built into build/<robot>/, or "
+                                   "build/<robot>-fmi3/ for FMI 3.0, if needed) "
                                    "and print every estimate against the truth and, for the "
                                    "planar medium target, the paper's values.")
     p.add_argument("ssp", nargs="?", metavar="SSP_FILE", help="a .ssp archive (or folder) to "
@@ -342,12 +336,13 @@ def build_parser() -> argparse.ArgumentParser:
                    "<solver>[-<settings>].csv, <settings> the --set overrides and an explicit "
                    "--stop-time; an existing file is replaced, with a note on stderr)")
     p.add_argument("--build-dir", metavar="DIR", help="where to build the .ssp for --robot "
-                                                      "(default build/<robot>/)")
+                                                      "(default build/<robot>/, FMI 3.0: "
+                                                      "build/<robot>-fmi3/)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--sensors", action="store_true", help="with --robot: run the system with "
                    "the sensors FMU (parameter sets ideal, realistic (default) and the "
                    "others; seed: --set sensors.seed=N)")
-    add_backend_argument(p)
+    add_fmi_version_argument(p, "built for --robot")
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("plot", help="plot a run CSV (paper Fig. 4/5 view) or a sweep table",

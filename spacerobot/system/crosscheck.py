@@ -1,4 +1,4 @@
-"""FMI cross-check artifacts for the two FMUs of a robot.
+"""FMI cross-check files for the three FMUs of a robot.
 
 For each FMU this writes, following the FMI Cross-Check rules (version 4.1, section 9.1.4 and
 Appendix B "CSV rules"; https://github.com/modelica/fmi-cross-check), into
@@ -10,20 +10,25 @@ Appendix B "CSV rules"; https://github.com/modelica/fmi-cross-check), into
                          ``RelTol``, plus the optional ``OutputIntervalLength``;
 - ``<Model>_ref.csv``    the reference result (time + at most 10 important outputs, as the rules
                          recommend), computed by the project's co-simulation loop (:func:`.runner.simulate`);
-- ``<Model>_in.csv``     the input signals (estimator only: the plant has no inputs). They are the
-                         plant outputs sampled at every communication point, i.e. exactly what the
-                         estimator receives when wired to the plant;
+- ``<Model>_in.csv``     the input signals (estimator and sensors: the plant has no inputs): the
+                         plant's outputs at every communication point, i.e. what the FMU
+                         receives when wired to the plant;
 - ``ReadMe.md``          how the files were made and how to re-simulate them.
 
 Each FMU runs with its default start values (a cross-check importer sets nothing), so the
 scenario - robot and target - is the one the FMU was built for.
 
-Reading the CSVs: the first line holds the variable names quoted with double quotes (CSV rules).
-Several estimator inputs are FMI structured names with a comma (``base.A[1,2]``). A CSV reader
-that honours the quotes (Python's :mod:`csv`, :func:`read_crosscheck_csv`) reads them correctly;
-fmpy 0.3.32's ``fmpy.util.read_csv`` and ``numpy.genfromtxt`` split the header at every comma and
-mislabel the columns, so do not feed ``_in.csv`` to ``fmpy simulate --input-file``; use
-:func:`read_crosscheck_csv` and pass the array to ``fmpy.simulate_fmu(input=...)``.
+Names with a comma. The cross-check's own validator (fmpy's ``validate_test_fmu``, which the
+cross-check repository runs) and importers that read the CSVs with ``numpy.genfromtxt`` or
+fmpy's ``read_csv`` split a header at every comma, quoted or not, so a column ``"base.A[1,2]"``
+cannot be read back. The rules ask for the FMU's own names, so these inputs (``base.A[i,j]``,
+``true.base.A[i,j]``) are left out of ``_in.csv`` (:func:`csv_name_ok`): an importer keeps
+them at their start values (the identity), and the reference is computed the same way (those
+inputs not fed). The files then check an importer, not the estimates: with the base's
+attitude held at the identity the estimator sees a base that does not turn.
+
+The sensors have direct feedthrough; their reference is sampled as importers sample a
+co-simulation FMU (:func:`sampled_after_each_step`).
 """
 from __future__ import annotations
 
@@ -38,7 +43,7 @@ import numpy as np
 from .. import __version__
 from ..interface import ExciteMode
 from .cli import fail_on_errors
-from .reader import system_of_fmus
+from .reader import wired_system
 from .runner import simulate
 
 TOOL_NAME = "spacerobot"
@@ -57,9 +62,25 @@ REF_VARIABLES = {
     ("estimator", "spatial"): ["base.m", "base.b[1]", "base.b[2]", "base.b[3]", "base.Izz",
                                "target.m", "target.b[1]", "target.b[2]", "target.b[3]",
                                "target.Izz"],
+    ("sensors", "planar"): ["base.r[1]", "base.v[1]", "base.omega[3]", "base.a[1]", "arm.q[1]",
+                            "arm.qd[1]", "thrust.F[1]", "thrust.M[3]", "thrust.J[1]",
+                            "thrust.H[3]"],
+    ("sensors", "spatial"): ["base.r[1]", "base.v[3]", "base.omega[1]", "base.a[2]", "arm.q[1]",
+                             "arm.qd[2]", "thrust.F[1]", "thrust.M[3]", "thrust.J[1]",
+                             "thrust.H[3]"],
 }
 
-MODELS = {"plant": "SpaceRobotPlant", "estimator": "SpaceRobotEstimator"}
+MODELS = {"plant": "SpaceRobotPlant", "estimator": "SpaceRobotEstimator",
+          "sensors": "SpaceRobotSensors"}
+#: the FMUs with inputs, and the plant output each input is, by name
+INPUT_OF = {"estimator": lambda name: name,
+            "sensors": lambda name: name[len("true."):] if name.startswith("true.") else None}
+
+
+def csv_name_ok(name: str) -> bool:
+    """Whether a variable name can be a column of a cross-check CSV that the cross-check's
+    validator (``numpy.genfromtxt``) reads back: no comma, quoted or not."""
+    return "," not in name
 
 
 # -- the reference run: the project's one co-simulation loop ---------------------------------------
@@ -67,38 +88,81 @@ MODELS = {"plant": "SpaceRobotPlant", "estimator": "SpaceRobotEstimator"}
 OPEN_LOOP = ("ident.excite_mode", int(ExciteMode.OFF))
 
 
-def reference_run(plant_fmu: Path, estimator_fmu: Path, stop_time: float, step: float) -> dict:
-    """Run plant -> estimator with default start values (the estimator's excitation request
-    off, :data:`OPEN_LOOP`) at a fixed communication step.
+def reference_run(fmus: Dict[str, Path], stop_time: float, step: float) -> dict:
+    """The references of the plant, the estimator and the sensors, each fed the plant's
+    outputs, with default start values (the estimator's excitation request off,
+    :data:`OPEN_LOOP`) at a fixed communication step.
 
-    The system of the two FMU files wired name to name (:func:`.reader.system_of_fmus`) run by
-    :func:`.runner.simulate`: at every communication point t_k the estimator's inputs are set
-    to the plant's outputs at t_k, then both FMUs step to t_{k+1} = (k + 1) * step (the time grid
-    fmpy's ``simulate_fmu`` uses). Returns ``{"time", "plant_names", "plant", "inputs_names",
-    "inputs", "est_names", "est"}`` with one row per communication point, t = 0 included.
+    ``fmus``: ``{"plant": path, "estimator": path[, "sensors": path]}``. The inputs whose names
+    cannot be CSV columns (:func:`csv_name_ok`) are not fed: they keep their start values, as in
+    an importer that applies ``_in.csv``. Plant and estimator run in :func:`.runner.simulate`:
+    at every communication point t_k the estimator's inputs are set to the plant's outputs at
+    t_k, then both step to t_{k+1} = (k + 1) * step (the time grid fmpy's ``simulate_fmu``
+    uses). The sensors (direct feedthrough) are then sampled as importers sample a
+    co-simulation FMU (:func:`sampled_after_each_step`). Returns ``{"time", "outputs": {kind:
+    (names, table)}, "inputs": {kind: (names, table)}}``, one row per communication point, t = 0
+    included.
     """
     from fmpy import read_model_description
 
     _n_steps(stop_time, step)
-    fmus = {"plant": Path(plant_fmu), "estimator": Path(estimator_fmu)}
+    fmus = {k: Path(p) for k, p in fmus.items()}
     variables = {k: read_model_description(str(p)).modelVariables for k, p in fmus.items()}
-    names = {k: [v.name for v in vs if v.causality == c]
-             for k, c, vs in (("plant", "output", variables["plant"]),
-                              ("inputs", "input", variables["estimator"]),
-                              ("est", "output", variables["estimator"]))}
-    missing = [x for x in names["inputs"] if x not in names["plant"]]
-    if missing:
-        raise ValueError(f"plant has no outputs for estimator inputs {missing}")
+    names = {k: {c: [v.name for v in vs if v.causality == c] for c in ("input", "output")}
+             for k, vs in variables.items()}
+    fed = {}
+    for kind in fmus:
+        if kind == "plant":
+            continue
+        for n in names[kind]["input"]:
+            if INPUT_OF[kind](n) not in names["plant"]["output"]:
+                raise ValueError(f"the plant has no output for the {kind} input {n}")
+        fed[kind] = [n for n in names[kind]["input"] if csv_name_ok(n)]
     # the paper's open loop: the estimator asks for no excitation, so the plant's input
     # ident.excite stays at its start value 0 and the plant alone reproduces its reference
-    res = simulate(system_of_fmus(fmus, step, stop_time), ".", progress=False,
-                   overrides={f"estimator.{OPEN_LOOP[0]}": OPEN_LOOP[1]})
+    system = {k: fmus[k] for k in ("plant", "estimator") if k in fmus}
+    connections = [("plant", n, "estimator", n) for n in fed.get("estimator", [])]
+    res = simulate(wired_system(system, connections, step, stop_time), ".", progress=False,
+                   overrides={f"estimator.{OPEN_LOOP[0]}": OPEN_LOOP[1]} if "estimator"
+                   in system else None)
 
     def table(comp: str, cols) -> np.ndarray:
         return np.column_stack([res.data[f"{comp}.{n}"].astype(float) for n in cols])
-    return {"time": res.time, "plant_names": names["plant"], "plant": table("plant", names["plant"]),
-            "inputs_names": names["inputs"], "inputs": table("estimator", names["inputs"]),
-            "est_names": names["est"], "est": table("estimator", names["est"])}
+    out = {"time": res.time, "outputs": {k: (names[k]["output"], table(k, names[k]["output"]))
+                                         for k in system}, "inputs": {}}
+    for kind, cols in fed.items():
+        plant_cols = [INPUT_OF[kind](n) for n in cols]
+        out["inputs"][kind] = (cols, table("plant", plant_cols))
+    if "sensors" in fmus:
+        outs = names["sensors"]["output"]
+        out["outputs"]["sensors"] = (outs, sampled_after_each_step(
+            fmus["sensors"], *out["inputs"]["sensors"], outs, res.time))
+    return out
+
+
+def sampled_after_each_step(fmu: Path, inputs: Sequence[str], rows: np.ndarray,
+                            outputs: Sequence[str], time: np.ndarray) -> np.ndarray:
+    """The ``outputs`` of an FMU with direct feedthrough as importers sample a co-simulation FMU
+    (fmpy's ``simulate_fmu``, fmusim, the FMU Compliance Checker): at t_0 after its inputs of
+    t_0 are set in initialisation mode; at t_(k+1) right after the step from t_k, its inputs
+    still those of t_k (``rows[k]``). One row per point of ``time``."""
+    from .instance import FMUInstance
+
+    inst = FMUInstance(fmu, "reference")
+    try:
+        inst.fmu.setupExperiment(startTime=float(time[0]))
+        inst.fmu.enterInitializationMode()
+        inst.set_many(inputs, rows[0])
+        inst.fmu.exitInitializationMode()
+        inst.initialized = True
+        got = [list(inst.values(outputs).values())]
+        for k in range(len(time) - 1):
+            inst.set_many(inputs, rows[k])
+            inst.fmu.doStep(float(time[k]), float(time[k + 1] - time[k]))
+            got.append(list(inst.values(outputs).values()))
+    finally:
+        inst.close()
+    return np.array(got, dtype=float)
 
 
 def _n_steps(stop_time: float, step: float) -> int:
@@ -156,11 +220,12 @@ def write_crosscheck(robot: str = "planar", out: str | Path = "build/crosscheck"
                      target: Optional[str] = None, stop_time: float = 20.0, step: float = 0.1,
                      rel_tol: float = 1e-6, fmus: Optional[Dict[str, Path]] = None,
                      ref_variables: Optional[Dict[str, List[str]]] = None) -> Dict[str, Path]:
-    """Write the cross-check folders of both FMUs of ``robot``; returns ``{kind: folder}``.
+    """Write the cross-check folders of the three FMUs of ``robot``; returns ``{kind: folder}``.
 
-    ``fmus`` = ``{"plant": path, "estimator": path}`` uses FMUs already built (they must have
-    been built for the scenario wanted); otherwise they are built for ``scenario(robot, target)``.
-    ``ref_variables`` overrides the outputs written to ``_ref.csv`` per kind.
+    ``fmus`` = ``{"plant": path, "estimator": path, "sensors": path}`` uses FMUs already built
+    (they must have been built for the scenario wanted); otherwise they are built for
+    ``scenario(robot, target)``. ``ref_variables`` overrides the outputs written to
+    ``_ref.csv`` per kind.
     """
     from fmpy import platform
 
@@ -172,22 +237,22 @@ def write_crosscheck(robot: str = "planar", out: str | Path = "build/crosscheck"
         sc = scenario(robot, target)
         stage = out / "_build" / robot
         fmus = {k: build_fmu(k, sc, stage) for k in MODELS}
-    ref = reference_run(fmus["plant"], fmus["estimator"], stop_time, step)
+    fmus = {k: Path(fmus[k]) for k in MODELS}
+    ref = reference_run(fmus, stop_time, step)
     folders = {}
     for kind, model in MODELS.items():
         folder = out / "fmus" / "2.0" / "cs" / platform / TOOL_NAME / __version__ / model
         folder.mkdir(parents=True, exist_ok=True)
         shutil.copy2(fmus[kind], folder / f"{model}.fmu")
         names = (ref_variables or {}).get(kind) or REF_VARIABLES[(kind, robot)]
-        all_names = ref["plant_names"] if kind == "plant" else ref["est_names"]
+        all_names, outputs = ref["outputs"][kind]
         unknown = [x for x in names if x not in all_names]
         if unknown:
             raise ValueError(f"{model} has no outputs {unknown}")
-        data = ref[kind if kind == "plant" else "est"][:, [all_names.index(x) for x in names]]
+        data = outputs[:, [all_names.index(x) for x in names]]
         write_crosscheck_csv(folder / f"{model}_ref.csv", ref["time"], names, data)
-        if kind == "estimator":
-            write_crosscheck_csv(folder / f"{model}_in.csv", ref["time"], ref["inputs_names"],
-                                 ref["inputs"])
+        if kind in ref["inputs"]:
+            write_crosscheck_csv(folder / f"{model}_in.csv", ref["time"], *ref["inputs"][kind])
         (folder / f"{model}_ref.opt").write_text(
             f"StartTime, 0.0\nStopTime, {stop_time!r}\nStepSize, {step!r}\nRelTol, {rel_tol!r}\n"
             f"OutputIntervalLength, {step!r}\n")
@@ -199,16 +264,25 @@ def write_crosscheck(robot: str = "planar", out: str | Path = "build/crosscheck"
 
 def _readme(model: str, robot: str, stop_time: float, step: float, kind: str) -> str:
     inputs = ("\nThe inputs in `{m}_in.csv` are the outputs of SpaceRobotPlant (same robot, "
-              "default parameters) at every communication point; apply them at the communication "
-              "point (they are sampled, the FMU does not interpolate). Several names contain a "
-              "comma (`base.A[1,2]`): read the file with a CSV reader that honours quotes.\n"
-              ).format(m=model) if kind == "estimator" else ""
+              "default parameters) at every communication point{feed}; apply them at the "
+              "communication point (they are sampled, the FMU does not interpolate). The "
+              "inputs {a} are not in the file: their names carry a comma, which the "
+              "cross-check's CSV reader splits; keep them at their start values (the identity "
+              "matrix), as the reference does.{sampling}\n"
+              ).format(sampling=" The outputs (direct feedthrough: they measure the inputs "
+                       "set) are sampled as fmpy, fmusim and the FMU Compliance Checker sample "
+                       "a co-simulation FMU: at 0 s after the inputs of 0 s are set, then right "
+                       "after each step, its inputs still those the step started from."
+                       if kind == "sensors" else "",m=model, feed=" (the sensors' input `true.<name>` is the plant's "
+                       "output `<name>`)" if kind == "sensors" else "",
+                       a="`true.base.A[i,j]`" if kind == "sensors" else "`base.A[i,j]`") \
+        if kind in INPUT_OF else ""
     return (f"# {model} ({robot} robot), FMI 2.0 co-simulation, native C core\n\n"
             f"Reference computed by spacerobot {__version__} (`spacerobot crosscheck`): fixed "
             f"communication step {step} s from 0 to {stop_time} s, default start values "
             f"except the estimator's {OPEN_LOOP[0]} = {OPEN_LOOP[1]} (no excitation request, "
-            f"so the plant's input ident.excite stays 0), plant -> estimator wired name to "
-            f"name.\n{inputs}\n"
+            f"so the plant's input ident.excite stays 0), the plant's outputs wired to the "
+            f"estimator's and the sensors' inputs.\n{inputs}\n"
             "Any FMI host loads the FMU without set-up: its binaries (linux64, and win64 where "
             "the package was installed with the mingw cross-compiler) need nothing but the C "
             "runtime: see docs/fmus.md of the spacerobot project.\n")
@@ -218,8 +292,8 @@ def _readme(model: str, robot: str, stop_time: float, step: float, kind: str) ->
 def register(subparsers) -> None:
     """Add ``spacerobot crosscheck --robot R --out DIR`` to an argparse subparsers object."""
     p = subparsers.add_parser(
-        "crosscheck", help="write FMI cross-check files (_in.csv, _ref.csv, _ref.opt) for both FMUs",
-        description="Build both FMUs of a robot and write, per FMU, the FMI cross-check files "
+        "crosscheck", help="write FMI cross-check files (_in.csv, _ref.csv, _ref.opt) for the FMUs",
+        description="Build the three FMUs of a robot and write, per FMU, the FMI cross-check files "
                     "into DIR/fmus/2.0/cs/<platform>/spacerobot/<version>/<Model>/.")
     p.add_argument("--robot", choices=("planar", "spatial"), default="planar")
     p.add_argument("--target", default=None, help="target of the scenario (default: the robot's)")

@@ -28,7 +28,7 @@ def logger_callbacks(sink: Callable[[str, int, str, str], None]):
     The logger is called directly by the FMU, not through fmpy's ``addLoggerProxy``: that proxy
     keeps ONE process-global Python target, so registering through it would redirect every other
     FMU's messages in the process (and leave a dangling pointer once the target is gone). The
-    message then arrives as the printf format string, which for our pythonfmu FMUs is the whole
+    message then arrives as the printf format string, which for the project's FMUs is the whole
     message with ``%`` escaped as ``%%`` (undone here). Keep the returned structure alive as long
     as an instance uses it (it holds the ctypes callables).
     """

@@ -150,8 +150,9 @@ class Master:
 @contextlib.contextmanager
 def deferred_interrupt():
     """Within the block, Ctrl-C (SIGINT) only sets a flag, which the stepping loop checks
-    between communication steps: the interrupt then never lands inside an FMU's Python code
-    (pythonfmu would turn it into fmi2Fatal) and the loop stops cleanly with KeyboardInterrupt.
+    between communication steps: the interrupt then never lands between two FMU calls of one
+    exchange or step (the FMUs left at different times), and the loop stops cleanly with
+    KeyboardInterrupt.
     Yields the function that tells whether SIGINT arrived. Only in the main thread and only if
     Python's default handler is installed; otherwise that function always returns False."""
     hit = []

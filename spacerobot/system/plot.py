@@ -6,7 +6,7 @@ Reads the CSV written by :func:`spacerobot.system.runner.run_ssp` (columns ``tim
 (columns ``time``, ``<name>``, ``sd.<name>`` and, where its telemetry had a truth,
 ``truth.<name>``). The truth of each parameter is the plant's parameter connector of the same
 name (``plant.target.m`` ...), recorded by the runner, or, where the plant outputs one, its
-current truth ``plant.truth.<name>`` at every sample (a base that uses propellant, issue #17),
+current truth ``plant.truth.<name>`` at every sample (a base that uses propellant),
 or the ``truth.<name>`` column that ``spacerobot identify`` copies from the telemetry.
 
 The y-axis of each panel follows the estimate (its second half, where it has settled), never

@@ -3,8 +3,9 @@
 :func:`open_system` opens what the user gave (a ``.ssp`` archive or an extracted folder) and
 reports every problem with that file (not a zip, a corrupt archive, no SSD, malformed XML) as
 a :class:`~.errors.SimulationError` naming the user's file, never a temporary path.
-:func:`system_of_fmus` describes a system of FMU files wired name to name instead, for runs
-without an SSD (the cross-check references).
+:func:`system_of_fmus` describes a system of FMU files wired name to name instead, and
+:func:`wired_system` one with the connections given, for runs without an SSD (the cross-check
+references).
 """
 from __future__ import annotations
 
@@ -187,7 +188,6 @@ def system_of_fmus(fmus: Mapping[str, str | Path], step_size: float, stop_time: 
         md = read_model_description(str(path))
         causal[comp] = {v.name: v.causality for v in md.modelVariables}
     connections = []
-    connectors: Dict[str, List[Tuple[str, str]]] = {c: [] for c in fmus}
     for b, variables in causal.items():
         for n, kind in variables.items():
             if kind != "input":
@@ -197,9 +197,18 @@ def system_of_fmus(fmus: Mapping[str, str | Path], step_size: float, stop_time: 
                 raise SimulationError(f"input {b}.{n} is an output of {sources}: ambiguous")
             if sources:
                 connections.append((sources[0], n, b, n))
+    return wired_system(fmus, connections, step_size, stop_time, start_time, name)
+
+
+def wired_system(fmus: Mapping[str, str | Path], connections: List[Tuple[str, str, str, str]],
+                 step_size: float, stop_time: float, start_time: float = 0.0,
+                 name: str = "system") -> SystemInfo:
+    """A system of the FMU files ``fmus`` (``{component: path}``, in stepping order) with the
+    ``connections`` given (``(output component, output, input component, input)``)."""
+    connectors: Dict[str, List[Tuple[str, str]]] = {c: [] for c in fmus}
     for a, ac, b, bc in connections:
         connectors[a].append((ac, "output"))
         connectors[b].append((bc, "input"))
     comps = {c: ComponentInfo(c, str(Path(p).resolve()), connectors[c]) for c, p in fmus.items()}
-    return SystemInfo(name, comps, connections, start_time=start_time, stop_time=stop_time,
+    return SystemInfo(name, comps, list(connections), start_time=start_time, stop_time=stop_time,
                       step_size=step_size)

@@ -406,8 +406,7 @@ def write_ssp_sources(dest: str | Path = SSP_SOURCE_DIR) -> List[Path]:
 
 
 def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]] = None,
-                 sensors: bool = False, backend: Optional[str] = None,
-                 fmi_version: int = 2) -> Dict[str, Path]:
+                 sensors: bool = False, fmi_version: int = 2) -> Dict[str, Path]:
     """Build the FMUs, the SSD, the SSVs and the packaged ``<robot>.ssp`` into ``out_dir``.
 
     Parameters
@@ -422,13 +421,9 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     sensors : bool
         The system with the sensors FMU between plant and estimator: ``<robot>_sensors.ssp``
         (its SSD and parameter sets go to ``out_dir/<robot>_sensors/``).
-    backend : str, optional
-        How the FMUs are built (:data:`spacerobot.fmi.build.BACKENDS`): ``native`` builds the
-        models that have a native binary (:func:`spacerobot.fmi.build.native_kinds`) natively
-        and the others with pythonfmu; default :data:`spacerobot.fmi.build.DEFAULT_BACKEND`.
     fmi_version : int
-        2 (default) or 3: FMI 3.0 FMUs (native backend only), with the same variable names, so
-        that the SSD and its parameter sets are the same text (docs/fmus.md).
+        2 (default) or 3: FMI 3.0 FMUs, with the same variable names, so that the SSD and its
+        parameter sets are the same text (docs/fmus.md).
 
     Returns
     -------
@@ -446,7 +441,7 @@ def build_system(robot: str, out_dir: str | Path, fmus: Optional[Dict[str, Path]
     fmus = dict(fmus or {})
     for kind in kinds:
         if kind not in fmus:
-            fmus[kind] = build_fmu(kind, scenario(robot), out, backend, fmi_version)
+            fmus[kind] = build_fmu(kind, scenario(robot), out, fmi_version)
     paths: Dict[str, Path] = {k: Path(fmus[k]) for k in kinds}
     files = generate(robot, sensors)
     src_dir = out / system_name(robot, True) if sensors else out
@@ -501,51 +496,60 @@ def has_sensors(ssp: str | Path) -> bool:
 
 
 def _newest_source_mtime(robot: Optional[str] = None) -> float:
-    """Newest modification time of the files the FMUs and the SSD are built from (with the
-    URDF of ``robot``)."""
-    from ..fmi.build import BUNDLES, LIB, _script
-
-    paths = [Path(__file__), *(robot_files(robot) if robot else ())]
-    for kind, items in BUNDLES.items():
-        script = _script(kind)
-        paths += [script, script.parent / "README.md"]
-        for item in items:
-            src = LIB / item
-            paths += list(src.rglob("*.py")) if src.is_dir() else [src]
-    paths += list((LIB / "core" / "lib").rglob("*.*"))    # the native binaries
+    """Newest modification time of the files the FMUs and the SSD are built from: the library's
+    Python sources, the native binaries, the URDF of ``robot``."""
+    lib = Path(__file__).resolve().parents[1]              # the spacerobot package
+    paths = [*lib.rglob("*.py"), *(lib / "core" / "lib").rglob("*.*"),
+             *(robot_files(robot) if robot else ())]
     return max(p.stat().st_mtime for p in paths if p.exists())
+
+
+def default_build_dir(robot: str, fmi_version: int = 2) -> Path:
+    """``build/<robot>/`` (FMI 2.0) or ``build/<robot>-fmi3/`` (FMI 3.0), in the current
+    directory (``<robot>``: :func:`spacerobot.robots.robot_label`)."""
+    return Path("build") / (robot_label(robot) + ("-fmi3" if fmi_version == 3 else ""))
+
+
+def _fmi_version_of(fmu: bytes) -> Optional[str]:
+    """The ``fmiVersion`` of an FMU's model description (its bytes), None if it is not one of
+    the native FMUs (no variable table)."""
+    import io
+
+    from lxml import etree
+
+    from ..fmi.native import VARIABLES_FILE
+    with zipfile.ZipFile(io.BytesIO(fmu)) as zf:
+        if f"resources/{VARIABLES_FILE}" not in zf.namelist():
+            return None
+        return etree.fromstring(zf.read("modelDescription.xml")).get("fmiVersion")
 
 
 def ensure_ssp(robot: str, out_dir: Optional[str | Path] = None, sensors: bool = False,
                on_build: Optional[Callable[[Path], None]] = None,
-               backend: Optional[str] = None) -> Path:
+               fmi_version: int = 2) -> Path:
     """Path of ``<out_dir>/<robot>[_sensors].ssp``, (re)built with :func:`build_system` if it
-    is missing, older than any library source it is built from, or its SSD differs from the
-    generator's.
+    is missing, older than any library source it is built from, its SSD differs from the
+    generator's, or its FMUs are not native FMI ``fmi_version`` ones.
 
-    ``out_dir`` defaults to ``build/<robot>/`` in the current directory (``<robot>``: the
-    built-in name or the URDF's robot name, :func:`spacerobot.robots.robot_label`).
-    ``on_build(out_dir)`` is called just before a (re)build (the command line says so).
-    ``backend``: as :func:`build_system`'s; an .ssp whose estimator was built with another
-    backend is rebuilt.
+    ``out_dir`` defaults to :func:`default_build_dir`. ``on_build(out_dir)`` is called just
+    before a (re)build (the command line says so).
     """
-    from ..fmi.build import backend_of, fmu_backend
-
     _check_robot(robot)
-    out = Path(out_dir) if out_dir is not None else Path("build") / robot_label(robot)
+    out = Path(out_dir) if out_dir is not None else default_build_dir(robot, fmi_version)
     ssp = out / f"{system_name(robot, sensors)}.ssp"
     fresh = False
     if ssp.exists() and ssp.stat().st_mtime >= _newest_source_mtime(robot):
         try:
             with zipfile.ZipFile(ssp) as zf:
                 fresh = (zf.read(SSD_NAME).decode("utf-8") == ssd_xml(robot, sensors=sensors)
-                         and fmu_backend(zf.read(SOURCES[ESTIMATOR])) == backend_of(ESTIMATOR, backend))
+                         and _fmi_version_of(zf.read(SOURCES[ESTIMATOR]))
+                         == f"{fmi_version}.0")
         except (zipfile.BadZipFile, KeyError):
             fresh = False
     if not fresh:
         if on_build is not None:
             on_build(out)
-        build_system(robot, out, sensors=sensors, backend=backend)
+        build_system(robot, out, sensors=sensors, fmi_version=fmi_version)
     return ssp
 
 

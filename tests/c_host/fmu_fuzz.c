@@ -16,7 +16,8 @@
  * start values, its states) and checks every status against what FMI 2.0 and the project's
  * layer promise: a refused call (fmi2Error) leaves the instance as it was; a call in the wrong
  * phase is refused; doStep outside the stepping phase or with a non-finite point or a step
- * <= 0 is discarded; never fmi2Fatal. After every refusal of an instance in the stepping
+ * <= 0 is discarded, one from another point than the instance's time refused (fmi2Error);
+ * never fmi2Fatal. After every refusal of an instance in the stepping
  * phase it probes that the instance still works: a valid doStep returns fmi2OK and, for an
  * instance initialised with its start parameters, every Real output is finite (an instance
  * running from a damaged state or with random parameters the FMU accepted is only asked not to
@@ -69,6 +70,7 @@
 #  include <dlfcn.h>
 #  include <unistd.h>
 #endif
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
@@ -424,6 +426,13 @@ static void print_changed_parameters(int k) {
             printf("    parameter vr %u = %d (start %d)\n", par_int.vr[i], z[i], start_int[i]);
 }
 
+/* Is t the instance's time as the FMU judges it (a millionth of the step h, plus the round-off of
+ * the time)? 1 yes, 0 no, -1 too close to the limit to tell. */
+static int at_time(double t, double time, double h) {
+    double off = fabs(t - time), tol = 1e-6 * h + 8.0 * DBL_EPSILON * fmax(fabs(t), fabs(time));
+    return off <= 0.5 * tol ? 1 : off > 2.0 * tol ? 0 : -1;
+}
+
 /* may a valid step of instance k be discarded (-F), or must it be (-N)? */
 static unsigned valid_step_mask(int k) {
     const Slot *s = &slot[k];
@@ -764,8 +773,13 @@ static void op_step(int k, int wild) {
     st = CALL(K_DoStep, F.DoStep(s->c, t, h, chance(50)));
     mask = s->phase != STEPPING || !isfinite(t) || !(isfinite(h) && h > 0.0) || h > max_step
          ? M_DISCARD : valid_step_mask(k);
-    expect(K_DoStep, st, mask, k, "a step while stepping, finite t, finite h > 0 (<= -H), "
-           "no NaN in a -N input");
+    if (mask != M_DISCARD) {                     /* a step from another time: refused */
+        int at = at_time(t, s->time, h);
+        if (s->damaged || at < 0) mask |= M_ERROR;
+        else if (at == 0) mask = M_ERROR;
+    }
+    expect(K_DoStep, st, mask, k, "a step while stepping, finite t at the instance's time, "
+           "finite h > 0 (<= -H), no NaN in a -N input");
     if (st == fmi2OK) {
         s->time = t + h;
         if (s->damaged) damaged_steps++;
@@ -1135,9 +1149,11 @@ static void damage_sweep(int steps, const char *const *int_params, int n_int_par
             if (st == fmi2OK) {
                 st = CALL(K_DoStep, F.DoStep(slot[0].c, t, 0.1, fmi2True));
                 /* a damaged phase or time may turn the step down; it must not crash */
-                expect(K_DoStep, st, M_OK | M_DISCARD, 0, "sweep: a step from a damaged state");
+                expect(K_DoStep, st, M_OK | M_DISCARD | M_ERROR, 0,
+                       "sweep: a step from a damaged state");
                 st = CALL(K_DoStep, F.DoStep(slot[0].c, t + 0.1, 0.1, fmi2True));
-                expect(K_DoStep, st, M_OK | M_DISCARD, 0, "sweep: a step from a damaged state");
+                expect(K_DoStep, st, M_OK | M_DISCARD | M_ERROR, 0,
+                       "sweep: a step from a damaged state");
                 st = CALL(K_SetFMUstate, F.SetFMUstate(slot[0].c, clean));
                 expect(K_SetFMUstate, st, M_OK, 0, "sweep: back to the clean state");
             } else {

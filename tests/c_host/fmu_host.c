@@ -1,7 +1,7 @@
 /*
  * fmu_host.c -- a minimal FMI 2.0 co-simulation master written in C, used by
- * tests/test_conformance_c_host.py and tests/test_native_fmu_hosts.py to show that the spacerobot
- * FMUs work in a host that is not Python (the situation of fmuCheck, OMSimulator or Simulink).
+ * tests/test_native_fmu_hosts.py and tests/test_native_closed_loop_host.py to show that the
+ * spacerobot FMUs work in a host that is not Python (the situation of fmuCheck, OMSimulator or Simulink).
  *
  * ONE source for Linux and Windows: it compiles with gcc (dlopen) and with x86_64-w64-mingw32-gcc
  * (LoadLibrary / GetProcAddress under _WIN32; the .exe then runs a win64 FMU binary, e.g. under
