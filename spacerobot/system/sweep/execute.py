@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
+from ... import __version__
 from .points import Point
 from .run import DEFAULT_BUILDER, DEFAULT_RUNNER, _resolve, run_point
 from .ship import ShippedSystem, run_shipped
@@ -122,8 +123,8 @@ def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp,
             sent = ship(client, systems.values())
             stamp = f"{time.time_ns():x}"
             futures = {client.submit(run_shipped, study.task, p, sent[systems[p.robot].key],
-                                     runner, pure=False, key=f"{study.name}-{p.id}-{stamp}",
-                                     retries=0): p for p in todo}
+                                     runner, __version__, pure=False, retries=0,
+                                     key=f"{study.name}-{p.id}-{stamp}"): p for p in todo}
             summary.submitted = len(futures)
             bar = None
             if progress:

@@ -48,6 +48,10 @@ class ShippedSystem:
         data = path.read_bytes()
         return cls(path.name, hashlib.sha256(data).hexdigest(), data)
 
+    def _holds(self, path: Path) -> bool:
+        """The file at ``path`` is this archive."""
+        return path.is_file() and hashlib.sha256(path.read_bytes()).hexdigest() == self.digest
+
     @property
     def key(self) -> str:
         """The Dask key of the scattered archive: the same for the same bytes."""
@@ -64,22 +68,23 @@ class ShippedSystem:
         if path is not None and path.is_file():
             return path
         path = folder / self.name
-        if not (path.is_file() and _sha256(path) == self.digest):
+        if not self._holds(path):
             folder.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(prefix=f".{self.name}.", dir=folder)
             try:
                 with os.fdopen(fd, "wb") as f:
                     f.write(self.data)
-                os.replace(tmp, path)       # atomic: a reader sees all of it or nothing
-            except BaseException:
+                try:
+                    os.replace(tmp, path)   # atomic: a reader sees all of it or nothing
+                except OSError:             # Windows: another task has it open, i.e. wrote it
+                    if not self._holds(path):
+                        raise
+            finally:
                 Path(tmp).unlink(missing_ok=True)
-                raise
         _LOCAL[memo] = path
         return path
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def scratch_root() -> Path:
@@ -92,7 +97,13 @@ def scratch_root() -> Path:
         return Path(tempfile.gettempdir())
 
 
-def run_shipped(task: Callable, item, system: ShippedSystem, runner: str):
+def run_shipped(task: Callable, item, system: ShippedSystem, runner: str,
+                version: Optional[str] = None):
     """``task(item, ssp_path, runner)`` with the archive written on this machine (what each
-    Dask task of a study runs)."""
+    Dask task of a study runs); ``RuntimeError`` if this machine's package is not the
+    client's ``version`` (the row would be computed by other code)."""
+    from ... import __version__
+    if version is not None and version != __version__:
+        raise RuntimeError(f"this worker has spacerobot {__version__}, the client "
+                           f"{version}: install the client's version on every worker")
     return task(item, str(system.local_path()), runner)
