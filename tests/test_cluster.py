@@ -4,9 +4,10 @@ A ``dask scheduler`` and two ``dask worker`` processes on loopback (free ports),
 its own mount namespace (``unshare --mount``) where a tmpfs hides pytest's whole temporary
 folder: the client's build folders, tables and .ssp files do not exist for the workers, as on
 machines that share no file system with the client and have only the package installed. The
-commands run through the CLI against ``--scheduler``; their rows must equal, cell for cell, those
-of the same commands on a local cluster (the same library on the same machine computes both, so
-the numbers are the same bits), with no failed row.
+Monte Carlo and the sweep run through the CLI against ``--scheduler``; their rows must equal,
+cell for cell, those of the same commands on a local cluster (the same library on the same
+machine computes both, so the numbers are the same bits), with no failed row; the excitation
+design's scores on the cluster equal those computed in this process.
 
 Needs Linux and the right to create a mount namespace (root, as in CI); skipped otherwise.
 """
@@ -182,3 +183,16 @@ def test_sweep_on_hidden_workers(scheduler, tmp_path):
     remote, local = read_table(tmp_path / "c.csv"), read_table(tmp_path / "l.csv")
     assert len(remote) == 4
     _same_rows(remote, local, "sweep_id", pids)
+
+
+def test_design_excitation_on_hidden_workers(scheduler):
+    """The same candidates' scores on the cluster as in this process, to the bit."""
+    from spacerobot.system.design import Candidate, design
+
+    address, _ = scheduler
+    cands = [Candidate(30.0), Candidate(7.5)]
+    remote = design("spatial", cands, cases=1, stop_time=20.0, scheduler=address)
+    local = design("spatial", cands, cases=1, stop_time=20.0, workers=1)
+    for ci in range(len(cands)):
+        assert remote.scores(ci).tolist() == local.scores(ci).tolist()
+    assert remote.table() == local.table()
