@@ -180,6 +180,19 @@ def flag_outcomes(rows, errs, threshold: float = THRESHOLD) -> Dict[str, tuple]:
     return out
 
 
+def flag_table(flags: Dict[str, tuple]) -> List[str]:
+    """The Markdown table of :func:`flag_outcomes`."""
+    lines = ["| rule | c | bodies flagged | off by more than the threshold | fraction | upper 95 % "
+             "bound | expected off if the sds were calibrated (at most) |",
+             "|---|---|---|---|---|---|---|"]
+    for name, (nb, k, up, expect) in flags.items():
+        cval = f"{RULES[name]:.2f}" if name in RULES else "-"
+        frac = f"{_pct(k / nb)}" if nb else "-"
+        lines.append(f"| {name} | {cval} | {nb} | {k} | {frac} | "
+                     f"{_pct(up) if nb else '-'} | {expect:.2f} |")
+    return lines
+
+
 def efficiency(rows) -> Dict[str, tuple]:
     """Per estimate: the efficiency of ``montecarlo.efficiencies`` (bound RMS / error RMS over
     the cases) with its case-bootstrap interval."""
@@ -292,15 +305,7 @@ def report(rows, args, wall: float, load0: float, summary) -> str:
         f"off by more than the threshold at the end (the target: at most 1 %, upper 95 % "
         f"bound):",
         "",
-        "| rule | c | bodies flagged | off by more than the threshold | fraction | upper 95 % "
-        "bound | expected off if the sds were calibrated (at most) |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for name, (nb, k, up, expect) in flags.items():
-        cval = f"{RULES[name]:.2f}" if name in RULES else "-"
-        frac = f"{_pct(k / nb)}" if nb else "-"
-        lines.append(f"| {name} | {cval} | {nb} | {k} | {frac} | "
-                     f"{_pct(up) if nb else '-'} | {expect:.2f} |")
+    ] + flag_table(flags)
     lines += [
         "",
         "Efficiency per estimate (bound / RMS error, 1 = as good as any unbiased estimator; "
@@ -353,14 +358,7 @@ def seed_report(rows, args) -> str:
         f"Per seed, the fraction within 2 sd: median {np.median(per):.2f}, lowest "
         f"{per.min():.2f}; seeds with at most 70 %: {int((per <= 0.7).sum())}/{n}.",
         "",
-        "| rule | c | bodies flagged | off by more than the threshold | upper 95 % bound | "
-        "expected off if calibrated (at most) |",
-        "|---|---|---|---|---|---|",
-    ]
-    for name, (nb, k, up, expect) in flags.items():
-        cval = f"{RULES[name]:.2f}" if name in RULES else "-"
-        lines.append(f"| {name} | {cval} | {nb} | {k} | {_pct(up) if nb else '-'} | "
-                     f"{expect:.2f} |")
+    ] + flag_table(flags)
     return "\n".join(lines + [""])
 
 

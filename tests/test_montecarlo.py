@@ -193,9 +193,12 @@ def test_summaries_do_not_depend_on_the_order_the_rows_finished_in():
 
     rows = _summary_rows()
     rng = np.random.default_rng(0)
-    orders = [[rows[i] for i in rng.permutation(len(rows))] for _ in range(300)]
-    printed = {f"{np.mean([float(r['within2sd']) for r in o]):.3f}" for o in orders}
-    assert printed == {"0.977", "0.978"}, printed          # the premise: order matters
+    orders = {}                        # the plain mean's digits -> orders that print them
+    for _ in range(300):
+        o = [rows[i] for i in rng.permutation(len(rows))]
+        orders.setdefault(f"{np.mean([float(r['within2sd']) for r in o]):.3f}", []).append(o)
+    assert set(orders) == {"0.977", "0.978"}, set(orders)  # the premise: order matters
     ref = (summary_table(rows), calibration(rows), efficiency_table(rows))
-    for o in orders:
-        assert (summary_table(o), calibration(o), efficiency_table(o)) == ref
+    for some in orders.values():
+        for o in some[:8]:
+            assert (summary_table(o), calibration(o), efficiency_table(o)) == ref
