@@ -88,6 +88,21 @@ def test_criteria_and_choice_by_hand():
     assert d.best is None
 
 
+def test_table_does_not_depend_on_the_order_the_runs_finished_in():
+    """The same outcomes collected in any order (the runs finish in any order on a cluster)
+    print the same table, a tie of the most frequent worst estimate included (two cases each:
+    base.m and base.b[1] once: the first in the estimates' order is named)."""
+    cands = [Candidate(30.0), Candidate(7.5)]
+    outs = {(0, 0): _outcome([0.03, 0.01]), (0, 1): _outcome([0.01, 0.02]),
+            (1, 0): _outcome([0.002, 0.001]), (1, 1): _outcome([0.001, 0.003])}
+    keys = list(outs)
+    tables = {Design(cands, {k: outs[k] for k in order}, "largest").table()
+              for order in (keys, keys[::-1], [keys[1], keys[3], keys[0], keys[2]])}
+    assert len(tables) == 1
+    rows = tables.pop().splitlines()[2:]
+    assert all(" base.m " in r for r in rows), rows
+
+
 def test_design_refuses_bad_arguments():
     with pytest.raises(ValueError, match="period 0.5 s is too short for the sample time 0.1 s"):
         design("spatial", [Candidate(30.0), Candidate(0.5)])

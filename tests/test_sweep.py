@@ -218,3 +218,13 @@ def test_cli_config_and_plot(ssp, tmp_path, sweep_2x2):
         bad = tmp_path / "empty.csv"
         bad.write_text(",".join(COLUMNS) + "\n")
         sw.plot_sweep(bad, tmp_path / "x.png")
+
+
+def test_summary_lists_failures_in_id_order_not_completion_order():
+    from spacerobot.system.sweep.execute import SweepSummary
+    fails = [("b2", "FileNotFoundError: x"), ("a1", "ValueError: y"), ("c3", "KeyError: z")]
+    texts = {str(SweepSummary(total=3, submitted=3, failed=3, failures=list(order)))
+             for order in (fails, fails[::-1], fails[1:] + fails[:1])}
+    assert len(texts) == 1
+    text = texts.pop()
+    assert text.index("a1") < text.index("b2") < text.index("c3")

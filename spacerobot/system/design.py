@@ -187,12 +187,14 @@ class Design:
         return all(o.omega_max <= self.omega_limit
                    for (i, _), o in self.outcomes.items() if i == ci)
 
+    def of(self, ci: int) -> List[Outcome]:
+        """The outcomes of candidate ``ci``, in the order of the cases (not of completion)."""
+        return [self.outcomes[k] for k in sorted(k for k in self.outcomes if k[0] == ci)]
+
     def scores(self, ci: int) -> np.ndarray:
         """The criterion of candidate ``ci`` on each case."""
         f = CRITERIA[self.criterion][1]
-        keys = sorted(k for k in self.outcomes if k[0] == ci)
-        return np.array([f(self.outcomes[k].scaled_bound[self.outcomes[k].scaled_bound > 0])
-                         for k in keys])
+        return np.array([f(o.scaled_bound[o.scaled_bound > 0]) for o in self.of(ci)])
 
     @property
     def best(self) -> Optional[int]:
@@ -211,9 +213,9 @@ class Design:
         best = self.best
         for i, c in enumerate(self.candidates):
             s = 100.0 * self.scores(i)
-            outs = [o for (ci, _), o in self.outcomes.items() if ci == i]
-            worst = [ESTIMATE_NAMES[int(np.argmax(o.scaled_bound))] for o in outs]
-            common = max(set(worst), key=worst.count)
+            outs = self.of(i)
+            worst = [int(np.argmax(o.scaled_bound)) for o in outs]
+            common = ESTIMATE_NAMES[max(sorted(set(worst)), key=worst.count)]  # ties: first
             lines.append(f"{c.period:10.4g} {c.arm:5.2f} {s.mean():9.3f} {s.max():11.3f} "
                          f"{common:>15} {max(o.omega_max for o in outs):14.3f} "
                          f"{max(o.qd_max for o in outs):9.3f}"
@@ -226,34 +228,54 @@ def design(robot: str, candidates: Sequence[Candidate], cases: int = 4, seed: in
            stop_time: float = 300.0, criterion: str = "largest", noise_scale: float = 1.0,
            base: Optional[Excitation] = None, omega_limit: float = math.inf, workers: int = 2,
            progress=None, target: Optional[str] = None,
-           noise: Optional[Mapping[str, float]] = None) -> Design:
+           noise: Optional[Mapping[str, float]] = None, scheduler: Optional[str] = None,
+           client=None) -> Design:
     """Run every candidate on ``cases`` cases of ``robot`` (:func:`case_scenario`: random
     targets, or the named ``target``; each case its own sensor seed) and score them;
     ``noise``: sensor magnitudes other than the realistic defaults (:func:`sensor_magnitudes`),
     given to the sensors and to the estimator's noise profile alike.
     ``base``: the excitation whose bounds and ramp the candidates keep (default: each case's,
     the robot's scenario excitation). ``omega_limit`` [rad/s]: a candidate whose base rate
-    exceeds it in any case is not chosen. ``progress(done, total)`` is called after each run."""
-    from multiprocessing import get_context
+    exceeds it in any case is not chosen. ``progress(done, total)`` is called after each run.
 
+    The runs go to ``workers`` local processes (1: this process), or to a Dask cluster: a
+    ``client`` or the ``scheduler`` at that address. A run needs the installed package only
+    (it builds its own plant, sensors and estimator from the core)."""
     robot = check_arguments(robot, candidates, cases, stop_time, criterion, noise_scale,
                             omega_limit, target, noise, workers)
     jobs = [(robot, i, seed, ci, c, float(stop_time), float(noise_scale), noise, base, target)
             for ci, c in enumerate(candidates) for i in range(cases)]
     out: Dict[Tuple[int, int], Outcome] = {}
-    if workers == 1:
-        results = map(_job, jobs)
-    else:
-        pool = get_context("spawn").Pool(min(workers, len(jobs)))
-        results = pool.imap_unordered(_job, jobs)
-    try:
-        for ci, index, o in results:
-            out[(ci, index)] = o
-            if progress is not None:
-                progress(len(out), len(jobs))
-    finally:
-        if workers != 1:
-            pool.terminate()
+
+    def collect(ci, index, o):
+        out[(ci, index)] = o
+        if progress is not None:
+            progress(len(out), len(jobs))
+
+    if scheduler is None and client is None:
+        if workers == 1:
+            results = map(_job, jobs)
+        else:   # a process pool: a local cluster's start-up costs 2 s more (measured)
+            from multiprocessing import get_context
+            pool = get_context("spawn").Pool(min(workers, len(jobs)))
+            results = pool.imap_unordered(_job, jobs)
+        try:
+            for r in results:
+                collect(*r)
+        finally:
+            if workers != 1:
+                pool.terminate()
+        return Design(list(candidates), out, criterion, omega_limit)
+    from distributed import as_completed
+
+    from .sweep.execute import dask_client
+    with dask_client(workers, scheduler, client) as c:
+        futures = [c.submit(_job, job, pure=False) for job in jobs]
+        try:
+            for fut in as_completed(futures):
+                collect(*fut.result())
+        finally:
+            c.cancel([f for f in futures if not f.done()])
     return Design(list(candidates), out, criterion, omega_limit)
 
 
@@ -322,7 +344,7 @@ def cmd_design(args) -> int:
     d = design(args.robot, cands, args.cases, args.seed, args.stop_time, args.criterion,
                args.noise_scale, omega_limit=args.omega_limit, workers=args.workers,
                progress=None if args.no_progress else _print_progress, target=args.target,
-               noise=noise)
+               noise=noise, scheduler=args.scheduler)
     print(d.table())
     if d.best is None:
         print(f"no candidate kept the base rate within {args.omega_limit:g} rad/s")
@@ -377,6 +399,10 @@ def register(subparsers):
     p.add_argument("--omega-limit", type=float, default=math.inf, metavar="RAD/S",
                    help="the spacecraft's base rate limit: candidates exceeding it are not "
                         "chosen (default: none)")
-    p.add_argument("--workers", type=int, default=2, help="worker processes")
+    p.add_argument("--workers", type=int, default=2,
+                   help="local worker processes (1: in this process)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="an existing Dask scheduler (e.g. tcp://host:8786) instead of local "
+                        "workers; the workers need only this package installed")
     p.add_argument("--no-progress", action="store_true", help="no progress line")
     p.set_defaults(func=fail_on_errors("design-excitation")(cmd_design))

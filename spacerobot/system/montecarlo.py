@@ -245,6 +245,8 @@ def case_row(case: Case, res) -> Dict[str, object]:
     sd = _series(res, [f"sd.{p}" for p in ESTIMATE_NAMES], "estimator")[-1]
     ident = layout.identified
     row["within2sd"] = float(np.mean(np.abs(est[-1] - truth)[ident] <= 2.0 * sd[ident]))
+    row.update({f"sd.{p}": float(s) for p, s in
+                zip(ESTIMATE_NAMES, sd / interface.error_scale(truth))})
     if f"estimator.crb.{ESTIMATE_NAMES[0]}" in res.data:      # the information filter's bound
         crb = _series(res, [f"crb.{p}" for p in ESTIMATE_NAMES], "estimator")[-1]
         row.update({f"crb.{p}": float(c) for p, c in
@@ -269,11 +271,14 @@ STUDY = Study(name="montecarlo", columns=COLUMNS, key="case_id", task=run_case)
 #: the study through the sensors (:class:`SensorsCase`): the sensors' scale and seed too
 #: (and the information filter's Cramér-Rao bound per estimate, relative to its error scale as
 #: the ``relerr`` columns: the efficiency's denominator; the excitation rate the estimator
-#: chose, ``ident.excite_rate``, empty where it made no choice)
+#: chose, ``ident.excite_rate``, empty where it made no choice; the reported standard
+#: deviation per estimate at the end, relative to the error scale: ``relerr / sd`` is the
+#: error in standard deviations, what calibration and the flags are checked on)
 SENSORS_STUDY = Study(name="montecarlo-sensors",
                       columns=COLUMNS[:len(CASE_COLUMNS)] + ("noise_scale", "sensors_seed")
                       + COLUMNS[len(CASE_COLUMNS):] + tuple(f"crb.{p}" for p in ESTIMATE_NAMES)
-                      + ("excite_rate",), key="case_id", task=run_case)
+                      + ("excite_rate",) + tuple(f"sd.{p}" for p in ESTIMATE_NAMES),
+                      key="case_id", task=run_case)
 
 
 def build_sensors_system(robot: str, out_dir):
@@ -296,6 +301,11 @@ def run_montecarlo(cases: Sequence[Case], out_csv, **kwargs):
     return run_sweep(cases, out_csv, study=STUDY, **kwargs)
 
 
+def _canonical(rows: Sequence[Dict[str, str]]) -> List[Dict[str, str]]:
+    from .sweep.table import canonical
+    return canonical(rows, STUDY.key)
+
+
 def read_results(csv_path) -> List[Dict[str, str]]:
     """The rows of a Monte Carlo table (complete lines), with or without sensors."""
     from .sweep.table import read_table
@@ -306,9 +316,10 @@ def summary_table(rows: Sequence[Dict[str, str]]) -> str:
     """A Markdown table per (method, excitation): cases, within 1 % / 0.1 % at the end, median
     and largest worst error (``error/scale``: :func:`spacerobot.interface.relative_errors`, the
     metric of every table), median time to 1 % and 0.1 %, identified, false flags, impossible
-    estimates."""
+    estimates; from the rows in the order of their ids (the same digits whatever order the
+    cases finished in)."""
     groups: Dict[tuple, List[Dict[str, str]]] = {}
-    for r in rows:
+    for r in _canonical(rows):
         if r["status"] == "ok":
             groups.setdefault((r["robot"], r["method"], r["excite"]), []).append(r)
     lines = ["| robot | method | excitation | cases | within 1 % | within 0.1 % | median worst "
@@ -350,6 +361,7 @@ def bound_stats(rows: Sequence[Dict[str, str]]) -> Dict[str, tuple]:
     empty for rows without the bound, and no entry where an estimate is not identified
     (:func:`spacerobot.interface.identified_estimates` of the row's robot)."""
     out: Dict[str, tuple] = {}
+    rows = _canonical(rows)
     identified = {name: set(interface.identified_estimates(get_robot(name)))
                   for name in {r["robot"] for r in rows}}
     for p in ESTIMATE_NAMES:
@@ -400,7 +412,8 @@ def rate_text(rows: Sequence[Dict[str, str]]) -> str:
 def calibration(rows: Sequence[Dict[str, str]]) -> str:
     """The mean fraction of the identified estimates within 2 reported standard deviations of
     the truth at the end (calibrated: 0.90-0.99), or "-" for a table without the column."""
-    x = [float(r["within2sd"]) for r in rows if r.get("within2sd") not in (None, "")]
+    x = [float(r["within2sd"]) for r in _canonical(rows)
+         if r.get("within2sd") not in (None, "")]
     return f"{np.mean(x):.3f}" if x else "-"
 
 
@@ -413,7 +426,7 @@ def plot_montecarlo(csv_path, out_png: Optional[str] = None,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    rows = [r for r in read_results(csv_path) if r["status"] == "ok"
+    rows = [r for r in _canonical(read_results(csv_path)) if r["status"] == "ok"
             and (ids is None or r["case_id"] in ids)]
     if not rows:
         raise ValueError(f"{csv_path} has no finished case to plot")
@@ -485,11 +498,14 @@ def register(subparsers):
                         "(repeatable; not the case's own draw or options; in the default "
                         "results name, not in the table's rows: one table per setting)")
     p.add_argument("--workers", type=int, default=2, help="local cluster worker processes")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask scheduler")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="an existing Dask scheduler (e.g. tcp://host:8786) instead of local "
+                        "workers; its workers need only this package installed (the .ssp is "
+                        "sent to them, no shared file system)")
     p.add_argument("--build-dir", dest="build_dir", metavar="DIR",
-                   help="where the .ssp is built (default <out>.build/)")
-    p.add_argument("--ssp", metavar="SSP_FILE", help="run this .ssp of the robot instead of "
-                   "building one")
+                   help="where the .ssp is built on this machine (default <out>.build/)")
+    p.add_argument("--ssp", metavar="SSP_FILE", help="run this .ssp archive of the robot "
+                   "instead of building one (read here and sent to the workers)")
     p.add_argument("--out", metavar="CSV", help="results table (default "
                    "results/montecarlo-<robot>[-sensors[<S>]][-<settings>]-seed<S>.csv, "
                    "<settings> the --set overrides and an explicit --stop-time; resumed if it "
@@ -522,6 +538,9 @@ def cli_montecarlo(args) -> int:
     if args.ssp:
         if not Path(args.ssp).exists():
             raise ValueError(f"{args.ssp} does not exist")
+        if not Path(args.ssp).is_file():
+            raise ValueError(f"{args.ssp} is a folder: give the .ssp archive (it is sent to "
+                             f"the workers as one file)")
         ssp = {robot: str(Path(args.ssp).resolve())}
     # through the sensors: the realistic set's accelerations (differenced, the noise profile's
     # 9-sample derivative in the momentum equations)

@@ -8,9 +8,9 @@ these values (given on the command line or in a TOML file).
 Every point runs :func:`spacerobot.system.runner.run_ssp` in a Dask worker process (a local
 cluster by default: ``distributed.LocalCluster(processes=True, threads_per_worker=1)``, or an
 existing scheduler with ``--scheduler``). The .ssp is built once per robot with
-:func:`spacerobot.system.ssd.build_system` before any point is submitted; the workers receive
-its path, so with a remote scheduler the build directory must be on a file system the workers
-share.
+:func:`spacerobot.system.ssd.build_system` before any point is submitted and sent to the
+workers as data (:mod:`.ship`: once per worker, written once into its scratch space): the
+workers need the installed package only, no file system shared with the client.
 
 Results table (CSV, one row per point, appended and flushed as each point finishes):
 

@@ -111,9 +111,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=int, default=S, help="local cluster worker processes "
                    "(default 2)")
     p.add_argument("--scheduler", default=S, metavar="ADDRESS",
-                   help="use an existing Dask scheduler (workers must see the build directory)")
+                   help="use an existing Dask scheduler (e.g. tcp://host:8786); its workers "
+                        "need only this package installed (the .ssp is sent to them, no shared "
+                        "file system)")
     p.add_argument("--build-dir", dest="build_dir", default=S,
-                   help="where the .ssp is built (default <out>.build/)")
+                   help="where the .ssp is built on this machine (default <out>.build/)")
     p.add_argument("--out", default=S, help="results CSV (appended; resumed if it exists)")
     p.add_argument("--plot", default=S, metavar="PNG", help="also plot the table to PNG")
     p.add_argument("--dry-run", action="store_true", help="list the points and their ids")

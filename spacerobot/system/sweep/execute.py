@@ -1,22 +1,28 @@
-"""Executing a sweep on Dask: skip finished points, build each robot's .ssp once, submit the
-rest to a local cluster or an existing scheduler, write each row as it finishes.
+"""Executing a sweep on Dask: skip finished points, build each robot's .ssp once, send it to
+the workers, submit the rest to a local cluster or an existing scheduler, write each row as it
+finishes.
 
 The same machinery runs any study whose items are co-simulations of one robot's .ssp
 (:class:`Study`): the parameter sweep, and the Monte Carlo study
 (:mod:`spacerobot.system.montecarlo`). An item has ``id`` (stable hash), ``robot`` and
 ``columns()`` (its parameters as table columns, including the study's key column).
+
+The workers need the installed package only: each .ssp travels to them as Dask data
+(:mod:`.ship`), never as a path, so no file system is shared with the client.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
-
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
+from ... import __version__
 from .points import Point
 from .run import DEFAULT_BUILDER, DEFAULT_RUNNER, _resolve, run_point
+from .ship import ShippedSystem, run_shipped
 from .table import COLUMNS, _check_header, _exclusive, _rewrite, _Table, read_table
 
 
@@ -53,7 +59,7 @@ class SweepSummary:
     def __str__(self) -> str:
         s = (f"{self.total} points: {self.skipped} already done, {self.submitted} run, "
              f"{self.ok} ok, {self.failed} failed -> {self.csv}")
-        for pid, err in self.failures:
+        for pid, err in sorted(self.failures):          # not in the order they finished
             s += f"\n  failed {pid}: {err}"
         return s
 
@@ -78,11 +84,16 @@ def run_sweep(points: Sequence[Point], out_csv, *, workers: int = 2,
     workers : number of worker processes of the local cluster.
     scheduler : address of an existing Dask scheduler (then no local cluster is started).
     client : an existing ``distributed.Client`` (takes precedence over ``scheduler``).
-    build_dir : where the .ssp of each robot is built (default: ``<out_csv>.build/``).
-    ssp : ``{robot: path}`` of already built .ssp files (skips the build for those robots).
+    build_dir : where the .ssp of each robot is built on this machine (default:
+        ``<out_csv>.build/``).
+    ssp : ``{robot: path}`` of already built .ssp files on this machine (skips the build for
+        those robots).
     progress : show a tqdm progress bar.
     runner, builder : ``"module:function"`` of the co-simulation runner and of the SSP build.
     study : the kind of items and table (default: the parameter sweep, :data:`SWEEP`).
+
+    Each robot's .ssp is read here and sent to the workers as data (:mod:`.ship`): the
+    workers need the installed package only, no file of this machine.
 
     Only one sweep at a time may write a table: a second one on the same ``out_csv`` raises
     :class:`SweepLocked` (an advisory lock on ``<out_csv>.lock``, held while the sweep runs).
@@ -101,58 +112,77 @@ def _run_sweep(points, out: Path, *, workers, scheduler, client, build_dir, ssp,
     todo = _points_to_run(points, out, summary, study)
     if not todo:
         return summary
-    ssp_paths = _build_systems(todo, out, ssp, build_dir, builder)
+    systems = {robot: ShippedSystem.read(path)
+               for robot, path in _build_systems(todo, out, ssp, build_dir, builder).items()}
 
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import as_completed
 
-    cluster = own_client = None
     table = _Table(out, study.columns)
     try:
-        if client is None:
-            if scheduler:
-                client = own_client = Client(scheduler)
-            else:
-                cluster = LocalCluster(n_workers=int(workers), processes=True,
-                                       threads_per_worker=1, dashboard_address=":0")
-                client = own_client = Client(cluster)
-        stamp = f"{time.time_ns():x}"
-        futures = {client.submit(study.task, p, ssp_paths[p.robot], runner, pure=False,
-                                 key=f"{study.name}-{p.id}-{stamp}", retries=0): p for p in todo}
-        summary.submitted = len(futures)
-        bar = None
-        if progress:
-            from tqdm.auto import tqdm
-            bar = tqdm(total=len(futures), desc=study.name, unit="point")
-        try:
-            for fut in as_completed(list(futures)):
-                p = futures[fut]
-                try:
-                    row = fut.result()
-                except Exception as e:  # noqa: BLE001 -- worker died, task lost ...
-                    row = _failed_row(p, f"{type(e).__name__}: {e}")
-                table.write(row)
-                if row["status"] == "ok":
-                    summary.ok += 1
-                else:
-                    summary.failed += 1
-                    summary.failures.append((p.id, str(row["error"])))
+        with dask_client(workers, scheduler, client) as client:
+            sent = ship(client, systems.values())
+            stamp = f"{time.time_ns():x}"
+            futures = {client.submit(run_shipped, study.task, p, sent[systems[p.robot].key],
+                                     runner, __version__, pure=False, retries=0,
+                                     key=f"{study.name}-{p.id}-{stamp}"): p for p in todo}
+            summary.submitted = len(futures)
+            bar = None
+            if progress:
+                from tqdm.auto import tqdm
+                bar = tqdm(total=len(futures), desc=study.name, unit="point")
+            try:
+                for fut in as_completed(list(futures)):
+                    p = futures[fut]
+                    try:
+                        row = fut.result()
+                    except Exception as e:  # noqa: BLE001 -- worker died, task lost ...
+                        row = _failed_row(p, f"{type(e).__name__}: {e}")
+                    table.write(row)
+                    if row["status"] == "ok":
+                        summary.ok += 1
+                    else:
+                        summary.failed += 1
+                        summary.failures.append((p.id, str(row["error"])))
+                    if bar is not None:
+                        bar.update(1)
+                        bar.set_postfix(ok=summary.ok, failed=summary.failed)
+                    fut.release()
+            finally:
                 if bar is not None:
-                    bar.update(1)
-                    bar.set_postfix(ok=summary.ok, failed=summary.failed)
-                fut.release()
-        finally:
-            if bar is not None:
-                bar.close()
-            for fut in futures:
-                if not fut.done():
-                    fut.cancel()
+                    bar.close()
+                for fut in futures:
+                    if not fut.done():
+                        fut.cancel()
     finally:
         table.close()
-        if own_client is not None:
-            own_client.close()
-        if cluster is not None:
-            cluster.close()
     return summary
+
+
+@contextlib.contextmanager
+def dask_client(workers: int = 2, scheduler: Optional[str] = None, client=None):
+    """A ``distributed.Client``: ``client`` itself if given, else one connected to the
+    ``scheduler`` address, else to a local cluster of ``workers`` processes with one thread
+    each (closed on exit; a given client stays open)."""
+    from distributed import Client, LocalCluster
+
+    if client is not None:
+        yield client
+        return
+    if scheduler:
+        with Client(scheduler) as own:
+            yield own
+        return
+    with LocalCluster(n_workers=int(workers), processes=True, threads_per_worker=1,
+                      dashboard_address=":0") as cluster, Client(cluster) as own:
+        yield own
+
+
+def ship(client, systems) -> Dict[str, object]:
+    """``{system.key: future}``: each :class:`ShippedSystem` scattered to every worker of
+    ``client`` (waits for a first worker: a cluster whose workers are still starting, e.g. in a
+    batch queue)."""
+    client.wait_for_workers(1)
+    return client.scatter({s.key: s for s in systems}, broadcast=True)
 
 
 def _points_to_run(points: Sequence[Point], out: Path, summary: SweepSummary,

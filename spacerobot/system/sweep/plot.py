@@ -80,7 +80,7 @@ def plot_sweep(csv_path, out_png=None, *, paper: bool = True):
             ax = axes[i, j]
             shown = [c for c in comps if f"{who}.{c}" in identified]
             for s, (lab, rs) in enumerate(sorted(groups.items())):
-                rs = sorted(rs, key=lambda r: _f(r["v0_norm"]))
+                rs = sorted(rs, key=lambda r: (_f(r["v0_norm"]), r["sweep_id"]))
                 x = np.array([_f(r["v0_norm"]) for r in rs])
                 for k, comp in enumerate(shown):
                     y = 100.0 * np.array([_f(r[f"relerr.{who}.{comp}"]) for r in rs])

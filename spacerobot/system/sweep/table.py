@@ -8,7 +8,7 @@ import csv
 import io
 import os
 from pathlib import Path
-from typing import Dict, List, Mapping, Tuple
+from typing import Dict, Iterable, List, Mapping, Tuple
 
 from .points import PARAMS
 
@@ -34,6 +34,13 @@ def read_table(csv_path, key: str = "sweep_id") -> List[Dict[str, str]]:
     reader = csv.DictReader(io.StringIO(text))
     return [r for r in reader if r.get(key) and None not in r.values()
             and None not in r]
+
+
+def canonical(rows: Iterable[Mapping[str, str]], key: str = "sweep_id") -> List:
+    """The rows sorted by their id (the ``key`` column): figures computed from them (a mean is
+    a float sum, whose last digit depends on the order) are then the same whatever order the
+    rows finished and were written in (rows without an id keep their order, first)."""
+    return sorted(rows, key=lambda r: r.get(key) or "")
 
 
 def _check_header(path: Path, columns: Tuple[str, ...] = COLUMNS, what: str = "sweep") -> None:
