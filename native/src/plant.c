@@ -50,79 +50,6 @@ static void msg3(char *err, size_t errlen, const char *a, const char *b, const c
 
 /* -- small numerics (kernels.py / rigid_body.py) -------------------------------------------- */
 
-/* fdlibm's atan (s_atan.c): below 1 ulp, +, -, *, / only */
-static double atan_p(double x)
-{
-    static const double atanhi[4] = {4.63647609000806093515e-01, 7.85398163397448278999e-01,
-                                     9.82793723247329054082e-01, 1.57079632679489655800e+00};
-    static const double atanlo[4] = {2.26987774529616870924e-17, 3.06161699786838301793e-17,
-                                     1.39033110312309984516e-17, 6.12323399573676603587e-17};
-    static const double aT[11] = {
-        3.33333333333329318027e-01, -1.99999999998764832476e-01, 1.42857142725034663711e-01,
-        -1.11111104054623557880e-01, 9.09088713343650656196e-02, -7.69187620504482999495e-02,
-        6.66107313738753120669e-02, -5.83357013379057348645e-02, 4.97687799461593236017e-02,
-        -3.65315727442169155270e-02, 1.62858201153657823623e-02};
-    double ax, z, w, s1, s2, r;
-    int id, neg;
-    if (isnan(x))
-        return x + x;
-    neg = x < 0.0;
-    ax = fabs(x);
-    if (ax >= 7.3786976294838206464e19) {             /* 2^66 */
-        r = atanhi[3] + atanlo[3];
-        return neg ? -r : r;
-    }
-    if (ax < 0.4375) {
-        if (ax < 7.4505805969238281e-09)               /* 2^-27: atan x = x */
-            return x;
-        id = -1;
-    } else if (ax < 1.1875) {
-        if (ax < 0.6875) {
-            id = 0;
-            ax = (2.0 * ax - 1.0) / (2.0 + ax);
-        } else {
-            id = 1;
-            ax = (ax - 1.0) / (ax + 1.0);
-        }
-    } else if (ax < 2.4375) {
-        id = 2;
-        ax = (ax - 1.5) / (1.0 + 1.5 * ax);
-    } else {
-        id = 3;
-        ax = -1.0 / ax;
-    }
-    z = ax * ax;
-    w = z * z;
-    s1 = z * (aT[0] + w * (aT[2] + w * (aT[4] + w * (aT[6] + w * (aT[8] + w * aT[10])))));
-    s2 = w * (aT[1] + w * (aT[3] + w * (aT[5] + w * (aT[7] + w * aT[9]))));
-    if (id < 0) {
-        r = ax - ax * (s1 + s2);
-        return neg ? -r : r;
-    }
-    r = atanhi[id] - ((ax * (s1 + s2) - atanlo[id]) - ax);
-    return neg ? -r : r;
-}
-
-/* atan2(y, x) for finite arguments (NaN propagates); atan2(0, 0) = 0 */
-static double atan2_p(double y, double x)
-{
-    static const double pi_lo = 1.2246467991473531772e-16;
-    double z;
-    if (isnan(x) || isnan(y))
-        return x + y;
-    if (x == 0.0) {
-        if (y == 0.0)
-            return 0.0;
-        return y > 0.0 ? 0.5 * PI : -0.5 * PI;
-    }
-    if (y == 0.0)
-        return x > 0.0 ? y : (signbit(y) ? -PI : PI);
-    z = atan_p(fabs(y / x));
-    if (x > 0.0)
-        return y > 0.0 ? z : -z;
-    return y > 0.0 ? PI - (z - pi_lo) : (z - pi_lo) - PI;
-}
-
 /* paper eqs. 40/41 for one axis: u = K x inside |x| < x_max (saturated at u_max),
  * u = sign(K x) u_max outside it; NaN passes through (kernels.bounded_law) */
 static double bounded_law(double x, double K, double x_max, double u_max)
@@ -445,7 +372,7 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
         gen[0] = cs * FM[0] + sn * FM[1];
         gen[1] = -sn * FM[0] + cs * FM[1];
         gen[2] = FM[5];
-        e[2] = atan2_p(s, c);
+        e[2] = sr_atan2(s, c);
     } else {
         double A[9], x = q[3], y = q[4], z = q[5], ww = q[6], nvec, kk;
         quat_dcm(x, y, z, ww, A);
@@ -460,7 +387,7 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
             ww = -ww;
         }
         nvec = sqrt(x * x + y * y + z * z);
-        kk = nvec > 1e-8 * ww ? 2.0 * atan2_p(nvec, ww) / nvec : 2.0 / ww;
+        kk = nvec > 1e-8 * ww ? 2.0 * sr_atan2(nvec, ww) / nvec : 2.0 / ww;
         e[0] = kk * x;
         e[1] = kk * y;
         e[2] = kk * z;
