@@ -45,26 +45,21 @@ def inertia_matrix(I6: Sequence[float]) -> np.ndarray:
 
 
 def check_body(name: str, mass: float, com: Sequence[float], I6: Sequence[float]) -> None:
-    """Raise ``ValueError`` with a readable message if the body is not physical.
+    """Raise ``ValueError`` with a readable message if the body is not one the project accepts.
 
-    Checks: finite numbers, ``mass > 0``, inertia positive definite and principal moments
-    satisfying the triangle inequality ``I1 <= I2 + I3`` (a real mass distribution).
+    The rule of the native core (``native/src/body.h``, ``sr_body_check``): finite numbers,
+    ``mass > 0``, inertia positive definite with principal moments satisfying the triangle
+    inequality ``I1 <= I2 + I3`` (a real mass distribution), then the ranges of a real body
+    (mass, centre of mass and principal moments; ``body.h``).
     """
-    vals = [mass, *com, *I6]
-    if not all(math.isfinite(float(x)) for x in vals):
-        raise ValueError(f"{name}: parameters must be finite numbers, got mass={mass}, "
-                         f"b={list(com)}, inertia={list(I6)}")
-    if mass <= 0.0:
-        raise ValueError(f"{name}.m must be > 0 kg, got {mass}")
-    lam = np.linalg.eigvalsh(inertia_matrix(I6))
-    if lam[0] <= 0.0:
-        raise ValueError(f"{name} inertia must be positive definite; principal moments "
-                         f"{np.array2string(lam, precision=6)} kg.m2")
-    tol = 1e-12 * lam[-1]
-    if lam[2] > lam[0] + lam[1] + tol:
-        raise ValueError(f"{name} inertia violates the triangle inequality: principal moments "
-                         f"{np.array2string(lam, precision=6)} kg.m2 (largest must not exceed "
-                         f"the sum of the other two)")
+    from .core.body import body_error
+    com, I6 = list(com), list(I6)
+    if len(com) != 3 or len(I6) != 6:
+        raise ValueError(f"{name}: b needs 3 and the inertia 6 numbers, got b={com}, "
+                         f"inertia={I6}")
+    err = body_error(name, [mass, *com, *I6])
+    if err is not None:
+        raise ValueError(err)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,9 @@
 #include <math.h>
 #include <string.h>
 
+#include "body.h"
 #include "sr_math.h"
+#include "sr_text.h"
 
 /* eigenvalue ratio below which the attitude solve is damped (kernels.DLS_RATIO) */
 #define DLS_RATIO 1e-2
@@ -24,29 +26,6 @@
 #define MAX_STEPS 1e9
 
 static const double PI = 3.141592653589793;          /* math.pi */
-
-/* -- messages ------------------------------------------------------------------------------ */
-
-/* err = a b c (truncated to errlen - 1 bytes, NUL-terminated); no number formatting
- * (locale independent) */
-static void msg3(char *err, size_t errlen, const char *a, const char *b, const char *c)
-{
-    const char *parts[3];
-    size_t k = 0;
-    int i;
-    if (err == NULL || errlen == 0)
-        return;
-    parts[0] = a;
-    parts[1] = b;
-    parts[2] = c;
-    for (i = 0; i < 3; i++) {
-        const char *s = parts[i];
-        while (s != NULL && *s != '\0' && k + 1 < errlen)
-            err[k++] = *s++;
-    }
-    err[k] = '\0';
-}
-
 
 /* -- small numerics (kernels.py / rigid_body.py) -------------------------------------------- */
 
@@ -874,43 +853,19 @@ static int model_ok(const sr_plant_model *md)
            && md->ex.ramp > 0.0;
 }
 
-/* spacerobot.robots.check_body: finite, m > 0, symmetric positive definite inertia whose
- * principal moments obey the triangle inequality */
+/* body.h's check of the body b named name; the symmetry of b's inertia (3 x 3) checked here,
+ * where it becomes body.h's six elements */
 static int check_body(const sr_body *b, const char *name, char *err, size_t errlen)
 {
-    double lam[3], U[9];
-    if (!isfinite(b->m) || !sr_finite_all(b->com, 3) || !sr_finite_all(b->I, 9)) {
-        msg3(err, errlen, name, ": parameters must be finite numbers", NULL);
+    const double *I = b->I;
+    const double g[10] = {b->m, b->com[0], b->com[1], b->com[2], I[0], I[4], I[8], I[1], I[2],
+                          I[5]};
+    if (sr_finite_all(I, 9) && !(I[1] == I[3] && I[2] == I[6] && I[5] == I[7])) {
+        sr_text_set(err, errlen, name);
+        sr_text_cat(err, errlen, " inertia must be symmetric");
         return 0;
     }
-    if (!(b->m > 0.0 && b->m <= 1e9)) {
-        msg3(err, errlen, name, ".m must be in (0, 1e9] kg", NULL);
-        return 0;
-    }
-    if (!(fabs(b->com[0]) <= 1e3 && fabs(b->com[1]) <= 1e3 && fabs(b->com[2]) <= 1e3)) {
-        msg3(err, errlen, name, ".b must be within 1e3 m of the frame origin", NULL);
-        return 0;
-    }
-    for (int k = 0; k < 9; ++k)
-        if (!(fabs(b->I[k]) <= 1e15)) {
-            msg3(err, errlen, name, " inertia elements must be at most 1e15 kg.m2", NULL);
-            return 0;
-        }
-    if (b->I[1] != b->I[3] || b->I[2] != b->I[6] || b->I[5] != b->I[7]) {
-        msg3(err, errlen, name, " inertia must be symmetric", NULL);
-        return 0;
-    }
-    jacobi_eigh(b->I, 3, lam, U);
-    if (lam[0] <= 0.0) {
-        msg3(err, errlen, name, " inertia must be positive definite", NULL);
-        return 0;
-    }
-    if (lam[2] > lam[0] + lam[1] + 1e-12 * lam[2]) {
-        msg3(err, errlen, name, " inertia violates the triangle inequality (largest principal "
-             "moment above the sum of the other two)", NULL);
-        return 0;
-    }
-    return 1;
+    return sr_body_check(name, g, err, errlen) == 0;
 }
 
 static const char *const CTRL_NAMES[SR_PLANT_NPAR] = {
@@ -919,7 +874,8 @@ static const char *const CTRL_NAMES[SR_PLANT_NPAR] = {
 static int fail(sr_plant_model *model, char *err, size_t errlen, const char *a, const char *b)
 {
     memset(model, 0, sizeof(*model));
-    msg3(err, errlen, a, b, NULL);
+    sr_text_set(err, errlen, a);
+    sr_text_cat(err, errlen, b);
     return SR_PLANT_EARG;
 }
 
@@ -935,7 +891,7 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
     if (err != NULL && errlen > 0)
         err[0] = '\0';
     if (model == NULL) {
-        msg3(err, errlen, "model is NULL", NULL, NULL);
+        sr_text_set(err, errlen, "model is NULL");
         return SR_PLANT_EARG;
     }
     memset(model, 0, sizeof(*model));
@@ -947,9 +903,8 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
     if (robot->n < 1 || robot->n > SR_MAX_JOINTS || (robot->planar != 0 && robot->planar != 1))
         return fail(model, err, errlen, "robot: joint count or planar flag out of range", NULL);
     if (!check_body(base, "base", err, errlen) || !check_body(target, "target", err, errlen)) {
-        char keep[SR_PLANT_MSG_LEN];
-        msg3(keep, sizeof keep, err, NULL, NULL);
-        return fail(model, err, errlen, keep, NULL);
+        memset(model, 0, sizeof(*model));           /* the message is in err */
+        return SR_PLANT_EARG;
     }
     par = &ctrl->K_F;
     for (i = 0; i < SR_PLANT_NPAR; i++) {
@@ -1480,11 +1435,11 @@ SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, 
     if (err != NULL && errlen > 0)
         err[0] = '\0';
     if (!model_ok(model) || data == NULL || x == NULL) {
-        msg3(err, errlen, "model, data or x is NULL or not initialised", NULL, NULL);
+        sr_text_set(err, errlen, "model, data or x is NULL or not initialised");
         return SR_PLANT_EARG;
     }
     if (!isfinite(t)) {
-        msg3(err, errlen, "state time must be finite", NULL, NULL);
+        sr_text_set(err, errlen, "state time must be finite");
         return SR_PLANT_EARG;
     }
     if (ex != NULL) {
@@ -1498,32 +1453,32 @@ SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, 
     if (!sr_finite_all(rp, SR_PLANT_EXCITE_STATE) || !(rp[3] > 0.0)
         || !(rp[0] >= 0.0 && rp[0] <= 1.0) || !(rp[1] >= 0.0 && rp[1] <= 1.0)
         || !(rp[4] >= 0.0 && rp[4] <= 1.0)) {
-        msg3(err, errlen, "excitation state must be finite numbers [s0, u, t0, T > 0, level "
-             "requested, rate in effect, rate requested] with the levels in [0, 1]", NULL,
-             NULL);
+        sr_text_set(err, errlen, "excitation state must be finite numbers [s0, u, t0, T > 0, level "
+                    "requested, rate in effect, rate requested] with the levels in [0, 1]");
         return SR_PLANT_EARG;
     }
     for (j = 5; j < 7; j++)
         if (!(rp[j] >= SR_PLANT_RATE_MIN && rp[j] <= SR_PLANT_RATE_MAX)) {
-            msg3(err, errlen, "excitation state: the rates must be in [0.1, 10]", NULL, NULL);
+            sr_text_format(err, errlen, "excitation state: the rates must be in [%g, %g]",
+                           SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX);
             return SR_PLANT_EARG;
         }
     if (!sr_finite_all(x, model->nx)) {
-        msg3(err, errlen, "state x must be finite", NULL, NULL);
+        sr_text_set(err, errlen, "state x must be finite");
         return SR_PLANT_EARG;
     }
     qb = x + 6 + (model->planar ? 2 : 3);
     nrm = model->planar ? sqrt(qb[0] * qb[0] + qb[1] * qb[1])
                         : sqrt(qb[0] * qb[0] + qb[1] * qb[1] + qb[2] * qb[2] + qb[3] * qb[3]);
     if (!(fabs(nrm - 1.0) <= 1e-6)) {
-        msg3(err, errlen, "state q: the base quaternion (or planar cos/sin pair) is not of "
-             "unit norm", NULL, NULL);
+        sr_text_set(err, errlen, "state q: the base quaternion (or planar cos/sin pair) is not of "
+                    "unit norm");
         return SR_PLANT_EARG;
     }
     om = 6 + model->nq + model->nv;
     mp = x[om];
     if (!(mp >= 0.0 && mp <= model->m0 * (1.0 + 1e-12))) {
-        msg3(err, errlen, "propellant mass outside [0, prop.m0]", NULL, NULL);
+        sr_text_set(err, errlen, "propellant mass outside [0, prop.m0]");
         return SR_PLANT_EARG;
     }
     data->t = t;
