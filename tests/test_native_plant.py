@@ -31,7 +31,6 @@ import pytest
 from spacerobot.robots import DEPLETION_PROPELLANT, URDF_DIR, RigidBody, scenario
 
 ROOT = Path(__file__).resolve().parents[1]
-SOURCES = ["sr_math.c", "arm.c", "dynamics.c", "plant.c"]
 #: communication steps: multiples of h and not (the shorter last internal step); 0.4 s a cycle
 STEPS = (0.1, 0.1, 0.0995, 0.1005)
 DURATION = 10.0
@@ -56,7 +55,8 @@ def _core_library(tmp_dir: Path) -> ctypes.CDLL:
     build = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = build          # (its dataclasses look their module up)
     spec.loader.exec_module(build)
-    return core.load_library(build.build_library(tmp_dir, SOURCES, strict=True))
+    return core.load_library(build.build_library(tmp_dir, build.MODEL_SOURCES["plant"],
+                                                    strict=True))
 
 
 @pytest.fixture(scope="module")
