@@ -358,7 +358,9 @@ class Controller:
 
     ``K_D``, ``K_P``: eq. 39 gains (diagonal). ``K_Dn``, ``K_Pn``: null-space posture gains that
     pull the arm back towards ``q0`` without disturbing the base attitude, and ``qdd_max``: bound
-    on commanded joint accelerations [rad/s2] (our choices).
+    on commanded joint accelerations [rad/s2] (our choices). The fields, their units and the
+    ranges the plant accepts are the C plant's (``plant.h``, ``SR_PLANT_CONTROLLER_FIELDS``;
+    :func:`spacerobot.core.plant.fields`), in its order.
     """
 
     F_max: float = 10.0
@@ -372,12 +374,6 @@ class Controller:
     K_Dn: float = 1.0
     K_Pn: float = 0.25
     qdd_max: float = 1.0
-
-    def check(self) -> None:
-        """Raise ``ValueError`` naming the first bound that is negative or not a number."""
-        for k in ("F_max", "P_max", "M_max", "L_max", "qdd_max"):
-            if not getattr(self, k) >= 0.0:
-                raise ValueError(f"{k} must be >= 0, got {getattr(self, k)}")
 
 
 #: golden-ratio conjugate and sqrt(2): irrational steps that spread the excitation frequencies
@@ -414,6 +410,9 @@ class Excitation:
     qdd_max : float   bound on each joint reference acceleration [rad/s2]
     period : float    period of the slowest component, 2 pi / w_f [s]
     ramp : float      duration of a change of the excitation level [s]
+
+    The fields, their units and the ranges the plant accepts are the C plant's (``plant.h``,
+    ``SR_PLANT_EXCITATION_FIELDS``; :func:`spacerobot.core.plant.fields`), in its order.
     """
 
     att_max: float = 0.3
@@ -422,17 +421,6 @@ class Excitation:
     qdd_max: float = 0.1
     period: float = 30.0
     ramp: float = 10.0
-
-    def check(self) -> None:
-        """Raise ``ValueError`` naming the first parameter out of range."""
-        for k in ("att_max", "q_max", "qd_max", "qdd_max"):
-            val = getattr(self, k)
-            if not (math.isfinite(val) and val >= 0.0):
-                raise ValueError(f"excite.{k} must be a finite number >= 0, got {val}")
-        for k in ("period", "ramp"):
-            val = getattr(self, k)
-            if not (math.isfinite(val) and val > 0.0):
-                raise ValueError(f"excite.{k} must be a finite number > 0 s, got {val}")
 
     def ramp_bounds(self) -> Tuple[float, float]:
         """``(max |s'|, max |s''|)`` of the ramp of a unit change [1/s, 1/s2]: the quintic
@@ -496,33 +484,23 @@ class Propellant:
     ----------
     m0 : float     initial propellant mass [kg]
     Isp : float    specific impulse [s]
-    r : (3,)       tank centre, base frame [m]
     R : float      tank radius [m]
     arm : float    distance between the two thrusters of a torque couple [m]
+    r : (3,)       tank centre, base frame [m]
+
+    The fields, their units and the ranges the plant accepts are the C plant's (``plant.h``,
+    ``SR_PLANT_PROPELLANT_FIELDS``; :func:`spacerobot.core.plant.fields`), in its order.
     """
 
     m0: float = 0.0
     Isp: float = 220.0
-    r: Vec3 = (0.0, 0.0, 0.0)
     R: float = 0.0
     arm: float = 1.0
+    r: Vec3 = (0.0, 0.0, 0.0)
 
     @property
     def active(self) -> bool:
         return self.m0 > 0.0
-
-    def check(self) -> None:
-        """Raise ``ValueError`` naming the first parameter out of range."""
-        if not (math.isfinite(self.m0) and self.m0 >= 0.0):
-            raise ValueError(f"prop.m0 must be a finite number >= 0 kg, got {self.m0}")
-        for k in ("Isp", "arm"):
-            val = getattr(self, k)
-            if not (math.isfinite(val) and val > 0.0):
-                raise ValueError(f"prop.{k} must be a finite number > 0, got {val}")
-        if not (math.isfinite(self.R) and self.R >= 0.0):
-            raise ValueError(f"prop.R must be a finite number >= 0 m, got {self.R}")
-        if not all(math.isfinite(float(x)) for x in self.r) or len(self.r) != 3:
-            raise ValueError(f"prop.r must be 3 finite numbers [m], got {list(self.r)}")
 
     def base(self, dry: RigidBody, m_p: float) -> RigidBody:
         """The base with ``m_p`` [kg] of propellant: mass, CoM and CoM inertia (base frame).

@@ -50,14 +50,12 @@ static int check_body(const sr_body *b, const char *name, char *err, size_t errl
     return sr_body_check(name, g, err, errlen) == 0;
 }
 
-static const char *const CTRL_NAMES[SR_PLANT_NPAR] = {
-    "K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn", "K_Dn", "qdd_max"};
-
-static int fail(sr_plant_model *model, char *err, size_t errlen, const char *a, const char *b)
+/* the model zeroed, why in err (msg; NULL: err holds it already); SR_PLANT_EARG */
+static int fail(sr_plant_model *model, char *err, size_t errlen, const char *msg)
 {
     memset(model, 0, sizeof(*model));
-    sr_text_set(err, errlen, a);
-    sr_text_cat(err, errlen, b);
+    if (msg != NULL)
+        sr_text_set(err, errlen, msg);
     return SR_PLANT_EARG;
 }
 
@@ -67,7 +65,6 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
                                const double *q_home, const double v0[3], const double w0[3],
                                double h, char *err, size_t errlen)
 {
-    const double *par;
     double vb[3], wb[3], I[9];
     int i, j, n, nq;
     if (err != NULL && errlen > 0)
@@ -79,60 +76,26 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
     memset(model, 0, sizeof(*model));
     if (robot == NULL || base == NULL || target == NULL || ctrl == NULL || ex == NULL
         || prop == NULL || v0 == NULL || w0 == NULL)
-        return fail(model, err, errlen, "a required argument is NULL", NULL);
-    if (!(h >= 1e-6 && h <= 1.0))
-        return fail(model, err, errlen, "h must be in [1e-6, 1] s", NULL);
+        return fail(model, err, errlen, "a required argument is NULL");
+    if (plant_check_range("h", &h, 1, SR_PLANT_H_MIN, SR_PLANT_H_MAX, "s", err, errlen))
+        return fail(model, err, errlen, NULL);
     if (robot->n < 1 || robot->n > SR_MAX_JOINTS || (robot->planar != 0 && robot->planar != 1))
-        return fail(model, err, errlen, "robot: joint count or planar flag out of range", NULL);
-    if (!check_body(base, "base", err, errlen) || !check_body(target, "target", err, errlen)) {
-        memset(model, 0, sizeof(*model));           /* the message is in err */
-        return SR_PLANT_EARG;
-    }
-    par = &ctrl->K_F;
-    for (i = 0; i < SR_PLANT_NPAR; i++) {
-        if (!(fabs(par[i]) <= 1e9))     /* beyond, products overflow within a step */
-            return fail(model, err, errlen, CTRL_NAMES[i], " must be a number within +-1e9");
-        if ((i == 1 || i == 2 || i == 4 || i == 5 || i == 10) && !(par[i] >= 0.0))
-            return fail(model, err, errlen, CTRL_NAMES[i], " must be >= 0");
-    }
-    {
-        const double exv[6] = {ex->att_max, ex->q_max, ex->qd_max, ex->qdd_max, ex->period,
-                               ex->ramp};
-        static const char *const names[6] = {"excite.att_max", "excite.q_max", "excite.qd_max",
-                                             "excite.qdd_max", "excite.period", "excite.ramp"};
-        static const double lo[6] = {0.0, 0.0, 0.0, 0.0, 1e-3, 1e-3},
-                            hi[6] = {3.141592653589793, 6.283185307179586, 1e3, 1e6, 1e9, 1e9};
-        static const char *const range[6] = {" must be in [0, pi] rad", " must be in [0, 2 pi] rad",
-                                             " must be in [0, 1e3] rad/s",
-                                             " must be in [0, 1e6] rad/s2",
-                                             " must be in [1e-3, 1e9] s", " must be in [1e-3, 1e9] s"};
-        for (i = 0; i < 6; i++)
-            if (!(exv[i] >= lo[i] && exv[i] <= hi[i]))
-                return fail(model, err, errlen, names[i], range[i]);
-    }
-    if (!(prop->m0 >= 0.0 && prop->m0 <= 1e9))
-        return fail(model, err, errlen, "prop.m0 must be in [0, 1e9] kg", NULL);
-    if (!(prop->Isp >= 1e-3 && prop->Isp <= 1e9))
-        return fail(model, err, errlen, "prop.Isp must be in [1e-3, 1e9] s", NULL);
-    if (!(prop->arm >= 1e-6 && prop->arm <= 1e6))
-        return fail(model, err, errlen, "prop.arm must be in [1e-6, 1e6] m", NULL);
-    if (!(prop->R >= 0.0 && prop->R <= 1e3))
-        return fail(model, err, errlen, "prop.R must be in [0, 1e3] m", NULL);
-    for (i = 0; i < 3; i++) {
-        if (!(fabs(prop->r[i]) <= 1e3))
-            return fail(model, err, errlen, "prop.r must be 3 numbers within +-1e3 m", NULL);
-        if (!(fabs(v0[i]) <= 1e6))
-            return fail(model, err, errlen, "base.v0 must be 3 numbers within +-1e6 m/s", NULL);
-        if (!(fabs(w0[i]) <= 1e3))
-            return fail(model, err, errlen, "base.omega0 must be 3 numbers within +-1e3 rad/s",
-                        NULL);
-    }
+        return fail(model, err, errlen, "robot: joint count or planar flag out of range");
+    if (!check_body(base, "base", err, errlen) || !check_body(target, "target", err, errlen)
+        || plant_check_range("base.v0", v0, 3, -SR_PLANT_V0_MAX, SR_PLANT_V0_MAX, "m/s", err,
+                             errlen)
+        || plant_check_range("base.omega0", w0, 3, -SR_PLANT_OMEGA0_MAX, SR_PLANT_OMEGA0_MAX,
+                             "rad/s", err, errlen)
+        || plant_check_fields(SR_PLANT_TABLE_CONTROLLER, ctrl, err, errlen)
+        || plant_check_fields(SR_PLANT_TABLE_EXCITATION, ex, err, errlen)
+        || plant_check_fields(SR_PLANT_TABLE_PROPELLANT, prop, err, errlen))
+        return fail(model, err, errlen, NULL);
     if (q_home != NULL && !sr_finite_all(q_home, robot->n))
-        return fail(model, err, errlen, "q_home must be finite numbers [rad]", NULL);
+        return fail(model, err, errlen, "q_home must be finite numbers [rad]");
     /* the robot + target on the dry base */
     if (sr_dyn_model_init(&model->dyn, robot, target) != SR_DYN_OK
         || sr_dyn_set_base(&model->dyn, base) != SR_DYN_OK)
-        return fail(model, err, errlen, "robot: the record is not a valid robot", NULL);
+        return fail(model, err, errlen, "robot: the record is not a valid robot");
     n = robot->n;
     nq = robot->planar ? 4 + n : 7 + n;
     model->planar = robot->planar;
@@ -141,16 +104,16 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
     model->nb = robot->planar ? 3 : 6;
     model->nv = model->nb + n;
     model->nx = 6 + nq + model->nv + 7;
-    model->ny = 64 + 5 * n;
+    model->ny = SR_PLANT_NY(n);
+    plant_output_offsets(n, model->y_at);
     model->n_att = robot->planar ? 1 : 3;
     model->n_ch = model->n_att + n;
-    for (i = 0; i < SR_PLANT_NPAR; i++)
-        model->par[i] = par[i];
+    model->ctrl = *ctrl;
     for (i = 0; i < n; i++)
         model->q_home[i] = q_home != NULL ? q_home[i] : 0.0;
     model->h = h;
     model->ex = *ex;
-    /* propellant (simulator.propellant_array): all zero when its model is off */
+    /* the propellant's constants: all zero when its model is off */
     model->m0 = prop->m0;
     if (prop->m0 > 0.0) {
         model->pp[0] = 1.0 / (prop->Isp * 9.80665);  /* G0 */
@@ -238,30 +201,14 @@ SR_API int sr_plant_dims(const sr_plant_model *model, int *nq, int *nv, int *nx,
     return SR_PLANT_OK;
 }
 
-static const char *const OUTPUT_NAMES[SR_PLANT_Y_COUNT] = {
-    "r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H", "P",
-    "L", "tau", "excite_level", "att_ref", "qd_ref", "m_p", "P_x", "L_x", "base_now",
-    "excite_rate"};
-
 SR_API int sr_plant_output_offsets(const sr_plant_model *model, int *offsets)
 {
-    /* sizes, -1 for n */
-    static const int size[SR_PLANT_Y_COUNT] = {3, 3, 9, 3, 3, 3, -1, -1, -1, 3, 3, 3, 3, 3, 3,
-                                               -1, 1, 3, -1, 1, 3, 3, 10, 1};
-    int k, o = 0;
+    int k;
     if (!plant_model_ok(model) || offsets == NULL)
         return SR_PLANT_EARG;
-    for (k = 0; k < SR_PLANT_Y_COUNT; k++) {
-        offsets[k] = o;
-        o += size[k] < 0 ? model->n : size[k];
-    }
-    offsets[SR_PLANT_Y_COUNT] = o;
+    for (k = 0; k <= SR_PLANT_Y_COUNT; k++)
+        offsets[k] = model->y_at[k];
     return SR_PLANT_OK;
-}
-
-SR_API const char *sr_plant_output_name(int k)
-{
-    return (k >= 0 && k < SR_PLANT_Y_COUNT) ? OUTPUT_NAMES[k] : NULL;
 }
 
 SR_API const char *sr_plant_status_message(int status)
@@ -302,7 +249,8 @@ SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, do
     sr_plant_data *d = data;
     double A[9], r[3], vl[3], w[3], dl[3], al[3], e[3], lev[3];
     const double *x, *q, *v, *acc, *hg, *c;
-    int err, i, j, o, n, nb, nq, om, ra;
+    int err, i, j, n, nb, nq, om, ra;
+#define Y(id) (y + md->y_at[SR_PLANT_Y_##id])      /* output id in y */
     if (!plant_model_ok(md) || d == NULL || y == NULL)
         return SR_PLANT_EARG;
     n = md->n;
@@ -343,68 +291,67 @@ SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, do
     e[1] = dl[1] + (w[2] * vl[0] - w[0] * vl[2]);
     e[2] = dl[2] + (w[0] * vl[1] - w[1] * vl[0]);
     for (i = 0; i < 3; i++) {
-        y[i] = r[i];
-        y[3 + i] = A[3 * i] * vl[0] + A[3 * i + 1] * vl[1] + A[3 * i + 2] * vl[2];
-        y[15 + i] = w[i];
-        y[18 + i] = A[3 * i] * e[0] + A[3 * i + 1] * e[1] + A[3 * i + 2] * e[2];
-        y[21 + i] = al[i];
+        Y(R_S)[i] = r[i];
+        Y(V_S)[i] = A[3 * i] * vl[0] + A[3 * i + 1] * vl[1] + A[3 * i + 2] * vl[2];
+        Y(OMEGA_B)[i] = w[i];
+        Y(A_S)[i] = A[3 * i] * e[0] + A[3 * i + 1] * e[1] + A[3 * i + 2] * e[2];
+        Y(ALPHA_B)[i] = al[i];
     }
     for (i = 0; i < 9; i++)
-        y[6 + i] = A[i];
-    o = 24;
+        Y(A_B)[i] = A[i];
     for (i = 0; i < n; i++) {
-        y[o + i] = q[nq - n + i];
-        y[o + n + i] = v[nb + i];
-        y[o + 2 * n + i] = acc[nb + i];
+        Y(Q)[i] = q[nq - n + i];
+        Y(QD)[i] = v[nb + i];
+        Y(QDD)[i] = acc[nb + i];
     }
-    o += 3 * n;
-    for (i = 0; i < 6; i++) {                       /* F, M, J, H */
-        y[o + i] = d->FM[i];
-        y[o + 6 + i] = x[i];
+    for (i = 0; i < 3; i++) {
+        Y(F)[i] = d->FM[i];
+        Y(M)[i] = d->FM[3 + i];
+        Y(J)[i] = x[i];
+        Y(H)[i] = x[3 + i];
     }
-    o += 12;
     /* P and L about the inertial origin: L_c + c x P */
-    y[o] = hg[0];
-    y[o + 1] = hg[1];
-    y[o + 2] = hg[2];
-    y[o + 3] = hg[3] + (c[1] * hg[2] - c[2] * hg[1]);
-    y[o + 4] = hg[4] + (c[2] * hg[0] - c[0] * hg[2]);
-    y[o + 5] = hg[5] + (c[0] * hg[1] - c[1] * hg[0]);
-    o += 6;
+    Y(P)[0] = hg[0];
+    Y(P)[1] = hg[1];
+    Y(P)[2] = hg[2];
+    Y(L)[0] = hg[3] + (c[1] * hg[2] - c[2] * hg[1]);
+    Y(L)[1] = hg[4] + (c[2] * hg[0] - c[0] * hg[2]);
+    Y(L)[2] = hg[5] + (c[0] * hg[1] - c[1] * hg[0]);
     for (i = 0; i < n; i++)
-        y[o + i] = d->gen[nb + i];
-    o += n;
+        Y(TAU)[i] = d->gen[nb + i];
     plant_ramp_level(d->t, d->ramp, lev);
-    y[o] = lev[0];
-    o += 1;
+    Y(EXCITE)[0] = lev[0];
     ra = md->n_att;
-    for (i = 0; i < 3 + n; i++)                     /* att_ref (3), qd_ref (n) */
-        y[o + i] = 0.0;
+    for (i = 0; i < 3; i++)
+        Y(ATT_REF)[i] = 0.0;
+    for (i = 0; i < n; i++)
+        Y(QD_REF)[i] = 0.0;
     if (d->ramp[0] != 0.0 || d->ramp[1] != 0.0) {
         double f[3], g[3];
         if (!(d->trig_t == d->t)) {
             plant_fill_trig(md, d, d->t, d->trig);
             d->trig_t = d->t;
         }
-        for (j = 0; j < ra; j++) {
+        for (j = 0; j < ra; j++) {                  /* planar: the z axis */
             plant_channel(d->ex_tab[j], d->trig[j], f);
             plant_level_times(lev, f, g);
-            y[o + 3 - ra + j] = g[0];
+            Y(ATT_REF)[3 - ra + j] = g[0];
         }
         for (i = 0; i < n; i++) {
             plant_channel(d->ex_tab[ra + i], d->trig[ra + i], f);
             plant_level_times(lev, f, g);
-            y[o + 3 + i] = g[1];
+            Y(QD_REF)[i] = g[1];
         }
     }
-    o += 3 + n;
-    for (i = 0; i < 7; i++)                         /* m_p, P_x, L_x */
-        y[o + i] = x[om + i];
-    o += 7;
-    plant_base_now(md, x[om], y + o);
-    o += 10;
-    y[o] = d->ex_rate[1];
+    Y(M_P)[0] = x[om];
+    for (i = 0; i < 3; i++) {
+        Y(P_X)[i] = x[om + 1 + i];
+        Y(L_X)[i] = x[om + 4 + i];
+    }
+    plant_base_now(md, x[om], Y(BASE_NOW));
+    Y(EXCITE_RATE)[0] = d->ex_rate[1];
     return sr_finite_all(y, md->ny) ? SR_PLANT_OK : SR_PLANT_ENONFINITE;
+#undef Y
 }
 
 SR_API int sr_plant_get_state(const sr_plant_model *model, const sr_plant_data *data, double *t,

@@ -149,24 +149,25 @@ static void jacobi_eigh(const double *S, int k, double *lam, double *U)
 }
 
 /* Thruster and arm commands at the normalised configuration q, velocity v (kernels.control):
- * M (nv x nv), nle (nv), hg (6) = [P, L_c] the rigid-body terms there; par (11) the controller;
+ * M (nv x nv), nle (nv), hg (6) = [P, L_c] the rigid-body terms there; ct the controller;
  * t, ramp the excitation (its sines: d->trig where d->trig_t is t, else evaluated here into
  * d->trig). Writes FM[0..5] = [F, M] (inertial), gen (nv) = [f_b, tau] and
  * acc (nv) = dv/dt (M acc + nle = gen by construction). Returns 0 or SR_PLANT_ESINGULAR_*. */
 static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, const double *v,
-                   const double *M, const double *nle, const double *hg, const double *par,
+                   const double *M, const double *nle, const double *hg,
+                   const sr_plant_controller *ct,
                    double t, const double *ramp, double *gen, double *acc, double *FM)
 {
     const int nv = md->nv, nb = md->nb, n = md->n, r = md->n_att, r0 = nb - r, nq = md->nq;
-    const double KD = par[6], KP = par[7], KPn = par[8], KDn = par[9], qdd_max = par[10];
+    const double KD = ct->K_D, KP = ct->K_P, KPn = ct->K_Pn, KDn = ct->K_Dn, qdd_max = ct->qdd_max;
     double e[3], Lb[36], sol[6 * (SR_MAX_JOINTS + 1)], Lm[SR_MAX_JOINTS * SR_MAX_JOINTS];
     double WiGt[SR_MAX_JOINTS * 3], GWG[9], Lg[9], zv[3], rhs[3], post[SR_MAX_JOINTS];
     double lev[3], lam[3], U[9], peak;
     const int w = n + 1;                            /* row length of sol: [X, y0] */
     int i, j, p, k, plain;
     for (i = 0; i < 3; i++) {
-        FM[i] = bounded_law(hg[i], par[0], par[1], par[2]);           /* eq. 41 (P) */
-        FM[3 + i] = bounded_law(hg[3 + i], par[3], par[4], par[5]);   /* eq. 40 (L_c) */
+        FM[i] = bounded_law(hg[i], ct->K_F, ct->P_max, ct->F_max);          /* eq. 41 (P) */
+        FM[3 + i] = bounded_law(hg[3 + i], ct->K_M, ct->L_max, ct->M_max);  /* eq. 40 (L_c) */
     }
     /* thrust in base coordinates, and the attitude error e (rotation vector; theta_z planar) */
     e[0] = e[1] = e[2] = 0.0;
@@ -332,12 +333,14 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
  * so that the accelerations and torques are those of the scaled thrust. FM[6] = the flow
  * (0 without propellant model) (kernels.thrust_control). */
 int plant_thrust_control(const sr_plant_model *md, sr_plant_data *d, double t,
-                          const double *ramp, double m_p, double dt)
+                         const double *ramp, double m_p, double dt)
 {
-    double parw[SR_PLANT_NPAR], flow, need, s;
-    int err, i;
+    sr_plant_controller scaled;
+    double flow, need, s;
+    int err;
     const double *pp = md->pp;
-    err = control(md, d, d->qn, d->vs, d->M, d->nle, d->hg, md->par, t, ramp, d->gen, d->acc, d->FM);
+    err = control(md, d, d->qn, d->vs, d->M, d->nle, d->hg, &md->ctrl, t, ramp, d->gen, d->acc,
+                  d->FM);
     if (err || pp[0] == 0.0) {
         d->FM[6] = 0.0;
         return err;
@@ -349,13 +352,14 @@ int plant_thrust_control(const sr_plant_model *md, sr_plant_data *d, double t,
         return SR_PLANT_OK;
     }
     s = (m_p > 0.0 ? m_p : 0.0) / need;
-    for (i = 0; i < SR_PLANT_NPAR; i++)
-        parw[i] = md->par[i];
-    parw[0] *= s;                                   /* K_F, F_max, K_M, M_max */
-    parw[2] *= s;
-    parw[3] *= s;
-    parw[5] *= s;
-    err = control(md, d, d->qn, d->vs, d->M, d->nle, d->hg, parw, t, ramp, d->gen, d->acc, d->FM);
+    scaled = md->ctrl;
+    scaled.K_F *= s;
+    scaled.F_max *= s;
+    scaled.K_M *= s;
+    scaled.M_max *= s;
+    err = control(md, d, d->qn, d->vs, d->M, d->nle, d->hg, &scaled, t, ramp, d->gen, d->acc,
+                  d->FM);
     d->FM[6] = plant_mass_flow(d->FM, pp);
     return err;
 }
+

@@ -14,10 +14,20 @@ static inline int plant_model_ok(const sr_plant_model *md)
         return 0;
     return md->nb == (md->planar ? 3 : 6) && md->nq == (md->planar ? 4 : 7) + md->n
            && md->nv == md->nb + md->n && md->nx == 6 + md->nq + md->nv + 7
-           && md->ny == 64 + 5 * md->n && md->n_att == (md->planar ? 1 : 3)
+           && md->ny == SR_PLANT_NY(md->n) && md->n_att == (md->planar ? 1 : 3)
            && md->n_ch == md->n_att + md->n && md->h > 0.0 && md->h <= 1.0
            && md->ex.ramp > 0.0;
 }
+
+/* -- the tables (plant_params.c) ------------------------------------------------------------ */
+/* at (SR_PLANT_Y_COUNT + 1): where each output starts in the output vector of n joints */
+void plant_output_offsets(int n, int *at);
+/* 0 when the size numbers v are within [lo, hi], else 1 with "<name>[k] must be within
+ * [lo, hi] <unit>, got <value>" in err */
+int plant_check_range(const char *name, const double *v, int size, double lo, double hi,
+                      const char *unit, char *err, size_t errlen);
+/* plant_check_range of every field of the struct s of table (enum sr_plant_table) */
+int plant_check_fields(int table, const void *s, char *err, size_t errlen);
 
 /* -- the excitation (plant_excitation.c) ------------------------------------------------- */
 void plant_ramp_level(double t, const double *ramp, double *s);

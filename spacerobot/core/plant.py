@@ -25,8 +25,9 @@ from __future__ import annotations
 
 import ctypes
 import math
+import struct
 from dataclasses import dataclass
-from typing import Optional
+from typing import Dict, Optional, Tuple
 
 import numpy as np
 
@@ -34,43 +35,97 @@ from ..robots import Controller, Excitation, Propellant, RigidBody, Robot
 from . import dptr, lib as _default_lib
 from .robot_record import SrBody, SrRobot, c_robot
 
-__all__ = ["NativePlant", "Controls", "SrPlantController", "SrPlantExcitation",
-           "SrPlantPropellant", "STATUS_OK", "OUTPUT_COUNT"]
+__all__ = ["NativePlant", "Controls", "Field", "fields", "output_names", "parameter_ranges",
+           "STATUS_OK"]
 
 MSG_LEN = 256
-#: the excitation rate's range (SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX) and the doubles of the
-#: excitation state (SR_PLANT_EXCITE_STATE: ramp (4), level requested, rates in effect and
-#: requested)
-RATE_MIN, RATE_MAX = 0.1, 10.0
+#: the doubles of the excitation state (SR_PLANT_EXCITE_STATE: ramp (4), level requested,
+#: rates in effect and requested)
 EXCITE_STATE = 7
 STATUS_OK = 0
 EARG = 1
 ENONFINITE = 2
-#: number of outputs (SR_PLANT_Y_COUNT)
-OUTPUT_COUNT = 24
-#: controller parameters, the order of sr_plant_controller (plant.h)
-PARAMS = ("K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn", "K_Dn",
-          "qdd_max")
+#: the parameter structs of plant.h (enum sr_plant_table) and the Python records they hold
+TABLES = {"controller": (0, Controller), "excitation": (1, Excitation),
+          "propellant": (2, Propellant)}
 
 
-class SrPlantController(ctypes.Structure):
-    """``sr_plant_controller`` (native/src/plant.h)."""
+@dataclass(frozen=True)
+class Field:
+    """A field of a parameter struct of the C plant (``plant.h``'s tables): its C name (the
+    Python record's attribute), FMI name (a 3-vector's variables are ``<fmi>[1..3]``), unit,
+    description, number of doubles, byte offset in the struct, and the range the core
+    enforces."""
 
-    _fields_ = [(k, ctypes.c_double) for k in PARAMS]
+    name: str
+    fmi: str
+    unit: str
+    description: str
+    size: int
+    offset: int
+    min: float
+    max: float
 
 
-class SrPlantExcitation(ctypes.Structure):
-    """``sr_plant_excitation``."""
+def fields(table: str, lib: Optional[ctypes.CDLL] = None) -> Tuple[Field, ...]:
+    """The fields of the C struct ``table`` (``"controller"``, ``"excitation"``,
+    ``"propellant"``), in the order of the FMU's variables, read from the library."""
+    L = _bind(lib or _default_lib())
+    cache = L._sr_plant_fields
+    if table not in cache:
+        t = TABLES[table][0]
+        lo, hi = ctypes.c_double(), ctypes.c_double()
+        out = []
+        for i in range(L.sr_plant_field_count(t)):
+            L.sr_plant_field_range(t, i, ctypes.byref(lo), ctypes.byref(hi))
+            out.append(Field(L.sr_plant_field_name(t, i).decode(),
+                             L.sr_plant_field_fmi_name(t, i).decode(),
+                             L.sr_plant_field_unit(t, i).decode(),
+                             L.sr_plant_field_description(t, i).decode(),
+                             L.sr_plant_field_size(t, i), L.sr_plant_field_offset(t, i),
+                             lo.value, hi.value))
+        cache[table] = tuple(out)
+    return cache[table]
 
-    _fields_ = [(k, ctypes.c_double) for k in ("att_max", "q_max", "qd_max", "qdd_max",
-                                               "period", "ramp")]
+
+def output_names(lib: Optional[ctypes.CDLL] = None) -> Tuple[str, ...]:
+    """The keys of the plant's outputs in the order of its output vector (``plant.h``)."""
+    L = _bind(lib or _default_lib())
+    return tuple(L.sr_plant_output_name(k).decode() for k in range(L.sr_plant_output_count()))
 
 
-class SrPlantPropellant(ctypes.Structure):
-    """``sr_plant_propellant``."""
+def parameter_ranges(lib: Optional[ctypes.CDLL] = None) -> Dict[str, Tuple[float, float]]:
+    """``{FMI name: (min, max)}``: the closed range the C core enforces for every Real
+    parameter and input of the plant FMU (``sr_plant_param_range``), in the FMU's order. An
+    inertia element's range is the bound the principal moments' range implies; the inputs'
+    values outside theirs are clipped."""
+    L = _bind(lib or _default_lib())
+    out = {}
+    name = ctypes.create_string_buffer(64)
+    lo, hi = ctypes.c_double(), ctypes.c_double()
+    i = 0
+    while L.sr_plant_param_name(i, name, len(name)) == 0:
+        key = name.value.decode()
+        if L.sr_plant_param_range(key.encode(), ctypes.byref(lo), ctypes.byref(hi)) != 0:
+            raise RuntimeError(f"sr_plant_param_range does not know {key!r}")
+        out[key] = (lo.value, hi.value)
+        i += 1
+    return out
 
-    _fields_ = [("m0", ctypes.c_double), ("Isp", ctypes.c_double), ("r", ctypes.c_double * 3),
-                ("R", ctypes.c_double), ("arm", ctypes.c_double)]
+
+def _pack(L: ctypes.CDLL, table: str, record) -> ctypes.Array:
+    """The C struct ``table`` with the values of the Python record (its attributes named as the
+    fields), written at the library's offsets."""
+    size = getattr(L, f"sr_plant_{table}_size")()
+    buf = (ctypes.c_double * ((size + 7) // 8))()
+    for f in fields(table, L):
+        value = getattr(record, f.name)
+        values = [float(x) for x in value] if f.size > 1 else [float(value)]
+        if len(values) != f.size:
+            raise ValueError(f"{f.fmi} must be {f.size} finite numbers [{f.unit}], got "
+                             f"{list(value)}")
+        struct.pack_into(f"={f.size}d", buf, f.offset, *values)
+    return buf
 
 
 @dataclass
@@ -94,12 +149,21 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     ip = ctypes.POINTER(ctypes.c_int)
     sig = {
         "sr_plant_model_init": ([vp, ctypes.POINTER(SrRobot), ctypes.POINTER(SrBody),
-                                 ctypes.POINTER(SrBody), ctypes.POINTER(SrPlantController),
-                                 ctypes.POINTER(SrPlantExcitation),
-                                 ctypes.POINTER(SrPlantPropellant), dp, dp, dp, cd, cp, sz], ci),
+                                 ctypes.POINTER(SrBody), vp, vp, vp, dp, dp, dp, cd, cp, sz], ci),
         "sr_plant_dims": ([vp, ip, ip, ip, ip, ip], ci),
+        "sr_plant_output_count": ([], ci),
         "sr_plant_output_offsets": ([vp, ip], ci),
         "sr_plant_output_name": ([ci], cp),
+        "sr_plant_field_count": ([ci], ci),
+        "sr_plant_field_name": ([ci, ci], cp),
+        "sr_plant_field_fmi_name": ([ci, ci], cp),
+        "sr_plant_field_unit": ([ci, ci], cp),
+        "sr_plant_field_description": ([ci, ci], cp),
+        "sr_plant_field_size": ([ci, ci], ci),
+        "sr_plant_field_offset": ([ci, ci], ctypes.c_long),
+        "sr_plant_field_range": ([ci, ci, dp, dp], ci),
+        "sr_plant_param_name": ([ci, cp, sz], ci),
+        "sr_plant_param_range": ([cp, dp, dp], ci),
         "sr_plant_status_message": ([ci], cp),
         "sr_plant_start": ([vp, vp], ci),
         "sr_plant_set_excitation": ([vp, vp, cd], ci),
@@ -121,14 +185,17 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
                  "sr_plant_excitation_size", "sr_plant_propellant_size"):
         getattr(L, name).argtypes = []
         getattr(L, name).restype = sz
-    for name, cls in (("sr_plant_controller_size", SrPlantController),
-                      ("sr_plant_excitation_size", SrPlantExcitation),
-                      ("sr_plant_propellant_size", SrPlantPropellant)):
-        if getattr(L, name)() != ctypes.sizeof(cls):
-            raise RuntimeError(f"{name}: {getattr(L, name)()} bytes in the library, "
-                               f"{ctypes.sizeof(cls)} in spacerobot.core.plant")
+    L._sr_plant_fields = {}
     L._sr_plant_bound = True
     return L
+
+
+def __getattr__(name: str):
+    # the excitation rate's range (SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX), from the library
+    if name in ("RATE_MIN", "RATE_MAX"):
+        lo, hi = parameter_ranges()["ident.excite_rate"]
+        return lo if name == "RATE_MIN" else hi
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _block(nbytes: int):
@@ -183,15 +250,9 @@ class NativePlant:
             c_rob = robot
             qh = np.zeros(robot.n) if q_home is None else q_home
         self.q_home = np.array(qh, float)
-        ctrl = SrPlantController(*[float(getattr(controller, k)) for k in PARAMS])
-        ex = SrPlantExcitation(*[float(getattr(excitation, k)) for k in
-                                 ("att_max", "q_max", "qd_max", "qdd_max", "period", "ramp")])
-        pr = SrPlantPropellant()
-        pr.m0, pr.Isp, pr.R, pr.arm = (float(propellant.m0), float(propellant.Isp),
-                                       float(propellant.R), float(propellant.arm))
-        if len(propellant.r) != 3:
-            raise ValueError(f"prop.r must be 3 finite numbers [m], got {list(propellant.r)}")
-        pr.r[:] = [float(x) for x in propellant.r]
+        ctrl = _pack(L, "controller", controller)
+        ex = _pack(L, "excitation", excitation)
+        pr = _pack(L, "propellant", propellant)
         v0a = np.array(v0, float).reshape(3)
         w0a = np.array(omega0, float).reshape(3)
         if self.q_home.shape != (c_rob.n,):
@@ -200,8 +261,7 @@ class NativePlant:
         self._data = _block(L.sr_plant_data_size())
         err = ctypes.create_string_buffer(MSG_LEN)
         st = L.sr_plant_model_init(self._model, ctypes.byref(c_rob), ctypes.byref(_body(base)),
-                                   ctypes.byref(_body(target)), ctypes.byref(ctrl),
-                                   ctypes.byref(ex), ctypes.byref(pr), dptr(self.q_home),
+                                   ctypes.byref(_body(target)), ctrl, ex, pr, dptr(self.q_home),
                                    dptr(v0a), dptr(w0a), float(h), err, MSG_LEN)
         if st != STATUS_OK:
             raise ValueError(err.value.decode("ascii", "replace"))
@@ -213,11 +273,11 @@ class NativePlant:
         self.planar = bool(c_rob.planar)
         self._nb = 3 if self.planar else 6
         self._om = 6 + self._nq + self._nv
-        off = (ctypes.c_int * (OUTPUT_COUNT + 1))()
+        names = output_names(L)
+        off = (ctypes.c_int * (len(names) + 1))()
         L.sr_plant_output_offsets(self._model, off)
         self._layout = []
-        for k in range(OUTPUT_COUNT):
-            key = L.sr_plant_output_name(k).decode("ascii")
+        for k, key in enumerate(names):
             a, b = off[k], off[k + 1]
             self._layout.append((key, a, b, (3, 3) if key == "A" else (b - a,)))
         self._y = np.empty(self._ny)
@@ -338,7 +398,8 @@ class NativePlant:
         ``ValueError`` (plant unchanged) outside [0, 1] or NaN."""
         level = float(level)
         if self._lib.sr_plant_set_excitation(self._model, self._data, level) != STATUS_OK:
-            raise ValueError(f"excitation level must be in [0, 1], got {level}")
+            lo, hi = parameter_ranges(self._lib)["ident.excite"]
+            raise ValueError(f"excitation level must be in [{lo:g}, {hi:g}], got {level}")
 
     def set_excitation_rate(self, rate: float) -> None:
         """Ask for the excitation rate ``rate`` (frequency multiplier, 1 = the plant's own;
@@ -347,8 +408,8 @@ class NativePlant:
         out of range or NaN."""
         rate = float(rate)
         if self._lib.sr_plant_set_excitation_rate(self._model, self._data, rate) != STATUS_OK:
-            raise ValueError(f"excitation rate must be in [{RATE_MIN:g}, {RATE_MAX:g}], got "
-                             f"{rate}")
+            lo, hi = parameter_ranges(self._lib)["ident.excite_rate"]
+            raise ValueError(f"excitation rate must be in [{lo:g}, {hi:g}], got {rate}")
 
     def excitation_rate(self) -> tuple:
         """``(rate in effect, rate requested)``."""
