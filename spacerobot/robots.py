@@ -1,6 +1,7 @@
 """Robot and scenario definitions: the one description used by plant, estimator, SSP and tests.
 
-Pure data and numpy only (no Pinocchio, no FMI), so that both FMUs can bundle it. The robots
+Data and numpy (no Pinocchio, no FMI); the check of a body is the native core's
+(:func:`check_body`). The robots
 themselves are URDF files (``data/robots/``) that :mod:`spacerobot.urdf` reads into the
 :class:`Robot` record, on first use of :data:`ROBOTS` (the FMUs get the record in their
 configuration and never read a URDF).

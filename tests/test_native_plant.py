@@ -7,10 +7,7 @@ accelerations under the plant's controls against Pinocchio on a model with the b
 instant (tests/oracles/pinocchio_model.py), base_now against Propellant.base, the bounds of the
 controllers and of the excitation references; the initial state against the oracle's
 conventions; bad input refused with a message naming the parameter and the plant unchanged
-after a refused or failed step; save / restore reproducing a run.
-
-(Until the Numba plant left the project, this file also compared every output with it: they
-agreed to 2e-11 relative over 10 s.)"""
+after a refused or failed step; save / restore reproducing a run."""
 from __future__ import annotations
 
 import copy

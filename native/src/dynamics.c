@@ -1,34 +1,11 @@
-/* Rigid-body dynamics of the free-floating robot: a port of the former spacerobot/plant/rigid_body.py
- * (aba, terms) with the same order of operations, so that the C plant reproduced the former Numba one
- * to rounding. Conventions in dynamics.h.
+/* The rigid-body model of the free-floating robot (dynamics.h): the base and the links in their
+ * joint frames with their spatial inertias, built from the robot record and the captured target;
+ * the base replaced (the plant's propellant). The algorithms on the model: dynamics_aba.c
+ * (forward dynamics), dynamics_crba.c (joint-space inertia, non-linear effects, momentum),
+ * dynamics_state.c (the physical state's view).
  *
  * Source of the equations: R. Featherstone, Rigid Body Dynamics Algorithms (RBDA), Springer
- * 2008, in Pinocchio's conventions (spatial motion and force [linear; angular]):
- *   - recursive Newton-Euler algorithm (RNEA), RBDA Table 5.1:
- *       v_i = v_p + S_i qd_i,  a_i = a_p + S_i qdd_i + v_i x S_i qd_i,
- *       f_i = I_i a_i + v_i x* I_i v_i,  tau_i = S_i^T f_i,  f_p += f_i;
- *   - composite-rigid-body algorithm (CRBA), RBDA Table 6.2:
- *       Ic_i = I_i + sum of the children's Ic,  F = Ic_i S_i,  H_ji = S_j^T F (j ancestors of i);
- *   - articulated-body algorithm (ABA), RBDA Table 7.1:
- *       pass 1: v_i = v_p + S_i qd_i,  c_i = v_i x S_i qd_i,  IA_i = I_i,  pA_i = v_i x* I_i v_i;
- *       pass 2: U_i = IA_i S_i,  D_i = S_i^T U_i,  u_i = tau_i - S_i^T pA_i,
- *               Ia = IA_i - U_i D_i^-1 U_i^T,  pa = pA_i + Ia c_i + U_i D_i^-1 u_i,
- *               IA_p += Ia,  pA_p += pa   (moved to the parent's point);
- *       pass 3: a_i = a_p + c_i,  qdd_i = D_i^-1 (u_i - U_i^T a_i),  a_i += S_i qdd_i;
- *   - floating base, RBDA Chapter 9 (floating bases): the base is body 0 with a 6-dof
- *     joint whose motion subspace is the identity (planar: the columns v_x, v_y, omega_z), no
- *     gravity, so its acceleration solves IA_0 a_0 = f_0 - pA_0 (restricted to the base's
- *     generalised velocities), f_0 the applied base force [A^T F; A^T M_S]; with the base's
- *     velocity in its own frame (Pinocchio's free-flyer) the base joint has no bias term.
- *
- * Frames: without gravity the dynamics do not depend on the base's pose, so every algorithm
- * works in the base frame (the inertial frame that coincides with the base's body frame at the
- * instant considered): there the base's generalised velocity and acceleration are its spatial
- * velocity and acceleration. The ABA expresses body k's quantities in base axes at its joint's
- * origin bp[k] (joint motion [0; s]; from body to parent only the origin moves); the CRBA/RNEA
- * (terms) express everything at the base origin S. Each body's inertia is turned into base axes
- * once per call. The running quantities of the serial chain (placement, velocity, articulated
- * inertia and force, acceleration) stay in local arrays; what a later pass reads is in data.
+ * 2008, in Pinocchio's conventions (spatial motion and force [linear; angular]).
  */
 #include "dynamics.h"
 
@@ -39,7 +16,7 @@
 
 /* Q (3 x 3) whose third column is the unit vector along a: the joint frame in which the axis a
  * (link frame) is z. The identity and exact permutations for the z, x and y axes, otherwise
- * two orthonormal vectors completing a (rigid_body._z_frame). */
+ * two orthonormal vectors completing a. */
 static void z_frame(const double *a_in, double *Q)
 {
     const double nrm = sqrt(a_in[0] * a_in[0] + a_in[1] * a_in[1] + a_in[2] * a_in[2]);
@@ -171,7 +148,8 @@ SR_API int sr_dyn_model_init(sr_dyn_model *model, const sr_robot *robot, const s
     n = robot->n;
     for (k = 0; k < n; k++) {
         const double *ax = robot->axis[k];
-        if (!sr_finite_all(robot->xyz[k], 3) || !sr_finite_all(robot->R[k], 9) || !sr_finite_all(ax, 3)
+        if (!sr_finite_all(robot->xyz[k], 3) || !sr_finite_all(robot->R[k], 9)
+            || !sr_finite_all(ax, 3)
             || !body_ok(&robot->link[k], 0)
             || ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2] <= 0.0)
             return SR_DYN_EARG;
@@ -194,7 +172,8 @@ SR_API int sr_dyn_model_init(sr_dyn_model *model, const sr_robot *robot, const s
         z_frame(robot->axis[k - 1], Q);
         for (i = 0; i < 3; i++)          /* T = Rj Q */
             for (j = 0; j < 3; j++)
-                T[3 * i + j] = Rj[3 * i] * Q[j] + Rj[3 * i + 1] * Q[3 + j] + Rj[3 * i + 2] * Q[6 + j];
+                T[3 * i + j] = Rj[3 * i] * Q[j] + Rj[3 * i + 1] * Q[3 + j]
+                               + Rj[3 * i + 2] * Q[6 + j];
         for (i = 0; i < 3; i++) {        /* R = Qp^T T, p = Qp^T pj */
             for (j = 0; j < 3; j++)
                 model->R[k][3 * i + j] = Qp[i] * T[j] + Qp[3 + i] * T[3 + j] + Qp[6 + i] * T[6 + j];

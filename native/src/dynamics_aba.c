@@ -1,4 +1,22 @@
-/* Forward dynamics of the free-floating robot by the articulated-body algorithm. */
+/* Forward dynamics of the free-floating robot by the articulated-body algorithm (dynamics.h).
+ *
+ * ABA, RBDA Table 7.1:
+ *   pass 1: v_i = v_p + S_i qd_i,  c_i = v_i x S_i qd_i,  IA_i = I_i,  pA_i = v_i x* I_i v_i;
+ *   pass 2: U_i = IA_i S_i,  D_i = S_i^T U_i,  u_i = tau_i - S_i^T pA_i,
+ *           Ia = IA_i - U_i D_i^-1 U_i^T,  pa = pA_i + Ia c_i + U_i D_i^-1 u_i,
+ *           IA_p += Ia,  pA_p += pa   (moved to the parent's point);
+ *   pass 3: a_i = a_p + c_i,  qdd_i = D_i^-1 (u_i - U_i^T a_i),  a_i += S_i qdd_i;
+ * with the floating base of RBDA Chapter 9: the base is body 0 with a 6-dof joint whose motion
+ * subspace is the identity (planar: the columns v_x, v_y, omega_z), no gravity, so its
+ * acceleration solves IA_0 a_0 = f_0 - pA_0 (restricted to the base's generalised velocities),
+ * f_0 the applied base force [A^T F; A^T M_S]; with the base's velocity in its own frame
+ * (Pinocchio's free-flyer) the base joint has no bias term.
+ *
+ * Body k's quantities are in base axes at its joint's origin bp[k] (joint motion [0; s]; from
+ * body to parent only the origin moves). Each body's inertia is turned into base axes once per
+ * call. The running quantities of the serial chain (placement, velocity, articulated inertia
+ * and force, acceleration) stay in local arrays; what a later pass reads is in data.
+ */
 #include <math.h>
 
 #include "dynamics_internal.h"

@@ -1,4 +1,13 @@
-/* Joint-space inertia (CRBA), non-linear effects (RNEA) and the system momentum. */
+/* Joint-space inertia (CRBA), non-linear effects (RNEA) and the system momentum of the
+ * free-floating robot (dynamics.h), in one pass over the chain (Pinocchio's computeAllTerms):
+ *   - RNEA, RBDA Table 5.1 (at zero acceleration):
+ *       v_i = v_p + S_i qd_i,  a_i = a_p + S_i qdd_i + v_i x S_i qd_i,
+ *       f_i = I_i a_i + v_i x* I_i v_i,  tau_i = S_i^T f_i,  f_p += f_i;
+ *   - CRBA, RBDA Table 6.2:
+ *       Ic_i = I_i + sum of the children's Ic,  F = Ic_i S_i,  H_ji = S_j^T F (j ancestors of i);
+ *   - the momentum h = sum I_i v_i.
+ * Everything is expressed at the base origin S in base axes.
+ */
 #include <math.h>
 
 #include "dynamics_internal.h"
@@ -144,7 +153,7 @@ void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
 }
 
 /* DCM base -> inertial of the configuration q: planar (cos, sin) as given; the quaternion
- * normalised on the fly (rigid_body.terms) */
+ * normalised on the fly */
 static void dcm_of_q(const sr_dyn_model *md, const double *q, double *A, double *r)
 {
     if (md->planar) {

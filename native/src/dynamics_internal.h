@@ -13,8 +13,8 @@
 
 static inline int dyn_model_ok(const sr_dyn_model *md)
 {
-    return md != NULL && md->n >= 1 && md->n <= SR_MAX_JOINTS && (md->planar == 0 || md->planar == 1)
-        && md->nv == (md->planar ? 3 : 6) + md->n && md->nq == (md->planar ? 4 : 7) + md->n;
+    return md != NULL && md->n >= 1 && md->n <= SR_MAX_JOINTS
+        && (md->planar == 0 || md->planar == 1) && md->nv == (md->planar ? 3 : 6) + md->n && md->nq == (md->planar ? 4 : 7) + md->n;
 }
 
 /* row of the base spatial velocity [v; omega] that is the base's generalised velocity i:

@@ -1,15 +1,7 @@
-/* The plant (see plant.h): a port of the former spacerobot/plant/kernels.py and simulator.py's Plant.
- *
- * One step path: sr_plant_advance -> step() per internal step: the rigid-body terms at the
- * step's start feed control() (zero-order hold; its inverse dynamics give the first stage's
- * accelerations), the articulated-body algorithm those of stages 2-4, stage() the RK4
- * bookkeeping. Everything runs on a working copy of the state that is committed only when
- * every step succeeded and the state reached is finite.
- *
- * Differences from the Numba kernels, all within round-off: the excitation sines come from
- * sr_sincos (libm's sin / cos are not portable); atan2 is fdlibm's arrangement
- * here (libm's is not portable); the 3 x 3 eigenvalues of the damping test come from the
- * Jacobi iteration instead of the closed form (which needs acos / cos).
+/* The plant's model, outputs and state (plant.h): sr_plant_model_init with its checks, the
+ * output vector at the current state, the state's get / set. The integration is in
+ * plant_step.c, the controllers in plant_control.c, the excitation in plant_excitation.c, the
+ * propellant in plant_propellant.c, the tables in plant_params.c.
  */
 #include "plant.h"
 

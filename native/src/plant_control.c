@@ -7,11 +7,11 @@
 #include "sr_math.h"
 #include "vec3.h"
 
-/* eigenvalue ratio below which the attitude solve is damped (kernels.DLS_RATIO) */
+/* eigenvalue ratio below which the attitude solve is damped (docs/models.md) */
 #define DLS_RATIO 1e-2
 
 /* paper eqs. 40/41 for one axis: u = K x inside |x| < x_max (saturated at u_max),
- * u = sign(K x) u_max outside it; NaN passes through (kernels.bounded_law) */
+ * u = sign(K x) u_max outside it; NaN passes through */
 static double bounded_law(double x, double K, double x_max, double u_max)
 {
     const double kx = K * x;
@@ -32,7 +32,7 @@ static double bounded_law(double x, double K, double x_max, double u_max)
 /* lower Cholesky factor L (k x k) of the SPD matrix S (k x k, row stride lds), with the
  * reciprocals of its diagonal on the diagonal (what cho_solve multiplies by; the upper
  * triangle is not written); 0 if a pivot is <= 0 (a NaN pivot passes, so that NaN
- * propagates) (rigid_body.cholesky) */
+ * propagates) */
 static int cholesky(const double *S, int lds, int k, double *restrict L)
 {
     int i, j, p;
@@ -55,8 +55,8 @@ static int cholesky(const double *S, int lds, int k, double *restrict L)
     return 1;
 }
 
-/* solve L L^T X = B in place of B (k x c, row-major), L from cholesky (rigid_body.cho_solve;
- * the same operations: the reciprocals 1 / L_ii it multiplies by now come from cholesky) */
+/* solve L L^T X = B in place of B (k x c, row-major), L from cholesky (multiplying by the
+ * reciprocals 1 / L_ii cholesky left on the diagonal) */
 static void cho_solve(const double *restrict L, int k, double *restrict B, int c)
 {
     int i, p, col;
@@ -85,7 +85,7 @@ static void cho_solve(const double *restrict L, int k, double *restrict B, int c
 }
 
 /* eigen-decomposition of a symmetric k x k matrix (k <= 3), cyclic Jacobi:
- * S = U diag(lam) U^T, eigenvalues ascending (kernels._jacobi_eigh) */
+ * S = U diag(lam) U^T, eigenvalues ascending */
 static void jacobi_eigh(const double *S, int k, double *lam, double *U)
 {
     double a[9];
@@ -148,7 +148,7 @@ static void jacobi_eigh(const double *S, int k, double *lam, double *U)
     }
 }
 
-/* Thruster and arm commands at the normalised configuration q, velocity v (kernels.control):
+/* Thruster and arm commands at the normalised configuration q, velocity v:
  * M (nv x nv), nle (nv), hg (6) = [P, L_c] the rigid-body terms there; ct the controller;
  * t, ramp the excitation (its sines: d->trig where d->trig_t is t, else evaluated here into
  * d->trig). Writes FM[0..5] = [F, M] (inertial), gen (nv) = [f_b, tau] and
@@ -331,7 +331,7 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
  * need more than m_p, the thrust is scaled by s = m_p / (flow dt) (the gains and bounds of both
  * thruster laws scaled: bounded_law is then s times the unscaled one) and control() runs again
  * so that the accelerations and torques are those of the scaled thrust. FM[6] = the flow
- * (0 without propellant model) (kernels.thrust_control). */
+ * (0 without propellant model). */
 int plant_thrust_control(const sr_plant_model *md, sr_plant_data *d, double t,
                          const double *ramp, double m_p, double dt)
 {

@@ -8,7 +8,7 @@
 static const double PI = 3.141592653589793;          /* math.pi */
 
 /* level s and its two derivatives at t of the ramp [s0, u, t0, T]: the quintic
- * s = s0 + (u - s0) p(x), p = 10 x^3 - 15 x^4 + 6 x^5, x = (t - t0) / T (kernels.ramp_level) */
+ * s = s0 + (u - s0) p(x), p = 10 x^3 - 15 x^4 + 6 x^5, x = (t - t0) / T */
 void plant_ramp_level(double t, const double *ramp, double *s)
 {
     const double s0 = ramp[0], u = ramp[1], t0 = ramp[2], T = ramp[3];
@@ -29,7 +29,7 @@ void plant_ramp_level(double t, const double *ramp, double *s)
 }
 
 /* the sines and cosines of both phases of every channel at t: trig[c] = [sin(w1 t + p1),
- * cos(w1 t + p1), sin(w2 t + p2), cos(w2 t + p2)] (kernels.fill_trig) */
+ * cos(w1 t + p1), sin(w2 t + p2), cos(w2 t + p2)] */
 void plant_fill_trig(const sr_plant_model *md, const sr_plant_data *d, double t,
                       double (*trig)[4])
 {
@@ -41,7 +41,7 @@ void plant_fill_trig(const sr_plant_model *md, const sr_plant_data *d, double t,
     }
 }
 
-/* d->trig advanced by h by the angle-addition formulas (kernels.rotate_trig) */
+/* d->trig advanced by h by the angle-addition formulas */
 void plant_rotate_trig(const sr_plant_model *md, sr_plant_data *d)
 {
     int c, j;
@@ -55,7 +55,7 @@ void plant_rotate_trig(const sr_plant_model *md, sr_plant_data *d)
 }
 
 /* channel c of the table, f = a/2 [sin(w1 t + p1) + sin(w2 t + p2)], f', f'', from its sines
- * trig (4) at t (kernels.channel_trig) */
+ * trig (4) at t */
 void plant_channel(const double *row, const double *trig, double *f)
 {
     const double w1 = row[1], w2 = row[3], h = 0.5 * row[0];

@@ -8,7 +8,7 @@
 #include "plant_internal.h"
 #include "sr_text.h"
 
-/* -- the outputs -------------------------------------------------------------------------------- */
+/* -- the outputs ----------------------------------------------------------------------------- */
 
 static const struct {
     const char *key, *unit, *what;
@@ -45,7 +45,7 @@ SR_API const char *sr_plant_output_description(int k)
     return k >= 0 && k < SR_PLANT_Y_COUNT ? OUTPUTS[k].what : NULL;
 }
 
-/* -- the parameter structs ---------------------------------------------------------------------- */
+/* -- the parameter structs ------------------------------------------------------------------- */
 
 typedef struct field {
     const char *name, *fmi, *unit, *what;
@@ -57,9 +57,12 @@ typedef struct field {
 #define FIELD_(type, f, dims, fmi, unit, lo, hi, what)                                          \
     {#f, fmi, unit, what, (int)(sizeof(((type *)0)->f) / sizeof(double)), offsetof(type, f), lo, \
      hi},
-#define CTRL_(f, dims, fmi, unit, lo, hi, what) FIELD_(sr_plant_controller, f, dims, fmi, unit, lo, hi, what)
-#define EX_(f, dims, fmi, unit, lo, hi, what) FIELD_(sr_plant_excitation, f, dims, fmi, unit, lo, hi, what)
-#define PROP_(f, dims, fmi, unit, lo, hi, what) FIELD_(sr_plant_propellant, f, dims, fmi, unit, lo, hi, what)
+#define CTRL_(f, dims, fmi, unit, lo, hi, what)                                                 \
+    FIELD_(sr_plant_controller, f, dims, fmi, unit, lo, hi, what)
+#define EX_(f, dims, fmi, unit, lo, hi, what)                                                   \
+    FIELD_(sr_plant_excitation, f, dims, fmi, unit, lo, hi, what)
+#define PROP_(f, dims, fmi, unit, lo, hi, what)                                                 \
+    FIELD_(sr_plant_propellant, f, dims, fmi, unit, lo, hi, what)
 static const field CONTROLLER[] = {SR_PLANT_CONTROLLER_FIELDS(CTRL_)};
 static const field EXCITATION[] = {SR_PLANT_EXCITATION_FIELDS(EX_)};
 static const field PROPELLANT[] = {SR_PLANT_PROPELLANT_FIELDS(PROP_)};
@@ -191,7 +194,7 @@ int plant_check_fields(int table, const void *s, char *err, size_t errlen)
     return 0;
 }
 
-/* -- every parameter and input of the plant FMU ------------------------------------------------- */
+/* -- every parameter and input of the plant FMU ---------------------------------------------- */
 
 /* the bound |a product of inertia| <= (max - min) / 2 that principal moments within
  * [min, max] imply (an off-diagonal element of a symmetric matrix is at most half the spread

@@ -14,7 +14,7 @@ double plant_mass_flow(const double *FM, const double *pp)
 
 /* the base of d->dyn with m_p [kg] of propellant: spatial inertias add, so the base's is the
  * dry one plus m_p times that of 1 kg of propellant at r (I_S += m_p ((2/5) R^2 + |r|^2) 1 -
- * m_p r r^T) (kernels.base_inertia). Nothing to do without propellant model. Returns 0, or
+ * m_p r r^T). Nothing to do without propellant model. Returns 0, or
  * SR_PLANT_ENONFINITE for a non-finite or non-positive resulting mass. */
 int plant_base_inertia(const sr_plant_model *md, sr_plant_data *d, double m_p)
 {
@@ -36,10 +36,9 @@ int plant_base_inertia(const sr_plant_model *md, sr_plant_data *d, double m_p)
 
 /* rows [dm_p, dP_x (3), dL_x (3)] of the state derivative at the stage state xa (A its base
  * DCM, base_dcm) for the mass flow [kg/s]: the expelled propellant leaves with the tank
- * centre's velocity v_c: dP_x = flow v_c, dL_x = flow (r_c x v_c + (2/5) R^2 omega_I)
- * (kernels._propellant_rates) */
+ * centre's velocity v_c: dP_x = flow v_c, dL_x = flow (r_c x v_c + (2/5) R^2 omega_I) */
 void plant_propellant_rates(const sr_plant_model *md, const double *xa, const double *A,
-                             double flow, double *row)
+                            double flow, double *row)
 {
     const int oq = 6, ov = 6 + md->nq, o = ov + md->nv;
     const double *pp = md->pp;
@@ -83,7 +82,7 @@ void plant_propellant_rates(const sr_plant_model *md, const double *xa, const do
 
 /* the base's truth [m, b, I6] with m_p of propellant (spacerobot.robots.Propellant.base):
  * m = m_d + m_p, b = b_d + (m_p / m)(r - b_d), I = I_d + m_d S(b_d - b) + (2/5) m_p R^2 1 +
- * m_p S(r - b), S(d) = |d|^2 1 - d d^T (kernels._base_now) */
+ * m_p S(r - b), S(d) = |d|^2 1 - d d^T */
 void plant_base_now(const sr_plant_model *md, double m_p, double *out)
 {
     const double *dry = md->dry, *pp = md->pp;

@@ -1,5 +1,11 @@
 /* The plant's integration (plant.h): classic RK4 at the internal step h with the controls held
- * over each step. */
+ * over each step.
+ *
+ * One step path: sr_plant_advance -> step() per internal step: the rigid-body terms at the
+ * step's start feed the controllers (zero-order hold; their inverse dynamics give the first
+ * stage's accelerations), the articulated-body algorithm those of stages 2-4, stage() the RK4
+ * bookkeeping. Everything runs on a working copy of the state that is committed only when
+ * every step succeeded and the state reached is finite. */
 #include <math.h>
 #include <string.h>
 
@@ -11,7 +17,7 @@
 #define MAX_STEPS 1e9
 
 /* the normalised configuration (unit quaternion / (cos, sin) pair) and the velocity of the
- * state x into d->qn, d->vs (kernels.load) */
+ * state x into d->qn, d->vs */
 void plant_load(const sr_plant_model *md, const double *x, sr_plant_data *d)
 {
     const int nq = md->nq, nv = md->nv;
@@ -32,7 +38,7 @@ void plant_load(const sr_plant_model *md, const double *x, sr_plant_data *d)
     }
 }
 
-/* RK4 stage i (0..3) of a step of dt from x (kernels.stage). xa: the stage state where a
+/* RK4 stage i (0..3) of a step of dt from x. xa: the stage state where a
  * (= dv/dt) was evaluated (x itself for stage 0, else d->xs). Writes d->K[i]; for i < 3 the
  * next stage state d->xs with its normalised configuration d->qn, d->vs and the held thrust in
  * its base coordinates d->gen[0..nb) (the joint torques are held); for i = 3 the new state
@@ -207,7 +213,7 @@ int plant_control_here(const sr_plant_model *md, sr_plant_data *d, const double 
 }
 
 /* one RK4 step of dt from d->xa (configuration in d->qn, d->vs) at t into d->xn, the controls
- * of its start held over it (kernels.advance's loop body). The joint placements' sines and
+ * of its start held over it. The joint placements' sines and
  * cosines: sr_sincos at the start of an anchor step, stepped from those at every other
  * stage (joint_sincos) */
 static int step(const sr_plant_model *md, sr_plant_data *d, double t, double dt, int anchor)
@@ -271,7 +277,7 @@ SR_API int sr_plant_advance(const sr_plant_model *model, sr_plant_data *data, do
         for (j = 0; j < nx; j++)                    /* stage() left xn's configuration in qn */
             d->xa[j] = d->xn[j];
         t += h;
-        /* the next step's sines from this step's, rotated by h (kernels.advance) */
+        /* the next step's sines from this step's, rotated by h */
         if (excited && d->trig_t == t_prev && h == md->h
             && (k + 1) % SR_PLANT_TRIG_ANCHOR != 0) {
             plant_rotate_trig(md, d);

@@ -30,10 +30,10 @@ extern "C" {
  *  "An improved algorithm for hypot(a, b)", arXiv:1904.09481, 2019), scaled by 2^+-600 for
  *  huge or tiny arguments. This is the arrangement (thresholds included) of glibc's hypot
  *  since 2.35 on machines without FMA: on Linux it gives glibc's bits (measured: 3e6 random
- *  pairs over the whole range, no difference), so the core's eigen solver reproduces the
- *  Python/Numba one. Below 1 ulp (correctly rounded for 99.4 % of arguments). C99 special
- *  values: +inf if either is infinite (even with a NaN), else NaN if either is NaN;
- *  hypot(x, +-0) = |x|. */
+ *  pairs over the whole range, no difference), so the core's eigen solver gives the bits of
+ *  the same algorithm on glibc's hypot. Below 1 ulp (correctly rounded for 99.4 % of
+ *  arguments). C99 special values: +inf if either is infinite (even with a NaN), else NaN if
+ *  either is NaN; hypot(x, +-0) = |x|. */
 SR_API double sr_hypot(double x, double y);
 
 /* sr_hypot's kernel: sqrt(ax^2 + ay^2) for ax >= ay > 0 whose squares neither overflow nor

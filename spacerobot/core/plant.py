@@ -1,8 +1,7 @@
 """The native plant (``native/src/plant.h``) bound with ctypes.
 
-:class:`NativePlant` is the library's plant (:class:`spacerobot.plant.Plant`; it replaced
-the former Python/Numba plant, whose API it keeps): the constructor, ``t``, ``m_p``,
-``q``/``v``/``J``/``H``,
+:class:`NativePlant` is the library's plant (:class:`spacerobot.plant.Plant`): the
+constructor, ``t``, ``m_p``, ``q``/``v``/``J``/``H``,
 :meth:`~NativePlant.advance`, :meth:`~NativePlant.set_excitation`,
 :meth:`~NativePlant.excitation_level`, :meth:`~NativePlant.references`,
 :meth:`~NativePlant.outputs`, :meth:`~NativePlant.output_vector`,
@@ -13,6 +12,11 @@ the former Python/Numba plant, whose API it keeps): the constructor, ``t``, ``m_
 One instance is one constant ``sr_plant_model`` and one ``sr_plant_data`` block (plain structs
 without pointers, held in ctypes buffers): a checkpoint is a copy of the data block. A failed
 step leaves the plant as it was before the call (the C step is transactional).
+
+The layouts are the C core's tables, read from the library: the parameter structs' fields
+(:func:`fields`: names, FMI names, units, offsets, ranges; the binding writes each value at its
+field's offset), the outputs (:func:`output_names`) and the ranges of every parameter and
+input of the plant FMU (:func:`parameter_ranges`).
 
 Examples
 --------
@@ -352,7 +356,7 @@ class NativePlant:
             raise ValueError(err.value.decode("ascii", "replace"))
 
     def get_state(self) -> dict:
-        """A deep copy of everything that determines the future (as Plant.get_state)."""
+        """A deep copy of everything that determines the future."""
         t, x, ramp = self._state()
         nq, om = self._nq, self._om
         return {"t": t, "q": x[6:6 + nq].copy(), "v": x[6 + nq:om].copy(), "J": x[0:3].copy(),
@@ -394,7 +398,7 @@ class NativePlant:
 
     # -- excitation --------------------------------------------------------------------------
     def set_excitation(self, level: float) -> None:
-        """Ask for the excitation level ``level`` in [0, 1] (Plant.set_excitation);
+        """Ask for the excitation level ``level`` in [0, 1];
         ``ValueError`` (plant unchanged) outside [0, 1] or NaN."""
         level = float(level)
         if self._lib.sr_plant_set_excitation(self._model, self._data, level) != STATUS_OK:
@@ -424,7 +428,8 @@ class NativePlant:
         return float(s[0]), float(s[1]), float(s[2])
 
     def references(self) -> dict:
-        """The excitation references now (as Plant.references)."""
+        """The excitation references now: ``{"att", "att_d", "att_dd", "q", "q_d", "q_dd"}``
+        (attitude axes, then the joint offsets from the home posture, and their derivatives)."""
         r = 1 if self.planar else 3
         vals = np.empty((r + self.n, 3))
         self._lib.sr_plant_references(self._model, self._data, dptr(vals))
@@ -452,7 +457,8 @@ class NativePlant:
         return self._y.copy()
 
     def outputs(self) -> dict:
-        """What the sensors measure now, plus truth momentum (keys of Plant.outputs)."""
+        """Every output now, by key (:func:`output_names`): what the sensors measure, the truth
+        momentum, the excitation and the propellant."""
         y = self.output_vector()
         return {key: y[a:b].reshape(shape) for key, a, b, shape in self._layout}
 
