@@ -154,16 +154,7 @@ def test_hypot_within_one_ulp_wide_range_and_special_values(lib):
 def dec_sincos(x: float):
     """sin x and cos x to ~70 digits (decimal: pi by Machin's formula, Taylor series)."""
     getcontext().prec = 90
-
-    def atan_inv(n):
-        t = s = Decimal(1) / n
-        k, x2 = 1, t * t
-        while abs(t) > Decimal(10) ** -88:
-            t *= -x2
-            k += 2
-            s += t / k
-        return s
-    pi = 4 * (4 * atan_inv(5) - atan_inv(239))
+    pi = 4 * (4 * dec_atan_inv(5, 88) - dec_atan_inv(239, 88))
     xd = Decimal(x)
     k = (xd / (pi / 2)).to_integral_value()
     r = xd - k * pi / 2
@@ -251,15 +242,16 @@ def dec_atan(x: float) -> Decimal:
         s += t / k
     s *= 8
     if big:
-        half_pi = 2 * (4 * dec_atan_inv(5) - dec_atan_inv(239))
+        half_pi = 2 * (4 * dec_atan_inv(5, 78) - dec_atan_inv(239, 78))
         s = (half_pi if x > 0 else -half_pi) - s
     return s
 
 
-def dec_atan_inv(n: int) -> Decimal:
+def dec_atan_inv(n: int, digits: int) -> Decimal:
+    """atan(1/n) by its series, to 10^-digits (at the decimal context's precision)."""
     t = s = Decimal(1) / n
     k, x2 = 1, t * t
-    while abs(t) > Decimal(10) ** -78:
+    while abs(t) > Decimal(10) ** -digits:
         t *= -x2
         k += 2
         s += t / k

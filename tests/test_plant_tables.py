@@ -162,18 +162,14 @@ def test_ranges_of_the_other_parameters_are_closed():
                 _body_plant(sc, who, inertia=bad)
     # the inputs
     p = _plant(sc)
-    lo, hi = r["ident.excite"]
-    for good in (lo, hi):
-        p.set_excitation(good)
-    for bad in (below(lo), above(hi)):
-        with pytest.raises(ValueError):
-            p.set_excitation(bad)
-    lo, hi = r["ident.excite_rate"]
-    for good in (lo, hi):
-        p.set_excitation_rate(good)
-    for bad in (below(lo), above(hi)):
-        with pytest.raises(ValueError):
-            p.set_excitation_rate(bad)
+    for name, ask in (("ident.excite", p.set_excitation),
+                      ("ident.excite_rate", p.set_excitation_rate)):
+        lo, hi = r[name]
+        for good in (lo, hi):
+            ask(good)
+        for bad in (below(lo), above(hi)):
+            with pytest.raises(ValueError):
+                ask(bad)
 
 
 def test_output_vector_starts_with_a_sample_and_has_the_documented_length():
