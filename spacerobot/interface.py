@@ -149,7 +149,7 @@ def _table_vars(table: str, record) -> List[Var]:
     """The parameters of one of the C plant's parameter structs (``plant.h``'s tables, read
     from the library: FMI names, units, descriptions, order), started at the values of the
     Python record (its attributes named as the fields); key: the FMI name (the glue's)."""
-    from .core.plant import fields
+    from .core.tables import fields
     out: List[Var] = []
     for f in fields(table):
         value = getattr(record, f.name)
@@ -163,7 +163,7 @@ def _table_vars(table: str, record) -> List[Var]:
 
 def _table_doc(table: str) -> Dict[str, Tuple[str, str]]:
     """``{field: (unit, description)}`` of the C plant's scalar fields of ``table``."""
-    from .core.plant import fields
+    from .core.tables import fields
     return {f.name: (f.unit, f.description) for f in fields(table) if f.size == 1}
 
 

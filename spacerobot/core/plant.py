@@ -13,10 +13,11 @@ One instance is one constant ``sr_plant_model`` and one ``sr_plant_data`` block 
 without pointers, held in ctypes buffers): a checkpoint is a copy of the data block. A failed
 step leaves the plant as it was before the call (the C step is transactional).
 
-The layouts are the C core's tables, read from the library: the parameter structs' fields
-(:func:`fields`: names, FMI names, units, offsets, ranges; the binding writes each value at its
-field's offset), the outputs (:func:`output_names`) and the ranges of every parameter and
-input of the plant FMU (:func:`parameter_ranges`).
+The layouts are the C core's tables, read from the library (:mod:`spacerobot.core.tables`,
+re-exported here): the parameter structs' fields (:func:`fields`: names, FMI names, units,
+offsets, ranges; the binding writes each value at its field's offset), the outputs
+(:func:`output_names`) and the ranges of every parameter and input of the plant FMU
+(:func:`parameter_ranges`).
 
 Examples
 --------
@@ -31,13 +32,14 @@ import ctypes
 import math
 import struct
 from dataclasses import dataclass
-from typing import Dict, Optional, Tuple
+from typing import Optional
 
 import numpy as np
 
 from ..robots import Controller, Excitation, Propellant, RigidBody, Robot
 from . import dptr, lib as _default_lib
 from .robot_record import SrBody, SrRobot, c_robot
+from .tables import Field, _bind_tables, fields, output_names, parameter_ranges  # noqa: F401
 
 __all__ = ["NativePlant", "Controls", "Field", "fields", "output_names", "parameter_ranges",
            "STATUS_OK"]
@@ -49,74 +51,6 @@ EXCITE_STATE = 7
 STATUS_OK = 0
 EARG = 1
 ENONFINITE = 2
-#: the parameter structs of plant.h (enum sr_plant_table) and the Python records they hold
-TABLES = {"controller": (0, Controller), "excitation": (1, Excitation),
-          "propellant": (2, Propellant)}
-
-
-@dataclass(frozen=True)
-class Field:
-    """A field of a parameter struct of the C plant (``plant.h``'s tables): its C name (the
-    Python record's attribute), FMI name (a 3-vector's variables are ``<fmi>[1..3]``), unit,
-    description, number of doubles, byte offset in the struct, and the range the core
-    enforces."""
-
-    name: str
-    fmi: str
-    unit: str
-    description: str
-    size: int
-    offset: int
-    min: float
-    max: float
-
-
-def fields(table: str, lib: Optional[ctypes.CDLL] = None) -> Tuple[Field, ...]:
-    """The fields of the C struct ``table`` (``"controller"``, ``"excitation"``,
-    ``"propellant"``), in the order of the FMU's variables, read from the library."""
-    L = _bind(lib or _default_lib())
-    cache = L._sr_plant_fields
-    if table not in cache:
-        t = TABLES[table][0]
-        lo, hi = ctypes.c_double(), ctypes.c_double()
-        out = []
-        for i in range(L.sr_plant_field_count(t)):
-            L.sr_plant_field_range(t, i, ctypes.byref(lo), ctypes.byref(hi))
-            out.append(Field(L.sr_plant_field_name(t, i).decode(),
-                             L.sr_plant_field_fmi_name(t, i).decode(),
-                             L.sr_plant_field_unit(t, i).decode(),
-                             L.sr_plant_field_description(t, i).decode(),
-                             L.sr_plant_field_size(t, i), L.sr_plant_field_offset(t, i),
-                             lo.value, hi.value))
-        cache[table] = tuple(out)
-    return cache[table]
-
-
-def output_names(lib: Optional[ctypes.CDLL] = None) -> Tuple[str, ...]:
-    """The keys of the plant's outputs in the order of its output vector (``plant.h``)."""
-    L = _bind(lib or _default_lib())
-    return tuple(L.sr_plant_output_name(k).decode() for k in range(L.sr_plant_output_count()))
-
-
-def parameter_ranges(lib: Optional[ctypes.CDLL] = None) -> Dict[str, Tuple[float, float]]:
-    """``{FMI name: (min, max)}``: the closed range the C core enforces for every Real
-    parameter and input of the plant FMU (``sr_plant_param_range``), in the FMU's order. An
-    inertia element's range is the bound the principal moments' range implies; the inputs'
-    values outside theirs are clipped."""
-    L = _bind(lib or _default_lib())
-    out = {}
-    name = ctypes.create_string_buffer(64)
-    lo, hi = ctypes.c_double(), ctypes.c_double()
-    i = 0
-    while L.sr_plant_param_name(i, name, len(name)) == 0:
-        key = name.value.decode()
-        if L.sr_plant_param_range(key.encode(), ctypes.byref(lo), ctypes.byref(hi)) != 0:
-            raise RuntimeError(f"sr_plant_param_range does not know {key!r}")
-        out[key] = (lo.value, hi.value)
-        i += 1
-    return out
-
-
 def _pack(L: ctypes.CDLL, table: str, record) -> ctypes.Array:
     """The C struct ``table`` with the values of the Python record (its attributes named as the
     fields), written at the library's offsets."""
@@ -155,19 +89,7 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
         "sr_plant_model_init": ([vp, ctypes.POINTER(SrRobot), ctypes.POINTER(SrBody),
                                  ctypes.POINTER(SrBody), vp, vp, vp, dp, dp, dp, cd, cp, sz], ci),
         "sr_plant_dims": ([vp, ip, ip, ip, ip, ip], ci),
-        "sr_plant_output_count": ([], ci),
         "sr_plant_output_offsets": ([vp, ip], ci),
-        "sr_plant_output_name": ([ci], cp),
-        "sr_plant_field_count": ([ci], ci),
-        "sr_plant_field_name": ([ci, ci], cp),
-        "sr_plant_field_fmi_name": ([ci, ci], cp),
-        "sr_plant_field_unit": ([ci, ci], cp),
-        "sr_plant_field_description": ([ci, ci], cp),
-        "sr_plant_field_size": ([ci, ci], ci),
-        "sr_plant_field_offset": ([ci, ci], ctypes.c_long),
-        "sr_plant_field_range": ([ci, ci, dp, dp], ci),
-        "sr_plant_param_name": ([ci, cp, sz], ci),
-        "sr_plant_param_range": ([cp, dp, dp], ci),
         "sr_plant_status_message": ([ci], cp),
         "sr_plant_start": ([vp, vp], ci),
         "sr_plant_set_excitation": ([vp, vp, cd], ci),
@@ -189,9 +111,8 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
                  "sr_plant_excitation_size", "sr_plant_propellant_size"):
         getattr(L, name).argtypes = []
         getattr(L, name).restype = sz
-    L._sr_plant_fields = {}
     L._sr_plant_bound = True
-    return L
+    return _bind_tables(L)
 
 
 def __getattr__(name: str):
