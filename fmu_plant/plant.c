@@ -1,20 +1,21 @@
 /*
- * plant.c -- the plant FMU's glue: maps the FMI variables (resources/spacerobot_variables.txt,
- * generated from spacerobot/interface.py) to the plant core (native/src/plant.h) and back.
- * The robot comes from resources/robot.txt, its home posture from resources/scenario.txt; the
- * truth (base, target), controller, excitation and propellant are parameters.
+ * The plant FMU's glue: maps the FMI variables (resources/spacerobot_variables.txt, generated
+ * from spacerobot/interface.py) to the plant core (native/src/plant.h) and back. The robot
+ * comes from resources/robot.txt, its home posture from resources/scenario.txt; the truth
+ * (base, target), controller, excitation and propellant are parameters, set field by field
+ * from the core's tables (a field's key is its FMI name, ".<i>" for an element of a vector).
  *
  * Outputs change only in doStep (no direct feedthrough): the inputs ident.excite (level) and
  * ident.excite_rate (rate) are what is asked for from the next step on.
  */
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "arm.h"
 #include "model.h"
 #include "plant.h"
+#include "sr_text.h"
 
 const char *const SR_MODEL_IDENTIFIER = "SpaceRobotPlant";
 const int SR_MODEL_FEEDTHROUGH = 0;
@@ -23,10 +24,6 @@ const double SR_MODEL_MAX_STEP = 100.0;
 
 #define ROBOT_FILE "robot.txt"
 #define SCENARIO_FILE "scenario.txt"
-
-static const char *const CONTROLLER[SR_PLANT_NPAR] = {
-    "K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn", "K_Dn", "qdd_max"};
-static const char *const EXCITATION[6] = {"att_max", "q_max", "qd_max", "qdd_max", "period", "ramp"};
 
 typedef struct {
     sr_robot robot;
@@ -41,8 +38,8 @@ typedef struct {
 
 /* the table key of element e of output k: "A.i.j" for the matrix, "<name>.e" else */
 static void output_key(char *out, size_t size, int k, int e) {
-    if (k == SR_PLANT_Y_A) snprintf(out, size, "A.%d.%d", e / 3, e % 3);
-    else snprintf(out, size, "%s.%d", sr_plant_output_name(k), e);
+    if (k == SR_PLANT_Y_A_B) sr_text_format(out, size, "A.%d.%d", e / 3, e % 3);
+    else sr_text_format(out, size, "%s.%d", sr_plant_output_name(k), e);
 }
 
 /* map every output variable to its place in the core's output vector (all must be found) */
@@ -76,14 +73,14 @@ void *sr_model_new(sr_instance *inst, const char *resource_dir) {
     plant_glue *g = calloc(1, sizeof *g);
     int bad = 0;
     if (!g) return NULL;
-    snprintf(path, sizeof path, "%s%s", resource_dir, ROBOT_FILE);
+    sr_text_format(path, sizeof path, "%s%s", resource_dir, ROBOT_FILE);
     if (sr_robot_read(path, &g->robot, err, sizeof err) != 0) {
         sr_log(inst, SR_LOG_ERROR, "cannot read the robot record: %s", err);
         free(g);
         return NULL;
     }
     for (int i = 0; i < g->robot.n && !bad; ++i) {
-        snprintf(key, sizeof key, "q_home.%d", i);
+        sr_text_format(key, sizeof key, "q_home.%d", i);
         bad = sr_resource_double(inst, resource_dir, SCENARIO_FILE, key, &g->q_home[i]);
     }
     if (bad || (g->vr_excite = sr_key_vr(inst, "excite", 1)) < 0
@@ -123,15 +120,30 @@ static double real_of(sr_instance *inst, const char *key) { return sr_key_real(i
 static void body_of(sr_instance *inst, const char *prefix, sr_body *b) {
     static const int AT[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
     char key[SR_VAR_KEY_MAX];
-    snprintf(key, sizeof key, "%s.m", prefix);
+    sr_text_format(key, sizeof key, "%s.m", prefix);
     b->m = real_of(inst, key);
     for (int i = 0; i < 3; ++i) {
-        snprintf(key, sizeof key, "%s.b.%d", prefix, i);
+        sr_text_format(key, sizeof key, "%s.b.%d", prefix, i);
         b->com[i] = real_of(inst, key);
     }
     for (int k = 0; k < 6; ++k) {
-        snprintf(key, sizeof key, "%s.I.%d", prefix, k);
+        sr_text_format(key, sizeof key, "%s.I.%d", prefix, k);
         b->I[3 * AT[k][0] + AT[k][1]] = b->I[3 * AT[k][1] + AT[k][0]] = real_of(inst, key);
+    }
+}
+
+/* the fields of parameter struct `table` (plant.h's tables) from their variables into s */
+static void fields_of(sr_instance *inst, int table, void *s) {
+    char key[SR_VAR_KEY_MAX];
+    for (int i = 0; i < sr_plant_field_count(table); ++i) {
+        const char *fmi = sr_plant_field_fmi_name(table, i);
+        const int size = sr_plant_field_size(table, i);
+        double *at = (double *)((char *)s + sr_plant_field_offset(table, i));
+        for (int e = 0; e < size; ++e) {
+            if (size == 1) sr_text_set(key, sizeof key, fmi);
+            else sr_text_format(key, sizeof key, "%s.%d", fmi, e);
+            at[e] = real_of(inst, key);
+        }
     }
 }
 
@@ -142,37 +154,23 @@ static int build_core(sr_instance *inst, plant_glue *g, sr_plant_model **core,
     sr_plant_controller ctrl;
     sr_plant_excitation ex;
     sr_plant_propellant prop;
-    double par[SR_PLANT_NPAR], exv[6], v0[3], w0[3];
+    double v0[3], w0[3];
     char key[SR_VAR_KEY_MAX];
     body_of(inst, "base", &base);
     body_of(inst, "target", &target);
-    for (int i = 0; i < SR_PLANT_NPAR; ++i) {
-        snprintf(key, sizeof key, "ctrl.%s", CONTROLLER[i]);
-        par[i] = real_of(inst, key);
-    }
-    memcpy(&ctrl, par, sizeof ctrl);       /* the struct's fields are kernels.PARAMS' order */
-    for (int i = 0; i < 6; ++i) {
-        snprintf(key, sizeof key, "excite_par.%s", EXCITATION[i]);
-        exv[i] = real_of(inst, key);
-    }
-    ex.att_max = exv[0]; ex.q_max = exv[1]; ex.qd_max = exv[2]; ex.qdd_max = exv[3];
-    ex.period = exv[4]; ex.ramp = exv[5];
-    prop.m0 = real_of(inst, "prop_par.m0");
-    prop.Isp = real_of(inst, "prop_par.Isp");
-    prop.R = real_of(inst, "prop_par.R");
-    prop.arm = real_of(inst, "prop_par.arm");
+    fields_of(inst, SR_PLANT_TABLE_CONTROLLER, &ctrl);
+    fields_of(inst, SR_PLANT_TABLE_EXCITATION, &ex);
+    fields_of(inst, SR_PLANT_TABLE_PROPELLANT, &prop);
     for (int i = 0; i < 3; ++i) {
-        snprintf(key, sizeof key, "prop_r.%d", i);
-        prop.r[i] = real_of(inst, key);
-        snprintf(key, sizeof key, "v0.%d", i);
+        sr_text_format(key, sizeof key, "v0.%d", i);
         v0[i] = real_of(inst, key);
-        snprintf(key, sizeof key, "omega0.%d", i);
+        sr_text_format(key, sizeof key, "omega0.%d", i);
         w0[i] = real_of(inst, key);
     }
     *core = malloc(sizeof **core);
     *data = malloc(sizeof **data);
     if (!*core || !*data) {
-        snprintf(err, size, "out of memory");
+        sr_text_set(err, size, "out of memory");
     } else if (sr_plant_model_init(*core, &g->robot, &base, &target, &ctrl, &ex, &prop, g->q_home,
                                    v0, w0, real_of(inst, "h"), err, size) == 0 &&
                sr_plant_start(*core, *data) == 0) {
@@ -231,11 +229,11 @@ void sr_model_preview(void *model, sr_instance *inst) {
 
 void sr_model_outputs(void *model, sr_instance *inst) { (void)model; (void)inst; }
 
-/* an excitation input (value reference vr, FMI name) within [lo, hi] (clipped with a
+/* an excitation input (value reference vr, FMI name) within the core's range (clipped with a
  * warning), or NaN */
-static double excite_input(sr_instance *inst, int vr, const char *name, double lo, double hi,
-                           double t) {
-    double u = sr_reals(inst)[vr];
+static double excite_input(sr_instance *inst, int vr, const char *name, double t) {
+    double u = sr_reals(inst)[vr], lo = 0.0, hi = 0.0;
+    sr_plant_param_range(name, &lo, &hi);
     if (isnan(u)) return u;
     if (!(u >= lo && u <= hi)) {
         double clipped = u < lo ? lo : hi;
@@ -254,9 +252,8 @@ int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     if (fabs(t - t0) > 1e-9 * (fabs(t) > 1.0 ? fabs(t) : 1.0))
         sr_log(inst, SR_LOG_WARNING, "communication point %.17g s differs from the plant time "
                "%.17g s; continuing from the plant state", t, t0);
-    level = excite_input(inst, g->vr_excite, "ident.excite", 0.0, 1.0, t);
-    rate = excite_input(inst, g->vr_rate, "ident.excite_rate", SR_PLANT_RATE_MIN,
-                        SR_PLANT_RATE_MAX, t);
+    level = excite_input(inst, g->vr_excite, "ident.excite", t);
+    rate = excite_input(inst, g->vr_rate, "ident.excite_rate", t);
     if (isnan(level) || isnan(rate)) {
         sr_log(inst, SR_LOG_DISCARD, "%s is NaN at t = %.6g s: step discarded, state kept at "
                "t = %.6g s", isnan(level) ? "ident.excite" : "ident.excite_rate", t, t0);
@@ -326,9 +323,9 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     err[0] = '\0';
     if (sr_plant_set_state(core, data, s[0], s + 1, s + 1 + nx, err, sizeof err) == 0) {
         if (bind_outputs(inst, g, core) != 0)          /* logged by bind_outputs */
-            snprintf(err, sizeof err, "the state does not fit this FMU's variables");
+            sr_text_set(err, sizeof err, "the state does not fit this FMU's variables");
         else if (write_outputs(inst, g, core, data) != 0)
-            snprintf(err, sizeof err, "the state's outputs are not finite");
+            sr_text_set(err, sizeof err, "the state's outputs are not finite");
     }
     if (err[0]) {
         sr_log(inst, SR_LOG_ERROR,

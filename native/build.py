@@ -58,7 +58,10 @@ MODEL_SOURCES = {"estimator": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "b
                                "excite_design.c",
                                "estimator.c", "est_paper.c", "est_joint.c"),
                  "sensors": ("sr_math.c", "sr_text.c", "sample.c", "rng.c", "sensor_noise.c", "sensors.c"),
-                 "plant": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c", "dynamics.c", "plant.c")}
+                 "plant": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c",
+                           "dynamics.c", "dynamics_aba.c", "dynamics_crba.c", "dynamics_state.c",
+                           "plant.c", "plant_params.c", "plant_step.c", "plant_control.c",
+                           "plant_excitation.c", "plant_propellant.c")}
 
 #: flags of every compilation: C99, optimised (-O3: 9 % fewer instructions per estimator sample
 #: than -O2, the same results bit for bit: no reassociation without -ffast-math), no contraction

@@ -145,19 +145,35 @@ def body_param_vars(prefix: str, body, causality: str, what: str, key_group: str
     return out
 
 
-CONTROLLER_DOC = {
-    "F_max": ("N", "Thruster force bound per axis (eq. 41)"),
-    "K_F": ("1/s", "Linear momentum feedback gain F = K_F P (eq. 41)"),
-    "P_max": ("N.s", "Linear momentum band of the bounded law (eq. 41)"),
-    "M_max": ("N.m", "Thruster torque bound per axis (eq. 40)"),
-    "K_M": ("1/s", "Angular momentum feedback gain M = K_M L (eq. 40)"),
-    "L_max": ("N.m.s", "Angular momentum band of the bounded law (eq. 40)"),
-    "K_D": ("1/s", "Base attitude law damping gain (eq. 39)"),
-    "K_P": ("1/s2", "Base attitude law stiffness gain (eq. 39)"),
-    "K_Dn": ("1/s", "Arm null-space posture damping gain"),
-    "K_Pn": ("1/s2", "Arm null-space posture stiffness gain"),
-    "qdd_max": ("rad/s2", "Bound on commanded joint accelerations"),
-}
+def _table_vars(table: str, record) -> List[Var]:
+    """The parameters of one of the C plant's parameter structs (``plant.h``'s tables, read
+    from the library: FMI names, units, descriptions, order), started at the values of the
+    Python record (its attributes named as the fields); key: the FMI name (the glue's)."""
+    from .core.tables import fields
+    out: List[Var] = []
+    for f in fields(table):
+        value = getattr(record, f.name)
+        if f.size == 1:
+            out.append(Var(f.fmi, "parameter", "fixed", "Real", f.unit, f.description,
+                           float(value), (f.fmi,)))
+        else:
+            out += _vec(f.fmi, f.fmi, f.unit, f.description, "parameter", "fixed", value)
+    return out
+
+
+def _table_doc(table: str) -> Dict[str, Tuple[str, str]]:
+    """``{field: (unit, description)}`` of the C plant's scalar fields of ``table``."""
+    from .core.tables import fields
+    return {f.name: (f.unit, f.description) for f in fields(table) if f.size == 1}
+
+
+def __getattr__(name: str):
+    # the parameter tables' views, read from the C core when first asked for
+    tables = {"CONTROLLER_DOC": "controller", "EXCITATION_DOC": "excitation",
+              "PROPELLANT_DOC": "propellant"}
+    if name in tables:
+        return _table_doc(tables[name])
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def plant_vars(robot: Robot, sc: Scenario) -> List[Var]:
@@ -174,37 +190,17 @@ def plant_vars(robot: Robot, sc: Scenario) -> List[Var]:
     v += _vec("base.v0", "v0", "m/s", "Initial velocity of S, inertial frame", "parameter", "fixed", sc.v0)
     v += _vec("base.omega0", "omega0", "rad/s", "Initial base angular velocity, base frame",
               "parameter", "fixed", sc.omega0)
-    ctrl = sc.controller
-    for name, (unit, doc) in CONTROLLER_DOC.items():
-        v.append(Var(name, "parameter", "fixed", "Real", unit, doc, float(getattr(ctrl, name)),
-                     ("ctrl", name)))
+    v += _table_vars("controller", sc.controller)
     v.append(Var("h", "parameter", "fixed", "Real", "s", "Internal RK4 step", sc.h, ("h",)))
     v += plant_excitation_vars(sc)
     v += propellant_vars(sc)
     return v
 
 
-#: propellant parameters (``prop.<field>`` of robots.Propellant; ``prop.r[1..3]`` the tank
-#: position): unit, description
-PROPELLANT_DOC = {
-    "m0": ("kg", "Initial propellant mass (0 = no propellant model: constant base, "
-                 "unmodelled supply)"),
-    "Isp": ("s", "Specific impulse of the thrusters (mass flow = thrust / (Isp g0))"),
-    "R": ("m", "Radius of the spherical tank (the propellant is a rigid sphere of liquid, "
-               "inertia (2/5) m R^2 about its centre; 0 = point mass)"),
-    "arm": ("m", "Distance between the two thrusters of a torque couple (a torque M_i "
-                 "about an inertial axis costs the thrust abs(M_i) / arm)"),
-}
-
-
 def propellant_vars(sc: Scenario) -> List[Var]:
     """The plant's propellant parameters and outputs (issue #17): ``prop.*`` and the base's
     current truth ``truth.base.*`` (the ``base.*`` parameters are the dry base)."""
-    pr = sc.propellant
-    v = [Var(f"prop.{k}", "parameter", "fixed", "Real", unit, doc, float(getattr(pr, k)),
-             ("prop_par", k)) for k, (unit, doc) in PROPELLANT_DOC.items()]
-    v += _vec("prop.r", "prop_r", "m", "Centre of the propellant tank, base frame B (origin S)",
-              "parameter", "fixed", pr.r)
+    v = _table_vars("propellant", sc.propellant)
     v.append(Var("prop.m", "output", "continuous", "Real", "kg", "Propellant mass left (truth)",
                  None, ("m_p", 0)))
     v += _vec("prop.P", "P_x", "N.s", "Linear momentum carried away by the expelled propellant "
@@ -218,17 +214,6 @@ def propellant_vars(sc: Scenario) -> List[Var]:
     v += [Var(x.name, "output", "continuous", "Real", x.unit, x.description, None,
               ("base_now", k)) for k, x in enumerate(now)]
     return v
-
-
-#: plant excitation parameters (``excite.<field>`` of robots.Excitation): unit, description
-EXCITATION_DOC = {
-    "att_max": ("rad", "Amplitude bound of the base attitude excitation reference, per axis"),
-    "q_max": ("rad", "Amplitude bound of each joint excitation reference about the home posture"),
-    "qd_max": ("rad/s", "Bound on each joint excitation reference rate"),
-    "qdd_max": ("rad/s2", "Bound on each joint excitation reference acceleration"),
-    "period": ("s", "Period of the slowest excitation component (components in [1, 3] x 2 pi/period)"),
-    "ramp": ("s", "Duration of a change of the excitation level (quintic ramp, no jump)"),
-}
 
 
 def plant_excitation_vars(sc: Scenario) -> List[Var]:
@@ -256,9 +241,7 @@ def plant_excitation_vars(sc: Scenario) -> List[Var]:
               "vector about the initial attitude; within excite.att_max per axis)", "output")
     v += _joint("excite.qd_ref", "qd_ref", "rad/s", "Joint rate excitation reference (within "
                 "excite.qd_max)", sc.robot.n_joints, "output")
-    for name, (unit, doc) in EXCITATION_DOC.items():
-        v.append(Var(f"excite.{name}", "parameter", "fixed", "Real", unit, doc,
-                     float(getattr(ex, name)), ("excite_par", name)))
+    v += _table_vars("excitation", ex)
     return v
 
 

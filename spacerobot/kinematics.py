@@ -1,4 +1,5 @@
-"""The arm's constant geometry, as the compiled kinematics read it, and a cross product.
+"""The arm's constant geometry as arrays: what the robot record carries and the compiled
+kinematics read.
 
 The estimator's equations of a sample (native/src/equations.c, through the robot record;
 the tests' NumPy oracle tests/oracles/estimator/kernels.py) evaluate the arm's
@@ -11,13 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from .robots import Robot
-
-
-def cross3(a, b) -> np.ndarray:
-    """``a x b`` for two 3-vectors (explicit formula)."""
-    a0, a1, a2 = a[0], a[1], a[2]
-    b0, b1, b2 = b[0], b[1], b[2]
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 class ArmGeometry:

@@ -1,6 +1,7 @@
 """Robot and scenario definitions: the one description used by plant, estimator, SSP and tests.
 
-Pure data and numpy only (no Pinocchio, no FMI), so that both FMUs can bundle it. The robots
+Data and numpy (no Pinocchio, no FMI); the check of a body is the native core's
+(:func:`check_body`). The robots
 themselves are URDF files (``data/robots/``) that :mod:`spacerobot.urdf` reads into the
 :class:`Robot` record, on first use of :data:`ROBOTS` (the FMUs get the record in their
 configuration and never read a URDF).
@@ -45,26 +46,21 @@ def inertia_matrix(I6: Sequence[float]) -> np.ndarray:
 
 
 def check_body(name: str, mass: float, com: Sequence[float], I6: Sequence[float]) -> None:
-    """Raise ``ValueError`` with a readable message if the body is not physical.
+    """Raise ``ValueError`` with a readable message if the body is not one the project accepts.
 
-    Checks: finite numbers, ``mass > 0``, inertia positive definite and principal moments
-    satisfying the triangle inequality ``I1 <= I2 + I3`` (a real mass distribution).
+    The rule of the native core (``native/src/body.h``, ``sr_body_check``): finite numbers,
+    ``mass > 0``, inertia positive definite with principal moments satisfying the triangle
+    inequality ``I1 <= I2 + I3`` (a real mass distribution), then the ranges of a real body
+    (mass, centre of mass and principal moments; ``body.h``).
     """
-    vals = [mass, *com, *I6]
-    if not all(math.isfinite(float(x)) for x in vals):
-        raise ValueError(f"{name}: parameters must be finite numbers, got mass={mass}, "
-                         f"b={list(com)}, inertia={list(I6)}")
-    if mass <= 0.0:
-        raise ValueError(f"{name}.m must be > 0 kg, got {mass}")
-    lam = np.linalg.eigvalsh(inertia_matrix(I6))
-    if lam[0] <= 0.0:
-        raise ValueError(f"{name} inertia must be positive definite; principal moments "
-                         f"{np.array2string(lam, precision=6)} kg.m2")
-    tol = 1e-12 * lam[-1]
-    if lam[2] > lam[0] + lam[1] + tol:
-        raise ValueError(f"{name} inertia violates the triangle inequality: principal moments "
-                         f"{np.array2string(lam, precision=6)} kg.m2 (largest must not exceed "
-                         f"the sum of the other two)")
+    from .core.body import body_error
+    com, I6 = list(com), list(I6)
+    if len(com) != 3 or len(I6) != 6:
+        raise ValueError(f"{name}: b needs 3 and the inertia 6 numbers, got b={com}, "
+                         f"inertia={I6}")
+    err = body_error(name, [mass, *com, *I6])
+    if err is not None:
+        raise ValueError(err)
 
 
 @dataclass(frozen=True)
@@ -363,7 +359,9 @@ class Controller:
 
     ``K_D``, ``K_P``: eq. 39 gains (diagonal). ``K_Dn``, ``K_Pn``: null-space posture gains that
     pull the arm back towards ``q0`` without disturbing the base attitude, and ``qdd_max``: bound
-    on commanded joint accelerations [rad/s2] (our choices).
+    on commanded joint accelerations [rad/s2] (our choices). The fields, their units and the
+    ranges the plant accepts are the C plant's (``plant.h``, ``SR_PLANT_CONTROLLER_FIELDS``;
+    :func:`spacerobot.core.plant.fields`), in its order.
     """
 
     F_max: float = 10.0
@@ -377,12 +375,6 @@ class Controller:
     K_Dn: float = 1.0
     K_Pn: float = 0.25
     qdd_max: float = 1.0
-
-    def check(self) -> None:
-        """Raise ``ValueError`` naming the first bound that is negative or not a number."""
-        for k in ("F_max", "P_max", "M_max", "L_max", "qdd_max"):
-            if not getattr(self, k) >= 0.0:
-                raise ValueError(f"{k} must be >= 0, got {getattr(self, k)}")
 
 
 #: golden-ratio conjugate and sqrt(2): irrational steps that spread the excitation frequencies
@@ -419,6 +411,9 @@ class Excitation:
     qdd_max : float   bound on each joint reference acceleration [rad/s2]
     period : float    period of the slowest component, 2 pi / w_f [s]
     ramp : float      duration of a change of the excitation level [s]
+
+    The fields, their units and the ranges the plant accepts are the C plant's (``plant.h``,
+    ``SR_PLANT_EXCITATION_FIELDS``; :func:`spacerobot.core.plant.fields`), in its order.
     """
 
     att_max: float = 0.3
@@ -427,17 +422,6 @@ class Excitation:
     qdd_max: float = 0.1
     period: float = 30.0
     ramp: float = 10.0
-
-    def check(self) -> None:
-        """Raise ``ValueError`` naming the first parameter out of range."""
-        for k in ("att_max", "q_max", "qd_max", "qdd_max"):
-            val = getattr(self, k)
-            if not (math.isfinite(val) and val >= 0.0):
-                raise ValueError(f"excite.{k} must be a finite number >= 0, got {val}")
-        for k in ("period", "ramp"):
-            val = getattr(self, k)
-            if not (math.isfinite(val) and val > 0.0):
-                raise ValueError(f"excite.{k} must be a finite number > 0 s, got {val}")
 
     def ramp_bounds(self) -> Tuple[float, float]:
         """``(max |s'|, max |s''|)`` of the ramp of a unit change [1/s, 1/s2]: the quintic
@@ -501,33 +485,23 @@ class Propellant:
     ----------
     m0 : float     initial propellant mass [kg]
     Isp : float    specific impulse [s]
-    r : (3,)       tank centre, base frame [m]
     R : float      tank radius [m]
     arm : float    distance between the two thrusters of a torque couple [m]
+    r : (3,)       tank centre, base frame [m]
+
+    The fields, their units and the ranges the plant accepts are the C plant's (``plant.h``,
+    ``SR_PLANT_PROPELLANT_FIELDS``; :func:`spacerobot.core.plant.fields`), in its order.
     """
 
     m0: float = 0.0
     Isp: float = 220.0
-    r: Vec3 = (0.0, 0.0, 0.0)
     R: float = 0.0
     arm: float = 1.0
+    r: Vec3 = (0.0, 0.0, 0.0)
 
     @property
     def active(self) -> bool:
         return self.m0 > 0.0
-
-    def check(self) -> None:
-        """Raise ``ValueError`` naming the first parameter out of range."""
-        if not (math.isfinite(self.m0) and self.m0 >= 0.0):
-            raise ValueError(f"prop.m0 must be a finite number >= 0 kg, got {self.m0}")
-        for k in ("Isp", "arm"):
-            val = getattr(self, k)
-            if not (math.isfinite(val) and val > 0.0):
-                raise ValueError(f"prop.{k} must be a finite number > 0, got {val}")
-        if not (math.isfinite(self.R) and self.R >= 0.0):
-            raise ValueError(f"prop.R must be a finite number >= 0 m, got {self.R}")
-        if not all(math.isfinite(float(x)) for x in self.r) or len(self.r) != 3:
-            raise ValueError(f"prop.r must be 3 finite numbers [m], got {list(self.r)}")
 
     def base(self, dry: RigidBody, m_p: float) -> RigidBody:
         """The base with ``m_p`` [kg] of propellant: mass, CoM and CoM inertia (base frame).

@@ -1,7 +1,8 @@
 """Read a URDF into the project's robot record (:class:`spacerobot.robots.Robot`).
 
-Standard library only (``xml.etree``) and numpy, no Pinocchio, so that it works wherever the
-estimator does. What a URDF must describe:
+Standard library (``xml.etree``), numpy and the native core's body check
+(:func:`spacerobot.robots.check_body`), no Pinocchio, so that it works wherever the estimator
+does. What a URDF must describe:
 
 * a tree with one root link, the **base** (floating in space; its frame origin is the base
   sensor point S and its ``<inertial>`` the base truth);

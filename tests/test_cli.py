@@ -155,7 +155,7 @@ def test_run_reports_fmu_errors(built, workdir):
     first, *rest = p.stderr.strip().splitlines()
     assert first.startswith(f"spacerobot run: error: {built['ssp']}: component 'plant' returned "
                             "Error from fmi2ExitInitializationMode")
-    assert any("base.m must be in (0, 1e9] kg" in line for line in rest)   # the FMU's message
+    assert any("base.m must be > 0 kg" in line for line in rest)   # the FMU's message
     assert "Traceback" not in p.stderr
 
 

@@ -221,13 +221,6 @@ def test_plant_dynamics_with_the_updated_base_inertia_equal_pinocchio(robot):
     assert masses[-1] < masses[0] < 100.0                     # the tank empties along the run
 
 
-def test_bad_propellant_parameters_are_rejected():
-    for bad in (dict(m0=-1.0), dict(m0=math.nan), dict(Isp=0.0), dict(arm=0.0), dict(R=-0.1),
-                dict(r=(0.0, math.inf, 0.0))):
-        with pytest.raises(ValueError, match="prop"):
-            make("planar", Propellant(**{"m0": 10.0, **bad}))
-
-
 @pytest.mark.parametrize("robot", ["planar", "spatial"])
 def test_base_truth_output_is_the_propellant_base(robot):
     """The plant's output ``base_now`` against Propellant.base (NumPy) as the

@@ -33,7 +33,7 @@ _V = ctypes.c_void_p
 
 def _core_library(tmp_dir: Path) -> ctypes.CDLL:
     """$SPACEROBOT_CORE_LIB, else the installed library if it has the dynamics, else a fresh
-    build of arm.c, equations.c and dynamics.c (native/build.py, warnings are errors)."""
+    build of the plant's sources and equations.c (native/build.py, warnings are errors)."""
     from spacerobot import core
     if os.environ.get("SPACEROBOT_CORE_LIB"):
         return core.load_library()
@@ -46,7 +46,7 @@ def _core_library(tmp_dir: Path) -> ctypes.CDLL:
     spec = importlib.util.spec_from_file_location("_sr_native_build", ROOT / "native" / "build.py")
     build = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(build)
-    path = build.build_library(tmp_dir, ["arm.c", "equations.c", "dynamics.c", "sr_math.c"], strict=True)
+    path = build.build_library(tmp_dir, [*build.MODEL_SOURCES["plant"], "equations.c"], strict=True)
     return core.load_library(path)
 
 

@@ -14,8 +14,10 @@ that keeps the core's results the same bits on every platform.
    of NumPy's, whose own log10 is 1.5 ulp off, and 0.75 ulp of the exact value from Python's
    decimal module); the integer powers and powers of ten against exact rational arithmetic
    (fractions.Fraction): correctly rounded 10^n for every n, within 0.6 ulp for x^n; hypot
-   (glibc's algorithm: NumPy's bits) within 1 ulp of the decimal square root. Special values as C99 (0, -0,
-   inf, nan, subnormals; sine and cosine NaN beyond 1e15, as documented).
+   (glibc's algorithm: NumPy's bits) within 1 ulp of the decimal square root; the arc tangent
+   within 1 ulp of NumPy's and of a 60-digit decimal series where they differ, atan2 within
+   2 ulp of NumPy's. Special values as C99 (0, -0, inf, nan, subnormals; sine and cosine NaN
+   beyond 1e15, atan2(0, 0) = 0 and atan2(inf, inf) NaN, as documented).
 3. The same bits as before for the generator: sr_portable_log / sr_portable_sincos (rng.h)
    are sr_ln / sr_sincos.
 
@@ -94,6 +96,7 @@ def lib(tmp_path_factory):
     for name, res, args in [("sr_hypot", D, [D, D]), ("sr_sin", D, [D]), ("sr_cos", D, [D]),
                             ("sr_ln", D, [D]), ("sr_log10", D, [D]), ("sr_powi", D, [D, I]),
                             ("sr_pow10", D, [I]), ("sr_portable_log", D, [D]),
+                            ("sr_atan", D, [D]), ("sr_atan2", D, [D, D]),
                             ("sr_sincos", None, [D, ctypes.POINTER(D), ctypes.POINTER(D)]),
                             ("sr_portable_sincos", None, [D, ctypes.POINTER(D), ctypes.POINTER(D)])]:
         f = getattr(lib, name)
@@ -151,16 +154,7 @@ def test_hypot_within_one_ulp_wide_range_and_special_values(lib):
 def dec_sincos(x: float):
     """sin x and cos x to ~70 digits (decimal: pi by Machin's formula, Taylor series)."""
     getcontext().prec = 90
-
-    def atan_inv(n):
-        t = s = Decimal(1) / n
-        k, x2 = 1, t * t
-        while abs(t) > Decimal(10) ** -88:
-            t *= -x2
-            k += 2
-            s += t / k
-        return s
-    pi = 4 * (4 * atan_inv(5) - atan_inv(239))
+    pi = 4 * (4 * dec_atan_inv(5, 88) - dec_atan_inv(239, 88))
     xd = Decimal(x)
     k = (xd / (pi / 2)).to_integral_value()
     r = xd - k * pi / 2
@@ -228,6 +222,69 @@ def test_logarithms_within_one_ulp_and_special_values(lib):
         assert f(1.0) == 0.0 and f(0.0) == -np.inf and f(-0.0) == -np.inf and f(np.inf) == np.inf
         assert np.isnan(f(-1.0)) and np.isnan(f(np.nan)) and np.isnan(f(-np.inf))
         assert np.isnan(f(-5e-324))
+
+
+def dec_atan(x: float) -> Decimal:
+    """atan x to ~60 digits (decimal): the argument halved three times by
+    atan x = 2 atan(x / (1 + sqrt(1 + x^2))), then the Taylor series; 1/x for |x| > 1."""
+    getcontext().prec = 80
+    xd = Decimal(x)
+    big = abs(xd) > 1
+    if big:
+        xd = 1 / xd
+    for _ in range(3):
+        xd = xd / (1 + (1 + xd * xd).sqrt())
+    t = s = xd
+    k, x2 = 1, xd * xd
+    while abs(t) > Decimal(10) ** -75:
+        t *= -x2
+        k += 2
+        s += t / k
+    s *= 8
+    if big:
+        half_pi = 2 * (4 * dec_atan_inv(5, 78) - dec_atan_inv(239, 78))
+        s = (half_pi if x > 0 else -half_pi) - s
+    return s
+
+
+def dec_atan_inv(n: int, digits: int) -> Decimal:
+    """atan(1/n) by its series, to 10^-digits (at the decimal context's precision)."""
+    t = s = Decimal(1) / n
+    k, x2 = 1, t * t
+    while abs(t) > Decimal(10) ** -digits:
+        t *= -x2
+        k += 2
+        s += t / k
+    return s
+
+
+def test_arc_tangent_within_one_ulp_and_atan2_within_two(lib):
+    x = np.concatenate([RNG.uniform(-3, 3, 30000), np.exp(RNG.uniform(-40, 60, 20000))
+                        * RNG.choice([-1.0, 1.0], 20000),
+                        [0.4375, 0.6875, 1.1875, 2.4375, 7.4505805969238281e-09, 2.0 ** 66,
+                         1e-300, 5e-324, np.finfo(float).max]])
+    got = each(lib.sr_atan, x)
+    err = ulps(got, np.arctan(x))
+    assert err.max() <= 1.0, (err.max(), x[err.argmax()])
+    getcontext().prec = 80                                   # where glibc and ours differ: exact
+    for i in np.flatnonzero(got != np.arctan(x))[:60]:
+        assert exact_ulps(got[i], Fraction(dec_atan(x[i]))) < 1.0, x[i]
+    y, z = RNG.normal(size=20000) * np.exp(RNG.uniform(-20, 20, 20000)), \
+        RNG.normal(size=20000) * np.exp(RNG.uniform(-20, 20, 20000))
+    err2 = ulps(each(lib.sr_atan2, y, z), np.arctan2(y, z))
+    assert err2.max() <= 2.0, (err2.max(), y[err2.argmax()], z[err2.argmax()])
+    pi = np.pi
+    assert lib.sr_atan(np.inf) == pi / 2 and lib.sr_atan(-np.inf) == -pi / 2
+    assert np.isnan(lib.sr_atan(np.nan)) and np.signbit(lib.sr_atan(-0.0))
+    assert lib.sr_atan2(1.0, 1.0) == np.arctan2(1.0, 1.0) and lib.sr_atan2(-1.0, -1.0) == -3 * pi / 4
+    for yy, xx, want in ((0.0, 1.0, 0.0), (-0.0, 1.0, -0.0), (0.0, -1.0, pi), (-0.0, -1.0, -pi),
+                         (2.0, 0.0, pi / 2), (-2.0, -0.0, -pi / 2), (0.0, 0.0, 0.0),
+                         (-0.0, -0.0, 0.0), (3.0, np.inf, 0.0), (3.0, -np.inf, pi),
+                         (np.inf, 3.0, pi / 2)):
+        got = lib.sr_atan2(yy, xx)
+        assert got == want and np.signbit(got) == np.signbit(want), (yy, xx, got)
+    assert np.isnan(lib.sr_atan2(np.nan, 1.0)) and np.isnan(lib.sr_atan2(1.0, np.nan))
+    assert np.isnan(lib.sr_atan2(np.inf, np.inf))                # documented: C99 says pi/4
 
 
 def test_powers_of_ten_correctly_rounded_for_every_exponent(lib):

@@ -1,11 +1,12 @@
-"""Physics of the plant core (issue #2): invariants, and Pinocchio cross-checked against
-independent computations.
+"""Physics of the plant core: invariants, and Pinocchio cross-checked against independent
+computations.
 
 * Thrusters off: total linear and angular momentum (about the inertial origin) conserved.
 * Thrusters on: P(t) - P(0) = J(t) and L(t) - L(0) = H(t) (impulse-momentum theorem).
 * Pinocchio's momentum and accelerations agree with a plain-numpy sum over the bodies
   (the test oracle ``tests/oracles/kinematics.py``, which does not use Pinocchio), at random
-  states built from physical quantities by this test (its own inverse of the plant's coordinate conventions).
+  states built from physical quantities by this test (its own inverse of the plant's
+  coordinate conventions).
 * Measured accelerations are the time derivatives of the measured velocities.
 * RK4: one step's error in the invariants is O(dt^5).
 * The base attitude follows eq. 39 while the thrusters damp the momentum at F_max.
@@ -407,30 +408,6 @@ def test_rk4_step_is_fifth_order_locally():
 # ------------------------------------------------------------------------------------------------
 
 
-def test_checkpoint_rollback_returns_to_the_state_bit_for_bit():
-    """A checkpoint, then another excitation level and steps, then rollback (what the plant
-    FMU does after a step that failed): the plant goes on exactly as one that never moved,
-    state, excitation ramp, outputs and the steps after it bit for bit."""
-    _, a = make_plant("spatial")
-    _, b = make_plant("spatial")
-    for p in (a, b):
-        p.set_excitation(1.0)
-        p.advance(0.3)
-    cp = a.checkpoint()
-    a.set_excitation(0.5)
-    a.advance(0.25)
-    assert not np.array_equal(a.v, b.v)
-    a.rollback(cp)
-    assert a.t == b.t and np.array_equal(a.output_vector(), b.output_vector())
-    for p in (a, b):
-        p.advance(0.2)
-    sa, sb = a.get_state(), b.get_state()
-    assert sa["t"] == sb["t"]
-    for key in ("q", "v", "J", "H", "excite_ramp", "prop"):
-        assert np.array_equal(sa[key], sb[key]), key
-    assert np.array_equal(a.output_vector(), b.output_vector())
-
-
 def test_partial_last_step():
     """advance(0.1005) = 100 RK4 steps of h + one of 0.0005 (advance(0.1) then advance(0.0005));
     advance(0.3) = exactly 300 of h (300 calls of advance(h)). To round-off (1e-11 relative):
@@ -460,27 +437,3 @@ def test_partial_last_step():
         np.testing.assert_allclose(x, y, rtol=1e-11, atol=1e-14)
 
 
-@pytest.mark.parametrize("change,words", [
-    (dict(h=0.0), "h must be in [1e-6, 1] s"),
-    (dict(h=2.0), "h must be in [1e-6, 1] s"),
-    (dict(F_max=-1.0), "F_max must be >= 0"),
-    (dict(qdd_max=math.nan), "qdd_max must be a number within +-1e9"),
-    (dict(F_max=1e10), "F_max must be a number within +-1e9"),
-    (dict(target_mass=0.0), "target.m must be in (0, 1e9] kg"),
-    (dict(target_mass=1e308), "target.m must be in (0, 1e9] kg"),
-    (dict(base_Izz=1e4), "base inertia violates the triangle inequality"),
-])
-def test_plant_core_rejects_invalid_parameters(change, words):
-    """The core itself checks its parameters (the FMU only maps the message to its status);
-    the C core's messages name the parameter and the bound (no number: it prints none)."""
-    sc = scenario("planar")
-    ctrl = dataclasses.replace(sc.controller, **{k: v for k, v in change.items()
-                                                 if k in ("F_max", "qdd_max")})
-    target = dataclasses.replace(sc.target, mass=change.get("target_mass", sc.target.mass))
-    base = sc.robot.base
-    if "base_Izz" in change:
-        base = dataclasses.replace(base, inertia=base.inertia[:2] + (change["base_Izz"],)
-                                   + base.inertia[3:])
-    with pytest.raises(ValueError) as exc:
-        Plant(sc.robot, base, target, ctrl, sc.v0, sc.omega0, change.get("h", sc.h))
-    assert words in str(exc.value)

@@ -1,8 +1,8 @@
-/* Rigid-body dynamics of the free-floating robot (port of the former spacerobot/plant/rigid_body.py):
- * forward dynamics (articulated-body algorithm), joint-space inertia (composite-rigid-body
- * algorithm), non-linear effects (recursive Newton-Euler) and the system momentum, for the
- * robot of an sr_robot record (any serial chain of 1..SR_MAX_JOINTS revolute joints on a free
- * or planar base) carrying a captured target rigidly attached at the end-effector frame E.
+/* Rigid-body dynamics of the free-floating robot: forward dynamics (articulated-body
+ * algorithm), joint-space inertia (composite-rigid-body algorithm), non-linear effects
+ * (recursive Newton-Euler) and the system momentum, for the robot of an sr_robot record (any
+ * serial chain of 1..SR_MAX_JOINTS revolute joints on a free or planar base) carrying a
+ * captured target rigidly attached at the end-effector frame E.
  *
  * Pinocchio's organisation: a constant model (sr_dyn_model, built once by sr_dyn_model_init),
  * a separate work space (sr_dyn_data, any contents; one per thread), free functions over both.
@@ -10,7 +10,7 @@
  *
  * Two views of the state.
  *
- * 1. Generalised coordinates, Pinocchio's (the plant's RK4 state, rigid_body.py's arguments):
+ * 1. Generalised coordinates, Pinocchio's (the plant's RK4 state):
  *    spatial (free-flyer root): q = [r_S (3), quaternion x y z w (4), q_arm (n)],
  *                               v = [v_l (3), omega_B (3), qd (n)],   nq = 7 + n, nv = 6 + n;
  *    planar (planar root):      q = [x, y, cos th, sin th, q_arm],
@@ -18,9 +18,9 @@
  *    v_l = A^T v_S is the velocity of the base origin S in base axes, omega_B the base's angular
  *    velocity in base axes. The base's generalised force is [A^T F; A^T M_S] (planar: its
  *    x, y and z rows), F the total thrust applied at S and M_S its moment about S, both
- *    inertial (the former spacerobot/plant/kernels.py). The acceleration ddq = dv/dt is the time
- *    derivative of these components (Pinocchio's spatial acceleration in the base frame:
- *    dv_l/dt = A^T a_S - omega_B x v_l), not the classical acceleration.
+ *    inertial. The acceleration ddq = dv/dt is the time derivative of these components
+ *    (Pinocchio's spatial acceleration in the base frame: dv_l/dt = A^T a_S - omega_B x v_l),
+ *    not the classical acceleration.
  *
  * 2. The physical state (the sensors' and the identification equations' quantities, equations.h):
  *    r_S (inertial), A (DCM base -> inertial, x_I = A x_B, row-major 3 x 3), v_S (inertial),
@@ -109,7 +109,7 @@ SR_API int sr_dyn_set_base(sr_dyn_model *model, const sr_body *base);
 SR_API size_t sr_dyn_model_size(void);
 SR_API size_t sr_dyn_data_size(void);
 
-/* -- generalised coordinates (Pinocchio's; drop-in for rigid_body.aba / rigid_body.terms) -- */
+/* -- generalised coordinates (Pinocchio's) ------------------------------------------------ */
 
 /** Forward dynamics ddq = M^-1 (tau - nle) by the articulated-body algorithm.
  *  q (nq), v (nv), tau (nv: base generalised force, then joint torques [N.m]), ddq (nv, out).

@@ -1,4 +1,4 @@
-/* Small dense linear algebra (see linalg.h): ports of report_kernels.py / kernels.py. */
+/* Small dense linear algebra of the native core (linalg.h). */
 #include "linalg.h"
 
 #include <math.h>

@@ -1,8 +1,8 @@
 /* Small dense linear algebra of the native core: the one module every other one uses.
  *
- * A port of the written-out (no LAPACK/BLAS) kernels of tests/oracles/estimator/report_kernels.py (formerly the library's)
- * and kernels.py, with the same algorithms and, where practical, the same operation order, so
- * the C estimator matches the Python one to round-off:
+ * Written out (no LAPACK/BLAS), with the algorithms and, where practical, the operation order
+ * of the tests' NumPy oracle (tests/oracles/estimator/report_kernels.py and kernels.py), so
+ * that the two agree to round-off:
  *   - sr_eigh: Householder tridiagonalisation + implicit QL (EISPACK tred2 / tql2, as JAMA);
  *   - sr_lu_solve: LU with partial (row) pivoting (report_kernels.lu_solve);
  *   - sr_cholesky / sr_cholesky_solve: the Cholesky factorisation and the two triangular

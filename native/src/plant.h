@@ -1,7 +1,6 @@
 /* The plant: the free-floating space robot after capture, integrated by classic RK4 at the
  * internal step h, with the paper's controllers held over each internal step (zero-order hold)
- * (Zhang, Yue, Yuan, IEEE Access 2020; port of the former spacerobot/plant/simulator.py Plant and
- * the former spacerobot/plant/kernels.py):
+ * (Zhang, Yue, Yuan, IEEE Access 2020):
  *
  *   - thrusters: the bounded momentum laws, eq. 41 on the linear momentum P and eq. 40 on the
  *     angular momentum about the system centre of mass L_c, per inertial axis;
@@ -18,9 +17,16 @@
  * Pinocchio's organisation: a constant model (sr_plant_model, built by sr_plant_model_init)
  * and a data block (sr_plant_data: the state and the work space). Both are plain structs of
  * fixed size without pointers: FMI get/set/serialize FMU state may memcpy the data block; a
- * checkpoint is a copy of it. Several data blocks may share one model.
+ * checkpoint is a copy of it. Several data blocks may share one model. A step's temporaries
+ * live in the data block's work space, so a step needs little stack.
  *
- * State vector x (nx = 6 + nq + nv + 7), the layout of simulator.py:
+ * The tables below are the one source of the plant's layouts: the output vector
+ * (SR_PLANT_OUTPUTS, after the sample's signals of sample.h) and the parameter structs with
+ * their FMI names, units and ranges (SR_PLANT_CONTROLLER_FIELDS, ...). The FMU glue and the
+ * Python bindings read them through the functions at the end (sr_plant_output_*,
+ * sr_plant_field_*, sr_plant_param_*).
+ *
+ * State vector x (nx = 6 + nq + nv + 7):
  *   x = [J (3), H (3), q (nq), v (nv), m_p, P_x (3), L_x (3)]
  *   J [N.s]   impulse of the thrust, inertial          (dJ/dt = F)
  *   H [N.m.s] its angular impulse about the inertial origin (dH/dt = M_S + r_S x F)
@@ -32,41 +38,6 @@
  *   P_x [N.s], L_x [N.m.s]: momentum carried away by the expelled propellant (inertial; L_x
  *             about the inertial origin): P + P_x - P(0) = J, L + L_x - L(0) = H.
  *
- * Output vector y (ny = 64 + 5 n; entry k of the list below starts at sr_plant_output_offsets
- * [k]; the order of spacerobot.plant.kernels.output_layout and Plant.output_vector):
- *   SR_PLANT_Y_R_S      r_S (3)        position of the base point S, inertial [m]
- *   SR_PLANT_Y_V_S      v_S (3)        velocity of S, inertial [m/s] (= A v_l)
- *   SR_PLANT_Y_A        A (9)          DCM base -> inertial (x_I = A x_B), row-major 3 x 3
- *   SR_PLANT_Y_OMEGA_B  omega_B (3)    base angular velocity, base frame [rad/s]
- *   SR_PLANT_Y_A_S      a_S (3)        classical acceleration of S, inertial [m/s2]
- *                                      (= A (dv_l/dt + omega_B x v_l))
- *   SR_PLANT_Y_ALPHA_B  alpha_B (3)    base angular acceleration, base frame [rad/s2]
- *   SR_PLANT_Y_Q        q (n)          joint angles [rad]
- *   SR_PLANT_Y_QD       qd (n)         joint rates [rad/s]
- *   SR_PLANT_Y_QDD      qdd (n)        joint accelerations [rad/s2]
- *   SR_PLANT_Y_F        F (3)          thrust at S, inertial [N]
- *   SR_PLANT_Y_M        M (3)          thrust moment about S, inertial [N.m]
- *   SR_PLANT_Y_J        J (3)          impulse of F since t = 0, inertial [N.s]
- *   SR_PLANT_Y_H        H (3)          angular impulse about the inertial origin [N.m.s]
- *   SR_PLANT_Y_P        P (3)          system linear momentum, inertial [N.s] (truth)
- *   SR_PLANT_Y_L        L (3)          system angular momentum about the inertial origin,
- *                                      inertial [N.m.s] (truth; L_c + c x P)
- *   SR_PLANT_Y_TAU      tau (n)        joint torques [N.m]
- *   SR_PLANT_Y_EXCITE   level (1)      excitation level in effect, in [0, 1]
- *   SR_PLANT_Y_ATT_REF  att_ref (3)    attitude reference (rotation vector) [rad]; planar:
- *                                      (0, 0, z); zero when no excitation was asked for
- *   SR_PLANT_Y_QD_REF   qd_ref (n)     rate of the joint reference [rad/s] (zero likewise)
- *   SR_PLANT_Y_M_P      m_p (1)        propellant left [kg]
- *   SR_PLANT_Y_P_X      P_x (3)        linear momentum carried away by the propellant [N.s]
- *   SR_PLANT_Y_L_X      L_x (3)        angular momentum carried away, about the inertial
- *                                      origin [N.m.s]
- *   SR_PLANT_Y_BASE_NOW base (10)      the base's truth now: m [kg], b (3) [m] (com, base
- *                                      frame), Ixx Iyy Izz Ixy Ixz Iyz [kg.m2] (about the com,
- *                                      base frame): the dry base plus the propellant left
- *   SR_PLANT_Y_EXCITE_RATE rate (1)    excitation rate in effect (frequency multiplier)
- * The accelerations, F, M and tau are those of the controls held from this instant over the
- * next internal step of h (so sum F = sum m a holds exactly at every output).
- *
  * Status codes: 0 ok; SR_PLANT_EARG (bad argument: nothing changed); SR_PLANT_ENONFINITE (the
  * step reached a non-finite state); SR_PLANT_ESINGULAR_* (a singular matrix on the way). Every
  * failing call leaves the state of the data (t, x, ramp) as it was before the call
@@ -74,12 +45,12 @@
  *
  * All angles of the excitation are computed with sr_math's sr_sincos (portable bits): afresh at
  * the first internal step of a call and every SR_PLANT_TRIG_ANCHOR steps, rotated by h at the
- * steps in between (kernels.rotate_trig: a few units in the last place from a fresh
- * evaluation; a run gives the same bits for the same sequence of calls). The sines and
- * cosines of the joint angles (the joint placements of the rigid-body algorithms) likewise:
- * sr_sincos at the first internal step of a call and every SR_PLANT_JOINT_ANCHOR steps, at
- * every other RK4 stage from those by the angle-addition formulas (within about 1 ulp of
- * sr_sincos). The only libm calls are sqrt, fabs, fmod and floor (exact).
+ * steps in between (a few units in the last place from a fresh evaluation; a run gives the same
+ * bits for the same sequence of calls). The sines and cosines of the joint angles (the joint
+ * placements of the rigid-body algorithms) likewise: sr_sincos at the first internal step of a
+ * call and every SR_PLANT_JOINT_ANCHOR steps, at every other RK4 stage from those by the
+ * angle-addition formulas (within about 1 ulp of sr_sincos). The only libm calls are sqrt,
+ * fabs, fmod and floor (exact).
  */
 #ifndef SR_PLANT_H
 #define SR_PLANT_H
@@ -88,22 +59,61 @@
 
 #include "arm.h"
 #include "dynamics.h"
+#include "sample.h"
 #include "sr_api.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
+/* -- the output vector ------------------------------------------------------------------------
+ * X(ID, key, fixed, per_joint, unit, description), as SR_SAMPLE_SIGNALS: the outputs after the
+ * sample's signals (the output vector begins with a sample, sample.h), each fixed + per_joint n
+ * values. The accelerations, F, M and tau are those of the controls held from this instant over
+ * the next internal step of h (so sum F = sum m a holds exactly at every output). */
+#define SR_PLANT_OUTPUTS(X)                                                                     \
+    X(P, "P", 3, 0, "N.s", "system linear momentum, inertial (truth)")                            \
+    X(L, "L", 3, 0, "N.m.s", "system angular momentum about the inertial origin, inertial "       \
+                             "(truth; L_c + c x P)")                                              \
+    X(TAU, "tau", 0, 1, "N.m", "joint torques")                                                   \
+    X(EXCITE, "excite_level", 1, 0, "1", "excitation level in effect, in [0, 1]")                 \
+    X(ATT_REF, "att_ref", 3, 0, "rad", "attitude reference (rotation vector); planar: (0, 0, "    \
+                                       "z); zero when no excitation was asked for")               \
+    X(QD_REF, "qd_ref", 0, 1, "rad/s", "rate of the joint reference (zero likewise)")             \
+    X(M_P, "m_p", 1, 0, "kg", "propellant left")                                                  \
+    X(P_X, "P_x", 3, 0, "N.s", "linear momentum carried away by the propellant, inertial")        \
+    X(L_X, "L_x", 3, 0, "N.m.s", "angular momentum carried away by the propellant, about the "    \
+                                 "inertial origin, inertial")                                     \
+    X(BASE_NOW, "base_now", 10, 0, "kg, m, kg.m2", "the base's truth now: m, b (3) (com, base "   \
+                  "frame), Ixx Iyy Izz Ixy Ixz Iyz (about the com, base frame): the dry base "    \
+                  "plus the propellant left")                                                     \
+    X(EXCITE_RATE, "excite_rate", 1, 0, "1", "excitation rate in effect (frequency multiplier)")
+
+/** The outputs in the order of the output vector: the sample's signals (SR_PLANT_Y_R_S ...
+ *  SR_PLANT_Y_H, in sample.h's order), then SR_PLANT_OUTPUTS. */
+enum sr_plant_output {
+#define SR_PLANT_Y_ENUM_(id, key, fixed, per_joint, unit, what) SR_PLANT_Y_##id,
+    SR_SAMPLE_SIGNALS(SR_PLANT_Y_ENUM_)
+    SR_PLANT_OUTPUTS(SR_PLANT_Y_ENUM_)
+#undef SR_PLANT_Y_ENUM_
+    SR_PLANT_Y_COUNT                    /* number of outputs */
+};
+
+/* the output vector's length for n joints: the sums over both tables */
+#define SR_PLANT_Y_FIXED_(id, key, fixed, per_joint, unit, what) + (fixed)
+#define SR_PLANT_Y_PER_JOINT_(id, key, fixed, per_joint, unit, what) + (per_joint)
+#define SR_PLANT_NY(n)                                                                          \
+    ((0 SR_SAMPLE_SIGNALS(SR_PLANT_Y_FIXED_) SR_PLANT_OUTPUTS(SR_PLANT_Y_FIXED_))               \
+     + (n) * (0 SR_SAMPLE_SIGNALS(SR_PLANT_Y_PER_JOINT_) SR_PLANT_OUTPUTS(SR_PLANT_Y_PER_JOINT_)))
+
 /** Largest configuration, velocity, state and output sizes (spatial, SR_MAX_JOINTS joints). */
 #define SR_PLANT_MAX_NQ (7 + SR_MAX_JOINTS)
 #define SR_PLANT_MAX_NV SR_DYN_MAX_NV
 #define SR_PLANT_MAX_NX (6 + SR_PLANT_MAX_NQ + SR_PLANT_MAX_NV + 7)
-#define SR_PLANT_MAX_NY (64 + 5 * SR_MAX_JOINTS)
+#define SR_PLANT_MAX_NY SR_PLANT_NY(SR_MAX_JOINTS)
 /** Excitation channels: up to 3 attitude axes, then the joints. */
 #define SR_PLANT_MAX_CHANNELS (3 + SR_MAX_JOINTS)
-/** Controller parameters (order of spacerobot.plant.kernels.PARAMS). */
-#define SR_PLANT_NPAR 11
-/** Internal steps between fresh evaluations of the excitation sines (kernels.TRIG_ANCHOR). */
+/** Internal steps between fresh evaluations of the excitation sines. */
 #define SR_PLANT_TRIG_ANCHOR 20
 /** Internal steps between fresh evaluations (sr_sincos) of the joint angles' sines and cosines
  *  (the joint placements); in between they are stepped from the last fresh ones by the
@@ -115,43 +125,104 @@ extern "C" {
 #define SR_PLANT_OK 0
 #define SR_PLANT_EARG 1                 /* bad argument (named in the message) */
 #define SR_PLANT_ENONFINITE 2           /* the state became non-finite */
-#define SR_PLANT_ESINGULAR_BASE 11      /* singular base inertia (kernels.ERRORS[1]) */
+#define SR_PLANT_ESINGULAR_BASE 11      /* singular base inertia */
 #define SR_PLANT_ESINGULAR_ARM 12       /* singular arm inertia */
 #define SR_PLANT_ESINGULAR_COUPLING 13  /* singular attitude coupling */
 #define SR_PLANT_ESINGULAR_ABA 14       /* singular articulated base inertia */
 
-/** The outputs, in the order of the output vector (see the table above). */
-enum sr_plant_output {
-    SR_PLANT_Y_R_S = 0, SR_PLANT_Y_V_S, SR_PLANT_Y_A, SR_PLANT_Y_OMEGA_B, SR_PLANT_Y_A_S,
-    SR_PLANT_Y_ALPHA_B, SR_PLANT_Y_Q, SR_PLANT_Y_QD, SR_PLANT_Y_QDD, SR_PLANT_Y_F, SR_PLANT_Y_M,
-    SR_PLANT_Y_J, SR_PLANT_Y_H, SR_PLANT_Y_P, SR_PLANT_Y_L, SR_PLANT_Y_TAU, SR_PLANT_Y_EXCITE,
-    SR_PLANT_Y_ATT_REF, SR_PLANT_Y_QD_REF, SR_PLANT_Y_M_P, SR_PLANT_Y_P_X, SR_PLANT_Y_L_X,
-    SR_PLANT_Y_BASE_NOW, SR_PLANT_Y_EXCITE_RATE,
-    SR_PLANT_Y_COUNT                    /* number of outputs (24) */
-};
+/* -- the parameters ---------------------------------------------------------------------------
+ * The ranges the core enforces (sr_plant_model_init; sr_plant_param_range reports them). */
+#define SR_PLANT_GAIN_MAX 1e9           /* |controller parameter|: beyond, products overflow
+                                           within a step */
+#define SR_PLANT_H_MIN 1e-6             /* internal step h [s] */
+#define SR_PLANT_H_MAX 1.0
+#define SR_PLANT_V0_MAX 1e6             /* |base.v0[i]| [m/s] */
+#define SR_PLANT_OMEGA0_MAX 1e3         /* |base.omega0[i]| [rad/s] */
+/* the excitation rate's range (input ident.excite_rate) and the level's (input ident.excite) */
+#define SR_PLANT_RATE_MIN 0.1
+#define SR_PLANT_RATE_MAX 10.0
+#define SR_PLANT_LEVEL_MIN 0.0
+#define SR_PLANT_LEVEL_MAX 1.0
 
-/** Controller gains and bounds (spacerobot.robots.Controller; FMU names as the fields).
- *  Eq. 41: F_i = K_F P_i within |P_i| < P_max, bounded by F_max [N]; eq. 40: M_i = K_M L_c,i
- *  within |L_c,i| < L_max, bounded by M_max [N.m]; eq. 39 gains K_D [1/s], K_P [1/s2];
- *  posture gains K_Pn [1/s2], K_Dn [1/s]; qdd_max [rad/s2]. The order of the fields is
- *  kernels.PARAMS (a double[11] view is valid). */
+/* X(field, dims, FMI name, unit, min, max, description): the fields of a parameter struct, in
+ * the order of the FMU's variables. dims is empty for a number, [3] for a 3-vector (FMI names
+ * <name>[1..3]); every field is a double (or 3). */
+
+/** Controller gains and bounds (spacerobot.robots.Controller; FMU names as the fields): eq. 41
+ *  F_i = K_F P_i within |P_i| < P_max, bounded by F_max; eq. 40 M_i = K_M L_c,i within
+ *  |L_c,i| < L_max, bounded by M_max; eq. 39 gains K_D, K_P; posture gains K_Dn, K_Pn. */
+#define SR_PLANT_CONTROLLER_FIELDS(X)                                                           \
+    X(F_max, , "F_max", "N", 0.0, SR_PLANT_GAIN_MAX, "Thruster force bound per axis (eq. 41)")    \
+    X(K_F, , "K_F", "1/s", -SR_PLANT_GAIN_MAX, SR_PLANT_GAIN_MAX,                                 \
+      "Linear momentum feedback gain F = K_F P (eq. 41)")                                         \
+    X(P_max, , "P_max", "N.s", 0.0, SR_PLANT_GAIN_MAX,                                            \
+      "Linear momentum band of the bounded law (eq. 41)")                                         \
+    X(M_max, , "M_max", "N.m", 0.0, SR_PLANT_GAIN_MAX, "Thruster torque bound per axis (eq. 40)") \
+    X(K_M, , "K_M", "1/s", -SR_PLANT_GAIN_MAX, SR_PLANT_GAIN_MAX,                                 \
+      "Angular momentum feedback gain M = K_M L (eq. 40)")                                        \
+    X(L_max, , "L_max", "N.m.s", 0.0, SR_PLANT_GAIN_MAX,                                          \
+      "Angular momentum band of the bounded law (eq. 40)")                                        \
+    X(K_D, , "K_D", "1/s", -SR_PLANT_GAIN_MAX, SR_PLANT_GAIN_MAX,                                 \
+      "Base attitude law damping gain (eq. 39)")                                                  \
+    X(K_P, , "K_P", "1/s2", -SR_PLANT_GAIN_MAX, SR_PLANT_GAIN_MAX,                                \
+      "Base attitude law stiffness gain (eq. 39)")                                                \
+    X(K_Dn, , "K_Dn", "1/s", -SR_PLANT_GAIN_MAX, SR_PLANT_GAIN_MAX,                               \
+      "Arm null-space posture damping gain")                                                      \
+    X(K_Pn, , "K_Pn", "1/s2", -SR_PLANT_GAIN_MAX, SR_PLANT_GAIN_MAX,                              \
+      "Arm null-space posture stiffness gain")                                                    \
+    X(qdd_max, , "qdd_max", "rad/s2", 0.0, SR_PLANT_GAIN_MAX,                                     \
+      "Bound on commanded joint accelerations")
+
+/** Excitation (spacerobot.robots.Excitation; FMU names excite.<field>). */
+#define SR_PLANT_EXCITATION_FIELDS(X)                                                           \
+    X(att_max, , "excite.att_max", "rad", 0.0, 3.141592653589793,                                 \
+      "Amplitude bound of the base attitude excitation reference, per axis")                      \
+    X(q_max, , "excite.q_max", "rad", 0.0, 6.283185307179586,                                     \
+      "Amplitude bound of each joint excitation reference about the home posture")                \
+    X(qd_max, , "excite.qd_max", "rad/s", 0.0, 1e3,                                               \
+      "Bound on each joint excitation reference rate")                                            \
+    X(qdd_max, , "excite.qdd_max", "rad/s2", 0.0, 1e6,                                            \
+      "Bound on each joint excitation reference acceleration")                                    \
+    X(period, , "excite.period", "s", 1e-3, 1e9,                                                  \
+      "Period of the slowest excitation component (components in [1, 3] x 2 pi/period)")          \
+    X(ramp, , "excite.ramp", "s", 1e-3, 1e9,                                                      \
+      "Duration of a change of the excitation level (quintic ramp, no jump)")
+
+/** Propellant (spacerobot.robots.Propellant; FMU names prop.<field>). */
+#define SR_PLANT_PROPELLANT_FIELDS(X)                                                           \
+    X(m0, , "prop.m0", "kg", 0.0, 1e9,                                                            \
+      "Initial propellant mass (0 = no propellant model: constant base, unmodelled supply)")      \
+    X(Isp, , "prop.Isp", "s", 1e-3, 1e9,                                                          \
+      "Specific impulse of the thrusters (mass flow = thrust / (Isp g0))")                        \
+    X(R, , "prop.R", "m", 0.0, 1e3,                                                               \
+      "Radius of the spherical tank (the propellant is a rigid sphere of liquid, inertia "        \
+      "(2/5) m R^2 about its centre; 0 = point mass)")                                            \
+    X(arm, , "prop.arm", "m", 1e-6, 1e6,                                                          \
+      "Distance between the two thrusters of a torque couple (a torque M_i about an inertial "    \
+      "axis costs the thrust abs(M_i) / arm)")                                                    \
+    X(r, [3], "prop.r", "m", -1e3, 1e3, "Centre of the propellant tank, base frame B (origin S)")
+
+#define SR_PLANT_FIELD_(field, dims, fmi, unit, lo, hi, what) double field dims;
 typedef struct sr_plant_controller {
-    double K_F, P_max, F_max, K_M, L_max, M_max, K_D, K_P, K_Pn, K_Dn, qdd_max;
+    SR_PLANT_CONTROLLER_FIELDS(SR_PLANT_FIELD_)
 } sr_plant_controller;
 
-/** Excitation (spacerobot.robots.Excitation; FMU names excite.<field>): amplitude bounds
- *  att_max [rad], q_max [rad], qd_max [rad/s], qdd_max [rad/s2] (>= 0), period of the slowest
- *  component [s] and duration of a level change ramp [s] (> 0). */
 typedef struct sr_plant_excitation {
-    double att_max, q_max, qd_max, qdd_max, period, ramp;
+    SR_PLANT_EXCITATION_FIELDS(SR_PLANT_FIELD_)
 } sr_plant_excitation;
 
-/** Propellant (spacerobot.robots.Propellant; FMU names prop.<field>): initial mass m0 [kg]
- *  (0: no propellant model, constant base), specific impulse Isp [s], tank centre r (base
- *  frame) [m], tank radius R [m], thruster couple arm [m]. */
 typedef struct sr_plant_propellant {
-    double m0, Isp, r[3], R, arm;
+    SR_PLANT_PROPELLANT_FIELDS(SR_PLANT_FIELD_)
 } sr_plant_propellant;
+#undef SR_PLANT_FIELD_
+
+/** The parameter structs, for sr_plant_field_* (the tables above). */
+enum sr_plant_table {
+    SR_PLANT_TABLE_CONTROLLER = 0, SR_PLANT_TABLE_EXCITATION, SR_PLANT_TABLE_PROPELLANT,
+    SR_PLANT_TABLE_COUNT
+};
+
+/* -- model and data ---------------------------------------------------------------------------- */
 
 /** The constant model (filled by sr_plant_model_init; read-only afterwards). */
 typedef struct sr_plant_model {
@@ -159,7 +230,8 @@ typedef struct sr_plant_model {
     int planar, n, nq, nv, nb, nx, ny;   /* nb = 3 planar / 6 spatial */
     int n_att;                           /* attitude channels: 1 planar (z), 3 spatial */
     int n_ch;                            /* excitation channels n_att + n */
-    double par[SR_PLANT_NPAR];           /* controller, kernels.PARAMS order */
+    int y_at[SR_PLANT_Y_COUNT + 1];      /* output k occupies y[y_at[k] .. y_at[k + 1]) */
+    sr_plant_controller ctrl;            /* the controller */
     double q_home[SR_MAX_JOINTS];        /* null-space posture, also the initial one [rad] */
     double h;                            /* internal RK4 step [s] */
     sr_plant_excitation ex;              /* the excitation's bounds, period, ramp */
@@ -203,16 +275,15 @@ typedef struct sr_plant_data {
 } sr_plant_data;
 
 /** Build the model. robot: the robot record (its base body is replaced by base); base: the
- *  dry base (frame B, origin S); target: the grasped target in the end-effector frame E
- *  (mass > 0); both as sr_body (mass [kg], com [m], inertia about the com (3 x 3, symmetric)
- *  [kg.m2]) and checked as spacerobot.robots.check_body (finite, m > 0, positive definite,
- *  triangle inequality). ctrl, ex, prop: as their structs (every field finite; bounds >= 0);
- *  q_home (n) [rad]: the home posture (robot.q0; NULL: zeros), also the initial arm posture;
- *  v0 (3): initial velocity of S, inertial [m/s]; w0 (3): initial omega_B, base frame [rad/s]
- *  (planar: only v0 x, y and w0 z are used); h: internal RK4 step [s], 0 < h <= 1.
+ *  dry base (frame B, origin S); target: the grasped target in the end-effector frame E; both
+ *  as sr_body (mass [kg], com [m], inertia about the com (3 x 3) [kg.m2]), checked by body.h's
+ *  sr_body_check (inertia symmetric, checked here). ctrl, ex, prop: within the ranges of
+ *  their tables; q_home (n) [rad]: the home posture (robot.q0; NULL: zeros), also the initial
+ *  arm posture; v0 (3): initial velocity of S, inertial [m/s]; w0 (3): initial omega_B, base
+ *  frame [rad/s] (planar: only v0 x, y and w0 z are used); h: internal RK4 step [s].
  *  Returns 0, or SR_PLANT_EARG (model zeroed) with a one-line message in err (errlen bytes,
  *  NUL-terminated when errlen > 0; err may be NULL) naming the bad parameter by its FMU name
- *  (e.g. "target.m", "F_max", "excite.ramp", "prop.Isp", "base.v0", "h"). */
+ *  and its range (e.g. "target.m", "F_max", "excite.ramp", "prop.Isp", "base.v0[2]", "h"). */
 SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, const sr_body *base,
                                const sr_body *target, const sr_plant_controller *ctrl,
                                const sr_plant_excitation *ex, const sr_plant_propellant *prop,
@@ -220,7 +291,7 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
                                double h, char *err, size_t errlen);
 
 /** sizeof(sr_plant_model), sizeof(sr_plant_data), sizeof(the three parameter structs), for
- *  bindings that allocate them and check their view of the structs. */
+ *  bindings that allocate them. */
 SR_API size_t sr_plant_model_size(void);
 SR_API size_t sr_plant_data_size(void);
 SR_API size_t sr_plant_controller_size(void);
@@ -232,14 +303,48 @@ SR_API size_t sr_plant_propellant_size(void);
 SR_API int sr_plant_dims(const sr_plant_model *model, int *nq, int *nv, int *nx, int *ny,
                          int *n);
 
+/** SR_PLANT_Y_COUNT, the number of outputs. */
+SR_API int sr_plant_output_count(void);
+
 /** Where each output starts in the output vector: offsets (SR_PLANT_Y_COUNT + 1), entry k
  *  (enum sr_plant_output) occupies [offsets[k], offsets[k + 1]); offsets[SR_PLANT_Y_COUNT] =
  *  ny. Returns 0 or SR_PLANT_EARG. */
 SR_API int sr_plant_output_offsets(const sr_plant_model *model, int *offsets);
 
-/** The key of output k (enum sr_plant_output) as Plant.outputs() names it ("r_S", "v_S",
- *  "A", ..., "base_now"); NULL for k out of range. Static storage. */
+/** The key of output k (enum sr_plant_output) as NativePlant.outputs() names it ("r_S", "v_S",
+ *  "A", ..., "base_now"), its unit and description; NULL for k out of range. Static storage. */
 SR_API const char *sr_plant_output_name(int k);
+SR_API const char *sr_plant_output_unit(int k);
+SR_API const char *sr_plant_output_description(int k);
+
+/** The fields of parameter struct `table` (enum sr_plant_table), in their tables' order:
+ *  their number (-1 for a table out of range); field i's C name ("F_max", "r"), FMI name
+ *  ("F_max", "excite.ramp", "prop.r": a 3-vector's variables are prop.r[1..3]), unit and
+ *  description (NULL out of range); its number of doubles (1 or 3) and its offset in the
+ *  struct in bytes (-1 out of range); its range in *min, *max (0, or 1 out of range). */
+SR_API int sr_plant_field_count(int table);
+SR_API const char *sr_plant_field_name(int table, int i);
+SR_API const char *sr_plant_field_fmi_name(int table, int i);
+SR_API const char *sr_plant_field_unit(int table, int i);
+SR_API const char *sr_plant_field_description(int table, int i);
+SR_API int sr_plant_field_size(int table, int i);
+SR_API long sr_plant_field_offset(int table, int i);
+SR_API int sr_plant_field_range(int table, int i, double *min, double *max);
+
+/** The FMI name of the plant FMU's Real parameter or input number i (0, 1, ...), in the FMU's
+ *  order: the bodies (base.m, base.b[1] ... base.Iyz, target.*), base.v0[1..3],
+ *  base.omega0[1..3], the controller, h, the inputs ident.excite and ident.excite_rate, the
+ *  excitation, the propellant; into name (size bytes, NUL-terminated; 64 suffice).
+ *  Returns 0, or 1 past the last (name untouched). */
+SR_API int sr_plant_param_name(int i, char *name, size_t size);
+
+/** The closed range [*min, *max] the core enforces for the plant FMU's Real parameter or
+ *  input fmi_name (sr_plant_param_name's names): the parameters' tables and constants above,
+ *  body.h's ranges for the bodies (an inertia element: the bound the principal moments'
+ *  range implies: a diagonal element within it, |a product| within half its width), the
+ *  inputs' ranges (values outside are clipped). Returns 0, or 1 for an unknown name (min, max
+ *  untouched). */
+SR_API int sr_plant_param_range(const char *fmi_name, double *min, double *max);
 
 /** A one-line description of a status code (static storage; never NULL). */
 SR_API const char *sr_plant_status_message(int status);
@@ -249,17 +354,13 @@ SR_API const char *sr_plant_status_message(int status);
  *  excitation level 0 (ramp [0, 0, 0, excitation.ramp]). Returns 0 or SR_PLANT_EARG. */
 SR_API int sr_plant_start(const sr_plant_model *model, sr_plant_data *data);
 
-/** Ask for the excitation level `level` in [0, 1] from now on (Plant.set_excitation): the
- *  level in effect moves there from its current value in excitation.ramp seconds along a
- *  quintic (to 0 first while a change of rate is pending); asking again for the level already
- *  requested changes nothing. Returns 0, or SR_PLANT_EARG (data unchanged) for a level outside
- *  [0, 1] or NaN. */
+/** Ask for the excitation level `level` in [0, 1] from now on: the level in effect moves there
+ *  from its current value in excitation.ramp seconds along a quintic (to 0 first while a
+ *  change of rate is pending); asking again for the level already requested changes nothing.
+ *  Returns 0, or SR_PLANT_EARG (data unchanged) for a level outside [0, 1] or NaN. */
 SR_API int sr_plant_set_excitation(const sr_plant_model *model, sr_plant_data *data,
                                    double level);
 
-/* the excitation rate's range (input ident.excite_rate) */
-#define SR_PLANT_RATE_MIN 0.1
-#define SR_PLANT_RATE_MAX 10.0
 /* doubles of the excitation state (sr_plant_get_state / set_state): the ramp [s0, u, t0, T],
  * the level requested, the rate in effect, the rate requested */
 #define SR_PLANT_EXCITE_STATE 7
@@ -272,8 +373,8 @@ SR_API int sr_plant_set_excitation(const sr_plant_model *model, sr_plant_data *d
  *  table changes at the first step boundary where the level has settled at 0 (at once where
  *  it is 0 already), and the level then ramps to the one requested; asking for the rate in
  *  effect cancels a pending change. (A request during a ramp restarts it from the level in
- *  effect with zero slope, as sr_plant_set_excitation does: the references' rates jump.) Returns 0, or SR_PLANT_EARG (data unchanged) for a
- *  rate out of range or NaN. */
+ *  effect with zero slope, as sr_plant_set_excitation does: the references' rates jump.)
+ *  Returns 0, or SR_PLANT_EARG (data unchanged) for a rate out of range or NaN. */
 SR_API int sr_plant_set_excitation_rate(const sr_plant_model *model, sr_plant_data *data,
                                         double rate);
 
@@ -286,38 +387,38 @@ SR_API int sr_plant_excitation_rate(const sr_plant_model *model, const sr_plant_
 SR_API int sr_plant_excitation_level(const sr_plant_model *model, const sr_plant_data *data,
                                      double *s);
 
-/** Integrate over dt [s] (Plant.advance): k = floor(dt / h + 1e-9) RK4 steps of h, then one
- *  step of the rest dt - k h if that is >= 1e-9 h; the controls of each step are computed at
- *  its start and held over it. A pending change of rate whose level has settled at 0 takes
- *  effect first (sr_plant_set_excitation_rate; it stays on failure). Transactional otherwise:
- *  returns 0 with (t, x) advanced, or a status (SR_PLANT_EARG for dt not finite and > 0;
+/** Integrate over dt [s]: k = floor(dt / h + 1e-9) RK4 steps of h, then one step of the rest
+ *  dt - k h if that is >= 1e-9 h; the controls of each step are computed at its start and held
+ *  over it. A pending change of rate whose level has settled at 0 takes effect first
+ *  (sr_plant_set_excitation_rate; it stays on failure). Transactional otherwise: returns 0
+ *  with (t, x) advanced, or a status (SR_PLANT_EARG for dt not finite and > 0;
  *  SR_PLANT_ESINGULAR_*; SR_PLANT_ENONFINITE when the state reached is not finite) with t, x
  *  as before the call. */
 SR_API int sr_plant_advance(const sr_plant_model *model, sr_plant_data *data, double dt);
 
-/** Every output at the current state, y (ny; the layout above), computed with the controls
+/** Every output at the current state, y (ny; the tables above), computed with the controls
  *  held from this instant over a step of h. Only the work space of data changes. Returns 0,
  *  SR_PLANT_EARG, SR_PLANT_ESINGULAR_* or SR_PLANT_ENONFINITE (an output is not finite; y
  *  then not to be used). */
 SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, double *y);
 
-/** The controls for the step starting at the current state (Plant.controls): F (3) [N] at S and
- *  M (3) [N.m] about S, inertial; tau (n) [N.m]; a (nv): the generalised acceleration dv/dt
- *  they produce (Pinocchio's convention); *flow: propellant mass flow [kg/s]. Any output may
- *  be NULL. Returns 0, SR_PLANT_EARG or SR_PLANT_ESINGULAR_*. */
+/** The controls for the step starting at the current state: F (3) [N] at S and M (3) [N.m]
+ *  about S, inertial; tau (n) [N.m]; a (nv): the generalised acceleration dv/dt they produce
+ *  (Pinocchio's convention); *flow: propellant mass flow [kg/s]. Any output may be NULL.
+ *  Returns 0, SR_PLANT_EARG, SR_PLANT_ESINGULAR_* or SR_PLANT_ENONFINITE. */
 SR_API int sr_plant_controls(const sr_plant_model *model, sr_plant_data *data, double *F,
                              double *M, double *tau, double *a, double *flow);
 
-/** The base's truth now (Plant.base_now): out (10) = m [kg], b (3) [m], Ixx Iyy Izz Ixy Ixz Iyz
- *  [kg.m2] (about the com, base frame): the dry base plus the propellant left (parallel axes);
- *  the dry base without propellant model. Returns 0 or SR_PLANT_EARG. */
+/** The base's truth now: out (10) = m [kg], b (3) [m], Ixx Iyy Izz Ixy Ixz Iyz [kg.m2] (about
+ *  the com, base frame): the dry base plus the propellant left (parallel axes); the dry base
+ *  without propellant model. Returns 0 or SR_PLANT_EARG. */
 SR_API int sr_plant_base_now(const sr_plant_model *model, const sr_plant_data *data,
                              double *out);
 
-/** The excitation references now (Plant.references): ref ((n_att + n) x 3, row-major), row c:
- *  the scaled channel c and its first two time derivatives; rows 0..n_att-1 the attitude axes
- *  (rotation vector [rad]; planar: z only), then the joint offsets from q_home [rad]. Zero
- *  when the level and its derivatives are zero. Returns 0 or SR_PLANT_EARG. */
+/** The excitation references now: ref ((n_att + n) x 3, row-major), row c: the scaled channel
+ *  c and its first two time derivatives; rows 0..n_att-1 the attitude axes (rotation vector
+ *  [rad]; planar: z only), then the joint offsets from q_home [rad]. Zero when the level and
+ *  its derivatives are zero. Returns 0 or SR_PLANT_EARG. */
 SR_API int sr_plant_references(const sr_plant_model *model, const sr_plant_data *data,
                                double *ref);
 
@@ -327,12 +428,11 @@ SR_API int sr_plant_references(const sr_plant_model *model, const sr_plant_data 
 SR_API int sr_plant_get_state(const sr_plant_model *model, const sr_plant_data *data, double *t,
                               double *x, double *ex);
 
-/** Set the state (Plant.set_state): t finite, x (nx) finite with a unit quaternion (planar: a
- *  unit (cos, sin) pair) within 1e-6 and 0 <= m_p <= m0 (1 + 1e-12), ex (as
- *  sr_plant_get_state's) finite with T > 0, the levels s0, u, requested in [0, 1] and both
- *  rates in [SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX] (NULL: [0, 0, 0, excitation.ramp, 0, 1,
- *  1]). Returns 0, or SR_PLANT_EARG (data unchanged) with a message in err (errlen bytes; err
- *  may be NULL). */
+/** Set the state: t finite, x (nx) finite with a unit quaternion (planar: a unit (cos, sin)
+ *  pair) within 1e-6 and 0 <= m_p <= m0 (1 + 1e-12), ex (as sr_plant_get_state's) finite with
+ *  T > 0, the levels s0, u, requested in [0, 1] and both rates in [SR_PLANT_RATE_MIN,
+ *  SR_PLANT_RATE_MAX] (NULL: [0, 0, 0, excitation.ramp, 0, 1, 1]). Returns 0, or SR_PLANT_EARG
+ *  (data unchanged) with a message in err (errlen bytes; err may be NULL). */
 SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, double t,
                               const double *x, const double *ex, char *err, size_t errlen);
 

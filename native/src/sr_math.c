@@ -408,6 +408,81 @@ double sr_cos(double x)
     return c;
 }
 
+/* -- arc tangent ------------------------------------------------------------------------------ */
+
+/* fdlibm's s_atan.c: atan x = atan c + atan((x - c) / (1 + x c)) for the breakpoints
+ * c = 1/2, 1, 3/2, inf (atan c in two parts), the rest by an odd polynomial of degree 23 */
+double sr_atan(double x)
+{
+    static const double atanhi[4] = {4.63647609000806093515e-01, 7.85398163397448278999e-01,
+                                     9.82793723247329054082e-01, 1.57079632679489655800e+00};
+    static const double atanlo[4] = {2.26987774529616870924e-17, 3.06161699786838301793e-17,
+                                     1.39033110312309984516e-17, 6.12323399573676603587e-17};
+    static const double aT[11] = {
+        3.33333333333329318027e-01, -1.99999999998764832476e-01, 1.42857142725034663711e-01,
+        -1.11111104054623557880e-01, 9.09088713343650656196e-02, -7.69187620504482999495e-02,
+        6.66107313738753120669e-02, -5.83357013379057348645e-02, 4.97687799461593236017e-02,
+        -3.65315727442169155270e-02, 1.62858201153657823623e-02};
+    double ax, z, w, s1, s2, r;
+    int id, neg;
+    if (isnan(x))
+        return x + x;
+    neg = x < 0.0;
+    ax = fabs(x);
+    if (ax >= 7.3786976294838206464e19) {             /* 2^66: atan x = pi/2 to the last bit */
+        r = atanhi[3] + atanlo[3];
+        return neg ? -r : r;
+    }
+    if (ax < 0.4375) {
+        if (ax < 7.4505805969238281e-09)               /* 2^-27: atan x = x */
+            return x;
+        id = -1;
+    } else if (ax < 1.1875) {
+        if (ax < 0.6875) {
+            id = 0;
+            ax = (2.0 * ax - 1.0) / (2.0 + ax);
+        } else {
+            id = 1;
+            ax = (ax - 1.0) / (ax + 1.0);
+        }
+    } else if (ax < 2.4375) {
+        id = 2;
+        ax = (ax - 1.5) / (1.0 + 1.5 * ax);
+    } else {
+        id = 3;
+        ax = -1.0 / ax;
+    }
+    z = ax * ax;
+    w = z * z;
+    s1 = z * (aT[0] + w * (aT[2] + w * (aT[4] + w * (aT[6] + w * (aT[8] + w * aT[10])))));
+    s2 = w * (aT[1] + w * (aT[3] + w * (aT[5] + w * (aT[7] + w * aT[9]))));
+    if (id < 0) {
+        r = ax - ax * (s1 + s2);
+        return neg ? -r : r;
+    }
+    r = atanhi[id] - ((ax * (s1 + s2) - atanlo[id]) - ax);
+    return neg ? -r : r;
+}
+
+double sr_atan2(double y, double x)
+{
+    static const double pi = 3.141592653589793, pi_lo = 1.2246467991473531772e-16;
+    double z;
+    if (isnan(x) || isnan(y))
+        return x + y;
+    if (x == 0.0) {
+        if (y == 0.0)
+            return 0.0;
+        return y > 0.0 ? 0.5 * pi : -0.5 * pi;
+    }
+    if (y == 0.0)
+        return x > 0.0 ? y : (signbit(y) ? -pi : pi);
+    z = sr_atan(fabs(y / x));
+    if (x > 0.0)
+        return y > 0.0 ? z : -z;
+    return y > 0.0 ? pi - (z - pi_lo) : (z - pi_lo) - pi;   /* pi in two parts */
+}
+
 /* -- logarithms ------------------------------------------------------------------------------- */
 
 /* x finite > 0: x = 2^k (1 + f), 1 + f in [sqrt(1/2), sqrt(2)] (f exact); then s = f / (2 + f),

@@ -30,10 +30,10 @@ extern "C" {
  *  "An improved algorithm for hypot(a, b)", arXiv:1904.09481, 2019), scaled by 2^+-600 for
  *  huge or tiny arguments. This is the arrangement (thresholds included) of glibc's hypot
  *  since 2.35 on machines without FMA: on Linux it gives glibc's bits (measured: 3e6 random
- *  pairs over the whole range, no difference), so the core's eigen solver reproduces the
- *  Python/Numba one. Below 1 ulp (correctly rounded for 99.4 % of arguments). C99 special
- *  values: +inf if either is infinite (even with a NaN), else NaN if either is NaN;
- *  hypot(x, +-0) = |x|. */
+ *  pairs over the whole range, no difference), so the core's eigen solver gives the bits of
+ *  the same algorithm on glibc's hypot. Below 1 ulp (correctly rounded for 99.4 % of
+ *  arguments). C99 special values: +inf if either is infinite (even with a NaN), else NaN if
+ *  either is NaN; hypot(x, +-0) = |x|. */
 SR_API double sr_hypot(double x, double y);
 
 /* sr_hypot's kernel: sqrt(ax^2 + ay^2) for ax >= ay > 0 whose squares neither overflow nor
@@ -86,6 +86,18 @@ SR_API double sr_sin(double x);
 
 /** cos x [rad] (sr_sincos). */
 SR_API double sr_cos(double x);
+
+/** Arc tangent [rad] in [-pi/2, pi/2]: fdlibm's arrangement (s_atan.c: a reduction by the
+ *  breakpoints 1/2, 1, 3/2 and 1/x, then an odd polynomial); below 1 ulp.
+ *  atan(+-inf) = +-pi/2, atan(+-0) = +-0, NaN for NaN. */
+SR_API double sr_atan(double x);
+
+/** The angle of the point (x, y) [rad] in [-pi, pi]: sr_atan(|y / x|) placed in its quadrant,
+ *  pi in two parts (fdlibm's e_atan2.c for finite arguments); within 2 ulp. Special values:
+ *  NaN if either is NaN; atan2(+-0, x > 0) = +-0, atan2(+-0, x < 0) = +-pi,
+ *  atan2(y != 0, +-0) = +-pi/2 by the sign of y, and atan2(+-0, +-0) = 0 (C99: +-0 or +-pi);
+ *  one infinite argument gives C99's value, two give NaN (C99: +-pi/4 or +-3 pi/4). */
+SR_API double sr_atan2(double y, double x);
 
 /** Natural logarithm (sr_ln: sr_log is the FMI layer's logger): x = 2^k m,
  *  m in [sqrt(1/2), sqrt(2)], log m = 2 atanh(f / (2 + f)) by its series (fdlibm's

@@ -29,4 +29,17 @@ static inline void mat3t_vec(const double *A, const double *x, double *out)
         out[i] = A[i] * x[0] + A[3 + i] * x[1] + A[6 + i] * x[2];
 }
 
+/* A (3 x 3, row-major): the DCM body -> inertial (x_I = A x_B) of the quaternion (x, y, z, w),
+ * which need not be of unit norm (it is normalised on the way) */
+static inline void quat_dcm(double x, double y, double z, double w, double *A)
+{
+    const double s = 2.0 / (x * x + y * y + z * z + w * w);
+    const double xx = x * x, yy = y * y, zz = z * z;
+    const double xy = x * y, xz = x * z, yz = y * z;
+    const double xw = x * w, yw = y * w, zw = z * w;
+    A[0] = 1.0 - s * (yy + zz); A[1] = s * (xy - zw); A[2] = s * (xz + yw);
+    A[3] = s * (xy + zw); A[4] = 1.0 - s * (xx + zz); A[5] = s * (yz - xw);
+    A[6] = s * (xz - yw); A[7] = s * (yz + xw); A[8] = 1.0 - s * (xx + yy);
+}
+
 #endif

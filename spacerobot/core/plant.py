@@ -1,8 +1,7 @@
 """The native plant (``native/src/plant.h``) bound with ctypes.
 
-:class:`NativePlant` is the library's plant (:class:`spacerobot.plant.Plant`; it replaced
-the former Python/Numba plant, whose API it keeps): the constructor, ``t``, ``m_p``,
-``q``/``v``/``J``/``H``,
+:class:`NativePlant` is the library's plant (:class:`spacerobot.plant.Plant`): the
+constructor, ``t``, ``m_p``, ``q``/``v``/``J``/``H``,
 :meth:`~NativePlant.advance`, :meth:`~NativePlant.set_excitation`,
 :meth:`~NativePlant.excitation_level`, :meth:`~NativePlant.references`,
 :meth:`~NativePlant.outputs`, :meth:`~NativePlant.output_vector`,
@@ -13,6 +12,12 @@ the former Python/Numba plant, whose API it keeps): the constructor, ``t``, ``m_
 One instance is one constant ``sr_plant_model`` and one ``sr_plant_data`` block (plain structs
 without pointers, held in ctypes buffers): a checkpoint is a copy of the data block. A failed
 step leaves the plant as it was before the call (the C step is transactional).
+
+The layouts are the C core's tables, read from the library (:mod:`spacerobot.core.tables`,
+re-exported here): the parameter structs' fields (:func:`fields`: names, FMI names, units,
+offsets, ranges; the binding writes each value at its field's offset), the outputs
+(:func:`output_names`) and the ranges of every parameter and input of the plant FMU
+(:func:`parameter_ranges`).
 
 Examples
 --------
@@ -25,6 +30,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import struct
 from dataclasses import dataclass
 from typing import Optional
 
@@ -33,44 +39,31 @@ import numpy as np
 from ..robots import Controller, Excitation, Propellant, RigidBody, Robot
 from . import dptr, lib as _default_lib
 from .robot_record import SrBody, SrRobot, c_robot
+from .tables import Field, _bind_tables, fields, output_names, parameter_ranges  # noqa: F401
 
-__all__ = ["NativePlant", "Controls", "SrPlantController", "SrPlantExcitation",
-           "SrPlantPropellant", "STATUS_OK", "OUTPUT_COUNT"]
+__all__ = ["NativePlant", "Controls", "Field", "fields", "output_names", "parameter_ranges",
+           "STATUS_OK"]
 
 MSG_LEN = 256
-#: the excitation rate's range (SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX) and the doubles of the
-#: excitation state (SR_PLANT_EXCITE_STATE: ramp (4), level requested, rates in effect and
-#: requested)
-RATE_MIN, RATE_MAX = 0.1, 10.0
+#: the doubles of the excitation state (SR_PLANT_EXCITE_STATE: ramp (4), level requested,
+#: rates in effect and requested)
 EXCITE_STATE = 7
 STATUS_OK = 0
 EARG = 1
 ENONFINITE = 2
-#: number of outputs (SR_PLANT_Y_COUNT)
-OUTPUT_COUNT = 24
-#: controller parameters, the order of sr_plant_controller (plant.h)
-PARAMS = ("K_F", "P_max", "F_max", "K_M", "L_max", "M_max", "K_D", "K_P", "K_Pn", "K_Dn",
-          "qdd_max")
-
-
-class SrPlantController(ctypes.Structure):
-    """``sr_plant_controller`` (native/src/plant.h)."""
-
-    _fields_ = [(k, ctypes.c_double) for k in PARAMS]
-
-
-class SrPlantExcitation(ctypes.Structure):
-    """``sr_plant_excitation``."""
-
-    _fields_ = [(k, ctypes.c_double) for k in ("att_max", "q_max", "qd_max", "qdd_max",
-                                               "period", "ramp")]
-
-
-class SrPlantPropellant(ctypes.Structure):
-    """``sr_plant_propellant``."""
-
-    _fields_ = [("m0", ctypes.c_double), ("Isp", ctypes.c_double), ("r", ctypes.c_double * 3),
-                ("R", ctypes.c_double), ("arm", ctypes.c_double)]
+def _pack(L: ctypes.CDLL, table: str, record) -> ctypes.Array:
+    """The C struct ``table`` with the values of the Python record (its attributes named as the
+    fields), written at the library's offsets."""
+    size = getattr(L, f"sr_plant_{table}_size")()
+    buf = (ctypes.c_double * ((size + 7) // 8))()
+    for f in fields(table, L):
+        value = getattr(record, f.name)
+        values = [float(x) for x in value] if f.size > 1 else [float(value)]
+        if len(values) != f.size:
+            raise ValueError(f"{f.fmi} must be {f.size} finite numbers [{f.unit}], got "
+                             f"{list(value)}")
+        struct.pack_into(f"={f.size}d", buf, f.offset, *values)
+    return buf
 
 
 @dataclass
@@ -94,12 +87,9 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     ip = ctypes.POINTER(ctypes.c_int)
     sig = {
         "sr_plant_model_init": ([vp, ctypes.POINTER(SrRobot), ctypes.POINTER(SrBody),
-                                 ctypes.POINTER(SrBody), ctypes.POINTER(SrPlantController),
-                                 ctypes.POINTER(SrPlantExcitation),
-                                 ctypes.POINTER(SrPlantPropellant), dp, dp, dp, cd, cp, sz], ci),
+                                 ctypes.POINTER(SrBody), vp, vp, vp, dp, dp, dp, cd, cp, sz], ci),
         "sr_plant_dims": ([vp, ip, ip, ip, ip, ip], ci),
         "sr_plant_output_offsets": ([vp, ip], ci),
-        "sr_plant_output_name": ([ci], cp),
         "sr_plant_status_message": ([ci], cp),
         "sr_plant_start": ([vp, vp], ci),
         "sr_plant_set_excitation": ([vp, vp, cd], ci),
@@ -121,14 +111,16 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
                  "sr_plant_excitation_size", "sr_plant_propellant_size"):
         getattr(L, name).argtypes = []
         getattr(L, name).restype = sz
-    for name, cls in (("sr_plant_controller_size", SrPlantController),
-                      ("sr_plant_excitation_size", SrPlantExcitation),
-                      ("sr_plant_propellant_size", SrPlantPropellant)):
-        if getattr(L, name)() != ctypes.sizeof(cls):
-            raise RuntimeError(f"{name}: {getattr(L, name)()} bytes in the library, "
-                               f"{ctypes.sizeof(cls)} in spacerobot.core.plant")
     L._sr_plant_bound = True
-    return L
+    return _bind_tables(L)
+
+
+def __getattr__(name: str):
+    # the excitation rate's range (SR_PLANT_RATE_MIN, SR_PLANT_RATE_MAX), from the library
+    if name in ("RATE_MIN", "RATE_MAX"):
+        lo, hi = parameter_ranges()["ident.excite_rate"]
+        return lo if name == "RATE_MIN" else hi
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _block(nbytes: int):
@@ -183,15 +175,9 @@ class NativePlant:
             c_rob = robot
             qh = np.zeros(robot.n) if q_home is None else q_home
         self.q_home = np.array(qh, float)
-        ctrl = SrPlantController(*[float(getattr(controller, k)) for k in PARAMS])
-        ex = SrPlantExcitation(*[float(getattr(excitation, k)) for k in
-                                 ("att_max", "q_max", "qd_max", "qdd_max", "period", "ramp")])
-        pr = SrPlantPropellant()
-        pr.m0, pr.Isp, pr.R, pr.arm = (float(propellant.m0), float(propellant.Isp),
-                                       float(propellant.R), float(propellant.arm))
-        if len(propellant.r) != 3:
-            raise ValueError(f"prop.r must be 3 finite numbers [m], got {list(propellant.r)}")
-        pr.r[:] = [float(x) for x in propellant.r]
+        ctrl = _pack(L, "controller", controller)
+        ex = _pack(L, "excitation", excitation)
+        pr = _pack(L, "propellant", propellant)
         v0a = np.array(v0, float).reshape(3)
         w0a = np.array(omega0, float).reshape(3)
         if self.q_home.shape != (c_rob.n,):
@@ -200,8 +186,7 @@ class NativePlant:
         self._data = _block(L.sr_plant_data_size())
         err = ctypes.create_string_buffer(MSG_LEN)
         st = L.sr_plant_model_init(self._model, ctypes.byref(c_rob), ctypes.byref(_body(base)),
-                                   ctypes.byref(_body(target)), ctypes.byref(ctrl),
-                                   ctypes.byref(ex), ctypes.byref(pr), dptr(self.q_home),
+                                   ctypes.byref(_body(target)), ctrl, ex, pr, dptr(self.q_home),
                                    dptr(v0a), dptr(w0a), float(h), err, MSG_LEN)
         if st != STATUS_OK:
             raise ValueError(err.value.decode("ascii", "replace"))
@@ -213,11 +198,11 @@ class NativePlant:
         self.planar = bool(c_rob.planar)
         self._nb = 3 if self.planar else 6
         self._om = 6 + self._nq + self._nv
-        off = (ctypes.c_int * (OUTPUT_COUNT + 1))()
+        names = output_names(L)
+        off = (ctypes.c_int * (len(names) + 1))()
         L.sr_plant_output_offsets(self._model, off)
         self._layout = []
-        for k in range(OUTPUT_COUNT):
-            key = L.sr_plant_output_name(k).decode("ascii")
+        for k, key in enumerate(names):
             a, b = off[k], off[k + 1]
             self._layout.append((key, a, b, (3, 3) if key == "A" else (b - a,)))
         self._y = np.empty(self._ny)
@@ -292,7 +277,7 @@ class NativePlant:
             raise ValueError(err.value.decode("ascii", "replace"))
 
     def get_state(self) -> dict:
-        """A deep copy of everything that determines the future (as Plant.get_state)."""
+        """A deep copy of everything that determines the future."""
         t, x, ramp = self._state()
         nq, om = self._nq, self._om
         return {"t": t, "q": x[6:6 + nq].copy(), "v": x[6 + nq:om].copy(), "J": x[0:3].copy(),
@@ -334,11 +319,12 @@ class NativePlant:
 
     # -- excitation --------------------------------------------------------------------------
     def set_excitation(self, level: float) -> None:
-        """Ask for the excitation level ``level`` in [0, 1] (Plant.set_excitation);
+        """Ask for the excitation level ``level`` in [0, 1];
         ``ValueError`` (plant unchanged) outside [0, 1] or NaN."""
         level = float(level)
         if self._lib.sr_plant_set_excitation(self._model, self._data, level) != STATUS_OK:
-            raise ValueError(f"excitation level must be in [0, 1], got {level}")
+            lo, hi = parameter_ranges(self._lib)["ident.excite"]
+            raise ValueError(f"excitation level must be in [{lo:g}, {hi:g}], got {level}")
 
     def set_excitation_rate(self, rate: float) -> None:
         """Ask for the excitation rate ``rate`` (frequency multiplier, 1 = the plant's own;
@@ -347,8 +333,8 @@ class NativePlant:
         out of range or NaN."""
         rate = float(rate)
         if self._lib.sr_plant_set_excitation_rate(self._model, self._data, rate) != STATUS_OK:
-            raise ValueError(f"excitation rate must be in [{RATE_MIN:g}, {RATE_MAX:g}], got "
-                             f"{rate}")
+            lo, hi = parameter_ranges(self._lib)["ident.excite_rate"]
+            raise ValueError(f"excitation rate must be in [{lo:g}, {hi:g}], got {rate}")
 
     def excitation_rate(self) -> tuple:
         """``(rate in effect, rate requested)``."""
@@ -363,7 +349,8 @@ class NativePlant:
         return float(s[0]), float(s[1]), float(s[2])
 
     def references(self) -> dict:
-        """The excitation references now (as Plant.references)."""
+        """The excitation references now: ``{"att", "att_d", "att_dd", "q", "q_d", "q_dd"}``
+        (attitude axes, then the joint offsets from the home posture, and their derivatives)."""
         r = 1 if self.planar else 3
         vals = np.empty((r + self.n, 3))
         self._lib.sr_plant_references(self._model, self._data, dptr(vals))
@@ -391,7 +378,8 @@ class NativePlant:
         return self._y.copy()
 
     def outputs(self) -> dict:
-        """What the sensors measure now, plus truth momentum (keys of Plant.outputs)."""
+        """Every output now, by key (:func:`output_names`): what the sensors measure, the truth
+        momentum, the excitation and the propellant."""
         y = self.output_vector()
         return {key: y[a:b].reshape(shape) for key, a, b, shape in self._layout}
 

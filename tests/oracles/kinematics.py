@@ -18,8 +18,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spacerobot.kinematics import ArmGeometry, cross3  # noqa: F401 (re-exported)
+from spacerobot.kinematics import ArmGeometry
 from spacerobot.robots import Robot
+
+
+def cross3(a, b) -> np.ndarray:
+    """``a x b`` for two 3-vectors (explicit formula)."""
+    a0, a1, a2 = a[0], a[1], a[2]
+    b0, b1, b2 = b[0], b[1], b[2]
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def skew(v: np.ndarray) -> np.ndarray:
