@@ -249,9 +249,7 @@ int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     double x0[SR_PLANT_MAX_NX], ex0[SR_PLANT_EXCITE_STATE], t0, level, rate;
     int status;
     sr_plant_get_state(g->core, g->data, &t0, x0, ex0);
-    if (fabs(t - t0) > 1e-9 * (fabs(t) > 1.0 ? fabs(t) : 1.0))
-        sr_log(inst, SR_LOG_WARNING, "communication point %.17g s differs from the plant time "
-               "%.17g s; continuing from the plant state", t, t0);
+    /* t is the instance's time: the layer refused any other communication point */
     level = excite_input(inst, g->vr_excite, "ident.excite", t);
     rate = excite_input(inst, g->vr_rate, "ident.excite_rate", t);
     if (isnan(level) || isnan(rate)) {

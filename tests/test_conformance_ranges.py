@@ -111,8 +111,15 @@ def test_a_parameter_outside_its_range_is_refused_with_its_name(kind, fmus):
         assert inst.set(v.name, value) == OK
         status, msgs = inst.call(inst.fmu.fmi2ExitInitializationMode, inst.fmu.component)
         assert status == ERROR, (v.name, value, msgs)
-        assert any(st == ERROR and v.name in m for st, _, m in msgs), (v.name, msgs)
+        assert any(st == ERROR and _named(v.name, m) for st, _, m in msgs), (v.name, msgs)
         inst.free()
+
+
+def _named(name: str, message: str) -> bool:
+    """The message names the variable, or for an inertia element (one rule over the tensor's
+    principal moments, body.h) the body's inertia ("base inertia")."""
+    body, _, element = name.rpartition(".")
+    return name in message or (element.startswith("I") and f"{body} inertia" in message)
 
 
 def test_an_input_outside_its_range_is_reported_with_its_name(kind, fmus):

@@ -111,7 +111,7 @@ MODELS: Dict[str, NativeModel] = {
         "Free-floating space robot after capture: base, arm and target (articulated-body "
         "algorithm), RK4, bounded momentum controller on the base thrusters, arm motion that "
         "stabilises the base attitude, excitation, propellant depletion (Zhang, Yue, Yuan "
-        "2020). Native C core: needs nothing but the C runtime.", robot="all"),
+        "2020). Native C core: needs nothing but the C runtime.", robot="all", ranges="plant"),
 }
 
 #: FMI 2.0 platform folder -> binary suffix (the platforms every install should carry)
