@@ -167,15 +167,6 @@ def _table_doc(table: str) -> Dict[str, Tuple[str, str]]:
     return {f.name: (f.unit, f.description) for f in fields(table) if f.size == 1}
 
 
-def __getattr__(name: str):
-    # the parameter tables' views, read from the C core when first asked for
-    tables = {"CONTROLLER_DOC": "controller", "EXCITATION_DOC": "excitation",
-              "PROPELLANT_DOC": "propellant"}
-    if name in tables:
-        return _table_doc(tables[name])
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def plant_vars(robot: Robot, sc: Scenario) -> List[Var]:
     """All variables of the plant FMU for ``robot`` with defaults from scenario ``sc``."""
     n = robot.n_joints
@@ -909,11 +900,18 @@ def sensors_dependencies(variables: Sequence[Var]) -> Dict[int, List[int]]:
     return deps
 
 
+#: the plant's parameter tables' views (CONTROLLER_DOC, ...), read from the C core when asked for
+_PLANT_TABLE_DOCS = {"CONTROLLER_DOC": "controller", "EXCITATION_DOC": "excitation",
+                     "PROPELLANT_DOC": "propellant"}
+
+
 def __getattr__(name: str):
-    # SENSOR_MAGNITUDES: the sensors' error magnitudes (the ``noise.*`` parameters but
-    # ``noise.scale``) in the native core's order (native/src/sensor_noise.h), read from the core
-    # when first used (this module imports no library)
+    # tables the native core owns, read from it when first used (importing this module loads no
+    # library): SENSOR_MAGNITUDES, the sensors' error magnitudes (the ``noise.*`` parameters but
+    # ``noise.scale``) in the core's order (native/src/sensor_noise.h); the plant's tables' docs
     if name == "SENSOR_MAGNITUDES":
         from .core.sensors import parameter_names
         return tuple("noise." + n for n in parameter_names())
+    if name in _PLANT_TABLE_DOCS:
+        return _table_doc(_PLANT_TABLE_DOCS[name])
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
