@@ -44,6 +44,7 @@ typedef struct {
                                               per sample (ident.noise_profile) */
     sr_estimator_model *core;              /* NULL before initialisation */
     void *data;                            /* the core's state (sr_estimator_data_size bytes) */
+    void *work;                            /* its work space (sr_estimator_work_size bytes) */
     double sample[MAX_SAMPLE];
 } estimator_glue;
 
@@ -123,15 +124,18 @@ void *sr_model_new(sr_instance *inst, const char *resource_dir) {
 static void drop_core(estimator_glue *g) {
     if (g->core) sr_estimator_model_free(g->core);
     free(g->data);
+    free(g->work);
     g->core = NULL;
     g->data = NULL;
+    g->work = NULL;
 }
 
-/* the instance takes a new core (model and data), dropping the one it had */
-static void adopt_core(estimator_glue *g, sr_estimator_model *core, void *data) {
+/* the instance takes a new core (model, data and its work space), dropping the one it had */
+static void adopt_core(estimator_glue *g, sr_estimator_model *core, void *data, void *work) {
     drop_core(g);
     g->core = core;
     g->data = data;
+    g->work = work;
 }
 
 void sr_model_free(void *model) {
@@ -255,7 +259,14 @@ int sr_model_initialize(void *model, sr_instance *inst) {
         sr_log(inst, SR_LOG_ERROR, "invalid estimator parameters: %s", err);
         return 1;
     }
-    adopt_core(g, core, data);
+    void *work = malloc(sr_estimator_work_size(core));
+    if (!work) {
+        sr_log(inst, SR_LOG_ERROR, "out of memory");
+        sr_estimator_model_free(core);
+        free(data);
+        return 1;
+    }
+    adopt_core(g, core, data, work);
     write_outputs(inst, g, core, data);
     return 0;
 }
@@ -279,7 +290,7 @@ int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     int status;
     (void)h;                                 /* one sample per communication point */
     for (int k = 0; k < g->n_sample; ++k) g->sample[k] = x[g->vr_in[k]];
-    status = sr_estimator_update(g->core, g->data, t, g->sample, msg, sizeof msg);
+    status = sr_estimator_update(g->core, g->data, g->work, t, g->sample, msg, sizeof msg);
     write_outputs(inst, g, g->core, g->data);
     if (status == 3 || status == 4) {        /* skipped: name the inputs at fault */
         char where[512] = "";
@@ -335,7 +346,14 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
         free(data);
         return 1;
     }
-    adopt_core(g, core, data);
+    void *work = malloc(sr_estimator_work_size(core));
+    if (!work) {
+        sr_log(inst, SR_LOG_ERROR, "restoring the FMU state: out of memory");
+        sr_estimator_model_free(core);
+        free(data);
+        return 1;
+    }
+    adopt_core(g, core, data, work);
     return 0;
 }
 

@@ -23,10 +23,8 @@ is G^-1 of a nearly singular G (docs/identification.md) and they move by 1e-3 of
 """
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import struct
-import time
 from pathlib import Path
 
 import numpy as np
@@ -708,32 +706,3 @@ def test_excitation_request(lib):
     assert all(e == 0.4 for e, _ in levels[2])
     assert all(e == (0.0 if ident else 0.4) for e, ident in levels[1])
     assert any(ident for _, ident in levels[1]) and not all(ident for _, ident in levels[1])
-
-
-def test_update_cost_is_reported(lib, capsys):
-    """The cost of one update (spatial robot, paper solver, momentum and force), measured
-    with a timing loop through ctypes; reported, not asserted (machine load varies)."""
-    from spacerobot.core import dptr
-    sc, rec = stream("spatial-default")
-    xs = [dptr(np.ascontiguousarray(x)) for _, x in rec]
-    keep = [x for _, x in rec]                           # noqa: F841 - the pointers' arrays
-    lines = []
-    for method in ("momentum", "force"):
-        nat = NativeEstimator(sc.robot, native_options(sc, method, 1.0), lib=lib)
-        update, model, data = lib.sr_estimator_update, nat._model, nat._data
-        best = np.inf
-        for _ in range(5):
-            nat.reset()
-            t0 = time.process_time()
-            for k, x in enumerate(xs):
-                update(model, data, k * 0.1, x, None, 0)
-            best = min(best, (time.process_time() - t0) / len(xs))
-        r = ctypes.byref(nat._report)
-        t0 = time.process_time()
-        for _ in range(1000):
-            lib.sr_estimator_report_get(nat._model, nat._data, r)
-        rep = (time.process_time() - t0) / 1000
-        lines.append(f"native update, spatial, {method}: {best * 1e6:.1f} us per sample "
-                     f"(report {rep * 1e6:.1f} us)")
-    with capsys.disabled():
-        print("\n" + "\n".join(lines))

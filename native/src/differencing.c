@@ -1,10 +1,10 @@
-/* Differencing weights (see differencing.h): a port of spacerobot/estimator/differencing.py. */
+/* The weights of a derivative and of the displacements over a window of samples, and the centre
+ * sample with its accelerations differenced (differencing.h). */
 #include "differencing.h"
 
 #include <math.h>
 
 #include "linalg.h"
-
 #include "sr_math.h"
 /* tau = t - t[centre] and s = max |tau| (the scale of the times: well-conditioned systems) */
 static double centred_times(const double *t, int k, int centre, double *tau)
@@ -60,10 +60,11 @@ int sr_derivative_weights(const double *t, int k, int centre, double *w)
 
 int sr_displacement_weights(const double *t, int k, int centre, const double *w, double *u)
 {
-    /* V^T (k x k): 82 kB of stack at the largest window; no allocation */
-    double x[SR_DIFF_MAX_SAMPLES], A[SR_DIFF_MAX_SAMPLES * SR_DIFF_MAX_SAMPLES], s;
+    /* V^T (k x k): 3.5 kB of stack at the largest window; no allocation */
+    double x[SR_DIFF_MAX_DISPLACEMENT_SAMPLES];
+    double A[SR_DIFF_MAX_DISPLACEMENT_SAMPLES * SR_DIFF_MAX_DISPLACEMENT_SAMPLES], s;
     int i, p;
-    if (k < 3 || k > SR_DIFF_MAX_SAMPLES || centre < 0 || centre >= k)
+    if (k < 3 || k > SR_DIFF_MAX_DISPLACEMENT_SAMPLES || centre < 0 || centre >= k)
         return 1;
     s = centred_times(t, k, centre, x);
     for (i = 0; i < k; ++i)

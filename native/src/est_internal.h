@@ -172,6 +172,30 @@ typedef struct est_data {
 
 #define EST_MAGIC 0x53524531u     /* "SRE1" */
 
+/* doubles of est_noise_add's scratch: the noise blocks' identified rows */
+#define EST_NOISE_SCRATCH (3 * EST_MAXCH * (EST_NL + EST_NA))
+
+/* The work space of one update (sr_estimator_work_size bytes beside the Data block, never part
+ * of the state): the new state of the sample's transaction and every temporary too large for
+ * a small stack. Its contents between updates mean nothing. */
+typedef struct est_work {
+    est_core nw;                  /* the new state, committed when it came out finite */
+    sr_info_data nwi;             /* the information filter's new state */
+    sr_exd_work exd;              /* the information filter's and the excitation design's */
+    /* the sample's equations (3 x 42) and their consider columns (3 x 16); the own-point rows
+     * (, consider); the sample as the equations take it (the centre of the differencing
+     * window, or a_S less the accelerometer bias) */
+    double E[3 * SR_N_COLS], Ec[3 * SR_N_CCOLS];
+    double own[3 * SR_N_COLS + 3 * SR_N_CCOLS];
+    double xc[SR_X_LEN(SR_MAX_JOINTS)], xb[SR_X_LEN(SR_MAX_JOINTS)];
+    /* the expected noise parts of the Gram matrices after this sample, the noise rows of the
+     * sample, a block of the window's (diff_momentum), est_noise_add's rows */
+    double N_a[EST_NJ * EST_NJ], N_b[EST_NA * EST_NA];
+    double own_noise[EST_MAXCH * 3 * SR_N_COLS];
+    double blk[EST_MAXCH * 3 * SR_N_COLS];
+    double noise_rows[EST_NOISE_SCRATCH];
+} est_work;
+
 /* -- shared by the solvers (est_paper.c) -- */
 double est_pymax(double a, double b);
 void est_gram_add(const double *S, int n, const double *R, int k, double lam, double *out);
@@ -278,11 +302,11 @@ int est_paper_step(const sr_estimator_model *m, const void *data, const est_core
  * rows of nblocks (<= EST_MAXCH) blocks sigma_l C_l (3 x 42 each, full 3D rows), weighted
  * and selected as the sample's rows. The paper solver's N_a (nl x nl) of [A | b] and N_b
  * (na x na) of [phi | y | psi]; the joint solver's N_a ((q + 1) x (q + 1)) of [H | yy], N_b
- * unused. */
+ * unused. scratch: EST_NOISE_SCRATCH doubles. */
 void est_noise_begin(const sr_estimator_model *m, const est_core *old, double *N_a,
                      double *N_b);
 void est_noise_add(const sr_estimator_model *m, const est_core *old, const double *blocks,
-                   int nblocks, double *N_a, double *N_b);
+                   int nblocks, double *N_a, double *N_b, double *scratch);
 
 /* K P K^T (q x q) with K = 1 + (S - N)^-1 N in the directions S - N observes
  * (solvers.compensation_gain): the covariance of a bias-compensated answer. S, N (n x n),

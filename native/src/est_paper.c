@@ -1367,7 +1367,7 @@ void est_noise_begin(const sr_estimator_model *m, const est_core *old, double *N
 }
 
 void est_noise_add(const sr_estimator_model *m, const est_core *old, const double *blocks,
-                   int nblocks, double *N_a, double *N_b)
+                   int nblocks, double *N_a, double *N_b, double *scratch)
 {
     if (nblocks <= 0)
         return;
@@ -1375,7 +1375,7 @@ void est_noise_add(const sr_estimator_model *m, const est_core *old, const doubl
         nblocks = EST_MAXCH;
     if (m->opt.solver == 1) {                /* rows [A | b] and [phi | y | psi] */
         double mu_full[EST_NMU], th_full[EST_NTH];
-        double Rn_lin[3 * EST_MAXCH * EST_NL], Rn_ang[3 * EST_MAXCH * EST_NA];
+        double *Rn_lin = scratch, *Rn_ang = scratch + 3 * EST_MAXCH * EST_NL;
         est_full_vectors(m, old, mu_full, th_full);
         identified_rows(m, blocks, nblocks, mu_full, th_full, Rn_lin, Rn_ang);
         est_gram_add(N_a, m->nl, Rn_lin, nblocks * m->k1, 1.0, N_a);   /* (in place) */
@@ -1383,7 +1383,7 @@ void est_noise_add(const sr_estimator_model *m, const est_core *old, const doubl
         return;
     }
     int q = m->q, nj = q + 1, k = m->k1 + m->k2;   /* rows [H | yy] (JointSolver._stack) */
-    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], R[3 * EST_MAXCH * EST_NJ];
+    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], *R = scratch;
     for (int blk = 0; blk < nblocks; blk++) {
         est_joint_rows(m, old, blocks + 3 * blk * SR_N_COLS, H, yy, NULL);
         for (int a = 0; a < k; a++) {

@@ -172,6 +172,14 @@ static int check_options(const sr_estimator_options *o, char *err, size_t errlen
         sr_text_int(err, errlen, o->diff_momentum);
         return 1;
     }
+    if (o->method == 2 && o->accel_source == 2 && o->diff_momentum
+        && o->diff_half_window > SR_DIFF_MAX_DISPLACEMENT_HALF_WINDOW) {
+        sr_text_set(err, errlen, "ident.diff_half_window must be an integer from 1 to 10 with "
+                                 "ident.diff_momentum = 1 (the displacement weights lose their "
+                                 "digits beyond), got ");
+        sr_text_int(err, errlen, o->diff_half_window);
+        return 1;
+    }
     if (sr_body_check("guess.base", o->guess_base, err, errlen)
         || sr_body_check("guess.target", o->guess_target, err, errlen))
         return 1;
@@ -756,7 +764,8 @@ static const double *own_c_of(const double *own) { return own + 3 * SR_N_COLS; }
 
 static int momentum_derivative(const sr_estimator_model *m, const void *data, const est_core *c,
                                double t, const double *x, const double *own_x, double *out,
-                               double *out_c, const double *noise_x, double *N_a, double *N_b)
+                               double *out_c, const double *noise_x, double *N_a, double *N_b,
+                               est_work *wk)
 {
     int half = m->half, k = 2 * half + 1, oJ = SR_X_J(m->n);
     double times[SR_DIFF_MAX_SAMPLES], w[SR_DIFF_MAX_SAMPLES], u[SR_DIFF_MAX_SAMPLES];
@@ -830,7 +839,7 @@ static int momentum_derivative(const sr_estimator_model *m, const void *data, co
     }
     if (N_a && m->eiv) {                     /* the noise rows, one sample's blocks at a time */
         const int nb = 3 * SR_N_COLS;
-        double blk[EST_MAXCH * 3 * SR_N_COLS];
+        double *blk = wk->blk;
         for (int i = 0; i < k; i++) {
             const double *Ci = i == k - 1 ? noise_x : own[i] - 1 - m->nflat + m->slot_noise;
             for (int b = 0; b < m->n_used; b++) {
@@ -846,7 +855,7 @@ static int momentum_derivative(const sr_estimator_model *m, const void *data, co
                 if (i == half)                               /* the centre: [u.v]x dP_c */
                     about_point_of(B, neg_vu, Ci + b * nb, SR_N_COLS);
             }
-            est_noise_add(m, c, blk, m->n_used, N_a, N_b);
+            est_noise_add(m, c, blk, m->n_used, N_a, N_b, wk->noise_rows);
         }
     }
     return 0;
@@ -1033,7 +1042,7 @@ static void physical_vector(const sr_estimator_model *m, const double *ls, const
  * mass is not positive). 0 ok, 1 failed (non-finite numbers: the sample is rejected). */
 static int info_step(const sr_estimator_model *m, void *data, double t,
                      const double *sample, const double *ls, const double *sd,
-                     sr_info_data *nwi)
+                     sr_info_data *nwi, sr_info_work *w)
 {
     double z[EST_NZ];
     int flags[4];
@@ -1045,7 +1054,7 @@ static int info_step(const sr_estimator_model *m, void *data, double t,
     /* the replay buffer: written at the filter's next slot only, which counts at the commit */
     double *buffer = (double *)((char *)data + m->off_info_buf);
     return sr_info_step(&m->info_m, (const sr_info_data *)((const char *)data + m->off_info),
-                        nwi, buffer, t, sample, z);
+                        nwi, buffer, t, sample, z, w);
 }
 
 /* the excitation's rate (excite_design.h), after a committed sample at t: the estimator
@@ -1064,7 +1073,7 @@ static int excite_wanted(void *ctx)
     return r.excite > 0.0;
 }
 
-static void design_step(const sr_estimator_model *m, void *data, double t)
+static void design_step(const sr_estimator_model *m, void *data, double t, sr_exd_work *w)
 {
     if (!m->adapt)
         return;
@@ -1072,7 +1081,7 @@ static void design_step(const sr_estimator_model *m, void *data, double t)
     /* a failed prediction leaves the rate at 1 (the plant's own): nothing to reject */
     (void)sr_exd_step(&m->exd, (sr_exd_data *)((char *)data + m->off_exd), &m->info_m,
                       (const sr_info_data *)((const char *)data + m->off_info), t,
-                      excite_wanted, &ctx);
+                      excite_wanted, &ctx, w);
 }
 
 static const char *const info_fail_msg =
@@ -1080,13 +1089,21 @@ static const char *const info_fail_msg =
     "not positive definite); are the inputs in SI units and of physical size, the noise.* "
     "magnitudes those of the sensors?";
 
-int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const double *sample,
-                        char *msg, size_t msglen)
+size_t sr_estimator_work_size(const sr_estimator_model *m) { return m ? sizeof(est_work) : 0; }
+
+int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, double t,
+                        const double *sample, char *msg, size_t msglen)
 {
     if (msg && msglen)
         msg[0] = '\0';
     if (!m || !data)
         return SR_EST_REJECT_NONFINITE;
+    if (!work) {
+        sr_text_set(msg, msglen, "sr_estimator_update: no work space given "
+                                 "(sr_estimator_work_size bytes)");
+        return SR_EST_REJECT_NONFINITE;
+    }
+    est_work *wk = (est_work *)work;
     est_data *d = (est_data *)data;
     est_core *c = &d->core;
     if (sr_estimator_data_check(m, d, msg, msglen) != 0)   /* never index with a corrupt
@@ -1146,11 +1163,11 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
 
     /* the information filter's sample, linearised at this estimator's estimates so far (its
      * own can run away while it is poorly informed); committed with the sample */
-    sr_info_data nwi;
+    sr_info_data *nwi = &wk->nwi;
     if (m->info) {
         double ls[EST_NZ], sdv[EST_NZ];
         rls_estimates(m, d, ls, sdv);
-        if (info_step(m, data, t, sample, ls, sdv, &nwi) != 0)
+        if (info_step(m, data, t, sample, ls, sdv, nwi, &wk->exd.info) != 0)
             return reject(d, SR_EST_REJECT_NONFINITE, info_fail_msg, msg, msglen);
     }
     /* the transaction: the new state on the stack, committed only if all came out finite */
@@ -1158,9 +1175,9 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
                                         "are the inputs in SI units and of physical size?";
     /* E (3 x 42) and, with the consider term, its consider columns Ec (3 x 16: the
      * right-hand sides' sensitivities, consider.py), which every linear step on E follows */
-    double E[3 * SR_N_COLS], Ec[3 * SR_N_CCOLS];
-    double own[3 * SR_N_COLS + 3 * SR_N_CCOLS];          /* own-point rows (, consider) */
-    double xc[SR_X_LEN(SR_MAX_JOINTS)], xb[SR_X_LEN(SR_MAX_JOINTS)];
+    double *E = wk->E, *Ec = wk->Ec;
+    double *own = wk->own;                               /* own-point rows (, consider) */
+    double *xc = wk->xc, *xb = wk->xb;
     const double *x = sample;
     int stored = 0, have_E = 0;               /* stored 1: a history sample only */
     /* the accelerometer bias (accel_bias.py; committed with the sample): the fit with this
@@ -1183,8 +1200,8 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
     /* the accelerations' noise (eiv.py): the expected noise parts of the Gram matrices after
      * this sample (paper: [A | b] and [phi | y | psi]; joint: [H | yy]); with diffmom the
      * new sample's own-point noise rows (stored with it), else this sample's noise rows */
-    double N_a[EST_NJ * EST_NJ], N_b[EST_NA * EST_NA];
-    double own_noise[EST_MAXCH * 3 * SR_N_COLS];
+    double *N_a = wk->N_a, *N_b = wk->N_b;
+    double *own_noise = wk->own_noise;
     int has_noise = 0;
     double gain = 1.0;                        /* the derivative's noise gain */
     /* the thrust integrals up to this sample (consider.ThrustIntegrals.add; committed with
@@ -1202,7 +1219,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
             return reject(d, SR_EST_REJECT_NONFINITE, overflow_msg, msg, msglen);
         kint = thr + SR_THRUST_K;
     }
-    memset(Ec, 0, sizeof Ec);
+    memset(Ec, 0, sizeof wk->Ec);
     if (m->diffmom)
         own_point_rows(m, sample, kint, own);
     if (m->diffmom && m->eiv)
@@ -1215,7 +1232,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
             if (m->eiv)
                 est_noise_begin(m, c, N_a, N_b);
             have_E = (wst = momentum_derivative(m, data, c, t, sample, own, E, Ec, own_noise,
-                                                m->eiv ? N_a : NULL, N_b)) == 0;
+                                                m->eiv ? N_a : NULL, N_b, wk)) == 0;
             has_noise = m->eiv;
         }
         else if ((wst = centre_sample(m, data, c, t, sample, xc, &gain)) == 0)
@@ -1242,8 +1259,8 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         if (!isfinite(s))
             return reject(d, SR_EST_REJECT_NONFINITE, overflow_msg, msg, msglen);
         if (first_reference) {
-            memcpy(c->ref, E, sizeof E);
-            memcpy(c->ref_c, Ec, sizeof Ec);
+            memcpy(c->ref, E, sizeof wk->E);
+            memcpy(c->ref_c, Ec, sizeof wk->Ec);
             c->has_ref = 1;
             stored = 2;
         } else {
@@ -1295,14 +1312,14 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         win_push(m, data, c, 0, t, sample, kint);
     if (stored) {
         if (m->info)
-            memcpy((char *)data + m->off_info, &nwi, sizeof nwi);
+            memcpy((char *)data + m->off_info, nwi, sizeof *nwi);
         if (m->thrust_int) {
             memcpy(c->thr, thr, sizeof thr);
             c->thr_started = 1;
         }
         d->status = SR_EST_REFERENCE;
         d->msg[0] = '\0';
-        design_step(m, data, t);
+        design_step(m, data, t, &wk->exd);
         return d->status;
     }
     /* the noise rows sigma_l C_l, C_l = E(x + e_l) - E(x) (eiv.noise_rows, eq. 1): the
@@ -1322,23 +1339,23 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
                 noise[b * 3 * SR_N_COLS + a] = sd * (Ek[a] - E[a]);
         }
         est_noise_begin(m, c, N_a, N_b);
-        est_noise_add(m, c, noise, m->n_used, N_a, N_b);
+        est_noise_add(m, c, noise, m->n_used, N_a, N_b, wk->noise_rows);
         has_noise = 1;
     }
-    est_core nw;                              /* written by the step, copied by the commit */
+    est_core *nw = &wk->nw;                  /* written by the step, copied by the commit */
     for (int i = 0; i < 2; i++) {
-        nw.corr_head[i] = c->corr_head[i];
-        nw.corr_count[i] = c->corr_count[i];
+        nw->corr_head[i] = c->corr_head[i];
+        nw->corr_count[i] = c->corr_count[i];
     }
     double e_lin[EST_MAXK], e_ang[3];
     /* the tracker's clock is the sample count: the estimates depend on the samples, not on
      * the step sizes between them */
     int st = m->opt.solver == 1
-                 ? est_paper_step(m, data, c, &nw, E, Ec, has_noise ? N_a : NULL,
+                 ? est_paper_step(m, data, c, nw, E, Ec, has_noise ? N_a : NULL,
                                   has_noise ? N_b : NULL, (double)d->samples, e_lin, e_ang)
-                 : est_joint_step(m, data, c, &nw, E, Ec, has_noise ? N_a : NULL,
+                 : est_joint_step(m, data, c, nw, E, Ec, has_noise ? N_a : NULL,
                                   (double)d->samples, e_lin);
-    if (st == 0 && !outputs_finite(&nw))   /* e.g. a restored block's numbers: never report
+    if (st == 0 && !outputs_finite(nw))   /* e.g. a restored block's numbers: never report
                                                them non-finite */
         st = 2;
     if (st != 0) {
@@ -1354,12 +1371,12 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
     }
     /* commit */
     if (m->info)
-        memcpy((char *)data + m->off_info, &nwi, sizeof nwi);
+        memcpy((char *)data + m->off_info, nwi, sizeof *nwi);
     if (m->lags > 0 && m->opt.solver == 1) {
-        est_corr_commit(m, data, &nw, 0, e_lin, m->k1);
-        est_corr_commit(m, data, &nw, 1, e_ang, m->k2);
+        est_corr_commit(m, data, nw, 0, e_lin, m->k1);
+        est_corr_commit(m, data, nw, 1, e_ang, m->k2);
     } else if (m->lags > 0) {
-        est_corr_commit(m, data, &nw, 0, e_lin, m->k1 + m->k2);
+        est_corr_commit(m, data, nw, 0, e_lin, m->k1 + m->k2);
     }
     if (m->differenced)                                  /* the window moves by one sample */
         push_history(m, data, c, t, sample, own, own_noise);
@@ -1373,11 +1390,11 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, double t, const
         c->bias = bfit;
         c->has_bias = 1;
     }
-    est_core_commit(m, c, &nw);
+    est_core_commit(m, c, nw);
     d->samples = count_up(d->samples);
     d->status = SR_EST_ESTIMATING;
     d->msg[0] = '\0';
-    design_step(m, data, t);
+    design_step(m, data, t, &wk->exd);
     return d->status;
 }
 

@@ -176,7 +176,17 @@ SR_API void sr_estimator_data_init(const sr_estimator_model *m, void *data);
  *  A 6 row-major, omega_B 15, a_S 18, alpha_B 21, q 24, qd 24+n, qdd 24+2n, F, M, J, H). */
 SR_API int sr_estimator_sample_length(const sr_estimator_model *m);
 
-/** One sample taken at time t [s]; sample (sr_estimator_sample_length(m) values) as above.
+/** Bytes of the work space of this Model: the temporaries of one update (the new state of
+ *  its transaction, the sample's equations, the information filter's and the excitation
+ *  design's matrices), kept off the stack so that an update needs little of it (hosts step
+ *  FMUs on threads with small stacks). Allocate it once beside the Data block, any alignment
+ *  of a malloc'ed or double-aligned buffer; it is no part of the state (never copied or
+ *  saved; its contents between updates mean nothing). One work space per thread that
+ *  updates. */
+SR_API size_t sr_estimator_work_size(const sr_estimator_model *m);
+
+/** One sample taken at time t [s]; sample (sr_estimator_sample_length(m) values) as above;
+ *  work: the work space (sr_estimator_work_size(m) bytes).
  *  Never fails hard: returns the status (SR_EST_*). A rejected sample (3, 4) leaves every
  *  estimate, covariance and internal state untouched except the rejected counter, the status
  *  and the message. msg (msglen bytes; may be NULL) gets the reason of a rejection ("" when
@@ -184,8 +194,8 @@ SR_API int sr_estimator_sample_length(const sr_estimator_model *m);
  *  depends on them (differenced accelerations, the momentum window, the thrust integrals of
  *  sd_thrust), as in the Python Identifier. A Data block
  *  whose counters are out of range (not initialised, corrupt, or of another Model) is not
- *  used: status 3, nothing written. */
-SR_API int sr_estimator_update(const sr_estimator_model *m, void *data, double t,
+ *  used: status 3, nothing written; so is a missing work space. */
+SR_API int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, double t,
                                const double *sample, char *msg, size_t msglen);
 
 /** Check a Data block restored from outside (FMI set / deserialize state, a file) before it is

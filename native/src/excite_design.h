@@ -80,6 +80,13 @@ typedef struct sr_exd_data {
     double dS[SR_INFO_MAX_U * SR_INFO_MAX_U];       /* information the rate-1 window added */
 } sr_exd_data;
 
+/** The choice's temporaries (a work space beside the state, never part of it): the
+ *  information filter's (sr_info_predict) and the information the candidate's window added. */
+typedef struct sr_exd_work {
+    sr_info_work info;
+    double dS_fast[SR_INFO_MAX_U * SR_INFO_MAX_U];
+} sr_exd_work;
+
 /** 0 when o's numbers are valid, else 1 with why: the offending FMU parameter's name, the rule
  *  it breaks ("in [0.1, 10] and not 1", static strings) and its value (any pointer may be
  *  NULL). */
@@ -91,10 +98,12 @@ SR_API void sr_exd_init(sr_exd_data *x);
 
 /** After the information filter took the sample at t [s] (fd: its state then): the choice's
  *  next step. wanted: 1 while the estimator asks for excitation (ident.excite > 0); read only
- *  where a window ends (wanted_fn(ctx) is called then; NULL: always wanted). Returns 0, or 1
- *  for a NULL pointer or a prediction that failed (the rate then stays 1, phase done). */
+ *  where a window ends (wanted_fn(ctx) is called then; NULL: always wanted). w: the work
+ *  space. Returns 0, or 1 for a NULL pointer or a prediction that failed (the rate then stays
+ *  1, phase done). */
 SR_API int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im,
-                       const sr_info_data *fd, double t, int (*wanted_fn)(void *), void *ctx);
+                       const sr_info_data *fd, double t, int (*wanted_fn)(void *), void *ctx,
+                       sr_exd_work *w);
 
 /** 1 if every number of x is finite and its phase in range, else 0 (a restored state). */
 SR_API int sr_exd_data_valid(const sr_exd_options *o, const sr_exd_data *x);

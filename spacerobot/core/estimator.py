@@ -98,7 +98,9 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     L.sr_estimator_data_init.restype = None
     L.sr_estimator_sample_length.argtypes = [vp]
     L.sr_estimator_sample_length.restype = ctypes.c_int
-    L.sr_estimator_update.argtypes = [vp, vp, ctypes.c_double, dp, cp, sz]
+    L.sr_estimator_work_size.argtypes = [vp]
+    L.sr_estimator_work_size.restype = sz
+    L.sr_estimator_update.argtypes = [vp, vp, vp, ctypes.c_double, dp, cp, sz]
     L.sr_estimator_update.restype = ctypes.c_int
     L.sr_estimator_report_get.argtypes = [vp, vp, ctypes.POINTER(SrEstimatorReport)]
     L.sr_estimator_report_get.restype = None
@@ -316,6 +318,8 @@ class NativeEstimator:
         self.size = int(L.sr_estimator_data_size(self._model))
         self._data = ctypes.create_string_buffer(self.size)
         L.sr_estimator_data_init(self._model, self._data)
+        #: the update's work space (no part of the state)
+        self._work = ctypes.create_string_buffer(int(L.sr_estimator_work_size(self._model)))
         self.n_flat = int(L.sr_estimator_sample_length(self._model))
         self._msg = ctypes.create_string_buffer(MSG_LEN)
         self._report = SrEstimatorReport()
@@ -338,8 +342,8 @@ class NativeEstimator:
         x = np.ascontiguousarray(flat, dtype=float)
         if x.shape != (self.n_flat,):
             raise ValueError(f"the flat sample has shape {x.shape}, expected ({self.n_flat},)")
-        return int(self._lib.sr_estimator_update(self._model, self._data, float(t), dptr(x),
-                                                 self._msg, len(self._msg)))
+        return int(self._lib.sr_estimator_update(self._model, self._data, self._work, float(t),
+                                                 dptr(x), self._msg, len(self._msg)))
 
     @property
     def message(self) -> str:
