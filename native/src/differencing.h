@@ -54,13 +54,19 @@ SR_API int sr_displacement_weights(const double *t, int k, int centre, const dou
                                    double *u);
 
 /* The centre sample of a window with its accelerations replaced by the derivatives of their
- * velocities at the centre's time (differencing.centre_derivative):
+ * velocities at the centre's time:
  * t (k) [s] and X (k x n) the window's k = 2m + 1 flattened samples, oldest first;
  * out (n) = X[m] with out[acc[p]] = sum_i w_i X[i][vel[p]] for p < npairs (w from
  * sr_derivative_weights(t, k, m)); *t_c = t[m]. acc, vel (npairs) indices into a sample
  * (0 <= index < n). k odd, 3 <= k <= SR_DIFF_MAX_SAMPLES. out must not alias X. */
 SR_API int sr_centre_derivative(const double *t, const double *X, int k, int n, const int *acc,
                                 const int *vel, int npairs, double *out, double *t_c);
+
+/* sr_centre_derivative with the window's samples given by their k row pointers X[i] (n values
+ * each; e.g. the slots of a ring), and the weights w (k) out (may be NULL). */
+SR_API int sr_centre_derivative_rows(const double *t, const double *const *X, int k, int n,
+                                     const int *acc, const int *vel, int npairs, double *out,
+                                     double *t_c, double *w);
 
 #ifdef __cplusplus
 }

@@ -1,4 +1,4 @@
-/* excite_design.c -- the estimator's choice of the excitation's rate (excite_design.h). */
+/* The estimator's choice of the excitation's rate (excite_design.h). */
 #include "excite_design.h"
 
 #include "physical.h"
@@ -82,9 +82,13 @@ static void added(const sr_info_model *im, const sr_info_data *fd, const double 
             dS[p * MU + q] -= S_mark[p * MU + q];
 }
 
+int sr_exd_reads_wanted(const sr_exd_options *o, const sr_exd_data *x, double t)
+{
+    return o && x && x->phase == SR_EXD_MEASURE && !(t - x->t_mark < o->window);
+}
+
 int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im,
-                const sr_info_data *fd, double t, int (*wanted_fn)(void *), void *ctx,
-                sr_exd_work *w)
+                const sr_info_data *fd, double t, int wanted, sr_exd_work *w)
 {
     if (!o || !x || !im || !fd || !w || !isfinite(t))
         return 1;
@@ -107,7 +111,7 @@ int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im
             return 0;
         added(im, fd, x->S_mark, x->dS);
         x->w_slow = t - x->t_mark;
-        if (wanted_fn && !wanted_fn(ctx)) {       /* no excitation wanted: nothing to choose */
+        if (!wanted) {                            /* no excitation wanted: nothing to choose */
             x->phase = SR_EXD_DONE;
             return 0;
         }

@@ -1,10 +1,9 @@
-/* information.c -- the information filter and the bound (information.h). */
+/* The information filter and the bound (information.h). */
 #include "information.h"
-
-#include "est_internal.h"
 
 #include "linalg.h"
 #include "sr_math.h"
+#include "standard_params.h"
 
 #include <limits.h>
 #include <math.h>
@@ -13,9 +12,9 @@
 #define MU SR_INFO_MAX_U             /* row stride of R, N_HH */
 #define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
 
-/* The unknowns' z part is in the standard layout of est_internal.h: per body m, c = m b (3),
- * I_O# (6, about the body frame's origin); est_standard_of_reported / est_joint_vector_of map
- * it from / to the reported parameters. */
+/* The unknowns' z part is in the standard layout of standard_params.h: per body m, c = m b (3),
+ * I_O# (6, about the body frame's origin); sr_standard_of_reported / sr_reported_of_standard
+ * map it from / to the reported parameters. */
 
 /* the white-noise sds of n (8), the channels the rows are weighed by */
 static void white_sds(const sr_info_noise *n, double *w)
@@ -77,7 +76,7 @@ int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_no
         m->rows[i] = m->planar ? planar_rows[i] : i;
     m->nb = noise->gyro_bias > 0.0 ? 3 : 0;
     m->nu = m->nz + m->nr + SR_N_CONSIDER + m->nb;
-    est_standard_of_reported(z0, m->zO0);
+    sr_standard_of_reported(z0, m->zO0);
     /* the prior: P0 on z_O, none on c0 (1e-12 keeps R invertible before the first rows: the
        momentum is unknown), the thrust errors' and gyro bias' own sds (an sd of 0: the
        unknown held at 0 by a prior information of 1e150) */
@@ -322,7 +321,7 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     double K[SR_THRUST_LEN], W[36], z[20];
     memcpy(K, d->K, sizeof K);
     sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(n), x + SR_X_M(n));
-    est_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
+    sr_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
     if (noise_weight(m, x, z, W) != 0)               /* every sample */
         return 1;
     /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
@@ -437,7 +436,7 @@ static void reported_of_u(const sr_info_model *m, const double *u, double *x)
     memcpy(z, m->zO0, sizeof z);
     for (int q = 0; q < m->nz; q++)
         z[m->zi[q]] = u[q];
-    est_joint_vector_of(EST_S2P, z, x);
+    sr_reported_of_standard(z, x);
 }
 
 /* Ri = R^-1 (R upper triangular nu x nu with a nonzero diagonal, row stride MU; Ri upper) */
@@ -469,7 +468,7 @@ static int bound_of(const sr_info_model *m, const double *Ri, const double *u, d
     memcpy(zO, m->zO0, sizeof zO);
     for (int q = 0; q < nz; q++)
         zO[m->zi[q]] = u[q];
-    est_joint_jacobian(EST_S2P, zO, Jz);
+    sr_reported_jacobian(zO, Jz);
     for (int i = 0; i < 20; i++)
         for (int q = 0; q < nz; q++)
             J[i * 20 + q] = Jz[i * 20 + m->zi[q]];

@@ -1,7 +1,7 @@
-/* information.h -- the information filter (issue #29; docs/identification.md, "The information
- * filter and the bound"): the 20 inertial parameters from the momentum equations with the
- * sensors' noise model, as a square-root information filter (Bierman), and the first-order
- * Cramér-Rao bound that the same information implies.
+/* The information filter (docs/identification.md, "The information filter and the bound"):
+ * the 20 inertial parameters from the momentum equations with the sensors' noise model, as
+ * a square-root information filter (Bierman), and the first-order Cramér-Rao bound that the
+ * same information implies.
  *
  * The measurement model. At every sample the momentum equations (eqs. 11/16, sr_equations'
  * momentum form, NOT differenced against a reference) hold exactly with three kinds of unknowns
@@ -146,10 +146,11 @@ SR_API int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_i
 /** What the filter says (reads d only; its temporaries on the stack, under 12 kB a frame):
  *  vec (20) the estimates (compensated for the noise in the regressors (errors in
  *  variables): 0 not, 1 to first order, 2 exactly, (S - N) u = s - n, falling back to 1
- *  where S - N is singular), bound (20) the first-order Cramér-Rao standard deviations (0 for a parameter not identified, e.g. out of plane),
- *  chi2 (may be NULL) the weighted residual sum of squares per degree of freedom (1 when the
- *  noise model is right; 0 before nu rows). Returns 0, or 1 for a NULL pointer or a singular
- *  information (vec, bound then NaN). */
+ *  where S - N is singular), bound (20) the first-order Cramér-Rao standard deviations (0
+ *  for a parameter not identified, e.g. out of plane), chi2 (may be NULL) the weighted
+ *  residual sum of squares per degree of freedom (1 when the noise model is right; 0 before
+ *  nu rows). Returns 0, or 1 for a NULL pointer or a singular information (vec, bound then
+ *  NaN). */
 SR_API int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
                             double *vec, double *bound, double *chi2);
 

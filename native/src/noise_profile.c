@@ -1,4 +1,4 @@
-/* noise_profile.c -- the estimator's noise model from the sensors' parameters (noise_profile.h). */
+/* The estimator's noise model from the sensors' parameters (noise_profile.h). */
 #include "noise_profile.h"
 
 #include <math.h>

@@ -1,5 +1,5 @@
-/* noise_profile.h -- one switch for real sensors (docs/identification.md, "One switch"): the
- * estimator's noise model set from the sensors' own parameters (the sensors FMU's noise.*
+/* One switch for real sensors (docs/identification.md, "One switch"): the estimator's noise
+ * model set from the sensors' own parameters (the sensors FMU's noise.*
  * names and units, docs/sensors.md) instead of a dozen hand settings.
  *
  * With ident.noise_profile = 1 each noise option of sr_estimator_options still at its default
