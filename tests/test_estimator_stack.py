@@ -103,10 +103,8 @@ def host(tmp_path_factory) -> Path:
 
 def _configs(source: str):
     """The configuration names of the host's table."""
-    table = source[source.index("CONFIGS[] = {"):]
-    table = "\n".join(line for line in table[:table.index("};")].splitlines()
-                      if not line.lstrip().startswith("#"))
-    return re.findall(r"C\((\w+)\)", table)
+    table = source[source.index("} CONFIGS[] = {"):]
+    return re.findall(r'^    \{"(\w+)", \{', table[:table.index("\n};")], re.M)
 
 
 @pytest.mark.parametrize("robot", ["planar", "spatial"])

@@ -216,7 +216,8 @@ def test_row_weights_and_correlation_lags_match_python(lib, method, lam):
     row_sd = (0.02, 0.05) if method == "momentum" else (0.3, 0.1)
     py, nat, _, _ = compare(lib, sc, rec, method, lam,
                             py_kw={"row_sd": row_sd, "corr_lags": 8},
-                            nat_kw={"row_sd_lin": row_sd[0], "row_sd_ang": row_sd[1],
+                            nat_kw={f"ident.sd_row.{method}_lin": row_sd[0],
+                                    f"ident.sd_row.{method}_ang": row_sd[1],
                                     "corr_lags": 8}, sd_tol=1e-4, res_rel=1e-6)
     inflation = py.solver.corr_lin.inflation(), py.solver.corr_ang.inflation()
     assert max(inflation) > 1.01          # the inflation did act on the compared sd
@@ -255,8 +256,8 @@ def test_joint_solver_matches_python(lib, name, method, lam, lags):
     py = Identifier(sc.robot, sc.guess, method, "joint", "measured", lam, corr_lags=lags,
                     row_sd=(0.1, 0.2))
     nat = NativeEstimator(sc.robot, {**native_options(sc, method, lam), "solver": 2,
-                                     "corr_lags": lags, "row_sd_lin": 0.1,
-                                     "row_sd_ang": 0.2}, lib=lib)
+                                     "corr_lags": lags, f"ident.sd_row.{method}_lin": 0.1,
+                                     f"ident.sd_row.{method}_ang": 0.2}, lib=lib)
     worst = 0.0
     for k, (t, x) in enumerate(rec):
         assert py.update_flat(t, x) == nat.update(t, x)
@@ -576,7 +577,7 @@ def test_guess_and_covariance_ranges(lib):
                     for v in (1e-7, 1e16)]
     for key in ("P0_mu", "P0_theta"):
         ok += [{key: v} for v in (1e-12, 1e16)]
-        refused += [({key: v}, f"{key} must be a covariance within [1e-12, 1e+16]")
+        refused += [({key: v}, f"{key} must be a finite covariance > 0, within [1e-12, 1e+16]")
                     for v in (5e-324, 1e-13, 1e17, 1e308)]
     for change in ok:
         for method in ("momentum", "force"):
@@ -653,8 +654,8 @@ def test_weak_prior_noise_free_run_keeps_every_sample(lib, method, P0s):
 # -- options -----------------------------------------------------------------------------------------
 def test_options_refused_with_the_python_messages(lib):
     """Invalid options: no model, the message of the oracle (the former Python Identifier)
-    naming the parameter; a reference window with the force method: refused by the library's
-    Identifier, never ignored."""
+    naming the parameter; the options of another method (a reference window with the force
+    method) ignored, by the core and the library's Identifier alike."""
     sc, _ = stream("planar-medium")
     values = {v.name: v.start for v in interface.estimator_vars(sc.robot, sc)
               if v.causality == "parameter"}
@@ -682,15 +683,14 @@ def test_options_refused_with_the_python_messages(lib):
     with pytest.raises(ValueError, match="method = 3 is not one of"):
         NativeEstimator(sc.robot, {"method": 3}, lib=lib)
     from spacerobot.estimator import Identifier as LibraryIdentifier
-    with pytest.raises(ValueError, match="momentum method's.*force method takes 0"):
-        LibraryIdentifier(sc.robot, sc.guess, "force", lib=lib, window=2.0)
-    # where the Python Identifier ignores an option (the other method's), so does the core
-    NativeEstimator(sc.robot, {"method": 2, "momentum_window": 5.0}, lib=lib)
+    assert LibraryIdentifier(sc.robot, sc.guess, "force", lib=lib, window=2.0).window == 0.0
+    nat = NativeEstimator(sc.robot, {"method": 2, "momentum_window": 5.0}, lib=lib)
+    assert nat.model_options()["momentum_window"] == 0.0
 
 
 def test_excitation_request(lib):
     """ident.excite: off 0; until identified the level while a body is not identified, 0
-    after; always the level (identifier.ExcitationRequest)."""
+    after; always the level."""
     sc, rec = stream("planar-medium")
     levels = {}
     for mode in (0, 1, 2):

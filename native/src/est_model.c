@@ -44,19 +44,13 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         sr_text_int(err, errlen, robot->n);
         return NULL;
     }
-    sr_estimator_options eff;                /* the options with the noise profile applied */
-    sr_noise_profile_error why;
-    if (sr_noise_profile_apply(opt, &eff, &why)) {
-        sr_text_set(err, errlen, why.name);
-        sr_text_cat(err, errlen, " must be ");
-        sr_text_cat(err, errlen, why.rule);
-        sr_text_cat(err, errlen, ", got ");
-        sr_text_repr(err, errlen, why.value);
+    /* the options as given checked, the noise profile applied, and the rules between options
+     * checked again where the profile set some */
+    sr_estimator_options eff;
+    if (sr_noise_profile_apply(opt, &eff, err, errlen)
+        || sr_estimator_options_check(&eff, err, errlen))
         return NULL;
-    }
     opt = &eff;
-    if (est_options_check(opt, err, errlen))
-        return NULL;
     sr_estimator_model *m = (sr_estimator_model *)calloc(1, sizeof *m);
     if (!m) {
         sr_text_set(err, errlen, "out of memory");
@@ -112,8 +106,10 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     /* the accelerometer bias (ident.accel_bias with the force method and measured
      * accelerations; ignored otherwise) */
     m->bias = m->force && !m->differenced && opt->accel_bias;
-    m->w_lin = opt->row_sd_lin > 0.0 ? 1.0 / opt->row_sd_lin : 1.0;
-    m->w_ang = opt->row_sd_ang > 0.0 ? 1.0 / opt->row_sd_ang : 1.0;
+    /* the row weights 1 / sd of the chosen method's equations */
+    const double *row_sd = opt->row_sd + 2 * (opt->method - 1);
+    m->w_lin = row_sd[0] > 0.0 ? 1.0 / row_sd[0] : 1.0;
+    m->w_ang = row_sd[1] > 0.0 ? 1.0 / row_sd[1] : 1.0;
     /* the identified estimates (spacerobot.interface.identified_estimates): all 20, or for a
      * planar robot m, b[1], b[2], Izz of each body; then the index arrays of
      * spacerobot.interface.ParameterLayout */
@@ -263,6 +259,24 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
 }
 
 void sr_estimator_model_free(sr_estimator_model *m) { free(m); }
+
+void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_options *out)
+{
+    if (!m || !out)
+        return;
+    *out = m->opt;
+    if (!m->window)                          /* the momentum method's */
+        out->momentum_window = 0.0;
+    if (m->force)
+        out->momentum_point = 0;
+    if (!m->bias)                            /* the force method's, measured accelerations */
+        out->accel_bias = 0;
+    if (!m->diffmom)                         /* the force method's, differenced ones */
+        out->diff_momentum = 0;
+    if (!m->force)                           /* the force method's noisy accelerations */
+        for (int i = 0; i < 6; i++)
+            out->signal_sd[i] = 0.0;
+}
 
 size_t sr_estimator_data_size(const sr_estimator_model *m) { return m ? m->size : 0; }
 

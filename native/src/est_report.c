@@ -5,6 +5,7 @@
 #include "est_report.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "est_corr.h"
@@ -133,6 +134,16 @@ void sr_estimator_message(const sr_estimator_model *m, const void *data, char *m
     sr_text_set(msg, msglen, buf);
 }
 
+double sr_estimator_excite_request(const sr_estimator_model *m, int identified_base,
+                                   int identified_target)
+{
+    if (!m)
+        return 0.0;
+    int mode = m->opt.excite_mode;         /* never, until both are identified, always */
+    return (mode == 2 || (mode == 1 && !(identified_base && identified_target)))
+               ? m->opt.excite_level : 0.0;
+}
+
 void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
                              sr_estimator_report *r)
 {
@@ -160,10 +171,7 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
     r->samples = d->samples;
     r->rejected = d->rejected;
     r->status = d->status;
-    /* the excitation request */
-    int mode = m->opt.excite_mode;
-    r->excite = (mode == 2 || (mode == 1 && !(r->identified[0] && r->identified[1])))
-                    ? m->opt.excite_level : 0.0;
+    r->excite = sr_estimator_excite_request(m, r->identified[0], r->identified[1]);
     if (m->adapt) {
         const sr_exd_data *x = est_exd_data(m, data);
         r->excite_rate = x->rate;
@@ -173,3 +181,91 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
 }
 
 size_t sr_estimator_report_size(void) { return sizeof(sr_estimator_report); }
+
+/* -- the outputs' and the status's tables ---------------------------------------------------- */
+
+/* the 20 estimates' names (spacerobot.interface.ESTIMATE_NAMES) and their index */
+#define ESTIMATES(Y, prefix, field)                                                              \
+    BODY_ESTIMATES(Y, prefix, "base.", field, 0) BODY_ESTIMATES(Y, prefix, "target.", field, 10)
+#define BODY_ESTIMATES(Y, prefix, body, field, o)                                               \
+    Y(prefix body "m", field, o) Y(prefix body "b[1]", field, o + 1)                            \
+    Y(prefix body "b[2]", field, o + 2) Y(prefix body "b[3]", field, o + 3)                     \
+    Y(prefix body "Ixx", field, o + 4) Y(prefix body "Iyy", field, o + 5)                       \
+    Y(prefix body "Izz", field, o + 6) Y(prefix body "Ixy", field, o + 7)                       \
+    Y(prefix body "Ixz", field, o + 8) Y(prefix body "Iyz", field, o + 9)
+
+/* the estimator FMU's outputs: name, Integer, the report's field and index */
+typedef struct {
+    const char *name;
+    int integer;
+    size_t offset;
+} output;
+
+#define REAL_(name, field, i)                                                                    \
+    {name, 0, offsetof(sr_estimator_report, field) + (size_t)(i) * sizeof(double)},
+#define INT_(name, field, i)                                                                     \
+    {name, 1, offsetof(sr_estimator_report, field) + (size_t)(i) * sizeof(int)},
+
+static const output OUTPUTS[] = {
+    ESTIMATES(REAL_, "", vector)             /* the estimates, physically consistent */
+    ESTIMATES(REAL_, "sd.", sd)              /* their standard deviations */
+    ESTIMATES(REAL_, "crb.", crb)            /* the information filter's bound */
+    INT_("diag.samples", samples, 0)
+    INT_("diag.rejected", rejected, 0)
+    INT_("diag.status", status, 0)
+    REAL_("diag.residual_lin", residual_lin, 0)
+    REAL_("diag.residual_ang", residual_ang, 0)
+    REAL_("diag.excitation_mu", excitation_mu, 0)
+    REAL_("diag.excitation_theta", excitation_theta, 0)
+    REAL_("ident.excite", excite, 0)
+    INT_("diag.identified.base", identified, 0)
+    INT_("diag.identified.target", identified, 1)
+    INT_("diag.physical.base", physical, 0)
+    INT_("diag.physical.target", physical, 1)
+    REAL_("diag.info_chi2", info_chi2, 0)
+    REAL_("ident.excite_rate", excite_rate, 0)
+    REAL_("diag.excite_score.rate_1", excite_score, 0)
+    REAL_("diag.excite_score.rate_try", excite_score, 1)
+};
+#undef REAL_
+#undef INT_
+#define N_OUTPUTS ((int)(sizeof OUTPUTS / sizeof OUTPUTS[0]))
+
+int sr_estimator_output_count(void) { return N_OUTPUTS; }
+
+const char *sr_estimator_output_name(int i)
+{
+    return i >= 0 && i < N_OUTPUTS ? OUTPUTS[i].name : NULL;
+}
+
+int sr_estimator_output_integer(int i)
+{
+    return i >= 0 && i < N_OUTPUTS ? OUTPUTS[i].integer : -1;
+}
+
+void sr_estimator_outputs(const sr_estimator_report *r, double *out)
+{
+    if (!r || !out)
+        return;
+    for (int i = 0; i < N_OUTPUTS; i++) {
+        const char *at = (const char *)r + OUTPUTS[i].offset;
+        out[i] = OUTPUTS[i].integer ? (double)*(const int *)at : *(const double *)at;
+    }
+}
+
+/* what diag.status says (the SR_EST_* codes) */
+static const char *const STATUS_TEXT[] = {
+    "no sample yet",
+    "reference sample stored (momentum method) or waiting for differencing history",
+    "estimating: last sample used",
+    "last sample rejected: non-finite or out-of-range input, or an update that overflowed",
+    "last sample rejected: inconsistent input (base.A not a rotation matrix, or a sample time "
+    "not after the previous one with differenced accelerations or a reference window)"};
+
+const char *sr_estimator_status_text(int s)
+{
+    return s >= SR_EST_NO_SAMPLE && s <= SR_EST_REJECT_INCONSISTENT ? STATUS_TEXT[s] : NULL;
+}
+
+double sr_estimator_input_limit(void) { return SR_EST_INPUT_LIMIT; }
+double sr_estimator_rotation_tol(void) { return SR_EST_ROTATION_TOL; }

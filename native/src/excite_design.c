@@ -8,40 +8,6 @@
 
 #define MU SR_INFO_MAX_U
 
-int sr_exd_options_check(const sr_exd_options *o, const char **name, const char **rule,
-                         double *value)
-{
-    const char *bad = NULL, *why = NULL;
-    double v = NAN;
-    if (!o) {
-        bad = "ident.excite_rate_try";
-        why = "given";
-    } else if (!(o->rate >= SR_EXD_RATE_MIN && o->rate <= SR_EXD_RATE_MAX) || o->rate == 1.0) {
-        bad = "ident.excite_rate_try";
-        why = "in [0.1, 10] and not 1";
-        v = o->rate;
-    } else if (!(o->window > 0.0 && o->window <= SR_EXD_TIME_MAX)) {
-        bad = "ident.excite_window";
-        why = "> 0 s and <= 1e7 s";
-        v = o->window;
-    } else if (!(o->settle >= 0.0 && o->settle <= SR_EXD_TIME_MAX)) {
-        bad = "ident.excite_settle";
-        why = ">= 0 s and <= 1e7 s";
-        v = o->settle;
-    } else if (!(o->horizon > 0.0 && o->horizon <= SR_EXD_TIME_MAX)) {
-        bad = "ident.excite_horizon";
-        why = "> 0 s and <= 1e7 s";
-        v = o->horizon;
-    }
-    if (name)
-        *name = bad;
-    if (rule)
-        *rule = why;
-    if (value)
-        *value = v;
-    return bad != NULL;
-}
-
 void sr_exd_init(sr_exd_data *x)
 {
     if (!x)

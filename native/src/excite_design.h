@@ -54,7 +54,8 @@ enum sr_exd_phase {
     SR_EXD_DONE = 4         /* chosen (or nothing to choose) */
 };
 
-/** The options (the estimator FMU's parameters ident.excite_*). */
+/** The options (the estimator FMU's parameters ident.excite_*; the estimator's options table
+ *  checks them: est_options.c). */
 typedef struct sr_exd_options {
     double rate;            /* ident.excite_rate_try: the candidate rate tried against 1,
                                in [SR_EXD_RATE_MIN, SR_EXD_RATE_MAX], != 1 */
@@ -86,12 +87,6 @@ typedef struct sr_exd_work {
     sr_info_work info;
     double dS_fast[SR_INFO_MAX_U * SR_INFO_MAX_U];
 } sr_exd_work;
-
-/** 0 when o's numbers are valid, else 1 with why: the offending FMU parameter's name, the rule
- *  it breaks ("in [0.1, 10] and not 1", static strings) and its value (any pointer may be
- *  NULL). */
-SR_API int sr_exd_options_check(const sr_exd_options *o, const char **name, const char **rule,
-                                double *value);
 
 /** The state before any sample: phase SR_EXD_WAIT, rate 1. */
 SR_API void sr_exd_init(sr_exd_data *x);

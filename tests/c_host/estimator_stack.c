@@ -25,98 +25,88 @@
 
 #include "arm.h"
 #include "estimator.h"
-#include "sensor_noise.h"
 
-typedef void (*configure_fn)(sr_estimator_options *o);
+/* a configuration: (option name, value) pairs (the core's options table; the estimator FMU's
+ * parameter names), the list ending with a NULL name */
+typedef struct {
+    const char *name;
+    double value;
+} setting;
 
-/* the sensors' realistic magnitudes (spacerobot.interface.NOISE_PARAMETERS' defaults) */
-static void sensors(sr_estimator_options *o)
-{
-    o->noise_profile = 1;
-    o->noise[SR_NOISE_GYRO_ARW] = 2.0e-5;
-    o->noise[SR_NOISE_GYRO_BIAS] = 4.8e-6;
-    o->noise[SR_NOISE_STAR_CROSS] = 9.7e-6;
-    o->noise[SR_NOISE_STAR_ROLL] = 4.8e-5;
-    o->noise[SR_NOISE_NAV_R] = 0.01;
-    o->noise[SR_NOISE_NAV_V] = 1e-3;
-    o->noise[SR_NOISE_ACCEL_VRW] = 5.0e-4;
-    o->noise[SR_NOISE_ALPHA] = 2.0e-4;
-    o->noise[SR_NOISE_ENC_RESOLUTION] = 1.1984e-5;
-    o->noise[SR_NOISE_ENC_Q] = 5.0e-6;
-    o->noise[SR_NOISE_ENC_QD] = 1e-4;
-    o->noise[SR_NOISE_ENC_QDD] = 1e-3;
-    o->noise[SR_NOISE_THRUST_SCALE] = 0.02;
-    o->noise[SR_NOISE_THRUST_MISALIGN] = 8.7e-3;
-    /* a short trial of the excitation's rate: it ends within the recorded samples */
-    o->excite_window = 1.0;
-    o->excite_settle = 0.5;
-}
-
-#define CONFIG(name, body) static void name(sr_estimator_options *o) { body; }
-CONFIG(momentum, (void)o)
-CONFIG(momentum_joint, o->solver = 2)
-CONFIG(momentum_forget, o->lambda = 0.995; o->row_sd_lin = 0.1; o->row_sd_ang = 0.2;
-       o->corr_lags = 5)
-CONFIG(momentum_window, o->momentum_window = 2.0; o->momentum_point = 1; o->corr_lags = 3)
-CONFIG(momentum_window_joint, o->solver = 2; o->momentum_window = 1.0;
-       o->sd_thrust_scale = 0.01; o->sd_thrust_misalign = 0.005)
-CONFIG(momentum_point_consider, o->momentum_point = 1; o->sd_thrust_scale = 0.02)
-CONFIG(momentum_window_full, o->momentum_window = 1.0; o->momentum_window_samples = 5)
-CONFIG(force, o->method = 2)
-CONFIG(force_joint, o->method = 2; o->solver = 2; o->corr_lags = 4)
-CONFIG(force_eiv_bias, o->method = 2; o->signal_sd[0] = 1e-3; o->signal_sd[1] = 1e-4;
-       o->signal_sd[2] = 1e-4; o->accel_bias = 1; o->corr_lags = 2)
-CONFIG(force_eiv_joint, o->method = 2; o->solver = 2; o->signal_sd[0] = 1e-3;
-       o->signal_sd[1] = 1e-4; o->signal_sd[2] = 1e-4; o->sd_thrust_misalign = 0.01;
-       o->accel_bias = 1)
-CONFIG(force_consider, o->method = 2; o->sd_thrust_scale = 0.01; o->sd_thrust_misalign = 0.01;
-       o->lambda = 0.999)
-CONFIG(differenced, o->method = 2; o->accel_source = 2)
-CONFIG(differenced_eiv, o->method = 2; o->accel_source = 2; o->diff_half_window = 5;
-       o->signal_sd[3] = 1e-4; o->signal_sd[4] = 1e-5; o->signal_sd[5] = 1e-5)
-CONFIG(differenced_joint, o->method = 2; o->accel_source = 2; o->solver = 2;
-       o->diff_half_window = 2; o->corr_lags = 3)
-CONFIG(differenced_long, o->method = 2; o->accel_source = 2; o->diff_half_window = 50)
-CONFIG(diff_momentum, o->method = 2; o->accel_source = 2; o->diff_momentum = 1;
-       o->diff_half_window = 4)
-CONFIG(diff_momentum_eiv, o->method = 2; o->accel_source = 2; o->diff_momentum = 1;
-       o->diff_half_window = 10; o->signal_sd[3] = 1e-4; o->signal_sd[4] = 1e-5;
-       o->signal_sd[5] = 1e-5; o->sd_thrust_scale = 0.01; o->corr_lags = 2)
-CONFIG(diff_momentum_joint_eiv, o->method = 2; o->accel_source = 2; o->solver = 2;
-       o->diff_momentum = 1; o->diff_half_window = 10; o->signal_sd[3] = 1e-4;
-       o->signal_sd[4] = 1e-5; o->signal_sd[5] = 1e-5; o->sd_thrust_misalign = 0.01)
-CONFIG(profile_momentum, sensors(o))
-CONFIG(profile_momentum_joint, sensors(o); o->solver = 2)
-CONFIG(profile_force, sensors(o); o->method = 2)
-CONFIG(profile_force_joint, sensors(o); o->method = 2; o->solver = 2)
-CONFIG(profile_differenced, sensors(o); o->method = 2; o->accel_source = 2)
-CONFIG(profile_differenced_joint, sensors(o); o->method = 2; o->accel_source = 2;
-       o->solver = 2)
-CONFIG(profile_always, sensors(o); o->excite_mode = 2)
-CONFIG(profile_filter_off, sensors(o); o->information = 2)
-#undef CONFIG
+/* the noise profile with the sensors' realistic magnitudes (spacerobot.interface's
+ * NOISE_PARAMETERS defaults), and a short trial of the excitation's rate: it ends within the
+ * recorded samples */
+#define SENSORS                                                                                 \
+    {"ident.noise_profile", 1}, {"noise.gyro.arw", 2.0e-5}, {"noise.gyro.bias", 4.8e-6},        \
+        {"noise.star.cross", 9.7e-6}, {"noise.star.roll", 4.8e-5}, {"noise.nav.r", 0.01},       \
+        {"noise.nav.v", 1e-3}, {"noise.accel.vrw", 5.0e-4}, {"noise.alpha", 2.0e-4},            \
+        {"noise.enc.resolution", 1.1984e-5}, {"noise.enc.q", 5.0e-6}, {"noise.enc.qd", 1e-4},   \
+        {"noise.enc.qdd", 1e-3}, {"noise.thrust.scale", 0.02},                                  \
+        {"noise.thrust.misalign", 8.7e-3}, {"ident.excite_window", 1.0},                        \
+        {"ident.excite_settle", 0.5}
+#define FORCE {"method", 2}
+#define JOINT {"solver", 2}
+#define DIFFERENCED {"method", 2}, {"accel_source", 2}
+#define VELOCITY_NOISE {"ident.noise.base.v", 1e-4}, {"ident.noise.base.omega", 1e-5},           \
+        {"ident.noise.arm.qd", 1e-5}
+#define ACCEL_NOISE {"ident.noise.base.a", 1e-3}, {"ident.noise.base.alpha", 1e-4},              \
+        {"ident.noise.arm.qdd", 1e-4}
+#define END {NULL, 0}
 
 static const struct {
     const char *name;
-    configure_fn configure;
+    setting settings[40];
 } CONFIGS[] = {
-#define C(x) {#x, x}
-    C(momentum), C(momentum_joint), C(momentum_forget), C(momentum_window),
-    C(momentum_window_joint), C(momentum_point_consider), C(momentum_window_full), C(force),
-    C(force_joint), C(force_eiv_bias), C(force_eiv_joint), C(force_consider), C(differenced),
-    C(differenced_eiv), C(differenced_joint), C(differenced_long), C(diff_momentum),
-    C(diff_momentum_eiv), C(diff_momentum_joint_eiv), C(profile_momentum),
-    C(profile_momentum_joint), C(profile_force), C(profile_force_joint),
-    C(profile_differenced), C(profile_differenced_joint), C(profile_always),
-    C(profile_filter_off),
-#undef C
+    {"momentum", {END}},
+    {"momentum_joint", {JOINT, END}},
+    {"momentum_forget", {{"lambda", 0.995}, {"ident.sd_row.momentum_lin", 0.1},
+                         {"ident.sd_row.momentum_ang", 0.2}, {"ident.corr_lags", 5}, END}},
+    {"momentum_window", {{"ident.momentum_window", 2.0}, {"ident.momentum_point", 1},
+                         {"ident.corr_lags", 3}, END}},
+    {"momentum_window_joint", {JOINT, {"ident.momentum_window", 1.0},
+                               {"ident.sd_thrust.scale", 0.01},
+                               {"ident.sd_thrust.misalign", 0.005}, END}},
+    {"momentum_point_consider", {{"ident.momentum_point", 1}, {"ident.sd_thrust.scale", 0.02},
+                                 END}},
+    {"momentum_window_full", {{"ident.momentum_window", 1.0}, {"momentum_window_samples", 5},
+                              END}},
+    {"force", {FORCE, END}},
+    {"force_joint", {FORCE, JOINT, {"ident.corr_lags", 4}, END}},
+    {"force_eiv_bias", {FORCE, ACCEL_NOISE, {"ident.accel_bias", 1}, {"ident.corr_lags", 2},
+                        END}},
+    {"force_eiv_joint", {FORCE, JOINT, ACCEL_NOISE, {"ident.sd_thrust.misalign", 0.01},
+                         {"ident.accel_bias", 1}, END}},
+    {"force_consider", {FORCE, {"ident.sd_thrust.scale", 0.01},
+                        {"ident.sd_thrust.misalign", 0.01}, {"lambda", 0.999},
+                        {"ident.sd_row.force_lin", 0.1}, {"ident.sd_row.force_ang", 0.1}, END}},
+    {"differenced", {DIFFERENCED, END}},
+    {"differenced_eiv", {DIFFERENCED, {"ident.diff_half_window", 5}, VELOCITY_NOISE, END}},
+    {"differenced_joint", {DIFFERENCED, JOINT, {"ident.diff_half_window", 2},
+                           {"ident.corr_lags", 3}, END}},
+    {"differenced_long", {DIFFERENCED, {"ident.diff_half_window", 50}, END}},
+    {"diff_momentum", {DIFFERENCED, {"ident.diff_momentum", 1}, {"ident.diff_half_window", 4},
+                       END}},
+    {"diff_momentum_eiv", {DIFFERENCED, {"ident.diff_momentum", 1},
+                           {"ident.diff_half_window", 10}, VELOCITY_NOISE,
+                           {"ident.sd_thrust.scale", 0.01}, {"ident.corr_lags", 2}, END}},
+    {"diff_momentum_joint_eiv", {DIFFERENCED, JOINT, {"ident.diff_momentum", 1},
+                                 {"ident.diff_half_window", 10}, VELOCITY_NOISE,
+                                 {"ident.sd_thrust.misalign", 0.01}, END}},
+    {"profile_momentum", {SENSORS, END}},
+    {"profile_momentum_joint", {SENSORS, JOINT, END}},
+    {"profile_force", {SENSORS, FORCE, END}},
+    {"profile_force_joint", {SENSORS, FORCE, JOINT, END}},
+    {"profile_differenced", {SENSORS, DIFFERENCED, END}},
+    {"profile_differenced_joint", {SENSORS, DIFFERENCED, JOINT, END}},
+    {"profile_always", {SENSORS, {"ident.excite_mode", 2}, END}},
+    {"profile_filter_off", {SENSORS, {"ident.information", 2}, END}},
 };
 
 typedef struct {
     const sr_robot *robot;
     int n_samples, n_flat;
     const double *samples;          /* n_samples x (1 + n_flat) */
-    configure_fn configure;
+    const setting *settings;
     /* out */
     int built, finite;
     sr_estimator_report report;
@@ -128,8 +118,9 @@ static void *run(void *arg)
     job *j = (job *)arg;
     sr_estimator_options o;
     sr_estimator_options_default(&o);
-    o.noise_dt = 0.1;
-    j->configure(&o);
+    for (const setting *s = j->settings; s->name; s++)
+        if (sr_estimator_options_set(&o, s->name, s->value, j->err, sizeof j->err) != 0)
+            return NULL;
     sr_estimator_model *m = sr_estimator_model_new(j->robot, &o, j->err, sizeof j->err);
     if (!m)
         return NULL;
@@ -202,7 +193,7 @@ int main(int argc, char **argv)
         j.n_samples = head[0];
         j.n_flat = head[1];
         j.samples = samples;
-        j.configure = CONFIGS[c].configure;
+        j.settings = CONFIGS[c].settings;
         pthread_t th;
         if (pthread_create(&th, &attr, run, &j) != 0 || pthread_join(th, NULL) != 0) {
             fprintf(stderr, "cannot run a thread\n");

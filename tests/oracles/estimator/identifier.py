@@ -17,8 +17,9 @@ from typing import Mapping, Tuple
 
 import numpy as np
 
-from spacerobot.interface import (COM_SCALE_MIN, SIGNAL_NOISE_PARAMETERS, AccelSource, ExciteMode,
-                         Method, ParameterLayout, Solver, body_of, row_sd)
+from spacerobot.interface import (COM_SCALE_MIN, ROW_SD_PARAMETERS, SIGNAL_NOISE_PARAMETERS,
+                                  AccelSource, ExciteMode, Method, ParameterLayout, Solver,
+                                  body_of)
 from spacerobot.kinematics import ArmGeometry
 from spacerobot.robots import Guess, Robot
 from . import consider, eiv, kernels, report_kernels
@@ -1055,6 +1056,18 @@ class ExcitationRequest:
                                               and not all(identified.values())):
             return float(self.level)
         return 0.0
+
+
+def row_sd(values: Mapping[str, float], method: Method) -> Tuple[float, float]:
+    """``(linear, angular)`` row standard deviations of ``method`` from the estimator's
+    parameter values, every pair checked."""
+    for suffix, _, _, _ in ROW_SD_PARAMETERS:
+        x = float(values[f"ident.sd_row.{suffix}"])
+        if not (math.isfinite(x) and x >= 0.0):
+            raise ValueError(f"ident.sd_row.{suffix} must be a finite number >= 0 "
+                             f"(0 = unit weight), got {x}")
+    return tuple(float(values[f"ident.sd_row.{suffix}"])
+                 for suffix, m, _, _ in ROW_SD_PARAMETERS if m is method)
 
 
 def identifier_from_values(robot: Robot, values: Mapping[str, float]
