@@ -23,7 +23,7 @@ from oracles import regressors as rg
 from oracles.kinematics import ArmKinematics
 from oracles import estimator as oracle
 from spacerobot.estimator import Identifier
-from spacerobot.estimator import parameters as par
+from oracles.estimator import parameters as par
 from oracles.estimator.rls import ModifiedRLS
 from spacerobot.interface import estimate_vector
 from spacerobot.plant import Plant

@@ -26,7 +26,7 @@ import pytest
 from oracles import estimator as oracle
 from oracles.kinematics import ArmKinematics, skew
 from spacerobot.estimator import Identifier
-from spacerobot.estimator import parameters as par
+from oracles.estimator import parameters as par
 from oracles.estimator.accel_bias import BiasFit
 from spacerobot.estimator.identifier import identifier_from_values
 from oracles.estimator.noise_model import equation_error_sd

@@ -160,7 +160,7 @@ def _batch(rows, weights, x0, P0):
 
 def _estimates_of_standard(pi):
     """The 20 estimates (m, b, I_c per body) of a standard parameter vector (20,)."""
-    from spacerobot.estimator import parameters as par
+    from oracles.estimator import parameters as par
     from spacerobot.interface import LAYOUT
     out = np.empty(20)
     for b in LAYOUT.bodies:
