@@ -157,9 +157,8 @@ def test_bad_noise_settings_are_refused(excited, bad, match):
     sc, _ = excited
     with pytest.raises(ValueError, match=match):
         Identifier(sc.robot, sc.guess, "force", signal_sd=bad)
-    # the momentum method's window: not the force method's (the core ignores it)
-    ident = Identifier(sc.robot, sc.guess, "force", window=1.0, signal_sd={"a_S": 1e-3})
-    assert ident.window == 0.0
+    with pytest.raises(ValueError, match="momentum method's.*force method takes 0"):
+        Identifier(sc.robot, sc.guess, "force", window=1.0, signal_sd={"a_S": 1e-3})
 
 
 def test_bad_fmu_noise_parameter_is_refused():

@@ -92,7 +92,7 @@ def test_parameter_ranges_are_what_the_core_enforces(spatial):
     """Every parameter has a closed range (min <= max); a value just outside it is refused with
     a message naming the parameter, the bounds themselves are accepted (where no rule between
     options or of the guessed body as a whole refuses them: a body's and the noise profile's
-    products are checked as such)."""
+    products are checked as such); the rows' weights of either method are checked."""
     ranges = core.parameter_ranges()
     table = {o.name: o for o in core.option_table()}
     assert set(ranges) == {v.name for v in _vars(spatial, "parameter")}
@@ -102,16 +102,19 @@ def test_parameter_ranges_are_what_the_core_enforces(spatial):
         o = table[name]
         below = lo - 1 if o.integer else math.nextafter(lo, -math.inf)
         above = hi + 1 if o.integer else math.nextafter(hi, math.inf)
+        method = {"method": 2} if name.startswith("ident.sd_row.force") else {}
         for bad in (below, above):
             if o.integer and not (-2 ** 31 <= bad < 2 ** 31):
                 continue
-            msg = _check({**base, name: bad})
+            msg = _check({**base, **method, name: bad})
             body = name.startswith("guess.")
             assert msg and (body or name in msg), (name, bad, msg)
+            if method:                      # the other method's weights: checked too
+                assert _check({**base, name: bad}) == msg, (name, bad)
         if name.startswith("guess.") or name.startswith("noise."):
             continue
         for good in (lo, hi):
-            assert _check({**base, name: good}) == "", (name, good)
+            assert _check({**base, **method, name: good}) == "", (name, good)
     assert core.parameter_ranges(["lambda"]) == {"lambda": ranges["lambda"]}
     with pytest.raises(KeyError):
         core.parameter_ranges(["ident.no_such_parameter"])

@@ -163,9 +163,9 @@ def test_fmu_parameters_reach_the_identifier():
     ident, _ = identifier_from_values(sc.robot, v)   # force, measured: the bias fit on
     assert (ident.window, ident.moving_point, ident.accel_bias) == (0.0, False, True)
     assert ident.core.options.accel_bias == 1
-    # a reference window is the momentum method's (the force method's high-pass is not kept):
-    # the core ignores it with the force method
-    assert Identifier(sc.robot, sc.guess, "force", window=2.0).window == 0.0
+    # a reference window is the momentum method's (the force method's high-pass is not kept)
+    with pytest.raises(ValueError, match="momentum method's.*force method takes 0"):
+        Identifier(sc.robot, sc.guess, "force", window=2.0)
     ident, _ = identifier_from_values(sc.robot, dict(v, **{"ident.accel_bias": 0}))
     assert (ident.window, ident.moving_point, ident.accel_bias) == (0.0, False, False)
     for name, bad in (("ident.momentum_point", 2), ("ident.accel_bias", -1),

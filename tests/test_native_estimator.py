@@ -577,7 +577,7 @@ def test_guess_and_covariance_ranges(lib):
                     for v in (1e-7, 1e16)]
     for key in ("P0_mu", "P0_theta"):
         ok += [{key: v} for v in (1e-12, 1e16)]
-        refused += [({key: v}, f"{key} must be a finite covariance > 0, within [1e-12, 1e+16]")
+        refused += [({key: v}, f"{key} must be a covariance within [1e-12, 1e+16]")
                     for v in (5e-324, 1e-13, 1e17, 1e308)]
     for change in ok:
         for method in ("momentum", "force"):
@@ -654,8 +654,9 @@ def test_weak_prior_noise_free_run_keeps_every_sample(lib, method, P0s):
 # -- options -----------------------------------------------------------------------------------------
 def test_options_refused_with_the_python_messages(lib):
     """Invalid options: no model, the message of the oracle (the former Python Identifier)
-    naming the parameter; the options of another method (a reference window with the force
-    method) ignored, by the core and the library's Identifier alike."""
+    naming the parameter; a reference window with the force method: refused by the library's
+    Identifier (its one ``window`` argument), never ignored; the core ignores the other
+    method's options."""
     sc, _ = stream("planar-medium")
     values = {v.name: v.start for v in interface.estimator_vars(sc.robot, sc)
               if v.causality == "parameter"}
@@ -683,7 +684,8 @@ def test_options_refused_with_the_python_messages(lib):
     with pytest.raises(ValueError, match="method = 3 is not one of"):
         NativeEstimator(sc.robot, {"method": 3}, lib=lib)
     from spacerobot.estimator import Identifier as LibraryIdentifier
-    assert LibraryIdentifier(sc.robot, sc.guess, "force", lib=lib, window=2.0).window == 0.0
+    with pytest.raises(ValueError, match="momentum method's.*force method takes 0"):
+        LibraryIdentifier(sc.robot, sc.guess, "force", lib=lib, window=2.0)
     nat = NativeEstimator(sc.robot, {"method": 2, "momentum_window": 5.0}, lib=lib)
     assert nat.model_options()["momentum_window"] == 0.0
 

@@ -209,7 +209,7 @@ def test_estimator_fmu_refuses_a_bad_profile_value(tmp_path):
                           "estimator.noise.scale=-1"], capture_output=True, text=True,
                          cwd=tmp_path, timeout=600)
     assert out.returncode != 0
-    assert "noise.scale must be a finite number in [0, 1e+06], got -1" in out.stderr, out.stderr
+    assert "noise.scale must be a finite number in [0, 1e6], got -1" in out.stderr, out.stderr
 
 
 def test_running_the_sensors_ssp_file_uses_its_bound_set(tmp_path):

@@ -20,12 +20,15 @@
 #define BELOW_ONE 0x1.fffffffffffffp-1     /* the largest double below 1 */
 #define FINITE DBL_MAX
 
-/* what a value's message says (rule: the text, {n} the option's name, {a} {b} its bounds):
+/* what a value's message says (rule: the text, {n} the option's name, {a} {b} its bounds as
+ * %g, {A} {B} the same without the exponent's sign and zeros, "1e6"):
  *   CODE   "<name> = <v> is not one of <rule>"
- *   RULE   "<rule>, got <v>" */
-enum { CODE, RULE };
-/* when a value is checked: always; with ident.noise_profile = 1; as a body (sr_body_check of
- * the guess it belongs to) */
+ *   RULE   "<rule>, got <v>" (an Integer option's v as an integer)
+ *   REPR   "<rule>, got <v>" (v as a Real's, "2.0")
+ *   COVAR  "<name> must be a finite covariance > 0, got <v>" when v is not, else the RULE */
+enum { CODE, RULE, REPR, COVAR };
+/* when a value is checked: always (the other method's row weights too); with
+ * ident.noise_profile = 1; as a body (sr_body_check of the guess it belongs to) */
 enum { ALWAYS, PROFILE, BODY };
 
 /* The options: X(name, field, index, integer, min, max, default, not_one, parameter, when,
@@ -38,10 +41,10 @@ enum { ALWAYS, PROFILE, BODY };
       "1 (measured), 2 (differenced)")                                                          \
     X("lambda", lambda, 0, 0, POSITIVE, 1.0, 1.0, 0, 1, ALWAYS, RULE,                           \
       "forgetting factor lambda must satisfy 0 < lambda <= 1")                                  \
-    X("P0_mu", P0_mu, 0, 0, SR_EST_P0_MIN, SR_EST_P0_MAX, 1e6, 0, 1, ALWAYS, RULE,              \
-      "{n} must be a finite covariance > 0, within [{a}, {b}] (SI units)")                      \
-    X("P0_theta", P0_theta, 0, 0, SR_EST_P0_MIN, SR_EST_P0_MAX, 1e6, 0, 1, ALWAYS, RULE,        \
-      "{n} must be a finite covariance > 0, within [{a}, {b}] (SI units)")                      \
+    X("P0_mu", P0_mu, 0, 0, SR_EST_P0_MIN, SR_EST_P0_MAX, 1e6, 0, 1, ALWAYS, COVAR,              \
+      "{n} must be a covariance within [{a}, {b}] (SI units)")                      \
+    X("P0_theta", P0_theta, 0, 0, SR_EST_P0_MIN, SR_EST_P0_MAX, 1e6, 0, 1, ALWAYS, COVAR,        \
+      "{n} must be a covariance within [{a}, {b}] (SI units)")                      \
     BODY_OPTIONS(X, "guess.base.", guess_base, 600.0, 0.0, 0.0, 0.0, 100.0, 100.0, 100.0)       \
     BODY_OPTIONS(X, "guess.target.", guess_target, 100.0, 0.1, 0.1, 0.1, 10.0, 10.0, 10.0)      \
     X("ident.sd_rel", sd_rel, 0, 0, POSITIVE, BELOW_ONE, 1e-3, 0, 1, ALWAYS, RULE,              \
@@ -85,8 +88,8 @@ enum { ALWAYS, PROFILE, BODY };
       "{n} (signal_sd['omega_B']) must be a finite number >= 0")                                \
     X("ident.noise.arm.qd", signal_sd, 5, 0, 0.0, FINITE, 0.0, 0, 1, ALWAYS, RULE,              \
       "{n} (signal_sd['qd']) must be a finite number >= 0")                                     \
-    X("ident.noise_profile", noise_profile, 0, 1, 0, 1, 0, 0, 1, ALWAYS, CODE,                  \
-      "0 (none), 1 (sensors)")                                                                  \
+    X("ident.noise_profile", noise_profile, 0, 1, 0, 1, 0, 0, 1, ALWAYS, REPR,                  \
+      "{n} must be 0 (none) or 1 (sensors)")                                                   \
     X("ident.information", information, 0, 1, 0, 2, 0, 0, 1, ALWAYS, CODE,                      \
       "0 (automatic), 1 (on), 2 (off)")                                                         \
     X("ident.excite_adapt", excite_adapt, 0, 1, 0, 2, 0, 0, 1, ALWAYS, CODE,                    \
@@ -94,13 +97,13 @@ enum { ALWAYS, PROFILE, BODY };
     X("ident.excite_rate_try", excite_rate_try, 0, 0, SR_EXD_RATE_MIN, SR_EXD_RATE_MAX, 4.0, 1, \
       1, ALWAYS, RULE, "{n} must be in [{a}, {b}] and not 1")                                   \
     X("ident.excite_window", excite_window, 0, 0, POSITIVE, SR_EXD_TIME_MAX, 30.0, 0, 1,        \
-      ALWAYS, RULE, "{n} must be > 0 s and <= {b} s")                                           \
+      ALWAYS, RULE, "{n} must be > 0 s and <= {B} s")                                           \
     X("ident.excite_settle", excite_settle, 0, 0, 0.0, SR_EXD_TIME_MAX, 20.0, 0, 1, ALWAYS,     \
-      RULE, "{n} must be >= 0 s and <= {b} s")                                                  \
+      RULE, "{n} must be >= 0 s and <= {B} s")                                                  \
     X("ident.excite_horizon", excite_horizon, 0, 0, POSITIVE, SR_EXD_TIME_MAX, 300.0, 0, 1,     \
-      ALWAYS, RULE, "{n} must be > 0 s and <= {b} s")                                           \
+      ALWAYS, RULE, "{n} must be > 0 s and <= {B} s")                                           \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
-      "{n} must be a finite number in [{a}, {b}]")                                              \
+      "{n} must be a finite number in [{a}, {B}]")                                              \
     PROFILE_MAGNITUDE(X, SR_NOISE_GYRO_ARW)                                                     \
     PROFILE_MAGNITUDE(X, SR_NOISE_NAV_V)                                                        \
     PROFILE_MAGNITUDE(X, SR_NOISE_ACCEL_VRW)                                                    \
@@ -116,7 +119,7 @@ enum { ALWAYS, PROFILE, BODY };
     PROFILE_MAGNITUDE(X, SR_NOISE_ENC_RESOLUTION)                                               \
     PROFILE_MAGNITUDE(X, SR_NOISE_GYRO_BIAS)                                                    \
     X("noise_dt", noise_dt, 0, 0, POSITIVE, SR_NOISE_PROFILE_MAX, 0.1, 0, 0, PROFILE, RULE,     \
-      "the sample time (noise_dt) must be a finite number in (0, {b}] s")                      \
+      "the sample time (noise_dt) must be a finite number in (0, {B}] s")                      \
     X("momentum_window_samples", momentum_window_samples, 0, 1, 0, SR_EST_MAX_WINDOW_SAMPLES,   \
       0, 1, 0, ALWAYS, RULE,                                                                    \
       "{n} (the momentum window's ring) must be 0 (automatic) or an integer from 2 to {b}")
@@ -291,11 +294,41 @@ static void value_text(const option *p, double v, char *err, size_t errlen)
         sr_text_repr(err, errlen, v);
 }
 
+/* append x as sr_text_num's %g (6 digits), compact: no sign or leading zeros in the exponent
+ * ("1e6", "1e-12", "0.5") */
+static void num_compact(char *err, size_t errlen, double x)
+{
+    char t[40], u[40];
+    size_t k = 0;
+    sr_text_set(t, sizeof t, "");
+    sr_text_num(t, sizeof t, x, 6);
+    for (const char *c = t; *c && k + 1 < sizeof u; c++) {
+        u[k++] = *c;
+        if (*c == 'e') {
+            if (c[1] == '+')
+                c++;
+            else if (c[1] == '-')
+                u[k++] = *++c;
+            while (c[1] == '0' && c[2])
+                c++;
+        }
+    }
+    u[k] = '\0';
+    sr_text_cat(err, errlen, u);
+}
+
 /* the message of option p's value v: "<name> = <v> is not one of <rule>" (CODE), or the rule
- * with {n} (the name), {a}, {b} (the bounds) filled in and ", got <v>" (RULE) */
+ * with {n} (the name), {a}, {b}, {A}, {B} (the bounds) filled in and ", got <v>" (RULE, REPR,
+ * COVAR) */
 static void message(const option *p, double v, char *err, size_t errlen)
 {
     sr_text_set(err, errlen, "");
+    if (p->style == COVAR && !(v > 0.0 && isfinite(v))) {
+        sr_text_cat(err, errlen, name_of(p));
+        sr_text_cat(err, errlen, " must be a finite covariance > 0, got ");
+        sr_text_repr(err, errlen, v);
+        return;
+    }
     if (p->style == CODE) {
         sr_text_cat(err, errlen, name_of(p));
         sr_text_cat(err, errlen, " = ");
@@ -308,8 +341,10 @@ static void message(const option *p, double v, char *err, size_t errlen)
         if (c[0] == '{' && c[1] && c[2] == '}') {
             if (c[1] == 'n')
                 sr_text_cat(err, errlen, name_of(p));
-            else
+            else if (c[1] == 'a' || c[1] == 'b')
                 sr_text_num(err, errlen, c[1] == 'a' ? p->min : p->max, 6);
+            else
+                num_compact(err, errlen, c[1] == 'A' ? p->min : p->max);
             c += 2;
         } else {
             char one[2] = {*c, '\0'};
@@ -317,7 +352,10 @@ static void message(const option *p, double v, char *err, size_t errlen)
         }
     }
     sr_text_cat(err, errlen, ", got ");
-    value_text(p, v, err, errlen);
+    if (p->style == REPR)
+        sr_text_repr(err, errlen, v);
+    else
+        value_text(p, v, err, errlen);
 }
 
 int sr_estimator_options_set(sr_estimator_options *o, const char *name, double value,
@@ -392,7 +430,7 @@ static int check_rules(const sr_estimator_options *o, char *err, size_t errlen)
         if (!(o->noise_scale * x <= limit)) {
             sr_text_set(err, errlen, name_of(p));
             sr_text_cat(err, errlen, " must be at most ");
-            sr_text_num(err, errlen, limit, 6);
+            num_compact(err, errlen, limit);
             sr_text_cat(err, errlen, " / noise.scale, got ");
             sr_text_repr(err, errlen, x);
             return 1;

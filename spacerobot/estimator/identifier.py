@@ -207,6 +207,12 @@ class Identifier:
         if unknown:
             raise ValueError(f"signal_sd: unknown signal {sorted(unknown)[0]!r}; known: "
                              f"{sorted(SIGNAL_SD_NAMES)}")
+        if method is Method.FORCE and window > 0.0:
+            # the argument, not an option: the core's ident.momentum_window is the momentum
+            # method's, which the force method ignores; this constructor has one window
+            raise ValueError(f"window = {window:g} s: the reference window is the momentum "
+                             f"method's (ident.momentum_window); the force method takes 0 (its "
+                             f"high-pass was measured and not kept, docs/identification.md)")
         m = method.name.lower()
         options = {
             "method": int(method), "solver": int(kind), "accel_source": int(accel_source),
