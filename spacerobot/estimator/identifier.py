@@ -160,8 +160,8 @@ class Identifier:
         Force method with differenced accelerations: True = apply the derivative's weights to
         the momentum equations of the window's samples instead of to the velocities (the
         force equations averaged by the same filter, exact however fast the accelerations
-        change between samples; :meth:`_differenced_momentum`, docs/identification.md,
-        section 6). False = the force equations at the centre with the velocities'
+        change between samples; est_rows.c, docs/identification.md, section 6; at most
+        ``diff_half_window`` = 10). False = the force equations at the centre with the velocities'
         derivatives (exact only where the velocities are quadratic over the window).
     excite : mapping
         The excitation request and the choice of its rate, as the core's options
