@@ -410,9 +410,9 @@ def batch_cost(outs: list, sc, Ns, repeats: int = 5) -> dict:
     lstsq for mu, then lstsq for theta with y + psi D(mu): seconds per re-solve at N. The rows
     come from the NumPy oracle estimator of the tests (tests/oracles/estimator; the native core
     keeps its equations internal): only the re-solves are timed."""
-    from spacerobot.estimator import parameters as rg
     if str(ROOT / "tests") not in sys.path:
         sys.path.insert(0, str(ROOT / "tests"))
+    from oracles.estimator import parameters as rg
     from oracles.estimator import Identifier as OracleIdentifier
     ident = OracleIdentifier(sc.robot, sc.guess, method="momentum")
     rows = []

@@ -53,10 +53,13 @@ DEFAULT_OUT = ROOT / "spacerobot" / "core" / "lib"
 MODELS = {"estimator": "SpaceRobotEstimator", "sensors": "SpaceRobotSensors",
           "plant": "SpaceRobotPlant"}
 #: the core modules each model's binary is built from (the estimator carries no plant code)
-MODEL_SOURCES = {"estimator": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c", "equations.c", "differencing.c",
-                               "physical.c", "sensor_noise.c", "noise_profile.c", "information.c",
-                               "excite_design.c",
-                               "estimator.c", "est_paper.c", "est_joint.c"),
+MODEL_SOURCES = {"estimator": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c",
+                               "equations.c", "differencing.c", "physical.c", "sensor_noise.c",
+                               "standard_params.c", "noise_profile.c", "information.c",
+                               "excite_design.c", "est_options.c", "est_model.c", "est_rows.c",
+                               "est_rls.c", "est_uncertainty.c", "est_eiv.c", "est_corr.c",
+                               "est_tracker.c", "est_consider.c", "est_paper.c", "est_joint.c",
+                               "est_report.c", "est_update.c"),
                  "sensors": ("sr_math.c", "sr_text.c", "sample.c", "rng.c", "sensor_noise.c", "sensors.c"),
                  "plant": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c",
                            "dynamics.c", "dynamics_aba.c", "dynamics_crba.c", "dynamics_state.c",

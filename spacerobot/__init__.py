@@ -29,7 +29,7 @@ _API = {
     "identified_estimates": "spacerobot.interface", "error_scale": "spacerobot.interface",
     # numerical cores (the plant: the native C core through ctypes)
     "Identifier": "spacerobot.estimator", "Plant": "spacerobot.plant",
-    "ExcitationRequest": "spacerobot.estimator", "project_body": "spacerobot.estimator",
+    "project_body": "spacerobot.estimator",
     "is_physical": "spacerobot.estimator",
     "SensorSuite": "spacerobot.sensors", "identify_csv": "spacerobot.system.identify",
     # FMUs, the system and its co-simulation (fmpy, lxml)

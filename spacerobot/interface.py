@@ -307,15 +307,33 @@ SOLVERS: Dict[int, str] = Solver.table()
 ACCEL_SOURCES: Dict[int, str] = AccelSource.table()
 EXCITE_MODES: Dict[int, str] = ExciteMode.table()
 
-#: Estimator status codes (``diag.status``)
-STATUS = {
-    0: "no sample yet",
-    1: "reference sample stored (momentum method) or waiting for differencing history",
-    2: "estimating: last sample used",
-    3: "last sample rejected: non-finite or out-of-range input, or an update that overflowed",
-    4: "last sample rejected: inconsistent input (base.A not a rotation matrix, or a sample "
-       "time not after the previous one with differenced accelerations or a reference window)",
-}
+def _status() -> Dict[int, str]:
+    """``{code: text}`` of ``diag.status``: the estimator core's table
+    (:data:`STATUS`)."""
+    from .core.estimator import status_texts
+    return status_texts()
+
+
+def _profile_magnitudes() -> Tuple[str, ...]:
+    """The sensors' magnitudes the estimator's noise profile reads (:data:`PROFILE_MAGNITUDES`):
+    the ``noise.*`` parameters of the core's options table but ``noise.scale``."""
+    from .core.estimator import option_table
+    return tuple(o.name for o in option_table()
+                 if o.parameter and o.name.startswith("noise.") and o.name != "noise.scale")
+
+
+#: read from the estimator core when first used (module attributes, PEP 562): STATUS, the
+#: status codes' texts of ``diag.status``; PROFILE_MAGNITUDES, the estimator FMU's ``noise.*``
+#: parameters besides ``noise.scale``
+_FROM_CORE = {"STATUS": _status, "PROFILE_MAGNITUDES": _profile_magnitudes}
+
+
+def __getattr__(name: str):
+    if name in _FROM_CORE:
+        value = _FROM_CORE[name]()
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
@@ -367,7 +385,8 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
         Var("diag.rejected", "output", "discrete", "Integer", None,
             "Number of samples rejected (non-finite or inconsistent)", None, ("rejected",)),
         Var("diag.status", "output", "discrete", "Integer", None,
-            "Status: " + "; ".join(f"{k} = {s}" for k, s in STATUS.items()), None, ("status",)),
+            "Status: " + "; ".join(f"{k} = {s}" for k, s in _status().items()), None,
+            ("status",)),
         Var("diag.residual_lin", "output", "continuous", "Real", "1",
             "A-priori residual of the linear (mass) equations, relative to the norm of their "
             "right-hand side", None, ("residual_lin",)),
@@ -493,7 +512,7 @@ def noise_model_vars() -> List[Var]:
               "are the bound times sqrt(max(1, diag.info_chi2))); 0 without the filter", None,
               ("info_chi2",))]
     v += excite_design_vars()
-    for name in ("noise.scale",) + PROFILE_MAGNITUDES:
+    for name in ("noise.scale",) + _profile_magnitudes():
         unit, default, doc = NOISE_PARAMETERS[name]
         v.append(Var(name, "parameter", "fixed", "Real", unit,
                      "With ident.noise_profile = 1: the sensors' " + doc[0].lower() + doc[1:]
@@ -547,15 +566,6 @@ def excite_design_vars() -> List[Var]:
     ]
 
 
-#: the magnitudes the estimator's noise profile reads (native/src/noise_profile.c): the
-#: estimator FMU's ``noise.*`` parameters besides ``noise.scale``
-PROFILE_MAGNITUDES = ("noise.gyro.arw", "noise.nav.v", "noise.accel.vrw", "noise.alpha",
-                      "noise.enc.qd", "noise.enc.qdd", "noise.thrust.scale",
-                      "noise.thrust.misalign", "noise.nav.r", "noise.star.cross",
-                      "noise.star.roll", "noise.enc.q", "noise.enc.resolution",
-                      "noise.gyro.bias")
-
-
 #: the estimator's accelerations' noise parameters (errors in variables): (measurement key,
 #: interface name, unit, acceleration source that uses it)
 SIGNAL_NOISE_PARAMETERS = (("a_S", "base.a", "m/s2", "measured"),
@@ -573,19 +583,6 @@ def body_of(values: Mapping[str, float], prefix: str) -> RigidBody:
     return RigidBody(float(values[f"{prefix}.m"]),
                      tuple(float(values[f"{prefix}.b[{i}]"]) for i in (1, 2, 3)),
                      tuple(float(values[f"{prefix}.{n}"]) for n in INERTIA_NAMES))
-
-
-def row_sd(values: Mapping[str, float], method: "Method") -> Tuple[float, float]:
-    """``(linear, angular)`` row standard deviations of ``method`` from the estimator's
-    parameter values (:func:`noise_model_vars`)."""
-    method = Method.parse(method, "method")
-    for suffix, _, _, _ in ROW_SD_PARAMETERS:     # the other method's pair is checked too
-        x = float(values[f"ident.sd_row.{suffix}"])
-        if not (math.isfinite(x) and x >= 0.0):
-            raise ValueError(f"ident.sd_row.{suffix} must be a finite number >= 0 "
-                             f"(0 = unit weight), got {x}")
-    return tuple(float(values[f"ident.sd_row.{suffix}"])
-                 for suffix, m, _, _ in ROW_SD_PARAMETERS if m is method)
 
 
 #: The 20 estimates (and truth parameters), in the order of ``Identifier.vector()``.

@@ -22,7 +22,7 @@ from spacerobot.estimator import Identifier
 from oracles.estimator.eiv import accel_channels, compensation
 from spacerobot.estimator.identifier import KEYS, identifier_from_values
 from spacerobot.interface import estimate_vector
-from spacerobot.kinematics import ArmGeometry
+from oracles.kinematics import ArmGeometry
 from spacerobot.robots import get_robot
 from oracles.sensors import SensorSuite  # the NumPy sensor models: test data
 from spacerobot.sensors import default_parameters, estimator_noise_settings

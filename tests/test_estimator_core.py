@@ -23,7 +23,7 @@ from oracles import regressors as rg
 from oracles.kinematics import ArmKinematics
 from oracles import estimator as oracle
 from spacerobot.estimator import Identifier
-from spacerobot.estimator import parameters as par
+from oracles.estimator import parameters as par
 from oracles.estimator.rls import ModifiedRLS
 from spacerobot.interface import estimate_vector
 from spacerobot.plant import Plant
@@ -348,25 +348,31 @@ def test_differencing_refuses_a_time_that_does_not_advance(planar_record, half_w
 
 
 @pytest.mark.parametrize("kw,words", [
-    ({"diff_half_window": math.nan}, "differencing half window must be an integer from 1"),
-    ({"diff_half_window": 2 ** 31 - 1}, "differencing half window must be an integer from 1"),
-    ({"corr_lags": math.inf}, "correlation lags must be an integer from 0"),
-    ({"corr_lags": 2 ** 31 - 1}, "correlation lags must be an integer from 0"),
-    ({"corr_lags": 1.5}, "correlation lags must be an integer from 0")])
+    ({"diff_half_window": math.nan}, "ident.diff_half_window must be an integer from 1 to 50, "
+                                     "got nan"),
+    ({"diff_half_window": 2 ** 31 - 1}, "ident.diff_half_window must be an integer from 1"),
+    ({"corr_lags": math.inf}, "ident.corr_lags must be an integer from 0 to 10000, got inf"),
+    ({"corr_lags": 2 ** 31 - 1}, "ident.corr_lags must be an integer from 0"),
+    ({"corr_lags": 1.5}, "ident.corr_lags must be an integer from 0 to 10000, got 1.5")])
 def test_bad_noise_model_settings_are_refused(kw, words):
+    """The core's messages (its options table), whatever type the value has."""
     sc = scenario("planar")
     with pytest.raises(ValueError, match=words):
         Identifier(sc.robot, sc.guess, **kw)
 
 
 def test_row_sd_of_either_method_is_checked():
-    from spacerobot.interface import Method, ROW_SD_PARAMETERS, row_sd
-    values = {f"ident.sd_row.{suffix}": 0.0 for suffix, _, _, _ in ROW_SD_PARAMETERS}
-    assert row_sd(values, Method.FORCE) == (0.0, 0.0)
+    """Every ident.sd_row.* is checked, the other method's too (the core's rule)."""
+    from spacerobot.estimator import identifier_from_values
+    from spacerobot.interface import ROW_SD_PARAMETERS, estimator_vars, Method
+    sc = scenario("planar")
+    values = {v.name: v.start for v in estimator_vars(sc.robot, sc) if v.causality == "parameter"}
+    values["method"] = int(Method.FORCE)
+    assert identifier_from_values(sc.robot, values)[0].row_sd == (0.0, 0.0)
     other = next(s for s, m, _, _ in ROW_SD_PARAMETERS if m is Method.MOMENTUM)
     for bad in (math.nan, -1.0):
-        with pytest.raises(ValueError, match=f"ident.sd_row.{other}"):
-            row_sd({**values, f"ident.sd_row.{other}": bad}, Method.FORCE)
+        with pytest.raises(ValueError, match=f"ident.sd_row.{other} must be a finite number"):
+            identifier_from_values(sc.robot, {**values, f"ident.sd_row.{other}": bad})
 
 
 @pytest.mark.parametrize("method,unused", [("momentum", ("a_S", "alpha_B", "qdd", "F", "M")),

@@ -11,7 +11,7 @@ from oracles import regressors as rg
 from oracles.kinematics import ArmKinematics
 from oracles.estimator import Identifier as OracleIdentifier
 from spacerobot.estimator import Identifier
-from spacerobot.estimator import parameters as par
+from oracles.estimator import parameters as par
 from spacerobot.estimator.identifier import KEYS, ROTATION_TOL
 from spacerobot.robots import scenario
 

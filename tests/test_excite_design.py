@@ -37,7 +37,7 @@ def _bind(L):
     vp = ctypes.c_void_p
     L.sr_info_information.argtypes = [vp, vp, _DP]
     L.sr_info_information.restype = None
-    L.sr_info_predict.argtypes = [vp, vp, _DP, ctypes.c_double, _DP]
+    L.sr_info_predict.argtypes = [vp, vp, _DP, ctypes.c_double, _DP, vp]
     L.sr_info_predict.restype = ctypes.c_int
     return L
 
@@ -102,7 +102,7 @@ def test_predicted_bound_matches_the_oracle(lib, filters, k):
     dS[np.ix_(p, p)] = S[np.ix_(p, p)] - o.prior
     bound = np.zeros(20)
     assert lib.sr_info_predict(c.model, c.data, _p(np.ascontiguousarray(dS.ravel())), k,
-                               _p(bound)) == 0
+                               _p(bound), c.work) == 0
     o.result(2)                                 # o.u, and the compensated estimate:
     u_c = o.compensated_exact()
     p = _oracle_order(nu)
@@ -122,14 +122,15 @@ def test_prediction_refuses_bad_input(lib, filters):
     dS = np.zeros(MU * MU)
     bound = np.zeros(20)
     for k in (-1.0, float("nan"), float("inf")):
-        assert lib.sr_info_predict(c.model, c.data, _p(dS), k, _p(bound)) == 1
+        assert lib.sr_info_predict(c.model, c.data, _p(dS), k, _p(bound), c.work) == 1
         assert np.all(np.isnan(bound))
     S = _information(lib, c).ravel()
     assert lib.sr_info_predict(c.model, c.data, _p(np.ascontiguousarray(-2.0 * S)), 1.0,
-                               _p(bound)) == 1     # S - 2 S: not positive definite
+                               _p(bound), c.work) == 1     # S - 2 S: not positive definite
     assert np.all(np.isnan(bound))
-    assert lib.sr_info_predict(None, c.data, _p(dS), 1.0, _p(bound)) == 1
-    assert lib.sr_info_predict(c.model, c.data, None, 1.0, _p(bound)) == 1
+    assert lib.sr_info_predict(None, c.data, _p(dS), 1.0, _p(bound), c.work) == 1
+    assert lib.sr_info_predict(c.model, c.data, None, 1.0, _p(bound), c.work) == 1
+    assert lib.sr_info_predict(c.model, c.data, _p(dS), 1.0, _p(bound), None) == 1
 
 
 # ------------------------------------------------------------------------------------------

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from spacerobot import interface
-from spacerobot.estimator import ExcitationRequest, Identifier, is_physical
+from spacerobot.estimator import Identifier, is_physical
 from spacerobot.interface import ExciteMode
 from spacerobot.plant import Plant
 from spacerobot.robots import random_scenario
@@ -140,15 +140,22 @@ def test_excitation_identifies_the_case_and_raises_both_flags(method):
 
 
 def test_excitation_request():
+    """The core's request (output ident.excite): the level while a body is not identified
+    (ident.excite_mode 1), always (2), never (0); a mode or level out of range refused."""
+    sc = random_scenario("spatial", np.random.default_rng(0))
+
+    def request(mode, level=1.0):
+        return Identifier(sc.robot, sc.guess,
+                          excite={"excite_mode": mode, "excite_level": level}).excite_request
     both, one = {"base": True, "target": True}, {"base": True, "target": False}
-    until = ExcitationRequest(ExciteMode.UNTIL_IDENTIFIED, 0.7)
+    until = request(ExciteMode.UNTIL_IDENTIFIED, 0.7)
     assert until(one) == 0.7 and until(both) == 0.0
-    assert ExcitationRequest("always", 1.0)(both) == 1.0
-    assert ExcitationRequest(0)(one) == 0.0
+    assert request(ExciteMode.ALWAYS, 1.0)(both) == 1.0
+    assert request(ExciteMode.OFF)(one) == 0.0
     with pytest.raises(ValueError, match="ident.excite_level must be in"):
-        ExcitationRequest(1, 1.5)
+        request(1, 1.5)
     with pytest.raises(ValueError, match="ident.excite_mode = 3 is not one of"):
-        ExcitationRequest(3)
+        request(3)
 
 
 def test_bad_threshold_is_refused():

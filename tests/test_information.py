@@ -70,12 +70,13 @@ def lib(tmp_path_factory):
     L.sr_info_model_init.restype = ctypes.c_int
     L.sr_info_data_init.argtypes = [vp, vp]
     L.sr_info_data_init.restype = None
-    L.sr_info_add.argtypes = [vp, vp, ctypes.c_double, _DP, _DP]
+    L.sr_info_add.argtypes = [vp, vp, ctypes.c_double, _DP, _DP, vp]
     L.sr_info_add.restype = ctypes.c_int
     L.sr_info_estimate.argtypes = [vp, vp, ctypes.c_int, _DP, _DP, _DP]
     L.sr_info_estimate.restype = ctypes.c_int
-    L.sr_info_model_size.argtypes = L.sr_info_data_size.argtypes = []
-    L.sr_info_model_size.restype = L.sr_info_data_size.restype = ctypes.c_size_t
+    for name in ("sr_info_model_size", "sr_info_data_size", "sr_info_work_size"):
+        getattr(L, name).argtypes = []
+        getattr(L, name).restype = ctypes.c_size_t
     return _bind(L)
 
 
@@ -86,6 +87,7 @@ class CFilter:
         self.L, self.robot = L, robot
         self.model = ctypes.create_string_buffer(L.sr_info_model_size())
         self.data = ctypes.create_string_buffer(L.sr_info_data_size())
+        self.work = ctypes.create_string_buffer(L.sr_info_work_size())
         self.status = self.init(noise, z0, P0_mu, P0_theta)
         L.sr_info_data_init(self.model, self.data)
 
@@ -102,7 +104,7 @@ class CFilter:
     def add(self, t: float, x, z_lin) -> int:
         x = np.ascontiguousarray(x, float)
         z = np.ascontiguousarray(z_lin, float)
-        return self.L.sr_info_add(self.model, self.data, float(t), _p(x), _p(z))
+        return self.L.sr_info_add(self.model, self.data, float(t), _p(x), _p(z), self.work)
 
     def estimate(self, compensated: bool):
         """(status, estimates (20), bound (20), chi2)."""
@@ -459,10 +461,11 @@ def test_add_refuses_bad_input_and_keeps_the_state(lib, small):
         assert f.add(t, x, truth) == 0
         assert ref.add(t, x, truth) == 0
     assert f.data.raw == ref.data.raw
-    assert lib.sr_info_add(None, f.data, 0.0, _p(X[0]), _p(truth)) == 1
-    assert lib.sr_info_add(f.model, None, 0.0, _p(X[0]), _p(truth)) == 1
-    assert lib.sr_info_add(f.model, f.data, 0.0, None, _p(truth)) == 1
-    assert lib.sr_info_add(f.model, f.data, 0.0, _p(X[0]), None) == 1
+    assert lib.sr_info_add(None, f.data, 0.0, _p(X[0]), _p(truth), f.work) == 1
+    assert lib.sr_info_add(f.model, None, 0.0, _p(X[0]), _p(truth), f.work) == 1
+    assert lib.sr_info_add(f.model, f.data, 0.0, None, _p(truth), f.work) == 1
+    assert lib.sr_info_add(f.model, f.data, 0.0, _p(X[0]), None, f.work) == 1
+    assert lib.sr_info_add(f.model, f.data, 0.0, _p(X[0]), _p(truth), None) == 1
     v = np.zeros(20)
     assert lib.sr_info_estimate(f.model, None, 1, _p(v), _p(v), None) == 1
     assert lib.sr_info_estimate(f.model, f.data, 1, None, _p(v), None) == 1

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from spacerobot.estimator import Identifier
-from spacerobot.estimator import parameters as par
+from oracles.estimator import parameters as par
 from spacerobot.interface import (ACCEL_SOURCES, ESTIMATE_NAMES, METHODS, SOLVERS, AccelSource,
                                   Method, ParameterLayout, Solver, error_scale, estimate_vector,
                                   estimator_vars, identified_estimates, relative_errors,

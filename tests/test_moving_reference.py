@@ -26,7 +26,7 @@ import pytest
 from oracles import estimator as oracle
 from oracles.kinematics import ArmKinematics, skew
 from spacerobot.estimator import Identifier
-from spacerobot.estimator import parameters as par
+from oracles.estimator import parameters as par
 from oracles.estimator.accel_bias import BiasFit
 from spacerobot.estimator.identifier import identifier_from_values
 from oracles.estimator.noise_model import equation_error_sd
@@ -280,5 +280,5 @@ def test_momentum_window_is_accurate_and_calibrated_on_a_short_noisy_run():
                                 dict(window=-1.0), dict(moving_point="no"), dict(accel_bias=2)])
 def test_bad_equation_settings_are_refused(spatial, kw):
     sc, _ = spatial
-    with pytest.raises(ValueError, match="window|moving_point|accel_bias"):
+    with pytest.raises(ValueError, match="window|momentum_point|accel_bias"):
         Identifier(sc.robot, sc.guess, "momentum", **kw)

@@ -4,13 +4,16 @@
 Tolerances: derivative weights to 1e-12 of the largest |weight| (a 3x3 well-scaled normal
 system); displacement weights to round-off times the condition number of the Vandermonde
 system both solve by LU (NumPy's LAPACK, C's sr_lu_solve): 1e-12 relative for half windows up
-to 2, cond * 1e-15 above (cond ~3e4 at m = 5). At m = 50 that condition number is ~1e20 and
-both results are noise, so there only what a backward-stable solve guarantees is tested: a
-small residual of the moment equations and sum u = sum w tau = 1 for derivative weights.
+to 2, cond * 1e-15 above (cond ~3e4 at m = 5). At m = 10, the largest half window the
+displacement weights take (SR_DIFF_MAX_DISPLACEMENT_HALF_WINDOW), that condition number is
+~1e9, so there what a backward-stable solve guarantees is tested (a small residual of the
+moment equations, sum u = sum w tau = 1 for derivative weights) and the accuracy
+differencing.h states, against the weights solved exactly in rational arithmetic.
 """
 from __future__ import annotations
 
 import ctypes
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -23,6 +26,8 @@ D = ndpointer(np.float64, flags="C_CONTIGUOUS")
 I = ndpointer(np.int32, flags="C_CONTIGUOUS")
 c_int, c_double = ctypes.c_int, ctypes.c_double
 HALF_WINDOWS = (1, 2, 5, 50)
+#: the displacement weights' half windows (they take at most 10)
+DISPLACEMENT_HALF_WINDOWS = (1, 2, 5, 10)
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +92,7 @@ def test_derivative_weights(lib, m, jitter):
             assert abs(w @ x - b) <= 1e-12 * max(scale, 1.0), (m, centre)
 
 
-@pytest.mark.parametrize("m", HALF_WINDOWS)
+@pytest.mark.parametrize("m", DISPLACEMENT_HALF_WINDOWS)
 @pytest.mark.parametrize("jitter", [False, True])
 def test_displacement_weights(lib, m, jitter):
     rng = np.random.default_rng(40 + m + 100 * jitter)
@@ -116,6 +121,49 @@ def test_displacement_weights(lib, m, jitter):
             dx = (tau[:, None] ** np.arange(1, k + 1) / np.arange(1, k + 1)) @ c
             scale = (np.abs(u) @ np.abs(v)) + np.abs(w) @ np.abs(dx)
             assert abs(u @ v - w @ dx) <= 1e-12 * scale
+
+
+def exact_displacement_weights(t, centre, w):
+    """u = V^-T W^T w (differencing.h) in rational arithmetic: t, w taken as the exact values
+    of their doubles; Gaussian elimination without round-off."""
+    k = len(t)
+    tau = [Fraction(x) - Fraction(t[centre]) for x in t]
+    s = max(abs(x) for x in tau)
+    x = [v / s for v in tau]
+    wf = [Fraction(v) for v in w]
+    A = [[x[i] ** p for i in range(k)] for p in range(k)]
+    b = [sum(s * x[i] ** (p + 1) / (p + 1) * wf[i] for i in range(k)) for p in range(k)]
+    for j in range(k):
+        piv = next(i for i in range(j, k) if A[i][j] != 0)
+        A[j], A[piv], b[j], b[piv] = A[piv], A[j], b[piv], b[j]
+        for i in range(j + 1, k):
+            f = A[i][j] / A[j][j]
+            if f:
+                A[i][j:] = [a - f * c for a, c in zip(A[i][j:], A[j][j:])]
+                b[i] -= f * b[j]
+    u = [Fraction(0)] * k
+    for j in range(k - 1, -1, -1):
+        u[j] = (b[j] - sum(A[j][c] * u[c] for c in range(j + 1, k))) / A[j][j]
+    return np.array([float(v) for v in u])
+
+
+@pytest.mark.parametrize("m,rel", [(4, 1e-13), (10, 1e-7)])
+@pytest.mark.parametrize("jitter", [False, True])
+def test_displacement_weights_exact(lib, m, rel, jitter):
+    """The accuracy differencing.h states (measured 1e-15 relative at m <= 4, 7e-9 at
+    m = 10; the limits here 1e-13 and 1e-7), against the exact weights; and the refusal of a
+    larger window, whose weights would have lost their digits (3e-4 at m = 15)."""
+    rng = np.random.default_rng(60 + m + 100 * jitter)
+    k = 2 * m + 1
+    for _ in range(3):
+        t = times(rng, k, jitter, h=0.1)
+        st, w = deriv(lib, t, m)
+        st_u, u = disp(lib, t, m, w)
+        exact = exact_displacement_weights(t, m, w)
+        assert st == 0 and st_u == 0
+        assert np.abs(u - exact).max() <= rel * np.abs(exact).max()
+    t = times(rng, 23, jitter)
+    assert disp(lib, t, 11, deriv(lib, t, 11)[1])[0] == 1
 
 
 def test_displacement_simpson(lib):

@@ -13,7 +13,7 @@ import pytest
 from spacerobot.core import robot_record as rr
 from oracles.estimator import kernels
 from spacerobot.estimator.identifier import INPUT_LIMIT, KEYS, ROTATION_TOL
-from spacerobot.kinematics import ArmGeometry
+from oracles.kinematics import ArmGeometry
 from test_estimator_kernels import reference_equations
 from test_robot_record import ROBOTS, core_library, robot_of
 

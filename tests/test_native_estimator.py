@@ -23,10 +23,8 @@ is G^-1 of a nearly singular G (docs/identification.md) and they move by 1e-3 of
 """
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import struct
-import time
 from pathlib import Path
 
 import numpy as np
@@ -218,7 +216,8 @@ def test_row_weights_and_correlation_lags_match_python(lib, method, lam):
     row_sd = (0.02, 0.05) if method == "momentum" else (0.3, 0.1)
     py, nat, _, _ = compare(lib, sc, rec, method, lam,
                             py_kw={"row_sd": row_sd, "corr_lags": 8},
-                            nat_kw={"row_sd_lin": row_sd[0], "row_sd_ang": row_sd[1],
+                            nat_kw={f"ident.sd_row.{method}_lin": row_sd[0],
+                                    f"ident.sd_row.{method}_ang": row_sd[1],
                                     "corr_lags": 8}, sd_tol=1e-4, res_rel=1e-6)
     inflation = py.solver.corr_lin.inflation(), py.solver.corr_ang.inflation()
     assert max(inflation) > 1.01          # the inflation did act on the compared sd
@@ -257,8 +256,8 @@ def test_joint_solver_matches_python(lib, name, method, lam, lags):
     py = Identifier(sc.robot, sc.guess, method, "joint", "measured", lam, corr_lags=lags,
                     row_sd=(0.1, 0.2))
     nat = NativeEstimator(sc.robot, {**native_options(sc, method, lam), "solver": 2,
-                                     "corr_lags": lags, "row_sd_lin": 0.1,
-                                     "row_sd_ang": 0.2}, lib=lib)
+                                     "corr_lags": lags, f"ident.sd_row.{method}_lin": 0.1,
+                                     f"ident.sd_row.{method}_ang": 0.2}, lib=lib)
     worst = 0.0
     for k, (t, x) in enumerate(rec):
         assert py.update_flat(t, x) == nat.update(t, x)
@@ -656,7 +655,8 @@ def test_weak_prior_noise_free_run_keeps_every_sample(lib, method, P0s):
 def test_options_refused_with_the_python_messages(lib):
     """Invalid options: no model, the message of the oracle (the former Python Identifier)
     naming the parameter; a reference window with the force method: refused by the library's
-    Identifier, never ignored."""
+    Identifier (its one ``window`` argument), never ignored; the core ignores the other
+    method's options."""
     sc, _ = stream("planar-medium")
     values = {v.name: v.start for v in interface.estimator_vars(sc.robot, sc)
               if v.causality == "parameter"}
@@ -686,13 +686,13 @@ def test_options_refused_with_the_python_messages(lib):
     from spacerobot.estimator import Identifier as LibraryIdentifier
     with pytest.raises(ValueError, match="momentum method's.*force method takes 0"):
         LibraryIdentifier(sc.robot, sc.guess, "force", lib=lib, window=2.0)
-    # where the Python Identifier ignores an option (the other method's), so does the core
-    NativeEstimator(sc.robot, {"method": 2, "momentum_window": 5.0}, lib=lib)
+    nat = NativeEstimator(sc.robot, {"method": 2, "momentum_window": 5.0}, lib=lib)
+    assert nat.model_options()["momentum_window"] == 0.0
 
 
 def test_excitation_request(lib):
     """ident.excite: off 0; until identified the level while a body is not identified, 0
-    after; always the level (identifier.ExcitationRequest)."""
+    after; always the level."""
     sc, rec = stream("planar-medium")
     levels = {}
     for mode in (0, 1, 2):
@@ -708,32 +708,3 @@ def test_excitation_request(lib):
     assert all(e == 0.4 for e, _ in levels[2])
     assert all(e == (0.0 if ident else 0.4) for e, ident in levels[1])
     assert any(ident for _, ident in levels[1]) and not all(ident for _, ident in levels[1])
-
-
-def test_update_cost_is_reported(lib, capsys):
-    """The cost of one update (spatial robot, paper solver, momentum and force), measured
-    with a timing loop through ctypes; reported, not asserted (machine load varies)."""
-    from spacerobot.core import dptr
-    sc, rec = stream("spatial-default")
-    xs = [dptr(np.ascontiguousarray(x)) for _, x in rec]
-    keep = [x for _, x in rec]                           # noqa: F841 - the pointers' arrays
-    lines = []
-    for method in ("momentum", "force"):
-        nat = NativeEstimator(sc.robot, native_options(sc, method, 1.0), lib=lib)
-        update, model, data = lib.sr_estimator_update, nat._model, nat._data
-        best = np.inf
-        for _ in range(5):
-            nat.reset()
-            t0 = time.process_time()
-            for k, x in enumerate(xs):
-                update(model, data, k * 0.1, x, None, 0)
-            best = min(best, (time.process_time() - t0) / len(xs))
-        r = ctypes.byref(nat._report)
-        t0 = time.process_time()
-        for _ in range(1000):
-            lib.sr_estimator_report_get(nat._model, nat._data, r)
-        rep = (time.process_time() - t0) / 1000
-        lines.append(f"native update, spatial, {method}: {best * 1e6:.1f} us per sample "
-                     f"(report {rep * 1e6:.1f} us)")
-    with capsys.disabled():
-        print("\n" + "\n".join(lines))

@@ -262,7 +262,7 @@ def test_thrust_consider_with_forgetting_and_lags(lib, noisy_run, lam):
                     "row_sd": (2.0, 500.0)},
              nat_kw={"sd_thrust_scale": THRUST_SD[0], "sd_thrust_misalign": THRUST_SD[1],
                      "momentum_window": 2.0, "momentum_point": 1, "corr_lags": 5,
-                     "row_sd_lin": 2.0, "row_sd_ang": 500.0})
+                     "ident.sd_row.momentum_lin": 2.0, "ident.sd_row.momentum_ang": 500.0})
 
 
 # -- ident.accel_bias; ident.noise.* with the joint solver and with ident.diff_momentum -------

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 from oracles import estimator as oracle
-from spacerobot.estimator import ExcitationRequest, Identifier
+from spacerobot.estimator import Identifier
 from oracles.estimator.differencing import derivative_weights
 from oracles.estimator.noise_model import equation_error_sd
 from oracles.estimator.rls import RLS
@@ -160,7 +160,7 @@ def _batch(rows, weights, x0, P0):
 
 def _estimates_of_standard(pi):
     """The 20 estimates (m, b, I_c per body) of a standard parameter vector (20,)."""
-    from spacerobot.estimator import parameters as par
+    from oracles.estimator import parameters as par
     from spacerobot.interface import LAYOUT
     out = np.empty(20)
     for b in LAYOUT.bodies:
@@ -345,8 +345,9 @@ def test_autocorrelation_inflation_is_the_long_run_variance_ratio():
 def test_forgetting_with_excitation_always_on_identifies_a_spatial_case():
     sc = random_scenario("spatial", np.random.default_rng(3))
     p = plant_of(sc, sc.excitation)
-    request = ExcitationRequest(ExciteMode.ALWAYS, 1.0)
-    ident = Identifier(sc.robot, sc.guess, "force", lam=0.995)
+    ident = Identifier(sc.robot, sc.guess, "force", lam=0.995,
+                       excite={"excite_mode": ExciteMode.ALWAYS, "excite_level": 1.0})
+    request = ident.excite_request
     truth = estimate_vector(sc.robot.base, sc.target)
     levels = []
     for k in range(601):

@@ -1,13 +1,16 @@
-"""Physical consistency of estimates: the test and the projection (spacerobot.estimator.physical).
+"""Physical consistency of estimates: the test and the projection (spacerobot.estimator.physical,
+the core's through its Python face).
 
 Checked against independent computations: the triangle-inequality test of robots.check_body,
-the pseudo-inertia's eigenvalues, and brute-force nearest points of random feasible bodies.
+the pseudo-inertia's eigenvalues, brute-force nearest points of random feasible bodies, and the
+oracle's NumPy/LAPACK projections (tests/oracles/estimator/physical.py).
 """
 import numpy as np
 import pytest
 
-from spacerobot.estimator.physical import (inertia_from_second_moment, is_physical,
-                                           project_body, project_planar_body, pseudo_inertia,
+from oracles.estimator.physical import (_project_body_numpy, _project_planar_body_numpy,
+                                        inertia_from_second_moment, pseudo_inertia)
+from spacerobot.estimator.physical import (is_physical, project_body, project_planar_body,
                                            second_moment)
 from spacerobot.robots import check_body
 
@@ -163,12 +166,11 @@ def test_negative_mass_is_clipped_to_the_mass_floor():
 
 
 def test_compiled_projection_equals_numpy():
-    """project_body (one compiled call) against its NumPy/LAPACK formulation
-    (_project_body_numpy) on random non-physical bodies of every kind (negative mass, one or
-    two negative Sigma_c eigenvalues, near-flat, large and small scales): the same mass bit for
-    bit, the inertia to round-off of the eigen-decomposition, a physical result; the same
-    answer through the fallback for non-finite input."""
-    from spacerobot.estimator.physical import _project_body_numpy
+    """project_body (the core's, one compiled call) against the oracle's NumPy/LAPACK
+    formulation (_project_body_numpy) on random non-physical bodies of every kind (negative
+    mass, one or two negative Sigma_c eigenvalues, near-flat, large and small scales): the same
+    mass bit for bit, the inertia to round-off of the eigen-decomposition, a physical result;
+    for a non-finite inertia NaN, as NumPy's."""
     rng = np.random.default_rng(11)
     n = 0
     for _ in range(3000):
@@ -196,7 +198,6 @@ def test_compiled_planar_projection_equals_numpy():
     planar estimates (wrong out-of-plane guesses, negative or tiny Izz, negative mass): the same
     mass, the inertia to round-off, physical results; Izz moved only where no real body keeps
     it (both versions fall back to the full projection there)."""
-    from spacerobot.estimator.physical import _project_planar_body_numpy
     rng = np.random.default_rng(12)
     n = small = 0
     for _ in range(3000):

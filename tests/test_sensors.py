@@ -263,12 +263,12 @@ def test_the_sample_layout_is_the_core_table_and_the_fmu_variables(n):
 
     variables = measurement_vars(n, "input")
     groups = list(dict.fromkeys(v.key[0] for v in variables))
-    assert list(sample.signals()) == groups == list(SIGNALS)
-    assert list(sample.units()) == [next(v.unit for v in variables if v.key[0] == g)
-                                    for g in groups]
-    assert sample.sizes(n) == [(g, sum(v.key[0] == g for v in variables)) for g in groups]
-    assert sample.length(n) == len(variables) == 24 + 3 * n + 12
-    x = {g: np.arange(k, dtype=float).reshape((3, 3) if g == "A" else (k,))
-         for g, k in sample.sizes(n)}
+    sizes = [(s.key, s.size) for s in sample.signals(n)]
+    assert list(sample.keys()) == groups == list(SIGNALS)
+    assert [s.unit for s in sample.signals(n)] == [next(v.unit for v in variables
+                                                         if v.key[0] == g) for g in groups]
+    assert sizes == [(g, sum(v.key[0] == g for v in variables)) for g in groups]
+    assert sample.sample_length(n) == len(variables) == 24 + 3 * n + 12
+    x = {g: np.arange(k, dtype=float).reshape((3, 3) if g == "A" else (k,)) for g, k in sizes}
     y = SensorSuite(n, scale=0.0).measure(x)
     assert all(np.array_equal(y[g], x[g]) for g in groups)

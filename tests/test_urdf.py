@@ -22,7 +22,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from spacerobot import interface
-from spacerobot.estimator import ExcitationRequest, Identifier
+from spacerobot.estimator import Identifier
 from spacerobot.plant import Plant
 from spacerobot.robots import (ROBOTS, URDF_DIR, ArmLink, RigidBody, Robot, get_robot,
                                parameter_set_scenario, robot_kind, robot_spec, scenario)
@@ -107,7 +107,7 @@ def _closed_loop(sc, seconds, method="momentum", dt=0.1):
     plant = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
                   excitation=sc.excitation)
     ident = Identifier(sc.robot, sc.guess, method)
-    request = ExcitationRequest()
+    request = ident.excite_request     # the core's rule, the default options: until identified, 1
     ident.update(0.0, plant.outputs())
     outs, est = [plant.outputs()], [ident.vector()]
     for k in range(int(round(seconds / dt))):

@@ -1,10 +1,11 @@
-/* Differencing weights (see differencing.h): a port of spacerobot/estimator/differencing.py. */
+/* The weights of a derivative and of the displacements over a window of samples, and the centre
+ * sample with its accelerations differenced (differencing.h). */
 #include "differencing.h"
 
 #include <math.h>
+#include <stddef.h>
 
 #include "linalg.h"
-
 #include "sr_math.h"
 /* tau = t - t[centre] and s = max |tau| (the scale of the times: well-conditioned systems) */
 static double centred_times(const double *t, int k, int centre, double *tau)
@@ -60,10 +61,11 @@ int sr_derivative_weights(const double *t, int k, int centre, double *w)
 
 int sr_displacement_weights(const double *t, int k, int centre, const double *w, double *u)
 {
-    /* V^T (k x k): 82 kB of stack at the largest window; no allocation */
-    double x[SR_DIFF_MAX_SAMPLES], A[SR_DIFF_MAX_SAMPLES * SR_DIFF_MAX_SAMPLES], s;
+    /* V^T (k x k): 3.5 kB of stack at the largest window; no allocation */
+    double x[SR_DIFF_MAX_DISPLACEMENT_SAMPLES];
+    double A[SR_DIFF_MAX_DISPLACEMENT_SAMPLES * SR_DIFF_MAX_DISPLACEMENT_SAMPLES], s;
     int i, p;
-    if (k < 3 || k > SR_DIFF_MAX_SAMPLES || centre < 0 || centre >= k)
+    if (k < 3 || k > SR_DIFF_MAX_DISPLACEMENT_SAMPLES || centre < 0 || centre >= k)
         return 1;
     s = centred_times(t, k, centre, x);
     for (i = 0; i < k; ++i)
@@ -84,8 +86,9 @@ int sr_displacement_weights(const double *t, int k, int centre, const double *w,
     return sr_finite_all(u, k) ? 0 : 2;
 }
 
-int sr_centre_derivative(const double *t, const double *X, int k, int n, const int *acc,
-                         const int *vel, int npairs, double *out, double *t_c)
+int sr_centre_derivative_rows(const double *t, const double *const *X, int k, int n,
+                              const int *acc, const int *vel, int npairs, double *out,
+                              double *t_c, double *w_out)
 {
     double w[SR_DIFF_MAX_SAMPLES];
     int i, p, m, status;
@@ -98,12 +101,26 @@ int sr_centre_derivative(const double *t, const double *X, int k, int n, const i
     status = sr_derivative_weights(t, k, m, w);
     *t_c = t[m];
     for (i = 0; i < n; ++i)
-        out[i] = X[m * n + i];
+        out[i] = X[m][i];
     for (p = 0; p < npairs; ++p) {              /* w @ X[:, vel] (m = 1: term by term) */
         double s = 0.0;
         for (i = 0; i < k; ++i)
-            s += w[i] * X[i * n + vel[p]];
+            s += w[i] * X[i][vel[p]];
         out[acc[p]] = s;
     }
+    if (w_out)
+        for (i = 0; i < k; ++i)
+            w_out[i] = w[i];
     return status;
+}
+
+int sr_centre_derivative(const double *t, const double *X, int k, int n, const int *acc,
+                         const int *vel, int npairs, double *out, double *t_c)
+{
+    const double *rows[SR_DIFF_MAX_SAMPLES];
+    if (k < 3 || k > SR_DIFF_MAX_SAMPLES || n < 0)
+        return 1;
+    for (int i = 0; i < k; ++i)
+        rows[i] = X + (size_t)i * (size_t)n;
+    return sr_centre_derivative_rows(t, rows, k, n, acc, vel, npairs, out, t_c, NULL);
 }

@@ -1,7 +1,5 @@
-/* The identification equations of one sample: a port of tests/oracles/estimator/kernels.py (formerly the library's)
- * (equations, D_of_mu, rotation_error, sample_check) with the same order of operations, so
- * that the C estimator reproduced the former Numba one to rounding; and the thrust's consider
- * sensitivities and integrals (spacerobot/estimator/consider.py).
+/* The identification equations of one sample, D(mu), the sample's check, and the thrust's
+ * consider sensitivities and integrals (equations.h).
  *
  * Arm kinematics, revolute joint i with parent frame p (all vectors inertial):
  *   d = A_p xyz_i,  A_i = A_p R_i Rot(axis_i, q_i),  z = A_i axis_i,  w_i = w_p + z qd_i,

@@ -1,4 +1,4 @@
-/* The identification equations of one sample (port of tests/oracles/estimator/kernels.py (formerly the library's)).
+/* The identification equations of one sample.
  *
  * One sample gives, for the base (body 1) and the target held at the end-effector frame E
  * (body n), three rows of
@@ -55,9 +55,9 @@ SR_API void sr_rotation_error(const double *A, double *err, double *det);
  *  len < SR_X_A_B + 9. */
 SR_API int sr_sample_check(const double *x, int len, double limit, double tol);
 
-/* -- the thrust's consider terms (spacerobot/estimator/consider.py, docs/identification.md
- * section 6): a scale factor error s and a misalignment phi (a small rotation), constant over a
- * run, turn every measured force and moment x into x + (s + [phi]x) x to first order. The
+/* -- the thrust's consider terms (est_consider.h, docs/identification.md section 6): a scale
+ * factor error s and a misalignment phi (a small rotation), constant over a run, turn every
+ * measured force and moment x into x + (s + [phi]x) x to first order. The
  * consider parameters c = [s_F, phi_F (3), s_M, phi_M (3)]; their sensitivities extend E by
  * SR_N_CCOLS right-hand-side columns per row, [d b / d c (8) | d y / d c (8)], which every
  * linear step on E (differencing, moving point, weights, planar selection) treats as the

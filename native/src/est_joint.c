@@ -1,97 +1,29 @@
 /* The joint solver (solver = 2): one RLS over the 20 standard parameters z = [m, m b, I_O#]
- * per body (Pinocchio's dynamic parameters; I_O the inertia about the body frame's origin, in
- * the paper's I# order), in which both identification equations are linear
- * (solvers.JointSolver; DESIGN.md section 4):
+ * per body (standard_params.h), in which both identification equations are linear
+ * (DESIGN.md section 4):
  *   linear rows   [B, 0]             (eq. 11 / 28: A mu = b, mu = [m, m b] per body)
  *   angular rows  [Psi[:, :4], Phi]  (eq. 16 / 31 with I_c = I_O - m (|b|^2 1 - b b^T): the
  *                                     quadratic columns of psi are the parallel-axis part)
  * The estimates: m, b = c / m, I_c = I_O - m (|b|^2 1 - b b^T) (parallel-axis theorem).
- * Uncertainty, tracker and report as the paper solver's (est_paper.c), with one information
- * block. Unidentified standard parameters (a planar robot's) stay at their guesses: their
- * columns move to the right-hand side.
+ * Uncertainty, tracker and consider term as the paper solver's (est_paper.c), with one
+ * information block. Unidentified standard parameters (a planar robot's) stay at their
+ * guesses: their columns move to the right-hand side.
  */
+#include "est_joint.h"
+
 #include <math.h>
 #include <string.h>
 
 #include "equations.h"
-#include "est_internal.h"
+#include "est_consider.h"
+#include "est_corr.h"
+#include "est_eiv.h"
+#include "est_rls.h"
+#include "est_tracker.h"
+#include "est_uncertainty.h"
 #include "linalg.h"
 #include "physical.h"
-
-/* index pairs (i, j) of the entries of I# (eq. 21) */
-static const int SHARP_I[6] = {0, 0, 0, 1, 1, 2}, SHARP_J[6] = {0, 1, 2, 1, 2, 2};
-
-const int EST_S2P[6] = {0, 3, 5, 1, 2, 4};
-
-void est_standard_of_reported(const double *x, double *z)
-{
-    for (int k = 0; k < 2; k++) {
-        const double *g = x + 10 * k;
-        double mk = g[0], bb = g[1] * g[1] + g[2] * g[2] + g[3] * g[3];
-        double Ic[9] = {g[4], g[7], g[8], g[7], g[5], g[9], g[8], g[9], g[6]};
-        z[10 * k] = mk;
-        for (int i = 0; i < 3; i++)
-            z[10 * k + 1 + i] = mk * g[1 + i];
-        for (int q = 0; q < 6; q++) {
-            int i = SHARP_I[q], j = SHARP_J[q];
-            double par = (i == j ? bb * 1.0 : bb * 0.0) - g[1 + i] * g[1 + j];
-            z[10 * k + 4 + q] = Ic[3 * i + j] + mk * par;
-        }
-    }
-}
-
-/* The 20 estimates from the standard parameters z (report_kernels.joint_vector_of): b = c / m,
- * I_c = I_O - m (|b|^2 1 - b b^T), I = I_c#[sharp_to_project]. */
-void est_joint_vector_of(const int *s2p, const double *z, double *out)
-{
-    for (int k = 0; k < 2; k++) {
-        int e = 10 * k;
-        double m = z[e], b[3], bb = 0.0;
-        out[e] = m;
-        for (int i = 0; i < 3; i++) {
-            b[i] = z[e + 1 + i] / m;
-            out[e + 1 + i] = b[i];
-        }
-        for (int i = 0; i < 3; i++)
-            bb += b[i] * b[i];
-        for (int jp = 0; jp < 6; jp++) {
-            int p = s2p[jp], i = SHARP_I[p], j = SHARP_J[p];
-            double eye = i == j ? 1.0 : 0.0;
-            out[e + 4 + jp] = z[e + 4 + p] - m * (bb * eye - b[i] * b[j]);
-        }
-    }
-}
-
-/* d joint_vector_of / d z (20 x 20) (report_kernels.joint_jacobian): db/dc = 1 / m,
- * db/dm = -c / m^2; I_c = I_O - S(c) / m, S(c) = |c|^2 1 - c c^T: dI_c/dI_O = 1,
- * dI_c/dm = S / m^2, dI_c,ij/dc_k = -(2 c_k d_ij - d_ik c_j - c_i d_jk) / m */
-void est_joint_jacobian(const int *s2p, const double *z, double *J)
-{
-    memset(J, 0, sizeof(double) * EST_NZ * EST_NZ);
-    for (int k = 0; k < 2; k++) {
-        int e = 10 * k;
-        double m = z[e], cc = 0.0;
-        J[e * EST_NZ + e] = 1.0;
-        for (int i = 0; i < 3; i++) {
-            J[(e + 1 + i) * EST_NZ + e + 1 + i] = 1.0 / m;
-            J[(e + 1 + i) * EST_NZ + e] = -z[e + 1 + i] / (m * m);
-        }
-        for (int i = 0; i < 3; i++)
-            cc += z[e + 1 + i] * z[e + 1 + i];
-        for (int jp = 0; jp < 6; jp++) {
-            int p = s2p[jp], row = e + 4 + jp, i = SHARP_I[p], j = SHARP_J[p];
-            double ci = z[e + 1 + i], cj = z[e + 1 + j];
-            double S_ij = (i == j ? cc : 0.0) - ci * cj;
-            J[row * EST_NZ + e + 4 + p] = 1.0;
-            J[row * EST_NZ + e] = S_ij / (m * m);
-            for (int kk = 0; kk < 3; kk++) {
-                double dS = (i == j ? 2.0 * z[e + 1 + kk] : 0.0) - (kk == i ? cj : 0.0)
-                            - (kk == j ? ci : 0.0);
-                J[row * EST_NZ + e + 1 + kk] = -dS / m;
-            }
-        }
-    }
-}
+#include "standard_params.h"
 
 void est_joint_init(const sr_estimator_model *m, est_core *c)
 {
@@ -106,7 +38,7 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
     int q = m->q, nj = q + 1;
     double lam = m->opt.lambda;
     /* the RLS's answer x (its prior's pull), and what the estimates report: the same, or the
-     * bias-compensated answer where the accelerations' noise is compensated (eiv.py) */
+     * bias-compensated answer where the accelerations' noise is compensated (est_eiv.h) */
     const double *pi_rep = c->has_eiv ? c->pi_c : c->pi;
     double x[EST_NZ + 1], x0[EST_NZ], G[EST_NZ * EST_NZ] = {0.0};
     for (int i = 0; i < q; i++) {
@@ -115,8 +47,9 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
         for (int j = 0; j < q; j++)
             G[i * q + j] = c->S_pi[i * nj + j];
     }
-    /* the prior's pull delta = -G^-1 W0 (x - x0), W0 = lam^N P0^-1 (uncertainty.prior_pull) */
-    double lam_e[EST_NZ], V[EST_NZ * EST_NZ], d[EST_NZ], rhs[EST_NZ], dx[EST_NZ];
+    /* the prior's pull delta = -G^-1 W0 (x - x0), W0 = lam^N P0^-1 (G: in place its scaled
+     * eigenvectors V) */
+    double lam_e[EST_NZ], *V = G, d[EST_NZ], rhs[EST_NZ], dx[EST_NZ];
     int unobs[EST_NZ], u[EST_NZ];
     int st = sr_scaled_eigh(G, q, lam_e, V, d, unobs);
     for (int i = 0; i < q; i++)
@@ -129,11 +62,11 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
         unobserved_z[m->std_active[i]] = u[i];
     }
     memcpy(z, pi_rep, sizeof z);
-    est_joint_jacobian(m->sharp_to_project, z, J);
-    est_joint_vector_of(m->sharp_to_project, z, xv);
+    sr_reported_jacobian(z, J);
+    sr_reported_of_standard(z, xv);
     for (int i = 0; i < EST_NZ; i++)
         zd[i] = z[i] - delta[i];
-    est_joint_vector_of(m->sharp_to_project, zd, xd);
+    sr_reported_of_standard(zd, xd);
     int finite = 1;
     for (int i = 0; i < EST_NZ; i++) {                       /* the pull through the map */
         pull[i] = xv[i] - xd[i];
@@ -143,8 +76,7 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
     if (!finite)                                             /* the data-only mass <= 0 */
         sr_matvec(J, delta, EST_NZ, EST_NZ, pull);
     /* the covariance: the RLS's P times the residual variance, the rest the prior's; with
-     * the noise compensated K P K^T (solvers.compensation_gain) and the residual variance at
-     * the compensated answer (JointSolver.covariance) */
+     * the noise compensated K P K^T and the residual variance at the compensated answer */
     const double *P = c->P_pi;
     double KPK[EST_NZ * EST_NZ];
     if (c->has_eiv) {
@@ -166,7 +98,7 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
     for (int i = 0; i < q; i++)
         for (int j = 0; j < q; j++)
             C[m->std_active[i] * EST_NZ + m->std_active[j]] = P[i * q + j] * s2;
-    est_scatter_sd(m, J, C, pull, unobserved_z, xv, 0, sd);
+    est_scatter_sd(J, C, pull, unobserved_z, xv, 0, sd);
     for (int i = 0; i < EST_NZ; i++) {
         data_only[i] = xv[i] - pull[i];
         vec[i] = xv[i];
@@ -174,8 +106,10 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
     return st != 0 ? 3 : 0;
 }
 
-int est_joint_lag(const sr_estimator_model *m, const est_core *c, const double *J,
-                  const double *rate_x, double growth, double *lag)
+/* the lag (20) of the estimates behind parameters moving at the rate rate_x (20) (eq. 2 over
+ * the standard parameters, mapped by J); 1 if finite */
+static int joint_lag(const sr_estimator_model *m, const est_core *c, const double *J,
+                     const double *rate_x, double growth, double *lag)
 {
     int q = m->q;
     double Jc[EST_NZ * EST_NZ], rate_z[EST_NZ], rate_a[EST_NZ], lag_a[EST_NZ], r_a[EST_NZ];
@@ -208,10 +142,11 @@ static void info_add(const double *old, const double *H, int k, int q, const int
         }
 }
 
-/* the excitation diagnostic of an information matrix (identifier._rcond) */
+/* the excitation diagnostic of an information matrix: the reciprocal condition number of its
+ * scaled form */
 static double rcond_of(const double *info, int n)
 {
-    double G[EST_NZ * EST_NZ], w[EST_NZ], V[EST_NZ * EST_NZ], d[EST_NZ];
+    double G[EST_NZ * EST_NZ], w[EST_NZ], *V = G, d[EST_NZ];
     int u[EST_NZ];
     if (n <= 0)
         return 0.0;
@@ -220,12 +155,15 @@ static double rcond_of(const double *info, int n)
     return sr_rcond_of_spectrum(w, u, n);
 }
 
-void est_joint_rows(const sr_estimator_model *m, const est_core *c, const double *E,
-                    double *H, double *yy, double *b)
+/* The rows of one block E (3 x 42, full 3D rows) over the identified standard parameters: H
+ * (k1 + k2 x q), yy (k1 + k2) the right-hand sides (the fixed parameters' columns moved there
+ * at c's pi); b (k1, may be NULL) the weighted linear right-hand sides before that. */
+static void joint_rows(const sr_estimator_model *m, const est_core *c, const double *E,
+                       double *H, double *yy, double *b)
 {
     int k1 = m->k1, k2 = m->k2, k = k1 + k2, q = m->q;
-    /* the identified rows, weighted (Identifier._identified_rows), over the standard
-     * parameters (JointSolver._stack): linear [B, 0], angular [-psi[:, m, m b], phi] */
+    /* the identified rows, weighted, over the standard parameters: linear [B, 0], angular
+     * [-psi[:, m, m b], phi] */
     double Y[EST_MAXK * EST_NZ] = {0.0};
     for (int a = 0; a < k1; a++) {
         const double *row = E + m->rows_lin[a] * SR_N_COLS;
@@ -265,14 +203,36 @@ void est_joint_rows(const sr_estimator_model *m, const est_core *c, const double
             H[a * q + i] = Y[a * EST_NZ + m->std_active[i]];
 }
 
-/* the bias-compensated standard parameters (JointSolver.update, eiv.compensation, eq. 2):
+/* The noise Gram matrix of [H | yy] after this sample (est_eiv.h, eq. 1): lam times old's,
+ * plus the rows of the noise blocks, n_chunks chunks of m->n_used blocks (3 x 42 each), each
+ * chunk's rows added as one, into N ((q + 1) x (q + 1)); scratch EST_NOISE_SCRATCH doubles */
+static void noise_gram(const sr_estimator_model *m, const est_core *old, const double *noise,
+                       int n_chunks, double *N, double *scratch)
+{
+    int q = m->q, nj = q + 1, k = m->k1 + m->k2, nb = m->n_used;
+    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], *R = scratch;
+    est_noise_begin(m->opt.lambda, old->has_eiv, old->N_pi, nj, N);
+    for (int c = 0; c < n_chunks; c++) {
+        const double *chunk = noise + (size_t)c * nb * EST_NB;
+        for (int blk = 0; blk < nb; blk++) {
+            joint_rows(m, old, chunk + blk * EST_NB, H, yy, NULL);
+            for (int a = 0; a < k; a++) {
+                memcpy(R + (blk * k + a) * nj, H + a * q, sizeof(double) * q);
+                R[(blk * k + a) * nj + q] = yy[a];
+            }
+        }
+        est_gram_add(N, nj, R, nb * k, 1.0, N);
+    }
+}
+
+/* the bias-compensated standard parameters (est_eiv.h, eq. 2):
  * pi_c = x_r + dx, (S_HH - N_HH) dx = N_HH x_r - N_Hy in the directions S - N observes
  * (a direction the noise swamps is left uncorrected) */
 static void compensate(const sr_estimator_model *m, est_core *nw)
 {
     int q = m->q, nj = q + 1;
     double G[EST_NZ * EST_NZ] = {0.0}, rhs[EST_NZ], dx[EST_NZ], lam_e[EST_NZ];
-    double V[EST_NZ * EST_NZ], d[EST_NZ];
+    double *V = G, d[EST_NZ];                /* (in place) */
     int un[EST_NZ], u[EST_NZ];
     for (int i = 0; i < q; i++) {
         double s = 0.0;
@@ -289,14 +249,64 @@ static void compensate(const sr_estimator_model *m, est_core *nw)
         nw->pi_c[m->std_active[i]] = nw->pi[m->std_active[i]] + dx[i];
 }
 
+/* nw->sd with the thrust's consider variance (est_consider.h): d pi / d c = G^-1 C, G the
+ * information of the standard parameters, C the consider sums; J (20 x 20) the Jacobian of
+ * the estimates in pi */
+static void joint_consider(const sr_estimator_model *m, est_core *nw, const double *J)
+{
+    double shift[EST_NZ * SR_N_CONSIDER];
+    int q = m->q, nj = q + 1;
+    double G[EST_NZ * EST_NZ] = {0.0}, lam[EST_NZ], *V = G, d[EST_NZ];   /* (in place) */
+    double dpi[EST_NZ * SR_N_CONSIDER];
+    int un[EST_NZ];
+    for (int i = 0; i < q; i++)
+        for (int j = 0; j < q; j++)
+            G[i * q + j] = nw->S_pi[i * nj + j];
+    sr_scaled_eigh(G, q, lam, V, d, un);
+    est_solve_columns(lam, V, d, un, q, nw->cons_lin, SR_N_CONSIDER, dpi);
+    memset(shift, 0, sizeof shift);
+    for (int i = 0; i < q; i++)
+        memcpy(shift + m->std_active[i] * SR_N_CONSIDER, dpi + i * SR_N_CONSIDER,
+               sizeof(double) * SR_N_CONSIDER);
+    est_consider_add(m, nw, J, shift);
+}
+
+/* The uncertainty of the new state nw after the step (H its rows, e the a-priori residuals,
+ * Ec the consider columns): the standard deviations and excitation diagnostics, the drift
+ * tracker's total sd at clock, the thrust's consider term. 0, or 3 where an
+ * eigen-decomposition did not converge. A frame of its own. */
+static EST_NOINLINE int joint_uncertainty(const sr_estimator_model *m, const void *data,
+                                          const est_core *old, est_core *nw, const double *H,
+                                          const double *Ec, const double *e, double clock)
+{
+    int k = m->k1 + m->k2;
+    double infl = m->lags > 0 ? est_corr_inflation(m, data, old, 0, e, k) : 1.0;
+    double sd[EST_NZ], data_only[EST_NZ], J[EST_NZ * EST_NZ];
+    if (est_joint_std_parts(m, nw, infl, sd, data_only, J, nw->vec) != 0)
+        return 3;
+    nw->rcond_mu = rcond_of(nw->info_lin, m->n_lin_cols);
+    nw->rcond_theta = rcond_of(nw->info_ang, m->n_ang_cols);
+    est_tracker_step ts;
+    double lag[EST_NZ];
+    est_tracker_begin(m, old, nw, clock, data_only, sd, &ts);
+    int has_lag = ts.all_positive && joint_lag(m, nw, J, ts.rate, ts.growth, lag);
+    est_tracker_end(nw, sd, has_lag ? lag : NULL, &ts);
+    if (m->consider) {                       /* the thrust's consider term (est_consider.h) */
+        est_consider_sums(m, old, nw, Ec, NULL, NULL, H);
+        joint_consider(m, nw, J);
+    }
+    return 0;
+}
+
 int est_joint_step(const sr_estimator_model *m, const void *data, const est_core *old,
-                   est_core *nw, const double *E, const double *Ec, const double *N_pi,
+                   const est_rows *rows, const double *noise, double *scratch, est_core *nw,
                    double clock, double *e)
 {
     int q = m->q, k1 = m->k1, k2 = m->k2, k = k1 + k2, nj = q + 1;
     double lam = m->opt.lambda;
-    double H[EST_MAXK * EST_NZ], x[EST_NZ], K[EST_NZ * EST_MAXK], yy[EST_MAXK], b[3];
-    est_joint_rows(m, old, E, H, yy, b);
+    double H[EST_MAXK * EST_NZ] = {0.0}, x[EST_NZ] = {0.0}, K[EST_NZ * EST_MAXK];
+    double yy[EST_MAXK], b[3];
+    joint_rows(m, old, rows->E, H, yy, b);
     for (int i = 0; i < q; i++)
         x[i] = old->pi[m->std_active[i]];
     /* one RLS step on H z = yy (eqs. 11/16 or 28/31 over the standard parameters) */
@@ -318,31 +328,25 @@ int est_joint_step(const sr_estimator_model *m, const void *data, const est_core
     nw->n1_lin = old->n1_lin;
     nw->n2_lin = old->n2_lin;
     est_gram_count(lam, k, &nw->rows_lin, &nw->decay_lin, &nw->n1_lin, &nw->n2_lin);
+    nw->rows_ang = old->rows_ang;            /* (one Gram matrix: the angular counts stay) */
+    nw->decay_ang = old->decay_ang;
+    nw->n1_ang = old->n1_ang;
+    nw->n2_ang = old->n2_ang;
     info_add(old->info_lin, H, k1, q, m->lin_cols, m->n_lin_cols, lam, nw->info_lin);
     info_add(old->info_ang, H + k1 * q, k2, q, m->ang_cols, m->n_ang_cols, lam, nw->info_ang);
     nw->residual_lin = est_relative_norm(e, b, k1);
     nw->residual_ang = est_relative_norm(e + k1, yy + k1, k2);
     /* the accelerations' noise: its expected part of the Gram matrix, the compensated
-     * answer (eiv.py) */
+     * answer (est_eiv.h) */
     nw->has_eiv = old->has_eiv;
-    if (N_pi) {
-        memcpy(nw->N_pi, N_pi, sizeof(double) * nj * nj);
+    if (rows->n_chunks > 0) {
+        noise_gram(m, old, noise, rows->n_chunks, nw->N_pi, scratch);
         nw->has_eiv = 1;
         compensate(m, nw);
     } else if (old->has_eiv) {               /* (a sample without noise rows: none come) */
         memcpy(nw->N_pi, old->N_pi, sizeof(double) * nj * nj);
         compensate(m, nw);
     }
-    double infl = m->lags > 0 ? est_corr_inflation(m, data, old, 0, e, k) : 1.0;
-    double sd[EST_NZ], data_only[EST_NZ], J[EST_NZ * EST_NZ];
-    if (est_joint_std_parts(m, nw, infl, sd, data_only, J, nw->vec) != 0)
-        return 3;
-    nw->rcond_mu = rcond_of(nw->info_lin, m->n_lin_cols);
-    nw->rcond_theta = rcond_of(nw->info_ang, m->n_ang_cols);
-    est_tracker_add(m, old, nw, clock, data_only, sd, J, NULL);
-    if (m->consider) {                       /* the thrust's consider term (consider.py) */
-        est_consider_sums(m, old, nw, Ec, NULL, NULL, H);
-        est_consider_sd(m, nw, J);
-    }
-    return 0;
+    /* the standard deviations, the excitation diagnostics, the tracker, the consider term */
+    return joint_uncertainty(m, data, old, nw, H, rows->Ec, e, clock);
 }

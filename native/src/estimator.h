@@ -1,6 +1,6 @@
 /* The estimator core: online identification of the inertial parameters of a space robot's base
- * and grasped target, one sample at a time (Zhang, Yue, Yuan, IEEE Access 2020), as the Python
- * spacerobot.estimator.Identifier does it.
+ * and grasped target, one sample at a time (Zhang, Yue, Yuan, IEEE Access 2020), with the
+ * noise options, the information filter and the excitation design around it.
  *
  * Shaped as Pinocchio's Model / Data:
  *   - a Model (sr_estimator_model), constant after sr_estimator_model_new: the known arm, the
@@ -8,12 +8,19 @@
  *   - a Data block (sr_estimator_data_size bytes, NO pointers inside): every state that evolves
  *     (estimates, covariances, Gram matrices, tracker, history, counters). FMI get/set/serialize
  *     FMU state is a memcpy of it. Several Data blocks may share one Model (the Model is only
- *     read by update and report).
+ *     read by update and report);
+ *   - a work space (sr_estimator_work_size bytes, no part of the state) for the temporaries of
+ *     an update, which then needs little stack (a host stepping FMUs on threads with small
+ *     stacks);
  *   - one step path, sr_estimator_update: validation, the sample's equations (momentum eqs.
- *     11/16 or force eqs. 28/31), the paper's modified RLS (eqs. 34-38), the standard deviations
- *     and the drift tracker, computed on the stack and committed only when every number came out
- *     finite (a rejected sample changes only the counters, status and message);
+ *     11/16 or force eqs. 28/31), the solver's step (the paper's modified RLS, eqs. 34-38, or
+ *     one RLS over the standard parameters), the standard deviations and the drift tracker,
+ *     computed in the work space and committed only when every number came out finite (a
+ *     rejected sample changes only the counters, status and message);
  *   - sr_estimator_report_get reads the Data only (pure).
+ * Every table a host or binding needs comes from here: the options by their FMU parameter
+ * names with their accepted ranges and defaults, the outputs by their FMU names, the status
+ * texts; the sample's signals are sample.h's.
  *
  * Vectors of 20 estimates are in the order of spacerobot.interface.ESTIMATE_NAMES: per body
  * (base, then target) m [kg], b (3) [m], Ixx Iyy Izz Ixy Ixz Iyz [kg.m2] (about the com, body
@@ -32,14 +39,14 @@
 extern "C" {
 #endif
 
-/* status codes (spacerobot.interface.STATUS) */
+/* status codes (diag.status; sr_estimator_status_text) */
 #define SR_EST_NO_SAMPLE 0           /* no sample yet */
 #define SR_EST_REFERENCE 1           /* momentum reference / differencing history stored */
 #define SR_EST_ESTIMATING 2          /* last sample used */
 #define SR_EST_REJECT_NONFINITE 3    /* non-finite / out-of-range input, or an update overflowed */
 #define SR_EST_REJECT_INCONSISTENT 4 /* base.A not a rotation, or time not increasing */
 
-/* largest accepted input magnitude, SI units (identifier.INPUT_LIMIT) */
+/* largest accepted input magnitude, SI units (every input's range; sr_estimator_param_range) */
 #define SR_EST_INPUT_LIMIT 1e15
 /* base.A is accepted as a rotation when max |A^T A - I| <= this and det A > 0 */
 #define SR_EST_ROTATION_TOL 1e-6
@@ -58,47 +65,57 @@ extern "C" {
  * with sd_thrust)) bytes per sample, 0.9 MB for a 2 s window of a 6-joint arm. */
 #define SR_EST_MAX_WINDOW_SAMPLES 100000
 #define SR_EST_WINDOW_MIN_STEP 1e-3
-/* largest ident.sd_thrust.scale / misalign (identifier.MAX_THRUST_SD) */
+/* largest ident.sd_thrust.scale / misalign, and ident.momentum_window [s] */
 #define SR_EST_MAX_THRUST_SD 1.0
+#define SR_EST_MAX_WINDOW 1e6
+/* ident.noise_profile: none, the sensors' (noise_profile.h); the largest noise.scale, noise.scale
+ * times a magnitude (SI units) and noise_dt [s] */
+#define SR_NOISE_PROFILE_NONE 0
+#define SR_NOISE_PROFILE_SENSORS 1
+#define SR_NOISE_PROFILE_MAX 1e6
 /* length of the message buffers (rejections, model errors) */
 #define SR_EST_MSG_LEN 256
 
-/** The estimator's options: the estimator FMU's parameters (their FMI names in the comments). */
+/** The estimator's options: the estimator FMU's parameters (their FMI names in the comments; the
+ *  table of est_options.c gives each its name, range and default: sr_estimator_options_set,
+ *  sr_estimator_param_range). */
 typedef struct sr_estimator_options {
     int method;            /* method: 1 momentum (eqs. 11/16), 2 force (eqs. 28/31) */
     int solver;            /* solver: 1 the paper's modified RLS, 2 joint RLS over the 20
                               standard parameters */
     int accel_source;      /* accel_source: 1 measured, 2 differenced (force method) */
     double lambda;         /* lambda: forgetting factor, 0 < lambda <= 1 */
-    double P0_mu, P0_theta;/* P0_mu, P0_theta: initial covariances (diagonal), > 0 */
+    double P0_mu, P0_theta;/* P0_mu, P0_theta: initial covariances (diagonal),
+                              SR_EST_P0_MIN..SR_EST_P0_MAX */
     double guess_base[10], guess_target[10];  /* guess.base.*, guess.target.*: m, b(3) [m],
-                                                 Ixx Iyy Izz Ixy Ixz Iyz about the com */
+                                                 Ixx Iyy Izz Ixy Ixz Iyz about the com
+                                                 (body.h's ranges) */
     double sd_rel;         /* ident.sd_rel: identified threshold, 0 < sd_rel < 1 (1e-3) */
     int excite_mode;       /* ident.excite_mode: 0 off, 1 until identified, 2 always */
     double excite_level;   /* ident.excite_level: 0..1 */
-    double row_sd_lin, row_sd_ang;   /* ident.sd_row.<method>_lin / _ang of the chosen method's
-                                        equations; 0 = unit weight */
-    int diff_half_window;  /* ident.diff_half_window: 1..50 */
+    double row_sd[4];      /* ident.sd_row.momentum_lin, .momentum_ang, .force_lin,
+                              .force_ang: the equations' row sd (the chosen method's pair
+                              weighs the rows); 0 = unit weight */
+    int diff_half_window;  /* ident.diff_half_window: 1..50 (1..10 with diff_momentum) */
     int diff_momentum;     /* ident.diff_momentum: 0/1 (force, differenced: the derivative's
                               weights on the momentum equations of the window's samples) */
     int corr_lags;         /* ident.corr_lags: 0..10000 */
     double signal_sd[6];   /* ident.noise.*: a_S, alpha_B, qdd (measured); v_S, omega_B, qd
                               (differenced): white-noise sd per sample; > 0: the force method's
-                              estimates bias-compensated (errors in variables, eiv.py; either
-                              solver, with diff_momentum too) */
+                              estimates bias-compensated (errors in variables, est_eiv.h;
+                              either solver, with diff_momentum too) */
     double momentum_window;/* ident.momentum_window [s], 0..1e6 (momentum method: each
                               sample's equations differenced against the newest stored sample
                               at least this much older, the first until then; 0 = against the
                               first sample, eqs. 11/16) */
     int momentum_point;    /* ident.momentum_point: 0/1 (momentum method: the angular rows
                               about the base's position at the newer sample) */
-    /* -- added after the first release (defaults 0 = the behaviour before them) -- */
     double sd_thrust_scale;     /* ident.sd_thrust.scale [1], 0..1: sd of the thrust's scale
                                    factor error (force and moment, constant over the run) */
     double sd_thrust_misalign;  /* ident.sd_thrust.misalign [rad], 0..1: sd of its
                                    misalignment per axis; either > 0: a consider covariance
                                    adds what they leave in the estimates to the sd (the
-                                   estimates are unchanged; consider.py) */
+                                   estimates are unchanged; est_consider.h) */
     int momentum_window_samples;/* no FMU parameter: the most samples the momentum window's
                                    ring holds, 2..SR_EST_MAX_WINDOW_SAMPLES; 0 = automatic,
                                    momentum_window / SR_EST_WINDOW_MIN_STEP + 2 (samples at
@@ -108,18 +125,20 @@ typedef struct sr_estimator_options {
     int accel_bias;             /* ident.accel_bias: 0/1 (force method, measured
                                    accelerations: a_S minus the accelerometer bias estimated
                                    online from the navigation velocity, the slope of
-                                   v_S - integral a_S dt; accel_bias.py; ignored otherwise) */
+                                   v_S - integral a_S dt; ignored otherwise) */
     /* -- the noise profile (noise_profile.h; docs/identification.md "One switch") -- */
     int noise_profile;          /* ident.noise_profile: 0 none (the options as given: without
                                    other settings the paper's equations), 1 sensors: the noise
                                    model of the sensors described below fills each noise option
                                    still at its default */
-    double noise_scale;         /* noise.scale >= 0: multiplies every magnitude in noise[] */
+    double noise_scale;         /* noise.scale, 0..1e6: multiplies every magnitude in noise[] */
     double noise[SR_NOISE_COUNT]; /* noise.<name>: the sensors' error magnitudes (sensor_noise.h,
-                                     the sensors FMU's parameters and units); default 0 */
-    double noise_dt;            /* the sample interval [s] the sensors draw their white noise at
-                                   (densities over 1 s become d / sqrt(noise_dt) per sample);
-                                   FMU: the scenario's sample time; default 0.1 */
+                                     the sensors FMU's parameters and units; the estimator FMU
+                                     has those the profile reads); default 0 */
+    double noise_dt;            /* no FMU parameter: the sample interval [s] the sensors draw
+                                   their white noise at (densities over 1 s become
+                                   d / sqrt(noise_dt) per sample); the FMU's: the scenario's
+                                   sample time; default 0.1 */
     int information;            /* ident.information: 1 on: the reported estimates and sds from
                                    the information filter (information.h: the momentum
                                    equations with the sensors' noise model, linearised at this
@@ -132,10 +151,10 @@ typedef struct sr_estimator_options {
     int excite_adapt;           /* ident.excite_adapt: 1 the estimator tries excite_rate_try
                                    against the plant's own rate and keeps it where its bound
                                    shrinks clearly faster (SR_EXD_MARGIN; output
-                                   ident.excite_rate); needs the
-                                   information filter; 2 off (rate 1); 0 (default) automatic:
-                                   on where the information filter runs and excitation is
-                                   requested (ident.excite_mode 1 or 2) */
+                                   ident.excite_rate); needs the information filter; 2 off
+                                   (rate 1); 0 (default) automatic: on where the information
+                                   filter runs and excitation is requested
+                                   (ident.excite_mode 1 or 2) */
     double excite_rate_try;     /* ident.excite_rate_try: the candidate rate, in
                                    [SR_EXD_RATE_MIN, SR_EXD_RATE_MAX], != 1 (4) */
     double excite_window;       /* ident.excite_window [s] > 0: the information measured over
@@ -146,21 +165,67 @@ typedef struct sr_estimator_options {
                                    predicted for (300) */
 } sr_estimator_options;
 
-/** The defaults of the estimator FMU's parameters (the paper's guesses and covariances of
- *  spacerobot.robots' default scenario: base 20 kg, target 2 kg cuboids, P0 = 1e4). */
+/** The options' defaults (the table's: the core's own, base 600 kg and target 100 kg guesses
+ *  with P0 = 1e6; an FMU's start values are its scenario's). */
 SR_API void sr_estimator_options_default(sr_estimator_options *o);
+
+/* -- the options' table (est_options.c): each option by the name of the estimator FMU's
+ *    parameter that sets it (noise_dt and momentum_window_samples: no parameter) -- */
+
+/** Number of options in the table, and option i's name (NULL out of range). */
+SR_API int sr_estimator_option_count(void);
+SR_API const char *sr_estimator_option_name(int i);
+/** Option i's place in sr_estimator_options: its field's name, the index in the field's array
+ *  (0 for a scalar) and the byte offset of the value; 1 for an Integer option (an int field),
+ *  0 for a Real one; 1 where an estimator FMU parameter sets it. -1 / NULL out of range. */
+SR_API const char *sr_estimator_option_field(int i);
+SR_API int sr_estimator_option_index(int i);
+SR_API long sr_estimator_option_offset(int i);
+SR_API int sr_estimator_option_integer(int i);
+SR_API int sr_estimator_option_parameter(int i);
+
+/** The closed range [*min, *max] the core accepts for the estimator FMU's parameter or input
+ *  fmi_name (an option's name, or an input's, e.g. "base.A[1,2]", "arm.q[3]": every input
+ *  within +-SR_EST_INPUT_LIMIT): 0, or 1 for a name that is neither (nothing written). A value
+ *  in its range may still be refused with the others (the rules between options, e.g.
+ *  ident.information = 1 needs ident.noise_profile = 1; a guess's inertia must be a real
+ *  body's): sr_estimator_options_check. */
+SR_API int sr_estimator_param_range(const char *fmi_name, double *min, double *max);
+
+/** Set the option name (its FMU name) of o to value: 0, 1 for a value an Integer option cannot
+ *  hold (not an integer: the option's message in err, errlen bytes), 2 for an unknown name. The
+ *  value's range is not checked here (sr_estimator_options_check). */
+SR_API int sr_estimator_options_set(sr_estimator_options *o, const char *name, double value,
+                                    char *err, size_t errlen);
+/** The value of the option name of o into *value: 0, or 2 for an unknown name. */
+SR_API int sr_estimator_options_get(const sr_estimator_options *o, const char *name,
+                                    double *value);
+
+/** 0 when the options o are valid: every value in its range (the noise.* magnitudes, noise.scale
+ *  and noise_dt where ident.noise_profile = 1), the guesses real bodies (sr_body_check), and
+ *  the rules between options; else 1 with a one-line message in err (errlen bytes,
+ *  NUL-terminated when errlen > 0; err may be NULL) naming the FMU parameter, e.g.
+ *  "forgetting factor lambda must satisfy 0 < lambda <= 1, got 1.5". */
+SR_API int sr_estimator_options_check(const sr_estimator_options *o, char *err, size_t errlen);
 
 /** The constant part: robot, options, prior, parameter layout. */
 typedef struct sr_estimator_model sr_estimator_model;
 
-/** A new Model, or NULL on invalid options or robot with a one-line message in err (errlen
- *  bytes, NUL-terminated when errlen > 0; err may be NULL) naming the parameter by its FMU name,
- *  e.g. "forgetting factor lambda must satisfy 0 < lambda <= 1, got 1.5" (the rules and
- *  messages of the Python Identifier). The robot is copied. Free with sr_estimator_model_free. */
+/** A new Model, or NULL on invalid options (sr_estimator_options_check, on the options as given
+ *  and with their noise profile applied) or robot with a one-line message in err (errlen
+ *  bytes, NUL-terminated when errlen > 0; err may be NULL) naming the parameter by its FMU
+ *  name. The robot is copied. Free with sr_estimator_model_free. */
 SR_API sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
                                                   const sr_estimator_options *opt,
                                                   char *err, size_t errlen);
 SR_API void sr_estimator_model_free(sr_estimator_model *m);
+
+/** The options the Model m runs with into *out: its noise profile applied, and those that do
+ *  not apply to its method and accelerations at 0 (ident.momentum_window: the momentum
+ *  method's, with a window; ident.momentum_point: the momentum method's; ident.accel_bias:
+ *  the force method's with measured accelerations; ident.diff_momentum: with differenced
+ *  ones; ident.noise.*: the force method's). */
+SR_API void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_options *out);
 
 
 /** Bytes of one Data block of this Model (depends on diff_half_window, corr_lags, n, the
@@ -172,20 +237,30 @@ SR_API size_t sr_estimator_data_size(const sr_estimator_model *m);
  *  or double-aligned buffer) to the state before any sample. */
 SR_API void sr_estimator_data_init(const sr_estimator_model *m, void *data);
 
-/** Number of values of a flat sample of a robot with n joints: 24 + 3 n + 12 (r_S 0, v_S 3,
- *  A 6 row-major, omega_B 15, a_S 18, alpha_B 21, q 24, qd 24+n, qdd 24+2n, F, M, J, H). */
+/** Number of values of a flat sample of the Model's robot (sample.h: its signals in the order
+ *  of SR_SAMPLE_SIGNALS, base.A row-major). */
 SR_API int sr_estimator_sample_length(const sr_estimator_model *m);
 
-/** One sample taken at time t [s]; sample (sr_estimator_sample_length(m) values) as above.
+/** Bytes of the work space of this Model: the temporaries of one update (the new state of
+ *  its transaction, the sample's equations, the information filter's and the excitation
+ *  design's matrices), kept off the stack so that an update needs little of it (hosts step
+ *  FMUs on threads with small stacks). Allocate it once beside the Data block, any alignment
+ *  of a malloc'ed or double-aligned buffer; it is no part of the state (never copied or
+ *  saved; its contents between updates mean nothing). One work space per thread that
+ *  updates. */
+SR_API size_t sr_estimator_work_size(const sr_estimator_model *m);
+
+/** One sample taken at time t [s]; sample (sr_estimator_sample_length(m) values) as above;
+ *  work: the work space (sr_estimator_work_size(m) bytes).
  *  Never fails hard: returns the status (SR_EST_*). A rejected sample (3, 4) leaves every
  *  estimate, covariance and internal state untouched except the rejected counter, the status
  *  and the message. msg (msglen bytes; may be NULL) gets the reason of a rejection ("" when
- *  accepted), as the Python Identifier.message. Sample times must increase only where the state
- *  depends on them (differenced accelerations, the momentum window, the thrust integrals of
- *  sd_thrust), as in the Python Identifier. A Data block
+ *  accepted). Sample times must increase only where the state depends on them (differenced
+ *  accelerations, the momentum window, the thrust integrals of sd_thrust, the information
+ *  filter). A Data block
  *  whose counters are out of range (not initialised, corrupt, or of another Model) is not
- *  used: status 3, nothing written. */
-SR_API int sr_estimator_update(const sr_estimator_model *m, void *data, double t,
+ *  used: status 3, nothing written; so is a missing work space. */
+SR_API int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, double t,
                                const double *sample, char *msg, size_t msglen);
 
 /** Check a Data block restored from outside (FMI set / deserialize state, a file) before it is
@@ -223,6 +298,12 @@ typedef struct sr_estimator_report {
                                          the choice) */
 } sr_estimator_report;
 
+/** The excitation level the Model m requests (output ident.excite) for the bodies' identified
+ *  flags: ident.excite_level while excitation is wanted (ident.excite_mode 2 always, 1 while
+ *  a body is not identified), else 0. */
+SR_API double sr_estimator_excite_request(const sr_estimator_model *m, int identified_base,
+                                          int identified_target);
+
 /** The report of the Data block (reads it only). */
 SR_API void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
                                     sr_estimator_report *r);
@@ -232,7 +313,7 @@ SR_API void sr_estimator_message(const sr_estimator_model *m, const void *data, 
                                  size_t msglen);
 
 /** The least-squares estimates (20, before the physical projection) and the standard
- *  deviations (20) of the Data block, as the Python Identifier.vector() / std(). */
+ *  deviations (20) of the Data block (the information filter's where it runs). */
 SR_API void sr_estimator_estimates(const sr_estimator_model *m, const void *data, double *vec,
                                    double *sd);
 
@@ -241,12 +322,30 @@ SR_API void sr_estimator_estimates(const sr_estimator_model *m, const void *data
  *  matrices, tracker, history) changes only with an accepted sample. */
 SR_API size_t sr_estimator_data_head_size(void);
 
-/** The standard deviations (20) of the least-squares estimates without the drift tracker's
- *  lag term: the data's scatter, the prior's pull, the unobserved floor, computed from the
- *  Data block (Python: Identifier.solver.std_parts().sd). A diagnostic: the report's sd
- *  adds the lag (tracking.total_sd). */
+/** The standard deviations (20) of this estimator's least-squares estimates without the drift
+ *  tracker's lag term: the data's scatter, the prior's pull, the unobserved floor, computed
+ *  from the Data block. A diagnostic: the report's sd adds the lag (est_tracker.h). */
 SR_API void sr_estimator_sd_without_lag(const sr_estimator_model *m, const void *data,
                                         double *sd);
+
+/* -- the outputs' and the status's tables (est_report.c) -- */
+
+/** Number of the estimator FMU's outputs; output i's FMU name (NULL out of range) and 1 where
+ *  it is an Integer variable. */
+SR_API int sr_estimator_output_count(void);
+SR_API const char *sr_estimator_output_name(int i);
+SR_API int sr_estimator_output_integer(int i);
+
+/** The outputs of the report r, in the table's order, into out (sr_estimator_output_count()
+ *  values; the Integer ones as exact doubles). */
+SR_API void sr_estimator_outputs(const sr_estimator_report *r, double *out);
+
+/** What status code s means (diag.status), or NULL for a code out of range. */
+SR_API const char *sr_estimator_status_text(int s);
+
+/** SR_EST_INPUT_LIMIT and SR_EST_ROTATION_TOL, for bindings. */
+SR_API double sr_estimator_input_limit(void);
+SR_API double sr_estimator_rotation_tol(void);
 
 /** sizeof(sr_estimator_options) and sizeof(sr_estimator_report), for bindings that check their
  *  view of the structs. */

@@ -1,4 +1,4 @@
-/* excite_design.c -- the estimator's choice of the excitation's rate (excite_design.h). */
+/* The estimator's choice of the excitation's rate (excite_design.h). */
 #include "excite_design.h"
 
 #include "physical.h"
@@ -7,40 +7,6 @@
 #include <string.h>
 
 #define MU SR_INFO_MAX_U
-
-int sr_exd_options_check(const sr_exd_options *o, const char **name, const char **rule,
-                         double *value)
-{
-    const char *bad = NULL, *why = NULL;
-    double v = NAN;
-    if (!o) {
-        bad = "ident.excite_rate_try";
-        why = "given";
-    } else if (!(o->rate >= SR_EXD_RATE_MIN && o->rate <= SR_EXD_RATE_MAX) || o->rate == 1.0) {
-        bad = "ident.excite_rate_try";
-        why = "in [0.1, 10] and not 1";
-        v = o->rate;
-    } else if (!(o->window > 0.0 && o->window <= SR_EXD_TIME_MAX)) {
-        bad = "ident.excite_window";
-        why = "> 0 s and <= 1e7 s";
-        v = o->window;
-    } else if (!(o->settle >= 0.0 && o->settle <= SR_EXD_TIME_MAX)) {
-        bad = "ident.excite_settle";
-        why = ">= 0 s and <= 1e7 s";
-        v = o->settle;
-    } else if (!(o->horizon > 0.0 && o->horizon <= SR_EXD_TIME_MAX)) {
-        bad = "ident.excite_horizon";
-        why = "> 0 s and <= 1e7 s";
-        v = o->horizon;
-    }
-    if (name)
-        *name = bad;
-    if (rule)
-        *rule = why;
-    if (value)
-        *value = v;
-    return bad != NULL;
-}
 
 void sr_exd_init(sr_exd_data *x)
 {
@@ -55,11 +21,12 @@ void sr_exd_init(sr_exd_data *x)
 /* the predicted largest scaled bound (bound / error scale at the filter's estimate, over the
  * estimates o identifies) of S(fd) + factor dS; NaN where the prediction fails */
 static double predicted(const sr_exd_options *o, const sr_info_model *im,
-                        const sr_info_data *fd, const double *dS, double factor)
+                        const sr_info_data *fd, const double *dS, double factor,
+                        sr_info_work *w)
 {
     double vec[20], bound[20], scale[20], worst = 0.0;
     if (sr_info_estimate(im, fd, 2, vec, bound, NULL) != 0 ||
-        sr_info_predict(im, fd, dS, factor, bound) != 0)
+        sr_info_predict(im, fd, dS, factor, bound, w) != 0)
         return NAN;
     sr_error_scale(vec, SR_COM_SCALE_MIN, scale);
     /* (a planar robot's out-of-plane entries move with the identified ones through the
@@ -81,10 +48,15 @@ static void added(const sr_info_model *im, const sr_info_data *fd, const double 
             dS[p * MU + q] -= S_mark[p * MU + q];
 }
 
-int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im,
-                const sr_info_data *fd, double t, int (*wanted_fn)(void *), void *ctx)
+int sr_exd_reads_wanted(const sr_exd_options *o, const sr_exd_data *x, double t)
 {
-    if (!o || !x || !im || !fd || !isfinite(t))
+    return o && x && x->phase == SR_EXD_MEASURE && !(t - x->t_mark < o->window);
+}
+
+int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im,
+                const sr_info_data *fd, double t, int wanted, sr_exd_work *w)
+{
+    if (!o || !x || !im || !fd || !w || !isfinite(t))
         return 1;
     switch (x->phase) {
     case SR_EXD_WAIT:
@@ -105,7 +77,7 @@ int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im
             return 0;
         added(im, fd, x->S_mark, x->dS);
         x->w_slow = t - x->t_mark;
-        if (wanted_fn && !wanted_fn(ctx)) {       /* no excitation wanted: nothing to choose */
+        if (!wanted) {                            /* no excitation wanted: nothing to choose */
             x->phase = SR_EXD_DONE;
             return 0;
         }
@@ -123,15 +95,15 @@ int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im
     case SR_EXD_MEASURE_FAST: {
         if (t - x->t_mark < o->window)
             return 0;
-        double dS_fast[MU * MU], left = x->t_first + o->horizon - t;
+        double *dS_fast = w->dS_fast, left = x->t_first + o->horizon - t;
         added(im, fd, x->S_mark, dS_fast);
         if (left < 0.0)
             left = 0.0;
         /* each rate's bound at the horizon if the rest of the run added what its window did;
          * back at rate 1 after one more settle */
         double back = left - o->settle > 0.0 ? left - o->settle : 0.0;
-        x->score[0] = predicted(o, im, fd, x->dS, back / x->w_slow);
-        x->score[1] = predicted(o, im, fd, dS_fast, left / (t - x->t_mark));
+        x->score[0] = predicted(o, im, fd, x->dS, back / x->w_slow, &w->info);
+        x->score[1] = predicted(o, im, fd, dS_fast, left / (t - x->t_mark), &w->info);
         x->phase = SR_EXD_DONE;
         if (!isfinite(x->score[0]) || !isfinite(x->score[1])) {
             x->score[0] = x->score[1] = 0.0;     /* no prediction: the rate stays 1 */

@@ -1,5 +1,5 @@
-/* excite_design.h -- the estimator's choice of how fast the plant excites (issue #29, point 3;
- * docs/identification.md, "Excitation that buys information").
+/* The estimator's choice of how fast the plant excites (docs/identification.md, "Excitation
+ * that buys information").
  *
  * Offline (`spacerobot design-excitation`) the period that shrinks the Cramér-Rao bound most
  * differed by target: on random spatial targets four times faster than the plant's default
@@ -54,7 +54,8 @@ enum sr_exd_phase {
     SR_EXD_DONE = 4         /* chosen (or nothing to choose) */
 };
 
-/** The options (the estimator FMU's parameters ident.excite_*). */
+/** The options (the estimator FMU's parameters ident.excite_*; the estimator's options table
+ *  checks them: est_options.c). */
 typedef struct sr_exd_options {
     double rate;            /* ident.excite_rate_try: the candidate rate tried against 1,
                                in [SR_EXD_RATE_MIN, SR_EXD_RATE_MAX], != 1 */
@@ -80,21 +81,27 @@ typedef struct sr_exd_data {
     double dS[SR_INFO_MAX_U * SR_INFO_MAX_U];       /* information the rate-1 window added */
 } sr_exd_data;
 
-/** 0 when o's numbers are valid, else 1 with why: the offending FMU parameter's name, the rule
- *  it breaks ("in [0.1, 10] and not 1", static strings) and its value (any pointer may be
- *  NULL). */
-SR_API int sr_exd_options_check(const sr_exd_options *o, const char **name, const char **rule,
-                                double *value);
+/** The choice's temporaries (a work space beside the state, never part of it): the
+ *  information filter's (sr_info_predict) and the information the candidate's window added. */
+typedef struct sr_exd_work {
+    sr_info_work info;
+    double dS_fast[SR_INFO_MAX_U * SR_INFO_MAX_U];
+} sr_exd_work;
 
 /** The state before any sample: phase SR_EXD_WAIT, rate 1. */
 SR_API void sr_exd_init(sr_exd_data *x);
 
+/** 1 where the step at t [s] ends the window at rate 1: the step then reads whether the
+ *  estimator still asks for excitation (sr_exd_step's wanted); else 0. */
+SR_API int sr_exd_reads_wanted(const sr_exd_options *o, const sr_exd_data *x, double t);
+
 /** After the information filter took the sample at t [s] (fd: its state then): the choice's
- *  next step. wanted: 1 while the estimator asks for excitation (ident.excite > 0); read only
- *  where a window ends (wanted_fn(ctx) is called then; NULL: always wanted). Returns 0, or 1
- *  for a NULL pointer or a prediction that failed (the rate then stays 1, phase done). */
+ *  next step. wanted: 1 while the estimator asks for excitation (ident.excite > 0), read only
+ *  where sr_exd_reads_wanted says (where the rate-1 window ends: no excitation wanted then,
+ *  nothing is tried). w: the work space. Returns 0, or 1 for a NULL pointer or a prediction
+ *  that failed (the rate then stays 1, phase done). */
 SR_API int sr_exd_step(const sr_exd_options *o, sr_exd_data *x, const sr_info_model *im,
-                       const sr_info_data *fd, double t, int (*wanted_fn)(void *), void *ctx);
+                       const sr_info_data *fd, double t, int wanted, sr_exd_work *w);
 
 /** 1 if every number of x is finite and its phase in range, else 0 (a restored state). */
 SR_API int sr_exd_data_valid(const sr_exd_options *o, const sr_exd_data *x);

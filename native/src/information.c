@@ -1,10 +1,9 @@
-/* information.c -- the information filter and the bound (information.h). */
+/* The information filter and the bound (information.h). */
 #include "information.h"
-
-#include "est_internal.h"
 
 #include "linalg.h"
 #include "sr_math.h"
+#include "standard_params.h"
 
 #include <limits.h>
 #include <math.h>
@@ -13,9 +12,9 @@
 #define MU SR_INFO_MAX_U             /* row stride of R, N_HH */
 #define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
 
-/* The unknowns' z part is in the standard layout of est_internal.h: per body m, c = m b (3),
- * I_O# (6, about the body frame's origin); est_standard_of_reported / est_joint_vector_of map
- * it from / to the reported parameters. */
+/* The unknowns' z part is in the standard layout of standard_params.h: per body m, c = m b (3),
+ * I_O# (6, about the body frame's origin); sr_standard_of_reported / sr_reported_of_standard
+ * map it from / to the reported parameters. */
 
 /* the white-noise sds of n (8), the channels the rows are weighed by */
 static void white_sds(const sr_info_noise *n, double *w)
@@ -77,7 +76,7 @@ int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_no
         m->rows[i] = m->planar ? planar_rows[i] : i;
     m->nb = noise->gyro_bias > 0.0 ? 3 : 0;
     m->nu = m->nz + m->nr + SR_N_CONSIDER + m->nb;
-    est_standard_of_reported(z0, m->zO0);
+    sr_standard_of_reported(z0, m->zO0);
     /* the prior: P0 on z_O, none on c0 (1e-12 keeps R invertible before the first rows: the
        momentum is unknown), the thrust errors' and gyro bias' own sds (an sd of 0: the
        unknown held at 0 by a prior information of 1e150) */
@@ -312,9 +311,9 @@ static void weigh(const double *W, int nr, const double *in, int ncol, double *o
 }
 
 int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
-                const double *z_lin)
+                const double *z_lin, sr_info_work *w)
 {
-    if (!m || !d || !x || !z_lin || !(z_lin[0] > 0.0) || !(z_lin[10] > 0.0))
+    if (!m || !d || !x || !z_lin || !w || !(z_lin[0] > 0.0) || !(z_lin[10] > 0.0))
         return 1;
     if (!isfinite(t) || (d->samples > 0 && !(t > d->K[SR_THRUST_T])))
         return 1;                      /* the thrust integrals need increasing times */
@@ -322,7 +321,7 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     double K[SR_THRUST_LEN], W[36], z[20];
     memcpy(K, d->K, sizeof K);
     sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(n), x + SR_X_M(n));
-    est_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
+    sr_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
     if (noise_weight(m, x, z, W) != 0)               /* every sample */
         return 1;
     /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
@@ -346,8 +345,8 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     double Wt[6 * HS];
     weigh(W, nr, Hy, nu + 1, Wt);
     /* errors in variables: N += sum_l sigma_l^2 (W dH_l)^T (W [dH_l dy_l]) */
-    double N_HH[MU * MU], N_Hy[MU];
-    memcpy(N_HH, d->N_HH, sizeof N_HH);
+    double *N_HH = w->N_HH, N_Hy[MU];        /* the new sums, committed when finite */
+    memcpy(N_HH, d->N_HH, sizeof d->N_HH);
     memcpy(N_Hy, d->N_Hy, sizeof N_Hy);
     int idx[12 + 2 * SR_MAX_JOINTS];
     double sd[12 + 2 * SR_MAX_JOINTS];
@@ -385,8 +384,8 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     }
     /* the QR update of [[R d]; [W H  W y]] (Householder, column by column: R's rows below
        the diagonal are zero, so each reflection touches R's row j and the nr new rows) */
-    double R[MU * MU], dv[MU], v[6];
-    memcpy(R, d->R, sizeof R);
+    double *R = w->R, dv[MU], v[6];
+    memcpy(R, d->R, sizeof d->R);
     memcpy(dv, d->d, sizeof dv);
     for (int j = 0; j < nu; j++) {
         double sigma = 0.0, alpha = R[j * MU + j];
@@ -418,9 +417,9 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
         rss += Wt[a * HS + nu] * Wt[a * HS + nu];
     if (!isfinite(numbers_sum(nu, R, dv, N_HH, N_Hy, K) + rss))   /* commit finite only */
         return 1;
-    memcpy(d->R, R, sizeof R);
+    memcpy(d->R, R, sizeof d->R);
     memcpy(d->d, dv, sizeof dv);
-    memcpy(d->N_HH, N_HH, sizeof N_HH);
+    memcpy(d->N_HH, N_HH, sizeof d->N_HH);
     memcpy(d->N_Hy, N_Hy, sizeof N_Hy);
     memcpy(d->K, K, sizeof K);
     d->rss = rss;
@@ -437,7 +436,7 @@ static void reported_of_u(const sr_info_model *m, const double *u, double *x)
     memcpy(z, m->zO0, sizeof z);
     for (int q = 0; q < m->nz; q++)
         z[m->zi[q]] = u[q];
-    est_joint_vector_of(EST_S2P, z, x);
+    sr_reported_of_standard(z, x);
 }
 
 /* Ri = R^-1 (R upper triangular nu x nu with a nonzero diagonal, row stride MU; Ri upper) */
@@ -469,7 +468,7 @@ static int bound_of(const sr_info_model *m, const double *Ri, const double *u, d
     memcpy(zO, m->zO0, sizeof zO);
     for (int q = 0; q < nz; q++)
         zO[m->zi[q]] = u[q];
-    est_joint_jacobian(EST_S2P, zO, Jz);
+    sr_reported_jacobian(zO, Jz);
     for (int i = 0; i < 20; i++)
         for (int q = 0; q < nz; q++)
             J[i * 20 + q] = Jz[i * 20 + m->zi[q]];
@@ -527,20 +526,20 @@ static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int co
         }
     }
     if (compensated == 2) {        /* exact: (S - N) u_c = s - n_y, as (1 - S^-1 N) u_c =
-                                      u - S^-1 n_y (S^-1 = Ri Ri^T: no normal equations) */
-        double Si[MU * MU], A[MU * MU], b[MU];
-        for (int p = 0; p < nu; p++)
-            for (int q = 0; q < nu; q++)
-                Si[p * MU + q] = inverse_entry(Ri, nu, p, q);
+                                      u - S^-1 n_y (S^-1 = Ri Ri^T: no normal equations; its
+                                      rows one at a time) */
+        double Si[MU], A[MU * MU], b[MU];
         for (int p = 0; p < nu; p++) {
+            for (int q = 0; q < nu; q++)
+                Si[q] = inverse_entry(Ri, nu, p, q);
             double s = u_raw[p];
             for (int q = 0; q < nu; q++)
-                s -= Si[p * MU + q] * d->N_Hy[q];
+                s -= Si[q] * d->N_Hy[q];
             b[p] = s;
             for (int q = 0; q < nu; q++) {
                 double a = p == q ? 1.0 : 0.0;
                 for (int j = 0; j < nu; j++)
-                    a -= Si[p * MU + j] * d->N_HH[j * MU + q];
+                    a -= Si[j] * d->N_HH[j * MU + q];
                 A[p * nu + q] = a;
             }
         }
@@ -591,24 +590,23 @@ void sr_info_information(const sr_info_model *m, const sr_info_data *d, double *
 }
 
 int sr_info_predict(const sr_info_model *m, const sr_info_data *d, const double *dS,
-                    double factor, double *bound)
+                    double factor, double *bound, sr_info_work *w)
 {
-    if (!m || !d || !dS || !bound || !(factor >= 0.0 && isfinite(factor))) {
+    if (!m || !d || !dS || !bound || !w || !(factor >= 0.0 && isfinite(factor))) {
         for (int i = 0; bound && i < 20; i++)
             bound[i] = NAN;
         return 1;
     }
     int nu = m->nu;
-    double u[MU] = {0}, Ri[MU * MU], S[MU * MU], R[MU * MU];
+    double u[MU] = {0}, *Ri = w->Ri, *S = w->S, *R = w->R, *L = w->L;
     solve_unknowns(m, d, 2, u, Ri);              /* the point the bound is mapped at */
     sr_info_information(m, d, S);
-    double L[MU * MU];
     for (int p = 0; p < nu; p++)                 /* S + factor dS, packed nu x nu */
         for (int q = 0; q < nu; q++)
             L[p * nu + q] = S[p * MU + q] + factor * dS[p * MU + q];
     int fail = sr_cholesky(L, nu) != 0;          /* = L L^T: R = L^T, S = R^T R */
     if (!fail) {
-        memset(R, 0, sizeof R);
+        memset(R, 0, sizeof w->R);
         for (int p = 0; p < nu; p++)
             for (int q = p; q < nu; q++)
                 R[p * MU + q] = L[q * nu + p];
@@ -647,9 +645,10 @@ static int own_point(const sr_info_model *m, const sr_info_data *d, double *z)
 }
 
 int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_data *d,
-                 double *buffer, double t, const double *x, const double *z_est)
+                 double *buffer, double t, const double *x, const double *z_est,
+                 sr_info_work *w)
 {
-    if (!m || !before || !d || before == d || !buffer || !x || !z_est)
+    if (!m || !before || !d || before == d || !buffer || !x || !z_est || !w)
         return 1;
     memcpy(d, before, sizeof *d);
     int slot = 1 + SR_X_LEN(m->n);
@@ -658,7 +657,7 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
         if (d->samples % SR_INFO_RELIN == 0 && own_point(m, d, z) == 0)
             memcpy(d->z_lin, z, sizeof z);
         memcpy(z, d->z_lin, sizeof z);
-        if (sr_info_add(m, d, t, x, z) != 0) {
+        if (sr_info_add(m, d, t, x, z, w) != 0) {
             memcpy(d, before, sizeof *d);
             return 1;
         }
@@ -670,7 +669,7 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
         double *s = buffer + (size_t)d->samples * (size_t)slot;
         s[0] = t;
         memcpy(s + 1, x, sizeof(double) * (size_t)(slot - 1));
-        return sr_info_add(m, d, t, x, z_est);
+        return sr_info_add(m, d, t, x, z_est, w);
     }
     /* the replay: the kept samples and this one again from the prior, at the own estimate */
     double z[20];
@@ -680,12 +679,12 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
     int ok = 1;
     for (int k = 0; k < SR_INFO_REPLAY && ok; k++) {
         const double *s = buffer + (size_t)k * (size_t)slot;
-        ok = sr_info_add(m, d, s[0], s + 1, z) == 0;
+        ok = sr_info_add(m, d, s[0], s + 1, z, w) == 0;
     }
     if (!ok)                                 /* no replay rather than no filter: go on from the
                                                 state before, at the point the replay chose */
         memcpy(d, before, sizeof *d);
-    if (sr_info_add(m, d, t, x, z) != 0) {
+    if (sr_info_add(m, d, t, x, z, w) != 0) {
         memcpy(d, before, sizeof *d);
         return 1;
     }
@@ -695,4 +694,5 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
 }
 
 size_t sr_info_model_size(void) { return sizeof(sr_info_model); }
+size_t sr_info_work_size(void) { return sizeof(sr_info_work); }
 size_t sr_info_data_size(void) { return sizeof(sr_info_data); }

@@ -1,7 +1,7 @@
-/* information.h -- the information filter (issue #29; docs/identification.md, "The information
- * filter and the bound"): the 20 inertial parameters from the momentum equations with the
- * sensors' noise model, as a square-root information filter (Bierman), and the first-order
- * Cramér-Rao bound that the same information implies.
+/* The information filter (docs/identification.md, "The information filter and the bound"):
+ * the 20 inertial parameters from the momentum equations with the sensors' noise model, as
+ * a square-root information filter (Bierman), and the first-order Cramér-Rao bound that the
+ * same information implies.
  *
  * The measurement model. At every sample the momentum equations (eqs. 11/16, sr_equations'
  * momentum form, NOT differenced against a reference) hold exactly with three kinds of unknowns
@@ -93,6 +93,15 @@ typedef struct sr_info_data {
     double z_lin[20];
 } sr_info_data;
 
+/** The filter's temporaries: a work space beside the state, never part of it (a host copies
+ *  the state, not this): sr_info_add's new R and N_HH (committed only when finite) and
+ *  sr_info_predict's matrices. Its contents between calls mean nothing. */
+typedef struct sr_info_work {
+    double R[SR_INFO_MAX_U * SR_INFO_MAX_U], N_HH[SR_INFO_MAX_U * SR_INFO_MAX_U];
+    double S[SR_INFO_MAX_U * SR_INFO_MAX_U], L[SR_INFO_MAX_U * SR_INFO_MAX_U];
+    double Ri[SR_INFO_MAX_U * SR_INFO_MAX_U];
+} sr_info_work;
+
 /** Fill *m for robot (copied) with the noise model, the guesses z0 (20, reported form) and the
  *  estimator's prior covariances P0_mu, P0_theta (> 0). Planar robots: the in-plane unknowns
  *  (m, b_x, b_y, I_zz per body) and rows (linear x, y, angular z). Returns 0, or 1 for a NULL
@@ -112,11 +121,11 @@ SR_API int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_
 SR_API void sr_info_data_init(const sr_info_model *m, sr_info_data *d);
 
 /** Add the sample x (flat, SR_X_LEN(n)) taken at t [s], linearised at z_lin (20, reported
- *  form: its masses > 0). In place; returns 0, or 1 (d unchanged) for a NULL pointer, a t not
- *  finite or not after the last sample's, a z_lin with a mass <= 0, a rows' noise covariance
- *  that is not positive definite, or non-finite numbers. */
+ *  form: its masses > 0); w: the work space. In place; returns 0, or 1 (d unchanged) for a
+ *  NULL pointer, a t not finite or not after the last sample's, a z_lin with a mass <= 0, a
+ *  rows' noise covariance that is not positive definite, or non-finite numbers. */
 SR_API int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
-                       const double *z_lin);
+                       const double *z_lin, sr_info_work *w);
 
 /** Doubles of the replay buffer of a robot with n joints: SR_INFO_REPLAY samples of
  *  [t, x (SR_X_LEN(n))]. */
@@ -129,17 +138,19 @@ SR_API size_t sr_info_buffer_length(int n);
  *  caller does not commit leaves only that slot, which the next sample overwrites). The
  *  replaying sample costs SR_INFO_REPLAY + 1 adds; where a kept sample cannot be added again
  *  (a corrupted buffer), the filter goes on from before without the replay. before and d must
- *  not overlap. Returns as sr_info_add (d = before on failure). */
+ *  not overlap; w: the work space. Returns as sr_info_add (d = before on failure). */
 SR_API int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_data *d,
-                        double *buffer, double t, const double *x, const double *z_est);
+                        double *buffer, double t, const double *x, const double *z_est,
+                        sr_info_work *w);
 
-/** What the filter says (reads d only; work space on the stack): vec (20) the estimates
- *  (compensated for the noise in the regressors (errors in variables): 0 not, 1 to first
- *  order, 2 exactly, (S - N) u = s - n, falling back to 1 where S - N is singular), bound (20) the first-order
- *  Cramér-Rao standard deviations (0 for a parameter not identified, e.g. out of plane),
- *  chi2 (may be NULL) the weighted residual sum of squares per degree of freedom (1 when the
- *  noise model is right; 0 before nu rows). Returns 0, or 1 for a NULL pointer or a singular
- *  information (vec, bound then NaN). */
+/** What the filter says (reads d only; its temporaries on the stack, under 12 kB a frame):
+ *  vec (20) the estimates (compensated for the noise in the regressors (errors in
+ *  variables): 0 not, 1 to first order, 2 exactly, (S - N) u = s - n, falling back to 1
+ *  where S - N is singular), bound (20) the first-order Cramér-Rao standard deviations (0
+ *  for a parameter not identified, e.g. out of plane), chi2 (may be NULL) the weighted
+ *  residual sum of squares per degree of freedom (1 when the noise model is right; 0 before
+ *  nu rows). Returns 0, or 1 for a NULL pointer or a singular information (vec, bound then
+ *  NaN). */
 SR_API int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
                             double *vec, double *bound, double *chi2);
 
@@ -150,14 +161,17 @@ SR_API void sr_info_information(const sr_info_model *m, const sr_info_data *d, d
 
 /** The bound (20, as sr_info_estimate's) that the information S(d) + factor dS would give,
  *  mapped at d's own estimate: dS (nu x nu, row stride SR_INFO_MAX_U) e.g. what a window of
- *  samples added, factor >= 0 how many such windows are to come. Returns 0, or 1 (bound NaN)
- *  for a NULL pointer, a factor not finite or < 0, a sum that is not positive definite. */
+ *  samples added, factor >= 0 how many such windows are to come; w: the work space. Returns
+ *  0, or 1 (bound NaN) for a NULL pointer, a factor not finite or < 0, a sum that is not
+ *  positive definite. */
 SR_API int sr_info_predict(const sr_info_model *m, const sr_info_data *d, const double *dS,
-                           double factor, double *bound);
+                           double factor, double *bound, sr_info_work *w);
 
-/** sizeof(sr_info_model), sizeof(sr_info_data), for bindings that check their view. */
+/** sizeof(sr_info_model), sizeof(sr_info_data), sizeof(sr_info_work), for bindings that
+ *  check their view or allocate them. */
 SR_API size_t sr_info_model_size(void);
 SR_API size_t sr_info_data_size(void);
+SR_API size_t sr_info_work_size(void);
 
 #ifdef __cplusplus
 }

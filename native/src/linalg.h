@@ -1,17 +1,15 @@
-/* Small dense linear algebra of the native core: the one module every other one uses.
- *
- * Written out (no LAPACK/BLAS), with the algorithms and, where practical, the operation order
- * of the tests' NumPy oracle (tests/oracles/estimator/report_kernels.py and kernels.py), so
- * that the two agree to round-off:
+/* Small dense linear algebra of the native core: the one module every other one uses, written
+ * out (no LAPACK/BLAS), each algorithm with one operation order (the same results on every
+ * platform):
  *   - sr_eigh: Householder tridiagonalisation + implicit QL (EISPACK tred2 / tql2, as JAMA);
- *   - sr_lu_solve: LU with partial (row) pivoting (report_kernels.lu_solve);
+ *   - sr_lu_solve: LU with partial (row) pivoting;
  *   - sr_cholesky / sr_cholesky_solve: the Cholesky factorisation and the two triangular
- *     solves of kernels.rls_update;
+ *     solves;
  *   - the scale-free eigen-decomposition of an information matrix and the solve restricted to
- *     its observed directions (report_kernels.scaled_information, eig_scaled, rcond_scaled,
- *     rcond_of_spectrum, eig_solve = uncertainty.observed_solve);
+ *     its observed directions (sr_scaled_information, sr_scaled_eigh, sr_rcond_scaled,
+ *     sr_rcond_of_spectrum, sr_eig_solve);
  *   - sr_eigvalsh_extremes: the smallest and largest eigenvalue alone (the estimator's
- *     excitation diagnostic where its information is well conditioned: issue #26's speed).
+ *     excitation diagnostic where its information is well conditioned).
  * The kernels keep their operation order and thus their results bit for bit where they are
  * vectorised (two entries a step, which the compiler packs; no reassociation).
  *

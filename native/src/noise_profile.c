@@ -1,54 +1,22 @@
-/* noise_profile.c -- the estimator's noise model from the sensors' parameters (noise_profile.h). */
+/* The estimator's noise model from the sensors' parameters (noise_profile.h). */
 #include "noise_profile.h"
 
 #include <math.h>
 #include <string.h>
 
-/* the magnitudes the profile reads */
-static const int READ[] = {SR_NOISE_GYRO_ARW, SR_NOISE_NAV_V, SR_NOISE_ACCEL_VRW, SR_NOISE_ALPHA,
-                           SR_NOISE_ENC_QD, SR_NOISE_ENC_QDD, SR_NOISE_THRUST_SCALE,
-                           SR_NOISE_THRUST_MISALIGN, SR_NOISE_NAV_R, SR_NOISE_STAR_CROSS,
-                           SR_NOISE_STAR_ROLL, SR_NOISE_ENC_Q, SR_NOISE_ENC_RESOLUTION,
-                           SR_NOISE_GYRO_BIAS};
-
-static int fail(sr_noise_profile_error *e, const char *name, const char *rule, double value)
-{
-    e->name = name;
-    e->rule = rule;
-    e->value = value;
-    return 1;
-}
-
 int sr_noise_profile_apply(const sr_estimator_options *in, sr_estimator_options *out,
-                           sr_noise_profile_error *e)
+                           char *err, size_t errlen)
 {
+    if (sr_estimator_options_check(in, err, errlen))
+        return 1;
     sr_estimator_options o = *in, d;
-    if (o.noise_profile != SR_NOISE_PROFILE_NONE && o.noise_profile != SR_NOISE_PROFILE_SENSORS)
-        return fail(e, "ident.noise_profile", "0 (none) or 1 (sensors)",
-                    (double)o.noise_profile);
     if (o.noise_profile == SR_NOISE_PROFILE_NONE) {
         *out = o;
         return 0;
     }
-    double s = o.noise_scale, dt = o.noise_dt;
-    if (!(isfinite(s) && s >= 0.0 && s <= SR_NOISE_PROFILE_MAX))
-        return fail(e, "noise.scale", "a finite number in [0, 1e6]", s);
-    if (!(isfinite(dt) && dt > 0.0 && dt <= SR_NOISE_PROFILE_MAX))
-        return fail(e, "the sample time (noise_dt)", "a finite number in (0, 1e6] s",
-                    dt);
-    double p[SR_NOISE_COUNT] = {0};
-    for (size_t k = 0; k < sizeof READ / sizeof READ[0]; k++) {
-        int i = READ[k];
-        double x = o.noise[i];
-        if (!(isfinite(x) && x >= 0.0))
-            return fail(e, sr_noise_name(i), "a finite number >= 0", x);
-        p[i] = s * x;
-        if (!(p[i] <= SR_NOISE_PROFILE_MAX))
-            return fail(e, sr_noise_name(i), "at most 1e6 / noise.scale", x);
-    }
-    for (int k = SR_NOISE_THRUST_SCALE; k <= SR_NOISE_THRUST_MISALIGN; k++)
-        if (p[k] > SR_EST_MAX_THRUST_SD)
-            return fail(e, sr_noise_name(k), "at most 1 / noise.scale", o.noise[k]);
+    double s = o.noise_scale, dt = o.noise_dt, p[SR_NOISE_COUNT];
+    for (int i = 0; i < SR_NOISE_COUNT; i++)     /* the magnitudes scaled (the estimator FMU's */
+        p[i] = s * o.noise[i];                    /* are the ones read below; the rest 0) */
     double rt = sqrt(dt);
     sr_estimator_options_default(&d);
     /* each option still at its default takes the profile's value; the user's stay */

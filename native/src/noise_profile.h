@@ -1,5 +1,5 @@
-/* noise_profile.h -- one switch for real sensors (docs/identification.md, "One switch"): the
- * estimator's noise model set from the sensors' own parameters (the sensors FMU's noise.*
+/* One switch for real sensors (docs/identification.md, "One switch"): the estimator's noise
+ * model set from the sensors' own parameters (the sensors FMU's noise.*
  * names and units, docs/sensors.md) instead of a dozen hand settings.
  *
  * With ident.noise_profile = 1 each noise option of sr_estimator_options still at its default
@@ -41,29 +41,17 @@
 extern "C" {
 #endif
 
-#define SR_NOISE_PROFILE_NONE 0
-#define SR_NOISE_PROFILE_SENSORS 1
 /* the momentum method's window under the profile [s] */
 #define SR_NOISE_PROFILE_WINDOW 5.0
 /* the force method's derivative under the profile: 2 m + 1 samples */
 #define SR_NOISE_PROFILE_HALF_WINDOW 4
-/* largest accepted noise.scale times a magnitude (SI units) and longest noise_dt [s] */
-#define SR_NOISE_PROFILE_MAX 1e6
-
-/** Why a profile cannot be applied: the FMU parameter, the rule it breaks, its value. */
-typedef struct sr_noise_profile_error {
-    const char *name, *rule;
-    double value;
-} sr_noise_profile_error;
 
 /** out = in with the noise profile in->noise_profile applied (out may alias in). Returns 0,
- *  or 1 with why in *e (the estimator's model_new words the message) for a profile other than
- *  0 or 1, noise.scale or a magnitude not finite and >= 0 or above SR_NOISE_PROFILE_MAX once
- *  scaled, noise_dt not finite in (0, SR_NOISE_PROFILE_MAX], or a thrust magnitude times
- *  noise.scale above SR_EST_MAX_THRUST_SD. With profile 0 the options are copied unchanged
- *  (the sensors' values are not read). */
+ *  or 1 with the message of sr_estimator_options_check in err (errlen bytes) where the options
+ *  in are not valid. With profile 0 the options are copied unchanged (the sensors' values are
+ *  not read). */
 SR_API int sr_noise_profile_apply(const sr_estimator_options *in, sr_estimator_options *out,
-                                  sr_noise_profile_error *e);
+                                  char *err, size_t errlen);
 
 /** The information filter's noise model (information.h) of the options o (the profile
  *  applied): the sensors' white noise per sample (densities over 1 s drawn every noise_dt:

@@ -1,5 +1,5 @@
-/* Physical consistency and the projection onto real bodies (see physical.h); a port of
- * report_kernels.py (second_moment ... project_planar_body), operation for operation. */
+/* Physical consistency of an estimated body and its projection onto real bodies
+ * (physical.h). */
 #include "physical.h"
 
 #include <math.h>

@@ -1,5 +1,5 @@
-/* Physical consistency of an estimated rigid body and the projection onto real bodies
- * (spacerobot/estimator/physical.py; a port of report_kernels.py's compiled versions).
+/* Physical consistency of an estimated rigid body and the projection onto real bodies (the
+ * estimator's report; spacerobot.estimator.physical binds them).
  *
  * A body is (m [kg], b[3] [m] the centre-of-mass offset, I6[6] [kg.m2] the inertia about the
  * centre of mass, I6 = Ixx Iyy Izz Ixy Ixz Iyz). It is real iff m > 0 and

@@ -93,18 +93,23 @@ extern "C" {
  *  SR_PLANT_Y_H, in sample.h's order), then SR_PLANT_OUTPUTS. */
 enum sr_plant_output {
 #define SR_PLANT_Y_ENUM_(id, key, fixed, per_joint, unit, what) SR_PLANT_Y_##id,
-    SR_SAMPLE_SIGNALS(SR_PLANT_Y_ENUM_)
+#define SR_PLANT_Y_ENUM_S_(id, key, fmi, fixed, per_joint, unit, what) SR_PLANT_Y_##id,
+    SR_SAMPLE_SIGNALS(SR_PLANT_Y_ENUM_S_)
     SR_PLANT_OUTPUTS(SR_PLANT_Y_ENUM_)
 #undef SR_PLANT_Y_ENUM_
+#undef SR_PLANT_Y_ENUM_S_
     SR_PLANT_Y_COUNT                    /* number of outputs */
 };
 
 /* the output vector's length for n joints: the sums over both tables */
 #define SR_PLANT_Y_FIXED_(id, key, fixed, per_joint, unit, what) + (fixed)
 #define SR_PLANT_Y_PER_JOINT_(id, key, fixed, per_joint, unit, what) + (per_joint)
+#define SR_PLANT_Y_FIXED_S_(id, key, fmi, fixed, per_joint, unit, what) + (fixed)
+#define SR_PLANT_Y_PER_JOINT_S_(id, key, fmi, fixed, per_joint, unit, what) + (per_joint)
 #define SR_PLANT_NY(n)                                                                          \
-    ((0 SR_SAMPLE_SIGNALS(SR_PLANT_Y_FIXED_) SR_PLANT_OUTPUTS(SR_PLANT_Y_FIXED_))               \
-     + (n) * (0 SR_SAMPLE_SIGNALS(SR_PLANT_Y_PER_JOINT_) SR_PLANT_OUTPUTS(SR_PLANT_Y_PER_JOINT_)))
+    ((0 SR_SAMPLE_SIGNALS(SR_PLANT_Y_FIXED_S_) SR_PLANT_OUTPUTS(SR_PLANT_Y_FIXED_))             \
+     + (n) * (0 SR_SAMPLE_SIGNALS(SR_PLANT_Y_PER_JOINT_S_)                                      \
+              SR_PLANT_OUTPUTS(SR_PLANT_Y_PER_JOINT_)))
 
 /** Largest configuration, velocity, state and output sizes (spatial, SR_MAX_JOINTS joints). */
 #define SR_PLANT_MAX_NQ (7 + SR_MAX_JOINTS)

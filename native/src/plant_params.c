@@ -15,9 +15,11 @@ static const struct {
     int fixed, per_joint;
 } OUTPUTS[SR_PLANT_Y_COUNT] = {
 #define ROW_(id, key, fixed, per_joint, unit, what) {key, unit, what, fixed, per_joint},
-    SR_SAMPLE_SIGNALS(ROW_)
+#define ROW_S_(id, key, fmi, fixed, per_joint, unit, what) {key, unit, what, fixed, per_joint},
+    SR_SAMPLE_SIGNALS(ROW_S_)
     SR_PLANT_OUTPUTS(ROW_)
 #undef ROW_
+#undef ROW_S_
 };
 
 void plant_output_offsets(int n, int *at)

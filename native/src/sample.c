@@ -4,10 +4,11 @@
 #include <stddef.h>
 
 static const struct {
-    const char *key, *unit, *what;
+    const char *key, *fmi, *unit, *what;
     int fixed, per_joint;
 } SIGNALS[SR_SIG_COUNT] = {
-#define SR_SAMPLE_ROW_(id, key, fixed, per_joint, unit, what) {key, unit, what, fixed, per_joint},
+#define SR_SAMPLE_ROW_(id, key, fmi, fixed, per_joint, unit, what)                              \
+    {key, fmi, unit, what, fixed, per_joint},
     SR_SAMPLE_SIGNALS(SR_SAMPLE_ROW_)
 #undef SR_SAMPLE_ROW_
 };
@@ -15,6 +16,11 @@ static const struct {
 int sr_sample_signal_count(void) { return SR_SIG_COUNT; }
 
 const char *sr_sample_signal_key(int i) { return i >= 0 && i < SR_SIG_COUNT ? SIGNALS[i].key : NULL; }
+
+const char *sr_sample_signal_fmi_name(int i)
+{
+    return i >= 0 && i < SR_SIG_COUNT ? SIGNALS[i].fmi : NULL;
+}
 
 const char *sr_sample_signal_unit(int i) { return i >= 0 && i < SR_SIG_COUNT ? SIGNALS[i].unit : NULL; }
 
@@ -46,12 +52,13 @@ int sr_sample_length(int n) { return SR_X_LEN(n); }
  * signal of (fixed + 1) doubles, and one of (per_joint + 1), give each signal's offset as
  * offsetof / sizeof(double) minus the signal's index (the + 1 of the members before it). */
 struct fixed_ {
-#define SR_SAMPLE_FIXED_(id, key, fixed, per_joint, unit, what) double id[(fixed) + 1];
+#define SR_SAMPLE_FIXED_(id, key, fmi, fixed, per_joint, unit, what) double id[(fixed) + 1];
     SR_SAMPLE_SIGNALS(SR_SAMPLE_FIXED_)
 #undef SR_SAMPLE_FIXED_
 };
 struct per_joint_ {
-#define SR_SAMPLE_PER_JOINT_(id, key, fixed, per_joint, unit, what) double id[(per_joint) + 1];
+#define SR_SAMPLE_PER_JOINT_(id, key, fmi, fixed, per_joint, unit, what)                       \
+    double id[(per_joint) + 1];
     SR_SAMPLE_SIGNALS(SR_SAMPLE_PER_JOINT_)
 #undef SR_SAMPLE_PER_JOINT_
 };

@@ -17,26 +17,28 @@
 extern "C" {
 #endif
 
-/* X(ID, key, fixed, per_joint, unit, description): the signal has fixed + per_joint n values
- * (n joints). The order is the flat sample's. */
+/* X(ID, key, fmi, fixed, per_joint, unit, description): the signal has fixed + per_joint n values
+ * (n joints); fmi: the FMU variables' name, indexed 1-based ("base.r[1]", "base.A[1,2]",
+ * "arm.q[3]"; spacerobot.interface.measurement_vars). The order is the flat sample's. */
 #define SR_SAMPLE_SIGNALS(X)                                                                    \
-    X(R_S, "r_S", 3, 0, "m", "position of the base point S, inertial")                            \
-    X(V_S, "v_S", 3, 0, "m/s", "velocity of S, inertial")                                         \
-    X(A_B, "A", 9, 0, "1", "DCM base -> inertial, row-major")                                     \
-    X(OMEGA_B, "omega_B", 3, 0, "rad/s", "base angular velocity, base frame")                     \
-    X(A_S, "a_S", 3, 0, "m/s2", "acceleration of S, inertial")                                    \
-    X(ALPHA_B, "alpha_B", 3, 0, "rad/s2", "base angular acceleration, base frame")                \
-    X(Q, "q", 0, 1, "rad", "joint angles")                                                        \
-    X(QD, "qd", 0, 1, "rad/s", "joint rates")                                                     \
-    X(QDD, "qdd", 0, 1, "rad/s2", "joint accelerations")                                          \
-    X(F, "F", 3, 0, "N", "thrust force applied at S, inertial")                                   \
-    X(M, "M", 3, 0, "N.m", "thrust moment about S, inertial")                                     \
-    X(J, "J", 3, 0, "N.s", "impulse of F since t = 0, inertial")                                  \
-    X(H, "H", 3, 0, "N.m.s", "angular impulse of the thrust about the inertial origin since t = 0")
+    X(R_S, "r_S", "base.r", 3, 0, "m", "position of the base point S, inertial")                  \
+    X(V_S, "v_S", "base.v", 3, 0, "m/s", "velocity of S, inertial")                               \
+    X(A_B, "A", "base.A", 9, 0, "1", "DCM base -> inertial, row-major")                           \
+    X(OMEGA_B, "omega_B", "base.omega", 3, 0, "rad/s", "base angular velocity, base frame")       \
+    X(A_S, "a_S", "base.a", 3, 0, "m/s2", "acceleration of S, inertial")                          \
+    X(ALPHA_B, "alpha_B", "base.alpha", 3, 0, "rad/s2", "base angular acceleration, base frame")  \
+    X(Q, "q", "arm.q", 0, 1, "rad", "joint angles")                                               \
+    X(QD, "qd", "arm.qd", 0, 1, "rad/s", "joint rates")                                           \
+    X(QDD, "qdd", "arm.qdd", 0, 1, "rad/s2", "joint accelerations")                               \
+    X(F, "F", "thrust.F", 3, 0, "N", "thrust force applied at S, inertial")                       \
+    X(M, "M", "thrust.M", 3, 0, "N.m", "thrust moment about S, inertial")                         \
+    X(J, "J", "thrust.J", 3, 0, "N.s", "impulse of F since t = 0, inertial")                      \
+    X(H, "H", "thrust.H", 3, 0, "N.m.s",                                                          \
+      "angular impulse of the thrust about the inertial origin since t = 0")
 
 /* the signals' indices: SR_SIG_R_S = 0, ... */
 enum sr_sample_signal {
-#define SR_SAMPLE_ENUM_(id, key, fixed, per_joint, unit, what) SR_SIG_##id,
+#define SR_SAMPLE_ENUM_(id, key, fmi, fixed, per_joint, unit, what) SR_SIG_##id,
     SR_SAMPLE_SIGNALS(SR_SAMPLE_ENUM_)
 #undef SR_SAMPLE_ENUM_
     SR_SIG_COUNT
@@ -65,8 +67,10 @@ enum sr_sample_signal {
 
 /** Number of signals (SR_SIG_COUNT). */
 SR_API int sr_sample_signal_count(void);
-/** Signal i's key ("r_S", ...), unit and description; NULL for i out of range. */
+/** Signal i's key ("r_S", ...), its FMU variables' name ("base.r", ...), unit and description;
+ *  NULL for i out of range. */
 SR_API const char *sr_sample_signal_key(int i);
+SR_API const char *sr_sample_signal_fmi_name(int i);
 SR_API const char *sr_sample_signal_unit(int i);
 SR_API const char *sr_sample_signal_description(int i);
 /** Signal i's number of values for a robot of n joints (3, 9 or n); -1 for i out of range. */

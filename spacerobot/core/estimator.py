@@ -1,10 +1,17 @@
 """The native estimator core (``native/src/estimator.h``) bound with ctypes.
 
-One :class:`NativeEstimator` is one constant Model (robot, options, prior) and one Data block
-(every state, a flat byte block without pointers): :meth:`~NativeEstimator.update` takes one
-flat sample (the layout of ``Identifier.update_flat``), :meth:`~NativeEstimator.report` reads
-what the estimator FMU outputs, :meth:`~NativeEstimator.get_state` /
+One :class:`NativeEstimator` is one constant Model (robot, options, prior), one Data block
+(every state, a flat byte block without pointers) and a work space for its updates:
+:meth:`~NativeEstimator.update` takes one flat sample (the signals of
+:mod:`spacerobot.core.sample` one after the other), :meth:`~NativeEstimator.report` reads what
+the estimator FMU outputs, :meth:`~NativeEstimator.get_state` /
 :meth:`~NativeEstimator.set_state` copy the Data block.
+
+The core's tables are read from it, never written again here: the options by the estimator
+FMU's parameter names with their ranges and defaults (:func:`option_table`,
+:func:`parameter_ranges`, :func:`options_from_values`), the outputs by their names
+(:func:`output_names`), the status texts (:func:`status_texts`), the input limit. Every option
+is checked by the core (:class:`ValueError` with its message).
 
 Examples
 --------
@@ -16,16 +23,21 @@ Examples
 from __future__ import annotations
 
 import ctypes
+import math
+import numbers
 import os
-from typing import Mapping, Optional, Union
+from dataclasses import dataclass
+from typing import Dict, Iterable, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
 from . import dptr, lib as _default_lib
 from .robot_record import SrRobot, c_read_record, c_robot
 
-__all__ = ["NativeEstimator", "SrEstimatorOptions", "SrEstimatorReport", "default_options",
-           "options_from_values", "profile_options", "profile_values"]
+__all__ = ["NativeEstimator", "SrEstimatorOptions", "SrEstimatorReport", "Option",
+           "default_options", "option_table", "parameter_ranges", "options_from_values",
+           "profile_options", "profile_values", "output_names", "status_texts",
+           "input_limit", "rotation_tol"]
 
 #: message buffer length (SR_EST_MSG_LEN)
 MSG_LEN = 256
@@ -43,8 +55,8 @@ class SrEstimatorOptions(ctypes.Structure):
         ("lambda_", ctypes.c_double), ("P0_mu", ctypes.c_double), ("P0_theta", ctypes.c_double),
         ("guess_base", ctypes.c_double * 10), ("guess_target", ctypes.c_double * 10),
         ("sd_rel", ctypes.c_double), ("excite_mode", ctypes.c_int),
-        ("excite_level", ctypes.c_double), ("row_sd_lin", ctypes.c_double),
-        ("row_sd_ang", ctypes.c_double), ("diff_half_window", ctypes.c_int),
+        ("excite_level", ctypes.c_double), ("row_sd", ctypes.c_double * 4),
+        ("diff_half_window", ctypes.c_int),
         ("diff_momentum", ctypes.c_int), ("corr_lags", ctypes.c_int),
         ("signal_sd", ctypes.c_double * 6), ("momentum_window", ctypes.c_double),
         ("momentum_point", ctypes.c_int), ("sd_thrust_scale", ctypes.c_double),
@@ -56,12 +68,6 @@ class SrEstimatorOptions(ctypes.Structure):
         ("excite_window", ctypes.c_double), ("excite_settle", ctypes.c_double),
         ("excite_horizon", ctypes.c_double),
     ]
-
-
-class SrNoiseProfileError(ctypes.Structure):
-    """``sr_noise_profile_error`` (native/src/noise_profile.h)."""
-
-    _fields_ = [("name", ctypes.c_char_p), ("rule", ctypes.c_char_p), ("value", ctypes.c_double)]
 
 
 class SrEstimatorReport(ctypes.Structure):
@@ -98,7 +104,9 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     L.sr_estimator_data_init.restype = None
     L.sr_estimator_sample_length.argtypes = [vp]
     L.sr_estimator_sample_length.restype = ctypes.c_int
-    L.sr_estimator_update.argtypes = [vp, vp, ctypes.c_double, dp, cp, sz]
+    L.sr_estimator_work_size.argtypes = [vp]
+    L.sr_estimator_work_size.restype = sz
+    L.sr_estimator_update.argtypes = [vp, vp, vp, ctypes.c_double, dp, cp, sz]
     L.sr_estimator_update.restype = ctypes.c_int
     L.sr_estimator_report_get.argtypes = [vp, vp, ctypes.POINTER(SrEstimatorReport)]
     L.sr_estimator_report_get.restype = None
@@ -109,12 +117,39 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     L.sr_estimator_sd_without_lag.argtypes = [vp, vp, dp]
     L.sr_estimator_sd_without_lag.restype = None
     L.sr_noise_profile_apply.argtypes = [ctypes.POINTER(SrEstimatorOptions),
-                                         ctypes.POINTER(SrEstimatorOptions),
-                                         ctypes.POINTER(SrNoiseProfileError)]
+                                         ctypes.POINTER(SrEstimatorOptions), cp, sz]
     L.sr_noise_profile_apply.restype = ctypes.c_int
-    if hasattr(L, "sr_estimator_data_check"):    # (a library built before it: no check_state)
-        L.sr_estimator_data_check.argtypes = [vp, vp, cp, sz]
-        L.sr_estimator_data_check.restype = ctypes.c_int
+    L.sr_estimator_data_check.argtypes = [vp, vp, cp, sz]
+    L.sr_estimator_data_check.restype = ctypes.c_int
+    ip, op = ctypes.c_int, ctypes.POINTER(SrEstimatorOptions)
+    for name, res in (("sr_estimator_option_name", cp), ("sr_estimator_option_field", cp),
+                      ("sr_estimator_option_index", ip), ("sr_estimator_option_offset",
+                                                          ctypes.c_long),
+                      ("sr_estimator_option_integer", ip), ("sr_estimator_option_parameter", ip),
+                      ("sr_estimator_output_name", cp), ("sr_estimator_output_integer", ip),
+                      ("sr_estimator_status_text", cp)):
+        getattr(L, name).argtypes = [ip]
+        getattr(L, name).restype = res
+    for name in ("sr_estimator_option_count", "sr_estimator_output_count"):
+        getattr(L, name).argtypes = []
+        getattr(L, name).restype = ip
+    for name in ("sr_estimator_input_limit", "sr_estimator_rotation_tol"):
+        getattr(L, name).argtypes = []
+        getattr(L, name).restype = ctypes.c_double
+    L.sr_estimator_param_range.argtypes = [cp, dp, dp]
+    L.sr_estimator_param_range.restype = ip
+    L.sr_estimator_options_set.argtypes = [op, cp, ctypes.c_double, cp, sz]
+    L.sr_estimator_options_set.restype = ip
+    L.sr_estimator_options_get.argtypes = [op, cp, dp]
+    L.sr_estimator_options_get.restype = ip
+    L.sr_estimator_options_check.argtypes = [op, cp, sz]
+    L.sr_estimator_options_check.restype = ip
+    L.sr_estimator_model_options.argtypes = [vp, op]
+    L.sr_estimator_model_options.restype = None
+    L.sr_estimator_excite_request.argtypes = [vp, ip, ip]
+    L.sr_estimator_excite_request.restype = ctypes.c_double
+    L.sr_estimator_outputs.argtypes = [ctypes.POINTER(SrEstimatorReport), dp]
+    L.sr_estimator_outputs.restype = None
     for name in ("sr_estimator_options_size", "sr_estimator_report_size",
                  "sr_estimator_data_head_size"):
         getattr(L, name).argtypes = []
@@ -128,13 +163,99 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     return L
 
 
-#: option names (keys of the options mapping) -> struct field
+#: the struct field of an option's other names (the Identifier's ``lam``)
 _FIELD = {"lambda": "lambda_", "lam": "lambda_"}
 
 
+@dataclass(frozen=True)
+class Option:
+    """One row of the core's options table: ``name`` (the estimator FMU parameter's, or the
+    option's own where no parameter sets it), where it sits in ``sr_estimator_options``
+    (``field``, ``index``, byte ``offset``), ``integer`` (an Integer parameter), ``parameter``
+    (an FMU parameter sets it), its accepted closed range ``min``, ``max`` (where it is a
+    parameter) and ``default``."""
+
+    name: str
+    field: str
+    index: int
+    offset: int
+    integer: bool
+    parameter: bool
+    min: float
+    max: float
+    default: float
+
+
+def option_table(lib: Optional[ctypes.CDLL] = None) -> Tuple[Option, ...]:
+    """The core's options table (``native/src/est_options.c``), in its order (the order of
+    its checks)."""
+    L = _bind(lib or _default_lib())
+    if getattr(L, "_sr_option_table", None) is None:
+        o = SrEstimatorOptions()
+        L.sr_estimator_options_default(ctypes.byref(o))
+        rows = []
+        for i in range(L.sr_estimator_option_count()):
+            name = L.sr_estimator_option_name(i)
+            lo, hi, start = ctypes.c_double(math.nan), ctypes.c_double(math.nan), ctypes.c_double()
+            L.sr_estimator_param_range(name, ctypes.byref(lo), ctypes.byref(hi))
+            L.sr_estimator_options_get(ctypes.byref(o), name, ctypes.byref(start))
+            rows.append(Option(name.decode(), L.sr_estimator_option_field(i).decode(),
+                               L.sr_estimator_option_index(i), L.sr_estimator_option_offset(i),
+                               bool(L.sr_estimator_option_integer(i)),
+                               bool(L.sr_estimator_option_parameter(i)), lo.value, hi.value,
+                               start.value))
+        L._sr_option_table = tuple(rows)
+    return L._sr_option_table
+
+
+def parameter_ranges(names: Optional[Iterable[str]] = None,
+                     lib: Optional[ctypes.CDLL] = None) -> Dict[str, Tuple[float, float]]:
+    """``{FMI name: (min, max)}``: the closed ranges the core accepts
+    (``sr_estimator_param_range``) of every estimator FMU parameter, or of ``names``
+    (parameters or inputs, e.g. ``"base.A[1,2]"``; ``KeyError`` for another name). A value in
+    its range may still be refused with the others (``sr_estimator_options_check``)."""
+    L = _bind(lib or _default_lib())
+    if names is None:
+        names = [o.name for o in option_table(L) if o.parameter]
+    out = {}
+    for name in names:
+        lo, hi = ctypes.c_double(), ctypes.c_double()
+        if L.sr_estimator_param_range(name.encode(), ctypes.byref(lo), ctypes.byref(hi)):
+            raise KeyError(f"{name!r} is not a parameter or input of the estimator FMU")
+        out[name] = (lo.value, hi.value)
+    return out
+
+
+def output_names(lib: Optional[ctypes.CDLL] = None) -> Tuple[str, ...]:
+    """The estimator FMU's outputs in the core's order (:meth:`NativeEstimator.outputs`)."""
+    L = _bind(lib or _default_lib())
+    return tuple(L.sr_estimator_output_name(i).decode()
+                 for i in range(L.sr_estimator_output_count()))
+
+
+def status_texts(lib: Optional[ctypes.CDLL] = None) -> Dict[int, str]:
+    """``{code: text}`` of ``diag.status`` (``sr_estimator_status_text``)."""
+    L = _bind(lib or _default_lib())
+    out, code = {}, 0
+    while (text := L.sr_estimator_status_text(code)) is not None:
+        out[code] = text.decode()
+        code += 1
+    return out
+
+
+def input_limit(lib: Optional[ctypes.CDLL] = None) -> float:
+    """The largest input magnitude the core accepts, SI units (``SR_EST_INPUT_LIMIT``)."""
+    return float(_bind(lib or _default_lib()).sr_estimator_input_limit())
+
+
+def rotation_tol(lib: Optional[ctypes.CDLL] = None) -> float:
+    """``base.A`` is a rotation when ``max |A^T A - I|`` is at most this (and ``det A > 0``)."""
+    return float(_bind(lib or _default_lib()).sr_estimator_rotation_tol())
+
+
 def default_options(lib: Optional[ctypes.CDLL] = None) -> dict:
-    """The options' defaults (``sr_estimator_options_default``) as a dictionary (lists for
-    the arrays; ``lambda`` under its FMU name)."""
+    """The options' defaults (``sr_estimator_options_default``) as a dictionary of the struct's
+    fields (lists for the arrays; ``lambda`` under its FMU name)."""
     L = _bind(lib or _default_lib())
     o = SrEstimatorOptions()
     L.sr_estimator_options_default(ctypes.byref(o))
@@ -149,42 +270,31 @@ def _as_dict(o: SrEstimatorOptions) -> dict:
     return out
 
 
+def _set(o: SrEstimatorOptions, name: str, value, L: ctypes.CDLL) -> None:
+    """The option ``name`` (an FMU parameter's name) of ``o`` set by the core
+    (``sr_estimator_options_set``); ``ValueError`` with its message for a value an Integer
+    option cannot hold, ``KeyError`` for an unknown name."""
+    if not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    x = float(value)
+    err = ctypes.create_string_buffer(MSG_LEN)
+    st = L.sr_estimator_options_set(ctypes.byref(o), name.encode(), x, err, len(err))
+    if st == 2:
+        raise KeyError(f"unknown estimator option {name!r}")
+    if st:
+        raise ValueError(err.value.decode("utf-8", "replace"))
+
+
 def profile_options(options: Mapping, lib: Optional[ctypes.CDLL] = None) -> dict:
     """The options (a mapping as :class:`NativeEstimator` takes) with their noise profile
     applied (``sr_noise_profile_apply``, native/src/noise_profile.h): what the estimator runs
-    with. ``ValueError`` names the parameter a profile cannot be applied with."""
+    with. ``ValueError`` with the core's message for invalid options."""
     L = _bind(lib or _default_lib())
-    o, out, why = _options(options, L), SrEstimatorOptions(), SrNoiseProfileError()
-    if L.sr_noise_profile_apply(ctypes.byref(o), ctypes.byref(out), ctypes.byref(why)):
-        raise ValueError(f"{why.name.decode()} must be {why.rule.decode()}, got {why.value!r}")
+    o, out = _options(options, L), SrEstimatorOptions()
+    err = ctypes.create_string_buffer(MSG_LEN)
+    if L.sr_noise_profile_apply(ctypes.byref(o), ctypes.byref(out), err, len(err)):
+        raise ValueError(err.value.decode("utf-8", "replace"))
     return _as_dict(out)
-
-
-#: the estimator's scalar noise options (``sr_estimator_options`` fields) the noise profile may
-#: set, by their FMU parameter names
-PROFILE_OPTION_NAMES = {"sd_thrust_scale": "ident.sd_thrust.scale",
-                        "sd_thrust_misalign": "ident.sd_thrust.misalign",
-                        "momentum_window": "ident.momentum_window",
-                        "momentum_point": "ident.momentum_point", "corr_lags": "ident.corr_lags",
-                        "accel_bias": "ident.accel_bias", "diff_momentum": "ident.diff_momentum",
-                        "diff_half_window": "ident.diff_half_window",
-                        "information": "ident.information"}
-
-
-#: the excitation design's options (``sr_estimator_options`` fields) by their FMU parameter
-#: names and types
-EXCITE_DESIGN_OPTIONS = {"excite_adapt": ("ident.excite_adapt", int),
-                         "excite_rate_try": ("ident.excite_rate_try", float),
-                         "excite_window": ("ident.excite_window", float),
-                         "excite_settle": ("ident.excite_settle", float),
-                         "excite_horizon": ("ident.excite_horizon", float)}
-
-
-def excite_design_values(values: Mapping[str, float]) -> dict:
-    """The excitation design's options of the estimator FMU's parameter ``values`` (those
-    absent keep the core's defaults)."""
-    return {field: kind(values[name]) for field, (name, kind) in EXCITE_DESIGN_OPTIONS.items()
-            if name in values}
 
 
 def profile_values(values: Mapping[str, float], sample_time: float = 0.1,
@@ -193,14 +303,19 @@ def profile_values(values: Mapping[str, float], sample_time: float = 0.1,
     estimator FMU's parameter ``values`` sets (``ident.noise_profile``, ``noise.*``; the
     sensors' densities at ``sample_time`` [s]): what ``sr_noise_profile_apply`` changes, by
     name; empty with ``ident.noise_profile`` = 0."""
-    from ..interface import SIGNAL_NOISE_PARAMETERS
-    given = {**options_from_values(values), "noise_dt": float(sample_time)}
-    used = profile_options(given, lib)
-    out = {name: used[field] for field, name in PROFILE_OPTION_NAMES.items()
-           if used[field] != given[field]}
-    for i, (_, name, _, _) in enumerate(SIGNAL_NOISE_PARAMETERS):
-        if used["signal_sd"][i] != given["signal_sd"][i]:
-            out[f"ident.noise.{name}"] = used["signal_sd"][i]
+    L = _bind(lib or _default_lib())
+    given = _options({**options_from_values(values, L), "noise_dt": float(sample_time)}, L)
+    used, err = SrEstimatorOptions(), ctypes.create_string_buffer(MSG_LEN)
+    if L.sr_noise_profile_apply(ctypes.byref(given), ctypes.byref(used), err, len(err)):
+        raise ValueError(err.value.decode("utf-8", "replace"))
+    out = {}
+    for opt in option_table(L):
+        if opt.parameter:
+            a, b = ctypes.c_double(), ctypes.c_double()
+            L.sr_estimator_options_get(ctypes.byref(given), opt.name.encode(), ctypes.byref(a))
+            L.sr_estimator_options_get(ctypes.byref(used), opt.name.encode(), ctypes.byref(b))
+            if a.value != b.value:
+                out[opt.name] = int(b.value) if opt.integer else b.value
     return out
 
 
@@ -212,8 +327,13 @@ def _body10(body) -> list:
 
 
 def _options(values: Mapping, L: ctypes.CDLL) -> SrEstimatorOptions:
+    """The options of ``values``: the struct's fields (``guess_base``, ``signal_sd``, ...), the
+    core's option names (the estimator FMU's parameters, ``noise_dt``), ``guess`` (a
+    ``robots.Guess``) or ``thrust_sd`` (``(scale, misalignment)``); the rest the defaults."""
     o = SrEstimatorOptions()
     L.sr_estimator_options_default(ctypes.byref(o))
+    fields = dict(SrEstimatorOptions._fields_)
+    names = {opt.name for opt in option_table(L)}
     for key, v in dict(values).items():
         if key == "guess":                                   # a robots.Guess
             o.guess_base[:] = _body10(v.base)
@@ -223,55 +343,35 @@ def _options(values: Mapping, L: ctypes.CDLL) -> SrEstimatorOptions:
         if key == "thrust_sd":                               # Identifier(thrust_sd=...)
             o.sd_thrust_scale, o.sd_thrust_misalign = (float(x) for x in v)
             continue
+        if key in names:
+            _set(o, key, v, L)
+            continue
         name = _FIELD.get(key, key)
-        if name not in dict(SrEstimatorOptions._fields_):
+        if name not in fields:
             raise KeyError(f"unknown estimator option {key!r}")
         if name in ("guess_base", "guess_target"):
             getattr(o, name)[:] = _body10(v)
-        elif name in ("signal_sd", "noise"):
+        elif name in ("signal_sd", "noise", "row_sd"):
             getattr(o, name)[:] = [float(x) for x in v]
-        elif dict(SrEstimatorOptions._fields_)[name] is ctypes.c_int:
+        elif fields[name] is ctypes.c_int:
             setattr(o, name, int(v))
         else:
             setattr(o, name, float(v))
     return o
 
 
-def options_from_values(values: Mapping[str, float]) -> dict:
-    """The options from the estimator FMU's parameter values (names of
-    :func:`spacerobot.interface.estimator_vars`), as :func:`.identifier_from_values` reads
-    them: the row standard deviations of the chosen method, the signal noise in
-    ``SIGNAL_NOISE_PARAMETERS`` order."""
-    from ..interface import BODY_PARAMETERS, SENSOR_MAGNITUDES, SIGNAL_NOISE_PARAMETERS
-    v = values
-    method = int(v["method"])
-    kind = "momentum" if method == 1 else "force"
-    return {
-        "method": method, "solver": int(v["solver"]), "accel_source": int(v["accel_source"]),
-        "lambda": float(v["lambda"]), "P0_mu": float(v["P0_mu"]),
-        "P0_theta": float(v["P0_theta"]),
-        "guess_base": [float(v[f"guess.base.{n}"]) for n in BODY_PARAMETERS],
-        "guess_target": [float(v[f"guess.target.{n}"]) for n in BODY_PARAMETERS],
-        "sd_rel": float(v["ident.sd_rel"]), "excite_mode": int(v["ident.excite_mode"]),
-        "excite_level": float(v["ident.excite_level"]),
-        "row_sd_lin": float(v[f"ident.sd_row.{kind}_lin"]),
-        "row_sd_ang": float(v[f"ident.sd_row.{kind}_ang"]),
-        "diff_half_window": int(v["ident.diff_half_window"]),
-        "diff_momentum": int(v["ident.diff_momentum"]), "corr_lags": int(v["ident.corr_lags"]),
-        "signal_sd": [float(v[f"ident.noise.{name}"]) for _, name, _, _ in
-                      SIGNAL_NOISE_PARAMETERS],
-        "momentum_window": float(v["ident.momentum_window"]),
-        "momentum_point": int(v["ident.momentum_point"]),
-        "sd_thrust_scale": float(v["ident.sd_thrust.scale"]),
-        "sd_thrust_misalign": float(v["ident.sd_thrust.misalign"]),
-        "accel_bias": int(v["ident.accel_bias"]),
-        "noise_profile": int(v["ident.noise_profile"]),
-        "noise_scale": float(v["noise.scale"]),
-        "information": int(v.get("ident.information", 0)),
-        # the magnitudes the profile reads (the others stay 0: the estimator has no use for them)
-        "noise": [float(v.get(name, 0.0)) for name in SENSOR_MAGNITUDES],
-        **excite_design_values(v),
-    }
+def options_from_values(values: Mapping[str, float], lib: Optional[ctypes.CDLL] = None) -> dict:
+    """The options from the estimator FMU's parameter values (any mapping; the names of the
+    core's table are read, the rest ignored) as :class:`NativeEstimator` takes them (the
+    struct's fields): what the FMU builds at initialisation. ``ValueError`` with the core's
+    message for a value an Integer parameter cannot hold."""
+    L = _bind(lib or _default_lib())
+    o = SrEstimatorOptions()
+    L.sr_estimator_options_default(ctypes.byref(o))
+    for opt in option_table(L):
+        if opt.name in values:
+            _set(o, opt.name, values[opt.name], L)
+    return _as_dict(o)
 
 
 class NativeEstimator:
@@ -281,15 +381,13 @@ class NativeEstimator:
     ----------
     robot : spacerobot.robots.Robot, SrRobot, or path of a robot record file
     options : mapping, optional
-        Fields of ``sr_estimator_options`` (``method``, ``solver``, ``accel_source``,
-        ``lambda``, ``P0_mu``, ``P0_theta``, ``guess_base`` / ``guess_target`` (a RigidBody or
-        10 numbers), ``sd_rel``, ``excite_mode``, ``excite_level``, ``row_sd_lin``,
-        ``row_sd_ang``, ``diff_half_window``, ``diff_momentum``, ``corr_lags``,
-        ``signal_sd`` (6), ``momentum_window``, ``momentum_point``, ``sd_thrust_scale``,
-        ``sd_thrust_misalign``, ``momentum_window_samples`` (the momentum window's ring
-        capacity, 0 = automatic: samples at least 1 ms apart), ``accel_bias``), ``guess`` (a
-        ``robots.Guess``: both bodies and P0) and ``thrust_sd`` (``(scale, misalignment)``,
-        as the Identifier's); the rest keep ``sr_estimator_options_default``.
+        By the names of the core's options table (the estimator FMU's parameters,
+        ``"ident.diff_half_window"``; ``noise_dt``, ``momentum_window_samples``: the momentum
+        window's ring capacity, 0 = automatic, samples at least 1 ms apart), or by the fields of
+        ``sr_estimator_options`` (``method``, ``lambda``, ``guess_base`` / ``guess_target`` (a
+        RigidBody or 10 numbers), ``row_sd`` (4), ``signal_sd`` (6), ``noise`` (17), ...),
+        ``guess`` (a ``robots.Guess``: both bodies and P0) and ``thrust_sd`` (``(scale,
+        misalignment)``); the rest keep ``sr_estimator_options_default``.
     lib : the library (default: :func:`spacerobot.core.lib`)
 
     Raises ``ValueError`` with the core's message for invalid options.
@@ -316,6 +414,8 @@ class NativeEstimator:
         self.size = int(L.sr_estimator_data_size(self._model))
         self._data = ctypes.create_string_buffer(self.size)
         L.sr_estimator_data_init(self._model, self._data)
+        #: the update's work space (no part of the state)
+        self._work = ctypes.create_string_buffer(int(L.sr_estimator_work_size(self._model)))
         self.n_flat = int(L.sr_estimator_sample_length(self._model))
         self._msg = ctypes.create_string_buffer(MSG_LEN)
         self._report = SrEstimatorReport()
@@ -333,13 +433,26 @@ class NativeEstimator:
         """The state before any sample."""
         self._lib.sr_estimator_data_init(self._model, self._data)
 
+    def model_options(self) -> dict:
+        """The options the core runs with (``sr_estimator_model_options``: the noise profile
+        applied, those that do not apply to the method and accelerations at 0)."""
+        o = SrEstimatorOptions()
+        self._lib.sr_estimator_model_options(self._model, ctypes.byref(o))
+        return _as_dict(o)
+
+    def excite_request(self, identified: Mapping[str, bool]) -> float:
+        """The excitation level requested for the bodies' identified flags
+        (``{'base': bool, 'target': bool}``; ``sr_estimator_excite_request``)."""
+        return float(self._lib.sr_estimator_excite_request(
+            self._model, int(bool(identified["base"])), int(bool(identified["target"]))))
+
     def update(self, t: float, flat) -> int:
         """One sample (the flat layout of ``Identifier.update_flat``); returns the status."""
         x = np.ascontiguousarray(flat, dtype=float)
         if x.shape != (self.n_flat,):
             raise ValueError(f"the flat sample has shape {x.shape}, expected ({self.n_flat},)")
-        return int(self._lib.sr_estimator_update(self._model, self._data, float(t), dptr(x),
-                                                 self._msg, len(self._msg)))
+        return int(self._lib.sr_estimator_update(self._model, self._data, self._work, float(t),
+                                                 dptr(x), self._msg, len(self._msg)))
 
     @property
     def message(self) -> str:
@@ -381,6 +494,14 @@ class NativeEstimator:
             "excite": r.excite, "crb": np.array(r.crb[:]), "info_chi2": r.info_chi2,
             "excite_rate": r.excite_rate, "excite_score": np.array(r.excite_score[:]),
         }
+
+    def outputs(self) -> np.ndarray:
+        """The estimator FMU's outputs of the current state, in the order of
+        :func:`output_names` (``sr_estimator_outputs``; the Integer ones as exact floats)."""
+        r, out = self._report, np.empty(self._lib.sr_estimator_output_count())
+        self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
+        self._lib.sr_estimator_outputs(ctypes.byref(r), dptr(out))
+        return out
 
     def get_state(self) -> bytes:
         """A copy of the Data block."""

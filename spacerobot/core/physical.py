@@ -10,7 +10,7 @@ import numpy as np
 
 from . import dptr, lib as _default_lib
 
-__all__ = ["is_physical", "project_body", "project_planar_body"]
+__all__ = ["second_moment", "is_physical", "project_body", "project_planar_body"]
 
 
 def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
@@ -19,6 +19,8 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
     d, dp, ip = ctypes.c_double, ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_int)
     L.sr_is_physical.argtypes = [d, dp, dp]
     L.sr_is_physical.restype = ctypes.c_int
+    L.sr_second_moment.argtypes = [dp, dp]
+    L.sr_second_moment.restype = None
     for name in ("sr_project_body", "sr_project_planar_body"):
         f = getattr(L, name)
         f.argtypes = [d, dp, dp, d, d, dp, dp, ip]
@@ -29,6 +31,14 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
 
 def _vec(x, n: int) -> np.ndarray:
     return np.ascontiguousarray(np.asarray(x, dtype=float).reshape(n))
+
+
+def second_moment(I6, lib: Optional[ctypes.CDLL] = None) -> np.ndarray:
+    """``sr_second_moment``: Sigma_c (3, 3) of the inertia I6 (6)."""
+    L = _bind(lib or _default_lib())
+    I6, S = _vec(I6, 6), np.empty((3, 3))
+    L.sr_second_moment(dptr(I6), dptr(S))
+    return S
 
 
 def is_physical(m: float, b, I6, lib: Optional[ctypes.CDLL] = None) -> bool:

@@ -110,8 +110,8 @@ class NativeSensors:
                              int(delay), int(bool(imu)), float(dt), msg, len(msg)) != 0:
             raise ValueError(msg.value.decode())
         L.sr_sensors_start(self._model, self._state)
-        self._sizes = sample.sizes(self.n, L)
-        self._len = sample.length(self.n, L)
+        self._sizes = [(s.key, s.size) for s in sample.signals(self.n, L)]
+        self._len = sample.sample_length(self.n, L)
 
     def flat(self, x: Mapping[str, np.ndarray]) -> np.ndarray:
         """The flat sample (the core's order) of ``x``."""

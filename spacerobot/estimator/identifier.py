@@ -4,36 +4,37 @@ Uses only the robot description (the known arm) and the measured signals of the 
 contract; never the plant. Runs on the native C core (``native/src/estimator.h``, bound by
 :class:`spacerobot.core.estimator.NativeEstimator`): the one implementation of the estimator
 that the estimator FMU, ``spacerobot identify``, the Monte Carlo and this class share. This
-module maps the Python options onto the core's, flattens the samples in the core's order and
-builds the :class:`Report` and :class:`BodyEstimate` from the core's report. (The former
-Python/Numba implementation lives on as the tests' independent oracle, tests/oracles/estimator.)
+module maps the Python arguments onto the core's options (by the estimator FMU's parameter
+names; the core checks them and its message is the error), flattens the samples in the core's
+order (the sample's table, :mod:`spacerobot.core.sample`) and builds the :class:`Report` and
+:class:`BodyEstimate` from the core's report.
 """
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
-from typing import Mapping, Optional, Tuple
+from typing import Callable, Mapping, Optional, Tuple
 
 import numpy as np
 
-from ..interface import (SIGNAL_NOISE_PARAMETERS, AccelSource, ExciteMode, Method,
-                         ParameterLayout, Solver, body_of, row_sd)
-from ..robots import Guess, Robot
+from ..core import estimator as _core
+from ..core import sample as _sample
+from ..interface import SIGNAL_NOISE_PARAMETERS, AccelSource, Method, ParameterLayout, Solver
+from ..robots import Guess, RigidBody, Robot
 
-__all__ = ["Identifier", "Report", "BodyEstimate", "ExcitationRequest", "identifier_from_values",
-           "KEYS", "INPUT_LIMIT", "ROTATION_TOL", "SD_REL"]
+__all__ = ["Identifier", "Report", "BodyEstimate", "identifier_from_values", "KEYS",
+           "INPUT_LIMIT", "ROTATION_TOL", "SD_REL"]
 
-#: measurement keys and their shapes (n = number of arm joints), the order of a flat sample
-KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
+#: the sample's signals (keys) in the order of a flat sample (native/src/sample.h)
+KEYS = _sample.keys()
 
 #: largest accepted input magnitude (SI units): far beyond any spacecraft state, far below
-#: the magnitudes at which the equations' products would overflow (SR_EST_INPUT_LIMIT)
-INPUT_LIMIT = 1e15
+#: the magnitudes at which the equations' products would overflow (the core's)
+INPUT_LIMIT = _core.input_limit()
 
 #: the validation rule for ``base.A``: a rotation matrix, ``max |A^T A - I| <= ROTATION_TOL``
-#: and ``det A > 0`` (SR_EST_ROTATION_TOL)
-ROTATION_TOL = 1e-6
+#: and ``det A > 0`` (the core's)
+ROTATION_TOL = _core.rotation_tol()
 
 # status codes (see spacerobot.interface.STATUS)
 NO_SAMPLE, REFERENCE, ESTIMATING, REJECT_NONFINITE, REJECT_INCONSISTENT = 0, 1, 2, 3, 4
@@ -41,19 +42,8 @@ NO_SAMPLE, REFERENCE, ESTIMATING, REJECT_NONFINITE, REJECT_INCONSISTENT = 0, 1, 
 #: default relative standard deviation below which every estimate of a body counts as identified
 SD_REL = 1e-3
 
-#: largest ``diff_half_window`` (samples each side of the differencing window's centre)
-MAX_HALF_WINDOW = 50
-#: largest ``corr_lags`` (lags of the residual autocorrelation kept)
-MAX_CORR_LAGS = 10_000
-#: largest reference window [s]
-MAX_WINDOW = 1e6
-#: largest thrust scale-factor / misalignment standard deviation (1, rad)
-MAX_THRUST_SD = 1.0
-
-#: the signals whose noise the errors-in-variables compensation takes, per acceleration
-#: source: the accelerations as measured, or the velocities they are differenced from
-SIGNAL_SD_KEYS = {src: tuple(k for k, _, _, s in SIGNAL_NOISE_PARAMETERS if s == src.name.lower())
-                  for src in AccelSource}
+#: the ``signal_sd`` keys and their estimator FMU parameters (``ident.noise.*``)
+SIGNAL_SD_NAMES = {key: f"ident.noise.{name}" for key, name, _, _ in SIGNAL_NOISE_PARAMETERS}
 
 
 @dataclass(frozen=True)
@@ -170,8 +160,8 @@ class Identifier:
         Force method with differenced accelerations: True = apply the derivative's weights to
         the momentum equations of the window's samples instead of to the velocities (the
         force equations averaged by the same filter, exact however fast the accelerations
-        change between samples; :meth:`_differenced_momentum`, docs/identification.md,
-        section 6). False = the force equations at the centre with the velocities'
+        change between samples; est_rows.c, docs/identification.md, section 6; at most
+        ``diff_half_window`` = 10). False = the force equations at the centre with the velocities'
         derivatives (exact only where the velocities are quadratic over the window).
     excite : mapping
         The excitation request and the choice of its rate, as the core's options
@@ -206,86 +196,90 @@ class Identifier:
                  moving_point: bool = False, accel_bias: bool = False, thrust_sd=(0.0, 0.0),
                  signal_sd: Mapping[str, float] | None = None, diff_momentum: bool = False,
                  sensors_noise: Mapping | None = None, excite: Mapping | None = None, lib=None):
-        from ..core.estimator import NativeEstimator
-
-        self._args = (robot, guess, dict(method=method, solver=solver, accel_source=accel_source,
-                                         lam=lam, sd_rel=sd_rel, row_sd=row_sd,
-                                         diff_half_window=diff_half_window, corr_lags=corr_lags,
-                                         window=window, moving_point=moving_point,
-                                         accel_bias=accel_bias, thrust_sd=thrust_sd,
-                                         signal_sd=signal_sd, diff_momentum=diff_momentum,
-                                         sensors_noise=sensors_noise, excite=excite))
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
         accel_source = AccelSource.parse(accel_source, "accel_source")
-        if not (isinstance(lam, numbers.Real) and 0.0 < lam <= 1.0):
-            raise ValueError(f"forgetting factor lambda must satisfy 0 < lambda <= 1, got {lam}")
-        if not (isinstance(sd_rel, numbers.Real) and 0.0 < sd_rel < 1.0):
-            raise ValueError(f"relative standard deviation threshold must satisfy "
-                             f"0 < sd_rel < 1, got {sd_rel}")
-        row_sd = tuple(float(x) for x in row_sd)
-        if len(row_sd) != 2 or not all(x >= 0.0 and math.isfinite(x) for x in row_sd):
-            raise ValueError(f"row standard deviations must be two finite numbers >= 0 "
-                             f"(0 = unit weight), got {row_sd}")
-        for name, val, low, high in (("differencing half window", diff_half_window, 1,
-                                      MAX_HALF_WINDOW),
-                                     ("correlation lags", corr_lags, 0, MAX_CORR_LAGS)):
-            if not (isinstance(val, numbers.Real) and math.isfinite(val) and int(val) == val
-                    and low <= val <= high):
-                raise ValueError(f"{name} must be an integer from {low} to {high}, got {val}")
-        window = _seconds(window, "reference window")
-        thrust_sd = _thrust_sd(thrust_sd)
-        moving_point = _flag(moving_point, "moving_point")
-        accel_bias = _flag(accel_bias, "accel_bias")
-        diff_momentum = _flag(diff_momentum, "diff_momentum")
-        for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
-            body.check(name)
-        for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
-            if not (val > 0.0 and math.isfinite(val)):
-                raise ValueError(f"{name} must be a finite covariance > 0, got {val}")
-        force = method is Method.FORCE
-        if force and window > 0.0:
+        row_sd, thrust_sd = tuple(row_sd), tuple(thrust_sd)
+        if len(row_sd) != 2 or len(thrust_sd) != 2:
+            raise ValueError(f"row_sd and thrust_sd are two numbers each (linear, angular; "
+                             f"scale factor, misalignment [rad]), got {row_sd!r}, {thrust_sd!r}")
+        unknown = set(signal_sd or {}) - set(SIGNAL_SD_NAMES)
+        if unknown:
+            raise ValueError(f"signal_sd: unknown signal {sorted(unknown)[0]!r}; known: "
+                             f"{sorted(SIGNAL_SD_NAMES)}")
+        if method is Method.FORCE and window > 0.0:
+            # the argument, not an option: the core's ident.momentum_window is the momentum
+            # method's, which the force method ignores; this constructor has one window
             raise ValueError(f"window = {window:g} s: the reference window is the momentum "
                              f"method's (ident.momentum_window); the force method takes 0 (its "
                              f"high-pass was measured and not kept, docs/identification.md)")
-        self.robot, self.guess = robot, guess
-        self.method, self.solver_kind, self.accel_source = method, kind, accel_source
-        self.lam, self.sd_rel, self.row_sd = float(lam), float(sd_rel), row_sd
-        self.diff_half_window, self.corr_lags = int(diff_half_window), int(corr_lags)
-        self.window, self.thrust_sd = window, thrust_sd
-        self.signal_sd = _signal_sd(signal_sd)
-        self.moving_point = moving_point and not force
-        self.accel_bias = accel_bias and force and accel_source is AccelSource.MEASURED
-        self.diff_momentum = diff_momentum and force and accel_source is AccelSource.DIFFERENCED
-        self.n = robot.n_joints
-        self._sizes = [3, 3, 9, 3, 3, 3, self.n, self.n, self.n, 3, 3, 3, 3]   # per KEYS entry
-        self._n_flat = sum(self._sizes)
-        self.layout = ParameterLayout.for_robot(robot)
+        m = method.name.lower()
         options = {
             "method": int(method), "solver": int(kind), "accel_source": int(accel_source),
-            "lambda": self.lam, "guess": guess, "sd_rel": self.sd_rel,
-            "row_sd_lin": row_sd[0], "row_sd_ang": row_sd[1],
-            "diff_half_window": self.diff_half_window, "corr_lags": self.corr_lags,
-            "diff_momentum": int(self.diff_momentum),
-            # the force method takes the accelerations' noise (the core ignores it otherwise)
-            "signal_sd": ([self.signal_sd.get(k, 0.0) for k, _, _, _ in SIGNAL_NOISE_PARAMETERS]
-                          if force else [0.0] * 6),
-            "momentum_window": 0.0 if force else window,
-            "momentum_point": int(self.moving_point),
-            "sd_thrust_scale": thrust_sd[0], "sd_thrust_misalign": thrust_sd[1],
-            "accel_bias": int(self.accel_bias),
+            "lambda": lam, "guess": guess, "ident.sd_rel": sd_rel,
+            f"ident.sd_row.{m}_lin": row_sd[0], f"ident.sd_row.{m}_ang": row_sd[1],
+            "ident.diff_half_window": diff_half_window, "ident.corr_lags": corr_lags,
+            "ident.momentum_window": window, "ident.momentum_point": moving_point,
+            "ident.accel_bias": accel_bias, "ident.diff_momentum": diff_momentum,
+            "ident.sd_thrust.scale": thrust_sd[0], "ident.sd_thrust.misalign": thrust_sd[1],
+            **{SIGNAL_SD_NAMES[k]: v for k, v in (signal_sd or {}).items()},
+            # the sensors' noise model (the core's noise_profile, noise_scale, noise,
+            # noise_dt, information): what the information filter weighs the rows by
+            **(sensors_noise or {}),
+            # the excitation request and the choice of its rate (the core's excite_mode,
+            # excite_level, excite_adapt, excite_rate_try, excite_window, excite_settle,
+            # excite_horizon)
+            **(excite or {}),
         }
-        # the sensors' noise model (the core's noise_profile, noise_scale, noise, noise_dt,
-        # information): what the information filter weighs the rows by
-        options.update(sensors_noise or {})
-        # the excitation request and the choice of its rate (the core's excite_mode,
-        # excite_level, excite_adapt, excite_rate_try, excite_window, excite_settle,
-        # excite_horizon): the core chooses the rate with the information filter
-        options.update(excite or {})
-        self.core = NativeEstimator(robot, options, lib=lib)
+        self._build(robot, _struct_options(options, lib), lib)
+
+    def _build(self, robot: Robot, options: dict, lib) -> None:
+        """The core of ``options`` (the struct's fields; the core checks them) and what this
+        class reads of it."""
+        self._options, self._lib_arg = dict(options), lib
+        self.core = _core.NativeEstimator(robot, options, lib=lib)
+        used = self.core.model_options()
+        self.robot = robot
+        self.guess = Guess(RigidBody(used["guess_base"][0], used["guess_base"][1:4],
+                                     used["guess_base"][4:]),
+                           RigidBody(used["guess_target"][0], used["guess_target"][1:4],
+                                     used["guess_target"][4:]),
+                           used["P0_mu"], used["P0_theta"])
+        self.method = Method(used["method"])
+        self.solver_kind = Solver(used["solver"])
+        self.accel_source = AccelSource(used["accel_source"])
+        self.lam, self.sd_rel = used["lambda"], used["sd_rel"]
+        k = 2 * (self.method - 1)
+        self.row_sd = (used["row_sd"][k], used["row_sd"][k + 1])
+        self.diff_half_window, self.corr_lags = used["diff_half_window"], used["corr_lags"]
+        # the options as the core uses them: those of another method or accelerations 0
+        self.window = used["momentum_window"]
+        self.thrust_sd = (used["sd_thrust_scale"], used["sd_thrust_misalign"])
+        self.signal_sd = {k: sd for k, sd in zip(SIGNAL_SD_NAMES, used["signal_sd"]) if sd}
+        self.moving_point = bool(used["momentum_point"])
+        self.accel_bias = bool(used["accel_bias"])
+        self.diff_momentum = bool(used["diff_momentum"])
+        self.n = robot.n_joints
+        self._signals = _sample.signals(self.n)
+        self._sizes = [sg.size for sg in self._signals]
+        self._n_flat = sum(self._sizes)
+        self.layout = ParameterLayout.for_robot(robot)
         self._zero = np.zeros(self._n_flat)       # a sample the core rejects (base.A = 0)
         self._note = None       # a rejection decided here (shape, type): its message
         self._rep = None        # the core's report, cached until the next update / set_state
+
+    @classmethod
+    def from_options(cls, robot: Robot, options: Mapping, lib=None) -> "Identifier":
+        """An identifier of the core's options (``options``: by the estimator FMU's parameter
+        names or the struct's fields, :class:`spacerobot.core.estimator.NativeEstimator`)."""
+        out = cls.__new__(cls)
+        out._build(robot, _struct_options(options, lib), lib)
+        return out
+
+    def excite_request(self, identified: Mapping[str, bool]) -> float:
+        """The excitation level requested (output ``ident.excite``) for the bodies' identified
+        flags (``{'base': bool, 'target': bool}``): the core's rule."""
+        return self.core.excite_request(identified)
 
     # -- the update ------------------------------------------------------------------------------
     def update(self, t: float, meas: dict) -> int:
@@ -326,8 +320,7 @@ class Identifier:
         """``(flat, None)``, or ``(None, why)`` for a sample whose signals do not have their
         shapes or are not numbers (the core judges the values)."""
         try:
-            vals = [meas[k] for k in KEYS]
-            vals[2] = np.ravel(vals[2])
+            vals = [np.ravel(meas[k]) if k == "A" else meas[k] for k in KEYS]
             if [len(v) for v in vals] == self._sizes and np.shape(meas["A"]) == (3, 3):
                 flat = np.concatenate(vals).astype(float, copy=False)
                 if flat.ndim == 1:
@@ -459,11 +452,11 @@ class Identifier:
         self._rep, self._note = None, None
 
     def __getstate__(self):
-        return {"args": self._args, "state": self.get_state(), "note": self._note}
+        return {"robot": self.robot, "options": self._options, "lib": self._lib_arg,
+                "state": self.get_state(), "note": self._note}
 
     def __setstate__(self, d):
-        robot, guess, kw = d["args"]
-        self.__init__(robot, guess, **kw)
+        self._build(d["robot"], d["options"], d["lib"])
         self.set_state(d["state"])
         self._note = d["note"]
 
@@ -473,132 +466,21 @@ class Identifier:
         return out
 
 
-def _windows(values: Mapping[str, float]) -> dict:
-    """``{Method: window [s]}``: ``ident.momentum_window`` (checked) for the momentum method,
-    0 for the force method."""
-    return {Method.MOMENTUM: _seconds(values["ident.momentum_window"], "ident.momentum_window"),
-            Method.FORCE: 0.0}
+def _struct_options(options: Mapping, lib=None) -> dict:
+    """The core's options (the struct's fields) of ``options`` (by the estimator FMU's
+    parameter names or the struct's fields)."""
+    L = _core._bind(lib or _core._default_lib())
+    return _core._as_dict(_core._options(options, L))
 
 
-def _seconds(x, name: str) -> float:
-    """A reference window [s] from 0 to :data:`MAX_WINDOW`, as a float."""
-    real = isinstance(x, numbers.Real)
-    if not (real and math.isfinite(x) and 0.0 <= x <= MAX_WINDOW):
-        raise ValueError(f"{name} must be a number of seconds from 0 to {MAX_WINDOW:g}, "
-                         f"got {x if real else repr(x)}")
-    return float(x)
-
-
-def _signal_sd(signal_sd) -> dict:
-    """The checked ``signal_sd`` option: ``{key: sd}`` (floats >= 0) for keys of
-    :data:`SIGNAL_SD_KEYS`."""
-    out = {}
-    known = {k for keys in SIGNAL_SD_KEYS.values() for k in keys}
-    for key, x in dict(signal_sd or {}).items():
-        if key not in known:
-            raise ValueError(f"signal_sd: unknown signal {key!r}; known: {sorted(known)}")
-        if not (isinstance(x, numbers.Real) and math.isfinite(x) and x >= 0.0):
-            name = dict((k, n) for k, n, _, _ in SIGNAL_NOISE_PARAMETERS)[key]
-            raise ValueError(f"ident.noise.{name} (signal_sd[{key!r}]) must be a finite number "
-                             f">= 0, got {x!r}")
-        out[key] = float(x)
-    return out
-
-
-#: the thrust's standard deviations (scale factor, misalignment) as FMU parameters
-THRUST_SD_NAMES = ("ident.sd_thrust.scale", "ident.sd_thrust.misalign")
-
-
-def _thrust_sd(pair, names=("thrust_sd scale factor", "thrust_sd misalignment [rad]")
-               ) -> Tuple[float, float]:
-    """``(scale, misalignment)``, each a number from 0 to :data:`MAX_THRUST_SD` (``names``
-    for the error message: the constructor's option or the FMU parameters)."""
-    pair = tuple(pair)
-    if len(pair) != 2:
-        raise ValueError(f"thrust standard deviations must be two numbers (scale factor, "
-                         f"misalignment [rad]), got {pair!r}")
-    for x, name in zip(pair, names):
-        if not (isinstance(x, numbers.Real) and 0.0 <= x <= MAX_THRUST_SD):
-            raise ValueError(f"{name} must be a number from 0 to {MAX_THRUST_SD:g}, got {x!r}")
-    return float(pair[0]), float(pair[1])
-
-
-def _flag(x, name: str) -> bool:
-    """An FMI Integer switch, 0 or 1."""
-    if x not in (0, 1):
-        raise ValueError(f"{name} must be 0 or 1, got {x}")
-    return bool(x)
-
-
-@dataclass(frozen=True)
-class ExcitationRequest:
-    """The excitation level the estimator asks the plant for (output ``ident.excite``).
-
-    Parameters
-    ----------
-    mode : :class:`spacerobot.interface.ExciteMode` (member, code or label)
-        OFF: 0. UNTIL_IDENTIFIED: ``level`` while a body is not identified, 0 once both are.
-        ALWAYS: ``level`` (keeps the parameters observable, for tracking slow changes with a
-        forgetting factor).
-    level : float
-        Requested level, 0..1.
-    """
-
-    mode: ExciteMode = ExciteMode.UNTIL_IDENTIFIED
-    level: float = 1.0
-
-    def __post_init__(self):
-        object.__setattr__(self, "mode", ExciteMode.parse(self.mode, "ident.excite_mode"))
-        if not (0.0 <= self.level <= 1.0):
-            raise ValueError(f"ident.excite_level must be in [0, 1], got {self.level}")
-
-    def __call__(self, identified: dict) -> float:
-        """The level for the bodies' identified flags (:attr:`Report.identified`)."""
-        if self.mode is ExciteMode.ALWAYS or (self.mode is ExciteMode.UNTIL_IDENTIFIED
-                                              and not all(identified.values())):
-            return float(self.level)
-        return 0.0
-
-
-def identifier_from_values(robot: Robot, values: Mapping[str, float], sample_time: float = 0.1
-                           ) -> Tuple[Identifier, ExcitationRequest]:
-    """The estimator core and its excitation request from the estimator FMU's parameter values
-    (names of :func:`spacerobot.interface.estimator_vars`): what the FMU builds at
-    initialisation, and ``spacerobot identify`` on recorded telemetry; with
-    ``ident.noise_profile`` = 1 the options its profile sets (the sensors' densities at
-    ``sample_time`` [s], the FMU's scenario sample time). Raises ``ValueError`` for an invalid
-    value or one the native core does not take."""
-    from ..core.estimator import options_from_values, profile_values
-    v = dict(values)
-    sensors_noise = None
-    if v.get("ident.noise_profile", 0) != 0:          # the core names a bad profile value
-        v.update(profile_values(v, sample_time))
-        o = options_from_values(v)
-        sensors_noise = {k: o[k] for k in ("noise_profile", "noise_scale", "noise",
-                                           "information")}
-        sensors_noise["noise_dt"] = float(sample_time)
-    codes = [code.parse(int(v[name]), name) for name, code in (
-        ("method", Method), ("solver", Solver), ("accel_source", AccelSource))]
-    guess = Guess(body_of(v, "guess.base"), body_of(v, "guess.target"), float(v["P0_mu"]),
-                  float(v["P0_theta"]))
-    ident = Identifier(robot, guess, *codes, float(v["lambda"]), sd_rel=float(v["ident.sd_rel"]),
-                       row_sd=row_sd(v, codes[0]),
-                       diff_half_window=int(v["ident.diff_half_window"]),
-                       corr_lags=int(v["ident.corr_lags"]),
-                       window=_windows(v)[codes[0]],
-                       moving_point=_flag(v["ident.momentum_point"], "ident.momentum_point"),
-                       accel_bias=_flag(v["ident.accel_bias"], "ident.accel_bias"),
-                       thrust_sd=_thrust_sd([v[n] for n in THRUST_SD_NAMES], THRUST_SD_NAMES),
-                       diff_momentum=_flag(v["ident.diff_momentum"], "ident.diff_momentum"),
-                       signal_sd={key: v[f"ident.noise.{name}"]
-                                  for key, name, _, _ in SIGNAL_NOISE_PARAMETERS},
-                       sensors_noise=sensors_noise, excite=_excite_options(v))
-    return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))
-
-
-def _excite_options(v: Mapping[str, float]) -> dict:
-    """The core's excitation options (request and rate choice) of the FMU parameter values
-    ``v`` (those absent keep the core's defaults)."""
-    from ..core.estimator import excite_design_values
-    return {"excite_mode": int(v["ident.excite_mode"]),
-            "excite_level": float(v["ident.excite_level"]), **excite_design_values(v)}
+def identifier_from_values(robot: Robot, values: Mapping[str, float], sample_time: float = 0.1,
+                           lib=None) -> Tuple[Identifier, Callable[[Mapping[str, bool]], float]]:
+    """The estimator core and its excitation request (:meth:`Identifier.excite_request`) from
+    the estimator FMU's parameter values (names of :func:`spacerobot.interface.estimator_vars`):
+    what the FMU builds at initialisation, and ``spacerobot identify`` on recorded telemetry;
+    ``sample_time`` [s]: the interval the sensors' noise densities are drawn at (the FMU's
+    scenario sample time; ``ident.noise_profile``). Raises ``ValueError`` with the core's
+    message for an invalid value."""
+    ident = Identifier.from_options(
+        robot, {**_core.options_from_values(values, lib), "noise_dt": float(sample_time)}, lib)
+    return ident, ident.excite_request

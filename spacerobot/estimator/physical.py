@@ -40,118 +40,53 @@ import numpy as np
 
 from ..core import physical as _native
 
-__all__ = ["second_moment", "inertia_from_second_moment", "pseudo_inertia", "is_physical",
-           "project_body", "project_planar_body"]
+__all__ = ["second_moment", "is_physical", "project_body", "project_planar_body"]
 
 #: smallest eigenvalue of Sigma_c kept by the projection, relative to the largest |eigenvalue|
-#: (a body this flat is still a real one: its inertia satisfies the strict triangle inequality)
+#: (a body this flat is still a real one: its inertia satisfies the strict triangle inequality;
+#: SR_REL_SIGMA_MIN)
 REL_SIGMA_MIN = 1e-6
-#: smallest mass kept by the projection, relative to the caller's mass scale
+#: smallest mass kept by the projection, relative to the caller's mass scale (SR_REL_MASS_MIN)
 REL_MASS_MIN = 1e-6
 
 
-def _six(M: np.ndarray) -> np.ndarray:
-    return np.array([M[0, 0], M[1, 1], M[2, 2], M[0, 1], M[0, 2], M[1, 2]])
-
-
 def second_moment(I6) -> np.ndarray:
-    """``Sigma_c = tr(I_c)/2 * 1 - I_c`` (3, 3) from ``I6 = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``.
-
-    ``Sigma_c = integral of x x^T dm`` about the centre of mass [kg.m2].
-    """
-    Ixx, Iyy, Izz, Ixy, Ixz, Iyz = np.asarray(I6, dtype=float).reshape(6)
-    t = 0.5 * (Ixx + Iyy + Izz)
-    return np.array([[t - Ixx, -Ixy, -Ixz], [-Ixy, t - Iyy, -Iyz], [-Ixz, -Iyz, t - Izz]])
-
-
-def inertia_from_second_moment(S: np.ndarray) -> np.ndarray:
-    """``I_c = tr(Sigma_c) * 1 - Sigma_c`` as ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` (6,)."""
-    S = np.asarray(S, dtype=float)
-    return _six(np.trace(S) * np.eye(3) - S)
-
-
-def pseudo_inertia(m: float, b, I6) -> np.ndarray:
-    """The 4x4 pseudo-inertia matrix ``J`` about the body frame origin (module docstring)."""
-    b = np.asarray(b, dtype=float)
-    J = np.empty((4, 4))
-    J[:3, :3] = second_moment(I6) + m * np.outer(b, b)      # Sigma_O = Sigma_c + m b b^T
-    J[:3, 3] = J[3, :3] = m * b                              # first moment h = m b
-    J[3, 3] = m
-    return J
+    """``Sigma_c = tr(I_c)/2 * 1 - I_c`` (3, 3) from ``I6 = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``:
+    ``Sigma_c = integral of x x^T dm`` about the centre of mass [kg.m2] (the core's
+    ``sr_second_moment``)."""
+    return _native.second_moment(I6)
 
 
 def is_physical(m: float, b, I6) -> bool:
-    """True iff ``(m, b, I6)`` is a real rigid body: finite, ``m > 0``, ``Sigma_c > 0``.
-
-    Equivalent to the pseudo-inertia matrix being positive definite; tested by a Cholesky
-    factorisation of ``Sigma_c`` (no tolerance: a body on the boundary, e.g. a rod, is not
-    accepted; the native core's ``sr_is_physical``).
-    """
+    """True iff ``(m, b, I6)`` is a real rigid body: finite, ``m > 0``, ``Sigma_c > 0``
+    (equivalently the pseudo-inertia matrix positive definite; no tolerance: a body on the
+    boundary, e.g. a rod, is not accepted; the core's ``sr_is_physical``)."""
     return _native.is_physical(m, b, I6)
 
 
 def project_body(m: float, b, I6, m_scale: float = 1.0) -> Tuple[float, np.ndarray, np.ndarray, bool]:
-    """The nearest real rigid body to ``(m, b, I6)`` in the ``(m, b, Sigma_c)`` coordinates.
+    """The nearest real rigid body to ``(m, b, I6)`` in the ``(m, b, Sigma_c)`` coordinates
+    (the module docstring; the core's ``sr_project_body``, what the estimator's report uses).
 
-    Parameters
-    ----------
-    m : float
-        Mass estimate [kg], finite, any sign.
-    b : (3,) array_like
-        Centre-of-mass offset [m], finite; kept as it is.
-    I6 : (6,) array_like
-        Inertia about the CoM ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` [kg.m2], finite, any values.
-    m_scale : float
-        Mass scale [kg] (e.g. the initial guess) setting the smallest mass kept,
-        ``REL_MASS_MIN * m_scale``.
+    The mass is clipped at ``REL_MASS_MIN * |m_scale|`` (pass the body's guessed mass), ``b``
+    kept, the eigenvalues of ``Sigma_c`` clipped at ``REL_SIGMA_MIN`` times the largest
+    |eigenvalue|.
 
     Returns
     -------
     m : float
     b : (3,) ndarray
-    I6 : (6,) ndarray
+    I6 : (6,) ndarray (NaN where the inertia is not finite: nothing to project)
     projected : bool
         False when the input was already physical; the outputs are then the inputs, exactly.
     """
-    return _projected(_native.project_body, _project_body_numpy, m, b, I6, m_scale)
-
-
-def _projected(kernel, reference, m, b, I6, m_scale):
-    """A projection in one native call ``kernel`` (``sr_project_body`` or
-    ``sr_project_planar_body``, what the estimator's report uses); its NumPy ``reference``
-    where the core's eigen-decomposition did not converge (non-finite input: as NumPy answers
-    it)."""
-    b = np.array(b, dtype=float)
-    I6 = np.array(I6, dtype=float)
-    m_out, I_out, projected, ok = kernel(float(m), b, I6, REL_MASS_MIN * abs(m_scale),
-                                         REL_SIGMA_MIN)
-    if not projected:
-        return float(m), b, I6, False
-    if ok:
-        return float(m_out), b, I_out, True
-    return reference(m, b, I6, m_scale)
-
-
-def _project_body_numpy(m: float, b, I6, m_scale: float = 1.0):
-    """:func:`project_body` in NumPy (LAPACK's eigen-decomposition): the reference of the
-    native ``sr_project_body`` and its fallback for non-finite input."""
-    b = np.array(b, dtype=float)
-    I6 = np.array(I6, dtype=float)
-    if is_physical(m, b, I6):
-        return float(m), b, I6, False
-    # m >= m_min: projection onto a half-line
-    m_min = REL_MASS_MIN * abs(m_scale)
-    m_out = float(m) if m >= m_min else m_min
-    # Sigma_c >= s_min 1: clip the eigenvalues (Frobenius-nearest), I_c = tr(S) 1 - S
-    lam, V = np.linalg.eigh(second_moment(I6))
-    s_min = REL_SIGMA_MIN * max(float(np.max(np.abs(lam))), np.finfo(float).tiny)
-    S = (V * np.maximum(lam, s_min)) @ V.T
-    return m_out, b, inertia_from_second_moment(0.5 * (S + S.T)), True
+    return _projected(_native.project_body, m, b, I6, m_scale)
 
 
 def project_planar_body(m: float, b, I6, m_scale: float = 1.0
                         ) -> Tuple[float, np.ndarray, np.ndarray, bool]:
-    """A real rigid body with the identified entries of a planar estimate kept.
+    """A real rigid body with the identified entries of a planar estimate kept (the core's
+    ``sr_project_planar_body``).
 
     Keeps ``m`` (unless below the mass floor of :func:`project_body`), ``b`` and ``Izz``; sets
     the unidentified ``Ixx``, ``Iyy``, ``Ixy``, ``Ixz``, ``Iyz`` so that ``Sigma_c > 0``: the
@@ -161,30 +96,16 @@ def project_planar_body(m: float, b, I6, m_scale: float = 1.0
 
     Parameters and returns as :func:`project_body`.
     """
-    return _projected(_native.project_planar_body, _project_planar_body_numpy, m, b, I6,
-                      m_scale)
+    return _projected(_native.project_planar_body, m, b, I6, m_scale)
 
 
-def _project_planar_body_numpy(m: float, b, I6, m_scale: float = 1.0):
-    """:func:`project_planar_body` in NumPy: the reference of the native
-    ``sr_project_planar_body`` and its fallback for non-finite input."""
+def _projected(kernel, m, b, I6, m_scale):
+    """A projection in one native call ``kernel``; a non-finite inertia (the eigen-decomposition
+    did not converge) gives NaN."""
     b = np.array(b, dtype=float)
     I6 = np.array(I6, dtype=float)
-    if is_physical(m, b, I6):
+    m_out, I_out, projected, ok = kernel(float(m), b, I6, REL_MASS_MIN * abs(m_scale),
+                                         REL_SIGMA_MIN)
+    if not projected:
         return float(m), b, I6, False
-    S = second_moment(I6)
-    lam, V = np.linalg.eigh(S[:2, :2])
-    izz = float(I6[2])                                       # = trace of the in-plane block
-    s_min = REL_SIGMA_MIN * max(float(np.max(np.abs(np.linalg.eigvalsh(S)))),
-                                np.finfo(float).tiny)
-    if not izz > 2.0 * s_min:
-        return _project_body_numpy(m, b, I6, m_scale)
-    if lam[0] < s_min:                                       # clip with the sum kept
-        lam = np.array([s_min, izz - s_min])
-    P = np.zeros((3, 3))
-    P[:2, :2] = (V * lam) @ V.T
-    P[2, 2] = max(float(S[2, 2]), s_min)
-    m_min = REL_MASS_MIN * abs(m_scale)
-    I_out = inertia_from_second_moment(0.5 * (P + P.T))
-    I_out[2] = izz                                           # exact, not re-rounded
-    return (float(m) if m >= m_min else m_min), b, I_out, True
+    return float(m_out), b, (I_out if ok else np.full(6, np.nan)), True

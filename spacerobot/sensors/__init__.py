@@ -18,6 +18,6 @@ def __getattr__(name):
         from ..core.sensors import NativeSensors
         return NativeSensors
     if name == "SIGNALS":
-        from ..core.sample import signals
-        return signals()
+        from ..core.sample import keys
+        return keys()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

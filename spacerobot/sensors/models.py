@@ -17,8 +17,8 @@ def __getattr__(name: str):
     # SIGNALS: the measurement groups in the core's flat sample's order, read from the native
     # core's sample table (spacerobot.core.sample) when first used
     if name == "SIGNALS":
-        from ..core.sample import signals
-        return signals()
+        from ..core.sample import keys
+        return keys()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

@@ -31,10 +31,11 @@ from typing import Dict, List, Mapping, Optional, Tuple
 
 import numpy as np
 
-from ..estimator import ExcitationRequest, Identifier
+from ..core.estimator import output_names
+from ..estimator import Identifier
 from ..estimator.identifier import identifier_from_values
-from ..interface import (ESTIMATE_NAMES, EXCITE_SCORES, Var, estimator_vars,
-                         identified_estimates, measurement_vars)
+from ..interface import (ESTIMATE_NAMES, Var, estimator_vars, identified_estimates,
+                         measurement_vars)
 from ..robots import check_robot, get_robot, robot_label, scenario
 from .recorder import read_csv, write_csv
 from .runner import RunResult, format_results
@@ -141,47 +142,16 @@ def estimator_parameters(robot: str, overrides: Optional[Mapping[str, float]] = 
 
 
 def identifier_of(robot: str, values: Mapping[str, float], sample_time: float = 0.1
-                  ) -> Tuple[Identifier, ExcitationRequest]:
-    """The estimator core and its excitation request as the FMU builds them from its
-    parameters (:func:`estimator_parameters`; :func:`.estimator.identifier.identifier_from_values`;
+                  ) -> Identifier:
+    """The estimator core as the FMU builds it from its parameters
+    (:func:`estimator_parameters`; :func:`.estimator.identifier.identifier_from_values`;
     ``sample_time`` [s]: the telemetry's, for the noise profile's per-sample densities)."""
-    return identifier_from_values(get_robot(robot), values, sample_time)
+    return identifier_from_values(get_robot(robot), values, sample_time)[0]
 
 
 def _output_vars(robot: str) -> List[Var]:
     sc = scenario(robot)
     return [v for v in estimator_vars(sc.robot, sc) if v.causality == "output"]
-
-
-def _row(ident: Identifier, request: ExcitationRequest, outs: List[Var]) -> List[float]:
-    """The estimator FMU's outputs (in the order of ``outs``) from the core's state."""
-    rep = ident.report()
-    exc = None
-    row = []
-    for v in outs:
-        group = v.key[0]
-        if group in ("est_base", "est_target"):
-            row.append(float(rep.vector[ESTIMATE_NAMES.index(v.name)]))
-        elif group in ("sd_base", "sd_target"):
-            row.append(float(rep.std[ESTIMATE_NAMES.index(v.name[len("sd."):])]))
-        elif group in ("crb_base", "crb_target"):
-            row.append(float(rep.crb[ESTIMATE_NAMES.index(v.name[len("crb."):])]))
-        elif group == "info_chi2":
-            row.append(float(rep.info_chi2))
-        elif group == "excite_rate":
-            row.append(float(rep.excite_rate))
-        elif group == "excite_score":
-            row.append(float(rep.excite_score[EXCITE_SCORES.index(v.key[1])]))
-        elif group in ("identified", "physical"):
-            row.append(float(getattr(rep, group)[v.key[1]]))
-        elif group == "excite":
-            row.append(float(request(rep.identified)))
-        elif group in ("excitation_mu", "excitation_theta"):
-            exc = ident.excitation() if exc is None else exc
-            row.append(float(exc[0 if group == "excitation_mu" else 1]))
-        else:                                     # samples, rejected, status, residuals
-            row.append(float(getattr(ident, group)))
-    return row
 
 
 def identify(time: np.ndarray, groups: Mapping[str, np.ndarray], robot: str,
@@ -205,13 +175,15 @@ def identify(time: np.ndarray, groups: Mapping[str, np.ndarray], robot: str,
     values = dict(parameters) if parameters is not None else estimator_parameters(robot)
     steps = np.diff(np.asarray(time, float))
     steps = steps[np.isfinite(steps) & (steps > 0)]
-    ident, request = identifier_of(robot, values,
-                                   float(np.median(steps)) if len(steps) else 0.1)
+    ident = identifier_of(robot, values, float(np.median(steps)) if len(steps) else 0.1)
     outs = _output_vars(robot)
+    # the FMU's outputs in the core's order (its table), taken in the variables' order
+    where = {name: i for i, name in enumerate(output_names())}
+    columns = np.array([where[v.name] for v in outs])
     rows = np.empty((len(time), len(outs)))
     for k, t in enumerate(np.asarray(time, float).tolist()):
         ident.update(t, {g: a[k] for g, a in groups.items()})     # never raises on bad data
-        rows[k] = _row(ident, request, outs)
+        rows[k] = ident.core.outputs()[columns]
     data = {"time": np.asarray(time, float)}
     for j, v in enumerate(outs):
         data[v.name] = rows[:, j]

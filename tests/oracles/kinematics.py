@@ -18,8 +18,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from spacerobot.kinematics import ArmGeometry
-from spacerobot.robots import Robot
+from .estimator.layout import arm_arrays
+
+
+class ArmGeometry:
+    """The known arm of a robot description as arrays (:func:`.estimator.layout.arm_arrays`):
+    ``xyz``, ``R``, ``axis``, ``mass``, ``com``, ``I``, ``ee_xyz``, ``ee_R``; ``n`` joints."""
+
+    def __init__(self, robot):
+        self.robot = robot
+        self.n = len(robot.links)
+        (self.xyz, self.R, self.axis, self.mass, self.com, self.I, self.ee_xyz,
+         self.ee_R) = arm_arrays(robot)
+
+    def arrays(self):
+        """``(xyz, R, axis, mass, com, I, ee_xyz, ee_R)``, the arguments of
+        :func:`oracles.estimator.kernels.equations`."""
+        return self.xyz, self.R, self.axis, self.mass, self.com, self.I, self.ee_xyz, self.ee_R
 
 
 def cross3(a, b) -> np.ndarray:
@@ -81,8 +96,7 @@ class ArmKinematics(ArmGeometry):
 
     Parameters
     ----------
-    robot : Robot
-        The robot description (only the arm geometry and link inertias are used).
+    robot : the robot description (only the arm geometry and link inertias are used).
 
     Notes
     -----
@@ -91,7 +105,7 @@ class ArmKinematics(ArmGeometry):
     and the velocity / acceleration recursions as cumulative sums of batched cross products.
     """
 
-    def __init__(self, robot: Robot):
+    def __init__(self, robot):
         super().__init__(robot)
         n = self.n
         # R_i Rot(axis_i, q) = R_i + sin(q) R_i K_i + (1 - cos(q)) R_i K_i^2, K_i = skew(axis_i)

@@ -25,7 +25,7 @@ The identifier evaluates these rows for both bodies at once in compiled code
 (:func:`oracles.estimator.kernels.equations`); this module is the NumPy reference it is
 tested against (a test oracle, not part of the library: it does not ship in the FMUs). The maps
 between parameterisations (``D(mu)``, ``I#``, standard parameters) are the library's
-(:mod:`spacerobot.estimator.parameters`).
+(:mod:`oracles.estimator.parameters`).
 
 With the 10 standard parameters ``[m, m b, I_O#]`` (``I_O = I_c + m(|b|^2 I - b b^T)``) the same
 rows are linear: ``Y_i = [[B_i, 0], [Psi_i[:, :4], D_i]]`` (momentum) and

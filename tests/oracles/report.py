@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from spacerobot.estimator import parameters as par
+from .estimator import parameters as par
 
 REL_EIG_MIN = 1e-12
 REL_SIGMA_MIN = 1e-6

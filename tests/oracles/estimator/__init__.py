@@ -1,6 +1,8 @@
-"""The test oracle: the former Python estimator (spacerobot/estimator before issue #26), pure
-NumPy (the Numba kernels run as plain Python, ``_nonumba``; the paper solver takes its layered
-NumPy path, ``PaperSolver.fused = False``). The library's Identifier runs the native core; the tests
+"""The test oracle: an independent NumPy formulation of the estimator (the Numba kernels run as
+plain Python, ``_nonumba``; the paper solver takes its layered NumPy path,
+``PaperSolver.fused = False``). It imports nothing from ``spacerobot``: its layout, codes and
+guess handling are in :mod:`.layout`, its parameter maps in :mod:`.parameters`, its projection
+onto real bodies in :mod:`.physical`. The library's Identifier runs the native core; the tests
 compare it with this one within tolerances.
 
 Estimator numerical core (no FMI, no plant): the Identifier (validation, equations of a

@@ -2,9 +2,9 @@
 
 Uses only the robot description (the known arm) and the measured signals of the interface
 contract; never the plant. The identifier validates a sample, builds its equations (momentum or
-force form, :class:`spacerobot.interface.Method`) and keeps the bookkeeping around them (the
+force form, :class:`.layout.Method`) and keeps the bookkeeping around them (the
 momentum reference, the differencing history, counters, status, diagnostics); a solver
-(:mod:`.solvers`, :class:`spacerobot.interface.Solver`) owns the parameters.
+(:mod:`.solvers`, :class:`.layout.Solver`) owns the parameters.
 """
 from __future__ import annotations
 
@@ -17,10 +17,8 @@ from typing import Mapping, Tuple
 
 import numpy as np
 
-from spacerobot.interface import (COM_SCALE_MIN, SIGNAL_NOISE_PARAMETERS, AccelSource, ExciteMode,
-                         Method, ParameterLayout, Solver, body_of, row_sd)
-from spacerobot.kinematics import ArmGeometry
-from spacerobot.robots import Guess, Robot
+from .layout import (COM_SCALE_MIN, ROW_SD_PARAMETERS, SIGNAL_NOISE_PARAMETERS, AccelSource,
+                     ExciteMode, Guess, Layout, Method, Solver, arm_arrays, body_of)
 from . import consider, eiv, kernels, report_kernels
 from .accel_bias import BiasFit
 from .differencing import centre_derivative, derivative_weights, displacement_weights
@@ -167,7 +165,7 @@ class Identifier:
     >>> ident.estimates()["target"].m                 # doctest: +SKIP
     """
 
-    def __init__(self, robot: Robot, guess: Guess, method: Method | str = "momentum",
+    def __init__(self, robot, guess: Guess, method: Method | str = "momentum",
                  solver: Solver | str = "paper", accel_source: AccelSource | str = "measured",
                  lam: float = 1.0, sd_rel: float = SD_REL, row_sd=(0.0, 0.0),
                  diff_half_window: int = 1, corr_lags: int = 0, window: float = 0.0,
@@ -196,7 +194,7 @@ class Identifier:
         accel_bias = _flag(accel_bias, "accel_bias")
         diff_momentum = _flag(diff_momentum, "diff_momentum")
         for name, body in (("guess.base", guess.base), ("guess.target", guess.target)):
-            body.check(name)
+            _check_body(name, body)
         for name, val in (("P0_mu", guess.P0_mu), ("P0_theta", guess.P0_theta)):
             if not (val > 0.0 and math.isfinite(val)):
                 raise ValueError(f"{name} must be a finite covariance > 0, got {val}")
@@ -217,7 +215,7 @@ class Identifier:
         # row weights 1 / sd (1: unweighted, the rows untouched)
         self._w_lin, self._w_ang = (1.0 / x if x > 0.0 else 1.0 for x in row_sd)
         self.n = robot.n_joints
-        self._geom = ArmGeometry(robot).arrays()
+        self._geom = arm_arrays(robot)
         self._sizes = [3, 3, 9, 3, 3, 3, self.n, self.n, self.n, 3, 3, 3, 3]   # per KEYS entry
         self._n_flat = sum(self._sizes)
         n, q0 = self.n, kernels.Q0
@@ -226,7 +224,7 @@ class Identifier:
                              (slice(kernels.ALPHA_B, kernels.ALPHA_B + 3),
                               slice(kernels.OMEGA_B, kernels.OMEGA_B + 3)),
                              (slice(q0 + 2 * n, q0 + 3 * n), slice(q0 + n, q0 + 2 * n)))
-        self.layout = ParameterLayout.for_robot(robot)
+        self.layout = Layout(robot)
         # the accelerations' noise sd per channel (.eiv), or None: no compensation
         self._accel_sd = (_channel_sd(self.signal_sd, accel_source, self.n)
                           if method is Method.FORCE else None)
@@ -934,7 +932,7 @@ def _seconds(x, name: str) -> float:
 
 #: signals whose noise the errors-in-variables compensation takes (.eiv), per acceleration
 #: source: the accelerations as measured, or the velocities they are differenced from
-SIGNAL_SD_KEYS = {src: tuple(k for k, _, _, s in SIGNAL_NOISE_PARAMETERS if s == src.name.lower())
+SIGNAL_SD_KEYS = {src: tuple(k for k, _, s in SIGNAL_NOISE_PARAMETERS if s == src.name.lower())
                   for src in AccelSource}
 
 
@@ -947,7 +945,7 @@ def _signal_sd(signal_sd, method: Method, source: AccelSource, window: float) ->
         if key not in known:
             raise ValueError(f"signal_sd: unknown signal {key!r}; known: {sorted(known)}")
         if not (isinstance(x, numbers.Real) and math.isfinite(x) and x >= 0.0):
-            name = dict((k, n) for k, n, _, _ in SIGNAL_NOISE_PARAMETERS)[key]
+            name = dict((k, n) for k, n, _ in SIGNAL_NOISE_PARAMETERS)[key]
             raise ValueError(f"ident.noise.{name} (signal_sd[{key!r}]) must be a finite number "
                              f">= 0, got {x!r}")
         out[key] = float(x)
@@ -1033,7 +1031,7 @@ class ExcitationRequest:
 
     Parameters
     ----------
-    mode : :class:`spacerobot.interface.ExciteMode` (member, code or label)
+    mode : :class:`.layout.ExciteMode` (member, code or label)
         OFF: 0. UNTIL_IDENTIFIED: ``level`` while a body is not identified, 0 once both are.
         ALWAYS: ``level`` (keeps the parameters observable, for tracking slow changes with a
         forgetting factor).
@@ -1057,7 +1055,35 @@ class ExcitationRequest:
         return 0.0
 
 
-def identifier_from_values(robot: Robot, values: Mapping[str, float]
+def _check_body(name: str, body) -> None:
+    """A real body: finite, m > 0, the inertia positive definite with its principal moments
+    obeying the triangle inequality (to 1e-12 of the largest); ValueError naming it else."""
+    values = [body.mass, *body.com, *body.inertia]
+    I = np.empty((3, 3))
+    for v, (i, j) in zip(body.inertia, ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))):
+        I[i, j] = I[j, i] = v
+    ok = all(math.isfinite(v) for v in values) and body.mass > 0.0
+    if ok:
+        w = np.linalg.eigvalsh(I)
+        ok = w[0] > 0.0 and w[2] <= w[0] + w[1] + 1e-12 * w[2]
+    if not ok:
+        raise ValueError(f"{name} is not a real rigid body: mass {body.mass!r}, inertia "
+                         f"{list(body.inertia)!r}")
+
+
+def row_sd(values: Mapping[str, float], method: Method) -> Tuple[float, float]:
+    """``(linear, angular)`` row standard deviations of ``method`` from the estimator's
+    parameter values, every pair checked."""
+    for suffix, _ in ROW_SD_PARAMETERS:
+        x = float(values[f"ident.sd_row.{suffix}"])
+        if not (math.isfinite(x) and x >= 0.0):
+            raise ValueError(f"ident.sd_row.{suffix} must be a finite number >= 0 "
+                             f"(0 = unit weight), got {x}")
+    return tuple(float(values[f"ident.sd_row.{suffix}"])
+                 for suffix, m in ROW_SD_PARAMETERS if m is method)
+
+
+def identifier_from_values(robot, values: Mapping[str, float]
                            ) -> Tuple[Identifier, ExcitationRequest]:
     """The estimator core and its excitation request from the estimator FMU's parameter values
     (names of :func:`spacerobot.interface.estimator_vars`): what the FMU builds at
@@ -1078,5 +1104,5 @@ def identifier_from_values(robot: Robot, values: Mapping[str, float]
                        thrust_sd=_thrust_sd([v[n] for n in THRUST_SD_NAMES], THRUST_SD_NAMES),
                        diff_momentum=_flag(v["ident.diff_momentum"], "ident.diff_momentum"),
                        signal_sd={key: v[f"ident.noise.{name}"]
-                                  for key, name, _, _ in SIGNAL_NOISE_PARAMETERS})
+                                  for key, name, _ in SIGNAL_NOISE_PARAMETERS})
     return ident, ExcitationRequest(int(v["ident.excite_mode"]), float(v["ident.excite_level"]))

@@ -1,10 +1,8 @@
-"""Compiled (Numba) kernels of the identifier's hot path: the equations of one sample and the
-RLS step.
+"""The oracle's kernels of one sample: its equations and the RLS step, written as plain loops
+(run as Python, ``_nonumba``).
 
 One sample needs the arm's forward kinematics (n links), the arm's momentum or rate of
-momentum, the regressors of base and target and two RLS updates: in NumPy some two hundred
-small-array operations, whose call overhead was most of the ~0.2 ms per sample. Here they are
-plain loops compiled by Numba. The equations are those of the NumPy test oracles
+momentum, the regressors of base and target and two RLS updates. The equations are those of the NumPy test oracles
 ``tests/oracles/kinematics.py`` (the arm recursion) and ``tests/oracles/regressors.py`` (the
 regressors of one body, same notation), which the tests check these kernels against:
 
@@ -21,9 +19,7 @@ regressors of one body, same notation), which the tests check these kernels agai
 ``A mu = b`` and ``phi theta = y + psi D(mu)``; for the momentum form the identifier
 subtracts the reference sample's ``E``.
 
-Compiled on first use and cached on disk (see :mod:`spacerobot.jit`; self-contained for that
-reason, so the Cholesky solve of :func:`rls_update` is written out here as in the plant's
-kernels).
+Self-contained: the Cholesky solve of :func:`rls_update` is written out here.
 """
 from __future__ import annotations
 

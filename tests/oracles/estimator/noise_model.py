@@ -23,15 +23,14 @@ from typing import Iterable, Mapping, Tuple
 
 import numpy as np
 
-from spacerobot.interface import AccelSource, Method
-from spacerobot.robots import Guess, RigidBody, Robot
 from . import parameters as par
+from .layout import AccelSource, Guess, Method
 from .identifier import Identifier
 
 __all__ = ["equation_error_sd"]
 
 
-def equation_error_sd(robot: Robot, base: RigidBody, target: RigidBody,
+def equation_error_sd(robot, base, target,
                       samples: Iterable[Tuple[float, Mapping[str, np.ndarray]]],
                       method: Method | str = "momentum",
                       accel_source: AccelSource | str = "measured",

@@ -1,6 +1,6 @@
 """The maps between the estimator's parameterisations of the two bodies.
 
-Positions in every vector come from :class:`spacerobot.interface.ParameterLayout`:
+Positions in every vector come from :class:`.layout.Layout`:
 
 * estimates (20,): per body ``m``, ``b`` (3), ``I`` (6, ``Ixx Iyy Izz Ixy Ixz Iyz``), CoM inertia;
 * the paper's ``mu = [m1, m1 b1, mn, mn bn]`` (8,) and ``theta = [I1#, In#]`` (12,), with
@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from spacerobot.interface import LAYOUT
-from spacerobot.robots import Guess
 from . import kernels, report_kernels
+from .layout import Guess, Layout
+
+LAYOUT = Layout(planar=False)
 
 #: ``I = I#[SHARP_TO_PROJECT]`` (the paper's order into the project's); ``I# = I[PROJECT_TO_SHARP]``
 SHARP_TO_PROJECT = LAYOUT.sharp_to_project

@@ -1,4 +1,5 @@
-"""Compiled (Numba) kernels of what the estimator reports at every sample: the prior's pull and
+"""The oracle's kernels of what the estimator reports at every sample (plain loops, run as
+Python, ``_nonumba``): the prior's pull and
 the covariance of the paper solver's parameters, the Jacobians of the maps to the estimates, the
 lag of the estimates behind moving parameters (:mod:`.tracking`), the residual autocorrelation
 (:class:`.uncertainty.Autocorrelation`), the physical-consistency test of an estimated body.

@@ -15,7 +15,7 @@ prior's pull, propagated by the delta method), and the snapshot that undoes a fa
   in which both equations are linear.
 
 Parameters that the robot's model does not identify (a planar robot's out-of-plane ones,
-:class:`spacerobot.interface.ParameterLayout`) stay at their guesses: their columns move to the
+:class:`.layout.Layout`) stay at their guesses: their columns move to the
 right-hand side.
 """
 from __future__ import annotations
@@ -25,8 +25,7 @@ from typing import NamedTuple, Optional, Tuple
 
 import numpy as np
 
-from spacerobot.interface import COM_SCALE_MIN, ParameterLayout, Solver
-from spacerobot.robots import Guess
+from .layout import COM_SCALE_MIN, Guess, Layout, Solver
 from . import eiv
 from . import parameters as par
 from . import report_kernels as rk
@@ -89,7 +88,7 @@ class ParameterSolver(ABC):
 
     kind: Solver
 
-    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float, lags: int = 0):
+    def __init__(self, layout: Layout, guess: Guess, lam: float, lags: int = 0):
         self.layout, self.guess, self.lam, self.lags = layout, guess, lam, int(lags)
 
     @abstractmethod
@@ -291,7 +290,7 @@ class PaperSolver(ParameterSolver):
     kind = Solver.PAPER
     fused = True
 
-    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0, lags: int = 0):
+    def __init__(self, layout: Layout, guess: Guess, lam: float = 1.0, lags: int = 0):
         super().__init__(layout, guess, lam, lags)
         L = layout
         mu0, th0 = par.paper_vectors(guess)
@@ -634,7 +633,7 @@ class JointSolver(ParameterSolver):
 
     kind = Solver.JOINT
 
-    def __init__(self, layout: ParameterLayout, guess: Guess, lam: float = 1.0, lags: int = 0):
+    def __init__(self, layout: Layout, guess: Guess, lam: float = 1.0, lags: int = 0):
         super().__init__(layout, guess, lam, lags)
         L = layout
         self.pi = par.standard_vector((guess.base, guess.target))
@@ -765,7 +764,7 @@ class JointSolver(ParameterSolver):
 SOLVERS = {Solver.PAPER: PaperSolver, Solver.JOINT: JointSolver}
 
 
-def make_solver(kind: Solver, layout: ParameterLayout, guess: Guess, lam: float = 1.0,
+def make_solver(kind: Solver, layout: Layout, guess: Guess, lam: float = 1.0,
                 lags: int = 0) -> ParameterSolver:
     """The solver of kind ``kind``."""
     return SOLVERS[Solver.parse(kind, "solver")](layout, guess, lam, lags)
