@@ -322,10 +322,23 @@ def _profile_magnitudes() -> Tuple[str, ...]:
                  if o.parameter and o.name.startswith("noise.") and o.name != "noise.scale")
 
 
-#: read from the estimator core when first used (module attributes, PEP 562): STATUS, the
-#: status codes' texts of ``diag.status``; PROFILE_MAGNITUDES, the estimator FMU's ``noise.*``
-#: parameters besides ``noise.scale``
-_FROM_CORE = {"STATUS": _status, "PROFILE_MAGNITUDES": _profile_magnitudes}
+def _sensor_magnitudes() -> Tuple[str, ...]:
+    """The sensors' error magnitudes (the ``noise.*`` parameters but ``noise.scale``) in the
+    sensors core's order (native/src/sensor_noise.h) (:data:`SENSOR_MAGNITUDES`)."""
+    from .core.sensors import parameter_names
+    return tuple("noise." + n for n in parameter_names())
+
+
+#: read from the native core when first used (module attributes, PEP 562; importing this
+#: module loads no library): STATUS, the status codes' texts of ``diag.status``;
+#: PROFILE_MAGNITUDES, the estimator FMU's ``noise.*`` parameters besides ``noise.scale``;
+#: SENSOR_MAGNITUDES, the sensors FMU's; CONTROLLER_DOC, EXCITATION_DOC, PROPELLANT_DOC, the
+#: plant's parameter tables' ``{field: (unit, description)}``
+_FROM_CORE = {"STATUS": _status, "PROFILE_MAGNITUDES": _profile_magnitudes,
+              "SENSOR_MAGNITUDES": _sensor_magnitudes,
+              "CONTROLLER_DOC": lambda: _table_doc("controller"),
+              "EXCITATION_DOC": lambda: _table_doc("excitation"),
+              "PROPELLANT_DOC": lambda: _table_doc("propellant")}
 
 
 def __getattr__(name: str):
@@ -896,19 +909,3 @@ def sensors_dependencies(variables: Sequence[Var]) -> Dict[int, List[int]]:
         deps[i] = [index[("input", k)] for k in keys]
     return deps
 
-
-#: the plant's parameter tables' views (CONTROLLER_DOC, ...), read from the C core when asked for
-_PLANT_TABLE_DOCS = {"CONTROLLER_DOC": "controller", "EXCITATION_DOC": "excitation",
-                     "PROPELLANT_DOC": "propellant"}
-
-
-def __getattr__(name: str):
-    # tables the native core owns, read from it when first used (importing this module loads no
-    # library): SENSOR_MAGNITUDES, the sensors' error magnitudes (the ``noise.*`` parameters but
-    # ``noise.scale``) in the core's order (native/src/sensor_noise.h); the plant's tables' docs
-    if name == "SENSOR_MAGNITUDES":
-        from .core.sensors import parameter_names
-        return tuple("noise." + n for n in parameter_names())
-    if name in _PLANT_TABLE_DOCS:
-        return _table_doc(_PLANT_TABLE_DOCS[name])
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
