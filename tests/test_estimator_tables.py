@@ -93,9 +93,14 @@ def test_parameter_ranges_are_what_the_core_enforces(spatial):
     a message naming the parameter, the bounds themselves are accepted (where no rule between
     options or of the guessed body as a whole refuses them: a body's and the noise profile's
     products are checked as such); the rows' weights of either method are checked."""
-    ranges = core.parameter_ranges()
+    every = core.parameter_ranges()
+    params = {v.name for v in _vars(spatial, "parameter")}
+    inputs = {v.name for v in _vars(spatial, "input")}
+    assert params | inputs <= set(every) and params.isdisjoint(inputs)
+    assert all(every[name] == (-core.input_limit(), core.input_limit()) for name in inputs)
+    assert set(every) - params - inputs <= {n for n in every if n.startswith("arm.")}  # 12 joints
+    ranges = {name: every[name] for name in params}
     table = {o.name: o for o in core.option_table()}
-    assert set(ranges) == {v.name for v in _vars(spatial, "parameter")}
     base = {"ident.noise_profile": 1}          # the profile's parameters are then checked
     for name, (lo, hi) in ranges.items():
         assert lo <= hi, name

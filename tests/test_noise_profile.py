@@ -75,13 +75,16 @@ def test_a_users_setting_wins_and_profile_0_reads_no_sensor():
                            **sensors()})
     assert got["corr_lags"] == 7 and got["momentum_window"] == 2.0
     assert got["momentum_point"] == 1                      # the rest still from the profile
-    # profile 0: the options as given, whatever the sensors' values (even invalid ones)
-    off = {**sensors(), "noise_profile": 0, "noise_scale": float("nan")}
+    # profile 0: the options as given, whatever the sensors' values
+    off = {**sensors(), "noise_profile": 0, "noise_scale": 3.0}
     got = profile_options(off)
     base = default_options()
     assert got["sd_thrust_scale"] == base["sd_thrust_scale"] == 0.0
     assert got["signal_sd"] == base["signal_sd"]
     assert got["information"] == base["information"] == 0
+    # ... but a value outside its declared range (the FMU's min / max) is refused either way
+    with pytest.raises(ValueError, match=r"noise\.scale"):
+        profile_options({**off, "noise_scale": float("nan")})
 
 
 def test_information_filter_needs_white_noise_and_the_profile():

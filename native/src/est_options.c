@@ -27,8 +27,9 @@
  *   REPR   "<rule>, got <v>" (v as a Real's, "2.0")
  *   COVAR  "<name> must be a finite covariance > 0, got <v>" when v is not, else the RULE */
 enum { CODE, RULE, REPR, COVAR };
-/* when a value is checked: always (the other method's row weights too); with
- * ident.noise_profile = 1; as a body (sr_body_check of the guess it belongs to) */
+/* how a value is checked: its range always (the other method's row weights too); a profile
+ * magnitude also scaled by noise.scale with ident.noise_profile = 1; a guess as a body
+ * (sr_body_check of the guess it belongs to) */
 enum { ALWAYS, PROFILE, BODY };
 
 /* The options: X(name, field, index, integer, min, max, default, not_one, parameter, when,
@@ -460,9 +461,7 @@ int sr_estimator_options_check(const sr_estimator_options *o, char *err, size_t 
             }
             continue;
         }
-        if (p->when == PROFILE && o->noise_profile != SR_NOISE_PROFILE_SENSORS)
-            continue;
-        if (!in_range(o, p)) {
+        if (!in_range(o, p)) {                 /* every value within its declared range */
             message(p, value_of(o, p), err, errlen);
             return 1;
         }

@@ -32,6 +32,7 @@
 #include <stddef.h>
 
 #include "arm.h"
+#include "sample.h"
 #include "sensor_noise.h"
 #include "sr_api.h"
 
@@ -46,8 +47,9 @@ extern "C" {
 #define SR_EST_REJECT_NONFINITE 3    /* non-finite / out-of-range input, or an update overflowed */
 #define SR_EST_REJECT_INCONSISTENT 4 /* base.A not a rotation, or time not increasing */
 
-/* largest accepted input magnitude, SI units (every input's range; sr_estimator_param_range) */
-#define SR_EST_INPUT_LIMIT 1e15
+/* largest accepted input magnitude, SI units (every input's range; sr_estimator_param_range):
+ * the sample's physical range */
+#define SR_EST_INPUT_LIMIT SR_SAMPLE_LIMIT
 /* base.A is accepted as a rotation when max |A^T A - I| <= this and det A > 0 */
 #define SR_EST_ROTATION_TOL 1e-6
 /* largest ident.diff_half_window and ident.corr_lags */

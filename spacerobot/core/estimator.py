@@ -211,12 +211,16 @@ def option_table(lib: Optional[ctypes.CDLL] = None) -> Tuple[Option, ...]:
 def parameter_ranges(names: Optional[Iterable[str]] = None,
                      lib: Optional[ctypes.CDLL] = None) -> Dict[str, Tuple[float, float]]:
     """``{FMI name: (min, max)}``: the closed ranges the core accepts
-    (``sr_estimator_param_range``) of every estimator FMU parameter, or of ``names``
+    (``sr_estimator_param_range``) of every estimator FMU parameter and input (of a robot with the
+    most joints the core takes), or of ``names``
     (parameters or inputs, e.g. ``"base.A[1,2]"``; ``KeyError`` for another name). A value in
     its range may still be refused with the others (``sr_estimator_options_check``)."""
     L = _bind(lib or _default_lib())
     if names is None:
+        from ..interface import measurement_vars
+        from .robot_record import MAX_JOINTS
         names = [o.name for o in option_table(L) if o.parameter]
+        names += [v.name for v in measurement_vars(MAX_JOINTS, "input")]
     out = {}
     for name in names:
         lo, hi = ctypes.c_double(), ctypes.c_double()

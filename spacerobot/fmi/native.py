@@ -97,7 +97,7 @@ MODELS: Dict[str, NativeModel] = {
         "Online one-step identification of the mass, centre of mass and inertia of both "
         "the base and the captured target of a space robot, from measurements alone "
         "(momentum- or force-based equations, modified RLS; Zhang, Yue, Yuan 2020). "
-        "Native C core: needs nothing but the C runtime.", robot="arm"),
+        "Native C core: needs nothing but the C runtime.", robot="arm", ranges="estimator"),
     "sensors": NativeModel(
         "SpaceRobotSensors", sensors_vars,
         "Sensors of a space robot servicer: gyro (white noise, bias random walk), star "
