@@ -121,3 +121,13 @@ def test_without_truth_the_axis_follows_the_estimate(tmp_path, monkeypatch):
     settled = data["target.m"][50:]
     assert lo <= settled.min() and settled.max() <= hi
     assert hi - lo < 0.1 * 250.0                                # not 1e18
+
+
+def test_an_estimate_a_projection_moved_for_a_while_is_not_plotted_as_identified():
+    """A planar run's out-of-plane moment keeps its guess but for a while where the physical
+    projection moved it (base.Ixx 100 -> 120 -> 100): it is no identified parameter; one that
+    ends elsewhere than its guess is."""
+    t = np.linspace(0.0, 10.0, 101)
+    moved = np.where((t > 1.0) & (t < 3.0), 120.0, 100.0)
+    data = {"estimator.base.Ixx": moved, "estimator.base.Izz": 100.0 - 16.4 * (1 - np.exp(-t))}
+    assert plot.identified(data) == ["base.Izz"]

@@ -48,15 +48,16 @@ def sd_band(data: Dict[str, np.ndarray], name: str, prefix: str = "estimator."
 
 
 def identified(data: Dict[str, np.ndarray], prefix: str = "estimator.") -> List[str]:
-    """Estimate names whose estimate changes during the run (the identified parameters).
+    """Estimate names whose estimate ends elsewhere than it started (the identified parameters).
 
     The planar model identifies only ``m``, ``b[1]``, ``b[2]``, ``Izz`` of each body; the other
-    estimates keep their initial guess and are left out.
+    estimates end at their initial guess (a physical projection may move them for a while on
+    the way, as it did the out-of-plane moments) and are left out.
     """
     out = []
     for n in ESTIMATE_NAMES:
         col = data.get(prefix + n)
-        if col is not None and col.dtype.kind == "f" and len(col) and np.ptp(col) > 0.0:
+        if col is not None and col.dtype.kind == "f" and len(col) and col[-1] != col[0]:
             out.append(n)
     return out
 
