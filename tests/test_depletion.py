@@ -211,9 +211,11 @@ def test_plant_dynamics_with_the_updated_base_inertia_equal_pinocchio(robot):
         ref = pin.aba(model, data, q, v, np.concatenate([f_b, u.tau]))
         # the plant's accelerations are those of its control law (tau from them by inverse
         # dynamics): ABA recovers them to the rounding amplified by M's conditioning (up to
-        # 2e5 along the spatial run)
+        # 2e5 along the spatial run): within 100 eps cond(M) (measured along this run: up to
+        # 53 eps cond(M))
         M = pin.crba(model, data, q)
-        tol = max(1e-12, 1e-14 * np.linalg.cond(np.triu(M) + np.triu(M, 1).T))
+        cond = np.linalg.cond(np.triu(M) + np.triu(M, 1).T)
+        tol = max(1e-12, 100 * np.finfo(float).eps * cond)
         np.testing.assert_allclose(u.a, ref, rtol=0, atol=tol * np.abs(ref).max())
         # not vacuous: the dry base gives other accelerations
         dry = pin.aba(dry_model, dry_model.createData(), q, v, np.concatenate([f_b, u.tau]))

@@ -20,6 +20,7 @@
 #include <math.h>
 
 #include "dynamics_internal.h"
+#include "linalg.h"
 
 /* X^T Ia X, an articulated inertia moved to the parent's origin by the pure translation
  * X = [[1, -P], [0, 1]], P = [d]x, d the child's origin seen from the parent's:
@@ -125,56 +126,30 @@ static int base_solve6(double IA0[6][6], const double *pA0, const double *fb, do
 }
 
 /* the base's acceleration of the ABA: x (nr) from (S^T IA0 S) x = fb - S^T pA0 (S the rows
- * base_row; nr = 3 planar, 6 free-flyer): base_solve6 for the free-flyer, else by L D L^T
- * (no square roots; one division per pivot). IA0 6 x 6. Returns 0, or SR_DYN_EPD if IA0 is
- * not positive definite (a pivot <= 0; a NaN passes). */
+ * base_row; nr = 3 planar, 6 free-flyer): base_solve6 for the free-flyer, else by sr_cholesky.
+ * IA0 6 x 6. Returns 0, or SR_DYN_EPD if IA0 is not positive definite (a non-finite pivot
+ * passes: x is then NaN, so that NaN propagates). */
 static int base_solve(int planar, double IA0[6][6], const double *pA0, const double *fb,
                       double *x)
 {
-    const int nr = planar ? 3 : 6;
-    double L[6][6], dd[6], w[6];
-    int i, j, p;
+    double L[9];
+    int i, j, st;
     if (!planar)
         return base_solve6(IA0, pA0, fb, x);
-    for (i = 0; i < nr; i++) {
+    for (i = 0; i < 3; i++) {
         const int ri = base_row(planar, i);
         x[i] = fb[i] - pA0[ri];
-        for (j = 0; j <= i; j++)
-            L[i][j] = IA0[ri][base_row(planar, j)];
+        for (j = 0; j < 3; j++)
+            L[3 * i + j] = IA0[ri][base_row(planar, j)];
     }
-    for (j = 0; j < nr; j++) {
-        /* w_p = L_jp d_p;  d_j = A_jj - sum_p L_jp w_p;  L_ij = (A_ij - sum_p L_ip w_p) / d_j */
-        double dj = L[j][j], r;
-        for (p = 0; p < j; p++) {
-            w[p] = L[j][p] * dd[p];
-            dj -= L[j][p] * w[p];
-        }
-        if (dj <= 0.0)
-            return SR_DYN_EPD;
-        dd[j] = dj;
-        r = 1.0 / dj;
-        L[j][j] = r;                       /* the diagonal is not read again: 1 / d_j */
-        for (i = j + 1; i < nr; i++) {
-            double s = L[i][j];
-            for (p = 0; p < j; p++)
-                s -= L[i][p] * w[p];
-            L[i][j] = s * r;
-        }
+    st = sr_cholesky(L, 3);
+    if (st == 1)
+        return SR_DYN_EPD;
+    if (st == 2) {
+        x[0] = x[1] = x[2] = NAN;
+        return SR_DYN_OK;
     }
-    for (i = 0; i < nr; i++) {             /* L z = b */
-        double s = x[i];
-        for (p = 0; p < i; p++)
-            s -= L[i][p] * x[p];
-        x[i] = s;
-    }
-    for (i = 0; i < nr; i++)               /* D y = z */
-        x[i] *= L[i][i];
-    for (i = nr - 1; i >= 0; i--) {        /* L^T x = y */
-        double s = x[i];
-        for (p = i + 1; p < nr; p++)
-            s -= L[p][i] * x[p];
-        x[i] = s;
-    }
+    sr_cholesky_solve(L, 3, x, 1);
     return SR_DYN_OK;
 }
 

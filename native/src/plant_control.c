@@ -3,6 +3,7 @@
  * the thrust limited by the propellant left. */
 #include <math.h>
 
+#include "linalg.h"
 #include "plant_internal.h"
 #include "sr_math.h"
 #include "vec3.h"
@@ -29,130 +30,29 @@ static double bounded_law(double x, double K, double x_max, double u_max)
     return kx;
 }
 
-/* lower Cholesky factor L (k x k) of the SPD matrix S (k x k, row stride lds), with the
- * reciprocals of its diagonal on the diagonal (what cho_solve multiplies by; the upper
- * triangle is not written); 0 if a pivot is <= 0 (a NaN pivot passes, so that NaN
- * propagates) */
-static int cholesky(const double *S, int lds, int k, double *restrict L)
+/* L = the k x k leading block of S (row stride lds) factored by sr_cholesky (L L^T, lower
+ * triangle); sr_cholesky's status: 0, 1 not positive definite, 2 a non-finite pivot */
+static int factor(const double *S, int lds, int k, double *L)
 {
-    int i, j, p;
-    for (j = 0; j < k; j++) {
-        double d = S[j * lds + j], r;
-        for (p = 0; p < j; p++)
-            d -= L[j * k + p] * L[j * k + p];
-        if (d <= 0.0)
-            return 0;
-        d = sqrt(d);
-        r = 1.0 / d;
-        L[j * k + j] = r;
-        for (i = j + 1; i < k; i++) {
-            double s = S[i * lds + j];
-            for (p = 0; p < j; p++)
-                s -= L[i * k + p] * L[j * k + p];
-            L[i * k + j] = s * r;
-        }
-    }
-    return 1;
-}
-
-/* solve L L^T X = B in place of B (k x c, row-major), L from cholesky (multiplying by the
- * reciprocals 1 / L_ii cholesky left on the diagonal) */
-static void cho_solve(const double *restrict L, int k, double *restrict B, int c)
-{
-    int i, p, col;
-    for (i = 0; i < k; i++) {
-        double *bi = B + i * c;
-        const double r = L[i * k + i];
-        for (p = 0; p < i; p++) {
-            const double lip = L[i * k + p], *bp = B + p * c;
-            for (col = 0; col < c; col++)
-                bi[col] -= lip * bp[col];
-        }
-        for (col = 0; col < c; col++)
-            bi[col] *= r;
-    }
-    for (i = k - 1; i >= 0; i--) {
-        double *bi = B + i * c;
-        const double r = L[i * k + i];
-        for (p = i + 1; p < k; p++) {
-            const double lpi = L[p * k + i], *bp = B + p * c;
-            for (col = 0; col < c; col++)
-                bi[col] -= lpi * bp[col];
-        }
-        for (col = 0; col < c; col++)
-            bi[col] *= r;
-    }
-}
-
-/* eigen-decomposition of a symmetric k x k matrix (k <= 3), cyclic Jacobi:
- * S = U diag(lam) U^T, eigenvalues ascending */
-static void jacobi_eigh(const double *S, int k, double *lam, double *U)
-{
-    double a[9];
-    int i, j, p, r, sweep;
-    for (i = 0; i < k * k; i++)
-        a[i] = S[i];
+    int i, j;
     for (i = 0; i < k; i++)
         for (j = 0; j < k; j++)
-            U[i * k + j] = (i == j) ? 1.0 : 0.0;
-    for (sweep = 0; sweep < 50; sweep++) {
-        double off = 0.0;
-        for (i = 0; i < k; i++)
-            for (j = i + 1; j < k; j++)
-                off += a[i * k + j] * a[i * k + j];
-        if (off <= 1e-30 * (a[0] * a[0] + a[(k - 1) * k + k - 1] * a[(k - 1) * k + k - 1])
-            || off == 0.0)
-            break;
-        for (p = 0; p < k; p++) {
-            for (r = p + 1; r < k; r++) {
-                double th, t, c, s;
-                if (a[p * k + r] == 0.0)
-                    continue;
-                th = (a[r * k + r] - a[p * k + p]) / (2.0 * a[p * k + r]);
-                t = (th >= 0.0 ? 1.0 : -1.0) / (fabs(th) + sqrt(th * th + 1.0));
-                c = 1.0 / sqrt(t * t + 1.0);
-                s = t * c;
-                for (i = 0; i < k; i++) {            /* a <- a G (columns p, r) */
-                    const double aip = a[i * k + p], air = a[i * k + r];
-                    a[i * k + p] = c * aip - s * air;
-                    a[i * k + r] = s * aip + c * air;
-                }
-                for (i = 0; i < k; i++) {            /* a <- G^T a (rows p, r) */
-                    const double api = a[p * k + i], ari = a[r * k + i];
-                    a[p * k + i] = c * api - s * ari;
-                    a[r * k + i] = s * api + c * ari;
-                }
-                for (i = 0; i < k; i++) {
-                    const double uip = U[i * k + p], uir = U[i * k + r];
-                    U[i * k + p] = c * uip - s * uir;
-                    U[i * k + r] = s * uip + c * uir;
-                }
-            }
-        }
-    }
-    for (i = 0; i < k; i++)
-        lam[i] = a[i * k + i];
-    for (i = 1; i < k; i++) {                        /* insertion sort, columns of U along */
-        j = i;
-        while (j > 0 && lam[j - 1] > lam[j]) {
-            double tmp = lam[j - 1];
-            lam[j - 1] = lam[j];
-            lam[j] = tmp;
-            for (r = 0; r < k; r++) {
-                tmp = U[r * k + j - 1];
-                U[r * k + j - 1] = U[r * k + j];
-                U[r * k + j] = tmp;
-            }
-            j--;
-        }
-    }
+            L[i * k + j] = S[i * lds + j];
+    return sr_cholesky(L, k);
+}
+
+/* the plant's status of a failed factor(): singular (which) or non-finite */
+static int factor_status(int st, int singular)
+{
+    return st == 1 ? singular : SR_PLANT_ENONFINITE;
 }
 
 /* Thruster and arm commands at the normalised configuration q, velocity v:
  * M (nv x nv), nle (nv), hg (6) = [P, L_c] the rigid-body terms there; ct the controller;
  * t, ramp the excitation (its sines: d->trig where d->trig_t is t, else evaluated here into
  * d->trig). Writes FM[0..5] = [F, M] (inertial), gen (nv) = [f_b, tau] and
- * acc (nv) = dv/dt (M acc + nle = gen by construction). Returns 0 or SR_PLANT_ESINGULAR_*. */
+ * acc (nv) = dv/dt (M acc + nle = gen by construction). Returns 0, SR_PLANT_ESINGULAR_*, or
+ * SR_PLANT_ENONFINITE for a non-finite matrix on the way. */
 static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, const double *v,
                    const double *M, const double *nle, const double *hg,
                    const sr_plant_controller *ct,
@@ -164,7 +64,7 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
     double WiGt[SR_MAX_JOINTS * 3], GWG[9], Lg[9], zv[3], rhs[3], post[SR_MAX_JOINTS];
     double lev[3], lam[3], U[9], peak;
     const int w = n + 1;                            /* row length of sol: [X, y0] */
-    int i, j, p, k, plain;
+    int i, j, p, k, plain, st;
     for (i = 0; i < 3; i++) {
         FM[i] = bounded_law(hg[i], ct->K_F, ct->P_max, ct->F_max);          /* eq. 41 (P) */
         FM[3 + i] = bounded_law(hg[3 + i], ct->K_M, ct->L_max, ct->M_max);  /* eq. 40 (L_c) */
@@ -198,21 +98,21 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
         e[2] = kk * z;
     }
     /* base rows: M_bb dv_b + M_bm qdd = f_b - c_b  ->  dv_b = y0 - X qdd */
-    if (!cholesky(M, nv, nb, Lb))
-        return SR_PLANT_ESINGULAR_BASE;
+    if ((st = factor(M, nv, nb, Lb)) != 0)
+        return factor_status(st, SR_PLANT_ESINGULAR_BASE);
     for (i = 0; i < nb; i++) {
         for (j = 0; j < n; j++)
             sol[i * w + j] = M[i * nv + nb + j];
         sol[i * w + n] = gen[i] - nle[i];
     }
-    cho_solve(Lb, nb, sol, w);                      /* [X, y0] */
+    sr_cholesky_solve(Lb, nb, sol, w);              /* [X, y0] */
     /* attitude rows: G qdd = y0_rot - alpha_des with G = X_rot; W = M_mm weights the solve */
-    if (!cholesky(M + nb * nv + nb, nv, n, Lm))
-        return SR_PLANT_ESINGULAR_ARM;
+    if ((st = factor(M + nb * nv + nb, nv, n, Lm)) != 0)
+        return factor_status(st, SR_PLANT_ESINGULAR_ARM);
     for (i = 0; i < n; i++)
         for (j = 0; j < r; j++)
             WiGt[i * r + j] = sol[(r0 + j) * w + i];
-    cho_solve(Lm, n, WiGt, r);                      /* W^-1 G^T */
+    sr_cholesky_solve(Lm, n, WiGt, r);              /* W^-1 G^T */
     for (i = 0; i < r; i++)
         for (j = 0; j < r; j++) {
             double s = 0.0;
@@ -265,21 +165,23 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
         plain = (g00 > 0.0 && g00 * g11 - g01 * g01 > 0.0 && det > 0.0
                  && 4.0 * det >= 2.0 * 1.01 * DLS_RATIO * (tr * tr * tr));
         if (!plain) {
-            jacobi_eigh(GWG, 3, lam, U);
+            if (sr_eigh(GWG, 3, lam, U) != 0)
+                return SR_PLANT_ENONFINITE;
             plain = lam[0] / (lam[2] > 1e-300 ? lam[2] : 1e-300) >= 1.01 * DLS_RATIO;
         }
     } else {
         plain = GWG[0] / (GWG[0] > 1e-300 ? GWG[0] : 1e-300) >= 1.01 * DLS_RATIO;
     }
     if (plain) {                                    /* z = (GWG)^-1 rhs */
-        if (!cholesky(GWG, r, r, Lg))
-            return SR_PLANT_ESINGULAR_COUPLING;
+        if ((st = factor(GWG, r, r, Lg)) != 0)
+            return factor_status(st, SR_PLANT_ESINGULAR_COUPLING);
         for (j = 0; j < r; j++)
             zv[j] = rhs[j];
-        cho_solve(Lg, r, zv, 1);
+        sr_cholesky_solve(Lg, r, zv, 1);
     } else {
         double lmax;
-        jacobi_eigh(GWG, r, lam, U);
+        if (sr_eigh(GWG, r, lam, U) != 0)
+            return SR_PLANT_ENONFINITE;
         lmax = lam[r - 1] > 1e-300 ? lam[r - 1] : 1e-300;
         for (j = 0; j < r; j++)
             zv[j] = 0.0;
