@@ -175,7 +175,9 @@ def identify(time: np.ndarray, groups: Mapping[str, np.ndarray], robot: str,
     values = dict(parameters) if parameters is not None else estimator_parameters(robot)
     steps = np.diff(np.asarray(time, float))
     steps = steps[np.isfinite(steps) & (steps > 0)]
-    ident = identifier_of(robot, values, float(np.median(steps)) if len(steps) else 0.1)
+    # the nominal sample time: the median step to 12 digits (recorded times k h carry the
+    # round-off of their sums; the FMU takes its scenario's h exactly)
+    ident = identifier_of(robot, values, float(f"{np.median(steps):.12g}") if len(steps) else 0.1)
     outs = _output_vars(robot)
     # the FMU's outputs in the core's order (its table), taken in the variables' order
     where = {name: i for i, name in enumerate(output_names())}
