@@ -40,7 +40,8 @@ OUTPUT_KEYS = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "o
                "arm.qdd": "qdd", "thrust.F": "F", "thrust.M": "M", "thrust.J": "J",
                "thrust.H": "H", "system.P": "P", "system.L": "L", "arm.tau": "tau",
                "excite.att_ref": "att_ref", "excite.qd_ref": "qd_ref", "prop.P": "P_x",
-               "prop.L": "L_x"}
+               "prop.L": "L_x", "flex.P": "flex_P", "flex.L": "flex_L", "flex.q": "flex_q",
+               "flex.qd": "flex_qd", "slosh.x": "slosh_x", "slosh.v": "slosh_v"}
 #: the base's current truth: core ``base_now`` = [m, b (3), Ixx .. Iyz]
 TRUTH_BASE = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
@@ -105,9 +106,10 @@ def test_fmu_outputs_equal_core(spatial_fmus):
                  propellant=case["prop"])
     s = started_slave(spatial_fmus["plant"], _params(case), "plant")
     outs = s.names("output")
-    # 14 three-vectors (r v omega a alpha F M J H P L att_ref, prop.P prop.L), the DCM,
-    # q qd qdd tau qd_ref, excite.level, excite.rate, prop.m, the 10 truth.base parameters
-    assert len(outs) == 14 * 3 + 9 + 5 * sc.robot.n_joints + 1 + 1 + 1 + 10
+    # 16 three-vectors (r v omega a alpha F M J H P L att_ref, prop.P prop.L, flex.P flex.L),
+    # the DCM, q qd qdd tau qd_ref, excite.level, excite.rate, prop.m, the 10 truth.base
+    # parameters, the 4 deflections, rates, strokes and stroke rates of the flexible parts
+    assert len(outs) == 16 * 3 + 9 + 5 * sc.robot.n_joints + 1 + 1 + 1 + 10 + 4 * 4
     t = 0.0
     try:
         for dt in (None, 0.1005, 0.2995, 0.1):
