@@ -184,3 +184,26 @@ def matrix_pencil(y: np.ndarray, dt: float, order: int):
     f = np.abs(s.imag) / (2.0 * math.pi)
     i = np.argsort(f)
     return f[i], (-s.real / np.abs(s))[i]
+
+
+def with_tank(dry, m: float, r, R: float):
+    """The body (spacerobot.robots.RigidBody-like: mass, com, inertia_matrix()) of ``dry`` plus
+    a rigid sphere of ``m`` kg of radius ``R`` centred at ``r`` (base frame), as a pin.Inertia
+    sum: the base of the leaf model with the rigid part of the propellant."""
+    Y = pin.Inertia(dry.mass, np.array(dry.com, float), dry.inertia_matrix())
+    if m > 0.0:
+        Y = Y + pin.SE3(np.eye(3), np.asarray(r, float)).act(
+            pin.Inertia(m, np.zeros(3), 0.4 * m * R * R * np.eye(3)))
+    return _Body(Y)
+
+
+class _Body:
+    """A pin.Inertia seen as a body (mass, com, inertia_matrix(), inertia)."""
+
+    def __init__(self, Y: pin.Inertia):
+        v = body_vector(Y)
+        self.mass, self.com, self.inertia = float(v[0]), tuple(v[1:4]), tuple(v[4:])
+        self._I = Y.inertia.copy()
+
+    def inertia_matrix(self) -> np.ndarray:
+        return self._I.copy()
