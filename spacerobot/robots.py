@@ -820,10 +820,10 @@ REALISTIC_ESTIMATOR = (("ident.noise_profile", 1), ("noise.scale", 1.0), ("metho
 
 #: the motion of the sets with flexible parts (``wings``, ``slosh``, ``flexible``): the initial
 #: velocities of a spacecraft after capture (0.37 m/s, 0.06 rad/s) and an excitation of 0.1 rad
-#: (attitude and joints); the wings then bend by up to 1.4 degrees, the slosh masses move by up
-#: to 20 cm and the flexible parts carry up to 10 N s and 61 N m s over 300 s (the issue's
-#: sizes; docs/models.md). The paper's spatial rates (0.37 rad/s) would bend the wings by tens
-#: of degrees.
+#: (attitude and joints); over 300 s with the excitation on, the wings bend by up to 2.3
+#: degrees, the slosh masses move by up to 20 cm and the flexible parts carry up to 10 N s and
+#: 92 N m s (benchmarks/FLEXIBLE_PLANT.md; docs/models.md). The paper's spatial rates
+#: (0.37 rad/s) would bend the wings by tens of degrees.
 FLEXIBLE_MOTION = dict(v0=(0.3, -0.2, 0.1), omega0=(0.02, -0.03, 0.05),
                        excitation=Excitation(att_max=0.1, q_max=0.1))
 

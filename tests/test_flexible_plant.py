@@ -206,6 +206,8 @@ def test_the_arm_is_commanded_on_the_composite_rigid_body(robot):
     nq0, nb, n = (4, 3, sc.robot.n_joints) if sc.robot.planar else (7, 6, sc.robot.n_joints)
     rigid.set_state({**st, "q": st["q"][:nq0 + n], "v": st["v"][:nb + n]})
     a_flex, a_rigid = flex.controls().a, rigid.controls().a
+    print(robot, f"qdd {_rel(a_flex[nb:nb + n], a_rigid[nb:]):.1e}, base acceleration "
+                 f"{_rel(a_flex[:nb], a_rigid[:nb]):.1e} apart")
     assert np.abs(st["q"][nq0 + n:]).max() > 1e-4             # the parts are deflected
     assert _rel(a_flex[nb:nb + n], a_rigid[nb:]) <= 1e-10
     assert _rel(a_flex[:nb], a_rigid[:nb]) > 1e-6           # the base responds to the parts
