@@ -211,14 +211,8 @@ static void leaves_pass2(const sr_dyn_model *md, sr_dyn_data *d, const double *t
         const int k = md->n + 1 + j;
         const double m = md->m[k], *g = d->g[k], *J = d->J[k], *S6 = d->S[k], *cb = d->cb[k];
         const double *pA = d->pA[k];
-        const double I6[6][6] = {
-            {m, 0.0, 0.0, 0.0, g[2], -g[1]},
-            {0.0, m, 0.0, -g[2], 0.0, g[0]},
-            {0.0, 0.0, m, g[1], -g[0], 0.0},
-            {0.0, -g[2], g[1], J[0], J[1], J[2]},
-            {g[2], 0.0, -g[0], J[1], J[3], J[4]},
-            {-g[1], g[0], 0.0, J[2], J[4], J[5]}};
-        double *U = d->U[k], Ic[6], D = 0.0, u = tau[md->n + j], uc, rD;
+        double I6[6][6], *U = d->U[k], Ic[6], D = 0.0, u = tau[md->n + j], uc, rD;
+        rbi_full(m, g, J, I6);
         rbi_mul(m, g, J, S6, U);
         rbi_mul(m, g, J, cb, Ic);
         for (r = 0; r < 6; r++) {

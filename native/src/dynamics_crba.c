@@ -73,12 +73,7 @@ void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, co
         o[0] = on[0];
         o[1] = on[1];
         o[2] = on[2];
-        S[0] = o[1] * s[2] - o[2] * s[1];
-        S[1] = o[2] * s[0] - o[0] * s[2];
-        S[2] = o[0] * s[1] - o[1] * s[0];
-        S[3] = s[0];
-        S[4] = s[1];
-        S[5] = s[2];
+        joint_motion(o, s, S);
         /* velocity v_k = v_p + S qd; c_k = v_k x (S qd) = [w x sl + vl x sw; w x sw] qd */
         z = qd[k - 1];
         for (i = 0; i < 6; i++)
@@ -182,13 +177,8 @@ void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, co
             nle[i] = f[base_row(planar, i)];
     if (M != NULL) {
         /* [[m 1, -[g]x], [[g]x, J]] on the base's rows/columns */
-        const double I6[6][6] = {
-            {mt, 0.0, 0.0, 0.0, g[2], -g[1]},
-            {0.0, mt, 0.0, -g[2], 0.0, g[0]},
-            {0.0, 0.0, mt, g[1], -g[0], 0.0},
-            {0.0, -g[2], g[1], J[0], J[1], J[2]},
-            {g[2], 0.0, -g[0], J[1], J[3], J[4]},
-            {-g[1], g[0], 0.0, J[2], J[4], J[5]}};
+        double I6[6][6];
+        rbi_full(mt, g, J, I6);
         for (i = 0; i < nr; i++)
             for (j = 0; j < nr; j++)
                 M[i * nv + j] = I6[base_row(planar, i)][base_row(planar, j)];

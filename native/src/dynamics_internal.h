@@ -84,6 +84,34 @@ static inline void place(const sr_dyn_model *md, int k, double sn, double cs, co
     }
 }
 
+/* the motion S6 = [o x s; s] at the base origin of a rotation about the unit axis s through
+ * the point o */
+static inline void joint_motion(const double *o, const double *s, double *S6)
+{
+    S6[0] = o[1] * s[2] - o[2] * s[1];
+    S6[1] = o[2] * s[0] - o[0] * s[2];
+    S6[2] = o[0] * s[1] - o[1] * s[0];
+    S6[3] = s[0];
+    S6[4] = s[1];
+    S6[5] = s[2];
+}
+
+/* the rigid-body inertia [[m 1, -[g]x], [[g]x, J]] (J by its upper triangle) as a 6 x 6 matrix */
+static inline void rbi_full(double m, const double *g, const double *J, double I6[6][6])
+{
+    const double rows[6][6] = {
+        {m, 0.0, 0.0, 0.0, g[2], -g[1]},
+        {0.0, m, 0.0, -g[2], 0.0, g[0]},
+        {0.0, 0.0, m, g[1], -g[0], 0.0},
+        {0.0, -g[2], g[1], J[0], J[1], J[2]},
+        {g[2], 0.0, -g[0], J[1], J[3], J[4]},
+        {-g[1], g[0], 0.0, J[2], J[4], J[5]}};
+    int i, j;
+    for (i = 0; i < 6; i++)
+        for (j = 0; j < 6; j++)
+            I6[i][j] = rows[i][j];
+}
+
 /* the spatial inertia at the base origin S of a body whose first moment about the point o
  * is hh and inertia about o is io (upper triangle), base axes, mass m: the first moment
  * g = hh + m o and the inertia J = io + (2 o.hh + m |o|^2) 1 - (hh o^T + o hh^T + m o o^T)
@@ -127,12 +155,7 @@ static inline void leaf_place(const sr_dyn_model *md, int j, double ql, double s
             hh[i] = E[3 * i] * h[0] + E[3 * i + 1] * h[1] + E[3 * i + 2] * h[2];
         rot_sym(E, md->J[k], io);
         inertia_at(md->m[k], hh, io, o, g, J);
-        S6[0] = o[1] * a[2] - o[2] * a[1];
-        S6[1] = o[2] * a[0] - o[0] * a[2];
-        S6[2] = o[0] * a[1] - o[1] * a[0];
-        S6[3] = a[0];
-        S6[4] = a[1];
-        S6[5] = a[2];
+        joint_motion(o, a, S6);
     } else {                                        /* translated: first moment 0 about o */
         for (i = 0; i < 3; i++) {
             o[i] = md->p[k][i] + a[i] * ql;
