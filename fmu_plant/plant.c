@@ -2,8 +2,10 @@
  * The plant FMU's glue: maps the FMI variables (resources/spacerobot_variables.txt, generated
  * from spacerobot/interface.py) to the plant core (native/src/plant.h) and back. The robot
  * comes from resources/robot.txt, its home posture from resources/scenario.txt; the truth
- * (base, target), controller, excitation and propellant are parameters, set field by field
- * from the core's tables (a field's key is its FMI name, ".<i>" for an element of a vector).
+ * (base, target), controller, excitation, propellant and flexible parts are parameters, set
+ * field by field from the core's tables (a field's key is its FMI name, ".<i>" for an element
+ * of a vector; a struct of several records: ".<record>" and ".<record>.<i>"; the counts of
+ * the flexible parts flex.n, slosh.n are Integer parameters).
  *
  * Outputs change only in doStep (no direct feedthrough): the inputs ident.excite (level) and
  * ident.excite_rate (rate) are what is asked for from the next step on.
@@ -132,19 +134,41 @@ static void body_of(sr_instance *inst, const char *prefix, sr_body *b) {
     }
 }
 
-/* the fields of parameter struct `table` (plant.h's tables) from their variables into s */
-static void fields_of(sr_instance *inst, int table, void *s) {
+/* the fields of parameter struct `table` (plant.h's tables) from their variables into s: the
+ * struct, or record `rec` of a table of several (rec >= 0) */
+static void record_of(sr_instance *inst, int table, int rec, void *s) {
     char key[SR_VAR_KEY_MAX];
     for (int i = 0; i < sr_plant_field_count(table); ++i) {
         const char *fmi = sr_plant_field_fmi_name(table, i);
         const int size = sr_plant_field_size(table, i);
         double *at = (double *)((char *)s + sr_plant_field_offset(table, i));
         for (int e = 0; e < size; ++e) {
-            if (size == 1) sr_text_set(key, sizeof key, fmi);
-            else sr_text_format(key, sizeof key, "%s.%d", fmi, e);
+            if (rec < 0 && size == 1) sr_text_set(key, sizeof key, fmi);
+            else if (rec < 0) sr_text_format(key, sizeof key, "%s.%d", fmi, e);
+            else if (size == 1) sr_text_format(key, sizeof key, "%s.%d", fmi, rec);
+            else sr_text_format(key, sizeof key, "%s.%d.%d", fmi, rec, e);
             at[e] = real_of(inst, key);
         }
     }
+}
+
+static void fields_of(sr_instance *inst, int table, void *s) { record_of(inst, table, -1, s); }
+
+/* the Integer parameter with key `key` (0 if there is none: logged as an error) */
+static int integer_of(sr_instance *inst, const char *key) {
+    const int vr = sr_key_vr(inst, key, 1);
+    return vr >= 0 ? sr_integers(inst)[vr] : 0;
+}
+
+/* the flexible parts from their parameters into the model (sr_plant_model_set_leaves) */
+static int leaves_of(sr_instance *inst, sr_plant_model *core, char *err, size_t size) {
+    sr_plant_panel flex[SR_PLANT_MAX_FLEX];
+    sr_plant_slosh slosh[SR_PLANT_MAX_SLOSH];
+    for (int i = 0; i < SR_PLANT_MAX_FLEX; ++i) record_of(inst, SR_PLANT_TABLE_FLEX, i, &flex[i]);
+    for (int i = 0; i < SR_PLANT_MAX_SLOSH; ++i)
+        record_of(inst, SR_PLANT_TABLE_SLOSH, i, &slosh[i]);
+    return sr_plant_model_set_leaves(core, integer_of(inst, "flex.n"), flex,
+                                     integer_of(inst, "slosh.n"), slosh, err, size);
 }
 
 /* a new core (model and started data) from the parameters; 0 ok, else the reason in err */
@@ -173,7 +197,7 @@ static int build_core(sr_instance *inst, plant_glue *g, sr_plant_model **core,
         sr_text_set(err, size, "out of memory");
     } else if (sr_plant_model_init(*core, &g->robot, &base, &target, &ctrl, &ex, &prop, g->q_home,
                                    v0, w0, real_of(inst, "h"), err, size) == 0 &&
-               sr_plant_start(*core, *data) == 0) {
+               leaves_of(inst, *core, err, size) == 0 && sr_plant_start(*core, *data) == 0) {
         return 0;
     }
     free(*core);

@@ -64,7 +64,7 @@ MODEL_SOURCES = {"estimator": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "b
                  "plant": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c",
                            "dynamics.c", "dynamics_aba.c", "dynamics_crba.c", "dynamics_state.c",
                            "plant.c", "plant_params.c", "plant_step.c", "plant_control.c",
-                           "plant_excitation.c", "plant_propellant.c")}
+                           "plant_excitation.c", "plant_propellant.c", "plant_leaves.c")}
 
 #: flags of every compilation: C99, optimised (-O3: 9 % fewer instructions per estimator sample
 #: than -O2, the same results bit for bit: no reassociation without -ffast-math), no contraction

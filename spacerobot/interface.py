@@ -21,6 +21,7 @@ UNITS: Dict[str, Dict[str, int]] = {
     "s": {"s": 1},
     "1/s": {"s": -1},
     "1/s2": {"s": -2},
+    "Hz": {"s": -1},
     "m": {"m": 1},
     "m/s": {"m": 1, "s": -1},
     "m/s2": {"m": 1, "s": -2},
@@ -145,19 +146,34 @@ def body_param_vars(prefix: str, body, causality: str, what: str, key_group: str
     return out
 
 
-def _table_vars(table: str, record) -> List[Var]:
+def _table_vars(table: str, *records) -> List[Var]:
     """The parameters of one of the C plant's parameter structs (``plant.h``'s tables, read
     from the library: FMI names, units, descriptions, order), started at the values of the
-    Python record (its attributes named as the fields); key: the FMI name (the glue's)."""
+    Python record (its attributes named as the fields); key: the FMI name (the glue's). A
+    struct of several records (the panels', the slosh modes'): field by field, ``<fmi>[i]``
+    and ``<fmi>[i,k]`` for record i (1-based), keys ``(fmi, i - 1[, k - 1])``."""
     from .core.tables import fields
     out: List[Var] = []
+    label = {"flex": "panel", "slosh": "slosh mode"}.get(table, table)
     for f in fields(table):
-        value = getattr(record, f.name)
-        if f.size == 1:
-            out.append(Var(f.fmi, "parameter", "fixed", "Real", f.unit, f.description,
-                           float(value), (f.fmi,)))
-        else:
-            out += _vec(f.fmi, f.fmi, f.unit, f.description, "parameter", "fixed", value)
+        if len(records) == 1:
+            value = getattr(records[0], f.name)
+            if f.size == 1:
+                out.append(Var(f.fmi, "parameter", "fixed", "Real", f.unit, f.description,
+                               float(value), (f.fmi,)))
+            else:
+                out += _vec(f.fmi, f.fmi, f.unit, f.description, "parameter", "fixed", value)
+            continue
+        for i, rec in enumerate(records):
+            value = getattr(rec, f.name)
+            if f.size == 1:
+                out.append(Var(f"{f.fmi}[{i + 1}]", "parameter", "fixed", "Real", f.unit,
+                               f"{f.description}, {label} {i + 1}", float(value),
+                               (f.fmi, i)))
+            else:
+                out += [Var(f"{f.fmi}[{i + 1},{k + 1}]", "parameter", "fixed", "Real", f.unit,
+                            f"{f.description}, {'xyz'[k]} component, {label} {i + 1}",
+                            float(value[k]), (f.fmi, i, k)) for k in range(f.size)]
     return out
 
 
@@ -185,6 +201,41 @@ def plant_vars(robot: Robot, sc: Scenario) -> List[Var]:
     v.append(Var("h", "parameter", "fixed", "Real", "s", "Internal RK4 step", sc.h, ("h",)))
     v += plant_excitation_vars(sc)
     v += propellant_vars(sc)
+    v += flexible_vars(sc)
+    return v
+
+
+def flexible_vars(sc: Scenario) -> List[Var]:
+    """The plant's flexible parts (docs/models.md, "Flexible appendages and slosh"): the
+    counts ``flex.n``, ``slosh.n`` (Integer; 0 = none, the rigid plant), the records of the
+    panels ``flex.*[i]`` and of the slosh modes ``slosh.*[i]`` (all of the core's records,
+    :func:`spacerobot.core.tables.records`, started at the scenario's), and the outputs: the
+    flexible parts' momentum ``flex.P``, ``flex.L``, the deflections and strokes."""
+    from .core.tables import records
+    nf, ns = records("flex"), records("slosh")
+    v = [Var("flex.n", "parameter", "fixed", "Integer", None,
+             f"Number of hinged panels on the base: the first flex.n of the {nf} records "
+             f"flex.*[i] (0 = none: the rigid plant, bit for bit)", int(sc.flex.n), ("flex.n",))]
+    v += _table_vars("flex", *sc.flex.records(nf))
+    v.append(Var("slosh.n", "parameter", "fixed", "Integer", None,
+                 f"Number of propellant slosh modes: the first slosh.n of the {ns} records "
+                 f"slosh.*[i] (0 = none)", int(sc.slosh.n), ("slosh.n",)))
+    v += _table_vars("slosh", *sc.slosh.records(ns))
+    v += _vec("flex.P", "flex_P", "N.s", "Linear momentum of the flexible parts (panels and "
+              "slosh masses): the system's minus that of the composite rigid body (base + "
+              "panels at rest + slosh masses at equilibrium) at the same base and arm motion, "
+              "inertial frame (truth)", "output")
+    v += _vec("flex.L", "flex_L", "N.m.s", "Angular momentum of the flexible parts (likewise), "
+              "about the inertial origin, inertial frame (truth)", "output")
+    for name, key, unit, what, count in (
+            ("flex.q", "flex_q", "rad", "Deflection (truth; 0 past flex.n), panel", nf),
+            ("flex.qd", "flex_qd", "rad/s", "Deflection rate (truth; 0 past flex.n), panel", nf),
+            ("slosh.x", "slosh_x", "m", "Stroke from the equilibrium point (truth; 0 past "
+                                        "slosh.n), slosh mode", ns),
+            ("slosh.v", "slosh_v", "m/s", "Stroke rate (truth; 0 past slosh.n), slosh mode",
+             ns)):
+        v += [Var(f"{name}[{i + 1}]", "output", "continuous", "Real", unit, f"{what} {i + 1}",
+                  None, (key, i)) for i in range(count)]
     return v
 
 
@@ -201,7 +252,9 @@ def propellant_vars(sc: Scenario) -> List[Var]:
               "away by the expelled propellant since t = 0, inertial frame; "
               "system.L + prop.L - system.L(0) = thrust.H", "output")
     now = body_param_vars("truth.base", RigidBody(1.0, (0.0, 0.0, 0.0), (1.0,) * 3 + (0.0,) * 3),
-                          "output", "Base now (truth: dry base + propellant left)", "base_now")
+                          "output", "Base now (truth: dry base + propellant left; with "
+                          "flexible parts the composite rigid base: + panels at rest + slosh "
+                          "masses at equilibrium)", "base_now")
     v += [Var(x.name, "output", "continuous", "Real", x.unit, x.description, None,
               ("base_now", k)) for k, x in enumerate(now)]
     return v
@@ -332,13 +385,15 @@ def _sensor_magnitudes() -> Tuple[str, ...]:
 #: read from the native core when first used (module attributes, PEP 562; importing this
 #: module loads no library): STATUS, the status codes' texts of ``diag.status``;
 #: PROFILE_MAGNITUDES, the estimator FMU's ``noise.*`` parameters besides ``noise.scale``;
-#: SENSOR_MAGNITUDES, the sensors FMU's; CONTROLLER_DOC, EXCITATION_DOC, PROPELLANT_DOC, the
+#: SENSOR_MAGNITUDES, the sensors FMU's; CONTROLLER_DOC, EXCITATION_DOC, PROPELLANT_DOC, FLEX_DOC, SLOSH_DOC, the
 #: plant's parameter tables' ``{field: (unit, description)}``
 _FROM_CORE = {"STATUS": _status, "PROFILE_MAGNITUDES": _profile_magnitudes,
               "SENSOR_MAGNITUDES": _sensor_magnitudes,
               "CONTROLLER_DOC": lambda: _table_doc("controller"),
               "EXCITATION_DOC": lambda: _table_doc("excitation"),
-              "PROPELLANT_DOC": lambda: _table_doc("propellant")}
+              "PROPELLANT_DOC": lambda: _table_doc("propellant"),
+              "FLEX_DOC": lambda: _table_doc("flex"),
+              "SLOSH_DOC": lambda: _table_doc("slosh")}
 
 
 def __getattr__(name: str):

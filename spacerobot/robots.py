@@ -523,6 +523,176 @@ class Propellant:
 
 
 @dataclass(frozen=True)
+class Panel:
+    """A hinged panel on the base (a solar wing, a radiator): a rigid body on a hinge with a
+    torsional spring and damper, one flexible mode (docs/models.md, "Flexible appendages and
+    slosh"). Geometry at rest (deflection 0) in the base frame B (origin S).
+
+    Attributes
+    ----------
+    m : float           mass [kg]
+    com : (3,)          centre of mass at rest [m]
+    Ixx ... Iyz : float inertia about the centre of mass, base axes at rest [kg.m2]
+    hinge : (3,)        a point of the hinge axis [m]
+    axis : (3,)         hinge axis (normalised by the plant; a planar robot's: along z)
+    f : float           cantilevered frequency (base held) [Hz]: k = I_h (2 pi f)^2, I_h the
+                        inertia about the hinge axis
+    zeta : float        damping ratio: c = 2 zeta (2 pi f) I_h
+    q0, qd0 : float     initial deflection [rad] and rate [rad/s]
+
+    The fields, their units and the ranges the plant accepts are the C plant's (``plant.h``,
+    ``SR_PLANT_FLEX_FIELDS``; :func:`spacerobot.core.plant.fields`), in its order.
+    """
+
+    m: float
+    com: Vec3
+    Ixx: float
+    Iyy: float
+    Izz: float
+    Ixy: float
+    Ixz: float
+    Iyz: float
+    hinge: Vec3
+    axis: Vec3
+    f: float
+    zeta: float = 0.005
+    q0: float = 0.0
+    qd0: float = 0.0
+
+    def body(self) -> RigidBody:
+        """The panel at rest as a :class:`RigidBody` in base axes."""
+        return RigidBody(self.m, self.com, (self.Ixx, self.Iyy, self.Izz, self.Ixy, self.Ixz,
+                                            self.Iyz))
+
+
+def plate_panel(mass: float, hinge: Sequence[float], outward: Sequence[float],
+                axis: Sequence[float], length: float, width: float, thickness: float = 0.03,
+                f: float = 0.5, zeta: float = 0.005) -> Panel:
+    """A uniform plate hinged along ``axis`` through ``hinge``, reaching ``length`` [m] from the
+    hinge along ``outward`` (perpendicular to ``axis``), ``width`` [m] along the hinge, of
+    ``thickness`` [m]: its centre of mass ``hinge + outward length / 2`` and its inertia
+    ``m/12 (w^2 + t^2, L^2 + t^2, L^2 + w^2)`` about (outward, axis, their normal), turned into
+    base axes."""
+    u, a = (np.asarray(x, float) / np.linalg.norm(x) for x in (outward, axis))
+    R = np.column_stack([u, a, np.cross(u, a)])
+    k = mass / 12.0
+    I = R @ np.diag([k * (width ** 2 + thickness ** 2), k * (length ** 2 + thickness ** 2),
+                     k * (length ** 2 + width ** 2)]) @ R.T
+    com = np.asarray(hinge, float) + u * (length / 2.0)
+    clean = lambda x: float(x) + 0.0                                      # noqa: E731 (no -0.0)
+    return Panel(float(mass), tuple(clean(x) for x in com),
+                 *(clean(I[i, j]) for i, j in ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))),
+                 hinge=tuple(clean(x) for x in hinge), axis=tuple(clean(x) for x in a),
+                 f=float(f), zeta=float(zeta))
+
+
+@dataclass(frozen=True)
+class SloshMode:
+    """One lateral propellant slosh mode: the spring-mass equivalent (a point mass on a
+    prismatic joint with a spring and damper; docs/models.md, "Flexible appendages and slosh").
+
+    Attributes
+    ----------
+    m : float        slosh mass [kg] (with a propellant model part of the propellant)
+    r : (3,)         equilibrium point, base frame [m]
+    axis : (3,)      direction of motion (normalised by the plant; a planar robot's: in x-y)
+    f : float        frequency with the base held [Hz]: k = m (2 pi f)^2
+    zeta : float     damping ratio: c = 2 zeta (2 pi f) m
+    x0, v0 : float   initial stroke [m] and rate [m/s]
+
+    The fields, their units and the ranges the plant accepts are the C plant's (``plant.h``,
+    ``SR_PLANT_SLOSH_FIELDS``), in its order.
+    """
+
+    m: float
+    r: Vec3
+    axis: Vec3
+    f: float
+    zeta: float = 0.01
+    x0: float = 0.0
+    v0: float = 0.0
+
+
+#: the panels of the spatial robot's defaults: the issue's two solar wings (50 kg plates of
+#: 4 m x 1.6 m hinged on the base's +-x faces along y, 0.5 Hz cantilevered, 0.5 % damping),
+#: then two 10 kg radiators (1 m x 0.6 m on the -y face, hinged along z, 1.5 Hz, 1 %)
+SPATIAL_PANELS: Tuple[Panel, ...] = (
+    plate_panel(50.0, (0.5, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), 4.0, 1.6),
+    plate_panel(50.0, (-0.5, 0.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 1.0, 0.0), 4.0, 1.6),
+    plate_panel(10.0, (0.3, -0.5, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0), 1.0, 0.6,
+                f=1.5, zeta=0.01),
+    plate_panel(10.0, (-0.3, -0.5, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0), 1.0, 0.6,
+                f=1.5, zeta=0.01),
+)
+#: the planar robot's: the same in its plane (hinged along z on the +-y faces, the wings
+#: standing in the y-z plane), the radiators on the -x face
+PLANAR_PANELS: Tuple[Panel, ...] = (
+    plate_panel(50.0, (0.0, 0.5, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0), 4.0, 1.6),
+    plate_panel(50.0, (0.0, -0.5, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0), 4.0, 1.6),
+    plate_panel(10.0, (-0.5, 0.3, 0.0), (-1.0, 0.0, 0.0), (0.0, 0.0, 1.0), 1.0, 0.6,
+                f=1.5, zeta=0.01),
+    plate_panel(10.0, (-0.5, -0.3, 0.0), (-1.0, 0.0, 0.0), (0.0, 0.0, 1.0), 1.0, 0.6,
+                f=1.5, zeta=0.01),
+)
+#: the slosh modes of the spatial robot's defaults: the issue's 2 x 25 kg in one tank (along x
+#: at 0.30 Hz, along y at 0.35 Hz, 1 % damping), then 2 x 10 kg in a second tank (0.40 and
+#: 0.45 Hz)
+SPATIAL_SLOSH: Tuple[SloshMode, ...] = (
+    SloshMode(25.0, (-0.2, 0.1, -0.4), (1.0, 0.0, 0.0), 0.30, 0.01),
+    SloshMode(25.0, (-0.2, 0.1, -0.4), (0.0, 1.0, 0.0), 0.35, 0.01),
+    SloshMode(10.0, (0.25, -0.15, -0.35), (1.0, 0.0, 0.0), 0.40, 0.01),
+    SloshMode(10.0, (0.25, -0.15, -0.35), (0.0, 1.0, 0.0), 0.45, 0.01),
+)
+#: the planar robot's: the same in its plane (z = 0)
+PLANAR_SLOSH: Tuple[SloshMode, ...] = tuple(replace(s, r=(s.r[0], s.r[1], 0.0))
+                                            for s in SPATIAL_SLOSH)
+
+
+@dataclass(frozen=True)
+class Appendages:
+    """The base's flexible appendages: the first ``n`` of ``panels`` are on the spacecraft
+    (``n = 0``, the default: none; the plant is then the rigid one bit for bit). The FMU has a
+    fixed number of panel records (the C core's, 4): ``panels`` gives them (fewer are filled up
+    with the defaults)."""
+
+    n: int = 0
+    panels: Tuple[Panel, ...] = SPATIAL_PANELS
+
+    @property
+    def active(self) -> Tuple[Panel, ...]:
+        return tuple(self.panels[:self.n])
+
+    def records(self, count: int) -> Tuple[Panel, ...]:
+        """``count`` records (the FMU's, :func:`spacerobot.core.tables.records`): ``panels``
+        filled up with the defaults; ``ValueError`` if there are more."""
+        return _fill("flex", self.panels, SPATIAL_PANELS, count)
+
+
+@dataclass(frozen=True)
+class Slosh:
+    """The propellant's slosh modes: the first ``n`` of ``modes`` move (``n = 0``, the default:
+    none). With a propellant model (``Propellant.m0 > 0``) their masses are part of the
+    propellant (docs/models.md)."""
+
+    n: int = 0
+    modes: Tuple[SloshMode, ...] = SPATIAL_SLOSH
+
+    @property
+    def active(self) -> Tuple[SloshMode, ...]:
+        return tuple(self.modes[:self.n])
+
+    def records(self, count: int) -> Tuple[SloshMode, ...]:
+        """``count`` records (the FMU's): ``modes`` filled up with the defaults."""
+        return _fill("slosh", self.modes, SPATIAL_SLOSH, count)
+
+
+def _fill(what: str, given: Sequence, defaults: Sequence, count: int) -> tuple:
+    if len(given) > count:
+        raise ValueError(f"{what}: at most {count} records, got {len(given)}")
+    return tuple(given) + tuple(defaults[len(given):count])
+
+
+@dataclass(frozen=True)
 class Guess:
     """Initial guesses and initial covariances of the estimator (paper §V defaults)."""
 
@@ -556,6 +726,8 @@ class Scenario:
     sample_time: float = 0.1
     stop_time: float = 30.0
     propellant: Propellant = field(default_factory=Propellant)
+    flex: Appendages = field(default_factory=Appendages)
+    slosh: Slosh = field(default_factory=Slosh)
 
 
 def scenario_to_dict(sc: Scenario) -> dict:
@@ -572,11 +744,29 @@ def scenario_from_dict(d: dict) -> Scenario:
                     guess=Guess(_body(g["base"]), _body(g["target"]), g["P0_mu"], g["P0_theta"]),
                     h=d["h"], sample_time=d["sample_time"], stop_time=d["stop_time"],
                     excitation=Excitation(**d.get("excitation", {})),
-                    propellant=_propellant(d.get("propellant", {})))
+                    propellant=_propellant(d.get("propellant", {})),
+                    flex=_appendages(d.get("flex")), slosh=_slosh(d.get("slosh")))
 
 
 def _propellant(d: dict) -> Propellant:
     return Propellant(**{**d, **({"r": tuple(d["r"])} if "r" in d else {})})
+
+
+def _tuples(d: dict) -> dict:
+    """A record's dict with its lists (3-vectors) as tuples."""
+    return {k: tuple(v) if isinstance(v, list) else v for k, v in d.items()}
+
+
+def _appendages(d: Optional[dict]) -> Appendages:
+    if d is None:
+        return Appendages()
+    return Appendages(int(d["n"]), tuple(Panel(**_tuples(p)) for p in d["panels"]))
+
+
+def _slosh(d: Optional[dict]) -> Slosh:
+    if d is None:
+        return Slosh()
+    return Slosh(int(d["n"]), tuple(SloshMode(**_tuples(m)) for m in d["modes"]))
 
 
 #: An excitation with zero amplitudes: whatever level is requested, the plant moves as the
@@ -600,6 +790,15 @@ class ParameterSet:
     #: ``noise.scale`` of the sensors FMU (docs/sensors.md); None: not a sensors set (the set
     #: belongs to the plant + estimator system only)
     noise: float | None = None
+    #: the number of the robot's default panels (``flex.n``) and slosh modes (``slosh.n``) on
+    #: the spacecraft (docs/models.md, "Flexible appendages and slosh")
+    flex: int = 0
+    slosh: int = 0
+    #: the initial velocities and the excitation's bounds, where the set has its own (None:
+    #: the scenario's)
+    v0: Optional[Vec3] = None
+    omega0: Optional[Vec3] = None
+    excitation: Optional[Excitation] = None
 
 
 #: the ``depletion`` set's propellant: 80 kg of hydrazine (about 1000 kg/m3: a 0.27 m sphere)
@@ -618,6 +817,15 @@ DEPLETION_ESTIMATOR = (("ident.excite_mode", 2), ("lambda", 0.98), ("ident.corr_
 REALISTIC_ESTIMATOR = (("ident.noise_profile", 1), ("noise.scale", 1.0), ("method", 2),
                        ("accel_source", 2))
 
+
+#: the motion of the sets with flexible parts (``wings``, ``slosh``, ``flexible``): the initial
+#: velocities of a spacecraft after capture (0.37 m/s, 0.06 rad/s) and an excitation of 0.1 rad
+#: (attitude and joints); over 300 s with the excitation on, the wings bend by up to 2.3
+#: degrees, the slosh masses move by up to 20 cm and the flexible parts carry up to 10 N s and
+#: 92 N m s (benchmarks/FLEXIBLE_PLANT.md; docs/models.md). The paper's spatial rates
+#: (0.37 rad/s) would bend the wings by tens of degrees.
+FLEXIBLE_MOTION = dict(v0=(0.3, -0.2, 0.1), omega0=(0.02, -0.03, 0.05),
+                       excitation=Excitation(att_max=0.1, q_max=0.1))
 
 #: The parameter sets of each robot's SSP (one ``.ssv`` each). The paper's scenarios keep the
 #: excitation off (:data:`NO_EXCITATION`), so they reproduce the paper's figures with the
@@ -658,6 +866,22 @@ PARAMETER_SETS: Dict[str, Dict[str, ParameterSet]] = {
                                                    "noise; the estimator's noise profile "
                                                    "(force method, differenced accelerations)",
                                   estimator=REALISTIC_ESTIMATOR, noise=1.0),
+        "wings": ParameterSet("default", True, "the paper's spatial robot and target with two "
+                                               "50 kg solar wings (4 m x 1.6 m, hinged, 0.5 Hz "
+                                               "cantilevered, 0.5 % damping); excitation on "
+                                               "request; truth.base.* is the composite rigid "
+                                               "base", flex=2, **FLEXIBLE_MOTION),
+        "slosh": ParameterSet("default", True, "the paper's spatial robot and target with 2 x "
+                                               "25 kg of sloshing propellant (one tank, along x "
+                                               "at 0.30 Hz, along y at 0.35 Hz, 1 % damping); "
+                                               "excitation on request; truth.base.* is the "
+                                               "composite rigid base", slosh=2,
+                              **FLEXIBLE_MOTION),
+        "flexible": ParameterSet("default", True, "the paper's spatial robot and target with "
+                                                  "the two solar wings of 'wings' and the "
+                                                  "slosh of 'slosh'; excitation on request; "
+                                                  "truth.base.* is the composite rigid base",
+                                 flex=2, slosh=2, **FLEXIBLE_MOTION),
     },
 }
 
@@ -671,9 +895,12 @@ def parameter_set_scenario(robot: str, name: str) -> Scenario:
                          f"choose from {sorted(sets)}")
     ps = sets[name]
     sc = scenario(robot, ps.target)
+    excitation = ps.excitation or sc.excitation
     return replace(sc, name=f"{robot_label(robot)}-{name}",
-                   excitation=sc.excitation if ps.excited else NO_EXCITATION,
-                   propellant=ps.propellant, stop_time=ps.stop_time or sc.stop_time)
+                   excitation=excitation if ps.excited else NO_EXCITATION,
+                   v0=ps.v0 or sc.v0, omega0=ps.omega0 or sc.omega0,
+                   propellant=ps.propellant, stop_time=ps.stop_time or sc.stop_time,
+                   flex=replace(sc.flex, n=ps.flex), slosh=replace(sc.slosh, n=ps.slosh))
 
 
 def excitation_within_limits(robot: Robot, excitation: Excitation = Excitation()) -> Excitation:
@@ -707,9 +934,11 @@ def scenario(robot: str = "planar", target: str | None = None, **overrides) -> S
         raise ValueError(f"unknown target {target!r} for robot {robot_label(robot)!r}; "
                          f"choose from {sorted(TARGETS[kind])}")
     if kind == "planar":
-        base = dict(v0=(1.0, 2.0, 0.0), omega0=(0.0, 0.0, 0.1), stop_time=30.0)
+        base = dict(v0=(1.0, 2.0, 0.0), omega0=(0.0, 0.0, 0.1), stop_time=30.0,
+                    flex=Appendages(0, PLANAR_PANELS), slosh=Slosh(0, PLANAR_SLOSH))
     else:
-        base = dict(v0=(10.0, 20.0, 30.0), omega0=(0.1, 0.2, 0.3), stop_time=60.0)
+        base = dict(v0=(10.0, 20.0, 30.0), omega0=(0.1, 0.2, 0.3), stop_time=60.0,
+                    flex=Appendages(0, SPATIAL_PANELS), slosh=Slosh(0, SPATIAL_SLOSH))
     base.update(name=f"{robot_label(robot)}-{target}", robot=rb, target=TARGETS[kind][target],
                 guess=PAPER_GUESS[kind])
     if robot not in BUILTIN_ROBOTS:

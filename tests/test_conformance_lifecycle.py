@@ -106,6 +106,12 @@ def test_plant_lifecycle_and_outputs_equal_the_core(robot_fmus):
     for k, nm in enumerate(("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz",
                             "Iyz")):
         expected[f"truth.base.{nm}"] = out["base_now"][k]
+    # no flexible parts: their momentum, deflections and strokes 0
+    for prefix, g, count in (("flex.P", "flex_P", 3), ("flex.L", "flex_L", 3),
+                             ("flex.q", "flex_q", 4), ("flex.qd", "flex_qd", 4),
+                             ("slosh.x", "slosh_x", 4), ("slosh.v", "slosh_v", 4)):
+        for i in range(count):
+            expected[f"{prefix}[{i + 1}]"] = out[g][i]
     assert set(expected) == set(fmu_out)
     assert_same({k: fmu_out[k] for k in expected}, {k: float(v) for k, v in expected.items()},
                 "FMU vs core")

@@ -107,7 +107,7 @@ def test_fmpy_validate_detects_injected_defects(planar_fmus, tmp_path, edit, exp
 
 # -- descriptions and units -----------------------------------------------------------------------
 _PRIMITIVE = {"m": {"m": 1}, "s": {"s": 1}, "kg": {"kg": 1}, "rad": {"rad": 1},
-              "N": {"kg": 1, "m": 1, "s": -2}}
+              "N": {"kg": 1, "m": 1, "s": -2}, "Hz": {"s": -1}}
 
 
 def si_exponents(unit: str) -> dict:
@@ -159,6 +159,12 @@ CONTRACT_UNITS = [
     (r"(sd\.|crb\.|guess\.|truth\.)?(base|target)\.I(xx|yy|zz|xy|xz|yz)", "kg.m2"),
     (r"prop\.m0?", "kg"), (r"prop\.Isp", "s"), (r"prop\.(R|arm|r\[\d\])", "m"),
     (r"prop\.P\[\d\]", "N.s"), (r"prop\.L\[\d\]", "N.m.s"),
+    # the flexible parts: panels (flex) and slosh modes (slosh), record i
+    (r"(flex|slosh)\.m\[\d\]", "kg"), (r"(flex\.(com|hinge)|slosh\.r)\[\d,\d\]", "m"),
+    (r"flex\.I(xx|yy|zz|xy|xz|yz)\[\d\]", "kg.m2"), (r"(flex|slosh)\.axis\[\d,\d\]", "1"),
+    (r"(flex|slosh)\.f\[\d\]", "Hz"), (r"(flex|slosh)\.zeta\[\d\]", "1"),
+    (r"flex\.q0?\[\d\]", "rad"), (r"flex\.qd0?\[\d\]", "rad/s"), (r"slosh\.x0?\[\d\]", "m"),
+    (r"slosh\.v0?\[\d\]", "m/s"), (r"flex\.P\[\d\]", "N.s"), (r"flex\.L\[\d\]", "N.m.s"),
     (r"base\.v0\[\d\]", "m/s"), (r"base\.omega0\[\d\]", "rad/s"),
     (r"F_max", "N"), (r"M_max", "N.m"), (r"P_max", "N.s"), (r"L_max", "N.m.s"),
     (r"K_[FMD]|K_Dn", "1/s"), (r"K_Pn?", "1/s2"), (r"qdd_max", "rad/s2"), (r"h", "s"),
@@ -343,6 +349,11 @@ def test_docs_capability_table_matches_the_model_description(planar_fmus, spatia
 
 # -- generator of the docs tables (run this file as a script) -------------------------------------
 def _group(name: str) -> str:
+    # the records of the panels and slosh modes (flex.m[i], flex.com[i,k], flex.q[i], ...)
+    m = re.fullmatch(r"((?:flex|slosh)\.\w+)\[(\d+)(,\d+)?\]", name)
+    if m and m.group(1) not in ("flex.P", "flex.L"):
+        head = re.sub(r"\.(Ixx|Iyy|Izz|Ixy|Ixz|Iyz)$", ".{Ixx,Iyy,Izz,Ixy,Ixz,Iyz}", m.group(1))
+        return f"{head}[1..4{',1..3' if m.group(3) else ''}]"
     name = re.sub(r"\[\d+,\d+\]$", "[1..3,1..3]", name)
     name = re.sub(r"^((?:true\.)?arm\.\w+|excite\.qd_ref)\[\d+\]$", r"\1[1..n]", name)
     name = re.sub(r"\[\d\]$", "[1..3]", name)
@@ -350,6 +361,7 @@ def _group(name: str) -> str:
 
 
 def _short(desc: str) -> str:
+    desc = re.sub(r", (panel|slosh mode) \d+$", "", desc)
     desc = re.sub(r", (x|y|z) component$", "", desc)
     desc = re.sub(r", joint \d+$", "", desc)
     desc = re.sub(r", element \(\d,\d\)$", "", desc)

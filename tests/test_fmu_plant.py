@@ -24,7 +24,9 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from conftest import assert_initialisation_fails, started_slave
 from spacerobot.plant import Plant
-from spacerobot.robots import Propellant, RigidBody, inertia_matrix, scenario
+from spacerobot.interface import plant_vars
+from spacerobot.robots import (Propellant, RigidBody, inertia_matrix, parameter_set_scenario,
+                               scenario)
 
 FMI_DISCARD, FMI_WARNING = 2, 1
 
@@ -40,7 +42,8 @@ OUTPUT_KEYS = {"base.r": "r_S", "base.v": "v_S", "base.A": "A", "base.omega": "o
                "arm.qdd": "qdd", "thrust.F": "F", "thrust.M": "M", "thrust.J": "J",
                "thrust.H": "H", "system.P": "P", "system.L": "L", "arm.tau": "tau",
                "excite.att_ref": "att_ref", "excite.qd_ref": "qd_ref", "prop.P": "P_x",
-               "prop.L": "L_x"}
+               "prop.L": "L_x", "flex.P": "flex_P", "flex.L": "flex_L", "flex.q": "flex_q",
+               "flex.qd": "flex_qd", "slosh.x": "slosh_x", "slosh.v": "slosh_v"}
 #: the base's current truth: core ``base_now`` = [m, b (3), Ixx .. Iyz]
 TRUTH_BASE = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
@@ -105,9 +108,10 @@ def test_fmu_outputs_equal_core(spatial_fmus):
                  propellant=case["prop"])
     s = started_slave(spatial_fmus["plant"], _params(case), "plant")
     outs = s.names("output")
-    # 14 three-vectors (r v omega a alpha F M J H P L att_ref, prop.P prop.L), the DCM,
-    # q qd qdd tau qd_ref, excite.level, excite.rate, prop.m, the 10 truth.base parameters
-    assert len(outs) == 14 * 3 + 9 + 5 * sc.robot.n_joints + 1 + 1 + 1 + 10
+    # 16 three-vectors (r v omega a alpha F M J H P L att_ref, prop.P prop.L, flex.P flex.L),
+    # the DCM, q qd qdd tau qd_ref, excite.level, excite.rate, prop.m, the 10 truth.base
+    # parameters, the 4 deflections, rates, strokes and stroke rates of the flexible parts
+    assert len(outs) == 16 * 3 + 9 + 5 * sc.robot.n_joints + 1 + 1 + 1 + 10 + 4 * 4
     t = 0.0
     try:
         for dt in (None, 0.1005, 0.2995, 0.1):
@@ -177,6 +181,17 @@ BAD_PARAMETERS = [
     ({"prop.R": -0.1}, ["prop.R must be within [0, 1000] m"]),
     ({"K_Pn": -1e308}, ["K_Pn must be within [-1e+09, 1e+09] 1/s2, got -1e+308"]),
     ({"base.v0[1]": 1e308}, ["base.v0[1] must be within [-1e+06, 1e+06] m/s"]),
+    # the flexible parts (planar defaults: hinged along z; slosh in the plane)
+    ({"flex.n": 1, "flex.axis[1,1]": 0.0, "flex.axis[1,2]": 0.0, "flex.axis[1,3]": 0.0},
+     ["flex.axis[1] must not be zero"]),
+    ({"flex.n": 2, "flex.axis[2,1]": 1.0}, ["flex.axis[2]: a planar robot's panels turn in its "
+                                             "plane"]),
+    ({"slosh.n": 1, "slosh.axis[1,3]": 0.5}, ["slosh.axis[1]: a planar robot's slosh masses"]),
+    ({"flex.n": 1, "flex.f[1]": 80.0}, ["flex.f[1] = 80.0 Hz is too fast for the step"]),
+    ({"flex.n": 1, "flex.Izz[1]": 200.0}, ["flex[1] inertia violates the triangle inequality"]),
+    ({"slosh.n": 2, "prop.m0": 30.0}, ["slosh.m: the slosh masses in use total 50 kg, more than "
+                                       "the propellant prop.m0 = 30 kg"]),
+    ({"slosh.m[3]": 0.0}, ["slosh.m[3] must be within [1e-06, 1e+15] kg, got 0.0"]),
 ]
 
 
@@ -195,17 +210,74 @@ def test_bad_parameter_fails_initialisation_with_message(planar_fmus, params, wo
         good.free()
 
 
-@pytest.mark.parametrize("table", ["controller", "excitation", "propellant"])
+@pytest.mark.parametrize("table", ["controller", "excitation", "propellant", "flex", "slosh"])
 def test_glue_sets_every_parameter_field_by_its_name(planar_fmus, table):
     """Each field of the core's parameter structs (plant.h's tables), alone out of its range
     through its FMU variable: the core names that field (the glue set the variable's value
-    into the field of that name, not into another)."""
-    from spacerobot.core.plant import fields
+    into the field of that name, not into another); the panels' and slosh modes': every
+    record's."""
+    from spacerobot.core.plant import fields, records
+    count = records(table)
     for f in fields(table):
-        for k in range(f.size):
-            name = f.fmi if f.size == 1 else f"{f.fmi}[{k + 1}]"
-            assert_initialisation_fails(planar_fmus["plant"], {name: f.max + 1.0 + abs(f.max)},
-                                        [f"{name} must be within ["])
+        for i in range(count):
+            for k in range(f.size):
+                if count == 1:
+                    name = f.fmi if f.size == 1 else f"{f.fmi}[{k + 1}]"
+                else:
+                    name = f"{f.fmi}[{i + 1}]" if f.size == 1 else f"{f.fmi}[{i + 1},{k + 1}]"
+                assert_initialisation_fails(planar_fmus["plant"],
+                                            {name: f.max + 1.0 + abs(f.max)},
+                                            [f"{name} must be within ["])
+
+
+def _set_params(sc) -> dict:
+    """The FMU's parameters of a parameter set's scenario (the SSP's binding of the set)."""
+    from spacerobot.system.ssd import set_parameters
+    variables = plant_vars(sc.robot, sc)
+    var = {v.name: v for v in variables}
+    return {n: var[n].start for n in set_parameters(variables)}
+
+
+def test_fmu_with_flexible_parts_equals_the_core_and_restores_its_state(spatial_fmus):
+    """The spatial FMU with the `flexible` set's parameters (two wings, two slosh modes) and
+    the excitation requested: every output equals the core's plant of that set to 1e-12 over
+    steps of several lengths; a serialised state restored into a fresh instance continues bit
+    for bit."""
+    sc = parameter_set_scenario("spatial", "flexible")
+    core = Plant.of(sc)
+    a = started_slave(spatial_fmus["plant"], _set_params(sc), "flex_a")
+    b = started_slave(spatial_fmus["plant"], _set_params(sc), "flex_b")
+    try:
+        outs = a.names("output")
+        a.set("ident.excite", 1.0)
+        core.set_excitation(1.0)
+        t, data, ref = 0.0, None, None
+        for k, dt in enumerate((0.1005, 2.2995, 0.1, 3.0, 0.5, 0.5)):
+            a.fmu.doStep(t, dt)
+            core.advance(dt)
+            t += dt
+            o = core.outputs()
+            got = np.array([a.get(n) for n in outs])
+            want = np.array([core_value(o, n) for n in outs])
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+            if k == 2:
+                st = a.fmu.getFMUstate()
+                data, t_saved = a.fmu.serializeFMUstate(st), t
+                a.fmu.freeFMUstate(st)
+        ref = got
+        assert abs(a.get("flex.q[1]")) > 1e-4 and abs(a.get("slosh.x[2]")) > 1e-3
+        assert a.get("truth.base.m") == pytest.approx(500.0 + 100.0 + 50.0, rel=1e-15)
+        s = b.fmu.deSerializeFMUstate(data)
+        b.fmu.setFMUstate(s)
+        b.fmu.freeFMUstate(s)
+        for dt in (3.0, 0.5, 0.5):
+            b.fmu.doStep(t_saved, dt)
+            t_saved += dt
+        assert np.array_equal(np.array([b.get(n) for n in outs]), ref)
+        assert not [m for m in a.messages + b.messages if m[0] >= FMI_WARNING]
+    finally:
+        a.free()
+        b.free()
 
 
 def test_bad_communication_step_is_discarded(planar_fmus):

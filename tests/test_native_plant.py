@@ -175,7 +175,8 @@ def test_layout_and_initial_state_follow_the_conventions(lib):
         sizes = {"r_S": 3, "v_S": 3, "A": 9, "omega_B": 3, "a_S": 3, "alpha_B": 3, "q": n,
                  "qd": n, "qdd": n, "F": 3, "M": 3, "J": 3, "H": 3, "P": 3, "L": 3, "tau": n,
                  "excite_level": 1, "att_ref": 3, "qd_ref": n, "m_p": 1, "P_x": 3, "L_x": 3,
-                 "base_now": 10, "excite_rate": 1}
+                 "base_now": 10, "excite_rate": 1, "flex_P": 3, "flex_L": 3, "flex_q": 4,
+                 "flex_qd": 4, "slosh_x": 4, "slosh_v": 4}
         sl = c.output_slices()
         assert list(sl) == list(sizes)
         assert [b - a for a, b, _ in sl.values()] == list(sizes.values())

@@ -12,7 +12,7 @@ reads them:
   inertia elements: a value beyond the implied bound makes every body with it refused); the
   default scenarios lie within them;
 * the output vector: its first outputs are the sample's signals (sample.h: keys and sizes),
-  its length 64 + 5 n for the shipped robots, its pieces contiguous.
+  its length 86 + 5 n for the shipped robots, its pieces contiguous.
 """
 from __future__ import annotations
 
@@ -26,10 +26,13 @@ import pytest
 from spacerobot.core import lib as core_lib
 from spacerobot.core.plant import NativePlant, fields, output_names, parameter_ranges
 from spacerobot.interface import plant_vars
-from spacerobot.robots import (DEPLETION_PROPELLANT, Controller, Excitation, Propellant,
-                               RigidBody, parameter_set_scenario, scenario)
+from spacerobot.core.tables import records
+from spacerobot.robots import (DEPLETION_PROPELLANT, Appendages, Controller, Excitation, Panel,
+                               Propellant, RigidBody, Slosh, SloshMode, parameter_set_scenario,
+                               scenario)
 
-RECORDS = {"controller": Controller, "excitation": Excitation, "propellant": Propellant}
+RECORDS = {"controller": Controller, "excitation": Excitation, "propellant": Propellant,
+           "flex": Panel, "slosh": SloshMode}
 
 
 def _plant(sc, **change):
@@ -50,8 +53,27 @@ def _with(record, f, k, value):
     return dataclasses.replace(record, **{f.name: tuple(vec)})
 
 
-def _element(f, k):
-    return f.fmi if f.size == 1 else f"{f.fmi}[{k + 1}]"
+def _element(f, k, rec=None):
+    """The FMI name of element k of field f (of record rec of a struct of several)."""
+    if rec is None:
+        return f.fmi if f.size == 1 else f"{f.fmi}[{k + 1}]"
+    return f"{f.fmi}[{rec + 1}]" if f.size == 1 else f"{f.fmi}[{rec + 1},{k + 1}]"
+
+
+def _changed(sc, table, f, k, value, rec):
+    """The plant arguments with element k of field f of ``table``'s record (rec: of the
+    panels' or slosh modes' record rec, none of them in use) set to value."""
+    if table in ("flex", "slosh"):
+        group = sc.flex if table == "flex" else sc.slosh
+        recs = list(group.records(records(table)))
+        recs[rec] = _with(recs[rec], f, k, value)
+        new = Appendages(0, tuple(recs)) if table == "flex" else Slosh(0, tuple(recs))
+        return {table: new}
+    arg = {"controller": "controller", "excitation": "excitation",
+           "propellant": "propellant"}[table]
+    base_record = {"controller": sc.controller, "excitation": sc.excitation,
+                   "propellant": DEPLETION_PROPELLANT}[table]
+    return {arg: _with(base_record, f, k, value)}
 
 
 @pytest.mark.parametrize("table", list(RECORDS))
@@ -70,30 +92,30 @@ def test_python_records_have_the_c_fields_in_order(table):
 def test_each_field_is_read_by_the_core_where_python_writes_it(table):
     """Every element alone out of its range, by a margin and by one double: the core names
     that element (so the core reads it at the offset Python wrote it to, under its name); at
-    both ends of its range it is accepted."""
+    both ends of its range it is accepted. The panels' and slosh modes' records: each of the
+    FMU's records (none in use: the core checks them all)."""
     sc = scenario("spatial")
-    arg = {"controller": "controller", "excitation": "excitation",
-           "propellant": "propellant"}[table]
-    base_record = {"controller": sc.controller, "excitation": sc.excitation,
-                   "propellant": DEPLETION_PROPELLANT}[table]
+    recs = range(records(table)) if table in ("flex", "slosh") else [None]
     names = set()
-    for f in fields(table):
-        for k in range(f.size):
-            name = _element(f, k)
-            for bad in (f.max + 1.0 + abs(f.max), np.nextafter(f.max, math.inf),
-                        np.nextafter(f.min, -math.inf), math.nan):
-                with pytest.raises(ValueError) as exc:
-                    _plant(sc, **{arg: _with(base_record, f, k, float(bad))})
-                msg = str(exc.value)
-                assert msg.startswith(f"{name} must be within ["), (name, bad, msg)
-            for good in (f.min, f.max):
-                _plant(sc, **{arg: _with(base_record, f, k, float(good))})
-            names.add(name)
-    assert len(names) == sum(f.size for f in fields(table))
+    for rec in recs:
+        for f in fields(table):
+            for k in range(f.size):
+                name = _element(f, k, rec)
+                for bad in (f.max + 1.0 + abs(f.max), np.nextafter(f.max, math.inf),
+                            np.nextafter(f.min, -math.inf), math.nan):
+                    with pytest.raises(ValueError) as exc:
+                        _plant(sc, **_changed(sc, table, f, k, float(bad), rec))
+                    msg = str(exc.value)
+                    assert msg.startswith(f"{name} must be within ["), (name, bad, msg)
+                for good in (f.min, f.max):
+                    _plant(sc, **_changed(sc, table, f, k, float(good), rec))
+                names.add(name)
+    assert len(names) == len(recs) * sum(f.size for f in fields(table))
 
 
 def test_the_parameters_with_ranges_are_the_fmus_in_its_order():
-    for sc in (scenario("planar"), parameter_set_scenario("spatial", "depletion")):
+    for sc in (scenario("planar"), parameter_set_scenario("spatial", "depletion"),
+               parameter_set_scenario("spatial", "flexible")):
         vs = [v for v in plant_vars(sc.robot, sc) if v.causality in ("parameter", "input")]
         ranges = parameter_ranges()
         assert [v.name for v in vs] == list(ranges)
@@ -102,7 +124,10 @@ def test_the_parameters_with_ranges_are_the_fmus_in_its_order():
             assert lo <= v.start <= hi, (v.name, v.start, lo, hi)
     L = core_lib()
     lo, hi = ctypes.c_double(7.0), ctypes.c_double(7.0)
-    for unknown in (b"base.b[4]", b"base.b[0]", b"base.b", b"prop.r[3]x", b"F_maxx", b"", None):
+    for unknown in (b"base.b[4]", b"base.b[0]", b"base.b", b"prop.r[3]x", b"F_maxx", b"", None,
+                    b"flex.m", b"flex.m[5]", b"flex.m[0]", b"flex.m[1,1]", b"flex.com[1]",
+                    b"flex.com[1,4]", b"flex.com[5,1]", b"flex.com[1,1]x", b"flex.com[1,1,1]",
+                    b"flex.n[1]", b"slosh.r[2,]", b"slosh.r[,2]", b"flex.com[12,1]"):
         assert L.sr_plant_param_range(unknown, ctypes.byref(lo), ctypes.byref(hi)) == 1
     assert lo.value == 7.0 and hi.value == 7.0
 
@@ -190,6 +215,6 @@ def test_output_vector_starts_with_a_sample_and_has_the_documented_length():
         for key, (a, b, _) in slices.items():
             assert a == at and b > a, key
             at = b
-        assert at == p.output_vector().size == 64 + 5 * n
+        assert at == p.output_vector().size == 86 + 5 * n
         for i, key in enumerate(sample):
             assert slices[key][1] - slices[key][0] == L.sr_sample_signal_size(i, n)

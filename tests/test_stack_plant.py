@@ -6,8 +6,9 @@
   flags), and none is of unbounded dynamic size.
 * The plant core runs in a thread with a 64 KiB stack (tests/c_host/stack_plant.c, compiled
   here with the system compiler and the build's flags from the plant's sources): the robot
-  record read, the model built, 4 s of communication steps of 0.1 s (100 internal RK4 steps
-  each) with the excitation ramping in, a change of rate, the propellant used, the outputs,
+  record read, the model built with two hinged panels and two slosh modes, 4 s of
+  communication steps of 0.1 s (100 internal RK4 steps each) with the excitation ramping in, a
+  change of rate, the propellant used, the outputs,
   controls and references after every step; its end state equals the library's plant run the
   same way (to 1e-9: the same code, compiled twice). The host's own check: a thread that first
   uses 256 KiB of its stack crashes with 64 KiB and runs with 1 MiB.
@@ -27,7 +28,8 @@ import pytest
 
 from spacerobot.core.plant import NativePlant
 from spacerobot.core.robot_record import write_robot_record
-from spacerobot.robots import Controller, Excitation, Propellant, RigidBody, get_robot
+from spacerobot.robots import (SPATIAL_PANELS, SPATIAL_SLOSH, Appendages, Controller,
+                               Excitation, Propellant, RigidBody, Slosh, get_robot)
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "native" / "src"
@@ -125,7 +127,8 @@ def _library_plant_end(robot):
                     Excitation(att_max=0.3, q_max=0.3, qd_max=0.2, qdd_max=0.1, period=8.0,
                                ramp=1.0),
                     Propellant(m0=80.0, Isp=220.0, R=0.27, arm=1.0, r=(0.3, 0.2, -0.2)),
-                    q_home=np.zeros(robot.n_joints))
+                    q_home=np.zeros(robot.n_joints), flex=Appendages(2, SPATIAL_PANELS[:2] * 2),
+                    slosh=Slosh(2, SPATIAL_SLOSH[:2] * 2))
     p.set_excitation(1.0)
     for k in range(40):
         if k == 15:

@@ -177,9 +177,10 @@ def test_connections_match_interface_and_built_fmus(robot, systems):
 def test_ssv_values_are_the_scenario_truth(robot, systems):
     for name, target in TARGETS[robot].items():
         doc = etree.parse(str(systems[robot][f"ssv:{name}"])).getroot()
-        vals = {p.get("name"): float(p.find("ssv:Real", NS).get("value"))
+        vals = {p.get("name"): float(list(p)[0].get("value"))
                 for p in doc.findall("ssv:Parameters/ssv:Parameter", NS)}
         sc = scenario(robot, name)
+        assert vals["flex.n"] == vals["slosh.n"] == 0            # the rigid spacecraft
         assert vals["target.m"] == target.mass
         assert [vals[f"target.b[{i}]"] for i in (1, 2, 3)] == list(target.com)
         assert [vals[f"target.{n}"] for n in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")] == \
@@ -369,6 +370,28 @@ def test_depletion_set_runs_and_its_truth_is_the_current_base(systems):
     assert res.truth["base.m"] == d["plant.truth.base.m"][-1] != dry
     assert res.truth["base.b[1]"] == d["plant.truth.base.b[1]"][-1]
     assert res.truth["target.m"] == TARGETS["spatial"]["default"].mass
+
+
+def test_flexible_set_runs_and_its_truth_is_the_composite_rigid_base(systems):
+    """Spatial set ``flexible`` through the SSP: the wings and the slosh masses move, and the
+    run's truth of a base parameter is the composite rigid base (the base with the wings at
+    rest and the slosh masses at their equilibrium: Pinocchio's sum of the inertias,
+    tests/oracles/flexible_pinocchio.py), not the base parameter of the same name."""
+    from oracles import flexible_pinocchio as fp
+    from spacerobot.robots import parameter_set_scenario
+
+    res = run_ssp(systems["spatial"]["ssp"], parameter_set="flexible", stop_time=2.0,
+                  progress=False)
+    d = res.data
+    assert np.abs(d["plant.flex.q[1]"]).max() > 1e-5 and np.abs(d["plant.slosh.x[1]"]).max() > 1e-4
+    sc = parameter_set_scenario("spatial", "flexible")
+    fm = fp.build(sc.robot, sc.robot.base, sc.target, sc.flex.active, sc.slosh.active)
+    composite = fp.composite(fm)
+    names = ("m", "b[1]", "b[2]", "b[3]", "Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+    for k, n in enumerate(names):
+        assert res.truth[f"base.{n}"] == d[f"plant.truth.base.{n}"][-1]
+        assert res.truth[f"base.{n}"] == pytest.approx(composite[k], rel=1e-12, abs=1e-12), n
+    assert res.truth["base.m"] == 650.0 != ROBOTS["spatial"].base.mass
 
 
 def test_overrides_reach_both_components(systems, planar_baseline):

@@ -25,6 +25,10 @@ extern "C" {
 #define SR_BODY_COM_MAX 1e3
 #define SR_BODY_INERTIA_MIN 1e-6
 #define SR_BODY_INERTIA_MAX 1e15
+/* the bound |a product of inertia| <= (max - min) / 2 that principal moments within
+ * [SR_BODY_INERTIA_MIN, SR_BODY_INERTIA_MAX] imply (an off-diagonal element of a symmetric
+ * matrix is at most half the spread of its eigenvalues) */
+#define SR_BODY_PRODUCT_MAX (0.5 * (SR_BODY_INERTIA_MAX - SR_BODY_INERTIA_MIN))
 
 /** 0 when g (10, above) is a real body within the ranges: finite, m > 0, inertia positive
  *  definite with principal moments obeying the triangle inequality (the largest at most the

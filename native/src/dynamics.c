@@ -215,6 +215,52 @@ SR_API int sr_dyn_model_init(sr_dyn_model *model, const sr_robot *robot, const s
     return SR_DYN_OK;
 }
 
+SR_API int sr_dyn_add_leaf(sr_dyn_model *model, int kind, const double point[3],
+                           const double axis[3], const sr_body *body)
+{
+    double a[3], nrm, h[3], Io[9], rel[3];
+    int i, k, j;
+    if (!dyn_model_ok(model) || model->nl >= SR_DYN_MAX_LEAVES || axis == NULL || body == NULL
+        || (kind != SR_DYN_REVOLUTE && kind != SR_DYN_PRISMATIC)
+        || (kind == SR_DYN_REVOLUTE && (point == NULL || !sr_finite_all(point, 3)))
+        || !sr_finite_all(axis, 3) || !body_ok(body, 0))
+        return SR_DYN_EARG;
+    nrm = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    if (!(nrm > 0.0))
+        return SR_DYN_EARG;
+    for (i = 0; i < 3; i++)
+        a[i] = axis[i] / nrm;
+    j = model->nl;
+    k = model->n + 1 + j;
+    model->kind[j] = kind;
+    memcpy(model->axis[j], a, sizeof(a));
+    model->m[k] = body->m;
+    if (kind == SR_DYN_REVOLUTE) {
+        /* in the joint frame Q (z along the axis) at the point: x_B = Q x_joint + point */
+        z_frame(a, model->Q[k]);
+        memcpy(model->R[k], model->Q[k], 9 * sizeof(double));
+        for (i = 0; i < 3; i++) {
+            model->p[k][i] = point[i];
+            rel[i] = body->com[i] - point[i];
+        }
+        body_at_origin(body->m, rel, body->I, h, Io);
+        to_joint_frame(model->Q[k], Io, h, model->J[k], model->h[k]);
+    } else {
+        /* base axes at its centre of mass at rest: first moment 0, the inertia about it */
+        static const double I3[9] = {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0};
+        static const double Z3[3] = {0.0, 0.0, 0.0};
+        memcpy(model->Q[k], I3, sizeof(I3));
+        memcpy(model->R[k], I3, sizeof(I3));
+        for (i = 0; i < 3; i++)
+            model->p[k][i] = body->com[i];
+        to_joint_frame(I3, body->I, Z3, model->J[k], model->h[k]);
+    }
+    model->nl = j + 1;
+    model->nq += 1;
+    model->nv += 1;
+    return SR_DYN_OK;
+}
+
 SR_API int sr_dyn_arm_sincos(const sr_dyn_model *model, const double *q_arm, double *sc)
 {
     if (!dyn_model_ok(model) || q_arm == NULL || sc == NULL)

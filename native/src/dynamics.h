@@ -2,7 +2,10 @@
  * algorithm), joint-space inertia (composite-rigid-body algorithm), non-linear effects
  * (recursive Newton-Euler) and the system momentum, for the robot of an sr_robot record (any
  * serial chain of 1..SR_MAX_JOINTS revolute joints on a free or planar base) carrying a
- * captured target rigidly attached at the end-effector frame E.
+ * captured target rigidly attached at the end-effector frame E, and up to SR_DYN_MAX_LEAVES
+ * leaves: bodies on one-degree-of-freedom joints of the base (revolute or prismatic; the
+ * plant's flexible panels and slosh masses, their springs and dampers being generalised
+ * forces the caller applies).
  *
  * Pinocchio's organisation: a constant model (sr_dyn_model, built once by sr_dyn_model_init),
  * a separate work space (sr_dyn_data, any contents; one per thread), free functions over both.
@@ -11,10 +14,12 @@
  * Two views of the state.
  *
  * 1. Generalised coordinates, Pinocchio's (the plant's RK4 state):
- *    spatial (free-flyer root): q = [r_S (3), quaternion x y z w (4), q_arm (n)],
- *                               v = [v_l (3), omega_B (3), qd (n)],   nq = 7 + n, nv = 6 + n;
- *    planar (planar root):      q = [x, y, cos th, sin th, q_arm],
- *                               v = [v_l,x, v_l,y, omega_z, qd],      nq = 4 + n, nv = 3 + n;
+ *    spatial (free-flyer root): q = [r_S (3), quaternion x y z w (4), q_arm (n), q_leaf (nl)],
+ *                               v = [v_l (3), omega_B (3), qd (n), qd_leaf (nl)],
+ *                               nq = 7 + n + nl, nv = 6 + n + nl;
+ *    planar (planar root):      q = [x, y, cos th, sin th, q_arm, q_leaf],
+ *                               v = [v_l,x, v_l,y, omega_z, qd, qd_leaf],
+ *                               nq = 4 + n + nl, nv = 3 + n + nl;
  *    v_l = A^T v_S is the velocity of the base origin S in base axes, omega_B the base's angular
  *    velocity in base axes. The base's generalised force is [A^T F; A^T M_S] (planar: its
  *    x, y and z rows), F the total thrust applied at S and M_S its moment about S, both
@@ -48,21 +53,36 @@
 extern "C" {
 #endif
 
-/** Bodies of the model: the base (0) and the links (1..n). */
-#define SR_DYN_MAX_BODIES (SR_MAX_JOINTS + 1)
-/** Largest generalised velocity (6 + SR_MAX_JOINTS). */
-#define SR_DYN_MAX_NV (6 + SR_MAX_JOINTS)
+/** Most leaves (bodies on a one-degree-of-freedom joint of the base) a model may have. */
+#define SR_DYN_MAX_LEAVES 8
+/** Bodies of the model: the base (0), the links (1..n), the leaves (n + 1 .. n + nl). */
+#define SR_DYN_MAX_BODIES (SR_MAX_JOINTS + 1 + SR_DYN_MAX_LEAVES)
+/** Most coordinates after the base's (the arm's, then the leaves'). */
+#define SR_DYN_MAX_COORDS (SR_MAX_JOINTS + SR_DYN_MAX_LEAVES)
+/** Largest generalised velocity (6 + SR_DYN_MAX_COORDS). */
+#define SR_DYN_MAX_NV (6 + SR_DYN_MAX_COORDS)
+
+/** The joint of a leaf: a rotation about an axis fixed in the base, or a translation along
+ *  one. */
+#define SR_DYN_REVOLUTE 0
+#define SR_DYN_PRISMATIC 1
 
 #define SR_DYN_OK 0
 #define SR_DYN_EARG 1       /* NULL pointer, model not initialised, invalid robot/target */
 #define SR_DYN_EPD 2        /* not positive definite */
 
 /** The constant model. Each link is described in its joint frame (the link frame turned so
- *  that the joint axis is z: its rotation is then Rz(q)); the base keeps its frame B. */
+ *  that the joint axis is z: its rotation is then Rz(q)); the base keeps its frame B. A leaf
+ *  k = n + 1 + j is a body of its own whose parent is the base: revolute, in its joint frame
+ *  (R[k] its axes in B, z the axis; p[k] a point of the axis); prismatic, in base axes at its
+ *  centre of mass at rest p[k] (R[k] = Q[k] = identity), moving along axis[j]. */
 typedef struct sr_dyn_model {
     int planar;                          /* 1: planar root (v_x, v_y, omega_z) */
     int n;                               /* joints, 1..SR_MAX_JOINTS */
     int nq, nv;                          /* generalised coordinates / velocities */
+    int nl;                              /* leaves, 0..SR_DYN_MAX_LEAVES */
+    int kind[SR_DYN_MAX_LEAVES];         /* SR_DYN_REVOLUTE or SR_DYN_PRISMATIC */
+    double axis[SR_DYN_MAX_LEAVES][3];   /* unit joint axis of each leaf, base frame */
     double R[SR_DYN_MAX_BODIES][9];      /* joint k in its parent's joint frame at q = 0 (3 x 3):
                                             x_parent = R[k] Rz(q_k) x_k + p[k]; k = 0 identity */
     double p[SR_DYN_MAX_BODIES][3];      /* [m] */
@@ -74,7 +94,8 @@ typedef struct sr_dyn_model {
                                             x_link = Q[k] x_joint; Q[0] identity */
 } sr_dyn_model;
 
-/** Work space of the algorithms (contents are scratch between calls). */
+/** Work space of the algorithms (contents are scratch between calls); a leaf's entries are
+ *  at the base origin S (bp = its joint origin). */
 typedef struct sr_dyn_data {
     double bp[SR_DYN_MAX_BODIES][3];     /* joint origins in base axes [m] */
     double S[SR_DYN_MAX_BODIES][6];      /* joint motions [linear; angular], base axes */
@@ -93,6 +114,17 @@ typedef struct sr_dyn_data {
  *  SR_DYN_EARG (model zeroed) for a NULL pointer, n out of 1..SR_MAX_JOINTS, planar not 0/1, a
  *  non-finite value, a mass <= 0 (target: < 0) or a zero joint axis. */
 SR_API int sr_dyn_model_init(sr_dyn_model *model, const sr_robot *robot, const sr_body *target);
+
+/** Add a leaf to the model: body (mass [kg] > 0, centre of mass [m] and inertia about it
+ *  [kg.m2], in base axes at the leaf's coordinate 0) on a joint of the base of kind
+ *  SR_DYN_REVOLUTE (a rotation by the leaf's coordinate [rad] about the unit vector along
+ *  axis (3) through point (3) [m], base frame) or SR_DYN_PRISMATIC (a translation by it [m]
+ *  along axis; point not read). Its coordinate and velocity follow the arm's and those of the
+ *  leaves added before (nq, nv grow by one). Returns 0, or SR_DYN_EARG (model unchanged) for a
+ *  NULL pointer, a model not initialised or with SR_DYN_MAX_LEAVES leaves, an unknown kind, a
+ *  non-finite value, a mass <= 0 or a zero axis. */
+SR_API int sr_dyn_add_leaf(sr_dyn_model *model, int kind, const double point[3],
+                           const double axis[3], const sr_body *body);
 
 /** Replace the base body (body 0) by the spatial inertia given at the base origin S in base
  *  axes: mass m [kg], first moment h_B = m b (3) [kg.m], inertia about S I_S (3 x 3, only the
@@ -126,26 +158,29 @@ SR_API int sr_dyn_terms(const sr_dyn_model *model, sr_dyn_data *data, const doub
 
 /* -- the same with the joint placements' sines and cosines supplied ------------------------ */
 
-/** The sines and cosines of the arm's joint angles q_arm (n) [rad]: sc (n x 2, row k =
- *  (sin q_k, cos q_k)), by sr_sincos (what sr_dyn_aba and sr_dyn_terms compute inside).
- *  Returns 0 or SR_DYN_EARG. */
+/** The sines and cosines of the coordinates after the base, q_arm (n + nl: the arm's joint
+ *  angles [rad], then the leaves' coordinates): sc ((n + nl) x 2, row k = (sin q_k,
+ *  cos q_k)), by sr_sincos (what sr_dyn_aba and sr_dyn_terms compute inside; a prismatic
+ *  leaf's row is not used). Returns 0 or SR_DYN_EARG. */
 SR_API int sr_dyn_arm_sincos(const sr_dyn_model *model, const double *q_arm, double *sc);
 
-/** sr_dyn_aba with the sines and cosines of q's arm angles given by the caller, sc (n x 2, as
- *  sr_dyn_arm_sincos; q's arm angles are then not read): for a caller that has them already
+/** sr_dyn_aba with the sines and cosines of q's angles given by the caller, sc ((n + nl) x 2,
+ *  as sr_dyn_arm_sincos; q's arm and revolute leaf angles are then not read; a prismatic
+ *  leaf's coordinate is): for a caller that has them already
  *  (computed once for several algorithms at one configuration, or stepped from a nearby
  *  configuration's by the angle-addition formulas as the plant's RK4 stages do). With sc from
  *  sr_dyn_arm_sincos the result is sr_dyn_aba's, bit for bit. Returns as sr_dyn_aba. */
 SR_API int sr_dyn_aba_sc(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
                          const double *v, const double *tau, const double *sc, double *ddq);
 
-/** sr_dyn_terms with the sines and cosines of q's arm angles given (sc (n x 2), as
+/** sr_dyn_terms with the sines and cosines of q's angles given (sc ((n + nl) x 2), as
  *  sr_dyn_aba_sc). Returns as sr_dyn_terms. */
 SR_API int sr_dyn_terms_sc(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
                            const double *v, const double *sc, double *M, double *nle,
                            double *hg, double *com);
 
-/* -- the physical state -------------------------------------------------------------------- */
+/* -- the physical state --------------------------------------------------------------------
+ * For a model without leaves (one with leaves: SR_DYN_EARG). */
 
 /** The generalised coordinates of a physical state: q (nq) and v (nv) from r_S (3), A (9),
  *  v_S (3), omega_B (3), q_arm (n), qd (n). The quaternion is A's (w >= 0, Shepperd's method);

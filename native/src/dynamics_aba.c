@@ -13,7 +13,9 @@
  * (Pinocchio's free-flyer) the base joint has no bias term.
  *
  * Body k's quantities are in base axes at its joint's origin bp[k] (joint motion [0; s]; from
- * body to parent only the origin moves). Each body's inertia is turned into base axes once per
+ * body to parent only the origin moves); a leaf's at the base origin S (its parent's), with
+ * its joint motion S6 there, so that its articulated inertia and force add to the base's as
+ * they are. Each body's inertia is turned into base axes once per
  * call. The running quantities of the serial chain (placement, velocity, articulated inertia
  * and force, acceleration) stay in local arrays; what a later pass reads is in data.
  */
@@ -153,14 +155,67 @@ static int base_solve(int planar, double IA0[6][6], const double *pA0, const dou
     return SR_DYN_OK;
 }
 
+/* the leaves' pass 1 (j < nl, body k = n + 1 + j, at S): placement and inertia, v_k = v_0 +
+ * S6 qd, c_k = v_k x S6 qd, pA_k = v_k x* (I_k v_k) */
+static void leaves_pass1(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
+                         const double *ql, const double *qd, const double *v0)
+{
+    int j, i;
+    for (j = 0; j < md->nl; j++) {
+        const int k = md->n + 1 + j, c = md->n + j;
+        double *S6 = d->S[k], vk[6], z[6], y[6];
+        leaf_place(md, j, ql[j], sc[2 * c], sc[2 * c + 1], d->g[k], d->J[k], d->bp[k], S6);
+        for (i = 0; i < 6; i++) {
+            z[i] = S6[i] * qd[c];
+            vk[i] = v0[i] + z[i];
+        }
+        crm(vk, z, d->cb[k]);
+        rbi_mul(md->m[k], d->g[k], d->J[k], vk, y);
+        crf(vk, y, d->pA[k]);
+    }
+}
+
+/* the leaves' pass 2 folded into the base's articulated inertia IB (6 x 6) and bias force
+ * pA0: U = I S6, D = S6^T U, u = tau - S6^T pA, uc = u - U^T c;
+ * IB += I - U U^T / D, pA0 += pA + I c + U uc / D (RBDA Table 7.1 at the parent's point) */
+static void leaves_pass2(const sr_dyn_model *md, sr_dyn_data *d, const double *tau,
+                         double IB[6][6], double *pA0)
+{
+    int j, r, c;
+    for (j = 0; j < md->nl; j++) {
+        const int k = md->n + 1 + j;
+        const double m = md->m[k], *g = d->g[k], *J = d->J[k], *S6 = d->S[k], *cb = d->cb[k];
+        const double *pA = d->pA[k];
+        double I6[6][6], *U = d->U[k], Ic[6], D = 0.0, u = tau[md->n + j], uc, rD;
+        rbi_full(m, g, J, I6);
+        rbi_mul(m, g, J, S6, U);
+        rbi_mul(m, g, J, cb, Ic);
+        for (r = 0; r < 6; r++) {
+            D += S6[r] * U[r];
+            u -= S6[r] * pA[r];
+        }
+        uc = u;
+        for (r = 0; r < 6; r++)
+            uc -= U[r] * cb[r];
+        rD = 1.0 / D;
+        d->Du[k][0] = rD;
+        d->Du[k][1] = uc;
+        for (r = 0; r < 6; r++) {
+            for (c = 0; c < 6; c++)
+                IB[r][c] += I6[r][c] - U[r] * U[c] * rD;
+            pA0[r] += pA[r] + Ic[r] + U[r] * (uc * rD);
+        }
+    }
+}
+
 /* Articulated-body algorithm (RBDA Table 7.1 with the floating base of Chapter 9).
- * sc (n x 2): the sines and cosines of the arm's angles; qd, tau: its rates and torques (n);
- * vb, fb: the base's generalised
- * velocity and force (nr = 3 planar, 6 spatial); out: ab (nr) the base's generalised
- * acceleration, qdd (n). */
-int dyn_aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, const double *qd,
-                    const double *tau, const double *vb, const double *fb, double *ab,
-                    double *qdd)
+ * sc ((n + nl) x 2): the sines and cosines of the arm's angles (and the leaves'); ql: the
+ * leaves' coordinates; qd, tau: the rates and torques (generalised forces) of the arm and the
+ * leaves (n + nl); vb, fb: the base's generalised velocity and force (nr = 3 planar, 6
+ * spatial); out: ab (nr) the base's generalised acceleration, qdd (n + nl). */
+int dyn_aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, const double *ql,
+                 const double *qd, const double *tau, const double *vb, const double *fb,
+                 double *ab, double *qdd)
 {
     const int nb = md->n + 1;
     double v[6], hb[6], E[2][9], o[3], x[6];
@@ -169,6 +224,7 @@ int dyn_aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, const
     /* pass 1 (base to tip): v_k = shift(v_p) + [0; s qd], c_k = v_k x [0; s qd], the body's
      * inertia in base axes, pA_k = v_k x* (I_k v_k); the base: pA_0 = v_0 x* (I_0 v_0) */
     base_motion(md, d, vb, v, hb);
+    leaves_pass1(md, d, sc, ql, qd, v);
     for (i = 0; i < 9; i++)
         E[0][i] = (i % 4 == 0) ? 1.0 : 0.0;
     o[0] = o[1] = o[2] = 0.0;
@@ -320,6 +376,7 @@ int dyn_aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, const
         for (i = 0; i < 6; i++)
             d->pA[0][i] += f[i];
     }
+    leaves_pass2(md, d, tau, IB, d->pA[0]);
     if (base_solve(md->planar, IB, d->pA[0], fb, ab) != SR_DYN_OK)
         return SR_DYN_EPD;
     /* pass 3 (base to tip): a = shift(a_p) + c_k, qdd_k = (u_k - U_k^T a) / D_k,
@@ -329,6 +386,13 @@ int dyn_aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, const
         x[i] = 0.0;
     for (i = 0; i < (md->planar ? 3 : 6); i++)
         x[base_row(md->planar, i)] = ab[i];
+    for (j = 0; j < md->nl; j++) {          /* the leaves: qdd = (uc - U^T a_0) / D */
+        const double *Du = d->Du[nb + j], *U = d->U[nb + j];
+        double s = Du[1];
+        for (i = 0; i < 6; i++)
+            s -= U[i] * x[i];
+        qdd[md->n + j] = s * Du[0];
+    }
     for (k = 1; k < nb; k++) {
         const double *cb = d->cb[k], *Ut = d->U[k], *s = d->S[k] + 3;
         double dl[3], t0, t1, t2, sc, a;
@@ -358,7 +422,7 @@ int dyn_aba_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, const
 SR_API int sr_dyn_aba(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
                       const double *v, const double *tau, double *ddq)
 {
-    double sc[2 * SR_MAX_JOINTS];
+    double sc[2 * SR_DYN_MAX_COORDS];
     if (!dyn_model_ok(model) || q == NULL)
         return SR_DYN_EARG;
     dyn_arm_sincos(model, q + (model->planar ? 4 : 7), sc);
@@ -373,5 +437,6 @@ SR_API int sr_dyn_aba_sc(const sr_dyn_model *model, sr_dyn_data *data, const dou
         || ddq == NULL)
         return SR_DYN_EARG;
     nr = model->planar ? 3 : 6;
-    return dyn_aba_core(model, data, sc, v + nr, tau + nr, v, tau, ddq, ddq + nr);
+    return dyn_aba_core(model, data, sc, q + (model->planar ? 4 : 7) + model->n, v + nr,
+                        tau + nr, v, tau, ddq, ddq + nr);
 }

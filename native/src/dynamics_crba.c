@@ -6,21 +6,50 @@
  *   - CRBA, RBDA Table 6.2:
  *       Ic_i = I_i + sum of the children's Ic,  F = Ic_i S_i,  H_ji = S_j^T F (j ancestors of i);
  *   - the momentum h = sum I_i v_i.
- * Everything is expressed at the base origin S in base axes.
+ * Everything is expressed at the base origin S in base axes. A leaf (a body on a joint of the
+ * base) is a branch of one body: its column of M is I_j S_j on the base's rows, S_j^T I_j S_j
+ * on its own, 0 elsewhere.
  */
 #include <math.h>
 
 #include "dynamics_internal.h"
 #include "vec3.h"
 
+/* the leaves' RNEA at zero acceleration (j < nl, body k = n + 1 + j, at S): placement and
+ * inertia, v_k = v_0 + S6 qd, a_k = c_k = v_k x S6 qd, f_k = I a_k + v_k x* (I v_k) into
+ * d->pA[k]; their momentum I v_k added to hm */
+static void leaves_forward(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
+                           const double *ql, const double *qd, const double *v0, double *hm)
+{
+    int j, i;
+    for (j = 0; j < md->nl; j++) {
+        const int k = md->n + 1 + j, c = md->n + j;
+        double *S6 = d->S[k], vk[6], z[6], ak[6], y[6], fa[6], cv[6];
+        leaf_place(md, j, ql[j], sc[2 * c], sc[2 * c + 1], d->g[k], d->J[k], d->bp[k], S6);
+        for (i = 0; i < 6; i++) {
+            z[i] = S6[i] * qd[c];
+            vk[i] = v0[i] + z[i];
+        }
+        crm(vk, z, ak);
+        rbi_mul(md->m[k], d->g[k], d->J[k], vk, y);
+        for (i = 0; i < 6; i++)
+            hm[i] = hm[i] + y[i];
+        rbi_mul(md->m[k], d->g[k], d->J[k], ak, fa);
+        crf(vk, y, cv);
+        for (i = 0; i < 6; i++)
+            d->pA[k][i] = fa[i] + cv[i];
+    }
+}
+
 /* CRBA (RBDA Table 6.2), RNEA at zero acceleration (Table 5.1) and the momentum, all in base
- * axes at the base origin S, sc (n x 2) the sines and cosines of the arm's angles. Writes
+ * axes at the base origin S, sc ((n + nl) x 2) the sines and cosines of the arm's (and the
+ * leaves') angles, ql the leaves' coordinates, qd the arm's and the leaves' rates. Writes
  * M (nv x nv, both triangles) and nle (nv) when not NULL, and always hm (6) = the system
  * momentum [h_l; h_n about S] and gm (4) = [total mass, first moment about S (3)], base
  * axes. */
-void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
-                       const double *qd, const double *vb, double *M, double *nle, double *hm,
-                       double *gm)
+void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc, const double *ql,
+                    const double *qd, const double *vb, double *M, double *nle, double *hm,
+                    double *gm)
 {
     const int nb = md->n + 1, planar = md->planar;
     const int nr = planar ? 3 : 6, nv = md->nv;
@@ -29,6 +58,7 @@ void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
     /* RNEA, forward: v_k = v_p + S qd, a_k = a_p + c_k (a_0 = 0), c_k = v_k x (S qd);
      * f_k = I a_k + v x* (I v); momentum h = sum I v */
     base_motion(md, d, vb, v, hm);
+    leaves_forward(md, d, sc, ql, qd, v, hm);
     for (i = 0; i < 6; i++)
         a[i] = 0.0;
     for (i = 0; i < 9; i++)
@@ -36,19 +66,14 @@ void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
     o[0] = o[1] = o[2] = 0.0;
     for (k = 1; k < nb; k++) {
         double *S = d->S[k], *gk = d->g[k], *Jk = d->J[k], on[3], s[3], z, hh[3], io[6];
-        double mo[3], dd, yv[6], fa[6], cv[6];
+        double yv[6], fa[6], cv[6];
         const double m = md->m[k], *h = md->h[k];
         place(md, k, sc[2 * k - 2], sc[2 * k - 1], E[cur], o, E[1 - cur], on, s);
         cur = 1 - cur;
         o[0] = on[0];
         o[1] = on[1];
         o[2] = on[2];
-        S[0] = o[1] * s[2] - o[2] * s[1];
-        S[1] = o[2] * s[0] - o[0] * s[2];
-        S[2] = o[0] * s[1] - o[1] * s[0];
-        S[3] = s[0];
-        S[4] = s[1];
-        S[5] = s[2];
+        joint_motion(o, s, S);
         /* velocity v_k = v_p + S qd; c_k = v_k x (S qd) = [w x sl + vl x sw; w x sw] qd */
         z = qd[k - 1];
         for (i = 0; i < 6; i++)
@@ -59,26 +84,15 @@ void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
         a[3] += (v[4] * S[5] - v[5] * S[4]) * z;
         a[4] += (v[5] * S[3] - v[3] * S[5]) * z;
         a[5] += (v[3] * S[4] - v[4] * S[3]) * z;
-        /* inertia at the base origin: h' = bR_k h, I_o' = bR_k I_o bR_k^T, then moved by o:
-         * g = h' + m o, J = I_o' + (2 o.h' + m |o|^2) 1 - (h' o^T + o h'^T + m o o^T) */
+        /* inertia at the base origin: h' = bR_k h, I_o' = bR_k I_o bR_k^T, then moved by o
+         * (inertia_at) */
         {
             const double *Ek = E[cur];
             for (i = 0; i < 3; i++)
                 hh[i] = Ek[3 * i] * h[0] + Ek[3 * i + 1] * h[1] + Ek[3 * i + 2] * h[2];
             rot_sym(Ek, md->J[k], io);
         }
-        for (i = 0; i < 3; i++)
-            mo[i] = m * o[i];
-        dd = 2.0 * (o[0] * hh[0] + o[1] * hh[1] + o[2] * hh[2])
-             + (mo[0] * o[0] + mo[1] * o[1] + mo[2] * o[2]);
-        for (i = 0; i < 3; i++)
-            gk[i] = hh[i] + mo[i];       /* h' o^T + o h'^T + m o o^T = g o^T + o h'^T */
-        Jk[0] = io[0] + dd - (gk[0] * o[0] + o[0] * hh[0]);
-        Jk[3] = io[3] + dd - (gk[1] * o[1] + o[1] * hh[1]);
-        Jk[5] = io[5] + dd - (gk[2] * o[2] + o[2] * hh[2]);
-        Jk[1] = io[1] - (gk[0] * o[1] + o[0] * hh[1]);
-        Jk[2] = io[2] - (gk[0] * o[2] + o[0] * hh[2]);
-        Jk[4] = io[4] - (gk[1] * o[2] + o[1] * hh[2]);
+        inertia_at(m, hh, io, o, gk, Jk);
         rbi_mul(m, gk, Jk, v, yv);
         for (i = 0; i < 6; i++)
             hm[i] = hm[i] + yv[i];
@@ -130,18 +144,41 @@ void dyn_terms_core(const sr_dyn_model *md, sr_dyn_data *d, const double *sc,
         J[i] = J[i] + md->J[0][i];
         f[i] = f[i] + d->pA[0][i];
     }
+    /* the leaves: the composite and the force of each added to the base's; its own column */
+    for (j = 0; j < md->nl; j++) {
+        const int kl = nb + j, col = nr + md->n + j;
+        const double *S = d->S[kl], *fl = d->pA[kl];
+        mt += md->m[kl];
+        for (i = 0; i < 3; i++)
+            g[i] = g[i] + d->g[kl][i];
+        for (i = 0; i < 6; i++) {
+            J[i] = J[i] + d->J[kl][i];
+            f[i] = f[i] + fl[i];
+        }
+        if (nle != NULL)
+            nle[col] = S[0] * fl[0] + S[1] * fl[1] + S[2] * fl[2] + S[3] * fl[3] + S[4] * fl[4]
+                       + S[5] * fl[5];
+        if (M != NULL) {
+            rbi_mul(md->m[kl], d->g[kl], d->J[kl], S, F);
+            for (i = nr; i < nv; i++) {
+                M[i * nv + col] = 0.0;
+                M[col * nv + i] = 0.0;
+            }
+            M[col * nv + col] = S[0] * F[0] + S[1] * F[1] + S[2] * F[2] + S[3] * F[3]
+                                + S[4] * F[4] + S[5] * F[5];
+            for (i = 0; i < nr; i++) {
+                M[i * nv + col] = F[base_row(planar, i)];
+                M[col * nv + i] = F[base_row(planar, i)];
+            }
+        }
+    }
     if (nle != NULL)
         for (i = 0; i < nr; i++)
             nle[i] = f[base_row(planar, i)];
     if (M != NULL) {
         /* [[m 1, -[g]x], [[g]x, J]] on the base's rows/columns */
-        const double I6[6][6] = {
-            {mt, 0.0, 0.0, 0.0, g[2], -g[1]},
-            {0.0, mt, 0.0, -g[2], 0.0, g[0]},
-            {0.0, 0.0, mt, g[1], -g[0], 0.0},
-            {0.0, -g[2], g[1], J[0], J[1], J[2]},
-            {g[2], 0.0, -g[0], J[1], J[3], J[4]},
-            {-g[1], g[0], 0.0, J[2], J[4], J[5]}};
+        double I6[6][6];
+        rbi_full(mt, g, J, I6);
         for (i = 0; i < nr; i++)
             for (j = 0; j < nr; j++)
                 M[i * nv + j] = I6[base_row(planar, i)][base_row(planar, j)];
@@ -175,7 +212,7 @@ static void dcm_of_q(const sr_dyn_model *md, const double *q, double *A, double 
 SR_API int sr_dyn_terms(const sr_dyn_model *model, sr_dyn_data *data, const double *q,
                         const double *v, double *M, double *nle, double *hg, double *com)
 {
-    double sc[2 * SR_MAX_JOINTS];
+    double sc[2 * SR_DYN_MAX_COORDS];
     if (!dyn_model_ok(model) || q == NULL)
         return SR_DYN_EARG;
     dyn_arm_sincos(model, q + (model->planar ? 4 : 7), sc);
@@ -191,7 +228,8 @@ SR_API int sr_dyn_terms_sc(const sr_dyn_model *model, sr_dyn_data *data, const d
     if (!dyn_model_ok(model) || data == NULL || q == NULL || v == NULL || sc == NULL)
         return SR_DYN_EARG;
     nr = model->planar ? 3 : 6;
-    dyn_terms_core(model, data, sc, v + nr, v, M, nle, hm, gm);
+    dyn_terms_core(model, data, sc, q + (model->planar ? 4 : 7) + model->n, v + nr, v, M, nle,
+                   hm, gm);
     if (hg == NULL && com == NULL)
         return SR_DYN_OK;
     /* centre of mass (base frame): the composite's first moment over its mass;

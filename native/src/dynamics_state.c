@@ -1,4 +1,4 @@
-/* The dynamics of the physical state (dynamics.h's second view). */
+/* The dynamics of the physical state (dynamics.h's second view), for models without leaves. */
 #include <math.h>
 #include <string.h>
 
@@ -58,7 +58,7 @@ SR_API int sr_dyn_generalised(const sr_dyn_model *model, const double r_S[3], co
 {
     double Ae[9];
     int nr, nq0, i;
-    if (!dyn_model_ok(model) || r_S == NULL || A == NULL || v_S == NULL || omega_B == NULL
+    if (!dyn_model_ok(model) || model->nl != 0 || r_S == NULL || A == NULL || v_S == NULL || omega_B == NULL
         || q_arm == NULL || qd == NULL || q == NULL || v == NULL)
         return SR_DYN_EARG;
     nr = model->planar ? 3 : 6;
@@ -123,7 +123,7 @@ SR_API int sr_dyn_generalised_force(const sr_dyn_model *model, const double A[9]
 {
     double Ae[9], cs, sn;
     int nr, i;
-    if (!dyn_model_ok(model) || A == NULL || F == NULL || M_S == NULL || tau == NULL || gen == NULL)
+    if (!dyn_model_ok(model) || model->nl != 0 || A == NULL || F == NULL || M_S == NULL || tau == NULL || gen == NULL)
         return SR_DYN_EARG;
     nr = model->planar ? 3 : 6;
     if (model->planar)
@@ -141,16 +141,16 @@ SR_API int sr_dyn_forward(const sr_dyn_model *model, sr_dyn_data *data, const do
                           const double *qd, const double F[3], const double M_S[3],
                           const double *tau, double a_S[3], double alpha_B[3], double *qdd)
 {
-    double Ae[9], vb[6], fb[6], ab[6], vl[3], w[3], al[3], t[3], sc[2 * SR_MAX_JOINTS];
+    double Ae[9], vb[6], fb[6], ab[6], vl[3], w[3], al[3], t[3], sc[2 * SR_DYN_MAX_COORDS];
     int st;
-    if (!dyn_model_ok(model) || data == NULL || A == NULL || v_S == NULL || omega_B == NULL
+    if (!dyn_model_ok(model) || model->nl != 0 || data == NULL || A == NULL || v_S == NULL || omega_B == NULL
         || q_arm == NULL || qd == NULL || F == NULL || M_S == NULL || tau == NULL
         || a_S == NULL || alpha_B == NULL || qdd == NULL)
         return SR_DYN_EARG;
     dyn_base_velocity(model, A, v_S, omega_B, vb, Ae);
     dyn_base_force(model, Ae, F, M_S, fb);
     dyn_arm_sincos(model, q_arm, sc);
-    st = dyn_aba_core(model, data, sc, qd, tau, vb, fb, ab, qdd);
+    st = dyn_aba_core(model, data, sc, NULL, qd, tau, vb, fb, ab, qdd);
     if (st != SR_DYN_OK)
         return st;
     /* classical acceleration of S: a_S = A (dv_l/dt + omega_B x v_l) */
@@ -177,13 +177,13 @@ SR_API int sr_dyn_mass_bias(const sr_dyn_model *model, sr_dyn_data *data, const 
                             const double v_S[3], const double omega_B[3], const double *q_arm,
                             const double *qd, double *M, double *h)
 {
-    double Ae[9], vb[6], hm[6], gm[4], sc[2 * SR_MAX_JOINTS];
-    if (!dyn_model_ok(model) || data == NULL || A == NULL || v_S == NULL || omega_B == NULL
+    double Ae[9], vb[6], hm[6], gm[4], sc[2 * SR_DYN_MAX_COORDS];
+    if (!dyn_model_ok(model) || model->nl != 0 || data == NULL || A == NULL || v_S == NULL || omega_B == NULL
         || q_arm == NULL || qd == NULL)
         return SR_DYN_EARG;
     dyn_base_velocity(model, A, v_S, omega_B, vb, Ae);
     dyn_arm_sincos(model, q_arm, sc);
-    dyn_terms_core(model, data, sc, qd, vb, M, h, hm, gm);
+    dyn_terms_core(model, data, sc, NULL, qd, vb, M, h, hm, gm);
     return SR_DYN_OK;
 }
 
@@ -192,13 +192,13 @@ SR_API int sr_dyn_momentum(const sr_dyn_model *model, sr_dyn_data *data, const d
                            const double *q_arm, const double *qd, double P[3], double L[3],
                            double *com)
 {
-    double Ae[9], vb[6], hm[6], gm[4], t[3], sc[2 * SR_MAX_JOINTS];
-    if (!dyn_model_ok(model) || data == NULL || r_S == NULL || A == NULL || v_S == NULL
+    double Ae[9], vb[6], hm[6], gm[4], t[3], sc[2 * SR_DYN_MAX_COORDS];
+    if (!dyn_model_ok(model) || model->nl != 0 || data == NULL || r_S == NULL || A == NULL || v_S == NULL
         || omega_B == NULL || q_arm == NULL || qd == NULL || P == NULL || L == NULL)
         return SR_DYN_EARG;
     dyn_base_velocity(model, A, v_S, omega_B, vb, Ae);
     dyn_arm_sincos(model, q_arm, sc);
-    dyn_terms_core(model, data, sc, qd, vb, NULL, NULL, hm, gm);
+    dyn_terms_core(model, data, sc, NULL, qd, vb, NULL, NULL, hm, gm);
     /* P = A h_l;  L about the origin = A h_n (about S) + r_S x P */
     mat3_vec(Ae, hm, P);
     mat3_vec(Ae, hm + 3, L);

@@ -1,7 +1,8 @@
 /* The plant's model, outputs and state (plant.h): sr_plant_model_init with its checks, the
  * output vector at the current state, the state's get / set. The integration is in
  * plant_step.c, the controllers in plant_control.c, the excitation in plant_excitation.c, the
- * propellant in plant_propellant.c, the tables in plant_params.c.
+ * propellant in plant_propellant.c, the flexible parts in plant_leaves.c, the tables in
+ * plant_params.c.
  */
 #include "plant.h"
 
@@ -92,6 +93,7 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
     nq = robot->planar ? 4 + n : 7 + n;
     model->planar = robot->planar;
     model->n = n;
+    model->nq0 = robot->planar ? 4 : 7;
     model->nq = nq;
     model->nb = robot->planar ? 3 : 6;
     model->nv = model->nb + n;
@@ -229,6 +231,7 @@ SR_API int sr_plant_start(const sr_plant_model *model, sr_plant_data *data)
     data->ramp[2] = 0.0;
     data->ramp[3] = model->ex.ramp;
     data->dyn = model->dyn;
+    data->rigid = model->rigid;
     data->ex_rate[0] = 0.0;                         /* no level requested, the own rate */
     data->ex_rate[2] = 1.0;
     plant_excitation_table(model, 1.0, data);
@@ -241,16 +244,19 @@ SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, do
     sr_plant_data *d = data;
     double A[9], r[3], vl[3], w[3], dl[3], al[3], e[3], lev[3];
     const double *x, *q, *v, *acc, *hg, *c;
-    int err, i, j, n, nb, nq, om, ra;
+    int err, i, j, n, nb, nq, nq0, om, ra;
 #define Y(id) (y + md->y_at[SR_PLANT_Y_##id])      /* output id in y */
     if (!plant_model_ok(md) || d == NULL || y == NULL)
         return SR_PLANT_EARG;
     n = md->n;
     nb = md->nb;
     nq = md->nq;
+    nq0 = md->nq0;
     om = 6 + nq + md->nv;
     x = d->x;
     d->dyn = md->dyn;
+    if (md->nl > 0)
+        d->rigid = md->rigid;
     d->trig_t = NAN;                                /* the sines evaluated afresh at t */
     plant_load(md, x, d);
     err = plant_control_here(md, d, x, d->t, d->ramp, md->h, 1);
@@ -292,7 +298,7 @@ SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, do
     for (i = 0; i < 9; i++)
         Y(A_B)[i] = A[i];
     for (i = 0; i < n; i++) {
-        Y(Q)[i] = q[nq - n + i];
+        Y(Q)[i] = q[nq0 + i];
         Y(QD)[i] = v[nb + i];
         Y(QDD)[i] = acc[nb + i];
     }
@@ -340,8 +346,39 @@ SR_API int sr_plant_outputs(const sr_plant_model *model, sr_plant_data *data, do
         Y(P_X)[i] = x[om + 1 + i];
         Y(L_X)[i] = x[om + 4 + i];
     }
-    plant_base_now(md, x[om], Y(BASE_NOW));
     Y(EXCITE_RATE)[0] = d->ex_rate[1];
+    for (i = 0; i < 3; i++) {
+        Y(FLEX_P)[i] = 0.0;
+        Y(FLEX_L)[i] = 0.0;
+    }
+    for (i = 0; i < SR_PLANT_MAX_FLEX; i++)
+        Y(FLEX_Q)[i] = Y(FLEX_QD)[i] = 0.0;
+    for (i = 0; i < SR_PLANT_MAX_SLOSH; i++)
+        Y(SLOSH_X)[i] = Y(SLOSH_V)[i] = 0.0;
+    if (md->nl == 0) {
+        plant_base_now(md, x[om], Y(BASE_NOW));
+    } else {
+        const double *hr = d->hg_r, *cr = d->com_r;
+        double Lr[3];
+        plant_composite_now(md, x[om], Y(BASE_NOW));
+        /* the flexible parts' momentum: the system's minus the composite rigid body's at the
+         * same base and arm motion (both L about the inertial origin: L_c + c x P) */
+        Lr[0] = hr[3] + (cr[1] * hr[2] - cr[2] * hr[1]);
+        Lr[1] = hr[4] + (cr[2] * hr[0] - cr[0] * hr[2]);
+        Lr[2] = hr[5] + (cr[0] * hr[1] - cr[1] * hr[0]);
+        for (i = 0; i < 3; i++) {
+            Y(FLEX_P)[i] = Y(P)[i] - hr[i];
+            Y(FLEX_L)[i] = Y(L)[i] - Lr[i];
+        }
+        for (i = 0; i < md->n_flex; i++) {
+            Y(FLEX_Q)[i] = q[nq0 + n + i];
+            Y(FLEX_QD)[i] = v[nb + n + i];
+        }
+        for (i = 0; i < md->n_slosh; i++) {
+            Y(SLOSH_X)[i] = q[nq0 + n + md->n_flex + i];
+            Y(SLOSH_V)[i] = v[nb + n + md->n_flex + i];
+        }
+    }
     return sr_finite_all(y, md->ny) ? SR_PLANT_OK : SR_PLANT_ENONFINITE;
 #undef Y
 }
@@ -414,8 +451,10 @@ SR_API int sr_plant_set_state(const sr_plant_model *model, sr_plant_data *data, 
     }
     om = 6 + model->nq + model->nv;
     mp = x[om];
-    if (!(mp >= 0.0 && mp <= model->m0 * (1.0 + 1e-12))) {
-        sr_text_set(err, errlen, "propellant mass outside [0, prop.m0]");
+    if (!(mp >= model->m_slosh && mp <= model->m0 * (1.0 + 1e-12))) {
+        sr_text_set(err, errlen, model->m_slosh > 0.0
+                    ? "propellant mass outside [the slosh masses, prop.m0]"
+                    : "propellant mass outside [0, prop.m0]");
         return SR_PLANT_EARG;
     }
     data->t = t;

@@ -12,7 +12,14 @@
  *     requested value in excitation.ramp seconds;
  *   - the optional propellant: a spherical tank in the base emptied by the thrusters
  *     (dm_p/dt = -(|F_x|+|F_y|+|F_z| + (|M_x|+|M_y|+|M_z|)/arm) / (Isp g0)); the base's inertia
- *     follows m_p at every RK4 stage; the expelled propellant carries away momentum P_x, L_x.
+ *     follows m_p at every RK4 stage; the expelled propellant carries away momentum P_x, L_x;
+ *   - the optional flexible parts (sr_plant_model_set_leaves; none by default): hinged panels
+ *     (a revolute joint with a torsional spring and damper each) and propellant slosh modes
+ *     (a point mass on a prismatic joint with a spring and damper each), leaves of the base in
+ *     the rigid-body algorithms (dynamics.h), exact at any amplitude. The controllers are
+ *     designed on the composite rigid body (base + panels at rest + slosh masses at their
+ *     equilibrium): the arm's attitude law uses its model, the thrusters act on the system's
+ *     momentum (docs/models.md, "Flexible appendages and slosh").
  *
  * Pinocchio's organisation: a constant model (sr_plant_model, built by sr_plant_model_init)
  * and a data block (sr_plant_data: the state and the work space). Both are plain structs of
@@ -31,10 +38,13 @@
  *   J [N.s]   impulse of the thrust, inertial          (dJ/dt = F)
  *   H [N.m.s] its angular impulse about the inertial origin (dH/dt = M_S + r_S x F)
  *   q, v      Pinocchio's generalised coordinates (dynamics.h): spatial
- *             q = [r_S (3) [m], quaternion x y z w (4), q_arm (n) [rad]],
- *             v = [v_l (3) [m/s] (velocity of S in base axes), omega_B (3) [rad/s], qd (n)];
- *             planar q = [x, y, cos th, sin th, q_arm], v = [v_l,x, v_l,y, omega_z, qd]
- *   m_p [kg]  propellant left (0 without propellant model)
+ *             q = [r_S (3) [m], quaternion x y z w (4), q_arm (n) [rad], q_leaf (nl)],
+ *             v = [v_l (3) [m/s] (velocity of S in base axes), omega_B (3) [rad/s], qd (n),
+ *             qd_leaf (nl)]; planar q = [x, y, cos th, sin th, q_arm, q_leaf],
+ *             v = [v_l,x, v_l,y, omega_z, qd, qd_leaf]; the leaves: the panels' deflections
+ *             [rad], then the slosh modes' strokes [m] (nl = n_flex + n_slosh, 0 by default)
+ *   m_p [kg]  propellant left (0 without propellant model; with slosh modes it includes their
+ *             masses, which the thrusters never draw: m_p >= their total)
  *   P_x [N.s], L_x [N.m.s]: momentum carried away by the expelled propellant (inertial; L_x
  *             about the inertial origin): P + P_x - P(0) = J, L + L_x - L(0) = H.
  *
@@ -58,6 +68,7 @@
 #include <stddef.h>
 
 #include "arm.h"
+#include "body.h"
 #include "dynamics.h"
 #include "sample.h"
 #include "sr_api.h"
@@ -86,8 +97,17 @@ extern "C" {
                                  "inertial origin, inertial")                                     \
     X(BASE_NOW, "base_now", 10, 0, "kg, m, kg.m2", "the base's truth now: m, b (3) (com, base "   \
                   "frame), Ixx Iyy Izz Ixy Ixz Iyz (about the com, base frame): the dry base "    \
-                  "plus the propellant left")                                                     \
-    X(EXCITE_RATE, "excite_rate", 1, 0, "1", "excitation rate in effect (frequency multiplier)")
+                  "plus the propellant left, plus the panels at rest and the slosh masses at "    \
+                  "their equilibrium (the composite rigid base)")                                 \
+    X(EXCITE_RATE, "excite_rate", 1, 0, "1", "excitation rate in effect (frequency multiplier)")  \
+    X(FLEX_P, "flex_P", 3, 0, "N.s", "linear momentum of the flexible parts: the system's minus "  \
+                "that of the composite rigid body at the same base and arm motion, inertial")     \
+    X(FLEX_L, "flex_L", 3, 0, "N.m.s", "angular momentum of the flexible parts (likewise), about " \
+                "the inertial origin, inertial")                                                  \
+    X(FLEX_Q, "flex_q", SR_PLANT_MAX_FLEX, 0, "rad", "panel deflections (0 past flex.n)")         \
+    X(FLEX_QD, "flex_qd", SR_PLANT_MAX_FLEX, 0, "rad/s", "panel deflection rates")                \
+    X(SLOSH_X, "slosh_x", SR_PLANT_MAX_SLOSH, 0, "m", "slosh strokes (0 past slosh.n)")           \
+    X(SLOSH_V, "slosh_v", SR_PLANT_MAX_SLOSH, 0, "m/s", "slosh stroke rates")
 
 /** The outputs in the order of the output vector: the sample's signals (SR_PLANT_Y_R_S ...
  *  SR_PLANT_Y_H, in sample.h's order), then SR_PLANT_OUTPUTS. */
@@ -111,8 +131,13 @@ enum sr_plant_output {
      + (n) * (0 SR_SAMPLE_SIGNALS(SR_PLANT_Y_PER_JOINT_S_)                                      \
               SR_PLANT_OUTPUTS(SR_PLANT_Y_PER_JOINT_)))
 
-/** Largest configuration, velocity, state and output sizes (spatial, SR_MAX_JOINTS joints). */
-#define SR_PLANT_MAX_NQ (7 + SR_MAX_JOINTS)
+/** Most panels and slosh modes (the leaves of the rigid-body model, dynamics.h). */
+#define SR_PLANT_MAX_FLEX 4
+#define SR_PLANT_MAX_SLOSH 4
+#define SR_PLANT_MAX_LEAVES (SR_PLANT_MAX_FLEX + SR_PLANT_MAX_SLOSH)
+/** Largest configuration, velocity, state and output sizes (spatial, SR_MAX_JOINTS joints,
+ *  SR_PLANT_MAX_LEAVES leaves). */
+#define SR_PLANT_MAX_NQ (7 + SR_MAX_JOINTS + SR_PLANT_MAX_LEAVES)
 #define SR_PLANT_MAX_NV SR_DYN_MAX_NV
 #define SR_PLANT_MAX_NX (6 + SR_PLANT_MAX_NQ + SR_PLANT_MAX_NV + 7)
 #define SR_PLANT_MAX_NY SR_PLANT_NY(SR_MAX_JOINTS)
@@ -148,10 +173,18 @@ enum sr_plant_output {
 #define SR_PLANT_RATE_MAX 10.0
 #define SR_PLANT_LEVEL_MIN 0.0
 #define SR_PLANT_LEVEL_MAX 1.0
+/* the flexible parts: frequencies [Hz], and the largest 2 pi f h of a panel or slosh mode in
+ * use (RK4's stability limit is 2.8; the modes of the free spacecraft lie above the
+ * cantilevered ones) */
+#define SR_PLANT_FREQ_MIN 1e-3
+#define SR_PLANT_FREQ_MAX 100.0
+#define SR_PLANT_STEP_PHASE_MAX 0.25
 
 /* X(field, dims, FMI name, unit, min, max, description): the fields of a parameter struct, in
  * the order of the FMU's variables. dims is empty for a number, [3] for a 3-vector (FMI names
- * <name>[1..3]); every field is a double (or 3). */
+ * <name>[1..3]); every field is a double (or 3). The panels' and slosh modes' structs are
+ * records of which the FMU has SR_PLANT_MAX_FLEX (SR_PLANT_MAX_SLOSH): FMI names
+ * <name>[i] for a number of record i, <name>[i,k] for element k of a 3-vector (1-based). */
 
 /** Controller gains and bounds (spacerobot.robots.Controller; FMU names as the fields): eq. 41
  *  F_i = K_F P_i within |P_i| < P_max, bounded by F_max; eq. 40 M_i = K_M L_c,i within
@@ -207,6 +240,60 @@ enum sr_plant_output {
       "axis costs the thrust abs(M_i) / arm)")                                                    \
     X(r, [3], "prop.r", "m", -1e3, 1e3, "Centre of the propellant tank, base frame B (origin S)")
 
+/** A hinged panel (a flexible appendage; FMU names flex.<field>[i]): a rigid body on a
+ *  revolute joint of the base with a torsional spring and damper, k = I_h (2 pi f)^2,
+ *  c = 2 zeta (2 pi f) I_h, I_h its inertia about the hinge axis. Geometry at rest (deflection
+ *  0), base frame. */
+#define SR_PLANT_FLEX_FIELDS(X)                                                                 \
+    X(m, , "flex.m", "kg", SR_BODY_MASS_MIN, SR_BODY_MASS_MAX, "Panel mass")                      \
+    X(com, [3], "flex.com", "m", -SR_BODY_COM_MAX, SR_BODY_COM_MAX,                               \
+      "Panel centre of mass at rest (deflection 0), base frame B (origin S)")                     \
+    X(Ixx, , "flex.Ixx", "kg.m2", SR_BODY_INERTIA_MIN, SR_BODY_INERTIA_MAX,                       \
+      "Panel inertia tensor element Ixx about its centre of mass, base axes at rest")             \
+    X(Iyy, , "flex.Iyy", "kg.m2", SR_BODY_INERTIA_MIN, SR_BODY_INERTIA_MAX,                       \
+      "Panel inertia tensor element Iyy about its centre of mass, base axes at rest")             \
+    X(Izz, , "flex.Izz", "kg.m2", SR_BODY_INERTIA_MIN, SR_BODY_INERTIA_MAX,                       \
+      "Panel inertia tensor element Izz about its centre of mass, base axes at rest")             \
+    X(Ixy, , "flex.Ixy", "kg.m2", -SR_BODY_PRODUCT_MAX, SR_BODY_PRODUCT_MAX,                      \
+      "Panel inertia tensor element Ixy (minus the product of inertia), base axes at rest")       \
+    X(Ixz, , "flex.Ixz", "kg.m2", -SR_BODY_PRODUCT_MAX, SR_BODY_PRODUCT_MAX,                      \
+      "Panel inertia tensor element Ixz (minus the product of inertia), base axes at rest")       \
+    X(Iyz, , "flex.Iyz", "kg.m2", -SR_BODY_PRODUCT_MAX, SR_BODY_PRODUCT_MAX,                      \
+      "Panel inertia tensor element Iyz (minus the product of inertia), base axes at rest")       \
+    X(hinge, [3], "flex.hinge", "m", -SR_BODY_COM_MAX, SR_BODY_COM_MAX,                           \
+      "A point of the panel's hinge axis, base frame B")                                          \
+    X(axis, [3], "flex.axis", "1", -1.0, 1.0,                                                     \
+      "Direction of the hinge axis, base frame B (normalised; not zero; the deflection turns "    \
+      "the panel about it by the right-hand rule; planar robots: along z)")                       \
+    X(f, , "flex.f", "Hz", SR_PLANT_FREQ_MIN, SR_PLANT_FREQ_MAX,                                  \
+      "Cantilevered frequency (base held): stiffness k = I_h (2 pi f)^2, I_h the panel's "        \
+      "inertia about the hinge axis")                                                             \
+    X(zeta, , "flex.zeta", "1", 0.0, 1.0,                                                         \
+      "Damping ratio of the cantilevered mode: damping c = 2 zeta (2 pi f) I_h")                  \
+    X(q0, , "flex.q0", "rad", -3.141592653589793, 3.141592653589793, "Initial deflection")        \
+    X(qd0, , "flex.qd0", "rad/s", -SR_PLANT_OMEGA0_MAX, SR_PLANT_OMEGA0_MAX,                      \
+      "Initial deflection rate")
+
+/** A propellant slosh mode (FMU names slosh.<field>[i]): the spring-mass equivalent of one
+ *  lateral mode, a point mass on a prismatic joint of the base with a spring and damper,
+ *  k = m (2 pi f)^2, c = 2 zeta (2 pi f) m. With a propellant model (prop.m0 > 0) the slosh
+ *  masses are part of the propellant. */
+#define SR_PLANT_SLOSH_FIELDS(X)                                                                \
+    X(m, , "slosh.m", "kg", SR_BODY_MASS_MIN, SR_BODY_MASS_MAX,                                   \
+      "Slosh mass (with prop.m0 > 0 a part of the propellant, not an addition)")                  \
+    X(r, [3], "slosh.r", "m", -SR_BODY_COM_MAX, SR_BODY_COM_MAX,                                  \
+      "Equilibrium point of the slosh mass, base frame B")                                        \
+    X(axis, [3], "slosh.axis", "1", -1.0, 1.0,                                                    \
+      "Direction of its motion, base frame B (normalised; not zero; planar robots: in the "       \
+      "x-y plane)")                                                                               \
+    X(f, , "slosh.f", "Hz", SR_PLANT_FREQ_MIN, SR_PLANT_FREQ_MAX,                                 \
+      "Frequency of the mode with the base held: stiffness k = m (2 pi f)^2")                    \
+    X(zeta, , "slosh.zeta", "1", 0.0, 1.0, "Damping ratio of the mode: damping c = 2 zeta "       \
+      "(2 pi f) m")                                                                               \
+    X(x0, , "slosh.x0", "m", -SR_BODY_COM_MAX, SR_BODY_COM_MAX,                                   \
+      "Initial stroke from the equilibrium point along the axis")                                 \
+    X(v0, , "slosh.v0", "m/s", -SR_PLANT_V0_MAX, SR_PLANT_V0_MAX, "Initial stroke rate")
+
 #define SR_PLANT_FIELD_(field, dims, fmi, unit, lo, hi, what) double field dims;
 typedef struct sr_plant_controller {
     SR_PLANT_CONTROLLER_FIELDS(SR_PLANT_FIELD_)
@@ -219,20 +306,33 @@ typedef struct sr_plant_excitation {
 typedef struct sr_plant_propellant {
     SR_PLANT_PROPELLANT_FIELDS(SR_PLANT_FIELD_)
 } sr_plant_propellant;
+
+typedef struct sr_plant_panel {
+    SR_PLANT_FLEX_FIELDS(SR_PLANT_FIELD_)
+} sr_plant_panel;
+
+typedef struct sr_plant_slosh {
+    SR_PLANT_SLOSH_FIELDS(SR_PLANT_FIELD_)
+} sr_plant_slosh;
 #undef SR_PLANT_FIELD_
 
 /** The parameter structs, for sr_plant_field_* (the tables above). */
 enum sr_plant_table {
     SR_PLANT_TABLE_CONTROLLER = 0, SR_PLANT_TABLE_EXCITATION, SR_PLANT_TABLE_PROPELLANT,
-    SR_PLANT_TABLE_COUNT
+    SR_PLANT_TABLE_FLEX, SR_PLANT_TABLE_SLOSH, SR_PLANT_TABLE_COUNT
 };
 
 /* -- model and data ---------------------------------------------------------------------------- */
 
 /** The constant model (filled by sr_plant_model_init; read-only afterwards). */
 typedef struct sr_plant_model {
-    sr_dyn_model dyn;                    /* robot + target on the dry base */
+    sr_dyn_model dyn;                    /* robot + target on the dry base, with the leaves */
+    sr_dyn_model rigid;                  /* the composite rigid body the controllers know: the
+                                            robot + target on the dry base + the leaves at rest
+                                            (used when nl > 0) */
     int planar, n, nq, nv, nb, nx, ny;   /* nb = 3 planar / 6 spatial */
+    int nq0;                             /* the base's coordinates: 4 planar / 7 spatial */
+    int n_flex, n_slosh, nl;             /* panels, slosh modes, leaves (their sum) */
     int n_att;                           /* attitude channels: 1 planar (z), 3 spatial */
     int n_ch;                            /* excitation channels n_att + n */
     int y_at[SR_PLANT_Y_COUNT + 1];      /* output k occupies y[y_at[k] .. y_at[k + 1]) */
@@ -245,6 +345,12 @@ typedef struct sr_plant_model {
     double m0;                           /* initial propellant mass [kg] */
     double dry[10];                      /* dry base: m, b (3), Ixx Iyy Izz Ixy Ixz Iyz */
     double dry_hB[3], dry_IS[9];         /* dry base first moment m b and inertia about S */
+    double k_leaf[SR_PLANT_MAX_LEAVES];  /* springs [N.m/rad or N/m] of the leaves */
+    double c_leaf[SR_PLANT_MAX_LEAVES];  /* dampers [N.m.s/rad or N.s/m] */
+    double rest_m, rest_hB[3], rest_IS[9];   /* the leaves at rest: mass, first moment and
+                                            inertia about S (base axes) */
+    double m_slosh;                      /* slosh mass that is part of the propellant [kg]
+                                            (0 without propellant model) */
     double x0[SR_PLANT_MAX_NX];          /* initial state (sr_plant_start) */
 } sr_plant_model;
 
@@ -263,6 +369,7 @@ typedef struct sr_plant_data {
     /* -- work space ------------------------------------------------------------------- */
     sr_dyn_model dyn;                    /* the model's dyn with the base of the current
                                             stage's propellant mass */
+    sr_dyn_model rigid;                  /* the model's rigid likewise */
     sr_dyn_data dd;
     double K[4][SR_PLANT_MAX_NX];        /* RK4 stage derivatives */
     double xa[SR_PLANT_MAX_NX], xs[SR_PLANT_MAX_NX], xn[SR_PLANT_MAX_NX];
@@ -270,12 +377,19 @@ typedef struct sr_plant_data {
     double gen[SR_PLANT_MAX_NV], acc[SR_PLANT_MAX_NV], ddq[SR_PLANT_MAX_NV];
     double FM[7];                        /* held thrust [F, M] (inertial), mass flow [kg/s] */
     double M[SR_PLANT_MAX_NV * SR_PLANT_MAX_NV], nle[SR_PLANT_MAX_NV], hg[6], com[3];
+    /* the composite rigid body's terms at the same base and arm state (nl > 0): M (nb + n
+     * square), nle, hg, com */
+    double Mr[(6 + SR_MAX_JOINTS) * (6 + SR_MAX_JOINTS)], nle_r[6 + SR_MAX_JOINTS], hg_r[6];
+    double com_r[3];
+    /* the controllers' solves of the free rows: the factor of M_uu, [X, y0] */
+    double Luu[(6 + SR_PLANT_MAX_LEAVES) * (6 + SR_PLANT_MAX_LEAVES)];
+    double sol_u[(6 + SR_PLANT_MAX_LEAVES) * (SR_MAX_JOINTS + 1)];
     double trig[SR_PLANT_MAX_CHANNELS][4];   /* sin, cos of both phases of every channel at
                                             trig_t (NaN: none) */
     double trig_t;
-    double q_anc[SR_MAX_JOINTS];         /* arm angles of the last anchor [rad] */
-    double sc_anc[2 * SR_MAX_JOINTS];    /* their sines and cosines (n x 2, sr_sincos) */
-    double sc[2 * SR_MAX_JOINTS];        /* those of the current RK4 stage (n x 2) */
+    double q_anc[SR_DYN_MAX_COORDS];     /* arm (and leaf) angles of the last anchor [rad] */
+    double sc_anc[2 * SR_DYN_MAX_COORDS];    /* their sines and cosines ((n + nl) x 2) */
+    double sc[2 * SR_DYN_MAX_COORDS];    /* those of the current RK4 stage ((n + nl) x 2) */
     double A_s[9];                       /* DCM of the RK4 stage state xs (3 x 3) */
 } sr_plant_data;
 
@@ -295,13 +409,31 @@ SR_API int sr_plant_model_init(sr_plant_model *model, const sr_robot *robot, con
                                const double *q_home, const double v0[3], const double w0[3],
                                double h, char *err, size_t errlen);
 
-/** sizeof(sr_plant_model), sizeof(sr_plant_data), sizeof(the three parameter structs), for
+/** Add the flexible parts to a model sr_plant_model_init built (once, before sr_plant_start):
+ *  n_flex panels (0..SR_PLANT_MAX_FLEX) and n_slosh slosh modes (0..SR_PLANT_MAX_SLOSH).
+ *  flex: SR_PLANT_MAX_FLEX records, slosh: SR_PLANT_MAX_SLOSH records (either may be NULL
+ *  when its count is 0): every record is checked against its table's ranges (the FMU has
+ *  them all); the first n_flex (n_slosh) are the parts. A part in use must also be real (a
+ *  panel's inertia by body.h's rule, an axis not zero), slow enough for the step
+ *  (2 pi f h <= SR_PLANT_STEP_PHASE_MAX) and, on a planar robot, move in the plane (hinge
+ *  axis along z, slosh axis in x-y); with a propellant model the slosh masses in use must not
+ *  exceed prop.m0 (they are part of the propellant; the thrusters draw only the rest).
+ *  Initial state: the deflections and strokes q0, x0 at rates qd0, v0. With n_flex = n_slosh
+ *  = 0 the model is left as it was. Returns 0, or SR_PLANT_EARG (model zeroed) with a one-line
+ *  message in err naming the parameter by its FMU name (e.g. "flex.f[2]", "slosh.m"). */
+SR_API int sr_plant_model_set_leaves(sr_plant_model *model, int n_flex,
+                                     const sr_plant_panel *flex, int n_slosh,
+                                     const sr_plant_slosh *slosh, char *err, size_t errlen);
+
+/** sizeof(sr_plant_model), sizeof(sr_plant_data), sizeof(the parameter structs), for
  *  bindings that allocate them. */
 SR_API size_t sr_plant_model_size(void);
 SR_API size_t sr_plant_data_size(void);
 SR_API size_t sr_plant_controller_size(void);
 SR_API size_t sr_plant_excitation_size(void);
 SR_API size_t sr_plant_propellant_size(void);
+SR_API size_t sr_plant_flex_size(void);
+SR_API size_t sr_plant_slosh_size(void);
 
 /** Sizes of the model: nq, nv, nx (state vector), ny (output vector), n (joints); any pointer
  *  may be NULL. Returns 0 or SR_PLANT_EARG (model NULL or not initialised). */
@@ -326,7 +458,11 @@ SR_API const char *sr_plant_output_description(int k);
  *  their number (-1 for a table out of range); field i's C name ("F_max", "r"), FMI name
  *  ("F_max", "excite.ramp", "prop.r": a 3-vector's variables are prop.r[1..3]), unit and
  *  description (NULL out of range); its number of doubles (1 or 3) and its offset in the
- *  struct in bytes (-1 out of range); its range in *min, *max (0, or 1 out of range). */
+ *  struct in bytes (-1 out of range); its range in *min, *max (0, or 1 out of range).
+ *  sr_plant_table_records: how many records of the struct the FMU has (1; the panels'
+ *  SR_PLANT_MAX_FLEX, the slosh modes' SR_PLANT_MAX_SLOSH: FMI names <name>[i], <name>[i,k]);
+ *  -1 for a table out of range. */
+SR_API int sr_plant_table_records(int table);
 SR_API int sr_plant_field_count(int table);
 SR_API const char *sr_plant_field_name(int table, int i);
 SR_API const char *sr_plant_field_fmi_name(int table, int i);
@@ -336,10 +472,12 @@ SR_API int sr_plant_field_size(int table, int i);
 SR_API long sr_plant_field_offset(int table, int i);
 SR_API int sr_plant_field_range(int table, int i, double *min, double *max);
 
-/** The FMI name of the plant FMU's Real parameter or input number i (0, 1, ...), in the FMU's
+/** The FMI name of the plant FMU's parameter or input number i (0, 1, ...), in the FMU's
  *  order: the bodies (base.m, base.b[1] ... base.Iyz, target.*), base.v0[1..3],
  *  base.omega0[1..3], the controller, h, the inputs ident.excite and ident.excite_rate, the
- *  excitation, the propellant; into name (size bytes, NUL-terminated; 64 suffice).
+ *  excitation, the propellant, the panels (flex.n, then flex.m[1..4], flex.com[1,1] ...) and
+ *  the slosh modes (slosh.n, slosh.m[1..4], ...); into name (size bytes, NUL-terminated; 64
+ *  suffice). All are Real but the counts flex.n and slosh.n (Integer).
  *  Returns 0, or 1 past the last (name untouched). */
 SR_API int sr_plant_param_name(int i, char *name, size_t size);
 
@@ -416,7 +554,8 @@ SR_API int sr_plant_controls(const sr_plant_model *model, sr_plant_data *data, d
 
 /** The base's truth now: out (10) = m [kg], b (3) [m], Ixx Iyy Izz Ixy Ixz Iyz [kg.m2] (about
  *  the com, base frame): the dry base plus the propellant left (parallel axes); the dry base
- *  without propellant model. Returns 0 or SR_PLANT_EARG. */
+ *  without propellant model; with flexible parts the composite rigid base (plus the panels at
+ *  rest and the slosh masses at their equilibrium). Returns 0 or SR_PLANT_EARG. */
 SR_API int sr_plant_base_now(const sr_plant_model *model, const sr_plant_data *data,
                              double *out);
 
@@ -434,7 +573,8 @@ SR_API int sr_plant_get_state(const sr_plant_model *model, const sr_plant_data *
                               double *x, double *ex);
 
 /** Set the state: t finite, x (nx) finite with a unit quaternion (planar: a unit (cos, sin)
- *  pair) within 1e-6 and 0 <= m_p <= m0 (1 + 1e-12), ex (as sr_plant_get_state's) finite with
+ *  pair) within 1e-6 and m_slosh <= m_p <= m0 (1 + 1e-12) (m_slosh: the slosh masses that are
+ *  part of the propellant, else 0), ex (as sr_plant_get_state's) finite with
  *  T > 0, the levels s0, u, requested in [0, 1] and both rates in [SR_PLANT_RATE_MIN,
  *  SR_PLANT_RATE_MAX] (NULL: [0, 0, 0, excitation.ramp, 0, 1, 1]). Returns 0, or SR_PLANT_EARG
  *  (data unchanged) with a message in err (errlen bytes; err may be NULL). */

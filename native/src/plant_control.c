@@ -1,6 +1,12 @@
 /* The plant's controllers (plant.h): the thrusters' bounded momentum laws (eqs. 40-41) and the
  * arm's attitude law (eq. 39) with the null-space posture and the excitation's references,
- * the thrust limited by the propellant left. */
+ * the thrust limited by the propellant left.
+ *
+ * With flexible parts the controllers are those of the composite rigid body (the base with
+ * the panels at rest and the slosh masses at their equilibrium): the attitude law is solved
+ * on its dynamics at the measured base and arm state, the thrusters act on the system's
+ * momentum; the joints follow the commanded accelerations and the base and the parts respond
+ * as the true dynamics say (the free rows solved with the arm's accelerations given). */
 #include <math.h>
 
 #include "linalg.h"
@@ -47,24 +53,54 @@ static int factor_status(int st, int singular)
     return st == 1 ? singular : SR_PLANT_ENONFINITE;
 }
 
-/* Thruster and arm commands at the normalised configuration q, velocity v:
- * M (nv x nv), nle (nv), hg (6) = [P, L_c] the rigid-body terms there; ct the controller;
- * t, ramp the excitation (its sines: d->trig where d->trig_t is t, else evaluated here into
- * d->trig). Writes FM[0..5] = [F, M] (inertial), gen (nv) = [f_b, tau] and
- * acc (nv) = dv/dt (M acc + nle = gen by construction). Returns 0, SR_PLANT_ESINGULAR_*, or
- * SR_PLANT_ENONFINITE for a non-finite matrix on the way. */
+/* The free rows u (nu) of M a + nle = gen (M ld x ld, row-major) with the accelerations of the
+ * n rows a0 .. a0 + n - 1 (the arm's) given: M_uu a_u = (gen_u - nle_u) - M_ua qdd. Factors
+ * M_uu (gathered into L, nu x nu) and solves [X, y0] = M_uu^-1 [M_ua, gen_u - nle_u] into
+ * sol (nu x (n + 1)), so that a_u = y0 - X qdd. Returns sr_cholesky's status (0, 1 not
+ * positive definite, 2 a non-finite pivot). */
+static int free_rows(const double *M, int ld, const int *u, int nu, int a0, int n,
+                     const double *gen, const double *nle, double *L, double *sol)
+{
+    const int w = n + 1;
+    int i, j, st;
+    for (i = 0; i < nu; i++)
+        for (j = 0; j < nu; j++)
+            L[i * nu + j] = M[u[i] * ld + u[j]];
+    if ((st = sr_cholesky(L, nu)) != 0)
+        return st;
+    for (i = 0; i < nu; i++) {
+        for (j = 0; j < n; j++)
+            sol[i * w + j] = M[u[i] * ld + a0 + j];
+        sol[i * w + n] = gen[u[i]] - nle[u[i]];
+    }
+    sr_cholesky_solve(L, nu, sol, w);
+    return 0;
+}
+
+/* Thruster and arm commands at the normalised configuration q, velocity v, with the
+ * rigid-body terms there in d: M (nv x nv), nle (nv), hg (6) = [P, L_c]; the controllers'
+ * model's (nl > 0: the composite rigid body's Mr ((nb + n) square), nle_r; else M, nle
+ * themselves); ct the controller; t, ramp the excitation (its sines: d->trig where d->trig_t
+ * is t, else evaluated here into d->trig). Writes FM[0..5] = [F, M] (inertial),
+ * gen (nv) = [f_b, tau, the leaves' spring and damper forces (kept)] and acc (nv) = dv/dt
+ * (M acc + nle = gen by construction). Returns 0, SR_PLANT_ESINGULAR_*, or SR_PLANT_ENONFINITE
+ * for a non-finite matrix on the way. */
 static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, const double *v,
-                   const double *M, const double *nle, const double *hg,
                    const sr_plant_controller *ct,
                    double t, const double *ramp, double *gen, double *acc, double *FM)
 {
-    const int nv = md->nv, nb = md->nb, n = md->n, r = md->n_att, r0 = nb - r, nq = md->nq;
+    const int nv = md->nv, nb = md->nb, n = md->n, r = md->n_att, r0 = nb - r, nq0 = md->nq0;
     const double KD = ct->K_D, KP = ct->K_P, KPn = ct->K_Pn, KDn = ct->K_Dn, qdd_max = ct->qdd_max;
-    double e[3], Lb[36], sol[6 * (SR_MAX_JOINTS + 1)], Lm[SR_MAX_JOINTS * SR_MAX_JOINTS];
+    const double *M = d->M, *nle = d->nle, *hg = d->hg;
+    const double *Mr = md->nl > 0 ? d->Mr : M, *nle_r = md->nl > 0 ? d->nle_r : nle;
+    const int ldr = nb + n;                         /* Mr's rows */
+    double e[3], Lb[36], sol[6 * (SR_MAX_JOINTS + 1)];
+    double Lm[SR_MAX_JOINTS * SR_MAX_JOINTS];
     double WiGt[SR_MAX_JOINTS * 3], GWG[9], Lg[9], zv[3], rhs[3], post[SR_MAX_JOINTS];
     double lev[3], lam[3], U[9], peak;
+    const double *sol_b = sol;                      /* [X, y0] of the base's response */
     const int w = n + 1;                            /* row length of sol: [X, y0] */
-    int i, j, p, k, plain, st;
+    int i, j, p, k, plain, st, u[6 + SR_PLANT_MAX_LEAVES], nu = nb;
     for (i = 0; i < 3; i++) {
         FM[i] = bounded_law(hg[i], ct->K_F, ct->P_max, ct->F_max);          /* eq. 41 (P) */
         FM[3 + i] = bounded_law(hg[3 + i], ct->K_M, ct->L_max, ct->M_max);  /* eq. 40 (L_c) */
@@ -97,22 +133,18 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
         e[1] = kk * y;
         e[2] = kk * z;
     }
-    /* base rows: M_bb dv_b + M_bm qdd = f_b - c_b  ->  dv_b = y0 - X qdd */
-    if ((st = factor(M, nv, nb, Lb)) != 0)
+    /* base rows (the controllers' model): M_bb dv_b + M_bm qdd = f_b - c_b -> dv_b = y0 - X qdd */
+    for (i = 0; i < nb; i++)
+        u[i] = i;
+    if ((st = free_rows(Mr, ldr, u, nb, nb, n, gen, nle_r, Lb, sol)) != 0)   /* [X, y0] */
         return factor_status(st, SR_PLANT_ESINGULAR_BASE);
-    for (i = 0; i < nb; i++) {
-        for (j = 0; j < n; j++)
-            sol[i * w + j] = M[i * nv + nb + j];
-        sol[i * w + n] = gen[i] - nle[i];
-    }
-    sr_cholesky_solve(Lb, nb, sol, w);              /* [X, y0] */
     /* attitude rows: G qdd = y0_rot - alpha_des with G = X_rot; W = M_mm weights the solve */
-    if ((st = factor(M + nb * nv + nb, nv, n, Lm)) != 0)
+    if ((st = factor(Mr + nb * ldr + nb, ldr, n, Lm)) != 0)
         return factor_status(st, SR_PLANT_ESINGULAR_ARM);
     for (i = 0; i < n; i++)
         for (j = 0; j < r; j++)
             WiGt[i * r + j] = sol[(r0 + j) * w + i];
-    sr_cholesky_solve(Lm, n, WiGt, r);              /* W^-1 G^T */
+    sr_cholesky_solve(Lm, n, WiGt, r);                      /* W^-1 G^T */
     for (i = 0; i < r; i++)
         for (j = 0; j < r; j++) {
             double s = 0.0;
@@ -122,7 +154,7 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
         }
     /* posture: -K_Pn (q - q_home) - K_Dn qd */
     for (i = 0; i < n; i++)
-        post[i] = -KPn * (q[nq - n + i] - md->q_home[i]) - KDn * v[nb + i];
+        post[i] = -KPn * (q[nq0 + i] - md->q_home[i]) - KDn * v[nb + i];
     /* eq. 39: alpha_des = -K_D omega - K_P e; rhs_att = y0_rot - alpha_des - G post */
     for (j = 0; j < r; j++)
         rhs[j] = sol[(r0 + j) * w + n] + KD * v[r0 + j] + KP * e[3 - r + j];
@@ -214,11 +246,21 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
         for (i = 0; i < n; i++)
             acc[nb + i] *= f;
     }
-    for (i = 0; i < nb; i++) {                      /* dv_b = y0 - X qdd */
-        double s = sol[i * w + n];
+    /* the free rows' response to qdd (the true dynamics): without flexible parts the
+     * controllers' solve of the base rows; with them the base's and the leaves' rows of M */
+    if (md->nl > 0) {
+        for (j = 0; j < md->nl; j++)
+            u[nb + j] = nb + n + j;
+        nu = nb + md->nl;
+        if ((st = free_rows(M, nv, u, nu, nb, n, gen, nle, d->Luu, d->sol_u)) != 0)
+            return factor_status(st, SR_PLANT_ESINGULAR_BASE);
+        sol_b = d->sol_u;
+    }
+    for (i = 0; i < nu; i++) {                      /* dv_u = y0 - X qdd */
+        double s = sol_b[i * w + n];
         for (p = 0; p < n; p++)
-            s -= sol[i * w + p] * acc[nb + p];
-        acc[i] = s;
+            s -= sol_b[i * w + p] * acc[nb + p];
+        acc[u[i]] = s;
     }
     for (i = 0; i < n; i++) {                       /* tau = M_m. acc + c_m (arm rows) */
         double s = nle[nb + i];
@@ -229,8 +271,8 @@ static int control(const sr_plant_model *md, sr_plant_data *d, const double *q, 
     return SR_PLANT_OK;
 }
 
-/* control() limited by the propellant m_p [kg] available for a step of dt: when the flow would
- * need more than m_p, the thrust is scaled by s = m_p / (flow dt) (the gains and bounds of both
+/* control() limited by the propellant m_p [kg] available for a step of dt (less the slosh
+ * masses, which stay): when the flow would need more than that, the thrust is scaled by s = m_p / (flow dt) (the gains and bounds of both
  * thruster laws scaled: bounded_law is then s times the unscaled one) and control() runs again
  * so that the accelerations and torques are those of the scaled thrust. FM[6] = the flow
  * (0 without propellant model). */
@@ -241,14 +283,14 @@ int plant_thrust_control(const sr_plant_model *md, sr_plant_data *d, double t,
     double flow, need, s;
     int err;
     const double *pp = md->pp;
-    err = control(md, d, d->qn, d->vs, d->M, d->nle, d->hg, &md->ctrl, t, ramp, d->gen, d->acc,
-                  d->FM);
+    err = control(md, d, d->qn, d->vs, &md->ctrl, t, ramp, d->gen, d->acc, d->FM);
     if (err || pp[0] == 0.0) {
         d->FM[6] = 0.0;
         return err;
     }
     flow = plant_mass_flow(d->FM, pp);
     need = flow * dt;
+    m_p -= md->m_slosh;                             /* what the thrusters may draw */
     if (need <= m_p) {
         d->FM[6] = flow;
         return SR_PLANT_OK;
@@ -259,8 +301,7 @@ int plant_thrust_control(const sr_plant_model *md, sr_plant_data *d, double t,
     scaled.F_max *= s;
     scaled.K_M *= s;
     scaled.M_max *= s;
-    err = control(md, d, d->qn, d->vs, d->M, d->nle, d->hg, &scaled, t, ramp, d->gen, d->acc,
-                  d->FM);
+    err = control(md, d, d->qn, d->vs, &scaled, t, ramp, d->gen, d->acc, d->FM);
     d->FM[6] = plant_mass_flow(d->FM, pp);
     return err;
 }

@@ -1,5 +1,6 @@
 /* The plant's propellant (plant.h): the mass flow of the thrust, the base's inertia with the
- * propellant left, the momentum the expelled propellant carries away. */
+ * propellant left, the momentum the expelled propellant carries away. With slosh modes the
+ * propellant's rigid part is m_p less their masses (plant_leaves.c), which stay. */
 #include <math.h>
 
 #include "plant_internal.h"
@@ -12,25 +13,44 @@ double plant_mass_flow(const double *FM, const double *pp)
             + (fabs(FM[3]) + fabs(FM[4]) + fabs(FM[5])) * pp[1]) * pp[0];
 }
 
-/* the base of d->dyn with m_p [kg] of propellant: spatial inertias add, so the base's is the
- * dry one plus m_p times that of 1 kg of propellant at r (I_S += m_p ((2/5) R^2 + |r|^2) 1 -
- * m_p r r^T). Nothing to do without propellant model. Returns 0, or
- * SR_PLANT_ENONFINITE for a non-finite or non-positive resulting mass. */
-int plant_base_inertia(const sr_plant_model *md, sr_plant_data *d, double m_p)
+/* the base with m_p [kg] of propellant as a spatial inertia at S (base axes): spatial
+ * inertias add, so it is the dry one plus the rigid part m_r = m_p - m_slosh times that of
+ * 1 kg of propellant at r: *m = m_d + m_r, hB = m_d b_d + m_r r,
+ * IS = I_S,d + m_r ((2/5) R^2 + |r|^2) 1 - m_r r r^T (the dry base without propellant model) */
+void plant_base_spatial(const sr_plant_model *md, double m_p, double *m, double *hB,
+                        double *IS)
 {
-    const double *pp = md->pp, *rt = md->pp + 3;
-    double hB[3], IS[9], rr;
+    const double *pp = md->pp, *rt = md->pp + 3, m_r = m_p - md->m_slosh;
+    const double rr = pp[2] + (rt[0] * rt[0] + rt[1] * rt[1] + rt[2] * rt[2]);
     int i, j;
-    if (pp[0] == 0.0)
-        return SR_PLANT_OK;
-    rr = pp[2] + (rt[0] * rt[0] + rt[1] * rt[1] + rt[2] * rt[2]);
     for (i = 0; i < 3; i++) {
-        hB[i] = md->dry_hB[i] + m_p * rt[i];
+        hB[i] = md->dry_hB[i] + m_r * rt[i];
         for (j = 0; j < 3; j++)
             IS[3 * i + j] = md->dry_IS[3 * i + j]
-                            + m_p * ((i == j ? rr : 0.0) - rt[i] * rt[j]);
+                            + m_r * ((i == j ? rr : 0.0) - rt[i] * rt[j]);
     }
-    return sr_dyn_set_base_spatial(&d->dyn, md->dry[0] + m_p, hB, IS) == SR_DYN_OK
+    *m = md->dry[0] + m_r;
+}
+
+/* the base of d->dyn with m_p [kg] of propellant (plant_base_spatial), and with flexible
+ * parts that of d->rigid (plus the parts at rest). Nothing to do without propellant model.
+ * Returns 0, or SR_PLANT_ENONFINITE for a non-finite or non-positive resulting mass. */
+int plant_base_inertia(const sr_plant_model *md, sr_plant_data *d, double m_p)
+{
+    double hB[3], IS[9], m;
+    int i;
+    if (md->pp[0] == 0.0)
+        return SR_PLANT_OK;
+    plant_base_spatial(md, m_p, &m, hB, IS);
+    if (sr_dyn_set_base_spatial(&d->dyn, m, hB, IS) != SR_DYN_OK)
+        return SR_PLANT_ENONFINITE;
+    if (md->nl == 0)
+        return SR_PLANT_OK;
+    for (i = 0; i < 3; i++)
+        hB[i] += md->rest_hB[i];
+    for (i = 0; i < 9; i++)
+        IS[i] += md->rest_IS[i];
+    return sr_dyn_set_base_spatial(&d->rigid, m + md->rest_m, hB, IS) == SR_DYN_OK
            ? SR_PLANT_OK : SR_PLANT_ENONFINITE;
 }
 
@@ -117,8 +137,13 @@ void plant_base_now(const sr_plant_model *md, double m_p, double *out)
 SR_API int sr_plant_base_now(const sr_plant_model *model, const sr_plant_data *data,
                              double *out)
 {
+    double m_p;
     if (!plant_model_ok(model) || data == NULL || out == NULL)
         return SR_PLANT_EARG;
-    plant_base_now(model, data->x[6 + model->nq + model->nv], out);
+    m_p = data->x[6 + model->nq + model->nv];
+    if (model->nl > 0)
+        plant_composite_now(model, m_p, out);
+    else
+        plant_base_now(model, m_p, out);
     return SR_PLANT_OK;
 }

@@ -177,28 +177,31 @@ static void step_sincos(int n, const double *q0, const double *sc0, const double
     }
 }
 
-/* the sines and cosines of the arm's angles of d->qn into d->sc: sr_sincos's (correctly
- * rounded) when anchor is set, which makes d->qn the anchor (d->q_anc, d->sc_anc), else
- * stepped from the anchor's (step_sincos) */
+/* the sines and cosines of the arm's (and the leaves') coordinates of d->qn into d->sc:
+ * sr_sincos's (correctly rounded) when anchor is set, which makes d->qn the anchor (d->q_anc,
+ * d->sc_anc), else stepped from the anchor's (step_sincos); a slosh stroke's are not used */
 static void joint_sincos(const sr_plant_model *md, sr_plant_data *d, int anchor)
 {
-    const double *qa = d->qn + md->nq - md->n;
+    const double *qa = d->qn + md->nq0;
+    const int nc = md->n + md->nl;
     int k;
     if (anchor) {
-        for (k = 0; k < md->n; k++) {
+        for (k = 0; k < nc; k++) {
             sr_sincos(qa[k], &d->sc_anc[2 * k], &d->sc_anc[2 * k + 1]);
             d->q_anc[k] = qa[k];
         }
-        for (k = 0; k < 2 * md->n; k++)
+        for (k = 0; k < 2 * nc; k++)
             d->sc[k] = d->sc_anc[k];
     } else {
-        step_sincos(md->n, d->q_anc, d->sc_anc, qa, d->sc);
+        step_sincos(nc, d->q_anc, d->sc_anc, qa, d->sc);
     }
 }
 
 /* the rigid-body terms and the controls at the state x (time t) for a step of dt, x's
- * configuration already in d->qn, d->vs: d->M, nle, hg, com, gen, acc, FM; the joint
- * placements' sines and cosines as joint_sincos (anchor: afresh) */
+ * configuration already in d->qn, d->vs: d->M, nle, hg, com, gen, acc, FM (with flexible
+ * parts also the composite rigid body's terms d->Mr, nle_r, hg_r, com_r at the same base and
+ * arm state: the prefix of q, v); the joint placements' sines and cosines as joint_sincos
+ * (anchor: afresh) */
 int plant_control_here(const sr_plant_model *md, sr_plant_data *d, const double *x, double t,
                         const double *ramp, double dt, int anchor)
 {
@@ -209,6 +212,12 @@ int plant_control_here(const sr_plant_model *md, sr_plant_data *d, const double 
     if (sr_dyn_terms_sc(&d->dyn, &d->dd, d->qn, d->vs, d->sc, d->M, d->nle, d->hg, d->com)
         != SR_DYN_OK)
         return SR_PLANT_EARG;
+    if (md->nl > 0) {
+        if (sr_dyn_terms_sc(&d->rigid, &d->dd, d->qn, d->vs, d->sc, d->Mr, d->nle_r, d->hg_r,
+                            d->com_r) != SR_DYN_OK)
+            return SR_PLANT_EARG;
+        plant_leaf_forces(md, d);
+    }
     return plant_thrust_control(md, d, t, ramp, x[om], dt);
 }
 
@@ -228,6 +237,7 @@ static int step(const sr_plant_model *md, sr_plant_data *d, double t, double dt,
         if (plant_base_inertia(md, d, d->xs[om]) != SR_PLANT_OK)
             return SR_PLANT_ENONFINITE;
         joint_sincos(md, d, 0);
+        plant_leaf_forces(md, d);
         err = sr_dyn_aba_sc(&d->dyn, &d->dd, d->qn, d->vs, d->gen, d->sc, d->ddq);
         if (err == SR_DYN_EPD)
             return SR_PLANT_ESINGULAR_ABA;
@@ -257,6 +267,8 @@ SR_API int sr_plant_advance(const sr_plant_model *model, sr_plant_data *data, do
     total = n + (rest > 0.0 ? 1 : 0);
     nx = md->nx;
     d->dyn = md->dyn;
+    if (md->nl > 0)
+        d->rigid = md->rigid;
     plant_excitation_update(md, d);                       /* a pending rate whose dip has ended */
     /* work on a copy: d->x, d->t change only when every step succeeded */
     for (j = 0; j < nx; j++)
@@ -272,8 +284,8 @@ SR_API int sr_plant_advance(const sr_plant_model *model, sr_plant_data *data, do
             return err;
         if (!sr_finite_all(d->xn, nx))
             return SR_PLANT_ENONFINITE;
-        if (d->xn[6 + md->nq + md->nv] < 0.0)        /* an emptied tank: round-off below 0 kg */
-            d->xn[6 + md->nq + md->nv] = 0.0;
+        if (d->xn[6 + md->nq + md->nv] < md->m_slosh)  /* an emptied tank: round-off below */
+            d->xn[6 + md->nq + md->nv] = md->m_slosh;
         for (j = 0; j < nx; j++)                    /* stage() left xn's configuration in qn */
             d->xa[j] = d->xn[j];
         t += h;
@@ -301,6 +313,8 @@ SR_API int sr_plant_controls(const sr_plant_model *model, sr_plant_data *data, d
     if (!plant_model_ok(model) || data == NULL)
         return SR_PLANT_EARG;
     data->dyn = model->dyn;
+    if (model->nl > 0)
+        data->rigid = model->rigid;
     data->trig_t = NAN;
     plant_load(model, data->x, data);
     err = plant_control_here(model, data, data->x, data->t, data->ramp, model->h, 1);

@@ -36,10 +36,11 @@ from typing import Optional
 
 import numpy as np
 
-from ..robots import Controller, Excitation, Propellant, RigidBody, Robot
+from ..robots import (Appendages, Controller, Excitation, Propellant, RigidBody, Robot, Slosh)
 from . import dptr, lib as _default_lib
 from .robot_record import SrBody, SrRobot, c_robot
-from .tables import Field, _bind_tables, fields, output_names, parameter_ranges  # noqa: F401
+from .tables import (Field, _bind_tables, fields, output_names, parameter_ranges,  # noqa: F401
+                     records)
 
 __all__ = ["NativePlant", "Controls", "Field", "fields", "output_names", "parameter_ranges",
            "STATUS_OK"]
@@ -51,19 +52,21 @@ EXCITE_STATE = 7
 STATUS_OK = 0
 EARG = 1
 ENONFINITE = 2
-def _pack(L: ctypes.CDLL, table: str, record) -> ctypes.Array:
+def _pack(L: ctypes.CDLL, table: str, *record) -> ctypes.Array:
     """The C struct ``table`` with the values of the Python record (its attributes named as the
-    fields), written at the library's offsets."""
+    fields), written at the library's offsets; several records: an array of the structs."""
     size = getattr(L, f"sr_plant_{table}_size")()
-    buf = (ctypes.c_double * ((size + 7) // 8))()
-    for f in fields(table, L):
-        value = getattr(record, f.name)
-        values = [float(x) for x in value] if f.size > 1 else [float(value)]
-        if len(values) != f.size:
-            raise ValueError(f"{f.fmi} must be {f.size} finite numbers [{f.unit}], got "
-                             f"{list(value)}")
-        struct.pack_into(f"={f.size}d", buf, f.offset, *values)
+    buf = (ctypes.c_double * ((len(record) * size + 7) // 8))()
+    for i, rec in enumerate(record):
+        for f in fields(table, L):
+            value = getattr(rec, f.name)
+            values = [float(x) for x in value] if f.size > 1 else [float(value)]
+            if len(values) != f.size:
+                raise ValueError(f"{f.fmi} must be {f.size} finite numbers [{f.unit}], got "
+                                 f"{list(value)}")
+            struct.pack_into(f"={f.size}d", buf, i * size + f.offset, *values)
     return buf
+
 
 
 @dataclass
@@ -103,12 +106,14 @@ def _bind(L: ctypes.CDLL) -> ctypes.CDLL:
         "sr_plant_references": ([vp, vp, dp], ci),
         "sr_plant_get_state": ([vp, vp, dp, dp, dp], ci),
         "sr_plant_set_state": ([vp, vp, cd, dp, dp, cp, sz], ci),
+        "sr_plant_model_set_leaves": ([vp, ci, vp, ci, vp, cp, sz], ci),
     }
     for name, (args, res) in sig.items():
         f = getattr(L, name)
         f.argtypes, f.restype = args, res
     for name in ("sr_plant_model_size", "sr_plant_data_size", "sr_plant_controller_size",
-                 "sr_plant_excitation_size", "sr_plant_propellant_size"):
+                 "sr_plant_excitation_size", "sr_plant_propellant_size", "sr_plant_flex_size",
+                 "sr_plant_slosh_size"):
         getattr(L, name).argtypes = []
         getattr(L, name).restype = sz
     L._sr_plant_bound = True
@@ -153,6 +158,8 @@ class NativePlant:
     propellant : Propellant
     q_home : (n,), optional   home (and initial) posture; default ``robot.q0``
     lib : the library (default :func:`spacerobot.core.lib`)
+    flex : Appendages         the hinged panels (none by default)
+    slosh : Slosh             the propellant's slosh modes (none by default)
 
     Raises ``ValueError`` with the C core's message (naming the parameter) for bad input.
     """
@@ -160,12 +167,14 @@ class NativePlant:
     def __init__(self, robot, base: RigidBody, target: RigidBody, controller: Controller,
                  v0, omega0, h: float = 1e-3, excitation: Excitation = Excitation(),
                  propellant: Propellant = Propellant(), q_home=None,
-                 lib: Optional[ctypes.CDLL] = None):
+                 lib: Optional[ctypes.CDLL] = None, flex: Appendages = Appendages(),
+                 slosh: Slosh = Slosh()):
         L = _bind(lib or _default_lib())
         self._lib = L
         self._init_args = (robot, base, target, controller, tuple(v0), tuple(omega0), h,
-                           excitation, propellant, q_home, lib)
+                           excitation, propellant, q_home, lib, flex, slosh)
         self.excitation, self.propellant, self.controller = excitation, propellant, controller
+        self.flex, self.slosh = flex, slosh
         self.robot = robot
         self._dry = base
         if isinstance(robot, Robot):
@@ -190,6 +199,12 @@ class NativePlant:
                                    dptr(v0a), dptr(w0a), float(h), err, MSG_LEN)
         if st != STATUS_OK:
             raise ValueError(err.value.decode("ascii", "replace"))
+        panels = _pack(L, "flex", *flex.records(records("flex", L)))
+        modes = _pack(L, "slosh", *slosh.records(records("slosh", L)))
+        st = L.sr_plant_model_set_leaves(self._model, int(flex.n), panels, int(slosh.n), modes,
+                                         err, MSG_LEN)
+        if st != STATUS_OK:
+            raise ValueError(err.value.decode("ascii", "replace"))
         self.h = float(h)
         nq, nv, nx, ny, n = (ctypes.c_int() for _ in range(5))
         L.sr_plant_dims(self._model, *(ctypes.byref(x) for x in (nq, nv, nx, ny, n)))
@@ -212,6 +227,18 @@ class NativePlant:
         if L.sr_plant_start(self._model, self._data) != STATUS_OK:
             raise RuntimeError("sr_plant_start failed")
 
+    @classmethod
+    def of(cls, sc, **change) -> "NativePlant":
+        """The plant of scenario ``sc`` (:class:`spacerobot.robots.Scenario`: its robot, base,
+        target, controller, initial velocities, step, excitation, propellant and flexible
+        parts); ``change``: constructor arguments replaced."""
+        args = dict(robot=sc.robot, base=sc.robot.base, target=sc.target,
+                    controller=sc.controller, v0=sc.v0, omega0=sc.omega0, h=sc.h,
+                    excitation=sc.excitation, propellant=sc.propellant, flex=sc.flex,
+                    slosh=sc.slosh)
+        args.update(change)
+        return cls(**args)
+
     # -- copies ------------------------------------------------------------------------------
     def __deepcopy__(self, memo):
         new = NativePlant(*self._init_args)
@@ -221,8 +248,8 @@ class NativePlant:
 
     def __reduce__(self):
         # the library travels as its path (a CDLL does not pickle)
-        return _restore_native_plant, (self._init_args[:-1], getattr(self._lib, "_name", None),
-                                       self.get_state())
+        args = self._init_args[:10] + (None,) + self._init_args[11:]
+        return _restore_native_plant, (args, getattr(self._lib, "_name", None), self.get_state())
 
     # -- errors ------------------------------------------------------------------------------
     def _raise(self, st: int, what: str) -> None:
@@ -399,8 +426,9 @@ class NativePlant:
 
     def base_now(self) -> RigidBody:
         """The base's truth now: the dry base plus the propellant left (the dry base without
-        propellant model)."""
-        if not self.propellant.active:
+        propellant model); with flexible parts the composite rigid base (plus the panels at
+        rest and the slosh masses at their equilibrium)."""
+        if not self.propellant.active and self.flex.n == 0 and self.slosh.n == 0:
             return self._dry
         out = np.empty(10)
         self._lib.sr_plant_base_now(self._model, self._data, dptr(out))
@@ -410,6 +438,8 @@ class NativePlant:
 
 def _restore_native_plant(args, lib_path, state) -> NativePlant:
     from . import load_library
-    p = NativePlant(*args, lib=load_library(lib_path) if lib_path else None)
+    args = list(args)
+    args[10] = load_library(lib_path) if lib_path else None      # the library's place
+    p = NativePlant(*args)
     p.set_state(state)
     return p

@@ -13,10 +13,11 @@ from typing import Dict, Optional, Tuple
 
 from . import lib as _default_lib
 
-__all__ = ["Field", "fields", "output_names", "parameter_ranges", "TABLES"]
+__all__ = ["Field", "fields", "records", "output_names", "parameter_ranges", "TABLES"]
 
-#: the parameter structs of plant.h (enum sr_plant_table)
-TABLES = {"controller": 0, "excitation": 1, "propellant": 2}
+#: the parameter structs of plant.h (enum sr_plant_table): one record each, but the panels'
+#: (``flex``) and the slosh modes' (``slosh``), of which the FMU has :func:`records`
+TABLES = {"controller": 0, "excitation": 1, "propellant": 2, "flex": 3, "slosh": 4}
 
 
 def _bind_tables(L: ctypes.CDLL) -> ctypes.CDLL:
@@ -28,6 +29,7 @@ def _bind_tables(L: ctypes.CDLL) -> ctypes.CDLL:
     sig = {
         "sr_plant_output_count": ([], ci),
         "sr_plant_output_name": ([ci], cp),
+        "sr_plant_table_records": ([ci], ci),
         "sr_plant_field_count": ([ci], ci),
         "sr_plant_field_name": ([ci, ci], cp),
         "sr_plant_field_fmi_name": ([ci, ci], cp),
@@ -66,7 +68,8 @@ class Field:
 
 def fields(table: str, lib: Optional[ctypes.CDLL] = None) -> Tuple[Field, ...]:
     """The fields of the C struct ``table`` (``"controller"``, ``"excitation"``,
-    ``"propellant"``), in the order of the FMU's variables, read from the library."""
+    ``"propellant"``, ``"flex"``, ``"slosh"``), in the order of the FMU's variables, read from
+    the library."""
     L = _bind_tables(lib or _default_lib())
     cache = L._sr_plant_fields
     if table not in cache:
@@ -85,6 +88,14 @@ def fields(table: str, lib: Optional[ctypes.CDLL] = None) -> Tuple[Field, ...]:
     return cache[table]
 
 
+def records(table: str, lib: Optional[ctypes.CDLL] = None) -> int:
+    """How many records of the C struct ``table`` the plant FMU has: 1, the panels'
+    (``flex``) and the slosh modes' (``slosh``) maximum counts (FMI names ``<fmi>[i]``,
+    ``<fmi>[i,k]``)."""
+    L = _bind_tables(lib or _default_lib())
+    return int(L.sr_plant_table_records(TABLES[table]))
+
+
 def output_names(lib: Optional[ctypes.CDLL] = None) -> Tuple[str, ...]:
     """The keys of the plant's outputs in the order of its output vector (``plant.h``)."""
     L = _bind_tables(lib or _default_lib())
@@ -92,10 +103,10 @@ def output_names(lib: Optional[ctypes.CDLL] = None) -> Tuple[str, ...]:
 
 
 def parameter_ranges(lib: Optional[ctypes.CDLL] = None) -> Dict[str, Tuple[float, float]]:
-    """``{FMI name: (min, max)}``: the closed range the C core enforces for every Real
-    parameter and input of the plant FMU (``sr_plant_param_range``), in the FMU's order. An
-    inertia element's range is the bound the principal moments' range implies; the inputs'
-    values outside theirs are clipped."""
+    """``{FMI name: (min, max)}``: the closed range the C core enforces for every parameter
+    and input of the plant FMU (``sr_plant_param_range``; all Real but the Integer counts
+    ``flex.n`` and ``slosh.n``), in the FMU's order. An inertia element's range is the bound
+    the principal moments' range implies; the inputs' values outside theirs are clipped."""
     L = _bind_tables(lib or _default_lib())
     out = {}
     name = ctypes.create_string_buffer(64)

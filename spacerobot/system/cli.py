@@ -317,8 +317,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "run instead of --robot")
     add_robot_arguments(p)
     p.add_argument("--target", help="parameter set: small|medium|large|paper|excited (planar "
-                                    "robots), paper|default|depletion (spatial robots); "
-                                    "default: the one bound in the SSD")
+                                    "robots), paper|default|depletion|wings|slosh|flexible "
+                                    "(spatial robots); default: the one bound in the SSD")
     p.add_argument("--method", choices=list(METHOD_CODES),
                    help="identification equations (default: the parameter set's, e.g. force "
                         "for realistic sensors; else momentum)")

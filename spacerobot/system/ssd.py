@@ -71,12 +71,21 @@ SSD_NAME = "SystemStructure.ssd"
 GENERATOR = "spacerobot.system.ssd"
 
 #: the plant parameters a parameter set binds (the scenario's truth, initial velocities,
-#: excitation bounds and propellant)
+#: excitation bounds, propellant and flexible parts: the counts flex.n, slosh.n and every
+#: record of the panels and slosh modes)
 SET_PARAMETERS: Tuple[str, ...] = (
     ESTIMATE_NAMES + tuple(f"base.v0[{i}]" for i in (1, 2, 3))
     + tuple(f"base.omega0[{i}]" for i in (1, 2, 3))
     + tuple(f"excite.{k}" for k in EXCITATION_DOC)
     + tuple(f"prop.{k}" for k in PROPELLANT_DOC) + tuple(f"prop.r[{i}]" for i in (1, 2, 3)))
+
+
+def set_parameters(variables: List[Var]) -> Tuple[str, ...]:
+    """The names of the plant parameters a parameter set binds: :data:`SET_PARAMETERS`, then
+    those of the flexible parts (``flex.*``, ``slosh.*``) in the FMU's order."""
+    return SET_PARAMETERS + tuple(
+        v.name for v in variables if v.causality == "parameter"
+        and v.name.split(".", 1)[0] in ("flex", "slosh"))
 
 #: the estimator parameters a parameter set binds (``resources/estimator/<set>.ssv``): every
 #: estimator setting any set has (:attr:`spacerobot.robots.ParameterSet.estimator`); a set
@@ -126,13 +135,15 @@ def _check_set(robot: str, name: str) -> None:
                          f"choose from {parameter_set_names(robot, sensors=True)}")
 
 
-def parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
-    """``[(variable name, value, unit), ...]`` of the plant's values of parameter set ``name`` of
-    ``robot`` (:data:`SET_PARAMETERS`)."""
+def parameter_set(robot: str, name: str) -> List[Tuple[str, str, float, Optional[str]]]:
+    """``[(variable name, FMI type, value, unit or None), ...]`` of the plant's values of
+    parameter set ``name`` of ``robot`` (:func:`set_parameters`)."""
     _check_set(robot, name)
     sc = parameter_set_scenario(robot, name)
-    var = {v.name: v for v in plant_vars(sc.robot, sc)}   # starts = the scenario's values
-    return [(n, float(var[n].start), var[n].unit) for n in SET_PARAMETERS]
+    variables = plant_vars(sc.robot, sc)                  # starts = the scenario's values
+    var = {v.name: v for v in variables}
+    return [(n, var[n].type, float(var[n].start), var[n].unit)
+            for n in set_parameters(variables)]
 
 
 def sensors_parameter_set(robot: str, name: str) -> List[Tuple[str, float, str]]:
@@ -194,8 +205,8 @@ def ssv_xml(robot: str, name: str) -> str:
     """Text of the SSP 1.0 parameter values file ``resources/<name>.ssv`` (the plant's)."""
     pset = PARAMETER_SETS[robot_kind(robot)][name]
     desc = (f"{robot_label(robot)}-{name}: {pset.description}; plant truth (base, "
-            f"target), initial velocities and excitation bounds")
-    return _ssv_text(name, desc, [(n, "Real", v, u) for n, v, u in parameter_set(robot, name)])
+            f"target), initial velocities, excitation bounds, propellant and flexible parts")
+    return _ssv_text(name, desc, parameter_set(robot, name))
 
 
 def sensors_ssv_xml(robot: str, name: str) -> str:

@@ -5,7 +5,8 @@
  *
  * Usage: stack_plant RECORD STACK_BYTES [hog]
  *   In a thread whose stack is STACK_BYTES (pthread_attr_setstacksize): read the robot record
- *   RECORD, build the model (its own base, a 250 kg target, the propellant on), start, ask for
+ *   RECORD, build the model (its own base, a 250 kg target, the propellant on, two hinged
+ *   panels and two slosh modes), start, ask for
  *   the excitation at level 1 and a change of rate, then run communication steps of 0.1 s
  *   (sr_plant_advance: 100 internal RK4 steps each) through the level's ramp and the rate's
  *   change, the outputs and controls after each. Prints "ok <t> <r_S[0]>" and exits 0; on a
@@ -35,6 +36,36 @@ static double hog(size_t n)
     return (double)buf[n / 2];
 }
 
+/* two 50 kg wings (4 m x 1.6 m plates hinged at x = +-0.5 m along y, 0.5 Hz) and two 25 kg
+ * slosh modes (along x at 0.30 Hz, along y at 0.35 Hz), each pair twice (4 records) */
+static void parts(sr_plant_panel *flex, sr_plant_slosh *slosh)
+{
+    int i;
+    memset(flex, 0, SR_PLANT_MAX_FLEX * sizeof *flex);
+    memset(slosh, 0, SR_PLANT_MAX_SLOSH * sizeof *slosh);
+    for (i = 0; i < SR_PLANT_MAX_FLEX; i++) {
+        const double side = i % 2 ? -1.0 : 1.0;
+        flex[i].m = 50.0;
+        flex[i].com[0] = 2.5 * side;
+        flex[i].Ixx = 10.67041666666667;
+        flex[i].Iyy = 66.67041666666668;
+        flex[i].Izz = 77.33333333333334;
+        flex[i].hinge[0] = 0.5 * side;
+        flex[i].axis[1] = 1.0;
+        flex[i].f = 0.5;
+        flex[i].zeta = 0.005;
+    }
+    for (i = 0; i < SR_PLANT_MAX_SLOSH; i++) {
+        slosh[i].m = 25.0;
+        slosh[i].r[0] = -0.2;
+        slosh[i].r[1] = 0.1;
+        slosh[i].r[2] = -0.4;
+        slosh[i].axis[i % 2] = 1.0;
+        slosh[i].f = i % 2 ? 0.35 : 0.3;
+        slosh[i].zeta = 0.01;
+    }
+}
+
 static void *run(void *arg)
 {
     job *jb = arg;
@@ -50,6 +81,8 @@ static void *run(void *arg)
                                       .K_Dn = 1.0, .K_Pn = 0.25, .qdd_max = 1.0};
     sr_plant_excitation ex;
     sr_plant_propellant prop;
+    sr_plant_panel flex[SR_PLANT_MAX_FLEX];
+    sr_plant_slosh slosh[SR_PLANT_MAX_SLOSH];
     const double v0[3] = {1.0, 2.0, 3.0}, w0[3] = {0.1, 0.2, 0.3};
     int k, st;
     jb->status = 1;
@@ -70,6 +103,11 @@ static void *run(void *arg)
     if (sr_plant_model_init(model, robot, &robot->base, &target, &ctrl, &ex, &prop, NULL, v0, w0,
                             1e-3, err, sizeof err) != 0) {
         printf("model: %s\n", err);
+        return NULL;
+    }
+    parts(flex, slosh);
+    if (sr_plant_model_set_leaves(model, 2, flex, 2, slosh, err, sizeof err) != 0) {
+        printf("leaves: %s\n", err);
         return NULL;
     }
     if (sr_plant_start(model, data) != 0 || sr_plant_set_excitation(model, data, 1.0) != 0)
