@@ -470,6 +470,12 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
         Var("ident.sd_rel", "parameter", "fixed", "Real", "1",
             "A body counts as identified when every one of its identified estimates has a "
             "standard deviation below this fraction of its error scale", 1e-3, ("sd_rel",)),
+        Var("ident.flag_confidence", "parameter", "fixed", "Real", "1",
+            "With the information filter (ident.information): the probability, under the "
+            "reported standard deviations, that every identified estimate of a body flagged "
+            "identified lies within ident.sd_rel of its error scale (each standard deviation "
+            "must be below the threshold over the two-sided normal quantile of "
+            "(1 - this) / the body's identified estimates)", 0.99, ("flag_confidence",)),
         Var("ident.excite_mode", "parameter", "fixed", "Integer", None,
             f"Excitation request (output ident.excite): {ExciteMode.OFF:d} = never, "
             f"{ExciteMode.UNTIL_IDENTIFIED:d} = while a body is not identified, "
@@ -487,7 +493,8 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
         v += [Var(f"diag.identified.{who}", "output", "discrete", "Integer", None,
                   f"1 when every identified estimate of the {who} has a standard deviation below "
                   f"ident.sd_rel of its error scale (with the information filter, "
-                  f"ident.information: 2 standard deviations), else 0", None,
+                  f"ident.information: every estimate within it with probability "
+                  f"ident.flag_confidence), else 0", None,
                   ("identified", who)),
               Var(f"diag.physical.{who}", "output", "discrete", "Integer", None,
                   f"1 when the least-squares estimate of the {who} is a real rigid body; 0 when "
@@ -520,11 +527,13 @@ def noise_model_vars() -> List[Var]:
               "equations are evaluated at the centre (the estimate lags m samples)", 1,
               ("diff_half_window",)),
           Var("ident.diff_momentum", "parameter", "fixed", "Integer", None,
-              "Force method, differenced accelerations: 1 = the derivative's weights applied "
-              "to the momentum equations of the window's samples (the force equations averaged "
-              "by the same filter: no truncation error where the accelerations change between "
-              "samples), 0 = applied to the velocities (the force equations at the centre, the "
-              "paper's form)", 0, ("diff_momentum",)),
+              "Force method, differenced accelerations: where the derivative's weights go. "
+              "1 = on the momentum equations of the window's samples (the force equations "
+              "averaged by the same filter: no truncation error however fast the accelerations "
+              "change between samples; diff_half_window at most 10), 2 = on the velocities (the "
+              "force equations at the centre, the paper's form: exact only where the velocities "
+              "are quadratic over the window), 0 = automatic (1, or 2 where diff_half_window "
+              "is above 10)", 0, ("diff_momentum",)),
           Var("ident.corr_lags", "parameter", "fixed", "Integer", None,
               "Lags (>= 0) of the residual autocorrelation that inflates the standard "
               "deviations for correlated equation errors (0 = rows independent)", 0,

@@ -172,7 +172,7 @@ CONTRACT_UNITS = [
     (r"excite\.qd_max", "rad/s"), (r"excite\.qdd_max", "rad/s2"), (r"excite\.(period|ramp)", "s"),
     (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta"
      r"|info_chi2)", "1"),
-    (r"ident\.(sd_rel|excite_level)", "1"), (r"excite\.att_ref\[\d\]", "rad"),
+    (r"ident\.(sd_rel|flag_confidence|excite_level)", "1"), (r"excite\.att_ref\[\d\]", "rad"),
     # the excitation's rate: a frequency multiplier; the choice's times and scores
     (r"ident\.excite_(rate|rate_try)|excite\.rate|diag\.excite_score\.rate_(1|try)", "1"),
     (r"ident\.excite_(window|settle|horizon)", "s"),

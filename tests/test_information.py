@@ -621,3 +621,41 @@ def test_a_corrupted_replay_buffer_costs_the_replay_not_the_filter(lib):
     for t, x in zip(ts[600:], X[600:]):
         assert est.update(t, x) in (1, 2), est.message
     assert np.all(np.isfinite(est.report()["crb"])) and np.all(est.report()["crb"] > 0)
+
+
+def test_flags_follow_the_bonferroni_rule_of_ident_flag_confidence(lib):
+    """With the filter a body is flagged exactly when each of its 10 estimates has
+    sd <= sd_rel * scale / z, z the two-sided normal quantile (SciPy's, an independent
+    algorithm) of (1 - ident.flag_confidence) / 10, scale the error scale of the reported
+    estimate (and the report is the least-squares estimate there: no projection); checked at
+    every sample of a 30 s run with a 5 % threshold (so the flags rise within it), for two
+    confidences; the lower one flags earlier."""
+    from scipy.stats import norm
+    from spacerobot.core.estimator import NativeEstimator, options_from_values
+    from spacerobot.interface import error_scale
+    dt, sd_rel = 0.1, 0.05
+    sc = scenario("spatial")
+    ts, X = record(sc, dt, 30.0, sensors_seed=2)
+    first = {}
+    for conf in (0.99, 0.6):
+        z = norm.isf((1.0 - conf) / 10 / 2)
+        vals = _estimator_values(sc, **{"ident.sd_rel": sd_rel, "ident.flag_confidence": conf})
+        est = NativeEstimator(sc.robot, {**options_from_values(vals), "noise_dt": dt}, lib=lib)
+        checked = 0
+        for t, x in zip(ts, X):
+            assert est.update(t, x) in (1, 2), est.message
+            r = est.report()
+            ls, sd = est.estimates()
+            if not np.array_equal(r["vector"], ls):
+                continue                                 # projected: the flags stay down
+            ratio = sd / (sd_rel * error_scale(r["vector"]))
+            for k, who in enumerate(("base", "target")):
+                worst = ratio[10 * k:10 * k + 10].max()
+                if abs(worst * z - 1.0) < 1e-9:
+                    continue                             # on the edge: round-off decides
+                assert r["identified"][who] == (worst * z < 1.0), (conf, t, who, worst * z)
+                checked += 1
+                if r["identified"][who]:
+                    first.setdefault((conf, who), t)
+        assert checked > 400
+    assert first[(0.6, "target")] < first[(0.99, "target")], first

@@ -110,8 +110,9 @@ def noisy(rec, sd: float, seed: int = 5, corr: float = 0.0):
 
 
 def native_options(sc, method, lam, accel="measured", **kw):
+    # the oracle's differenced rows are the velocities' form unless told otherwise
     return {"guess": sc.guess, "method": 1 if method == "momentum" else 2, "lambda": lam,
-            "accel_source": 1 if accel == "measured" else 2, **kw}
+            "accel_source": 1 if accel == "measured" else 2, "diff_momentum": 2, **kw}
 
 
 def compare(lib, sc, rec, method, lam, accel="measured", py_kw=None, nat_kw=None,

@@ -116,7 +116,9 @@ def run_both(lib, sc, rec, method="momentum", accel="measured", solver="paper", 
     py = Identifier(sc.robot, sc.guess, method, solver, accel, lam, **(py_kw or {}))
     opts = {"guess": sc.guess, "method": 1 if method == "momentum" else 2,
             "solver": 1 if solver == "paper" else 2,
-            "accel_source": 1 if accel == "measured" else 2, "lambda": lam, **(nat_kw or {})}
+            "accel_source": 1 if accel == "measured" else 2, "lambda": lam,
+            # the oracle's differenced rows are the velocities' form unless told otherwise
+            "diff_momentum": 2, **(nat_kw or {})}
     nat = NativeEstimator(sc.robot, opts, lib=lib)
     base = None
     if consider_tol is not None:

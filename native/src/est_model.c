@@ -7,10 +7,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "differencing.h"
 #include "est_joint.h"
 #include "est_types.h"
 #include "est_options.h"
 #include "noise_profile.h"
+#include "sr_math.h"
 #include "standard_params.h"
 #include "sr_text.h"
 
@@ -62,7 +64,13 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     m->nflat = sr_sample_length(robot->n);
     m->force = opt->method == 2;
     m->differenced = m->force && opt->accel_source == 2;
-    m->diffmom = m->differenced && opt->diff_momentum;
+    /* differenced accelerations: the derivative's weights on the momentum equations (exact
+     * however fast the accelerations change between samples) unless switched off, or, when
+     * automatic, unless the window is wider than those weights keep their digits */
+    m->diffmom = m->differenced
+                 && (opt->diff_momentum == 1
+                     || (opt->diff_momentum == 0
+                         && opt->diff_half_window <= SR_DIFF_MAX_DISPLACEMENT_HALF_WINDOW));
     /* the thrust's consider term (consider.thrust_sd): the prior sd of
      * c = [s_F, phi_F (3), s_M, phi_M (3)], the same for force and moment */
     m->consider = opt->sd_thrust_scale > 0.0 || opt->sd_thrust_misalign > 0.0;
@@ -116,6 +124,12 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     for (int k = 0; k < 2; k++)
         for (int i = 0; i < 10; i++)
             m->identified[10 * k + i] = !robot->planar || i == 0 || i == 1 || i == 2 || i == 6;
+    {
+        int k_body = 0;                                      /* a body's identified estimates */
+        for (int i = 0; i < 10; i++)
+            k_body += m->identified[i];
+        m->flag_z = sr_normal_quantile2((1.0 - opt->flag_confidence) / k_body);
+    }
     m->p = m->r = 0;
     for (int k = 0; k < 2; k++) {
         for (int i = 0; i < 4; i++)                          /* m, b -> mu */
@@ -271,8 +285,7 @@ void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_option
         out->momentum_point = 0;
     if (!m->bias)                            /* the force method's, measured accelerations */
         out->accel_bias = 0;
-    if (!m->diffmom)                         /* the force method's, differenced ones */
-        out->diff_momentum = 0;
+    out->diff_momentum = m->diffmom;         /* as used: 1 the momentum form, else 0 */
     if (!m->force)                           /* the force method's noisy accelerations */
         for (int i = 0; i < 6; i++)
             out->signal_sd[i] = 0.0;

@@ -50,6 +50,9 @@ enum { ALWAYS, PROFILE, BODY };
     BODY_OPTIONS(X, "guess.target.", guess_target, 100.0, 0.1, 0.1, 0.1, 10.0, 10.0, 10.0)      \
     X("ident.sd_rel", sd_rel, 0, 0, POSITIVE, BELOW_ONE, 1e-3, 0, 1, ALWAYS, RULE,              \
       "relative standard deviation threshold ident.sd_rel must satisfy 0 < sd_rel < 1")         \
+    X("ident.flag_confidence", flag_confidence, 0, 0, SR_EST_FLAG_CONFIDENCE_MIN,               \
+      SR_EST_FLAG_CONFIDENCE_MAX, 0.99, 0, 1, ALWAYS, RULE,                                      \
+      "{n} must be a probability from {a} to {b}")                                              \
     X("ident.excite_mode", excite_mode, 0, 1, 0, 2, 1, 0, 1, ALWAYS, CODE,                      \
       "0 (off), 1 (until_identified), 2 (always)")                                              \
     X("ident.excite_level", excite_level, 0, 0, 0.0, 1.0, 1.0, 0, 1, ALWAYS, RULE,              \
@@ -64,8 +67,8 @@ enum { ALWAYS, PROFILE, BODY };
       "{n} must be a finite number >= 0 (0 = unit weight)")                                     \
     X("ident.diff_half_window", diff_half_window, 0, 1, 1, SR_EST_MAX_HALF_WINDOW, 1, 0, 1,     \
       ALWAYS, RULE, "{n} must be an integer from {a} to {b}")                                   \
-    X("ident.diff_momentum", diff_momentum, 0, 1, 0, 1, 0, 0, 1, ALWAYS, RULE,                  \
-      "{n} must be 0 or 1")                                                                     \
+    X("ident.diff_momentum", diff_momentum, 0, 1, 0, 2, 0, 0, 1, ALWAYS, CODE,                  \
+      "0 (automatic), 1 (on), 2 (off)")                                                         \
     X("ident.corr_lags", corr_lags, 0, 1, 0, SR_EST_MAX_CORR_LAGS, 0, 0, 1, ALWAYS, RULE,       \
       "{n} must be an integer from {a} to {b}")                                                 \
     X("ident.momentum_window", momentum_window, 0, 0, 0.0, SR_EST_MAX_WINDOW, 0.0, 0, 1,        \
@@ -408,7 +411,7 @@ static int check_rules(const sr_estimator_options *o, char *err, size_t errlen)
                                  "parameters");
         return 1;
     }
-    if (o->method == 2 && o->accel_source == 2 && o->diff_momentum
+    if (o->method == 2 && o->accel_source == 2 && o->diff_momentum == 1
         && o->diff_half_window > SR_DIFF_MAX_DISPLACEMENT_HALF_WINDOW) {
         sr_text_set(err, errlen, "ident.diff_half_window must be an integer from 1 to ");
         sr_text_int(err, errlen, SR_DIFF_MAX_DISPLACEMENT_HALF_WINDOW);

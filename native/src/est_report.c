@@ -17,9 +17,10 @@
 void est_physical_vector(const sr_estimator_model *m, const double *ls, const double *sd,
                          double *out, int *flags)
 {
-    /* the information filter's sds are calibrated (an error beyond 2 sd in 1 of 20): its flag
-       asks 2 sd below the threshold, so that a flagged estimate is within it at 95 % */
-    double sd_rel = m->info ? 0.5 * m->opt.sd_rel : m->opt.sd_rel;
+    /* the information filter's sds are calibrated: its flag asks every sd flag_z times below
+       the threshold, so that every estimate of a flagged body is within it with probability
+       ident.flag_confidence */
+    double sd_rel = m->info ? m->opt.sd_rel / m->flag_z : m->opt.sd_rel;
     memcpy(out, ls, sizeof(double) * EST_NZ);
     if (sr_report_flags(ls, sd, SR_COM_SCALE_MIN, sd_rel, m->identified, flags))
         return;

@@ -79,6 +79,10 @@ struct sr_estimator_model {
     int n_mu_out, mu_out[EST_NMU], n_th_out, th_out[EST_NTH];
     int k1, k2, rows_lin[3], rows_ang[3];
     int identified[EST_NZ];
+    /* with the information filter, a flagged body's sd are at most its threshold / flag_z:
+     * flag_z = the two-sided normal quantile of (1 - ident.flag_confidence) / (its identified
+     * estimates) (Bonferroni: whatever their correlation) */
+    double flag_z;
     /* the joint solver's standard parameters [m, m b, I_O#] per body (20): the identified
      * ones (q), the others, and which identified ones are masses / first moments */
     int q, std_active[EST_NZ], n_std_out, std_out[EST_NZ];

@@ -44,6 +44,9 @@ extern "C" {
 #define SR_EST_NO_SAMPLE 0           /* no sample yet */
 #define SR_EST_REFERENCE 1           /* momentum reference / differencing history stored */
 #define SR_EST_ESTIMATING 2          /* last sample used */
+/* ident.flag_confidence's range: from a coin's toss to a billion to one */
+#define SR_EST_FLAG_CONFIDENCE_MIN 0.5
+#define SR_EST_FLAG_CONFIDENCE_MAX (1.0 - 1e-9)
 #define SR_EST_REJECT_NONFINITE 3    /* non-finite / out-of-range input, or an update overflowed */
 #define SR_EST_REJECT_INCONSISTENT 4 /* base.A not a rotation, or time not increasing */
 
@@ -93,14 +96,20 @@ typedef struct sr_estimator_options {
                                                  Ixx Iyy Izz Ixy Ixz Iyz about the com
                                                  (body.h's ranges) */
     double sd_rel;         /* ident.sd_rel: identified threshold, 0 < sd_rel < 1 (1e-3) */
+    double flag_confidence;/* ident.flag_confidence: with the information filter, the
+                              probability under the reported sd that every identified
+                              estimate of a flagged body lies within the threshold,
+                              SR_EST_FLAG_CONFIDENCE_MIN..MAX (0.99) */
     int excite_mode;       /* ident.excite_mode: 0 off, 1 until identified, 2 always */
     double excite_level;   /* ident.excite_level: 0..1 */
     double row_sd[4];      /* ident.sd_row.momentum_lin, .momentum_ang, .force_lin,
                               .force_ang: the equations' row sd (the chosen method's pair
                               weighs the rows); 0 = unit weight */
     int diff_half_window;  /* ident.diff_half_window: 1..50 (1..10 with diff_momentum) */
-    int diff_momentum;     /* ident.diff_momentum: 0/1 (force, differenced: the derivative's
-                              weights on the momentum equations of the window's samples) */
+    int diff_momentum;     /* ident.diff_momentum: 0 automatic (on unless diff_half_window >
+                              SR_DIFF_MAX_DISPLACEMENT_HALF_WINDOW), 1 on, 2 off (force,
+                              differenced: the derivative's weights on the momentum equations
+                              of the window's samples, not on the velocities) */
     int corr_lags;         /* ident.corr_lags: 0..10000 */
     double signal_sd[6];   /* ident.noise.*: a_S, alpha_B, qdd (measured); v_S, omega_B, qd
                               (differenced): white-noise sd per sample; > 0: the force method's

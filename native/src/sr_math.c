@@ -650,3 +650,30 @@ double sr_pow10(int n)
 {
     return sr_powi(10.0, n);
 }
+
+/* ln P(|Z| > z) at x = z / sqrt 2 (sr_normal_quantile2) */
+static double ln_two_sided_tail(double x)
+{
+    double t = x;
+    for (int n = 1000; n >= 1; n--)
+        t = x + 0.5 * n / t;                      /* K(x), backwards */
+    return -x * x - 0.57236494292470008707 - sr_ln(t);    /* ln sqrt(pi) */
+}
+
+double sr_normal_quantile2(double p)
+{
+    if (!(p >= 1e-300 && p <= 0.5))
+        return NAN;
+    const double target = sr_ln(p);
+    double lo = 0.4, hi = 26.6;                   /* tails e^-0.2 .. below 1e-300 */
+    for (int i = 0; i < 200 && hi - lo > 0.0; i++) {
+        const double mid = 0.5 * (lo + hi);
+        if (mid <= lo || mid >= hi)
+            break;
+        if (ln_two_sided_tail(mid) > target)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return 1.41421356237309504880 * 0.5 * (lo + hi);
+}

@@ -156,8 +156,9 @@ class Identifier:
         velocities ``v_S`` [m/s], ``omega_B`` [rad/s], ``qd`` [rad/s] (the derivative's noise
         follows from its weights). With any > 0 the estimates are bias-compensated for the
         accelerations' noise (errors in variables). Empty / 0 = the plain least-squares answers.
-    diff_momentum : bool
-        Force method with differenced accelerations: True = apply the derivative's weights to
+    diff_momentum : bool or None
+        Force method with differenced accelerations: None (default) = automatic (True unless
+        ``diff_half_window`` > 10); True = apply the derivative's weights to
         the momentum equations of the window's samples instead of to the velocities (the
         force equations averaged by the same filter, exact however fast the accelerations
         change between samples; est_rows.c, docs/identification.md, section 6; at most
@@ -194,7 +195,7 @@ class Identifier:
                  lam: float = 1.0, sd_rel: float = SD_REL, row_sd=(0.0, 0.0),
                  diff_half_window: int = 1, corr_lags: int = 0, window: float = 0.0,
                  moving_point: bool = False, accel_bias: bool = False, thrust_sd=(0.0, 0.0),
-                 signal_sd: Mapping[str, float] | None = None, diff_momentum: bool = False,
+                 signal_sd: Mapping[str, float] | None = None, diff_momentum: bool | None = None,
                  sensors_noise: Mapping | None = None, excite: Mapping | None = None, lib=None):
         method = Method.parse(method, "method")
         kind = Solver.parse(solver, "solver")
@@ -220,7 +221,8 @@ class Identifier:
             f"ident.sd_row.{m}_lin": row_sd[0], f"ident.sd_row.{m}_ang": row_sd[1],
             "ident.diff_half_window": diff_half_window, "ident.corr_lags": corr_lags,
             "ident.momentum_window": window, "ident.momentum_point": moving_point,
-            "ident.accel_bias": accel_bias, "ident.diff_momentum": diff_momentum,
+            "ident.accel_bias": accel_bias,
+            "ident.diff_momentum": {None: 0, True: 1, False: 2}[diff_momentum],
             "ident.sd_thrust.scale": thrust_sd[0], "ident.sd_thrust.misalign": thrust_sd[1],
             **{SIGNAL_SD_NAMES[k]: v for k, v in (signal_sd or {}).items()},
             # the sensors' noise model (the core's noise_profile, noise_scale, noise,
