@@ -16,7 +16,8 @@
  * start values, its states) and checks every status against what FMI 2.0 and the project's
  * layer promise: a refused call (fmi2Error) leaves the instance as it was; a call in the wrong
  * phase is refused; doStep outside the stepping phase or with a non-finite point or a step
- * <= 0 is discarded, one from another point than the instance's time refused (fmi2Error);
+ * <= 0 is discarded, one from another point than the instance's time refused (fmi2Error,
+ * also where a NaN input would have discarded it: the point is checked first);
  * never fmi2Fatal. After every refusal of an instance in the stepping
  * phase it probes that the instance still works: a valid doStep returns fmi2OK and, for an
  * instance initialised with its start parameters, every Real output is finite (an instance
@@ -771,9 +772,11 @@ static void op_step(int k, int wild) {
         if (h > wild_max && h <= max_step) h = wild_max;
     }
     st = CALL(K_DoStep, F.DoStep(s->c, t, h, chance(50)));
-    mask = s->phase != STEPPING || !isfinite(t) || !(isfinite(h) && h > 0.0) || h > max_step
-         ? M_DISCARD : valid_step_mask(k);
-    if (mask != M_DISCARD) {                     /* a step from another time: refused */
+    int well_formed = s->phase == STEPPING && isfinite(t) && isfinite(h) && h > 0.0
+                      && h <= max_step;
+    mask = well_formed ? valid_step_mask(k) : M_DISCARD;
+    if (well_formed) {                           /* a step from another time: refused, before
+                                                    the model sees its inputs (NaN or not) */
         int at = at_time(t, s->time, h);
         if (s->damaged || at < 0) mask |= M_ERROR;
         else if (at == 0) mask = M_ERROR;
