@@ -5,7 +5,7 @@
   something);
 - every variable has a description, every Real a unit defined in UnitDefinitions, and each unit's
   SI base exponents equal an independent decomposition of the Modelica unit string;
-- the units follow the interface contract (README "Interface" and docs/fmus.md), written here
+- the units follow the interface contract (docs/fmus.md), written here
   independently of spacerobot/interface.py;
 - ModelStructure/Outputs and /InitialUnknowns list exactly the outputs, in ascending order, and at
   initialisation the outputs depend on the inputs the InitialUnknowns declare and on no other;
@@ -149,7 +149,7 @@ def test_every_variable_described_and_every_real_has_a_defined_unit(fmu):
         assert exps == si_exponents(name), f"BaseUnit of {name!r}: {exps}"
 
 
-#: the interface contract's units (README "Interface"), independent of spacerobot/interface.py
+#: the interface contract's units (docs/fmus.md), independent of spacerobot/interface.py
 CONTRACT_UNITS = [
     (r"base\.r\[\d\]", "m"), (r"base\.v\[\d\]", "m/s"), (r"base\.A\[\d,\d\]", "1"),
     (r"base\.omega\[\d\]", "rad/s"), (r"base\.a\[\d\]", "m/s2"), (r"base\.alpha\[\d\]", "rad/s2"),
