@@ -56,6 +56,7 @@ def test_fmpy_validate_api_reports_no_problem(fmu):
 
 
 @pytest.mark.parametrize("robot", ROBOTS)
+@pytest.mark.slow
 def test_fmpy_validate_command_line_reports_no_problem(request, robot):
     for kind in KINDS:
         path = fmus_for(request, robot)[kind]
@@ -99,6 +100,7 @@ def _drop_output(root):
     (_drop_initial_unknown, "InitialUnknowns"),
     (_drop_output, "Outputs"),
 ], ids=["unit", "initial-unknown", "output"])
+@pytest.mark.slow
 def test_fmpy_validate_detects_injected_defects(planar_fmus, tmp_path, edit, expect):
     """Negative control: the validator sees the defects our FMUs must not have."""
     from fmpy.validation import validate_fmu

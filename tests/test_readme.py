@@ -119,6 +119,7 @@ def test_own_robot_block_names_a_link_the_shipped_example_has():
         assert key is not None and "servicer7" in key
 
 
+@pytest.mark.slow
 def test_own_robot_block_runs_as_pasted(tmp_path):
     """README "Your own robot": the bash block, run by bash in a folder laid out as the
     repository (the shipped URDF at the path the block names), builds servicer7's FMUs and runs
