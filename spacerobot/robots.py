@@ -6,7 +6,7 @@ themselves are URDF files (``data/robots/``) that :mod:`spacerobot.urdf` reads i
 :class:`Robot` record, on first use of :data:`ROBOTS` (the FMUs get the record in their
 configuration and never read a URDF).
 
-Conventions (see README "Conventions"):
+Conventions (see docs/models.md, "Conventions"):
 
 * Base frame ``B`` has its origin at the base sensor point ``S``; target frame ``T`` is the
   end-effector frame with origin at the grasp point ``E``.

@@ -97,6 +97,7 @@ def test_run_prints_table_with_paper_values_and_writes_csv(planar_run):
     assert str(out) in p.stdout
 
 
+@pytest.mark.slow
 def test_run_robot_builds_if_needed_and_uses_default_csv_name(workdir):
     d = workdir / "auto"
     d.mkdir()
@@ -112,6 +113,7 @@ def test_run_robot_builds_if_needed_and_uses_default_csv_name(workdir):
     assert all(pv is None for _, _, pv in table.values())       # no paper values for small
 
 
+@pytest.mark.slow
 def test_run_fmi3_builds_and_runs_in_one_step(workdir):
     """``run --robot R --fmi-version 3``: the FMI 3.0 FMUs and their .ssp are built into
     build/<robot>-fmi3/ and run; the results equal the FMI 2.0 system's (the same core and
@@ -309,6 +311,7 @@ def test_version():
     assert p.stdout.strip() == f"spacerobot {spacerobot.__version__}"
 
 
+@pytest.mark.slow
 def test_plot_writes_png(planar_run, workdir):
     csv_path = planar_run[1]
     png = workdir / "fig" / "run.png"
@@ -355,6 +358,7 @@ def test_plot_dispatches_sweep_tables(tmp_path, monkeypatch):
     assert calls == [(str(path), str(tmp_path / "s.png"))]
 
 
+@pytest.mark.slow
 def test_help_lists_commands():
     p = subprocess.run(CLI + ["--help"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0
@@ -517,6 +521,7 @@ def _pipe_run(built, tmp_path, name):
                                    "--out", tmp_path / name]]
 
 
+@pytest.mark.slow
 def test_closed_pipe_ends_quietly(built, tmp_path):
     """stdout closed by its reader before the table is printed: exit status 141 (128 +
     SIGPIPE, as Unix tools), no traceback, no error line; the CSV was written."""

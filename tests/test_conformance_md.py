@@ -5,9 +5,10 @@
   something);
 - every variable has a description, every Real a unit defined in UnitDefinitions, and each unit's
   SI base exponents equal an independent decomposition of the Modelica unit string;
-- the units follow the interface contract (README "Interface" and docs/fmus.md), written here
+- the units follow the interface contract (docs/fmus.md), written here
   independently of spacerobot/interface.py;
-- ModelStructure/Outputs and /InitialUnknowns list exactly the outputs, in ascending order;
+- ModelStructure/Outputs and /InitialUnknowns list exactly the outputs, in ascending order, and at
+  initialisation the outputs depend on the inputs the InitialUnknowns declare and on no other;
 - the FMUs declare exactly the variables of the interface table and the capability flags and
   variables that docs/fmus.md documents.
 
@@ -23,9 +24,11 @@ from itertools import product
 from pathlib import Path
 from xml.etree import ElementTree as ET
 
+import numpy as np
 import pytest
 
-from test_conformance_util import KINDS, ROBOTS, fmus_for
+from test_conformance_util import free_instances  # noqa: F401  (autouse fixture)
+from test_conformance_util import KINDS, ROBOTS, Inst, fmus_for
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs" / "fmus.md"
@@ -53,6 +56,7 @@ def test_fmpy_validate_api_reports_no_problem(fmu):
 
 
 @pytest.mark.parametrize("robot", ROBOTS)
+@pytest.mark.slow
 def test_fmpy_validate_command_line_reports_no_problem(request, robot):
     for kind in KINDS:
         path = fmus_for(request, robot)[kind]
@@ -96,6 +100,7 @@ def _drop_output(root):
     (_drop_initial_unknown, "InitialUnknowns"),
     (_drop_output, "Outputs"),
 ], ids=["unit", "initial-unknown", "output"])
+@pytest.mark.slow
 def test_fmpy_validate_detects_injected_defects(planar_fmus, tmp_path, edit, expect):
     """Negative control: the validator sees the defects our FMUs must not have."""
     from fmpy.validation import validate_fmu
@@ -146,7 +151,7 @@ def test_every_variable_described_and_every_real_has_a_defined_unit(fmu):
         assert exps == si_exponents(name), f"BaseUnit of {name!r}: {exps}"
 
 
-#: the interface contract's units (README "Interface"), independent of spacerobot/interface.py
+#: the interface contract's units (docs/fmus.md), independent of spacerobot/interface.py
 CONTRACT_UNITS = [
     (r"base\.r\[\d\]", "m"), (r"base\.v\[\d\]", "m/s"), (r"base\.A\[\d,\d\]", "1"),
     (r"base\.omega\[\d\]", "rad/s"), (r"base\.a\[\d\]", "m/s2"), (r"base\.alpha\[\d\]", "rad/s2"),
@@ -218,6 +223,45 @@ def test_outputs_and_initial_unknowns_list_every_output(fmu):
         listed = [int(u.get("index")) for u in root.find(f"ModelStructure/{section}")]
         assert listed == outputs, f"ModelStructure/{section} != outputs (ascending)"
 
+
+
+#: per kind, a parameter and a value that moves some output at initialisation
+INITIAL_PARAMETER = {"plant": ("base.v0[1]", 0.3), "estimator": ("guess.target.m", 42.0),
+                     "sensors": ("seed", 7)}
+
+
+def test_initial_unknowns_depend_on_the_declared_inputs_only(fmu):
+    """In initialisation mode (what a master reads before the first step) each output follows
+    the parameters and, of the inputs, exactly those its InitialUnknowns entry declares: one
+    input perturbed at a time changes exactly the outputs that declare it (none, for plant and
+    estimator: so a master sees no algebraic loop at initialisation), and a parameter that
+    changes outputs is declared by every one of them."""
+    from fmpy import read_model_description
+
+    robot, kind, path = fmu
+    md = read_model_description(str(path))
+    declared = {u.variable.name: {d.name for d in u.dependencies} for u in md.initialUnknowns}
+    assert set(declared) == {v.name for v in md.modelVariables if v.causality == "output"}
+    s = Inst(path, "initial-unknowns")
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.enterInitializationMode()
+    ins, outs = s.names("input"), s.names("output")
+    x = np.array([float(s.vars[n].start) for n in ins])
+    rng = np.random.default_rng(5)
+    if kind == "sensors":                              # any values: the sensors measure them
+        x = x + rng.normal(size=len(ins))
+    s.set_many(ins, x)
+    y0 = s.values(outs)
+    for i, name in enumerate(ins):
+        s.set_many(ins, x + np.eye(len(ins))[i] * 0.01)
+        y = s.values(outs)
+        assert {o for o in outs if y[o] != y0[o]} == {o for o in outs if name in declared[o]}, name
+    s.set_many(ins, x)
+    param, value = INITIAL_PARAMETER[kind]
+    s.set(param, value)
+    y = s.values(outs)
+    assert any(y[o] != y0[o] for o in outs), param
+    assert all(param in declared[o] for o in outs), param
 
 def test_variables_equal_the_interface_table(fmu):
     """Every variable of the interface table, with its causality, variability, unit and

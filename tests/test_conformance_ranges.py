@@ -49,6 +49,7 @@ def _declared(path):
             if v.causality in ("parameter", "input")]
 
 
+@pytest.mark.slow
 def test_every_parameter_and_input_declares_min_and_max_around_its_start(kind, fmus):
     from fmpy.validation import validate_fmu
 
@@ -103,6 +104,7 @@ def _outside(path, causality):
     return cases
 
 
+@pytest.mark.slow
 def test_a_parameter_outside_its_range_is_refused_with_its_name(kind, fmus):
     for v, value in _outside(fmus[2], "parameter"):
         inst = Inst(fmus[2], "range")

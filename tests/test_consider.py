@@ -66,6 +66,7 @@ def identify(sc, data, method, solver="paper", cls=Identifier, **kw):
 
 @pytest.mark.parametrize("solver", ["paper", "joint"])
 @pytest.mark.parametrize("method,kw", SETUPS)
+@pytest.mark.slow
 def test_thrust_errors_move_the_estimates_as_the_sensitivity_predicts(excited, method, kw, solver):
     sc, data = excited
     clean = identify(sc, data, method, solver, thrust_sd=THRUST_SD, **kw)
@@ -84,6 +85,7 @@ def test_thrust_errors_move_the_estimates_as_the_sensitivity_predicts(excited, m
 
 
 @pytest.mark.parametrize("method,kw", SETUPS[0::2])
+@pytest.mark.slow
 def test_thrust_errors_are_within_two_consider_standard_deviations(excited, method, kw):
     sc, data = excited
     truth = estimate_vector(sc.robot.base, sc.target)

@@ -20,6 +20,7 @@ from spacerobot.system import cli
 from spacerobot.system.design import CRITERIA, Candidate, Design, Outcome, design
 
 
+@pytest.mark.slow
 def test_candidate_keeps_the_plant_bounds():
     """The plant's C core run with a candidate's excitation (7.5 s, arm share 0.5) at level 1,
     ramp included, over 40 s: its references stay within the attitude bound att_max and the
@@ -127,6 +128,7 @@ def test_no_bound_without_sensor_noise():
         closed_loop_bound(scenario("spatial"), 1, 1.0, noise_scale=0.0)
 
 
+@pytest.mark.slow
 def test_faster_excitation_buys_information():
     """One random spatial case (montecarlo's draw 0), 60 s, realistic sensors: the period of
     7.5 s leaves its largest scaled bound below 1/1.5 of the 30 s one (measured 0.75 % against
@@ -138,6 +140,7 @@ def test_faster_excitation_buys_information():
     assert all(np.isfinite(o.scaled_bound).all() for o in d.outcomes.values())
 
 
+@pytest.mark.slow
 def test_the_best_excitation_depends_on_the_target():
     """The paper's spatial target (--target default), 60 s: there the plant's default period
     of 30 s leaves the smaller bound (measured 0.037 % against 0.066 % for 7.5 s, the bound
@@ -149,6 +152,7 @@ def test_the_best_excitation_depends_on_the_target():
     assert d.best == 0
 
 
+@pytest.mark.slow
 def test_the_sensors_own_magnitudes():
     """--noise: the magnitudes reach the sensors and the estimator's profile alike. On the
     planar medium target the navigation noise sets the bound (docs/identification.md): ten
@@ -167,6 +171,7 @@ def test_the_sensors_own_magnitudes():
         sensor_magnitudes({"nav.r": -1.0})
 
 
+@pytest.mark.slow
 def test_cli(capsys):
     """Two candidates on two worker processes (the spawn pool): the faster one marked best at
     60 s, as in :func:`test_faster_excitation_buys_information` (one worker there)."""

@@ -70,6 +70,7 @@ def test_displacement_weights_are_simpson_and_exact_for_polynomials():
     assert abs(u.sum() - 1.0) < 1e-12                        # a constant velocity: v itself
 
 
+@pytest.mark.slow
 def test_linear_rows_are_the_momentum_rows_differenced(excited):
     """The oracle's rows (the reference of the native core's diff_momentum,
     tests/test_native_estimator.py; the native core does not expose its rows)."""
@@ -95,6 +96,7 @@ def test_linear_rows_are_the_momentum_rows_differenced(excited):
     assert checked == len(data) - 2
 
 
+@pytest.mark.slow
 def test_noise_free_rows_hold_at_the_truth_where_the_velocities_form_does_not(excited):
     sc, data = excited
     base, target = sc.robot.base, sc.target
@@ -140,6 +142,7 @@ def test_compensated_answers_scatter_as_k_p_k():
     assert np.all(ratio_plain > 2.0), ratio_plain            # the plain P: far too small
 
 
+@pytest.mark.slow
 def test_noisy_velocities_the_standard_deviations_cover_the_errors(excited):
     sc, data = excited
     truth = estimate_vector(sc.robot.base, sc.target)

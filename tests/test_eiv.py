@@ -105,6 +105,7 @@ def test_compensation_removes_the_attenuation_of_a_synthetic_problem():
 
 
 @pytest.mark.parametrize("solver", ["paper", "joint"])
+@pytest.mark.slow
 def test_noisy_accelerations_no_longer_bias_the_masses(excited, solver):
     sc, data = excited
     truth = estimate_vector(sc.robot.base, sc.target)
@@ -185,6 +186,7 @@ def test_noise_settings_are_the_sensors_per_sample_noise(excited, sensor, key, s
     assert abs(err.std() / expected - 1.0) < 0.05                 # 4000+ draws: ~1 % error
 
 
+@pytest.mark.slow
 def test_the_prior_pull_is_the_rls_own_with_compensation(excited):
     """The compensated estimate moves ``mu``; the prior's pull (part of the sd) stays the RLS's
     distance to its data-only answer, not that shift (the oracle's solver: the native core

@@ -135,6 +135,7 @@ def _truth_params(sc):
 
 
 @pytest.mark.parametrize("which", ["planar", "spatial"])
+@pytest.mark.slow
 def test_regressors_reproduce_plant_momentum_and_forces(which, planar_record, spatial_record):
     sc, rec = planar_record if which == "planar" else spatial_record
     mu, th = _truth_params(sc)

@@ -51,6 +51,7 @@ def estimator_sources():
             native_build.model_glue("estimator")]
 
 
+@pytest.mark.slow
 def test_no_frame_above_16k(tmp_path):
     cc = gcc()
     frames = []
@@ -108,6 +109,7 @@ def _configs(source: str):
 
 
 @pytest.mark.parametrize("robot", ["planar", "spatial"])
+@pytest.mark.slow
 def test_every_configuration_in_a_64k_thread(host, tmp_path, robot):
     from spacerobot.core.robot_record import write_robot_record
     rob, rec = _stream(robot)

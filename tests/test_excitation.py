@@ -92,6 +92,7 @@ def _sample_references(p: Plant, times, requests):
     return rows
 
 
+@pytest.mark.slow
 def test_references_stay_within_their_bounds():
     rng = np.random.default_rng(12)
     sc = scenario("spatial")
@@ -308,6 +309,7 @@ ID_SEEDS = (1, 3, 10)
 
 
 @pytest.mark.parametrize("seed", ID_SEEDS)
+@pytest.mark.slow
 def test_identification_with_excitation_within_one_percent(seed):
     from spacerobot.estimator import Identifier
 

@@ -78,6 +78,7 @@ def _oracle_order(nu: int) -> np.ndarray:
     return np.r_[0:4, 10:14, 4:10, 14:20, 20:nu]
 
 
+@pytest.mark.slow
 def test_information_matches_the_oracle(lib, filters):
     """S = R^T R within 1e-7 relative (Frobenius; measured 1.4e-8) of the oracle's."""
     c, o = filters
@@ -89,6 +90,7 @@ def test_information_matches_the_oracle(lib, filters):
 
 
 @pytest.mark.parametrize("k", [0.0, 3.0])
+@pytest.mark.slow
 def test_predicted_bound_matches_the_oracle(lib, filters, k):
     """The bound of S + k dS (dS: the information the samples added, S minus the prior's),
     mapped at the exactly compensated estimate: the oracle's inverse of the same sum through
@@ -176,6 +178,7 @@ def _rates(sc, ts, X, **over):
     return np.array(rates), np.array(scores), ident
 
 
+@pytest.mark.slow
 def test_the_choice_follows_its_timing(run90):
     """Rate 1 until the replay (60 s) plus one window (10 s); the candidate (4) from 70 s, for
     the settle (5 s) and one more window (10 s); at 85 s the candidate where its predicted
@@ -191,6 +194,7 @@ def test_the_choice_follows_its_timing(run90):
     assert np.all(scores[k85:] == s)            # chosen once
 
 
+@pytest.mark.slow
 def test_the_horizon_counts_from_the_first_sample(run90):
     """The same data 1000 s later: the same rates at the same times after the first sample and
     the same scores (within 1e-6 relative: the thrust integrals' round-off); a horizon the
@@ -204,6 +208,7 @@ def test_the_horizon_counts_from_the_first_sample(run90):
     assert np.all(short == 1.0) and np.all(s_short == 0.0)
 
 
+@pytest.mark.slow
 def test_no_choice_without_excitation_or_filter(run90):
     """Off (excite_adapt 2), with no excitation requested (excite_mode 0: automatic is off), or
     where the estimator stops asking before the first window ends (both bodies identified at
@@ -232,6 +237,7 @@ def test_bad_options_refused_by_name(run90, name, value):
         _rates(sc, ts[:1], X[:1], **{name.replace(".", "__"): value})
 
 
+@pytest.mark.slow
 def test_state_round_trip_and_a_corrupt_phase(run90):
     """A state saved while the candidate settles, restored after the choice, gives the same
     rates again (the same code, the same numbers); a block whose phase is out of range is
@@ -303,6 +309,7 @@ def _closed_loop(sc, sensors_seed: int, stop_time: float, **over):
     return rep, in_effect
 
 
+@pytest.mark.slow
 def test_closed_loop_the_faster_rate_is_chosen_and_pays():
     """A random spatial target (Monte Carlo case 3) with the default window, settle and
     horizon (300 s): the estimator chooses rate 4, the plant runs it, and the largest scaled

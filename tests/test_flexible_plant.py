@@ -215,6 +215,7 @@ def test_the_arm_is_commanded_on_the_composite_rigid_body(robot):
 
 # -- balances and frequencies --------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_momentum_balance_with_thrust_and_the_slosh_part_of_the_propellant():
     """P + P_x - P(0) = J and L + L_x - L(0) = H over 60 s of thrust with the propellant used
     (the expelled propellant carries P_x, L_x away), to 1e-9 of the momentum change; the slosh
@@ -247,6 +248,7 @@ def test_momentum_balance_with_thrust_and_the_slosh_part_of_the_propellant():
     assert plant.base_now().mass == pytest.approx(sc.robot.base.mass + m_p + 100.0, rel=1e-15)
 
 
+@pytest.mark.slow
 def test_energy_balance_with_springs_and_dampers():
     """E - E(0) = W - D over 20 s: E the kinetic energy (Pinocchio's mass matrix) plus the
     springs', W the work of the joint torques and the thrust (held over each 1 ms step: tau .
@@ -283,6 +285,7 @@ def test_energy_balance_with_springs_and_dampers():
     assert err <= 1e-6 * dE
 
 
+@pytest.mark.slow
 def test_linearised_frequencies_equal_a_simulated_free_vibration():
     """The arm held (qdd_max = 0), the thrusters off, no damping, no initial base motion,
     small initial deflections and strokes (0.06 degree, 5 mm: the frequencies shift with the
@@ -319,6 +322,7 @@ def test_linearised_frequencies_equal_a_simulated_free_vibration():
     assert np.all(f_lin > cantilevered * (1 + 1e-3))
 
 
+@pytest.mark.slow
 def test_closed_loop_is_bounded_and_settles_with_the_issues_sizes():
     """The `flexible` set (two 50 kg wings at 0.5 Hz, 2 x 25 kg slosh at 0.30 / 0.35 Hz) for
     300 s with the excitation on: the deflections, strokes and the parts' momentum stay of the

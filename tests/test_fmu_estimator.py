@@ -76,6 +76,7 @@ def spatial_run(spatial_fmus):
 
 
 @pytest.mark.parametrize("name", ["momentum/paper", "force/paper", "momentum/joint", "force/joint"])
+@pytest.mark.slow
 def test_spatial_all_20_within_0p1_percent_by_60s(spatial_run, name):
     times, hist, diag, msgs = spatial_run
     sc = scenario("spatial")

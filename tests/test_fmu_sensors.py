@@ -129,6 +129,7 @@ def test_sensors_ssd_validates_and_wires_through_the_sensors(sensors_system):
     assert "ideal" not in ssd.parameter_set_names("planar")
 
 
+@pytest.mark.slow
 def test_sensors_system_parameter_sets(sensors_system, planar_fmus, tmp_path):
     two = ssd.build_system("planar", tmp_path / "two", fmus=planar_fmus)
     ref = run_ssp(two["ssp"], parameter_set="excited", stop_time=2.0, progress=False)

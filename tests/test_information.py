@@ -174,6 +174,7 @@ def _both(L, robot_name: str, stop_time: float):
 
 
 @pytest.mark.parametrize("robot_name, stop_time", [("spatial", 25.0), ("planar", 20.0)])
+@pytest.mark.slow
 def test_matches_the_oracle(lib, robot_name, stop_time):
     """The estimates within 1e-4 of the bound's sd of the oracle's (measured: spatial, 25 s:
     9e-7, planar 20 s: 2e-11, uncompensated and compensated), the bound within 1e-4 relative
@@ -296,6 +297,7 @@ def _monte_carlo(L, dt: float, stop_time: float, draws: int, scale: float, P0: f
 DRAWS = 150
 
 
+@pytest.mark.slow
 def test_bound_matches_monte_carlo(lib):
     """The bound is the estimates' scatter: the spatial default scenario, 2 s sampled every
     10 ms (201 samples), every random input drawn from the filter's own model (the white noise
@@ -344,6 +346,7 @@ def _check_monte_carlo(bound, e0, e1, bs, chis, corr, rows: int) -> None:
     assert abs(chis.mean() - expected) <= 4 * math.sqrt(2 / rows) / math.sqrt(N), chis.mean()
 
 
+@pytest.mark.slow
 def test_bound_monte_carlo_at_a_tenth_of_a_second(lib):
     """As :func:`test_bound_matches_monte_carlo` at the scenario's own sample interval (0.1 s,
     15 s: 151 samples). The rows' noise covariance R_k is ill-conditioned (eigenvalues over 7
@@ -550,6 +553,7 @@ def test_estimator_reports_the_filter(lib):
     assert np.max(np.abs(ls_off - ls) / bound) > 1.0
 
 
+@pytest.mark.slow
 def test_the_replay_relinearises_the_first_samples(lib):
     """``sr_info_step`` inside the estimator (SR_INFO_REPLAY = 600 samples): the first 600
     samples linearised at the estimator's own equations' estimates, then, at sample 600, the
@@ -600,6 +604,7 @@ def test_information_on_needs_white_noise():
         NativeEstimator(sc.robot, opts)
 
 
+@pytest.mark.slow
 def test_a_corrupted_replay_buffer_costs_the_replay_not_the_filter(lib):
     """A restored state whose kept samples hold a NaN (the buffer is not checked sample by
     sample): the replaying sample is accepted without the replay (the filter goes on from its

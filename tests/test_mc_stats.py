@@ -56,6 +56,7 @@ def test_median_interval_is_the_order_statistics_table():
     assert median_ci([1.0] * 10 + [math.inf] * 11)[0] == math.inf
 
 
+@pytest.mark.slow
 def test_median_interval_covers_as_promised():
     """Simulated coverage of the true median over 4000 samples of 25 exponential values:
     at least 95 % within its binomial standard error (4 x 0.34 %)."""

@@ -31,6 +31,7 @@ def study(spatial_ssp, tmp_path_factory):
     return code, out, read_results(out)
 
 
+@pytest.mark.slow
 def test_every_case_identified_within_1_percent_and_flags_honest(study):
     code, out, rows = study
     assert code == 0 and len(rows) == 4                      # 2 cases x 2 methods
@@ -49,6 +50,7 @@ def test_every_case_identified_within_1_percent_and_flags_honest(study):
         assert float(r["max_att_ref"]) > 0.0
 
 
+@pytest.mark.slow
 def test_rows_carry_the_drawn_truth(study):
     """The relative errors in the table are those of the drawn bodies: recomputed here from
     the case's own draw."""
@@ -63,6 +65,7 @@ def test_rows_carry_the_drawn_truth(study):
         assert np.isclose(rel.max(), float(r["worst_error"]), rtol=1e-12)
 
 
+@pytest.mark.slow
 def test_summary_and_plot_written(study, capsys):
     _, out, _ = study
     png = out.with_suffix(".png")
@@ -72,6 +75,7 @@ def test_summary_and_plot_written(study, capsys):
     assert header[0] == "case_id" and "worst_error" in header
 
 
+@pytest.mark.slow
 def test_summary_counts_only_this_commands_cases(spatial_ssp, tmp_path, monkeypatch, capsys):
     """An explicit --stop-time is in the default results name; a table that holds other rows
     (another stop time, written with --out) is resumed, but the summary counts only the cases
@@ -90,6 +94,7 @@ def test_summary_counts_only_this_commands_cases(spatial_ssp, tmp_path, monkeypa
     assert len(line) == 1 and line[0].split("|")[4].strip() == "1", text
 
 
+@pytest.mark.slow
 def test_a_value_every_case_refuses_names_the_cause(spatial_ssp, tmp_path, capsys):
     """A --set value the plant FMU refuses at initialisation (a negative period): every case
     fails, and the command ends with the FMU's reason, not with an empty plot's."""

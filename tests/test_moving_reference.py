@@ -227,6 +227,7 @@ def test_bias_fit_recovers_a_constant_bias_exactly_for_linear_accelerations():
     assert np.all(BiasFit().add(1.0, v0, a0).bias() == 0.0)    # one sample: no slope yet
 
 
+@pytest.mark.slow
 def test_estimated_bias_removes_most_of_an_accelerometer_bias(spatial):
     """The accelerometer bias fit removes most of a constant accelerometer bias: the native
     Identifier and the oracle's."""
@@ -247,6 +248,7 @@ def test_estimated_bias_removes_most_of_an_accelerometer_bias(spatial):
 # calibration and accuracy on a short noisy run
 # ------------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_momentum_window_is_accurate_and_calibrated_on_a_short_noisy_run():
     sc = scenario("spatial")
     runs = {}

@@ -150,6 +150,7 @@ def runner_run(work, loop: Loop) -> np.ndarray:
 
 
 # ---- 1. linux64 from an empty environment --------------------------------------------------
+@pytest.mark.slow
 def test_closed_loop_in_the_c_host_equals_the_runner(work, loop, host):
     c_rows = linux_run(loop, host)
     ref = runner_run(work, loop)
@@ -174,6 +175,7 @@ def test_closed_loop_in_the_c_host_equals_the_runner(work, loop, host):
     assert np.ptp(c_rows[:, col["plant.excite.level"]]) > 0.5
 
 
+@pytest.mark.slow
 def test_the_feedback_wire_matters(loop, host):
     """Without the wire estimator ident.excite -> plant ident.excite the plant keeps its start
     input (0: no excitation) and the estimates differ: the closed loop above is a loop."""
@@ -185,6 +187,7 @@ def test_the_feedback_wire_matters(loop, host):
 
 
 # ---- 2. win64 under Wine ----------------------------------------------------------------------
+@pytest.mark.slow
 def test_closed_loop_win64_under_wine_equals_linux64(work, loop, host):
     nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
     nh.require(nh.wine(), "Wine")
@@ -207,6 +210,7 @@ def test_closed_loop_win64_under_wine_equals_linux64(work, loop, host):
 
 
 # ---- 3. memory safety -------------------------------------------------------------------------
+@pytest.mark.slow
 def test_closed_loop_sanitized_runs_clean(work, loop, host):
     why = nh.asan_missing(work)
     if why:

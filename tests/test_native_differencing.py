@@ -74,6 +74,7 @@ def vandermonde_cond(t, centre):
 
 @pytest.mark.parametrize("m", HALF_WINDOWS)
 @pytest.mark.parametrize("jitter", [False, True])
+@pytest.mark.slow
 def test_derivative_weights(lib, m, jitter):
     rng = np.random.default_rng(20 + m + 100 * jitter)
     k = 2 * m + 1
@@ -94,6 +95,7 @@ def test_derivative_weights(lib, m, jitter):
 
 @pytest.mark.parametrize("m", DISPLACEMENT_HALF_WINDOWS)
 @pytest.mark.parametrize("jitter", [False, True])
+@pytest.mark.slow
 def test_displacement_weights(lib, m, jitter):
     rng = np.random.default_rng(40 + m + 100 * jitter)
     k = 2 * m + 1

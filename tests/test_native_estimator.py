@@ -163,6 +163,7 @@ def compare(lib, sc, rec, method, lam, accel="measured", py_kw=None, nat_kw=None
 @pytest.mark.parametrize("lam", [1.0, 0.98])
 @pytest.mark.parametrize("method", ["momentum", "force"])
 @pytest.mark.parametrize("name", ["planar-medium", "spatial-default", "random"])
+@pytest.mark.slow
 def test_measured_matches_python(lib, name, method, lam):
     """Momentum and force method, measured accelerations, with and without forgetting: the
     estimates, their standard deviations, the reported (physical) bodies, the flags, the
@@ -175,6 +176,7 @@ def test_measured_matches_python(lib, name, method, lam):
 
 @pytest.mark.parametrize("name, lam", [("planar-medium", 1.0), ("spatial-default", 0.98),
                                        ("random", 1.0)])
+@pytest.mark.slow
 def test_differenced_matches_python(lib, name, lam):
     """Force method with differenced accelerations, the 3-point central difference
     (diff_half_window 1; the equations at the window's centre): the first 2 samples are
@@ -186,6 +188,7 @@ def test_differenced_matches_python(lib, name, lam):
 
 
 @pytest.mark.parametrize("name, lam, half", [("spatial-default", 0.98, 3), ("random", 1.0, 5)])
+@pytest.mark.slow
 def test_savitzky_golay_window_matches_python(lib, name, lam, half):
     """diff_half_window > 1 (the Savitzky-Golay derivative over 2 m + 1 samples). Its weights
     come from a 3 x 3 normal-equation solve, in Python by LAPACK and BLAS, here by the C LU:
@@ -202,6 +205,7 @@ def test_savitzky_golay_window_matches_python(lib, name, lam, half):
 
 
 @pytest.mark.parametrize("method, lam", [("momentum", 1.0), ("force", 0.98)])
+@pytest.mark.slow
 def test_row_weights_and_correlation_lags_match_python(lib, method, lam):
     """Row standard deviations (the rows weighted by their inverse) and the residual
     autocorrelation's inflation of the standard deviations (corr_lags), on a noisy stream
@@ -227,6 +231,7 @@ def test_row_weights_and_correlation_lags_match_python(lib, method, lam):
 
 
 @pytest.mark.parametrize("name, lam", [("spatial-default", 1.0), ("random", 0.98)])
+@pytest.mark.slow
 def test_momentum_point_matches_python(lib, name, lam):
     """ident.momentum_point = 1: the momentum method's angular rows about the base's position
     at the newer sample (identifier.about_point). Python forms [r_S]x times the linear rows
@@ -243,6 +248,7 @@ def test_momentum_point_matches_python(lib, name, lam):
 @pytest.mark.parametrize("name, method, lam, lags", [("planar-medium", "momentum", 1.0, 0),
                                                      ("spatial-default", "force", 0.98, 5),
                                                      ("random", "momentum", 0.98, 0)])
+@pytest.mark.slow
 def test_joint_solver_matches_python(lib, name, method, lam, lags):
     """solver = 2, one RLS over the 20 standard parameters (the oracle's JointSolver, its RLS
     step by LAPACK's Cholesky and solve): on a stream with 1e-4 white noise (noise-free the
@@ -284,6 +290,7 @@ def test_joint_solver_matches_python(lib, name, method, lam, lags):
 @pytest.mark.parametrize("name, half, lam, x_tol, sd_tol", [
     ("spatial-default", 1, 1.0, 1e-8, 1e-6), ("random", 1, 1.0, 1e-8, 1e-6),
     ("planar-medium", 2, 0.98, 1e-6, 1e-4)])
+@pytest.mark.slow
 def test_differenced_momentum_matches_python(lib, name, half, lam, x_tol, sd_tol):
     """ident.diff_momentum = 1 (force method, differenced): the derivative's weights applied
     to the momentum equations of the window's samples (Identifier._differenced_momentum).
@@ -303,6 +310,7 @@ def test_differenced_momentum_matches_python(lib, name, half, lam, x_tol, sd_tol
 @pytest.mark.parametrize("name, accel, lam", [("planar-medium", "measured", 1.0),
                                               ("random", "measured", 1.0),
                                               ("spatial-default", "differenced", 0.98)])
+@pytest.mark.slow
 def test_noise_compensation_matches_python(lib, name, accel, lam):
     """signal_sd > 0 (ident.noise.*): the force method's estimates compensated for the bias
     that noisy accelerations cause (errors in variables, eiv.py): the noise rows
@@ -464,6 +472,7 @@ def _finite_report(nat) -> bool:
     return bool(np.all(np.isfinite(v)))
 
 
+@pytest.mark.slow
 def test_damaged_state_words_refused_or_stepped_finite(lib):
     """Every 4-byte word of a real state (force method, differenced accelerations: history
     ring; corr_lags: residual rings) damaged in turn: sr_estimator_data_check refuses it with
@@ -617,6 +626,7 @@ def test_converges_to_the_truth_planar_momentum(lib):
 
 
 @pytest.mark.parametrize("method, P0s", [("momentum", (1e8, 1e12, 1e16)), ("force", (1e16,))])
+@pytest.mark.slow
 def test_weak_prior_noise_free_run_keeps_every_sample(lib, method, P0s):
     """Issue #26: with a weak prior (P0_mu = P0_theta up to 1e16, the largest accepted) the
     scatter variance of an estimate of a noise-free run comes out <= 0 by round-off at times

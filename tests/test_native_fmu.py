@@ -30,6 +30,7 @@ def native_fmus(tmp_path_factory):
 
 
 @pytest.mark.parametrize("robot", ["planar", "spatial"])
+@pytest.mark.slow
 def test_model_description_is_valid_and_claims_what_it_carries(native_fmus, robot):
     path = native_fmus[robot]
     assert validate_fmu(str(path)) == []

@@ -181,12 +181,14 @@ def linux_fuzz(fuzz, fmus, seed):
 
 
 @pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.slow
 def test_fuzz_linux64(fuzz, fmus, kind, seed):
     r, seconds = linux_fuzz(fuzz, fmus, seed)
     what = f"{kind} linux64 seed {seed}"
     print_summary(check_summary(r, what, CALLS_OF[kind][0]), what, seconds)
 
 
+@pytest.mark.slow
 def test_fuzz_sanitized(work, libs, fmus, kind):
     why = nh.asan_missing(work)
     if why:
@@ -203,6 +205,7 @@ def test_fuzz_sanitized(work, libs, fmus, kind):
                   f"{kind} ASan/UBSan", time.perf_counter() - t)
 
 
+@pytest.mark.slow
 def test_fuzz_win64_under_wine_same_statuses_as_linux64(work, fuzz, fmus, kind):
     nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
     nh.require(nh.wine(), "Wine")
@@ -218,6 +221,7 @@ def test_fuzz_win64_under_wine_same_statuses_as_linux64(work, fuzz, fmus, kind):
     assert s == lin, "the same calls gave other statuses on win64"
 
 
+@pytest.mark.slow
 def test_fuzz_valgrind(fuzz, fmus, kind):
     vg = nh.require(nh.valgrind(), "valgrind")
     p, o = fmus["planar"], fmus["spatial"]
@@ -232,6 +236,7 @@ def test_fuzz_valgrind(fuzz, fmus, kind):
                   f"{kind} valgrind memcheck", time.perf_counter() - t)
 
 
+@pytest.mark.slow
 def test_damaged_state_sweep_sanitized(work, libs, fmus, kind):
     """A state is bytes a host may hand back: a damaged one is refused or run, never trusted
     into an out-of-bounds index (estimator: force method, differenced accelerations: history
@@ -268,6 +273,7 @@ EXTREME_REALS = [math.nan, math.inf, -math.inf, 1e308, -1e308, 1e16, -1e16, 5e-3
 EXTREME_INTS = [-2**31, 2**31 - 1, -1, 0, 3, 10_001]
 
 
+@pytest.mark.slow
 def test_accepted_extreme_parameters_keep_outputs_finite(work, libs):
     """Each parameter alone at an extreme value: refused at fmi2ExitInitializationMode (with a
     logged reason), or the estimator steps 10 real samples with every output finite."""
@@ -335,6 +341,7 @@ def test_accepted_extreme_parameters_keep_outputs_finite(work, libs):
 
 
 @pytest.mark.parametrize("model", ["sensors", "plant"])
+@pytest.mark.slow
 def test_accepted_extreme_parameters_of_sensors_and_plant(work, libs, model):
     """Each parameter alone at an extreme value: refused at fmi2ExitInitializationMode (with a
     logged reason), or 10 steps (the sensors: 10 real plant samples as their true inputs; the

@@ -292,6 +292,7 @@ def test_win64_dll_imports_only_kernel32_and_msvcrt(case, libs):
     assert {"fmi2Instantiate", "fmi2DoStep", "fmi2SerializeFMUstate"} <= exports
 
 
+@pytest.mark.slow
 def test_win64_dll_under_wine_equals_linux64(case, work, host):
     nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
     nh.require(nh.wine(), "Wine")
@@ -311,6 +312,7 @@ def test_win64_dll_under_wine_equals_linux64(case, work, host):
           f"{int(np.all(w_rows == linux_run(case, host), axis=1).sum())}/{w_rows.shape[0]}")
 
 
+@pytest.mark.slow
 def test_information_filter_under_wine_equals_linux64(work, libs, host):
     """The estimator FMU with the noise profile (ident.noise_profile = 1: the information
     filter, native/src/information.c) on 70 s of the spatial default scenario through the
@@ -361,6 +363,7 @@ def memory_reference(case: Case, host) -> np.ndarray:
     return linux_run(case, host)[:case.memory_steps + 1]
 
 
+@pytest.mark.slow
 def test_sanitized_binary_runs_clean(case, work, libs, host):
     why = nh.asan_missing(work)
     if why:
@@ -376,6 +379,7 @@ def test_sanitized_binary_runs_clean(case, work, libs, host):
     print(f"{case.tag}: ASan/UBSan clean in {time.perf_counter() - t:.1f} s")
 
 
+@pytest.mark.slow
 def test_valgrind_memcheck_clean(case, host):
     vg = nh.require(nh.valgrind(), "valgrind")
     t = time.perf_counter()

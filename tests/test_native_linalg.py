@@ -104,6 +104,7 @@ def symmetric_cases(rng, n):
     return out
 
 
+@pytest.mark.slow
 def test_eigh_against_lapack(lib):
     rng = np.random.default_rng(1)
     worst = dict(val=0.0, res=0.0, orth=0.0)
@@ -125,6 +126,7 @@ def test_eigh_against_lapack(lib):
     print("eigh worst:", worst)
 
 
+@pytest.mark.slow
 def test_eigh_matches_compiled_python(lib):
     """Same algorithm as report_kernels.eigh (Numba): eigenvalues and eigenvectors agree to
     round-off (eigenvectors up to sign, of well-separated eigenvalues)."""

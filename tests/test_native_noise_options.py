@@ -166,6 +166,7 @@ def run_both(lib, sc, rec, method="momentum", accel="measured", solver="paper", 
 # -- ident.momentum_window ---------------------------------------------------------------------
 @pytest.mark.parametrize("window", [0.5, 2.0])
 @pytest.mark.parametrize("point", [0, 1])
+@pytest.mark.slow
 def test_momentum_window_matches_python(lib, noisy_run, window, point):
     """Each sample's momentum equations against the newest sample at least ``window`` s
     older (the first until then), about the origin or the base (ident.momentum_point): the
@@ -211,6 +212,7 @@ def test_momentum_window_changes_the_estimates(lib, noisy_run):
      {"diff_half_window": 2, "diff_momentum": 1,
       "signal_sd": {"v_S": 1e-3, "omega_B": 6.32456e-5, "qd": 1e-4}}),
 ])
+@pytest.mark.slow
 def test_thrust_consider_term_matches_python(lib, noisy_run, method, accel, solver, extra):
     """sd_thrust = (0.01, 0.005): the consider sums and the thrust integrals give the Python
     Identifier's consider standard deviations (the estimates are unchanged by the term), in
@@ -302,6 +304,7 @@ def native_kw(extra: dict) -> dict:
     ("differenced", "joint", {"diff_half_window": 2, "diff_momentum": 1,
                               "signal_sd": SD_DIFFERENCED}),
 ])
+@pytest.mark.slow
 def test_force_noise_options_match_python(lib, noisy_run, accel, solver, extra):
     """The force method's ident.accel_bias (a_S minus the accelerometer bias fitted online
     from the navigation velocity, accel_bias.BiasFit) and ident.noise.* (the errors-in-variables
@@ -352,6 +355,7 @@ def test_accel_bias_subtracts_the_bias_where_it_applies(lib, noisy_run):
         assert a.get_state() == b.get_state(), opts
 
 
+@pytest.mark.slow
 def test_planar_robot(lib):
     """A planar robot (the identified rows x, y and z; the consider columns selected with
     them), momentum window and consider term, on a noisy stream of the planar plant."""
@@ -467,6 +471,7 @@ def test_noise_options_state_round_trip_and_check(lib, noisy_run):
         assert any(name in r for r in reasons), sorted(reasons)
 
 
+@pytest.mark.slow
 def test_damaged_state_words_refused_or_stepped_finite(lib, noisy_run):
     """Every 4-byte word of a real state with the window's ring (wrapped round) and the
     thrust integrals damaged in turn (as tests/test_native_estimator.py does for the other
@@ -592,6 +597,7 @@ def _run_fmu(fmu: Path, n: int, rec, params: dict):
     return out
 
 
+@pytest.mark.slow
 def test_native_fmu_takes_the_options(lib, noisy_run, tmp_path):
     """The native estimator FMU (this tree's glue and core, built as build_native_fmu packs
     it) accepts ident.momentum_window = 2 with the thrust's sd, and the force method's

@@ -88,6 +88,7 @@ def bodies(rng, n):
     return out
 
 
+@pytest.mark.slow
 def test_second_moment(lib):
     rng = np.random.default_rng(10)
     for _ in range(100):
@@ -100,6 +101,7 @@ def test_second_moment(lib):
         assert np.abs(physical.inertia_from_second_moment(S) - I6).max() <= 1e-14 * np.abs(I6).max()
 
 
+@pytest.mark.slow
 def test_is_physical(lib):
     rng = np.random.default_rng(11)
     counts = [0, 0]
@@ -125,6 +127,7 @@ def test_is_physical(lib):
 @pytest.mark.parametrize("fn,ref", [("sr_project_body", physical._project_body_numpy),
                                     ("sr_project_planar_body",
                                      physical._project_planar_body_numpy)])
+@pytest.mark.slow
 def test_projection_against_numpy(lib, fn, ref):
     rng = np.random.default_rng(12 if fn == "sr_project_body" else 13)
     worst, n_projected = 0.0, 0
@@ -148,6 +151,7 @@ def test_projection_against_numpy(lib, fn, ref):
     print(fn, "worst |I - I_numpy| / |I|:", worst)
 
 
+@pytest.mark.slow
 def test_planar_keeps_izz(lib):
     """A planar estimate with a reasonable Izz keeps m, b and Izz exactly."""
     rng = np.random.default_rng(14)
@@ -203,6 +207,7 @@ def test_error_scale(lib):
         assert np.all(scale[~np.isnan(scale)] > 0.0)
 
 
+@pytest.mark.slow
 def test_identified_and_report_flags(lib):
     rng = np.random.default_rng(16)
     sd_rel = 1e-3

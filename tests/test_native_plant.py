@@ -384,6 +384,7 @@ def test_checkpoint_state_copy_and_pickle_reproduce_a_run(lib):
         np.testing.assert_array_equal(go(other), first)
 
 
+@pytest.mark.slow
 def test_mingw_compiles_the_plant_warning_free(tmp_path):
     cc = shutil.which("x86_64-w64-mingw32-gcc")
     if cc is None:

@@ -31,6 +31,7 @@ def fmu(request, tmp_path_factory):
     return sc, build_native_fmu("plant", sc, tmp_path_factory.mktemp(f"nplant_{request.param}"))
 
 
+@pytest.mark.slow
 def test_model_description_claims_what_it_carries(fmu):
     from fmpy import read_model_description
     from fmpy.validation import validate_fmu

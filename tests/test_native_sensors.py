@@ -170,6 +170,7 @@ def c_rng(lib, seed=None, state=None) -> Rng:
 
 
 # -- the generator ----------------------------------------------------------------------------
+@pytest.mark.slow
 def test_xoshiro_and_splitmix_reference_outputs(lib):
     # xoshiro256starstar.c from the state {1, 2, 3, 4} (rand_xoshiro's test "reference")
     ref = [11520, 0, 1509978240, 1215971899390074240, 1216172134540287360, 607988272756665600,
@@ -506,6 +507,7 @@ def test_rotation_vector_to_matrix_against_scipy(lib):
 
 
 # -- statistics against today's SensorSuite ----------------------------------------------------
+@pytest.mark.slow
 def test_white_noise_per_channel_equals_sensorsuite(lib):
     """Every white noise, one run each (m = 10000 samples): sd and mean per channel."""
     m = 10000
@@ -535,6 +537,7 @@ def test_white_noise_per_channel_equals_sensorsuite(lib):
         assert same_mean(phis[0][:, i].mean(), phis[1][:, i].mean(), sd, m), i
 
 
+@pytest.mark.slow
 def test_bias_random_walks_grow_as_sensorsuite(lib):
     """Gyro and accelerometer bias random walks over runs of 40 steps (initial bias 0; C 1000
     runs, Python 300): increments (m = runs x 40 x 3), Var(b(k)) = k d^2 dt at k = 10 and 40
@@ -561,6 +564,7 @@ def test_bias_random_walks_grow_as_sensorsuite(lib):
                 and abs(vp - v) <= 5 * sp, (g, k, vc, vp, v)
 
 
+@pytest.mark.slow
 def test_initial_biases_and_thrust_errors_over_seeds_equal_sensorsuite(lib):
     """Per seed (2000): gyro and accelerometer initial biases, and the thrust errors of force
     and moment, (1 + s) R(phi): s and phi per axis."""
@@ -695,6 +699,7 @@ int main(void)
 """
 
 
+@pytest.mark.slow
 def test_mingw_build_under_wine_gives_the_same_bits(tmp_path):
     mingw, wine = shutil.which("x86_64-w64-mingw32-gcc"), shutil.which("wine")
     cc = shutil.which("gcc") or shutil.which("cc")

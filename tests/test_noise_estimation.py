@@ -171,6 +171,7 @@ def _estimates_of_standard(pi):
 
 
 @pytest.mark.parametrize("method", ["momentum", "force"])
+@pytest.mark.slow
 def test_row_weights_equal_batch_weighted_least_squares(planar_samples, method):
     """The native Identifier with row weights against batch weighted least squares over the
     rows the NumPy oracle's solvers are updated with (recorded), with the oracle's prior:
@@ -260,6 +261,7 @@ def test_weighted_row_counts_are_the_direct_sums():
     assert (g1.dof(1), g1.var_scale) == (4.0, 1.0)
 
 
+@pytest.mark.slow
 def test_forgetting_variance_matches_the_scatter_of_the_estimate():
     rng = np.random.default_rng(5)
     lam, p, sigma, N = 0.97, 3, 0.5, 150     # N: ~5 memories of lam (steady state)
@@ -316,6 +318,7 @@ def test_autocorrelation_sums_equal_the_direct_sums(lam):
         assert a.inflation() == pytest.approx(max(f, 1.0), rel=1e-12)
 
 
+@pytest.mark.slow
 def test_autocorrelation_inflation_is_the_long_run_variance_ratio():
     """Bartlett-weighted sums: ``1 + 2 sum_j (1 - j/(L+1)) rho_j`` (tolerances ~ 3 standard
     errors of the estimate, ``sqrt(4 L / 3 N)`` relative)."""
@@ -342,6 +345,7 @@ def test_autocorrelation_inflation_is_the_long_run_variance_ratio():
 # forgetting with the excitation always on; calibration under noise
 # ------------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_forgetting_with_excitation_always_on_identifies_a_spatial_case():
     sc = random_scenario("spatial", np.random.default_rng(3))
     p = plant_of(sc, sc.excitation)
@@ -364,6 +368,7 @@ def test_forgetting_with_excitation_always_on_identifies_a_spatial_case():
     assert np.all(np.isfinite(ident.std()))
 
 
+@pytest.mark.slow
 def test_standard_deviations_are_calibrated_on_a_short_noisy_run():
     sc = scenario("spatial")
     p = plant_of(sc, sc.excitation)

@@ -172,6 +172,7 @@ def _run_sensors(tmp_path, extra=()):
     return out.stdout, errors
 
 
+@pytest.mark.slow
 def test_sensors_run_with_no_setting_gives_usable_inertias(tmp_path):
     """The issue's measurement: with realistic sensors the estimator's defaults gave inertia
     errors of 1e4 % and more. With the realistic set's profile (no --set: the information
@@ -186,6 +187,7 @@ def test_sensors_run_with_no_setting_gives_usable_inertias(tmp_path):
     assert max(plain.values()) > 1.0, plain                # more than 100 % off
 
 
+@pytest.mark.slow
 def test_montecarlo_sensors_case_runs_the_preset(tmp_path):
     """One SensorsCase through the system with the sensors (no Dask): the overrides carry the
     sensors' seed and scale to both FMUs, and the row's calibration column is filled."""
@@ -203,6 +205,7 @@ def test_montecarlo_sensors_case_runs_the_preset(tmp_path):
     assert row["worst_error"] < 0.2                        # a usable answer after 60 s
 
 
+@pytest.mark.slow
 def test_estimator_fmu_refuses_a_bad_profile_value(tmp_path):
     """Through the native estimator FMU (the SSP with the sensors): a negative noise.scale is
     refused at initialisation with the parameter's name; nothing runs."""
@@ -215,6 +218,7 @@ def test_estimator_fmu_refuses_a_bad_profile_value(tmp_path):
     assert "noise.scale must be a finite number in [0, 1e6], got -1" in out.stderr, out.stderr
 
 
+@pytest.mark.slow
 def test_running_the_sensors_ssp_file_uses_its_bound_set(tmp_path):
     """``spacerobot run <robot>_sensors.ssp``: the set its SSD binds (realistic, with its noise
     profile, force method, differenced accelerations), as any SSP tool runs it; the header and

@@ -106,6 +106,7 @@ def test_projection_output_is_always_physical_on_noisy_estimates():
     assert n_projected > 100
 
 
+@pytest.mark.slow
 def test_projection_is_the_nearest_real_body():
     """Optimality against brute force: no real body (random, and on the segment to the
     output) is nearer to the estimate in the Frobenius distance of Sigma_c."""
@@ -165,6 +166,7 @@ def test_negative_mass_is_clipped_to_the_mass_floor():
     assert projected and m2 == pytest.approx(1e-4) and m2 > 0
 
 
+@pytest.mark.slow
 def test_compiled_projection_equals_numpy():
     """project_body (the core's, one compiled call) against the oracle's NumPy/LAPACK
     formulation (_project_body_numpy) on random non-physical bodies of every kind (negative
@@ -193,6 +195,7 @@ def test_compiled_projection_equals_numpy():
     assert np.array_equal(got[2], want[2], equal_nan=True)
 
 
+@pytest.mark.slow
 def test_compiled_planar_projection_equals_numpy():
     """project_planar_body (compiled) against its NumPy formulation on random non-physical
     planar estimates (wrong out-of-plane guesses, negative or tiny Izz, negative mass): the same

@@ -1,7 +1,8 @@
 """The README's quick start is what CI runs (two fenced shell blocks, the second in .ci/run), and
-its Python blocks (the fmpy recipe, the Python API) run as written; so do the "Your own robot"
-block (the shipped servicer7.urdf, built and run by bash) and docs/fmus.md's parameter-defaults
-command and Pinocchio recipe (the latter against finite differences)."""
+its Python blocks (the Python API, the minimal loop of "The estimator in your own simulation")
+run as written; so do the "Your own robot" block (the shipped servicer7.urdf, built and run by
+bash) and docs/fmus.md's fmpy recipe, parameter-defaults command, Pinocchio recipe (against
+finite differences) and minimal loop (the README's, word for word)."""
 import re
 from pathlib import Path
 
@@ -29,9 +30,9 @@ def test_ci_runs_the_readme_test_command():
         assert line.strip() in ci
 
 
-def python_block(section: str) -> str:
-    """The one fenced Python block of a README section."""
-    text = (ROOT / "README.md").read_text()
+def python_block(section: str, path: Path = ROOT / "README.md") -> str:
+    """The one fenced Python block of a section (``## <section>``) of a Markdown file."""
+    text = path.read_text()
     part = text.split(f"## {section}\n", 1)[1].split("\n## ", 1)[0]
     blocks = re.findall(r"```python\n(.*?)```", part, re.S)
     assert len(blocks) == 1, section
@@ -39,7 +40,7 @@ def python_block(section: str) -> str:
 
 
 def test_fmpy_recipe_runs_and_shows_the_fmu_message(planar_fmus, tmp_path):
-    """The README's fmpy recipe, run as written (in a fresh process, from a folder holding
+    """docs/fmus.md's fmpy recipe, run as written (in a fresh process, from a folder holding
     build/planar/ as ``spacerobot build`` makes it)."""
     import shutil
     import subprocess
@@ -49,7 +50,7 @@ def test_fmpy_recipe_runs_and_shows_the_fmu_message(planar_fmus, tmp_path):
     build.mkdir(parents=True)
     for path in planar_fmus.values():
         shutil.copy(path, build)
-    p = subprocess.run([sys.executable, "-c", python_block("Using the FMUs from fmpy")],
+    p = subprocess.run([sys.executable, "-c", python_block("Using the FMUs from fmpy", ROOT / "docs" / "fmus.md")],
                        cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr
     line = next(x for x in p.stdout.splitlines() if x.startswith("target.m, target.Izz:"))
@@ -81,7 +82,7 @@ def test_python_api_block_runs(planar_fmus, tmp_path, monkeypatch):
 
 
 # ---------------------------------------------------------------------------------------------
-# issue #28: the documented examples run as pasted
+# the documented examples run as pasted
 # ---------------------------------------------------------------------------------------------
 
 def shell_block(section: str, path: Path = ROOT / "README.md") -> str:
@@ -104,7 +105,7 @@ def _cli_env() -> dict:
 
 
 def test_own_robot_block_names_a_link_the_shipped_example_has():
-    """The ee-link lookup that failed (issue #28: --ee tool0 for a file whose tip is tcp): every
+    """The ee-link lookup (a wrong --ee such as tool0 for a file whose tip is tcp fails): every
     URDF and --ee of the block parse, through the command line's own argument handling."""
     import shlex
     from spacerobot.system import cli
@@ -118,6 +119,7 @@ def test_own_robot_block_names_a_link_the_shipped_example_has():
         assert key is not None and "servicer7" in key
 
 
+@pytest.mark.slow
 def test_own_robot_block_runs_as_pasted(tmp_path):
     """README "Your own robot": the bash block, run by bash in a folder laid out as the
     repository (the shipped URDF at the path the block names), builds servicer7's FMUs and runs
@@ -198,3 +200,27 @@ def test_pinocchio_recipe_of_docs_fmus():
     assert np.allclose(got["base.omega"], [W[2, 1], W[0, 2], W[1, 0]], atol=1e-6)
     # the confusion the docs warn of: Pinocchio's own ddq[0:3] is not the inertial acceleration
     assert not np.allclose(ddq[0:3], (rp - 2 * r0 + rm) / h ** 2, atol=1e-2)
+
+
+def test_minimal_loop_runs_as_written(planar_fmus, tmp_path):
+    """The README's "The estimator in your own simulation" block (docs/fmus.md's "A minimal
+    loop in your own simulator" is the same text), run as written in a fresh process from a
+    folder holding build/planar/, feeds the estimator FMU from the plant without FMI and
+    prints the target's mass and inertia, within 0.01 % of the scenario's truth as the text
+    says."""
+    import shutil
+    import subprocess
+    import sys
+    from spacerobot.robots import scenario
+    code = re.findall(r"```python\n(.*?)```", (ROOT / "docs" / "fmus.md").read_text(), re.S)
+    loop = [c for c in code if "def sample(y)" in c]
+    assert loop == [python_block("The estimator in your own simulation")]
+    (tmp_path / "build" / "planar").mkdir(parents=True)
+    shutil.copy(planar_fmus["estimator"], tmp_path / "build" / "planar")
+    p = subprocess.run([sys.executable, "-c", loop[0]], cwd=tmp_path, capture_output=True,
+                       text=True, timeout=600, env=_cli_env())
+    assert p.returncode == 0, p.stderr
+    m, izz = (float(x) for x in re.findall(r"= ([-+0-9.e]+)", p.stdout))
+    target = scenario("planar", "medium").target
+    assert abs(m - target.mass) / target.mass < 1e-4
+    assert abs(izz - target.inertia[2]) / target.inertia[2] < 1e-4

@@ -286,6 +286,7 @@ def test_random_corruption_never_crashes_and_accepts_only_what_python_reads(lib)
 
 
 # -- locale --------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_record_under_a_comma_decimal_locale(lib, tmp_path):
     """Written and read in a process whose C locale writes 1,5: the same bits."""
     if shutil.which("localedef") is None:

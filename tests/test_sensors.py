@@ -115,6 +115,7 @@ def test_bad_parameters_are_refused():
 N = 20000
 
 
+@pytest.mark.slow
 def test_gyro_white_noise_and_bias_random_walk():
     x = true_sample(np.random.default_rng(5))
     arw, rrw = 2e-4, 3e-5
@@ -144,6 +145,7 @@ def test_gyro_and_accelerometer_initial_bias_over_seeds():
     assert abs(e[:, 0].mean()) < 5e-4 / np.sqrt(3 * runs) and abs(e[:, 1].mean()) < 1e-2 / np.sqrt(3 * runs)
 
 
+@pytest.mark.slow
 def test_star_tracker_noise_per_axis_and_rotation():
     x = true_sample(np.random.default_rng(7))
     cross, roll = 1e-4, 5e-4
@@ -169,6 +171,7 @@ def test_rotation_vector_to_matrix_against_axis_angle():
         assert np.isclose(np.dot(R @ v, v) / np.dot(v, v), np.cos(angle), atol=1e-14)
 
 
+@pytest.mark.slow
 def test_navigation_accelerometer_alpha_and_joint_rate_noise():
     x = true_sample(np.random.default_rng(8))
     p = {"nav.r": 0.02, "nav.v": 3e-3, "accel.vrw": 1e-3, "alpha": 4e-4, "enc.qd": 2e-4,
@@ -182,6 +185,7 @@ def test_navigation_accelerometer_alpha_and_joint_rate_noise():
         assert all(_std_ok(e[:, i].std(), sd, N) for i in range(e.shape[1])), g
 
 
+@pytest.mark.slow
 def test_accelerometer_bias_random_walk():
     x = true_sample(np.random.default_rng(9))
     brw = 1e-4
@@ -190,6 +194,7 @@ def test_accelerometer_bias_random_walk():
     assert all(_std_ok(inc[:, i].std(), brw * np.sqrt(DT), N) for i in range(3))
 
 
+@pytest.mark.slow
 def test_encoder_noise_and_quantisation():
     x = true_sample(np.random.default_rng(10))
     e = run(SensorSuite(N_JOINTS, zero_except(**{"enc.q": 1e-4}), seed=6), x, N)["q"] - x["q"]
@@ -210,6 +215,7 @@ def test_encoder_noise_and_quantisation():
     assert _std_ok(err.std(), res / np.sqrt(12), N * N_JOINTS, k=8)   # uniform on the step
 
 
+@pytest.mark.slow
 def test_thrust_scale_factor_and_misalignment_over_seeds():
     runs = 3000
     scale, mis = 0.03, 0.01

@@ -124,6 +124,7 @@ def run_c(tmp_path_factory):
     return tmp, values, stdin, run
 
 
+@pytest.mark.slow
 def test_every_number_is_printed_as_python_prints_it(run_c):
     _, values, _, run = run_c
     lines = run()
@@ -143,6 +144,7 @@ def _german(tmp: Path):
     return (str(d), "de_DE.UTF-8") if (d / "de_DE.UTF-8").is_dir() else None
 
 
+@pytest.mark.slow
 def test_a_german_locale_changes_printf_but_not_the_messages(run_c):
     tmp, values, _, run = run_c
     german = _german(tmp)
@@ -154,6 +156,7 @@ def test_a_german_locale_changes_printf_but_not_the_messages(run_c):
     assert lines[1:] == run()[1:]
 
 
+@pytest.mark.slow
 def test_windows_build_prints_the_same(run_c, tmp_path_factory):
     tmp, values, stdin, run = run_c
     mingw, wine = nh.mingw(), nh.wine()

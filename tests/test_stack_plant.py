@@ -81,6 +81,7 @@ def objects(tmp_path_factory):
     return cc, objs, sus
 
 
+@pytest.mark.slow
 def test_no_frame_of_the_plant_above_16_kib(objects):
     _, _, sus = objects
     frames = []
@@ -137,6 +138,7 @@ def _library_plant_end(robot):
     return p.t, p.outputs()["r_S"][0]
 
 
+@pytest.mark.slow
 def test_a_plant_step_runs_in_a_thread_with_a_64_kib_stack(host):
     r = _run(host, STACK)
     assert r.returncode == 0, (r.returncode, r.stdout, r.stderr)
@@ -147,6 +149,7 @@ def test_a_plant_step_runs_in_a_thread_with_a_64_kib_stack(host):
     assert float(x) == pytest.approx(x_ref, rel=1e-9) and abs(x_ref) > 1.0
 
 
+@pytest.mark.slow
 def test_the_host_thread_has_the_stack_it_asked_for(host):
     """A thread that uses 256 KiB of its stack crashes with 64 KiB, and runs with 1 MiB."""
     assert _run(host, STACK, "hog").returncode != 0

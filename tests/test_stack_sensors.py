@@ -55,6 +55,7 @@ def test_the_frame_reader_sees_a_large_frame(tmp_path):
     assert frames["big"][0] > FRAME_LIMIT and "static" in frames["big"][1]
 
 
+@pytest.mark.slow
 def test_no_frame_above_16_kB(tmp_path):
     nb = nh.native_build()
     gcc = _gcc()

@@ -92,6 +92,7 @@ def test_grid_expansion_and_overrides():
         sw.parse_v0("0,10;5")
 
 
+@pytest.mark.slow
 def test_2x2_sweep_rows_and_columns(sweep_2x2):
     out, points, summary = sweep_2x2
     assert (summary.total, summary.submitted, summary.ok, summary.failed) == (4, 4, 4, 0), summary
@@ -123,6 +124,7 @@ def test_2x2_sweep_rows_and_columns(sweep_2x2):
     assert len({r["worker"] for r in rows}) == 2
 
 
+@pytest.mark.slow
 def test_failed_point_is_reported_alone(ssp, tmp_path):
     out = tmp_path / "fail.csv"
     good = make_points("planar", "medium", "momentum", "measured", [(0, 10), (10, 0)], 0.1, 1.0)
@@ -157,6 +159,7 @@ def test_failed_point_is_reported_alone(ssp, tmp_path):
         assert _by_id(out)[p.id] == rows[p.id]
 
 
+@pytest.mark.slow
 def test_rerun_skips_finished_points(sweep_2x2, ssp, tmp_path):
     src, points, _ = sweep_2x2
     out = tmp_path / "resume.csv"
@@ -189,6 +192,7 @@ def test_rerun_skips_finished_points(sweep_2x2, ssp, tmp_path):
         assert rows[pid]["wall_time"] == r["wall_time"] and rows[pid]["worker"] == r["worker"]
 
 
+@pytest.mark.slow
 def test_cli_config_and_plot(ssp, tmp_path, sweep_2x2):
     out = tmp_path / "cli.csv"
     cfg = tmp_path / "study.toml"

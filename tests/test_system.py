@@ -62,6 +62,7 @@ def test_committed_ssp_files_equal_generator_output(robot):
             f"ssp/{robot}/{rel} differs from the generator: run `python -m spacerobot.system.ssd`"
 
 
+@pytest.mark.slow
 def test_write_ssp_sources_writes_every_robot(tmp_path):
     written = ssd.write_ssp_sources(tmp_path)
     assert {p.relative_to(tmp_path).parts[0] for p in written} == set(ROBOTS)

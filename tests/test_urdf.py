@@ -404,6 +404,7 @@ def test_ee_before_a_joint_and_unknown_robot_are_refused(capsys):
 # the command line builds the system of a URDF robot
 # ------------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_cli_builds_fmus_and_ssp_of_a_urdf_robot(tmp_path, capsys):
     from fmpy import read_model_description
 

@@ -5,7 +5,8 @@ A native FMU is a zip of
 
 * ``modelDescription.xml``, generated here from :mod:`spacerobot.interface` (the one table of
   every variable: names, units, causality, start values) with ``needsExecutionTool="false"``
-  and ``<ModelStructure><Outputs>`` dependencies;
+  and the ``<ModelStructure>`` dependencies of every output (``Outputs``: its
+  direct-feedthrough inputs; ``InitialUnknowns``: the parameters and those inputs);
 * ``binaries/<platform>/<model identifier>.{so,dll,dylib}``: the binaries the install step
   compiled (``native/build.py``; FMI 2.0: linux64 always, win64 where mingw was found; FMI 3.0:
   x86_64-linux, x86_64-windows; and the macOS / ARM Linux ones where ``native/build.py --zig``
@@ -236,6 +237,19 @@ def _range_attributes(v: Var, ranges: Optional[Ranges]) -> Dict[str, str]:
     return {k: _value_text(v, x) for k, x in (("min", lo), ("max", hi)) if math.isfinite(x)}
 
 
+def _initial_dependencies(variables: Sequence[Var],
+                          dependencies: Optional[Dict[int, List[int]]], vr: int) -> List[int]:
+    """The knowns an output depends on in initialisation mode (FMI 2.0 ``InitialUnknowns``, FMI
+    3.0 ``InitialUnknown``), as value references: every parameter (``initial="exact"``: the
+    preview of the FMI layer, ``sr_model_preview``, builds the outputs from the parameters set
+    so far) and, for a direct-feedthrough output, the inputs of its ``<Outputs>`` entry (the
+    sensors' preview measures the inputs); no other input. Declared, a master sees no
+    algebraic loop at initialisation that does not exist (without the attribute it must assume
+    that every output depends on every input)."""
+    feed = set((dependencies or {}).get(vr, []))
+    return [j for j, v in enumerate(variables) if v.causality == "parameter" or j in feed]
+
+
 def model_description(variables: Sequence[Var], model_identifier: str, guid: str,
                       description: str, sc: Scenario,
                       dependencies: Optional[Dict[int, List[int]]] = None,
@@ -282,7 +296,9 @@ def model_description(variables: Sequence[Var], model_identifier: str, guid: str
                       dependencies=" ".join(str(j + 1) for j in deps))
     init = ET.SubElement(ms, "InitialUnknowns")
     for i in outputs:
-        ET.SubElement(init, "Unknown", index=str(i))
+        deps = _initial_dependencies(variables, dependencies, i - 1)
+        ET.SubElement(init, "Unknown", index=str(i),
+                      dependencies=" ".join(str(j + 1) for j in deps))
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
@@ -337,7 +353,8 @@ def model_description3(variables: Sequence[Var], model_identifier: str, token: s
         ET.SubElement(ms, "Output", valueReference=str(vr),
                       dependencies=" ".join(str(j) for j in deps))
     for vr in outputs:
-        ET.SubElement(ms, "InitialUnknown", valueReference=str(vr))
+        ET.SubElement(ms, "InitialUnknown", valueReference=str(vr), dependencies=" ".join(
+            str(j) for j in _initial_dependencies(variables, dependencies, vr)))
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
