@@ -103,6 +103,13 @@ enum { ALWAYS, PROFILE, BODY };
       RULE, "{n} must be >= 0 s and <= {B} s")                                                  \
     X("ident.excite_horizon", excite_horizon, 0, 0, POSITIVE, SR_EXD_TIME_MAX, 300.0, 0, 1,     \
       ALWAYS, RULE, "{n} must be > 0 s and <= {B} s")                                           \
+    X("ident.modes", modes, 0, 1, 1, 2, 2, 0, 1, ALWAYS, CODE, "1 (on), 2 (off)")               \
+    X("ident.mode_f[1]", mode_f, 0, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
+      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
+    X("ident.mode_f[2]", mode_f, 1, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
+      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
+    X("ident.mode_f[3]", mode_f, 2, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
+      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
       "{n} must be a finite number in [{a}, {B}]")                                              \
     PROFILE_MAGNITUDE(X, SR_NOISE_GYRO_ARW)                                                     \
@@ -406,6 +413,12 @@ static int check_rules(const sr_estimator_options *o, char *err, size_t errlen)
         sr_text_set(err, errlen, "ident.information = 1 needs the sensors' noise model: set "
                                  "ident.noise_profile = 1 (which turns it on) and the noise.* "
                                  "parameters");
+        return 1;
+    }
+    if (o->modes == 1 && (o->method != 1 || o->solver != 2 || o->momentum_window > 0.0)) {
+        sr_text_set(err, errlen, "ident.modes = 1 (the modal columns) needs the momentum method "
+                                 "(method = 1), the joint solver (solver = 2) and no momentum "
+                                 "window (ident.momentum_window = 0)");
         return 1;
     }
     if (o->method == 2 && o->accel_source == 2 && o->diff_momentum

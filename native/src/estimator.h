@@ -75,6 +75,8 @@ extern "C" {
 #define SR_NOISE_PROFILE_NONE 0
 #define SR_NOISE_PROFILE_SENSORS 1
 #define SR_NOISE_PROFILE_MAX 1e6
+/* largest ident.mode_f [Hz] */
+#define SR_EST_MAX_MODE_F 10.0
 /* length of the message buffers (rejections, model errors) */
 #define SR_EST_MSG_LEN 256
 
@@ -165,6 +167,12 @@ typedef struct sr_estimator_options {
                                    rates (20: 2 excite.ramp of the project's plant) */
     double excite_horizon;      /* ident.excite_horizon [s] > 0: the run's length the bound is
                                    predicted for (300) */
+    /* -- the modal columns (est_modal.h; docs/identification.md "Flexible parts: the modal
+     *    columns") -- */
+    int modes;                  /* ident.modes: 1 on (needs the momentum method, the joint
+                                   solver, no momentum window), 2 off (default) */
+    double mode_f[3];           /* ident.mode_f[1..3] [Hz]: the modes' frequencies where known,
+                                   0 = not given (then found from the data) */
 } sr_estimator_options;
 
 /** The options' defaults (the table's: the core's own, base 600 kg and target 100 kg guesses

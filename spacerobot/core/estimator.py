@@ -67,6 +67,8 @@ class SrEstimatorOptions(ctypes.Structure):
         ("excite_adapt", ctypes.c_int), ("excite_rate_try", ctypes.c_double),
         ("excite_window", ctypes.c_double), ("excite_settle", ctypes.c_double),
         ("excite_horizon", ctypes.c_double),
+        ("modes", ctypes.c_int),
+        ("mode_f", ctypes.c_double * 3),
     ]
 
 
@@ -355,7 +357,7 @@ def _options(values: Mapping, L: ctypes.CDLL) -> SrEstimatorOptions:
             raise KeyError(f"unknown estimator option {key!r}")
         if name in ("guess_base", "guess_target"):
             getattr(o, name)[:] = _body10(v)
-        elif name in ("signal_sd", "noise", "row_sd"):
+        elif name in ("signal_sd", "noise", "row_sd", "mode_f"):
             getattr(o, name)[:] = [float(x) for x in v]
         elif fields[name] is ctypes.c_int:
             setattr(o, name, int(v))
