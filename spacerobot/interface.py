@@ -590,7 +590,13 @@ def noise_model_vars() -> List[Var]:
     v += [Var(f"ident.mode_f[{i + 1}]", "parameter", "fixed", "Real", "Hz",
               f"With ident.modes = 1: the frequency of flexible mode {i + 1} with the base "
               "held (cantilevered panel, slosh) where known; 0 = not given (the modes are then "
-              "found from the kept samples)", 0.0, ("mode_f", i)) for i in range(3)]
+              "found from the kept samples)", 0.0, ("mode_f", i)) for i in range(4)]
+    v += [Var(f"diag.mode_f[{i + 1}]", "output", "continuous", "Real", "Hz",
+              f"With ident.modes = 1: the frequency of mode {i + 1} in use (given, refined "
+              "or found from the data); 0 = none", None, ("mode_f", i)) for i in range(4)]
+    v += [Var(f"diag.mode_zeta[{i + 1}]", "output", "continuous", "Real", "1",
+              f"With ident.modes = 1: the damping ratio of mode {i + 1} in use; 0 = none", None,
+              ("mode_zeta", i)) for i in range(4)]
     for name in ("noise.scale",) + _profile_magnitudes():
         unit, default, doc = NOISE_PARAMETERS[name]
         v.append(Var(name, "parameter", "fixed", "Real", unit,

@@ -19,11 +19,19 @@
 #define EST_MODAL_F_LO 0.1
 #define EST_MODAL_F_HI 1.5
 #define EST_MODAL_ZETA0 0.02
-#define EST_MODAL_NM_EVALS 40
+/* the bounds of a mode (the refinement's): frequency from EST_MODAL_F_MIN to
+ * SR_EST_MAX_MODE_F [Hz] (below, a mode's columns mimic the rigid body's), damping */
+#define EST_MODAL_F_MIN SR_EST_MIN_MODE_F
+#define EST_MODAL_ZETA_MIN 1e-4
+#define EST_MODAL_ZETA_MAX 0.5
+/* the modes are kept (no replay) where a search moved none by more than this (relative; the
+ * damping 100 times this) */
+#define EST_MODAL_KEEP 1e-3
+#define EST_MODAL_NM_EVALS 30
 #define EST_MODAL_MIN_GAIN 0.3
 #define EST_MODAL_FIT_FLOOR 1e-6
 #define EST_MODAL_FIRST_SEARCH 60.0
-#define EST_MODAL_SCAN_SAMPLES 700
+#define EST_MODAL_SCAN_SAMPLES 300
 /* the prior information of a modal unknown (weak: the data decide), SI units */
 #define EST_MODAL_PRIOR_INFO 1e-12
 #define TWO_PI 6.283185307179586
@@ -103,13 +111,20 @@ static void expm4(const double *M, double *E)
  * chain of two integrators) */
 static void filter_step(est_modal_filter *f, double dt, const double *u0, const double *u1)
 {
-    double M[16] = {0.0}, E[16];
-    M[1] = dt;                                            /* row 0: eta' */
-    M[4] = -f->w * f->w * dt;                             /* row 1: eta'' */
-    M[5] = -2.0 * f->zeta * f->w * dt;
-    M[6] = -dt;
-    M[11] = 1.0;                                          /* row 2: the input's slope */
-    expm4(M, E);
+    double *E = f->step;
+    if (!(f->key[0] == f->w && f->key[1] == f->zeta && f->key[2] == dt)) {
+        double M[16] = {0.0}, X[16];
+        M[1] = dt;                                        /* row 0: eta' */
+        M[4] = -f->w * f->w * dt;                         /* row 1: eta'' */
+        M[5] = -2.0 * f->zeta * f->w * dt;
+        M[6] = -dt;
+        M[11] = 1.0;                                      /* row 2: the input's slope */
+        expm4(M, X);
+        memcpy(E, X, sizeof(double) * 8);                 /* rows 0 and 1 */
+        f->key[0] = f->w;
+        f->key[1] = f->zeta;
+        f->key[2] = dt;
+    }
     for (int j = 0; j < EST_MODAL_U; j++) {
         double du = u1[j] - u0[j], a = f->eta[j], b = f->etad[j];
         f->eta[j] = E[0] * a + E[1] * b + E[2] * u0[j] + E[3] * du;
@@ -257,21 +272,24 @@ static void solve_reset(const sr_estimator_model *m, void *data)
     s->rss = s->rows = s->y2 = 0.0;
 }
 
-/* the rows (k x (n + 1)) into [R d] by Givens rotations (in place; the rows are destroyed) */
+/* the rows (k x (n + 1)) into [R d] by Givens rotations (in place; the rows are destroyed),
+ * pivot by pivot with every row at each (one pass over R per sample: R is megabytes) */
 static void solve_add(const sr_estimator_model *m, void *data, double *rows, int k)
 {
     est_modal_data *s = state(m, data);
-    int n = s->n_f * EST_MODAL_COLS + m->q;
+    int n = s->n_f * EST_MODAL_COLS + m->q, w = n + 1;
     double *R = R_of(m, data), *d = d_of(m, data);
-    for (int a = 0; a < k; a++) {
-        double *x = rows + (size_t)a * (n + 1);
-        s->y2 += x[n] * x[n];
-        for (int i = 0; i < n; i++) {
+    for (int a = 0; a < k; a++)
+        s->y2 += rows[(size_t)a * w + n] * rows[(size_t)a * w + n];
+    for (int i = 0; i < n; i++) {
+        double *restrict Ri = R + (size_t)i * n;
+        for (int a = 0; a < k; a++) {
+            double *restrict x = rows + (size_t)a * w;
             if (x[i] == 0.0)
                 continue;
-            double *Ri = R + (size_t)i * n, r = hypot(Ri[i], x[i]);
-            double c = Ri[i] / r, sn = x[i] / r;
+            double r = hypot(Ri[i], x[i]), c = Ri[i] / r, sn = x[i] / r;
             Ri[i] = r;
+            x[i] = 0.0;
             for (int j = i + 1; j < n; j++) {
                 double p = Ri[j], v = x[j];
                 Ri[j] = c * p + sn * v;
@@ -281,7 +299,9 @@ static void solve_add(const sr_estimator_model *m, void *data, double *rows, int
             d[i] = c * p + sn * v;
             x[n] = c * v - sn * p;
         }
-        s->rss += x[n] * x[n];
+    }
+    for (int a = 0; a < k; a++) {
+        s->rss += rows[(size_t)a * w + n] * rows[(size_t)a * w + n];
         s->rows += 1.0;
     }
 }
@@ -385,7 +405,8 @@ static double objective(const sr_estimator_model *m, void *data, const est_modal
     int k = m->k1 + m->k2, nc = EST_MODAL_SCAN_COLS, width = n_f * nc + m->q + 1;
     for (int g = 0; g < n_f; g++) {
         f[g] = f_in[g];
-        if (!(f[g].w > 0.0 && f[g].zeta > 0.0 && f[g].zeta < 1.0))
+        if (!(f[g].w >= TWO_PI * EST_MODAL_F_MIN && f[g].w <= TWO_PI * SR_EST_MAX_MODE_F
+              && f[g].zeta >= EST_MODAL_ZETA_MIN && f[g].zeta <= EST_MODAL_ZETA_MAX))
             return HUGE_VAL;
         memset(f[g].eta, 0, sizeof f[g].eta);
         memset(f[g].etad, 0, sizeof f[g].etad);
@@ -545,47 +566,66 @@ static double refine(const sr_estimator_model *m, void *data, est_modal_filter *
     return F[lo];
 }
 
-/* The modes from the kept samples: the given ones refined (each with the others held), or a
- * greedy scan (est_modal.h); s->f and s->n_f updated */
-static void search(const sr_estimator_model *m, void *data, const double *u0, est_modal_work *w)
+/* The modes from the kept samples: those so far (given or found before) refined, each with
+ * the others held; a mode that lowers the residual by less than EST_MODAL_MIN_GAIN dropped;
+ * then more by the greedy scan (est_modal.h). s->f and s->n_f updated; 1 where the modes
+ * changed by more than EST_MODAL_KEEP (relative, frequency and damping) or in number. */
+static int search(const sr_estimator_model *m, void *data, const double *u0, est_modal_work *w)
 {
     est_modal_data *s = state(m, data);
     int stride = (s->kept + EST_MODAL_SCAN_SAMPLES - 1) / EST_MODAL_SCAN_SAMPLES;
-    est_modal_filter f[EST_MODAL_MAX_F];
+    est_modal_filter f[EST_MODAL_MAX_F], g[EST_MODAL_MAX_F];
     memcpy(f, s->f, sizeof f);
     int n_f = s->n_f;
     double r0 = objective(m, data, f, n_f, u0, stride, w);
-    if (n_f > 0) {                                        /* given: refined */
-        for (int j = 0; j < n_f; j++)
-            r0 = refine(m, data, f, n_f, j, u0, stride, r0, w);
-    } else {
-        while (n_f < EST_MODAL_MAX_F) {
-            int best = -1;
-            double rb = HUGE_VAL;
-            for (int g = 0; g < EST_MODAL_GRID; g++) {
-                f[n_f].w = TWO_PI * EST_MODAL_F_LO
-                           * pow(EST_MODAL_F_HI / EST_MODAL_F_LO, g / (EST_MODAL_GRID - 1.0));
-                f[n_f].zeta = EST_MODAL_ZETA0;
-                double r = objective(m, data, f, n_f + 1, u0, stride, w);
-                if (r < rb) {
-                    rb = r;
-                    best = g;
-                }
-            }
-            if (best < 0)
-                break;
-            f[n_f].w = TWO_PI * EST_MODAL_F_LO
-                       * pow(EST_MODAL_F_HI / EST_MODAL_F_LO, best / (EST_MODAL_GRID - 1.0));
-            f[n_f].zeta = EST_MODAL_ZETA0;
-            double r1 = refine(m, data, f, n_f + 1, n_f, u0, stride, rb, w);
-            if (!(r1 < (1.0 - EST_MODAL_MIN_GAIN) * r0))
-                break;
-            n_f++;
-            r0 = r1;
+    for (int j = 0; j < n_f; j++)
+        r0 = refine(m, data, f, n_f, j, u0, stride, r0, w);
+    for (int j = n_f - 1; j >= 0 && n_f > 0; j--) {        /* pruning */
+        int c = 0;
+        for (int i = 0; i < n_f; i++)
+            if (i != j)
+                g[c++] = f[i];
+        double r = objective(m, data, g, c, u0, stride, w);
+        if (!(r0 < (1.0 - EST_MODAL_MIN_GAIN) * r)) {
+            memcpy(f, g, sizeof(est_modal_filter) * (size_t)c);
+            n_f = c;
+            r0 = r;
         }
     }
-    memcpy(s->f, f, sizeof f);
-    s->n_f = n_f;
+    while (n_f < EST_MODAL_MAX_F) {                         /* the scan */
+        int best = -1;
+        double rb = HUGE_VAL;
+        for (int i = 0; i < EST_MODAL_GRID; i++) {
+            f[n_f].w = TWO_PI * EST_MODAL_F_LO
+                       * pow(EST_MODAL_F_HI / EST_MODAL_F_LO, i / (EST_MODAL_GRID - 1.0));
+            f[n_f].zeta = EST_MODAL_ZETA0;
+            double r = objective(m, data, f, n_f + 1, u0, stride, w);
+            if (r < rb) {
+                rb = r;
+                best = i;
+            }
+        }
+        if (best < 0)
+            break;
+        f[n_f].w = TWO_PI * EST_MODAL_F_LO
+                   * pow(EST_MODAL_F_HI / EST_MODAL_F_LO, best / (EST_MODAL_GRID - 1.0));
+        f[n_f].zeta = EST_MODAL_ZETA0;
+        double r1 = refine(m, data, f, n_f + 1, n_f, u0, stride, rb, w);
+        if (!(r1 < (1.0 - EST_MODAL_MIN_GAIN) * r0))
+            break;
+        n_f++;
+        r0 = r1;
+    }
+    int changed = n_f != s->n_f;
+    for (int j = 0; j < n_f && !changed; j++)
+        changed = fabs(f[j].w - s->f[j].w) > EST_MODAL_KEEP * s->f[j].w
+                  || fabs(f[j].zeta - s->f[j].zeta) > 100.0 * EST_MODAL_KEEP * s->f[j].zeta;
+    if (changed) {
+        memset(s->f, 0, sizeof s->f);
+        memcpy(s->f, f, sizeof(est_modal_filter) * (size_t)n_f);
+        s->n_f = n_f;
+    }
+    return changed;
 }
 
 /* -- the stage ------------------------------------------------------------------------------ */
@@ -688,10 +728,8 @@ void est_modal_step(const sr_estimator_model *m, void *data, double t, const dou
             && t - s->t0 >= EST_MODAL_FIRST_SEARCH * ldexp(1.0, s->searches)) {
             s->searches++;
             double rel = s->y2 > 0.0 ? sqrt(s->rss / s->y2) : 0.0;
-            if (rel > EST_MODAL_FIT_FLOOR || s->n_f > 0) {
-                search(m, data, s->u0, w);
+            if ((rel > EST_MODAL_FIT_FLOOR || s->n_f > 0) && search(m, data, s->u0, w))
                 replay(m, data, s->u0, w);
-            }
         }
     }
     report_into(m, data, nw, w);

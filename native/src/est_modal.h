@@ -32,6 +32,7 @@
 typedef struct est_modal_filter {
     double w, zeta;
     double eta[EST_MODAL_U], etad[EST_MODAL_U];
+    double key[3], step[8];    /* the step's coefficients for (w, zeta, dt) = key */
 } est_modal_filter;
 
 /* the modal stage's state in the Data block (followed by R, d and the kept samples) */

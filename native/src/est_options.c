@@ -110,6 +110,8 @@ enum { ALWAYS, PROFILE, BODY };
       "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
     X("ident.mode_f[3]", mode_f, 2, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
       "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
+    X("ident.mode_f[4]", mode_f, 3, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
+      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
       "{n} must be a finite number in [{a}, {B}]")                                              \
     PROFILE_MAGNITUDE(X, SR_NOISE_GYRO_ARW)                                                     \
@@ -421,6 +423,16 @@ static int check_rules(const sr_estimator_options *o, char *err, size_t errlen)
                                  "window (ident.momentum_window = 0)");
         return 1;
     }
+    for (int k = 0; k < SR_EST_MAX_MODES; k++)
+        if (o->mode_f[k] != 0.0 && o->mode_f[k] < SR_EST_MIN_MODE_F) {
+            sr_text_set(err, errlen, "ident.mode_f[");
+            sr_text_int(err, errlen, k + 1);
+            sr_text_cat(err, errlen, "] must be 0 (not given) or a frequency from ");
+            sr_text_num(err, errlen, SR_EST_MIN_MODE_F, 6);
+            sr_text_cat(err, errlen, " Hz (below, a mode's columns are a rigid body's), got ");
+            sr_text_repr(err, errlen, o->mode_f[k]);
+            return 1;
+        }
     if (o->method == 2 && o->accel_source == 2 && o->diff_momentum
         && o->diff_half_window > SR_DIFF_MAX_DISPLACEMENT_HALF_WINDOW) {
         sr_text_set(err, errlen, "ident.diff_half_window must be an integer from 1 to ");

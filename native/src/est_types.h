@@ -38,7 +38,7 @@
 /* the modal columns (est_modal.h): most mode frequencies, unknowns per frequency (G 21, C 36,
  * D 36, T 72) and those the search's scan uses (G, C), most unknowns of the modal solve, most
  * samples kept for the mode search and the replay */
-#define EST_MODAL_MAX_F 3
+#define EST_MODAL_MAX_F SR_EST_MAX_MODES
 #define EST_MODAL_COLS 165
 #define EST_MODAL_SCAN_COLS 57
 #define EST_MODAL_NMAX (EST_MODAL_MAX_F * EST_MODAL_COLS + EST_NZ)

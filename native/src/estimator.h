@@ -75,8 +75,10 @@ extern "C" {
 #define SR_NOISE_PROFILE_NONE 0
 #define SR_NOISE_PROFILE_SENSORS 1
 #define SR_NOISE_PROFILE_MAX 1e6
-/* largest ident.mode_f [Hz] */
-#define SR_EST_MAX_MODE_F 10.0
+/* largest ident.mode_f [Hz]; most modes of the modal columns (ident.mode_f[1..], diag.mode_*) */
+#define SR_EST_MAX_MODE_F 3.0
+#define SR_EST_MIN_MODE_F 0.05
+#define SR_EST_MAX_MODES 4
 /* length of the message buffers (rejections, model errors) */
 #define SR_EST_MSG_LEN 256
 
@@ -171,7 +173,7 @@ typedef struct sr_estimator_options {
      *    columns") -- */
     int modes;                  /* ident.modes: 1 on (needs the momentum method, the joint
                                    solver, no momentum window), 2 off (default) */
-    double mode_f[3];           /* ident.mode_f[1..3] [Hz]: the modes' frequencies where known,
+    double mode_f[SR_EST_MAX_MODES]; /* ident.mode_f[1..4] [Hz]: the modes' frequencies where known,
                                    0 = not given (then found from the data) */
 } sr_estimator_options;
 
@@ -306,6 +308,9 @@ typedef struct sr_estimator_report {
     double excite_score[2];           /* diag.excite_score.rate_1 / .rate_try: the predicted
                                          largest scaled bound at the horizon of each (0 before
                                          the choice) */
+    /* -- the modal columns (options.modes = 1; else 0) -- */
+    double mode_f[SR_EST_MAX_MODES], mode_zeta[SR_EST_MAX_MODES];   /* diag.mode_f[k] [Hz], diag.mode_zeta[k]: the modes in
+                                         use, given or found (0: none) */
 } sr_estimator_report;
 
 /** The excitation level the Model m requests (output ident.excite) for the bodies' identified
