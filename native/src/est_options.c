@@ -104,14 +104,8 @@ enum { ALWAYS, PROFILE, BODY };
     X("ident.excite_horizon", excite_horizon, 0, 0, POSITIVE, SR_EXD_TIME_MAX, 300.0, 0, 1,     \
       ALWAYS, RULE, "{n} must be > 0 s and <= {B} s")                                           \
     X("ident.modes", modes, 0, 1, 1, 2, 2, 0, 1, ALWAYS, CODE, "1 (on), 2 (off)")               \
-    X("ident.mode_f[1]", mode_f, 0, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
-      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
-    X("ident.mode_f[2]", mode_f, 1, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
-      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
-    X("ident.mode_f[3]", mode_f, 2, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
-      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
-    X("ident.mode_f[4]", mode_f, 3, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,          \
-      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")                             \
+    MODE_F(X, "ident.mode_f[1]", 0) MODE_F(X, "ident.mode_f[2]", 1)                            \
+    MODE_F(X, "ident.mode_f[3]", 2) MODE_F(X, "ident.mode_f[4]", 3)                            \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
       "{n} must be a finite number in [{a}, {B}]")                                              \
     PROFILE_MAGNITUDE(X, SR_NOISE_GYRO_ARW)                                                     \
@@ -156,6 +150,11 @@ enum { ALWAYS, PROFILE, BODY };
       RULE, NULL)                                                                               \
     X(prefix "Iyz", field, 9, 0, -SR_BODY_INERTIA_MAX, SR_BODY_INERTIA_MAX, 0.0, 0, 1, BODY,    \
       RULE, NULL)
+
+/* a mode's frequency given to the modal columns (est_modal.h): 0 or in range [Hz] */
+#define MODE_F(X, name, k)                                                                      \
+    X(name, mode_f, k, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,                      \
+      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")
 
 /* a sensors' magnitude the noise profile reads (noise.<name>, sensor_noise.h): finite >= 0 */
 #define PROFILE_MAGNITUDE(X, k)                                                                 \

@@ -309,8 +309,8 @@ typedef struct sr_estimator_report {
                                          largest scaled bound at the horizon of each (0 before
                                          the choice) */
     /* -- the modal columns (options.modes = 1; else 0) -- */
-    double mode_f[SR_EST_MAX_MODES], mode_zeta[SR_EST_MAX_MODES];   /* diag.mode_f[k] [Hz], diag.mode_zeta[k]: the modes in
-                                         use, given or found (0: none) */
+    double mode_f[SR_EST_MAX_MODES];  /* diag.mode_f[k] [Hz], diag.mode_zeta[k]: the modes */
+    double mode_zeta[SR_EST_MAX_MODES];  /* in use, given or found (0: none) */
 } sr_estimator_report;
 
 /** The excitation level the Model m requests (output ident.excite) for the bodies' identified
