@@ -14,11 +14,14 @@
  * rigid block is last, so its answer and covariance need only R's last q x q block.
  *
  * The frequencies: given (ident.mode_f, Hz) or found from the kept samples by variable
- * projection (a scan of EST_MODAL_GRID frequencies with the G and C blocks, each new mode's
- * (w, zeta) refined by Nelder-Mead, kept while it lowers the residual by EST_MODAL_MIN_GAIN),
- * at EST_MODAL_FIRST_SEARCH s after the reference and at each doubling of that time, where the
- * rigid rows' relative residual exceeds EST_MODAL_FIT_FLOOR; then every kept sample is solved
- * again with the new columns. */
+ * projection, at EST_MODAL_FIRST_SEARCH s after the reference and at each doubling of that
+ * time, where the rows' relative residual exceeds EST_MODAL_FIT_FLOOR: the modes so far refined
+ * (Nelder-Mead over (log w, log zeta), each with the others held), those that lower the
+ * residual by less than EST_MODAL_MIN_GAIN dropped, then a scan of EST_MODAL_GRID frequencies
+ * adding the best new mode (refined) while it lowers the residual by EST_MODAL_MIN_GAIN (the
+ * search with the G and C blocks only, on at most EST_MODAL_SCAN_SAMPLES kept samples); where
+ * the modes changed, every kept sample is solved again with the new columns (est_modal.c has
+ * the constants). */
 #ifndef SR_EST_MODAL_H
 #define SR_EST_MODAL_H
 

@@ -119,6 +119,8 @@ void sr_estimator_sd_without_lag(const sr_estimator_model *m, const void *data, 
     if (m->opt.solver == 1)
         est_paper_std_parts(m, &d->core, est_corr_current(m, data, 0),
                             est_corr_current(m, data, 1), sd, data_only, J, vec, rcond);
+    else if (m->modes && d->samples > 0)     /* the modal solve's (it adds no lag) */
+        memcpy(sd, d->core.sd, sizeof(double) * EST_NZ);
     else
         est_joint_std_parts(m, &d->core, est_corr_current(m, data, 0), sd, data_only, J, vec);
 }
