@@ -289,7 +289,9 @@ size_t sr_estimator_data_size(const sr_estimator_model *m) { return m ? m->size 
 
 size_t sr_estimator_work_size(const sr_estimator_model *m)
 {
-    return m ? sizeof(est_work) + sizeof(double) * m->work_noise : 0;
+    return m ? sizeof(est_work) + sizeof(double) * m->work_noise
+                   + (m->modes ? sizeof(est_modal_work) : 0)
+             : 0;
 }
 
 size_t sr_estimator_data_head_size(void) { return offsetof(est_data, core); }

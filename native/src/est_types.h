@@ -234,9 +234,16 @@ typedef struct est_work {
     sr_info_data nwi;             /* the information filter's new state */
     sr_exd_work exd;              /* the information filter's and the excitation design's */
     double noise_rows[EST_NOISE_SCRATCH];
-    est_modal_work modal;         /* the modal columns' (est_modal.h) */
-    double noise[];               /* the noise rows (est_rows.n_chunks chunks) */
+    double noise[];               /* the noise rows (est_rows.n_chunks chunks), then with
+                                     ident.modes = 1 the modal columns' temporaries
+                                     (est_modal_work, est_modal_work_of) */
 } est_work;
+
+/* the modal columns' temporaries in the work space w (after its noise rows) */
+static inline est_modal_work *est_modal_work_of(const sr_estimator_model *m, est_work *w)
+{
+    return (est_modal_work *)(w->noise + m->work_noise);
+}
 
 /* a function kept out of its caller's frame (the compilers that can be told): the largest
  * temporaries of an update's stages are then never on the stack at once */

@@ -316,7 +316,8 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
     if (st != 0)
         return reject(d, SR_EST_REJECT_NONFINITE, step_failure(st), msg, msglen);
     /* the modal columns' stage (est_modal.h): its own state, the estimates from it */
-    est_modal_step(m, data, t, sample, rows->E, nw, &wk->modal);
+    if (m->modes)
+        est_modal_step(m, data, t, sample, rows->E, nw, est_modal_work_of(m, wk));
     /* the commit */
     if (m->info)
         memcpy(est_info_data(m, data), &wk->nwi, sizeof wk->nwi);
