@@ -567,7 +567,8 @@ static double refine(const sr_estimator_model *m, void *data, est_modal_filter *
 }
 
 /* The modes from the kept samples: those so far (given or found before) refined, each with
- * the others held; a mode that lowers the residual by less than EST_MODAL_MIN_GAIN dropped;
+ * the others held; a found mode that lowers the residual by less than EST_MODAL_MIN_GAIN
+ * dropped (a given one is kept);
  * then more by the greedy scan (est_modal.h). s->f and s->n_f updated; 1 where the modes
  * changed by more than EST_MODAL_KEEP (relative, frequency and damping) or in number. */
 static int search(const sr_estimator_model *m, void *data, const double *u0, est_modal_work *w)
@@ -580,7 +581,9 @@ static int search(const sr_estimator_model *m, void *data, const double *u0, est
     double r0 = objective(m, data, f, n_f, u0, stride, w);
     for (int j = 0; j < n_f; j++)
         r0 = refine(m, data, f, n_f, j, u0, stride, r0, w);
-    for (int j = n_f - 1; j >= 0 && n_f > 0; j--) {        /* pruning */
+    for (int j = n_f - 1; j >= 0 && n_f > 0; j--) {        /* pruning (of found modes) */
+        if (f[j].given != 0.0)
+            continue;
         int c = 0;
         for (int i = 0; i < n_f; i++)
             if (i != j)
@@ -640,6 +643,7 @@ void est_modal_init(const sr_estimator_model *m, void *data)
         if (m->opt.mode_f[g] > 0.0) {
             s->f[s->n_f].w = TWO_PI * m->opt.mode_f[g];
             s->f[s->n_f].zeta = 0.01;
+            s->f[s->n_f].given = 1.0;
             s->n_f++;
         }
     solve_reset(m, data);

@@ -16,12 +16,12 @@
  * The frequencies: given (ident.mode_f, Hz) or found from the kept samples by variable
  * projection, at EST_MODAL_FIRST_SEARCH s after the reference and at each doubling of that
  * time, where the rows' relative residual exceeds EST_MODAL_FIT_FLOOR: the modes so far refined
- * (Nelder-Mead over (log w, log zeta), each with the others held), those that lower the
- * residual by less than EST_MODAL_MIN_GAIN dropped, then a scan of EST_MODAL_GRID frequencies
- * adding the best new mode (refined) while it lowers the residual by EST_MODAL_MIN_GAIN (the
- * search with the G and C blocks only, on at most EST_MODAL_SCAN_SAMPLES kept samples); where
- * the modes changed, every kept sample is solved again with the new columns (est_modal.c has
- * the constants). */
+ * (Nelder-Mead over (log w, log zeta), each with the others held), the found ones that lower
+ * the residual by less than EST_MODAL_MIN_GAIN dropped (the given ones kept), then a scan of
+ * EST_MODAL_GRID frequencies adding the best new mode (refined) while it lowers the residual by
+ * EST_MODAL_MIN_GAIN (the search with the G and C blocks only, on at most
+ * EST_MODAL_SCAN_SAMPLES kept samples); where the modes changed, every kept sample is solved
+ * again with the new columns (est_modal.c has the constants). */
 #ifndef SR_EST_MODAL_H
 #define SR_EST_MODAL_H
 
@@ -36,6 +36,7 @@ typedef struct est_modal_filter {
     double w, zeta;
     double eta[EST_MODAL_U], etad[EST_MODAL_U];
     double key[3], step[8];    /* the step's coefficients for (w, zeta, dt) = key */
+    double given;              /* 1: from ident.mode_f (refined, never dropped), 0: found */
 } est_modal_filter;
 
 /* the modal stage's state in the Data block (followed by R, d and the kept samples) */
