@@ -589,6 +589,23 @@ def noise_model_vars() -> List[Var]:
               "are the bound times sqrt(max(1, diag.info_chi2))); 0 without the filter", None,
               ("info_chi2",))]
     v += excite_design_vars()
+    v += [Var("ident.modes", "parameter", "fixed", "Integer", None,
+              "The modal columns (docs/identification.md, 'Flexible parts: the modal "
+              "columns'): the momentum of flexible panels and propellant slosh, to first order, "
+              "as extra unknowns driven by the measured base motion, the modes' frequencies "
+              "given (ident.mode_f) or found from the data; the reported estimates are then the "
+              "composite rigid body's. 1 = on (needs method = 1, solver = 2, "
+              "ident.momentum_window = 0), 2 = off", 2, ("modes",))]
+    v += [Var(f"ident.mode_f[{i + 1}]", "parameter", "fixed", "Real", "Hz",
+              f"With ident.modes = 1: the frequency of flexible mode {i + 1} with the base "
+              "held (cantilevered panel, slosh) where known; 0 = not given (the modes are then "
+              "found from the kept samples)", 0.0, ("mode_f", i)) for i in range(4)]
+    v += [Var(f"diag.mode_f[{i + 1}]", "output", "continuous", "Real", "Hz",
+              f"With ident.modes = 1: the frequency of mode {i + 1} in use (given, refined "
+              "or found from the data); 0 = none", None, ("mode_f", i)) for i in range(4)]
+    v += [Var(f"diag.mode_zeta[{i + 1}]", "output", "continuous", "Real", "1",
+              f"With ident.modes = 1: the damping ratio of mode {i + 1} in use; 0 = none", None,
+              ("mode_zeta", i)) for i in range(4)]
     for name in ("noise.scale",) + _profile_magnitudes():
         unit, default, doc = NOISE_PARAMETERS[name]
         v.append(Var(name, "parameter", "fixed", "Real", unit,

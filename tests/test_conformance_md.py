@@ -181,6 +181,8 @@ CONTRACT_UNITS = [
     # the excitation's rate: a frequency multiplier; the choice's times and scores
     (r"ident\.excite_(rate|rate_try)|excite\.rate|diag\.excite_score\.rate_(1|try)", "1"),
     (r"ident\.excite_(window|settle|horizon)", "s"),
+    # the modal columns: the modes' frequencies (given, in use) and damping ratios
+    (r"(ident|diag)\.mode_f\[\d\]", "Hz"), (r"diag\.mode_zeta\[\d\]", "1"),
     # estimator noise model: row standard deviations in the units of each method's equations
     (r"ident\.sd_row\.momentum_lin", "N.s"), (r"ident\.sd_row\.momentum_ang", "N.m.s"),
     (r"ident\.sd_row\.force_lin", "N"), (r"ident\.sd_row\.force_ang", "N.m"),

@@ -129,6 +129,15 @@ static int joint_lag(const sr_estimator_model *m, const est_core *c, const doubl
     return 1;
 }
 
+static void joint_rows(const sr_estimator_model *m, const est_core *c, const double *E,
+                       double *H, double *yy, double *b);
+
+void est_joint_rows(const sr_estimator_model *m, const est_core *c, const double *E, double *H,
+                    double *yy)
+{
+    joint_rows(m, c, E, H, yy, NULL);
+}
+
 /* info (n x n) = lam info + H^T H over the columns cols (n) of the rows H (k x q) */
 static void info_add(const double *old, const double *H, int k, int q, const int *cols, int n,
                      double lam, double *out)

@@ -20,4 +20,10 @@ int est_joint_step(const sr_estimator_model *m, const void *data, const est_core
 int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double infl,
                         double *sd, double *data_only, double *J, double *vec);
 
+/* The rows of one block E (3 x 42) over the identified standard parameters: H (k1 + k2 x q),
+ * yy (k1 + k2) the weighted right-hand sides (the fixed parameters' columns moved there at
+ * c's pi) */
+void est_joint_rows(const sr_estimator_model *m, const est_core *c, const double *E, double *H,
+                    double *yy);
+
 #endif /* SR_EST_JOINT_H */

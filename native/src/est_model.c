@@ -9,6 +9,7 @@
 
 #include "differencing.h"
 #include "est_joint.h"
+#include "est_modal.h"
 #include "est_types.h"
 #include "est_options.h"
 #include "noise_profile.h"
@@ -265,6 +266,12 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         m->off_exd = off;
         off += sizeof(sr_exd_data);
     }
+    m->modes = opt->modes == 1;     /* the modal columns (est_modal.h) */
+    if (m->modes) {
+        off = align8(off);
+        m->off_modal = off;
+        off += est_modal_size(m);
+    }
     m->size = off;
     /* the work space's noise rows: the window's 2 m + 1 chunks with diff_momentum, else one */
     if (m->eiv)
@@ -295,7 +302,9 @@ size_t sr_estimator_data_size(const sr_estimator_model *m) { return m ? m->size 
 
 size_t sr_estimator_work_size(const sr_estimator_model *m)
 {
-    return m ? sizeof(est_work) + sizeof(double) * m->work_noise : 0;
+    return m ? sizeof(est_work) + sizeof(double) * m->work_noise
+                   + (m->modes ? sizeof(est_modal_work) : 0)
+             : 0;
 }
 
 size_t sr_estimator_data_head_size(void) { return offsetof(est_data, core); }
@@ -326,6 +335,7 @@ void sr_estimator_data_init(const sr_estimator_model *m, void *data)
         sr_info_data_init(&m->info_m, est_info_data(m, data));
     if (m->adapt)
         sr_exd_init(est_exd_data(m, data));
+    est_modal_init(m, data);
 }
 
 /* "name = v is out of range lo..hi" (a Data block's count or index) */
@@ -400,6 +410,12 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
     if (m->adapt && !sr_exd_data_valid(&m->exd, est_exd_data(m, data))) {
         sr_text_set(err, errlen, "the estimator's state block is not valid: the excitation "
                              "design's phase or rate is out of range or its numbers not "
+                             "finite");
+        return 1;
+    }
+    if (est_modal_check(m, data)) {
+        sr_text_set(err, errlen, "the estimator's state block is not valid: the modal columns' "
+                             "counts or frequencies are out of range or its numbers not "
                              "finite");
         return 1;
     }

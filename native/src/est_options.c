@@ -106,6 +106,9 @@ enum { ALWAYS, PROFILE, BODY };
       RULE, "{n} must be >= 0 s and <= {B} s")                                                  \
     X("ident.excite_horizon", excite_horizon, 0, 0, POSITIVE, SR_EXD_TIME_MAX, 300.0, 0, 1,     \
       ALWAYS, RULE, "{n} must be > 0 s and <= {B} s")                                           \
+    X("ident.modes", modes, 0, 1, 1, 2, 2, 0, 1, ALWAYS, CODE, "1 (on), 2 (off)")               \
+    MODE_F(X, "ident.mode_f[1]", 0) MODE_F(X, "ident.mode_f[2]", 1)                            \
+    MODE_F(X, "ident.mode_f[3]", 2) MODE_F(X, "ident.mode_f[4]", 3)                            \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
       "{n} must be a finite number in [{a}, {B}]")                                              \
     PROFILE_MAGNITUDE(X, SR_NOISE_GYRO_ARW)                                                     \
@@ -150,6 +153,11 @@ enum { ALWAYS, PROFILE, BODY };
       RULE, NULL)                                                                               \
     X(prefix "Iyz", field, 9, 0, -SR_BODY_INERTIA_MAX, SR_BODY_INERTIA_MAX, 0.0, 0, 1, BODY,    \
       RULE, NULL)
+
+/* a mode's frequency given to the modal columns (est_modal.h): 0 or in range [Hz] */
+#define MODE_F(X, name, k)                                                                      \
+    X(name, mode_f, k, 0, 0.0, SR_EST_MAX_MODE_F, 0.0, 0, 1, ALWAYS, RULE,                      \
+      "{n} must be a frequency from {a} to {b} Hz (0 = not given)")
 
 /* a sensors' magnitude the noise profile reads (noise.<name>, sensor_noise.h): finite >= 0 */
 #define PROFILE_MAGNITUDE(X, k)                                                                 \
@@ -411,6 +419,22 @@ static int check_rules(const sr_estimator_options *o, char *err, size_t errlen)
                                  "parameters");
         return 1;
     }
+    if (o->modes == 1 && (o->method != 1 || o->solver != 2 || o->momentum_window > 0.0)) {
+        sr_text_set(err, errlen, "ident.modes = 1 (the modal columns) needs the momentum method "
+                                 "(method = 1), the joint solver (solver = 2) and no momentum "
+                                 "window (ident.momentum_window = 0)");
+        return 1;
+    }
+    for (int k = 0; k < SR_EST_MAX_MODES; k++)
+        if (o->mode_f[k] != 0.0 && o->mode_f[k] < SR_EST_MIN_MODE_F) {
+            sr_text_set(err, errlen, "ident.mode_f[");
+            sr_text_int(err, errlen, k + 1);
+            sr_text_cat(err, errlen, "] must be 0 (not given) or a frequency from ");
+            sr_text_num(err, errlen, SR_EST_MIN_MODE_F, 6);
+            sr_text_cat(err, errlen, " Hz (below, a mode's columns are a rigid body's), got ");
+            sr_text_repr(err, errlen, o->mode_f[k]);
+            return 1;
+        }
     if (o->method == 2 && o->accel_source == 2 && o->diff_momentum == 1
         && o->diff_half_window > SR_DIFF_MAX_DISPLACEMENT_HALF_WINDOW) {
         sr_text_set(err, errlen, "ident.diff_half_window must be an integer from 1 to ");

@@ -10,6 +10,7 @@
 
 #include "est_corr.h"
 #include "est_joint.h"
+#include "est_modal.h"
 #include "est_paper.h"
 #include "physical.h"
 #include "sr_text.h"
@@ -119,6 +120,8 @@ void sr_estimator_sd_without_lag(const sr_estimator_model *m, const void *data, 
     if (m->opt.solver == 1)
         est_paper_std_parts(m, &d->core, est_corr_current(m, data, 0),
                             est_corr_current(m, data, 1), sd, data_only, J, vec, rcond);
+    else if (m->modes && d->samples > 0)     /* the modal solve's (it adds no lag) */
+        memcpy(sd, d->core.sd, sizeof(double) * EST_NZ);
     else
         est_joint_std_parts(m, &d->core, est_corr_current(m, data, 0), sd, data_only, J, vec);
 }
@@ -179,6 +182,8 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
         r->excite_score[0] = x->score[0];
         r->excite_score[1] = x->score[1];
     }
+    for (int k = 0; k < SR_EST_MAX_MODES; k++)
+        est_modal_mode(m, data, k, &r->mode_f[k], &r->mode_zeta[k]);
 }
 
 size_t sr_estimator_report_size(void) { return sizeof(sr_estimator_report); }
@@ -227,6 +232,14 @@ static const output OUTPUTS[] = {
     REAL_("ident.excite_rate", excite_rate, 0)
     REAL_("diag.excite_score.rate_1", excite_score, 0)
     REAL_("diag.excite_score.rate_try", excite_score, 1)
+    REAL_("diag.mode_f[1]", mode_f, 0)
+    REAL_("diag.mode_f[2]", mode_f, 1)
+    REAL_("diag.mode_f[3]", mode_f, 2)
+    REAL_("diag.mode_f[4]", mode_f, 3)
+    REAL_("diag.mode_zeta[1]", mode_zeta, 0)
+    REAL_("diag.mode_zeta[2]", mode_zeta, 1)
+    REAL_("diag.mode_zeta[3]", mode_zeta, 2)
+    REAL_("diag.mode_zeta[4]", mode_zeta, 3)
 };
 #undef REAL_
 #undef INT_

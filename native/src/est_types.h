@@ -35,6 +35,15 @@
 #define EST_MAXK 6                /* most rows of one sample in one RLS update */
 #define EST_MAXCH (6 + SR_MAX_JOINTS)  /* most noisy channels (accelerations or velocities) */
 #define EST_NB (3 * SR_N_COLS)    /* doubles of one block of rows (3 x 42) */
+/* the modal columns (est_modal.h): most mode frequencies, unknowns per frequency (G 21, C 36,
+ * D 36, T 72) and those the search's scan uses (G, C), most unknowns of the modal solve, most
+ * samples kept for the mode search and the replay */
+#define EST_MODAL_MAX_F SR_EST_MAX_MODES
+#define EST_MODAL_COLS 165
+#define EST_MODAL_SCAN_COLS 57
+#define EST_MODAL_NMAX (EST_MODAL_MAX_F * EST_MODAL_COLS + EST_NZ)
+#define EST_MODAL_SCAN_NMAX (EST_MODAL_MAX_F * EST_MODAL_SCAN_COLS + EST_NZ + 1)
+#define EST_MODAL_MAX_SAMPLES 4096
 
 /* The accelerometer bias's running line fit: x(t) = v_S(t) - integral a_S dt =
  * c - b (t - t0) + noise per axis; t0 the first sample's time [s], t_last and a_last (3) the
@@ -102,6 +111,8 @@ struct sr_estimator_model {
     int adapt;                    /* the excitation's rate chosen (excite_design.h) */
     sr_exd_options exd;
     size_t off_exd;               /* its state (sr_exd_data) */
+    int modes;                    /* the modal columns (ident.modes = 1, est_modal.h) */
+    size_t off_modal;             /* their state, [R d] and the kept samples */
 };
 
 /* Everything an accepted sample changes except the variable tail (history, residual ring):
@@ -208,6 +219,15 @@ typedef struct est_rows {
 /* doubles of a solver's scratch for the noise blocks' identified rows (one chunk) */
 #define EST_NOISE_SCRATCH (3 * EST_MAXCH * (EST_NL + EST_NA))
 
+/* the modal stage's temporaries (est_modal.c): the search's Gram matrix, one sample's rows
+ * with the modal columns, one frequency's columns */
+typedef struct est_modal_work {
+    double gram[EST_MODAL_SCAN_NMAX * EST_MODAL_SCAN_NMAX];
+    double rows[EST_MAXK * (EST_MODAL_NMAX + 1)];
+    double cols[6 * EST_MODAL_COLS];
+    double cov[EST_NZ * EST_NZ];
+} est_modal_work;
+
 /* The work space of one update (sr_estimator_work_size bytes beside the Data block, never part
  * of the state): the sample's rows, the new state of its transaction and every temporary too
  * large for a small stack. Its contents between updates mean nothing. The noise rows follow
@@ -218,8 +238,16 @@ typedef struct est_work {
     sr_info_data nwi;             /* the information filter's new state */
     sr_exd_work exd;              /* the information filter's and the excitation design's */
     double noise_rows[EST_NOISE_SCRATCH];
-    double noise[];               /* the noise rows (est_rows.n_chunks chunks) */
+    double noise[];               /* the noise rows (est_rows.n_chunks chunks), then with
+                                     ident.modes = 1 the modal columns' temporaries
+                                     (est_modal_work, est_modal_work_of) */
 } est_work;
+
+/* the modal columns' temporaries in the work space w (after its noise rows) */
+static inline est_modal_work *est_modal_work_of(const sr_estimator_model *m, est_work *w)
+{
+    return (est_modal_work *)(w->noise + m->work_noise);
+}
 
 /* a function kept out of its caller's frame (the compilers that can be told): the largest
  * temporaries of an update's stages are then never on the stack at once */

@@ -9,6 +9,7 @@
 
 #include "est_corr.h"
 #include "est_joint.h"
+#include "est_modal.h"
 #include "est_types.h"
 #include "est_paper.h"
 #include "est_report.h"
@@ -286,6 +287,8 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
     if (st != 0)
         return reject(d, st, why, msg, msglen);
     if (rows->stored != EST_ROWS) {                      /* stored, not solved */
+        if (rows->stored == EST_STORED_REFERENCE)
+            est_modal_reference(m, data, t, sample);
         est_rows_commit(m, data, t, sample, rows);
         if (m->info)
             memcpy(est_info_data(m, data), &wk->nwi, sizeof wk->nwi);
@@ -312,6 +315,9 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
         st = 2;
     if (st != 0)
         return reject(d, SR_EST_REJECT_NONFINITE, step_failure(st), msg, msglen);
+    /* the modal columns' stage (est_modal.h): its own state, the estimates from it */
+    if (m->modes)
+        est_modal_step(m, data, t, sample, rows->E, nw, est_modal_work_of(m, wk));
     /* the commit */
     if (m->info)
         memcpy(est_info_data(m, data), &wk->nwi, sizeof wk->nwi);

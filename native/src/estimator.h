@@ -78,6 +78,10 @@ extern "C" {
 #define SR_NOISE_PROFILE_NONE 0
 #define SR_NOISE_PROFILE_SENSORS 1
 #define SR_NOISE_PROFILE_MAX 1e6
+/* largest ident.mode_f [Hz]; most modes of the modal columns (ident.mode_f[1..], diag.mode_*) */
+#define SR_EST_MAX_MODE_F 3.0
+#define SR_EST_MIN_MODE_F 0.05
+#define SR_EST_MAX_MODES 4
 /* length of the message buffers (rejections, model errors) */
 #define SR_EST_MSG_LEN 256
 
@@ -174,6 +178,12 @@ typedef struct sr_estimator_options {
                                    rates (20: 2 excite.ramp of the project's plant) */
     double excite_horizon;      /* ident.excite_horizon [s] > 0: the run's length the bound is
                                    predicted for (300) */
+    /* -- the modal columns (est_modal.h; docs/identification.md "Flexible parts: the modal
+     *    columns") -- */
+    int modes;                  /* ident.modes: 1 on (needs the momentum method, the joint
+                                   solver, no momentum window), 2 off (default) */
+    double mode_f[SR_EST_MAX_MODES]; /* ident.mode_f[1..4] [Hz]: the modes' frequencies where known,
+                                   0 = not given (then found from the data) */
 } sr_estimator_options;
 
 /** The options' defaults (the table's: the core's own, base 600 kg and target 100 kg guesses
@@ -307,6 +317,9 @@ typedef struct sr_estimator_report {
     double excite_score[2];           /* diag.excite_score.rate_1 / .rate_try: the predicted
                                          largest scaled bound at the horizon of each (0 before
                                          the choice) */
+    /* -- the modal columns (options.modes = 1; else 0) -- */
+    double mode_f[SR_EST_MAX_MODES];  /* diag.mode_f[k] [Hz], diag.mode_zeta[k]: the modes */
+    double mode_zeta[SR_EST_MAX_MODES];  /* in use, given or found (0: none) */
 } sr_estimator_report;
 
 /** The excitation level the Model m requests (output ident.excite) for the bodies' identified

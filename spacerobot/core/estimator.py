@@ -68,6 +68,8 @@ class SrEstimatorOptions(ctypes.Structure):
         ("excite_adapt", ctypes.c_int), ("excite_rate_try", ctypes.c_double),
         ("excite_window", ctypes.c_double), ("excite_settle", ctypes.c_double),
         ("excite_horizon", ctypes.c_double),
+        ("modes", ctypes.c_int),
+        ("mode_f", ctypes.c_double * 4),
     ]
 
 
@@ -83,6 +85,7 @@ class SrEstimatorReport(ctypes.Structure):
         ("excite", ctypes.c_double), ("crb", ctypes.c_double * 20),
         ("info_chi2", ctypes.c_double), ("excite_rate", ctypes.c_double),
         ("excite_score", ctypes.c_double * 2),
+        ("mode_f", ctypes.c_double * 4), ("mode_zeta", ctypes.c_double * 4),
     ]
 
 
@@ -356,7 +359,7 @@ def _options(values: Mapping, L: ctypes.CDLL) -> SrEstimatorOptions:
             raise KeyError(f"unknown estimator option {key!r}")
         if name in ("guess_base", "guess_target"):
             getattr(o, name)[:] = _body10(v)
-        elif name in ("signal_sd", "noise", "row_sd"):
+        elif name in ("signal_sd", "noise", "row_sd", "mode_f"):
             getattr(o, name)[:] = [float(x) for x in v]
         elif fields[name] is ctypes.c_int:
             setattr(o, name, int(v))
@@ -486,7 +489,8 @@ class NativeEstimator:
         ``excite``; the information filter's ``crb`` (20,: the Cramér-Rao bound's standard
         deviations, 0 without the filter) and ``info_chi2`` (its misfit); ``excite_rate`` (the
         rate asked of the plant) and ``excite_score`` (2,: the choice's predicted largest scaled
-        bounds at rate 1 and at the candidate; 0 before the choice)."""
+        bounds at rate 1 and at the candidate; 0 before the choice); ``mode_f`` [Hz] and
+        ``mode_zeta`` (3,: the modal columns' modes in use, 0 for none)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
         return {
@@ -498,6 +502,7 @@ class NativeEstimator:
             "samples": r.samples, "rejected": r.rejected, "status": r.status,
             "excite": r.excite, "crb": np.array(r.crb[:]), "info_chi2": r.info_chi2,
             "excite_rate": r.excite_rate, "excite_score": np.array(r.excite_score[:]),
+            "mode_f": np.array(r.mode_f[:]), "mode_zeta": np.array(r.mode_zeta[:]),
         }
 
     def outputs(self) -> np.ndarray:

@@ -59,6 +59,9 @@ static const struct {
 } CONFIGS[] = {
     {"momentum", {END}},
     {"momentum_joint", {JOINT, END}},
+    {"momentum_modes", {JOINT, {"ident.modes", 1}, END}},
+    {"momentum_modes_given", {JOINT, {"ident.modes", 1}, {"ident.mode_f[1]", 0.5},
+                              {"ident.momentum_point", 1}, END}},
     {"momentum_forget", {{"lambda", 0.995}, {"ident.sd_row.momentum_lin", 0.1},
                          {"ident.sd_row.momentum_ang", 0.2}, {"ident.corr_lags", 5}, END}},
     {"momentum_window", {{"ident.momentum_window", 2.0}, {"ident.momentum_point", 1},

@@ -1,0 +1,82 @@
+/* The modal columns (ident.modes = 1): the momentum of flexible parts on the base (panels,
+ * slosh), to first order in their deformation, as extra unknowns of the momentum rows, so that
+ * the reported rigid parameters are the composite body's despite the modes.
+ *
+ * A mode eta of a part on the base, at the (cantilevered) frequency w and damping zeta, obeys
+ *   eta'' + 2 zeta w eta' + w^2 eta = -(l^T a_B + s^T omega2),   u = [a_B (6); omega2 (6)]
+ * (a_B = [A^T a_S; alpha_B] the base's measured motion, omega2 the rate's products), and adds
+ * to the momentum in base axes about S (four blocks of unknowns per frequency):
+ *   G  l l^T eta'_a          21 (symmetric)      C  l s^T eta'_w       36
+ *   D  [w]x d eta, -[v_B]x d eta    36            T  Omega(w) dI(eta)   72
+ * eta, eta' the filter's response to each drive channel u_j (exact for an input linear between
+ * samples). The unknowns [modal (165 per frequency) | rigid standard parameters (q)] are solved
+ * by a square-root information filter (Givens rotations of each sample's rows into [R d]); the
+ * rigid block is last, so its answer and covariance need only R's last q x q block.
+ *
+ * The frequencies: given (ident.mode_f, Hz) or found from the kept samples by variable
+ * projection, at EST_MODAL_FIRST_SEARCH s after the reference and at each doubling of that
+ * time, where the rows' relative residual exceeds EST_MODAL_FIT_FLOOR: the modes so far refined
+ * (Nelder-Mead over (log w, log zeta), each with the others held), the found ones that lower
+ * the residual by less than EST_MODAL_MIN_GAIN dropped (the given ones kept), then a scan of
+ * EST_MODAL_GRID frequencies adding the best new mode (refined) while it lowers the residual by
+ * EST_MODAL_MIN_GAIN (the search with the G and C blocks only, on at most
+ * EST_MODAL_SCAN_SAMPLES kept samples); where the modes changed, every kept sample is solved
+ * again with the new columns (est_modal.c has the constants). */
+#ifndef SR_EST_MODAL_H
+#define SR_EST_MODAL_H
+
+#include "est_types.h"
+
+/* a sample's drive (12) and the doubles a kept sample needs beside its rows */
+#define EST_MODAL_U 12
+#define EST_MODAL_SIG (1 + 12 + 3 + 3 + 9 + 3)   /* t, u, omega_B, v_B, A, r_S */
+
+/* one frequency's filter: eta and eta' per drive channel */
+typedef struct est_modal_filter {
+    double w, zeta;
+    double eta[EST_MODAL_U], etad[EST_MODAL_U];
+    double key[3], step[8];    /* the step's coefficients for (w, zeta, dt) = key */
+    double given;              /* 1: from ident.mode_f (refined, never dropped), 0: found */
+} est_modal_filter;
+
+/* the modal stage's state in the Data block (followed by R, d and the kept samples) */
+typedef struct est_modal_data {
+    int started;               /* the reference sample came: the filters start at rest */
+    int n_f;                   /* frequencies in use */
+    int kept;                  /* samples kept (at most EST_MODAL_MAX_SAMPLES) */
+    int searches;              /* searches done */
+    double t0, t_prev;         /* the reference's and the previous sample's times [s] */
+    double u0[EST_MODAL_U];     /* the reference's drive (the filters start there) */
+    double u_prev[EST_MODAL_U];
+    double rss, rows;          /* the residual sum of squares and rows of the [R d] solve */
+    double y2;                 /* sum of the squared right-hand sides (the relative residual) */
+    est_modal_filter f[EST_MODAL_MAX_F];
+} est_modal_data;
+
+/* the doubles of a kept sample (its identified rows [H | yy] and its signals) */
+int est_modal_slot(const sr_estimator_model *m);
+
+/* bytes of the modal stage's state in the Data block (0 where ident.modes is off) */
+size_t est_modal_size(const sr_estimator_model *m);
+
+/* the state at rest with the given frequencies (none: found later) */
+void est_modal_init(const sr_estimator_model *m, void *data);
+
+/* 0, or 1 where a count or number of the state is out of range (a corrupt block) */
+int est_modal_check(const sr_estimator_model *m, const void *data);
+
+/* The reference sample (its time t, flat sample x): the filters start at rest there. */
+void est_modal_reference(const sr_estimator_model *m, void *data, double t, const double *x);
+
+/* The sample x at t with the rigid rows E (3 x 42) after the solver's step into nw: the
+ * filters' step, the rows with the modal columns into [R d], the sample kept, the mode search
+ * where it is due; then nw's estimates and sd from the modal solve (where they are finite).
+ * Writes the Data block (after the solver's step succeeded). */
+void est_modal_step(const sr_estimator_model *m, void *data, double t, const double *x,
+                    const double *E, est_core *nw, est_modal_work *w);
+
+/* the frequency [Hz] and damping of mode k (0 .. n_f - 1) now: 1, or 0 if there is none */
+int est_modal_mode(const sr_estimator_model *m, const void *data, int k, double *f,
+                   double *zeta);
+
+#endif /* SR_EST_MODAL_H */
