@@ -165,6 +165,20 @@ typedef struct sr_estimator_options {
                                    rates (20: 2 excite.ramp of the project's plant) */
     double excite_horizon;      /* ident.excite_horizon [s] > 0: the run's length the bound is
                                    predicted for (300) */
+    /* -- the model-fit test (docs/identification.md "When the rigid model does not fit") -- */
+    double fit_window;          /* ident.fit_window [s] > 0: the exponential window of the
+                                   relative residual (60) */
+    int fit_lags;               /* ident.fit_lags: lags of the whiteness test, 1..100 (50) */
+    double fit_rho_max;         /* ident.fit_rho_max: misfit where the relative residual is
+                                   above it (no noise model; 1e-6) */
+    double fit_whiteness_max;   /* ident.fit_whiteness_max: misfit where the Ljung-Box Q/L is
+                                   above it (information filter; 3) */
+    double fit_chi2_max;        /* ident.fit_chi2_max: misfit where diag.info_chi2 is above
+                                   it (2) */
+    double fit_thrust_max;      /* ident.fit_thrust_max: misfit where a thrust scale is more
+                                   than this many prior sds from 0 (3) */
+    double fit_bias_k;          /* ident.fit_bias_k: the model-error term's factor k (the
+                                   absorbed misfit over the residual's; 1) */
 } sr_estimator_options;
 
 /** The options' defaults (the table's: the core's own, base 600 kg and target 100 kg guesses
@@ -298,6 +312,11 @@ typedef struct sr_estimator_report {
     double excite_score[2];           /* diag.excite_score.rate_1 / .rate_try: the predicted
                                          largest scaled bound at the horizon of each (0 before
                                          the choice) */
+    /* -- the model-fit test -- */
+    double model_fit;                 /* diag.model_fit: the relative residual over
+                                         ident.fit_window (no noise model), or the Ljung-Box
+                                         Q/L of the information filter's whitened residuals */
+    int misfit;                       /* diag.misfit: 1 where the rigid model does not fit */
 } sr_estimator_report;
 
 /** The excitation level the Model m requests (output ident.excite) for the bodies' identified

@@ -10,6 +10,12 @@
 #include <string.h>
 
 #define MU SR_INFO_MAX_U             /* row stride of R, N_HH */
+/* a function kept out of its caller's frame: two of the large temporaries never share one */
+#if defined(__GNUC__)
+#define INFO_NOINLINE __attribute__((noinline))
+#else
+#define INFO_NOINLINE
+#endif
 #define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
 
 /* The unknowns' z part is in the standard layout of standard_params.h: per body m, c = m b (3),
@@ -91,6 +97,10 @@ int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_no
         m->prior_sqrt[at] = noise->thrust[q] > 0.0 ? 1.0 / noise->thrust[q] : 1e150;
     for (int q = 0; q < m->nb; q++, at++)
         m->prior_sqrt[at] = 1.0 / noise->gyro_bias;
+    m->fit.lags = 50;
+    m->fit.whiteness_max = 3.0;
+    m->fit.chi2_max = 2.0;
+    m->fit.thrust_max = 3.0;
     return 0;
 }
 
@@ -310,6 +320,27 @@ static void weigh(const double *W, int nr, const double *in, int ncol, double *o
         }
 }
 
+/* The whiteness test's ring and sums with the sample's whitened residual rows e (nr): the
+   rows the QR update leaves, ||e||^2 its rss increment, e about W (y - H u) at the estimate
+   before the sample (the update's reflections barely touch the new rows once R is large),
+   independent N(0, 1) where the model and the noise model hold */
+static void fit_ring_add(const sr_info_model *m, sr_info_data *d, const double *e)
+{
+    int L = m->fit.lags, cap = L + 1, nr = m->nr;
+    if (L < 1 || L > SR_INFO_MAX_LAGS || d->fit_head < 0 || d->fit_head >= cap)
+        return;
+    memcpy(d->fit_ring + 6 * d->fit_head, e, sizeof(double) * nr);
+    int stored = d->fit_count < cap ? d->fit_count + 1 : cap;
+    for (int k = 0; k < stored; k++) {       /* sum_t e_t e_(t-k): this row against k back */
+        const double *back = d->fit_ring + 6 * ((d->fit_head - k + cap) % cap);
+        for (int a = 0; a < nr; a++)
+            d->fit_sum[6 * k + a] += e[a] * back[a];
+    }
+    d->fit_head = (d->fit_head + 1) % cap;
+    if (d->fit_count < INT_MAX)
+        d->fit_count++;
+}
+
 int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
                 const double *z_lin, sr_info_work *w)
 {
@@ -424,6 +455,10 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     memcpy(d->K, K, sizeof K);
     d->rss = rss;
     d->rows += nr;
+    double e[6];
+    for (int a = 0; a < nr; a++)
+        e[a] = Wt[a * HS + nu];
+    fit_ring_add(m, d, e);
     if (d->samples < INT_MAX)                        /* saturates (~7 years at 10 Hz) */
         d->samples++;
     return 0;
@@ -455,16 +490,24 @@ static void upper_inverse(const double *R, int nu, double *Ri)
 }
 
 /* The first-order Cramér-Rao bound (20; 0 for a parameter not identified) of the reported
- * parameters: J C J^T, C = (Ri Ri^T)[:nz, :nz] the covariance of z_O's entries (the leading
- * unknowns), J = d reported / d z_O at the unknowns u (their identified columns). 1 where a
- * bound is not finite. */
-static int bound_of(const sr_info_model *m, const double *Ri, const double *u, double *bound)
+ * parameters: J C J^T, C = (Ri Ri^T)[:nz, :nz] (Ri: nu unknowns) the covariance of z_O's
+ * entries (the leading unknowns) plus, where G (nz x 8; may be NULL) is given, the consider
+ * term G P_c G^T of the thrust errors' prior (sds 1 / prior_sqrt), J = d reported / d z_O at
+ * the unknowns u (their identified columns). 1 where a bound is not finite. */
+static int bound_with(const sr_info_model *m, int nu, const double *Ri, const double *G,
+                      const double *u, double *bound)
 {
-    int nu = m->nu, nz = m->nz;
+    int nz = m->nz, i1 = m->nz + m->nr;
     double C[20 * 20], J[20 * 20], Jz[20 * 20], zO[20];
     for (int p = 0; p < nz; p++)
-        for (int q = 0; q <= p; q++)
-            C[p * 20 + q] = C[q * 20 + p] = inverse_entry(Ri, nu, p, q);
+        for (int q = 0; q <= p; q++) {
+            double s = inverse_entry(Ri, nu, p, q);
+            for (int j = 0; G && j < SR_N_CONSIDER; j++) {
+                double sd = 1.0 / m->prior_sqrt[i1 + j];
+                s += G[p * SR_N_CONSIDER + j] * sd * sd * G[q * SR_N_CONSIDER + j];
+            }
+            C[p * 20 + q] = C[q * 20 + p] = s;
+        }
     memcpy(zO, m->zO0, sizeof zO);
     for (int q = 0; q < nz; q++)
         zO[m->zi[q]] = u[q];
@@ -489,27 +532,33 @@ static int bound_of(const sr_info_model *m, const double *Ri, const double *u, d
     return ok ? 0 : 1;
 }
 
-/* The unknowns u (nu) of the state d (compensated as sr_info_estimate) and Ri = R^-1 */
-static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
-                           double *u, double *Ri)
+static int bound_of(const sr_info_model *m, const double *Ri, const double *u, double *bound)
 {
-    int nu = m->nu;
+    return bound_with(m, m->nu, Ri, NULL, u, bound);
+}
+
+/* The unknowns u (nu) of the square-root information [R dv] (nu unknowns, the z_O entries
+   first; N_HH, N_Hy the errors-in-variables sums over them: zero beyond z_O), compensated as
+   sr_info_estimate, and Ri = R^-1 */
+static void solve_square_root(int nu, const double *R, const double *dv, const double *N_HH,
+                              const double *N_Hy, int compensated, double *u, double *Ri)
+{
     /* R u = d (back substitution); Ri = R^-1 (upper triangular) */
     for (int i = nu - 1; i >= 0; i--) {
-        double s = d->d[i];
+        double s = dv[i];
         for (int j = i + 1; j < nu; j++)
-            s -= d->R[i * MU + j] * u[j];
-        u[i] = s / d->R[i * MU + i];
+            s -= R[i * MU + j] * u[j];
+        u[i] = s / R[i * MU + i];
     }
-    upper_inverse(d->R, nu, Ri);
+    upper_inverse(R, nu, Ri);
     double u_raw[MU];
     memcpy(u_raw, u, sizeof(double) * nu);
     if (compensated == 1 || compensated == 2) {  /* first order: u + S^-1 (N u - n_y) */
         double g[MU], h[MU];
         for (int p = 0; p < nu; p++) {
-            double s = -d->N_Hy[p];
+            double s = -N_Hy[p];
             for (int q = 0; q < nu; q++)
-                s += d->N_HH[p * MU + q] * u[q];
+                s += N_HH[p * MU + q] * u[q];
             g[p] = s;
         }
         for (int j = 0; j < nu; j++) {           /* h = Ri^T g */
@@ -534,12 +583,12 @@ static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int co
                 Si[q] = inverse_entry(Ri, nu, p, q);
             double s = u_raw[p];
             for (int q = 0; q < nu; q++)
-                s -= Si[q] * d->N_Hy[q];
+                s -= Si[q] * N_Hy[q];
             b[p] = s;
             for (int q = 0; q < nu; q++) {
                 double a = p == q ? 1.0 : 0.0;
                 for (int j = 0; j < nu; j++)
-                    a -= Si[j] * d->N_HH[j * MU + q];
+                    a -= Si[j] * N_HH[j * MU + q];
                 A[p * nu + q] = a;
             }
         }
@@ -549,6 +598,13 @@ static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int co
         if (finite)                  /* else the first order's answer stays */
             memcpy(u, b, sizeof(double) * nu);
     }
+}
+
+/* The unknowns u (nu) of the state d (compensated as sr_info_estimate) and Ri = R^-1 */
+static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
+                           double *u, double *Ri)
+{
+    solve_square_root(m->nu, d->R, d->d, d->N_HH, d->N_Hy, compensated, u, Ri);
 }
 
 int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
@@ -573,6 +629,198 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
         return 1;
     }
     return 0;
+}
+
+/* -- the thrust errors held at their priors ---------------------------------------------------
+ * The unknowns are u = [u1 = (z_O, c0), c (8), b (nb)], R = [[R11 R12 R13], [0 R22 R23],
+ * [0 0 R33]]. With c held at its prior mean c_T: R11 u1 + R13 b = d1 - R12 c_T and, in the
+ * least-squares sense, [R23; R33] b = [d2 - R22 c_T; d3]: a QR of that (8 + nb) x nb block
+ * gives the held square root Rh = [[R11 R13], [0 R33']] (no = nu - 8 unknowns, the z_O entries
+ * first as before), its right-hand side dh, the rhs' sensitivity Dh = d dh / d c_T (no x 8,
+ * for the consider term C_c = G P_c G^T, G = Rh^-1 Dh) and the weighted residual the hold adds
+ * (the QR's leftover rows: the cost J(u) = ||R u - d||^2 + rss at the held answer). */
+typedef struct held_sr {
+    int no;
+    double R[MU * MU], d[MU], D[MU * SR_N_CONSIDER], extra;
+} held_sr;
+
+static void held_square_root(const sr_info_model *m, const sr_info_data *d, held_sr *h)
+{
+    int nu = m->nu, i1 = m->nz + m->nr, i3 = i1 + SR_N_CONSIDER, nb = m->nb;
+    const double *cT = m->u0 + i1;
+    h->no = nu - SR_N_CONSIDER;
+    memset(h->R, 0, sizeof h->R);
+    for (int i = 0; i < i1; i++) {            /* block 1: R11, R13; d1 - R12 c_T; -R12 */
+        double r = d->d[i];
+        for (int j = 0; j < SR_N_CONSIDER; j++) {
+            r -= d->R[i * MU + i1 + j] * cT[j];
+            h->D[i * SR_N_CONSIDER + j] = -d->R[i * MU + i1 + j];
+        }
+        h->d[i] = r;
+        for (int j = i; j < i1; j++)
+            h->R[i * MU + j] = d->R[i * MU + j];
+        for (int j = 0; j < nb; j++)
+            h->R[i * MU + i1 + j] = d->R[i * MU + i3 + j];
+    }
+    /* blocks 2, 3 as rows [coefficients of b (nb) | rhs | d rhs / d c_T (8)] */
+    enum { NC = 3 + 1 + SR_N_CONSIDER, NRW = SR_N_CONSIDER + 3 };
+    double B[NRW * NC];
+    int nrw = SR_N_CONSIDER + nb;
+    memset(B, 0, sizeof B);
+    for (int a = 0; a < nrw; a++) {
+        int row = a < SR_N_CONSIDER ? i1 + a : i3 + (a - SR_N_CONSIDER);
+        double r = d->d[row];
+        for (int j = 0; j < SR_N_CONSIDER && a < SR_N_CONSIDER; j++) {
+            r -= d->R[row * MU + i1 + j] * cT[j];
+            B[a * NC + nb + 1 + j] = -d->R[row * MU + i1 + j];
+        }
+        for (int j = 0; j < nb; j++)
+            B[a * NC + j] = d->R[row * MU + i3 + j];
+        B[a * NC + nb] = r;
+    }
+    for (int j = 0; j < nb; j++) {            /* Householder QR of the b columns */
+        double norm = 0.0;
+        for (int a = j; a < nrw; a++)
+            norm += B[a * NC + j] * B[a * NC + j];
+        norm = sqrt(norm);
+        if (norm == 0.0)
+            continue;
+        double alpha = B[j * NC + j], beta = alpha >= 0.0 ? -norm : norm, v[NRW];
+        for (int a = j; a < nrw; a++)
+            v[a] = B[a * NC + j];
+        v[j] = alpha - beta;
+        double vv = 0.0;
+        for (int a = j; a < nrw; a++)
+            vv += v[a] * v[a];
+        for (int k = j; k < nb + 1 + SR_N_CONSIDER; k++) {
+            double s = 0.0;
+            for (int a = j; a < nrw; a++)
+                s += v[a] * B[a * NC + k];
+            s *= 2.0 / vv;
+            for (int a = j; a < nrw; a++)
+                B[a * NC + k] -= s * v[a];
+        }
+    }
+    for (int a = 0; a < nb; a++) {
+        for (int j = a; j < nb; j++)
+            h->R[(i1 + a) * MU + i1 + j] = B[a * NC + j];
+        h->d[i1 + a] = B[a * NC + nb];
+        for (int j = 0; j < SR_N_CONSIDER; j++)
+            h->D[(i1 + a) * SR_N_CONSIDER + j] = B[a * NC + nb + 1 + j];
+    }
+    h->extra = 0.0;
+    for (int a = nb; a < nrw; a++)
+        h->extra += B[a * NC + nb] * B[a * NC + nb];
+}
+
+/* the held estimate and bound (sr_info_estimate_held) of h: 0, or 1 where not finite */
+static INFO_NOINLINE int held_estimate(const sr_info_model *m, const sr_info_data *d,
+                                       const held_sr *h, int compensated, double *vec,
+                                       double *bound)
+{
+    int no = h->no, nz = m->nz;
+    double u[MU] = {0}, Ri[MU * MU], G[20 * SR_N_CONSIDER];
+    solve_square_root(no, h->R, h->d, d->N_HH, d->N_Hy, compensated, u, Ri);
+    reported_of_u(m, u, vec);
+    for (int p = 0; p < nz; p++)              /* G = Rh^-1 Dh (the z_O rows) */
+        for (int j = 0; j < SR_N_CONSIDER; j++) {
+            double s = 0.0;
+            for (int k = p; k < no; k++)
+                s += Ri[p * MU + k] * h->D[k * SR_N_CONSIDER + j];
+            G[p * SR_N_CONSIDER + j] = s;
+        }
+    int ok = bound_with(m, no, Ri, G, u, bound) == 0;
+    for (int i = 0; i < 20; i++)
+        ok = ok && isfinite(vec[i]);
+    return ok ? 0 : 1;
+}
+
+int sr_info_estimate_held(const sr_info_model *m, const sr_info_data *d, int compensated,
+                          double *vec, double *bound, double *chi2, double *rss_held)
+{
+    if (!m || !d || !vec || !bound)
+        return 1;
+    held_sr h;
+    held_square_root(m, d, &h);
+    double rss = d->rss + h.extra, dof = d->rows - h.no;
+    if (chi2)
+        *chi2 = dof > 0.0 ? rss / dof : 0.0;
+    if (rss_held)
+        *rss_held = rss;
+    if (held_estimate(m, d, &h, compensated, vec, bound) != 0) {
+        for (int i = 0; i < 20; i++)
+            vec[i] = bound[i] = NAN;
+        return 1;
+    }
+    return 0;
+}
+
+/* the larger thrust scale's |s| / prior sd of the state d (the unknowns with the thrust
+   estimated; 0 without a thrust prior), or NaN where the information is singular */
+static INFO_NOINLINE double thrust_ratio(const sr_info_model *m, const sr_info_data *d)
+{
+    double u[MU] = {0}, Ri[MU * MU], ratio = 0.0;
+    solve_unknowns(m, d, 2, u, Ri);
+    static const int scales[2] = {0, 4};     /* s_F, s_M of c (sr_thrust_sensitivity) */
+    for (int k = 0; k < 2; k++) {
+        double sd = m->noise.thrust[scales[k]], s = u[m->nz + m->nr + scales[k]];
+        if (sd > 0.0)
+            ratio = (fabs(s) / sd > ratio ? fabs(s) / sd : ratio);
+        if (!isfinite(s))
+            return NAN;
+    }
+    return ratio;
+}
+
+/* the Ljung-Box Q / L of the whitened residuals, per row and averaged over the rows:
+   Q = N (N + 2) sum_(k=1..L) r_k^2 / (N - k), r_k = sum_t e_t e_(t-k) / sum_t e_t^2 (about
+   chi2(L) for white residuals, Q / L about 1); 0 before 2 L rows */
+static double whiteness(const sr_info_model *m, const sr_info_data *d)
+{
+    int L = m->fit.lags, nr = m->nr;
+    double N = d->fit_count, q = 0.0;
+    if (L < 1 || !(N >= 2.0 * L))
+        return 0.0;
+    for (int a = 0; a < nr; a++) {
+        double v = d->fit_sum[a], s = 0.0;
+        if (!(v > 0.0))
+            continue;
+        for (int k = 1; k <= L; k++) {
+            double r = d->fit_sum[6 * k + a] / v;
+            s += r * r / (N - k);
+        }
+        q += N * (N + 2.0) * s / L;
+    }
+    return q / nr;
+}
+
+int sr_info_fit_of(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
+{
+    if (!m || !d || !f)
+        return 1;
+    double dof = d->rows - m->nu;
+    f->whiteness = whiteness(m, d);
+    f->chi2 = dof > 0.0 ? d->rss / dof : 0.0;
+    f->thrust = thrust_ratio(m, d);
+    f->misfit = 0;
+    if (!isfinite(f->thrust)) {
+        f->thrust = 0.0;
+        return 1;
+    }
+    f->misfit = d->replayed && (f->whiteness > m->fit.whiteness_max || f->chi2 > m->fit.chi2_max
+                                || f->thrust > m->fit.thrust_max);
+    return 0;
+}
+
+/* the filter's estimate as the report takes it: with the thrust held where the model does
+   not fit */
+static int estimate_as_fit(const sr_info_model *m, const sr_info_data *d, double *z,
+                           double *bound)
+{
+    sr_info_fit f;
+    if (sr_info_fit_of(m, d, &f) == 0 && f.misfit)
+        return sr_info_estimate_held(m, d, 2, z, bound, NULL, NULL);
+    return sr_info_estimate(m, d, 2, z, bound, NULL);
 }
 
 void sr_info_information(const sr_info_model *m, const sr_info_data *d, double *S)
@@ -639,7 +887,7 @@ size_t sr_info_buffer_length(int n)
 static int own_point(const sr_info_model *m, const sr_info_data *d, double *z)
 {
     double bound[20];
-    if (sr_info_estimate(m, d, 2, z, bound, NULL) != 0 || !(z[0] > 0.0 && z[10] > 0.0))
+    if (estimate_as_fit(m, d, z, bound) != 0 || !(z[0] > 0.0 && z[10] > 0.0))
         return 1;
     return 0;
 }
