@@ -178,7 +178,10 @@ typedef struct sr_estimator_options {
     double fit_thrust_max;      /* ident.fit_thrust_max: misfit where a thrust scale is more
                                    than this many prior sds from 0 (3) */
     double fit_bias_k;          /* ident.fit_bias_k: the model-error term's factor k (the
-                                   absorbed misfit over the residual's; 1) */
+                                   absorbed misfit over the residual's), the equations' own
+                                   sds (0.5) */
+    double fit_bias_k_info;     /* ident.fit_bias_k_info: the same for the information
+                                   filter's (0.05) */
 } sr_estimator_options;
 
 /** The options' defaults (the table's: the core's own, base 600 kg and target 100 kg guesses

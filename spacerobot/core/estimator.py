@@ -66,7 +66,10 @@ class SrEstimatorOptions(ctypes.Structure):
         ("noise_dt", ctypes.c_double), ("information", ctypes.c_int),
         ("excite_adapt", ctypes.c_int), ("excite_rate_try", ctypes.c_double),
         ("excite_window", ctypes.c_double), ("excite_settle", ctypes.c_double),
-        ("excite_horizon", ctypes.c_double),
+        ("excite_horizon", ctypes.c_double), ("fit_window", ctypes.c_double),
+        ("fit_lags", ctypes.c_int), ("fit_rho_max", ctypes.c_double),
+        ("fit_whiteness_max", ctypes.c_double), ("fit_chi2_max", ctypes.c_double),
+        ("fit_thrust_max", ctypes.c_double), ("fit_bias_k", ctypes.c_double),
     ]
 
 
@@ -81,7 +84,8 @@ class SrEstimatorReport(ctypes.Structure):
         ("samples", ctypes.c_int), ("rejected", ctypes.c_int), ("status", ctypes.c_int),
         ("excite", ctypes.c_double), ("crb", ctypes.c_double * 20),
         ("info_chi2", ctypes.c_double), ("excite_rate", ctypes.c_double),
-        ("excite_score", ctypes.c_double * 2),
+        ("excite_score", ctypes.c_double * 2), ("model_fit", ctypes.c_double),
+        ("misfit", ctypes.c_int),
     ]
 
 
@@ -485,7 +489,8 @@ class NativeEstimator:
         ``excite``; the information filter's ``crb`` (20,: the Cramér-Rao bound's standard
         deviations, 0 without the filter) and ``info_chi2`` (its misfit); ``excite_rate`` (the
         rate asked of the plant) and ``excite_score`` (2,: the choice's predicted largest scaled
-        bounds at rate 1 and at the candidate; 0 before the choice)."""
+        bounds at rate 1 and at the candidate; 0 before the choice); ``model_fit`` and
+        ``misfit`` (the model-fit test: diag.model_fit, diag.misfit)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
         return {
@@ -497,6 +502,7 @@ class NativeEstimator:
             "samples": r.samples, "rejected": r.rejected, "status": r.status,
             "excite": r.excite, "crb": np.array(r.crb[:]), "info_chi2": r.info_chi2,
             "excite_rate": r.excite_rate, "excite_score": np.array(r.excite_score[:]),
+            "model_fit": r.model_fit, "misfit": bool(r.misfit),
         }
 
     def outputs(self) -> np.ndarray:
