@@ -602,7 +602,7 @@ def model_fit_vars() -> List[Var]:
             "test of its whitened residuals (1 to 100)", 50, ("fit_lags",)),
         Var("ident.fit_rho_max", "parameter", "fixed", "Real", "1",
             "Misfit where the relative residual is above this (estimator without a noise "
-            "model; in (0, 1])", 1e-6, ("fit_rho_max",)),
+            "model; in (0, 1])", 1e-2, ("fit_rho_max",)),
         Var("ident.fit_whiteness_max", "parameter", "fixed", "Real", "1",
             "Misfit where the whitened residuals' Ljung-Box Q/L is above this (information "
             "filter; 1 for white residuals; in [1, 1e6])", 3.0, ("fit_whiteness_max",)),
@@ -616,7 +616,11 @@ def model_fit_vars() -> List[Var]:
         Var("ident.fit_bias_k", "parameter", "fixed", "Real", "1",
             "While diag.misfit = 1: the factor k of the model-error term of the standard "
             "deviations, sd^2 += k^2 [(A^T W A)^-1]_ii (the residual's sum of squares beyond "
-            "the noise's) (in [0, 100]; 0 = none)", 1.0, ("fit_bias_k",)),
+            "the noise's), the estimator's own equations (in [0, 100]; 0 = none)", 0.5,
+            ("fit_bias_k",)),
+        Var("ident.fit_bias_k_info", "parameter", "fixed", "Real", "1",
+            "As ident.fit_bias_k, for the information filter's standard deviations (its "
+            "whitened residual; in [0, 100]; 0 = none)", 0.05, ("fit_bias_k_info",)),
         Var("diag.model_fit", "output", "continuous", "Real", "1",
             "How well the rigid model fits: without a noise model the relative residual of "
             "the equations (a-posteriori, over ident.fit_window; about 1e-10 on a rigid "

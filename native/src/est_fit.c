@@ -11,6 +11,7 @@ void est_fit_window(const sr_estimator_model *m, const est_core *old, int first,
     for (int i = 0; i < 4; i++)
         nw->fit_win[i] = a * old->fit_win[i] + nw->fit_now[i];
     nw->fit_t = t;
+    nw->fit_t0 = first ? t : old->fit_t0;
 }
 
 /* the estimator declares no noise: rows unweighted, no errors in variables, no profile */
@@ -42,7 +43,10 @@ void est_fit_test(const sr_estimator_model *m, const void *data, double *model_f
             rho = r > rho ? r : rho;
         }
     *model_fit = rho;
-    *misfit = noise_free(m) && rho > m->opt.fit_rho_max;
+    /* decided once the window holds its length of samples (the first seconds' residuals are
+       the estimates settling) */
+    *misfit = noise_free(m) && d->core.fit_t - d->core.fit_t0 >= m->opt.fit_window
+              && rho > m->opt.fit_rho_max;
 }
 
 void est_fit_gate_flags(int misfit, int *identified)

@@ -16,7 +16,8 @@ void est_fit_window(const sr_estimator_model *m, const est_core *old, int first,
  * where that, its chi2 or a thrust scale is beyond its threshold (sr_info_fit_of). Without:
  * the relative residual rho = max over the linear and angular rows of
  * sqrt(sum e^2 / sum y^2) over the window, misfit where rho > ident.fit_rho_max and the
- * estimator has no noise model (with noise, rho measures the noise: no decision). */
+ * estimator has no noise model (with noise, rho measures the noise: no decision) and the
+ * window holds ident.fit_window seconds of samples. */
 void est_fit_test(const sr_estimator_model *m, const void *data, double *model_fit,
                   int *misfit);
 

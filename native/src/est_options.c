@@ -107,7 +107,7 @@ enum { ALWAYS, PROFILE, BODY };
       RULE, "{n} must be > 0 s and <= {B} s")                                                   \
     X("ident.fit_lags", fit_lags, 0, 1, 1, SR_INFO_MAX_LAGS, 50, 0, 1, ALWAYS, RULE,            \
       "{n} must be an integer from {a} to {b}")                                                 \
-    X("ident.fit_rho_max", fit_rho_max, 0, 0, POSITIVE, 1.0, 1e-6, 0, 1, ALWAYS, RULE,          \
+    X("ident.fit_rho_max", fit_rho_max, 0, 0, POSITIVE, 1.0, 1e-2, 0, 1, ALWAYS, RULE,          \
       "{n} must be in (0, {b}]")                                                                \
     X("ident.fit_whiteness_max", fit_whiteness_max, 0, 0, 1.0, 1e6, 3.0, 0, 1, ALWAYS, RULE,    \
       "{n} must be in [{a}, {B}]")                                                              \
@@ -115,7 +115,9 @@ enum { ALWAYS, PROFILE, BODY };
       "{n} must be in [{a}, {B}]")                                                              \
     X("ident.fit_thrust_max", fit_thrust_max, 0, 0, 1.0, 1e6, 3.0, 0, 1, ALWAYS, RULE,          \
       "{n} must be in [{a}, {B}]")                                                              \
-    X("ident.fit_bias_k", fit_bias_k, 0, 0, 0.0, 100.0, 1.0, 0, 1, ALWAYS, RULE,                \
+    X("ident.fit_bias_k", fit_bias_k, 0, 0, 0.0, 100.0, 0.5, 0, 1, ALWAYS, RULE,                \
+      "{n} must be in [{a}, {b}]")                                                              \
+    X("ident.fit_bias_k_info", fit_bias_k_info, 0, 0, 0.0, 100.0, 0.05, 0, 1, ALWAYS, RULE,     \
       "{n} must be in [{a}, {b}]")                                                              \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
       "{n} must be a finite number in [{a}, {B}]")                                              \

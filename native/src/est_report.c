@@ -80,7 +80,7 @@ static int estimates_filter(const sr_estimator_model *m, const est_data *d, int 
         double dof = fd->rows - (m->info_m.nu - SR_N_CONSIDER);
         for (int i = 0; i < EST_NZ; i++)
             unit[i] = bound[i] * bound[i];
-        est_fit_model_error_var(m->opt.fit_bias_k, unit, rss - dof, var);
+        est_fit_model_error_var(m->opt.fit_bias_k_info, unit, rss - dof, var);
         for (int i = 0; i < EST_NZ; i++)
             sd[i] = sqrt(sd[i] * sd[i] + var[i]);
     }

@@ -238,6 +238,7 @@ static void core_commit(const sr_estimator_model *m, est_core *dst, const est_co
     dst->rcond_theta = src->rcond_theta;
     memcpy(dst->fit_win, src->fit_win, sizeof dst->fit_win);
     dst->fit_t = src->fit_t;
+    dst->fit_t0 = src->fit_t0;
 }
 
 /* -- one sample ----------------------------------------------------------------------------- */

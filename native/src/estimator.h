@@ -170,7 +170,7 @@ typedef struct sr_estimator_options {
                                    relative residual (60) */
     int fit_lags;               /* ident.fit_lags: lags of the whiteness test, 1..100 (50) */
     double fit_rho_max;         /* ident.fit_rho_max: misfit where the relative residual is
-                                   above it (no noise model; 1e-6) */
+                                   above it (no noise model; 1e-2) */
     double fit_whiteness_max;   /* ident.fit_whiteness_max: misfit where the Ljung-Box Q/L is
                                    above it (information filter; 3) */
     double fit_chi2_max;        /* ident.fit_chi2_max: misfit where diag.info_chi2 is above
