@@ -620,7 +620,7 @@ def model_fit_vars() -> List[Var]:
             ("fit_bias_k",)),
         Var("ident.fit_bias_k_info", "parameter", "fixed", "Real", "1",
             "As ident.fit_bias_k, for the information filter's standard deviations (its "
-            "whitened residual; in [0, 100]; 0 = none)", 0.05, ("fit_bias_k_info",)),
+            "whitened residual; in [0, 100]; 0 = none)", 0.25, ("fit_bias_k_info",)),
         Var("diag.model_fit", "output", "continuous", "Real", "1",
             "How well the rigid model fits: without a noise model the relative residual of "
             "the equations (a-posteriori, over ident.fit_window; about 1e-10 on a rigid "

@@ -117,7 +117,7 @@ enum { ALWAYS, PROFILE, BODY };
       "{n} must be in [{a}, {B}]")                                                              \
     X("ident.fit_bias_k", fit_bias_k, 0, 0, 0.0, 100.0, 0.5, 0, 1, ALWAYS, RULE,                \
       "{n} must be in [{a}, {b}]")                                                              \
-    X("ident.fit_bias_k_info", fit_bias_k_info, 0, 0, 0.0, 100.0, 0.05, 0, 1, ALWAYS, RULE,     \
+    X("ident.fit_bias_k_info", fit_bias_k_info, 0, 0, 0.0, 100.0, 0.25, 0, 1, ALWAYS, RULE,     \
       "{n} must be in [{a}, {b}]")                                                              \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
       "{n} must be a finite number in [{a}, {B}]")                                              \

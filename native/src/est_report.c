@@ -75,12 +75,14 @@ static int estimates_filter(const sr_estimator_model *m, const est_data *d, int 
     double k = sqrt(*chi2 > 1.0 ? *chi2 : 1.0);
     for (int i = 0; i < EST_NZ; i++)
         sd[i] = k * bound[i];
-    if (misfit) {                             /* the residual beyond the noise's: rss - dof */
+    if (misfit) {          /* the residual beyond the noise's: rss - dof; all of it where
+                              the model error is in the rows' noise model (me_var) */
         double unit[EST_NZ], var[EST_NZ];
         double dof = fd->rows - (m->info_m.nu - SR_N_CONSIDER);
+        double excess = fd->me_var[0] > 0.0 || fd->me_var[1] > 0.0 ? rss : rss - dof;
         for (int i = 0; i < EST_NZ; i++)
             unit[i] = bound[i] * bound[i];
-        est_fit_model_error_var(m->opt.fit_bias_k_info, unit, rss - dof, var);
+        est_fit_model_error_var(m->opt.fit_bias_k_info, unit, excess, var);
         for (int i = 0; i < EST_NZ; i++)
             sd[i] = sqrt(sd[i] * sd[i] + var[i]);
     }

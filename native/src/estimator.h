@@ -181,7 +181,7 @@ typedef struct sr_estimator_options {
                                    absorbed misfit over the residual's), the equations' own
                                    sds (0.5) */
     double fit_bias_k_info;     /* ident.fit_bias_k_info: the same for the information
-                                   filter's (0.05) */
+                                   filter's (0.25) */
 } sr_estimator_options;
 
 /** The options' defaults (the table's: the core's own, base 600 kg and target 100 kg guesses

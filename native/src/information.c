@@ -198,10 +198,37 @@ static int channels(const sr_info_model *m, int *idx, double *sd)
     return c;
 }
 
+/* The model error as noise of the rows (where the replay found a misfit): momentum the rigid
+   model lacks, P_f (linear, variance me_var[0] per axis) and L_f (angular about the base point,
+   me_var[1]), white and isotropic, enters the rows about the origin as [P_f; L_f + r_S x P_f]:
+   Rk += [[s_P I, s_P [r]x^T], [s_P [r]x, s_L I + s_P [r]x [r]x^T]] (the used rows) */
+static void add_model_error(const sr_info_model *m, const double *x, const double *me_var,
+                            double *Rk)
+{
+    if (!(me_var[0] > 0.0 || me_var[1] > 0.0))
+        return;
+    const double *r = x + SR_X_R_S;
+    double Rx[9] = {0, -r[2], r[1], r[2], 0, -r[0], -r[1], r[0], 0}, C[36];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double rr = 0.0;
+            for (int k = 0; k < 3; k++)
+                rr += Rx[i * 3 + k] * Rx[j * 3 + k];
+            C[i * 6 + j] = i == j ? me_var[0] : 0.0;
+            C[(3 + i) * 6 + j] = me_var[0] * Rx[i * 3 + j];
+            C[i * 6 + 3 + j] = me_var[0] * Rx[j * 3 + i];
+            C[(3 + i) * 6 + 3 + j] = (i == j ? me_var[1] : 0.0) + me_var[0] * rr;
+        }
+    for (int a = 0; a < m->nr; a++)
+        for (int b = 0; b < m->nr; b++)
+            Rk[a * 6 + b] += C[m->rows[a] * 6 + m->rows[b]];
+}
+
 /* R_k^-1/2 (lower triangular nr x nr) of the rows' noise covariance at x, z: the channels'
    white noise through central differences of the rows, the attitude's as small rotations
    about the base axes; 0, or 1 when R_k is not positive definite */
-static int noise_weight(const sr_info_model *m, const double *x, const double *z, double *W)
+static int noise_weight(const sr_info_model *m, const double *x, const double *z,
+                        const double *me_var, double *W)
 {
     int nr = m->nr, idx[12 + 2 * SR_MAX_JOINTS];
     double sd[12 + 2 * SR_MAX_JOINTS], Rk[36] = {0}, xs[SR_X_LEN(SR_MAX_JOINTS)];
@@ -254,6 +281,7 @@ static int noise_weight(const sr_info_model *m, const double *x, const double *z
             for (int b = 0; b < nr; b++)
                 Rk[a * 6 + b] += s2 * g[a] * g[b];
     }
+    add_model_error(m, x, me_var, Rk);
     double tr = 0.0;
     for (int a = 0; a < nr; a++)
         tr += Rk[a * 6 + a];
@@ -353,7 +381,7 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     memcpy(K, d->K, sizeof K);
     sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(n), x + SR_X_M(n));
     sr_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
-    if (noise_weight(m, x, z, W) != 0)               /* every sample */
+    if (noise_weight(m, x, z, d->me_var, W) != 0)    /* every sample */
         return 1;
     /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
     double Hy[6 * HS], r0[6], rb[6], xs[SR_X_LEN(SR_MAX_JOINTS)], y[6];
@@ -494,8 +522,8 @@ static void upper_inverse(const double *R, int nu, double *Ri)
  * entries (the leading unknowns) plus, where G (nz x 8; may be NULL) is given, the consider
  * term G P_c G^T of the thrust errors' prior (sds 1 / prior_sqrt), J = d reported / d z_O at
  * the unknowns u (their identified columns). 1 where a bound is not finite. */
-static int bound_with(const sr_info_model *m, int nu, const double *Ri, const double *G,
-                      const double *u, double *bound)
+static INFO_NOINLINE int bound_with(const sr_info_model *m, int nu, const double *Ri,
+                                    const double *G, const double *u, double *bound)
 {
     int nz = m->nz, i1 = m->nz + m->nr;
     double C[20 * 20], J[20 * 20], Jz[20 * 20], zO[20];
@@ -540,8 +568,9 @@ static int bound_of(const sr_info_model *m, const double *Ri, const double *u, d
 /* The unknowns u (nu) of the square-root information [R dv] (nu unknowns, the z_O entries
    first; N_HH, N_Hy the errors-in-variables sums over them: zero beyond z_O), compensated as
    sr_info_estimate, and Ri = R^-1 */
-static void solve_square_root(int nu, const double *R, const double *dv, const double *N_HH,
-                              const double *N_Hy, int compensated, double *u, double *Ri)
+static INFO_NOINLINE void solve_square_root(int nu, const double *R, const double *dv,
+                                            const double *N_HH, const double *N_Hy,
+                                            int compensated, double *u, double *Ri)
 {
     /* R u = d (back substitution); Ri = R^-1 (upper triangular) */
     for (int i = nu - 1; i >= 0; i--) {
@@ -794,22 +823,29 @@ static double whiteness(const sr_info_model *m, const sr_info_data *d)
     return q / nr;
 }
 
-int sr_info_fit_of(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
+/* sr_info_fit_of (m, d, f given) */
+static int fit_test(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
 {
-    if (!m || !d || !f)
-        return 1;
     double dof = d->rows - m->nu;
     f->whiteness = whiteness(m, d);
     f->chi2 = dof > 0.0 ? d->rss / dof : 0.0;
     f->thrust = thrust_ratio(m, d);
-    f->misfit = 0;
+    f->misfit = d->misfit;
     if (!isfinite(f->thrust)) {
         f->thrust = 0.0;
         return 1;
     }
-    f->misfit = d->replayed && (f->whiteness > m->fit.whiteness_max || f->chi2 > m->fit.chi2_max
-                                || f->thrust > m->fit.thrust_max);
+    f->misfit = d->misfit || (d->replayed && (f->whiteness > m->fit.whiteness_max
+                                              || f->chi2 > m->fit.chi2_max
+                                              || f->thrust > m->fit.thrust_max));
     return 0;
+}
+
+int sr_info_fit_of(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
+{
+    if (!m || !d || !f)
+        return 1;
+    return fit_test(m, d, f);
 }
 
 /* the filter's estimate as the report takes it: with the thrust held where the model does
@@ -874,7 +910,8 @@ int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d)
     double s = numbers_sum(m->nu, d->R, d->d, d->N_HH, d->N_Hy, d->K) + d->rss + d->rows;
     for (int i = 0; i < 20; i++)
         s += d->z_lin[i];
-    return isfinite(s);
+    return isfinite(s + d->me_var[0] + d->me_var[1]) && d->me_var[0] >= 0.0
+           && d->me_var[1] >= 0.0;
 }
 
 size_t sr_info_buffer_length(int n)
@@ -889,6 +926,90 @@ static int own_point(const sr_info_model *m, const sr_info_data *d, double *z)
     double bound[20];
     if (estimate_as_fit(m, d, z, bound) != 0 || !(z[0] > 0.0 && z[10] > 0.0))
         return 1;
+    return 0;
+}
+
+/* The model error's variances (sr_info_data.me_var) from the kept samples: the rows'
+   residuals at the estimate z (reported, 20; the thrust errors at 0), the linear ones less
+   their mean (the momentum c0) give P_f, the angular ones less r_S x that and their mean
+   give L_f about the base point; their mean squares per used row */
+static void model_error_of(const sr_info_model *m, const double *buffer, const double *z,
+                           double *me_var)
+{
+    int slot = 1 + SR_X_LEN(m->n), nlin = 0, nang = 0;
+    double zO[20], c[6] = {0}, s[2] = {0, 0};
+    int used[6] = {0};
+    for (int a = 0; a < m->nr; a++) {
+        used[m->rows[a]] = 1;
+        if (m->rows[a] < 3)
+            nlin++;
+        else
+            nang++;
+    }
+    sr_standard_of_reported(z, zO);
+    for (int pass = 0; pass < 3; pass++) {   /* mean of the linear; of the angular; squares */
+        double acc[6] = {0};
+        for (int k = 0; k < SR_INFO_REPLAY; k++) {
+            const double *x = buffer + (size_t)k * (size_t)slot + 1, *r = x + SR_X_R_S;
+            double full[6][20], y[6], e[6];
+            rows_full(m, x, full, y);
+            for (int i = 0; i < 6; i++) {
+                e[i] = -y[i];
+                for (int j = 0; j < 20; j++)
+                    e[i] += full[i][j] * zO[j];
+            }
+            double p[3] = {e[0] - c[0], e[1] - c[1], e[2] - c[2]};
+            double l[3] = {e[3] - (r[1] * p[2] - r[2] * p[1]) - c[3],
+                           e[4] - (r[2] * p[0] - r[0] * p[2]) - c[4],
+                           e[5] - (r[0] * p[1] - r[1] * p[0]) - c[5]};
+            for (int i = 0; i < 3; i++) {
+                if (pass == 0)
+                    acc[i] += e[i];
+                else if (pass == 1)
+                    acc[3 + i] += l[i];
+                else {
+                    acc[0] += used[i] ? p[i] * p[i] : 0.0;
+                    acc[1] += used[3 + i] ? l[i] * l[i] : 0.0;
+                }
+            }
+        }
+        for (int i = 0; i < 3 && pass < 2; i++)
+            c[3 * pass + i] = acc[3 * pass + i] / SR_INFO_REPLAY;
+        if (pass == 2) {
+            s[0] = nlin ? acc[0] / (nlin * (double)SR_INFO_REPLAY) : 0.0;
+            s[1] = nang ? acc[1] / (nang * (double)SR_INFO_REPLAY) : 0.0;
+        }
+    }
+    me_var[0] = isfinite(s[0]) ? s[0] : 0.0;
+    me_var[1] = isfinite(s[1]) ? s[1] : 0.0;
+}
+
+/* The replay into d: from the prior the kept samples and then x at t, linearised at z, with
+   the model error's variances me_var (NULL: none; else the misfit kept); where a kept sample
+   cannot be added, from before instead (no replay rather than no filter). 0, or 1 (d =
+   before) where x cannot be added. */
+static int replay(const sr_info_model *m, const sr_info_data *before, sr_info_data *d,
+                  const double *buffer, double t, const double *x, const double *z,
+                  const double *me_var, sr_info_work *w)
+{
+    int slot = 1 + SR_X_LEN(m->n), ok = 1;
+    sr_info_data_init(m, d);
+    if (me_var) {
+        d->misfit = 1;
+        memcpy(d->me_var, me_var, sizeof d->me_var);
+    }
+    for (int k = 0; k < SR_INFO_REPLAY && ok; k++) {
+        const double *s = buffer + (size_t)k * (size_t)slot;
+        ok = sr_info_add(m, d, s[0], s + 1, z, w) == 0;
+    }
+    if (!ok)
+        memcpy(d, before, sizeof *d);
+    if (sr_info_add(m, d, t, x, z, w) != 0) {
+        memcpy(d, before, sizeof *d);
+        return 1;
+    }
+    d->replayed = 1;
+    memcpy(d->z_lin, z, sizeof d->z_lin);
     return 0;
 }
 
@@ -923,21 +1044,19 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
     double z[20];
     if (own_point(m, d, z) != 0)
         memcpy(z, z_est, sizeof z);
-    sr_info_data_init(m, d);
-    int ok = 1;
-    for (int k = 0; k < SR_INFO_REPLAY && ok; k++) {
-        const double *s = buffer + (size_t)k * (size_t)slot;
-        ok = sr_info_add(m, d, s[0], s + 1, z, w) == 0;
-    }
-    if (!ok)                                 /* no replay rather than no filter: go on from the
-                                                state before, at the point the replay chose */
-        memcpy(d, before, sizeof *d);
-    if (sr_info_add(m, d, t, x, z, w) != 0) {
-        memcpy(d, before, sizeof *d);
+    if (replay(m, before, d, buffer, t, x, z, NULL, w) != 0)
         return 1;
+    /* where the rigid model does not fit the replayed samples: once more with the thrust errors
+       held (own_point's estimate) and the model error as the rows' noise */
+    sr_info_fit f;
+    if (fit_test(m, d, &f) == 0 && f.misfit) {
+        double me_var[2];
+        if (own_point(m, d, z) != 0)
+            memcpy(z, d->z_lin, sizeof z);
+        model_error_of(m, buffer, z, me_var);
+        if (replay(m, before, d, buffer, t, x, z, me_var, w) != 0)
+            return 1;
     }
-    d->replayed = 1;
-    memcpy(d->z_lin, z, sizeof z);
     return 0;
 }
 

@@ -82,8 +82,11 @@ typedef struct sr_info_fit_options {
 /** What the model-fit test says (sr_info_fit_of): the Ljung-Box Q/L of the whitened
  *  residuals (0 before 2 L samples), chi2 (the weighted residual sum of squares per degree of
  *  freedom, the thrust errors estimated), the larger thrust scale's |s| / prior sd (0 without
- *  a thrust prior), and misfit (1 where one of them is beyond its threshold, only once the
- *  filter has replayed: before, its linearisation point is the caller's). */
+ *  a thrust prior), and misfit (1 where one of them is beyond its threshold, decided from the
+ *  filter's replay on (before, its linearisation point is the caller's); found at the replay
+ *  it stays: the replay then adds the samples again with the thrust errors held and the model
+ *  error's variances (sr_info_data.me_var, from the kept samples' residuals) in the rows'
+ *  noise covariance). */
 typedef struct sr_info_fit {
     double whiteness, chi2, thrust;
     int misfit;
@@ -118,6 +121,11 @@ typedef struct sr_info_data {
        the lag products sum_t e_t e_(t-k), k = 0..lags (fit_sum[6 k + row]) */
     int fit_head, fit_count;
     double fit_ring[(SR_INFO_MAX_LAGS + 1) * 6], fit_sum[(SR_INFO_MAX_LAGS + 1) * 6];
+    /* the misfit found at the replay (kept: the thrust errors held from then on) and the
+       model error's variances it added to every row's noise covariance since: the linear
+       momentum's [N^2 s^2] and the angular momentum's about the base point [N^2 m^2 s^2] */
+    int misfit;
+    double me_var[2];
 } sr_info_data;
 
 /** The filter's temporaries: a work space beside the state, never part of it (a host copies
