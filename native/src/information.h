@@ -82,7 +82,9 @@ typedef struct sr_info_fit_options {
 /** What the model-fit test says (sr_info_fit_of): the Ljung-Box Q/L of the whitened
  *  residuals (0 before 2 L samples), chi2 (the weighted residual sum of squares per degree of
  *  freedom, the thrust errors estimated), the larger thrust scale's |s| / prior sd (0 without
- *  a thrust prior), and misfit (1 where one of them is beyond its threshold, decided from the
+ *  a thrust prior), and misfit (1 where one of them is beyond its threshold, the whiteness
+ *  only where chi2 > 1/2 (far below, the data are less noisy than their model and the
+ *  residuals' colour is round-off's), decided from the
  *  filter's replay on (before, its linearisation point is the caller's); found at the replay
  *  it stays: the replay then adds the samples again with the thrust errors held and the model
  *  error's variances (sr_info_data.me_var, from the kept samples' residuals) in the rows'
