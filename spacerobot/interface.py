@@ -605,7 +605,7 @@ def model_fit_vars() -> List[Var]:
             "model; in (0, 1])", 1e-2, ("fit_rho_max",)),
         Var("ident.fit_whiteness_max", "parameter", "fixed", "Real", "1",
             "Misfit where the whitened residuals' Ljung-Box Q/L is above this (information "
-            "filter; 1 for white residuals; in [1, 1e6])", 3.0, ("fit_whiteness_max",)),
+            "filter; 1 for white residuals; in [1, 1e6])", 30.0, ("fit_whiteness_max",)),
         Var("ident.fit_chi2_max", "parameter", "fixed", "Real", "1",
             "Misfit where diag.info_chi2 is above this (information filter; in [1, 1e6])", 2.0,
             ("fit_chi2_max",)),

@@ -109,7 +109,7 @@ enum { ALWAYS, PROFILE, BODY };
       "{n} must be an integer from {a} to {b}")                                                 \
     X("ident.fit_rho_max", fit_rho_max, 0, 0, POSITIVE, 1.0, 1e-2, 0, 1, ALWAYS, RULE,          \
       "{n} must be in (0, {b}]")                                                                \
-    X("ident.fit_whiteness_max", fit_whiteness_max, 0, 0, 1.0, 1e6, 3.0, 0, 1, ALWAYS, RULE,    \
+    X("ident.fit_whiteness_max", fit_whiteness_max, 0, 0, 1.0, 1e6, 30.0, 0, 1, ALWAYS, RULE,   \
       "{n} must be in [{a}, {B}]")                                                              \
     X("ident.fit_chi2_max", fit_chi2_max, 0, 0, 1.0, 1e6, 2.0, 0, 1, ALWAYS, RULE,              \
       "{n} must be in [{a}, {B}]")                                                              \

@@ -172,7 +172,7 @@ typedef struct sr_estimator_options {
     double fit_rho_max;         /* ident.fit_rho_max: misfit where the relative residual is
                                    above it (no noise model; 1e-2) */
     double fit_whiteness_max;   /* ident.fit_whiteness_max: misfit where the Ljung-Box Q/L is
-                                   above it (information filter; 3) */
+                                   above it (information filter; 30) */
     double fit_chi2_max;        /* ident.fit_chi2_max: misfit where diag.info_chi2 is above
                                    it (2) */
     double fit_thrust_max;      /* ident.fit_thrust_max: misfit where a thrust scale is more

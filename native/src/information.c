@@ -98,7 +98,7 @@ int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_no
     for (int q = 0; q < m->nb; q++, at++)
         m->prior_sqrt[at] = 1.0 / noise->gyro_bias;
     m->fit.lags = 50;
-    m->fit.whiteness_max = 3.0;
+    m->fit.whiteness_max = 30.0;
     m->fit.chi2_max = 2.0;
     m->fit.thrust_max = 3.0;
     return 0;

@@ -72,7 +72,7 @@ typedef struct sr_info_noise {
 
 /** The model-fit test's options (the estimator's ident.fit_*; sr_info_model_init sets the
  *  defaults in brackets): lags L of the whiteness test [50], 1..SR_INFO_MAX_LAGS; the
- *  thresholds of its Ljung-Box Q/L [3], of chi2 [2] and of the thrust scales' |s| / prior sd
+ *  thresholds of its Ljung-Box Q/L [30], of chi2 [2] and of the thrust scales' |s| / prior sd
  *  [3] above which the rigid model does not fit. */
 typedef struct sr_info_fit_options {
     int lags;
