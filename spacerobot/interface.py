@@ -623,8 +623,8 @@ def model_fit_vars() -> List[Var]:
             "whitened residual; in [0, 100]; 0 = none)", 0.25, ("fit_bias_k_info",)),
         Var("diag.model_fit", "output", "continuous", "Real", "1",
             "How well the rigid model fits: without a noise model the relative residual of "
-            "the equations (a-posteriori, over ident.fit_window; about 1e-10 on a rigid "
-            "spacecraft noise-free); with the information filter the Ljung-Box Q/L of its "
+            "the equations (a-posteriori, over ident.fit_window; about 1e-4 on the "
+            "project's rigid plant noise-free); with the information filter the Ljung-Box Q/L of its "
             "whitened residuals (about 1 where they are white; 0 before 2 ident.fit_lags "
             "samples)", None, ("model_fit",)),
         Var("diag.misfit", "output", "discrete", "Integer", None,
