@@ -4,14 +4,18 @@
 #include <math.h>
 #include <string.h>
 
-void est_fit_window(const sr_estimator_model *m, const est_core *old, int first, double t,
-                    est_core *nw)
+/* the window's length in samples (at least 1) */
+static double window_samples(const sr_estimator_model *m)
 {
-    double a = first ? 0.0 : exp(-(t - old->fit_t) / m->opt.fit_window);
+    double n = m->opt.fit_window / m->opt.noise_dt;
+    return n > 1.0 ? n : 1.0;
+}
+
+void est_fit_window(const sr_estimator_model *m, const est_core *old, int first, est_core *nw)
+{
+    double a = first ? 0.0 : 1.0 - 1.0 / window_samples(m);
     for (int i = 0; i < 4; i++)
         nw->fit_win[i] = a * old->fit_win[i] + nw->fit_now[i];
-    nw->fit_t = t;
-    nw->fit_t0 = first ? t : old->fit_t0;
 }
 
 /* the estimator declares no noise: rows unweighted, no errors in variables, no profile */
@@ -45,8 +49,7 @@ void est_fit_test(const sr_estimator_model *m, const void *data, double *model_f
     *model_fit = rho;
     /* decided once the window holds its length of samples (the first seconds' residuals are
        the estimates settling) */
-    *misfit = noise_free(m) && d->core.fit_t - d->core.fit_t0 >= m->opt.fit_window
-              && rho > m->opt.fit_rho_max;
+    *misfit = noise_free(m) && d->samples >= window_samples(m) && rho > m->opt.fit_rho_max;
 }
 
 void est_fit_gate_flags(int misfit, int *identified)

@@ -6,10 +6,10 @@
 
 #include "est_types.h"
 
-/* The exponential window of the relative residual with the sample at t [s]: nw->fit_win =
- * exp(-(t - t_last) / ident.fit_window) old->fit_win + nw->fit_now (the step's sums). */
-void est_fit_window(const sr_estimator_model *m, const est_core *old, int first, double t,
-                    est_core *nw);
+/* The exponential window of the relative residual with a sample: nw->fit_win =
+ * (1 - 1 / N) old->fit_win + nw->fit_now (the step's sums), N = ident.fit_window / the sample
+ * interval (noise_dt) samples: counted in samples, as the estimates (not the step sizes). */
+void est_fit_window(const sr_estimator_model *m, const est_core *old, int first, est_core *nw);
 
 /* What the test says of the committed state: the statistic (diag.model_fit) and misfit
  * (diag.misfit). With the information filter: its whitened residuals' Ljung-Box Q/L, misfit
@@ -17,7 +17,7 @@ void est_fit_window(const sr_estimator_model *m, const est_core *old, int first,
  * the relative residual rho = max over the linear and angular rows of
  * sqrt(sum e^2 / sum y^2) over the window, misfit where rho > ident.fit_rho_max and the
  * estimator has no noise model (with noise, rho measures the noise: no decision) and the
- * window holds ident.fit_window seconds of samples. */
+ * window's N samples came. */
 void est_fit_test(const sr_estimator_model *m, const void *data, double *model_fit,
                   int *misfit);
 

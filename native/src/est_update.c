@@ -237,8 +237,6 @@ static void core_commit(const sr_estimator_model *m, est_core *dst, const est_co
     dst->rcond_mu = src->rcond_mu;
     dst->rcond_theta = src->rcond_theta;
     memcpy(dst->fit_win, src->fit_win, sizeof dst->fit_win);
-    dst->fit_t = src->fit_t;
-    dst->fit_t0 = src->fit_t0;
 }
 
 /* -- one sample ----------------------------------------------------------------------------- */
@@ -317,7 +315,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
         st = 2;
     if (st != 0)
         return reject(d, SR_EST_REJECT_NONFINITE, step_failure(st), msg, msglen);
-    est_fit_window(m, c, d->samples == 0, t, nw);
+    est_fit_window(m, c, d->samples == 0, nw);
     /* the commit */
     if (m->info)
         memcpy(est_info_data(m, data), &wk->nwi, sizeof wk->nwi);
