@@ -588,6 +588,7 @@ def noise_model_vars() -> List[Var]:
               "noise model explains the equations' errors; the reported standard deviations "
               "are the bound times sqrt(max(1, diag.info_chi2))); 0 without the filter", None,
               ("info_chi2",))]
+    v += model_fit_vars()
     v += excite_design_vars()
     v += [Var("ident.modes", "parameter", "fixed", "Integer", None,
               "The modal columns (docs/identification.md, 'Flexible parts: the modal "
@@ -613,6 +614,52 @@ def noise_model_vars() -> List[Var]:
                      + " (as the sensors FMU's parameter of the same name)", default,
                      ("noise", name[len("noise."):])))
     return v
+
+
+def model_fit_vars() -> List[Var]:
+    """The model-fit test (docs/identification.md, 'When the rigid model does not fit'): its
+    parameters and outputs."""
+    return [
+        Var("ident.fit_window", "parameter", "fixed", "Real", "s",
+            "Model-fit test without a noise model: the exponential window of the relative "
+            "residual diag.model_fit (> 0)", 60.0, ("fit_window",)),
+        Var("ident.fit_lags", "parameter", "fixed", "Integer", None,
+            "Model-fit test with the information filter: the lags of the Ljung-Box whiteness "
+            "test of its whitened residuals (1 to 100)", 50, ("fit_lags",)),
+        Var("ident.fit_rho_max", "parameter", "fixed", "Real", "1",
+            "Misfit where the relative residual is above this (estimator without a noise "
+            "model; in (0, 1])", 1e-2, ("fit_rho_max",)),
+        Var("ident.fit_whiteness_max", "parameter", "fixed", "Real", "1",
+            "Misfit where the whitened residuals' Ljung-Box Q/L is above this (information "
+            "filter; 1 for white residuals; in [1, 1e6])", 30.0, ("fit_whiteness_max",)),
+        Var("ident.fit_chi2_max", "parameter", "fixed", "Real", "1",
+            "Misfit where diag.info_chi2 is above this (information filter; in [1, 1e6])", 2.0,
+            ("fit_chi2_max",)),
+        Var("ident.fit_thrust_max", "parameter", "fixed", "Real", "1",
+            "Misfit where the thrust's force or moment scale factor is estimated more than "
+            "this many prior standard deviations from 0 (information filter; in [1, 1e6])",
+            3.0, ("fit_thrust_max",)),
+        Var("ident.fit_bias_k", "parameter", "fixed", "Real", "1",
+            "While diag.misfit = 1: the factor k of the model-error term of the standard "
+            "deviations, sd^2 += k^2 [(A^T W A)^-1]_ii (the residual's sum of squares beyond "
+            "the noise's), the estimator's own equations (in [0, 100]; 0 = none)", 0.5,
+            ("fit_bias_k",)),
+        Var("ident.fit_bias_k_info", "parameter", "fixed", "Real", "1",
+            "As ident.fit_bias_k, for the information filter's standard deviations (its "
+            "whitened residual; in [0, 100]; 0 = none)", 0.25, ("fit_bias_k_info",)),
+        Var("diag.model_fit", "output", "continuous", "Real", "1",
+            "How well the rigid model fits: without a noise model the relative residual of "
+            "the equations (a-posteriori, over ident.fit_window; about 1e-4 on the "
+            "project's rigid plant noise-free); with the information filter the Ljung-Box Q/L of its "
+            "whitened residuals (about 1 where they are white; 0 before 2 ident.fit_lags "
+            "samples)", None, ("model_fit",)),
+        Var("diag.misfit", "output", "discrete", "Integer", None,
+            "1 where the rigid model does not fit the data (diag.model_fit, diag.info_chi2 "
+            "or a thrust scale beyond its threshold; the information filter decides after "
+            "its replay at 600 samples): the thrust errors are then held at their priors, "
+            "the standard deviations carry the model-error term and no body is flagged "
+            "identified", None, ("misfit",)),
+    ]
 
 
 #: the rate choice's two scores (``diag.excite_score.<name>``), in the order of the core's

@@ -178,6 +178,10 @@ CONTRACT_UNITS = [
     (r"lambda|P0_mu|P0_theta|diag\.(residual_lin|residual_ang|excitation_mu|excitation_theta"
      r"|info_chi2)", "1"),
     (r"ident\.(sd_rel|flag_confidence|excite_level)", "1"), (r"excite\.att_ref\[\d\]", "rad"),
+    # the model-fit test: its window, its thresholds and factors, its statistic
+    (r"ident\.fit_window", "s"),
+    (r"ident\.fit_(rho_max|whiteness_max|chi2_max|thrust_max|bias_k|bias_k_info)"
+     r"|diag\.model_fit", "1"),
     # the excitation's rate: a frequency multiplier; the choice's times and scores
     (r"ident\.excite_(rate|rate_try)|excite\.rate|diag\.excite_score\.rate_(1|try)", "1"),
     (r"ident\.excite_(window|settle|horizon)", "s"),

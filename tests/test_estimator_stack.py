@@ -142,3 +142,10 @@ def test_every_configuration_in_a_64k_thread(host, tmp_path, robot):
     for name in ("profile_always",):
         assert float(seen[name]["score_1"]) > 0.0, (name, seen[name])
         assert float(seen[name]["score_try"]) > 0.0, (name, seen[name])
+    # the misfit path (the model-fit test's replay with the thrust held and the model error as
+    # the rows' noise, the held estimates and the model-error term) ran in the thread too;
+    # the rate's choice is then not tried
+    for name in ("profile_misfit", "profile_misfit_joint"):
+        assert seen[name]["misfit"] == "1", (name, seen[name])
+        assert float(seen[name]["score_try"]) == 0.0, (name, seen[name])
+    assert seen["profile_always"]["misfit"] == "0"

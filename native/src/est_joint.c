@@ -345,6 +345,8 @@ int est_joint_step(const sr_estimator_model *m, const void *data, const est_core
     info_add(old->info_ang, H + k1 * q, k2, q, m->ang_cols, m->n_ang_cols, lam, nw->info_ang);
     nw->residual_lin = est_relative_norm(e, b, k1);
     nw->residual_ang = est_relative_norm(e + k1, yy + k1, k2);
+    est_fit_sums(H, yy, x, k1, q, nw->fit_now);
+    est_fit_sums(H + k1 * q, yy + k1, x, k2, q, nw->fit_now + 2);
     /* the accelerations' noise: its expected part of the Gram matrix, the compensated
      * answer (est_eiv.h) */
     nw->has_eiv = old->has_eiv;

@@ -29,7 +29,13 @@ static int info_model(sr_estimator_model *m, const sr_robot *robot,
     double z0[20];
     memcpy(z0, o->guess_base, sizeof(double) * 10);
     memcpy(z0 + 10, o->guess_target, sizeof(double) * 10);
-    return sr_info_model_init(&m->info_m, robot, &nz, z0, o->P0_mu, o->P0_theta);
+    if (sr_info_model_init(&m->info_m, robot, &nz, z0, o->P0_mu, o->P0_theta) != 0)
+        return 1;
+    m->info_m.fit.lags = o->fit_lags;
+    m->info_m.fit.whiteness_max = o->fit_whiteness_max;
+    m->info_m.fit.chi2_max = o->fit_chi2_max;
+    m->info_m.fit.thrust_max = o->fit_thrust_max;
+    return 0;
 }
 
 sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,

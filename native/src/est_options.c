@@ -109,6 +109,22 @@ enum { ALWAYS, PROFILE, BODY };
     X("ident.modes", modes, 0, 1, 1, 2, 2, 0, 1, ALWAYS, CODE, "1 (on), 2 (off)")               \
     MODE_F(X, "ident.mode_f[1]", 0) MODE_F(X, "ident.mode_f[2]", 1)                            \
     MODE_F(X, "ident.mode_f[3]", 2) MODE_F(X, "ident.mode_f[4]", 3)                            \
+    X("ident.fit_window", fit_window, 0, 0, POSITIVE, SR_EXD_TIME_MAX, 60.0, 0, 1, ALWAYS,      \
+      RULE, "{n} must be > 0 s and <= {B} s")                                                   \
+    X("ident.fit_lags", fit_lags, 0, 1, 1, SR_INFO_MAX_LAGS, 50, 0, 1, ALWAYS, RULE,            \
+      "{n} must be an integer from {a} to {b}")                                                 \
+    X("ident.fit_rho_max", fit_rho_max, 0, 0, POSITIVE, 1.0, 1e-2, 0, 1, ALWAYS, RULE,          \
+      "{n} must be in (0, {b}]")                                                                \
+    X("ident.fit_whiteness_max", fit_whiteness_max, 0, 0, 1.0, 1e6, 30.0, 0, 1, ALWAYS, RULE,   \
+      "{n} must be in [{a}, {B}]")                                                              \
+    X("ident.fit_chi2_max", fit_chi2_max, 0, 0, 1.0, 1e6, 2.0, 0, 1, ALWAYS, RULE,              \
+      "{n} must be in [{a}, {B}]")                                                              \
+    X("ident.fit_thrust_max", fit_thrust_max, 0, 0, 1.0, 1e6, 3.0, 0, 1, ALWAYS, RULE,          \
+      "{n} must be in [{a}, {B}]")                                                              \
+    X("ident.fit_bias_k", fit_bias_k, 0, 0, 0.0, 100.0, 0.5, 0, 1, ALWAYS, RULE,                \
+      "{n} must be in [{a}, {b}]")                                                              \
+    X("ident.fit_bias_k_info", fit_bias_k_info, 0, 0, 0.0, 100.0, 0.25, 0, 1, ALWAYS, RULE,     \
+      "{n} must be in [{a}, {b}]")                                                              \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
       "{n} must be a finite number in [{a}, {B}]")                                              \
     PROFILE_MAGNITUDE(X, SR_NOISE_GYRO_ARW)                                                     \

@@ -760,6 +760,8 @@ int est_paper_step(const sr_estimator_model *m, const void *data, const est_core
     est_gram_count(lam, k2, &nw->rows_ang, &nw->decay_ang, &nw->n1_ang, &nw->n2_ang);
     nw->residual_lin = est_relative_norm(e_lin, b, k1);
     nw->residual_ang = est_relative_norm(e_ang, rhs, k2);
+    est_fit_sums(A, b, nw->mu, k1, p, nw->fit_now);
+    est_fit_sums(phi, rhs, nw->theta, k2, r, nw->fit_now + 2);
 
     /* the accelerations' noise: its expected part of the Gram matrices, the compensated
      * answers (est_eiv.h) */

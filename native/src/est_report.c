@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "est_corr.h"
+#include "est_fit.h"
 #include "est_joint.h"
 #include "est_modal.h"
 #include "est_paper.h"
@@ -60,26 +61,57 @@ void est_least_squares(const sr_estimator_model *m, const void *data, double *ve
         est_joint_std_parts(m, &d->core, 1.0, sd, data_only, J, vec);
 }
 
+/* the information filter's estimates and standard deviations (its bound times
+ * sqrt(max(1, chi2)): the misfit the noise model did not foresee widens them); where the
+ * model does not fit, with the thrust errors held at their priors (a consider term) and the
+ * model-error term over the residual beyond the noise's. 0, or 1 (a singular information) */
+static int estimates_filter(const sr_estimator_model *m, const est_data *d, int misfit,
+                            double *vec, double *sd, double *bound, double *chi2)
+{
+    const sr_info_data *fd = est_info_data(m, d);
+    double rss = 0.0;
+    int st = misfit ? sr_info_estimate_held(&m->info_m, fd, 2, vec, bound, chi2, &rss)
+                    : sr_info_estimate(&m->info_m, fd, 2, vec, bound, chi2);
+    if (st != 0)
+        return 1;
+    double k = sqrt(*chi2 > 1.0 ? *chi2 : 1.0);
+    for (int i = 0; i < EST_NZ; i++)
+        sd[i] = k * bound[i];
+    if (misfit) {          /* the residual beyond the noise's: rss - dof; all of it where
+                              the model error is in the rows' noise model (me_var) */
+        double unit[EST_NZ], var[EST_NZ];
+        double dof = fd->rows - (m->info_m.nu - SR_N_CONSIDER);
+        double excess = fd->me_var[0] > 0.0 || fd->me_var[1] > 0.0 ? rss : rss - dof;
+        for (int i = 0; i < EST_NZ; i++)
+            unit[i] = bound[i] * bound[i];
+        est_fit_model_error_var(m->opt.fit_bias_k_info, unit, excess, var);
+        for (int i = 0; i < EST_NZ; i++)
+            sd[i] = sqrt(sd[i] * sd[i] + var[i]);
+    }
+    return 0;
+}
+
 /* the reported least-squares estimates and standard deviations: the information filter's
- * (its bound times sqrt(max(1, chi2)): the misfit the noise model did not foresee widens them)
- * where it runs, else the equations' own; crb (20) and chi2 (may be NULL) the filter's bound
- * and misfit, 0 without it */
-static void estimates_info(const sr_estimator_model *m, const est_data *d, double *vec,
-                           double *sd, double *crb, double *chi2)
+ * where it runs, else the equations' own (where the model does not fit, with the model-error
+ * term: the scatter sd^2 = s^2 [(A^T A)^-1]_ii, s^2 = ||r||^2 / dof, so the bias bound's
+ * [(A^T A)^-1]_ii ||r||^2 = sd^2 dof: unit variance sd^2, excess the rows' count); crb (20) and
+ * chi2 (may be NULL) the filter's bound and misfit, 0 without it; misfit the model-fit
+ * test's (est_fit_test) */
+static void estimates_info(const sr_estimator_model *m, const est_data *d, int misfit,
+                           double *vec, double *sd, double *crb, double *chi2)
 {
     double bound[EST_NZ], x2 = 0.0;
-    if (!m->info) {
-        est_least_squares(m, d, vec, sd);
+    if (!m->info || estimates_filter(m, d, misfit, vec, sd, bound, &x2) != 0) {
+        est_least_squares(m, d, vec, sd);     /* (a singular information: the equations') */
         memset(bound, 0, sizeof bound);
-    } else {
-        if (sr_info_estimate(&m->info_m, est_info_data(m, d), 2, vec, bound, &x2) == 0) {
-            double k = sqrt(x2 > 1.0 ? x2 : 1.0);
+        x2 = 0.0;
+        if (misfit && d->samples > 0) {
+            double var[EST_NZ], unit[EST_NZ];
             for (int i = 0; i < EST_NZ; i++)
-                sd[i] = k * bound[i];
-        } else {                          /* a singular information: the equations' own */
-            est_least_squares(m, d, vec, sd);
-            memset(bound, 0, sizeof bound);
-            x2 = 0.0;
+                unit[i] = sd[i] * sd[i];
+            est_fit_model_error_var(m->opt.fit_bias_k, unit, d->core.rows_lin, var);
+            for (int i = 0; i < EST_NZ; i++)
+                sd[i] = sqrt(sd[i] * sd[i] + var[i]);
         }
     }
     if (crb)
@@ -90,7 +122,10 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, doubl
 
 static void estimates(const sr_estimator_model *m, const est_data *d, double *vec, double *sd)
 {
-    estimates_info(m, d, vec, sd, NULL, NULL);
+    double fit;
+    int misfit;
+    est_fit_test(m, d, &fit, &misfit);
+    estimates_info(m, d, misfit, vec, sd, NULL, NULL);
 }
 
 void sr_estimator_estimates(const sr_estimator_model *m, const void *data, double *vec,
@@ -161,13 +196,15 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
         r->status = SR_EST_REJECT_NONFINITE;
         return;
     }
-    estimates_info(m, d, ls, r->sd, r->crb, &r->info_chi2);
+    est_fit_test(m, d, &r->model_fit, &r->misfit);
+    estimates_info(m, d, r->misfit, ls, r->sd, r->crb, &r->info_chi2);
     int flags[4];
     est_physical_vector(m, ls, r->sd, r->vector, flags);
     for (int k = 0; k < 2; k++) {
         r->physical[k] = flags[k];
         r->identified[k] = d->samples > 0 && flags[2 + k];
     }
+    est_fit_gate_flags(r->misfit, r->identified);
     r->residual_lin = d->core.residual_lin;
     r->residual_ang = d->core.residual_ang;
     r->excitation_mu = d->samples > 0 ? d->core.rcond_mu : 0.0;
@@ -240,6 +277,8 @@ static const output OUTPUTS[] = {
     REAL_("diag.mode_zeta[2]", mode_zeta, 1)
     REAL_("diag.mode_zeta[3]", mode_zeta, 2)
     REAL_("diag.mode_zeta[4]", mode_zeta, 3)
+    REAL_("diag.model_fit", model_fit, 0)
+    INT_("diag.misfit", misfit, 0)
 };
 #undef REAL_
 #undef INT_

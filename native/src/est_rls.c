@@ -222,3 +222,18 @@ double est_relative_norm(const double *e, const double *rhs, int k)
     return sqrt(se) / est_pymax(sqrt(sr), 1e-300);
 }
 
+
+void est_fit_sums(const double *H, const double *y, const double *x, int k, int q,
+                  double *sums)
+{
+    double se = 0.0, sy = 0.0;
+    for (int a = 0; a < k; a++) {
+        double e = y[a];
+        for (int i = 0; i < q; i++)
+            e -= H[a * q + i] * x[i];
+        se += e * e;
+        sy += y[a] * y[a];
+    }
+    sums[0] = se;
+    sums[1] = sy;
+}

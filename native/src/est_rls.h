@@ -32,4 +32,9 @@ double est_residual_variance(const double *S, const double *z, int n, double dof
 /* |e| / |rhs| (|rhs| floored at 1e-300), the relative a-priori residual of k rows */
 double est_relative_norm(const double *e, const double *rhs, int k);
 
+/* The model-fit test's sums of one sample's rows H x = y (k x q, row-major) at the estimate x
+ * after the step: sums[0] = sum (y - H x)^2 (the a-posteriori residuals), sums[1] = sum y^2 */
+void est_fit_sums(const double *H, const double *y, const double *x, int k, int q,
+                  double *sums);
+
 #endif /* SR_EST_RLS_H */

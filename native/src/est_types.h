@@ -175,6 +175,10 @@ typedef struct est_core {
     /* the accelerometer bias's fit (has_bias once a sample came) */
     int has_bias;
     est_bias_fit bias;
+    /* the model-fit test's relative residual (est_fit.h): this sample's sums of squares of
+     * the a-posteriori residuals and of the right-hand sides (linear, angular rows; the
+     * solver's step writes them) and their exponential window's sums */
+    double fit_now[4], fit_win[4];
 } est_core;
 
 /* The Data block's fixed head; the variable tail follows at the model's offsets. */

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "est_corr.h"
+#include "est_fit.h"
 #include "est_joint.h"
 #include "est_modal.h"
 #include "est_types.h"
@@ -145,7 +146,8 @@ static void design_step(const sr_estimator_model *m, void *data, double t, sr_ex
     if (sr_exd_reads_wanted(&m->exd, x, t)) {
         sr_estimator_report r;
         sr_estimator_report_get(m, data, &r);
-        wanted = r.excite > 0.0;
+        wanted = r.excite > 0.0 && !r.misfit;   /* no faster rate toward the modes a misfit
+                                                   may be */
     }
     /* a failed prediction leaves the rate at 1 (the plant's own): nothing to reject */
     (void)sr_exd_step(&m->exd, x, &m->info_m, est_info_data(m, data), t, wanted, w);
@@ -235,6 +237,7 @@ static void core_commit(const sr_estimator_model *m, est_core *dst, const est_co
     dst->residual_ang = src->residual_ang;
     dst->rcond_mu = src->rcond_mu;
     dst->rcond_theta = src->rcond_theta;
+    memcpy(dst->fit_win, src->fit_win, sizeof dst->fit_win);
 }
 
 /* -- one sample ----------------------------------------------------------------------------- */
@@ -318,6 +321,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
     /* the modal columns' stage (est_modal.h): its own state, the estimates from it */
     if (m->modes)
         est_modal_step(m, data, t, sample, rows->E, nw, est_modal_work_of(m, wk));
+    est_fit_window(m, c, d->samples == 0, nw);
     /* the commit */
     if (m->info)
         memcpy(est_info_data(m, data), &wk->nwi, sizeof wk->nwi);

@@ -184,6 +184,23 @@ typedef struct sr_estimator_options {
                                    solver, no momentum window), 2 off (default) */
     double mode_f[SR_EST_MAX_MODES]; /* ident.mode_f[1..4] [Hz]: the modes' frequencies where known,
                                    0 = not given (then found from the data) */
+    /* -- the model-fit test (docs/identification.md "When the rigid model does not fit") -- */
+    double fit_window;          /* ident.fit_window [s] > 0: the exponential window of the
+                                   relative residual (60) */
+    int fit_lags;               /* ident.fit_lags: lags of the whiteness test, 1..100 (50) */
+    double fit_rho_max;         /* ident.fit_rho_max: misfit where the relative residual is
+                                   above it (no noise model; 1e-2) */
+    double fit_whiteness_max;   /* ident.fit_whiteness_max: misfit where the Ljung-Box Q/L is
+                                   above it (information filter; 30) */
+    double fit_chi2_max;        /* ident.fit_chi2_max: misfit where diag.info_chi2 is above
+                                   it (2) */
+    double fit_thrust_max;      /* ident.fit_thrust_max: misfit where a thrust scale is more
+                                   than this many prior sds from 0 (3) */
+    double fit_bias_k;          /* ident.fit_bias_k: the model-error term's factor k (the
+                                   absorbed misfit over the residual's), the equations' own
+                                   sds (0.5) */
+    double fit_bias_k_info;     /* ident.fit_bias_k_info: the same for the information
+                                   filter's (0.25) */
 } sr_estimator_options;
 
 /** The options' defaults (the table's: the core's own, base 600 kg and target 100 kg guesses
@@ -320,6 +337,11 @@ typedef struct sr_estimator_report {
     /* -- the modal columns (options.modes = 1; else 0) -- */
     double mode_f[SR_EST_MAX_MODES];  /* diag.mode_f[k] [Hz], diag.mode_zeta[k]: the modes */
     double mode_zeta[SR_EST_MAX_MODES];  /* in use, given or found (0: none) */
+    /* -- the model-fit test -- */
+    double model_fit;                 /* diag.model_fit: the relative residual over
+                                         ident.fit_window (no noise model), or the Ljung-Box
+                                         Q/L of the information filter's whitened residuals */
+    int misfit;                       /* diag.misfit: 1 where the rigid model does not fit */
 } sr_estimator_report;
 
 /** The excitation level the Model m requests (output ident.excite) for the bodies' identified

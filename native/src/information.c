@@ -10,6 +10,12 @@
 #include <string.h>
 
 #define MU SR_INFO_MAX_U             /* row stride of R, N_HH */
+/* a function kept out of its caller's frame: two of the large temporaries never share one */
+#if defined(__GNUC__)
+#define INFO_NOINLINE __attribute__((noinline))
+#else
+#define INFO_NOINLINE
+#endif
 #define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
 
 /* The unknowns' z part is in the standard layout of standard_params.h: per body m, c = m b (3),
@@ -91,6 +97,10 @@ int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_no
         m->prior_sqrt[at] = noise->thrust[q] > 0.0 ? 1.0 / noise->thrust[q] : 1e150;
     for (int q = 0; q < m->nb; q++, at++)
         m->prior_sqrt[at] = 1.0 / noise->gyro_bias;
+    m->fit.lags = 50;
+    m->fit.whiteness_max = 30.0;
+    m->fit.chi2_max = 2.0;
+    m->fit.thrust_max = 3.0;
     return 0;
 }
 
@@ -188,10 +198,37 @@ static int channels(const sr_info_model *m, int *idx, double *sd)
     return c;
 }
 
+/* The model error as noise of the rows (where the replay found a misfit): momentum the rigid
+   model lacks, P_f (linear, variance me_var[0] per axis) and L_f (angular about the base point,
+   me_var[1]), white and isotropic, enters the rows about the origin as [P_f; L_f + r_S x P_f]:
+   Rk += [[s_P I, s_P [r]x^T], [s_P [r]x, s_L I + s_P [r]x [r]x^T]] (the used rows) */
+static void add_model_error(const sr_info_model *m, const double *x, const double *me_var,
+                            double *Rk)
+{
+    if (!(me_var[0] > 0.0 || me_var[1] > 0.0))
+        return;
+    const double *r = x + SR_X_R_S;
+    double Rx[9] = {0, -r[2], r[1], r[2], 0, -r[0], -r[1], r[0], 0}, C[36];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double rr = 0.0;
+            for (int k = 0; k < 3; k++)
+                rr += Rx[i * 3 + k] * Rx[j * 3 + k];
+            C[i * 6 + j] = i == j ? me_var[0] : 0.0;
+            C[(3 + i) * 6 + j] = me_var[0] * Rx[i * 3 + j];
+            C[i * 6 + 3 + j] = me_var[0] * Rx[j * 3 + i];
+            C[(3 + i) * 6 + 3 + j] = (i == j ? me_var[1] : 0.0) + me_var[0] * rr;
+        }
+    for (int a = 0; a < m->nr; a++)
+        for (int b = 0; b < m->nr; b++)
+            Rk[a * 6 + b] += C[m->rows[a] * 6 + m->rows[b]];
+}
+
 /* R_k^-1/2 (lower triangular nr x nr) of the rows' noise covariance at x, z: the channels'
    white noise through central differences of the rows, the attitude's as small rotations
    about the base axes; 0, or 1 when R_k is not positive definite */
-static int noise_weight(const sr_info_model *m, const double *x, const double *z, double *W)
+static int noise_weight(const sr_info_model *m, const double *x, const double *z,
+                        const double *me_var, double *W)
 {
     int nr = m->nr, idx[12 + 2 * SR_MAX_JOINTS];
     double sd[12 + 2 * SR_MAX_JOINTS], Rk[36] = {0}, xs[SR_X_LEN(SR_MAX_JOINTS)];
@@ -244,6 +281,7 @@ static int noise_weight(const sr_info_model *m, const double *x, const double *z
             for (int b = 0; b < nr; b++)
                 Rk[a * 6 + b] += s2 * g[a] * g[b];
     }
+    add_model_error(m, x, me_var, Rk);
     double tr = 0.0;
     for (int a = 0; a < nr; a++)
         tr += Rk[a * 6 + a];
@@ -310,6 +348,27 @@ static void weigh(const double *W, int nr, const double *in, int ncol, double *o
         }
 }
 
+/* The whiteness test's ring and sums with the sample's whitened residual rows e (nr): the
+   rows the QR update leaves, ||e||^2 its rss increment, e about W (y - H u) at the estimate
+   before the sample (the update's reflections barely touch the new rows once R is large),
+   independent N(0, 1) where the model and the noise model hold */
+static void fit_ring_add(const sr_info_model *m, sr_info_data *d, const double *e)
+{
+    int L = m->fit.lags, cap = L + 1, nr = m->nr;
+    if (L < 1 || L > SR_INFO_MAX_LAGS || d->fit_head < 0 || d->fit_head >= cap)
+        return;
+    memcpy(d->fit_ring + 6 * d->fit_head, e, sizeof(double) * nr);
+    int stored = d->fit_count < cap ? d->fit_count + 1 : cap;
+    for (int k = 0; k < stored; k++) {       /* sum_t e_t e_(t-k): this row against k back */
+        const double *back = d->fit_ring + 6 * ((d->fit_head - k + cap) % cap);
+        for (int a = 0; a < nr; a++)
+            d->fit_sum[6 * k + a] += e[a] * back[a];
+    }
+    d->fit_head = (d->fit_head + 1) % cap;
+    if (d->fit_count < INT_MAX)
+        d->fit_count++;
+}
+
 int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
                 const double *z_lin, sr_info_work *w)
 {
@@ -322,7 +381,7 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     memcpy(K, d->K, sizeof K);
     sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(n), x + SR_X_M(n));
     sr_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
-    if (noise_weight(m, x, z, W) != 0)               /* every sample */
+    if (noise_weight(m, x, z, d->me_var, W) != 0)    /* every sample */
         return 1;
     /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
     double Hy[6 * HS], r0[6], rb[6], xs[SR_X_LEN(SR_MAX_JOINTS)], y[6];
@@ -424,6 +483,10 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     memcpy(d->K, K, sizeof K);
     d->rss = rss;
     d->rows += nr;
+    double e[6];
+    for (int a = 0; a < nr; a++)
+        e[a] = Wt[a * HS + nu];
+    fit_ring_add(m, d, e);
     if (d->samples < INT_MAX)                        /* saturates (~7 years at 10 Hz) */
         d->samples++;
     return 0;
@@ -455,16 +518,24 @@ static void upper_inverse(const double *R, int nu, double *Ri)
 }
 
 /* The first-order Cramér-Rao bound (20; 0 for a parameter not identified) of the reported
- * parameters: J C J^T, C = (Ri Ri^T)[:nz, :nz] the covariance of z_O's entries (the leading
- * unknowns), J = d reported / d z_O at the unknowns u (their identified columns). 1 where a
- * bound is not finite. */
-static int bound_of(const sr_info_model *m, const double *Ri, const double *u, double *bound)
+ * parameters: J C J^T, C = (Ri Ri^T)[:nz, :nz] (Ri: nu unknowns) the covariance of z_O's
+ * entries (the leading unknowns) plus, where G (nz x 8; may be NULL) is given, the consider
+ * term G P_c G^T of the thrust errors' prior (sds 1 / prior_sqrt), J = d reported / d z_O at
+ * the unknowns u (their identified columns). 1 where a bound is not finite. */
+static INFO_NOINLINE int bound_with(const sr_info_model *m, int nu, const double *Ri,
+                                    const double *G, const double *u, double *bound)
 {
-    int nu = m->nu, nz = m->nz;
+    int nz = m->nz, i1 = m->nz + m->nr;
     double C[20 * 20], J[20 * 20], Jz[20 * 20], zO[20];
     for (int p = 0; p < nz; p++)
-        for (int q = 0; q <= p; q++)
-            C[p * 20 + q] = C[q * 20 + p] = inverse_entry(Ri, nu, p, q);
+        for (int q = 0; q <= p; q++) {
+            double s = inverse_entry(Ri, nu, p, q);
+            for (int j = 0; G && j < SR_N_CONSIDER; j++) {
+                double sd = 1.0 / m->prior_sqrt[i1 + j];
+                s += G[p * SR_N_CONSIDER + j] * sd * sd * G[q * SR_N_CONSIDER + j];
+            }
+            C[p * 20 + q] = C[q * 20 + p] = s;
+        }
     memcpy(zO, m->zO0, sizeof zO);
     for (int q = 0; q < nz; q++)
         zO[m->zi[q]] = u[q];
@@ -489,27 +560,34 @@ static int bound_of(const sr_info_model *m, const double *Ri, const double *u, d
     return ok ? 0 : 1;
 }
 
-/* The unknowns u (nu) of the state d (compensated as sr_info_estimate) and Ri = R^-1 */
-static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
-                           double *u, double *Ri)
+static int bound_of(const sr_info_model *m, const double *Ri, const double *u, double *bound)
 {
-    int nu = m->nu;
+    return bound_with(m, m->nu, Ri, NULL, u, bound);
+}
+
+/* The unknowns u (nu) of the square-root information [R dv] (nu unknowns, the z_O entries
+   first; N_HH, N_Hy the errors-in-variables sums over them: zero beyond z_O), compensated as
+   sr_info_estimate, and Ri = R^-1 */
+static INFO_NOINLINE void solve_square_root(int nu, const double *R, const double *dv,
+                                            const double *N_HH, const double *N_Hy,
+                                            int compensated, double *u, double *Ri)
+{
     /* R u = d (back substitution); Ri = R^-1 (upper triangular) */
     for (int i = nu - 1; i >= 0; i--) {
-        double s = d->d[i];
+        double s = dv[i];
         for (int j = i + 1; j < nu; j++)
-            s -= d->R[i * MU + j] * u[j];
-        u[i] = s / d->R[i * MU + i];
+            s -= R[i * MU + j] * u[j];
+        u[i] = s / R[i * MU + i];
     }
-    upper_inverse(d->R, nu, Ri);
+    upper_inverse(R, nu, Ri);
     double u_raw[MU];
     memcpy(u_raw, u, sizeof(double) * nu);
     if (compensated == 1 || compensated == 2) {  /* first order: u + S^-1 (N u - n_y) */
         double g[MU], h[MU];
         for (int p = 0; p < nu; p++) {
-            double s = -d->N_Hy[p];
+            double s = -N_Hy[p];
             for (int q = 0; q < nu; q++)
-                s += d->N_HH[p * MU + q] * u[q];
+                s += N_HH[p * MU + q] * u[q];
             g[p] = s;
         }
         for (int j = 0; j < nu; j++) {           /* h = Ri^T g */
@@ -534,12 +612,12 @@ static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int co
                 Si[q] = inverse_entry(Ri, nu, p, q);
             double s = u_raw[p];
             for (int q = 0; q < nu; q++)
-                s -= Si[q] * d->N_Hy[q];
+                s -= Si[q] * N_Hy[q];
             b[p] = s;
             for (int q = 0; q < nu; q++) {
                 double a = p == q ? 1.0 : 0.0;
                 for (int j = 0; j < nu; j++)
-                    a -= Si[j] * d->N_HH[j * MU + q];
+                    a -= Si[j] * N_HH[j * MU + q];
                 A[p * nu + q] = a;
             }
         }
@@ -549,6 +627,13 @@ static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int co
         if (finite)                  /* else the first order's answer stays */
             memcpy(u, b, sizeof(double) * nu);
     }
+}
+
+/* The unknowns u (nu) of the state d (compensated as sr_info_estimate) and Ri = R^-1 */
+static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
+                           double *u, double *Ri)
+{
+    solve_square_root(m->nu, d->R, d->d, d->N_HH, d->N_Hy, compensated, u, Ri);
 }
 
 int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
@@ -573,6 +658,207 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
         return 1;
     }
     return 0;
+}
+
+/* -- the thrust errors held at their priors ---------------------------------------------------
+ * The unknowns are u = [u1 = (z_O, c0), c (8), b (nb)], R = [[R11 R12 R13], [0 R22 R23],
+ * [0 0 R33]]. With c held at its prior mean c_T: R11 u1 + R13 b = d1 - R12 c_T and, in the
+ * least-squares sense, [R23; R33] b = [d2 - R22 c_T; d3]: a QR of that (8 + nb) x nb block
+ * gives the held square root Rh = [[R11 R13], [0 R33']] (no = nu - 8 unknowns, the z_O entries
+ * first as before), its right-hand side dh, the rhs' sensitivity Dh = d dh / d c_T (no x 8,
+ * for the consider term C_c = G P_c G^T, G = Rh^-1 Dh) and the weighted residual the hold adds
+ * (the QR's leftover rows: the cost J(u) = ||R u - d||^2 + rss at the held answer). */
+typedef struct held_sr {
+    int no;
+    double R[MU * MU], d[MU], D[MU * SR_N_CONSIDER], extra;
+} held_sr;
+
+static void held_square_root(const sr_info_model *m, const sr_info_data *d, held_sr *h)
+{
+    int nu = m->nu, i1 = m->nz + m->nr, i3 = i1 + SR_N_CONSIDER, nb = m->nb;
+    const double *cT = m->u0 + i1;
+    h->no = nu - SR_N_CONSIDER;
+    memset(h->R, 0, sizeof h->R);
+    for (int i = 0; i < i1; i++) {            /* block 1: R11, R13; d1 - R12 c_T; -R12 */
+        double r = d->d[i];
+        for (int j = 0; j < SR_N_CONSIDER; j++) {
+            r -= d->R[i * MU + i1 + j] * cT[j];
+            h->D[i * SR_N_CONSIDER + j] = -d->R[i * MU + i1 + j];
+        }
+        h->d[i] = r;
+        for (int j = i; j < i1; j++)
+            h->R[i * MU + j] = d->R[i * MU + j];
+        for (int j = 0; j < nb; j++)
+            h->R[i * MU + i1 + j] = d->R[i * MU + i3 + j];
+    }
+    /* blocks 2, 3 as rows [coefficients of b (nb) | rhs | d rhs / d c_T (8)] */
+    enum { NC = 3 + 1 + SR_N_CONSIDER, NRW = SR_N_CONSIDER + 3 };
+    double B[NRW * NC];
+    int nrw = SR_N_CONSIDER + nb;
+    memset(B, 0, sizeof B);
+    for (int a = 0; a < nrw; a++) {
+        int row = a < SR_N_CONSIDER ? i1 + a : i3 + (a - SR_N_CONSIDER);
+        double r = d->d[row];
+        for (int j = 0; j < SR_N_CONSIDER && a < SR_N_CONSIDER; j++) {
+            r -= d->R[row * MU + i1 + j] * cT[j];
+            B[a * NC + nb + 1 + j] = -d->R[row * MU + i1 + j];
+        }
+        for (int j = 0; j < nb; j++)
+            B[a * NC + j] = d->R[row * MU + i3 + j];
+        B[a * NC + nb] = r;
+    }
+    for (int j = 0; j < nb; j++) {            /* Householder QR of the b columns */
+        double norm = 0.0;
+        for (int a = j; a < nrw; a++)
+            norm += B[a * NC + j] * B[a * NC + j];
+        norm = sqrt(norm);
+        if (norm == 0.0)
+            continue;
+        double alpha = B[j * NC + j], beta = alpha >= 0.0 ? -norm : norm, v[NRW];
+        for (int a = j; a < nrw; a++)
+            v[a] = B[a * NC + j];
+        v[j] = alpha - beta;
+        double vv = 0.0;
+        for (int a = j; a < nrw; a++)
+            vv += v[a] * v[a];
+        for (int k = j; k < nb + 1 + SR_N_CONSIDER; k++) {
+            double s = 0.0;
+            for (int a = j; a < nrw; a++)
+                s += v[a] * B[a * NC + k];
+            s *= 2.0 / vv;
+            for (int a = j; a < nrw; a++)
+                B[a * NC + k] -= s * v[a];
+        }
+    }
+    for (int a = 0; a < nb; a++) {
+        for (int j = a; j < nb; j++)
+            h->R[(i1 + a) * MU + i1 + j] = B[a * NC + j];
+        h->d[i1 + a] = B[a * NC + nb];
+        for (int j = 0; j < SR_N_CONSIDER; j++)
+            h->D[(i1 + a) * SR_N_CONSIDER + j] = B[a * NC + nb + 1 + j];
+    }
+    h->extra = 0.0;
+    for (int a = nb; a < nrw; a++)
+        h->extra += B[a * NC + nb] * B[a * NC + nb];
+}
+
+/* the held estimate and bound (sr_info_estimate_held) of h: 0, or 1 where not finite */
+static INFO_NOINLINE int held_estimate(const sr_info_model *m, const sr_info_data *d,
+                                       const held_sr *h, int compensated, double *vec,
+                                       double *bound)
+{
+    int no = h->no, nz = m->nz;
+    double u[MU] = {0}, Ri[MU * MU], G[20 * SR_N_CONSIDER];
+    solve_square_root(no, h->R, h->d, d->N_HH, d->N_Hy, compensated, u, Ri);
+    reported_of_u(m, u, vec);
+    for (int p = 0; p < nz; p++)              /* G = Rh^-1 Dh (the z_O rows) */
+        for (int j = 0; j < SR_N_CONSIDER; j++) {
+            double s = 0.0;
+            for (int k = p; k < no; k++)
+                s += Ri[p * MU + k] * h->D[k * SR_N_CONSIDER + j];
+            G[p * SR_N_CONSIDER + j] = s;
+        }
+    int ok = bound_with(m, no, Ri, G, u, bound) == 0;
+    for (int i = 0; i < 20; i++)
+        ok = ok && isfinite(vec[i]);
+    return ok ? 0 : 1;
+}
+
+int sr_info_estimate_held(const sr_info_model *m, const sr_info_data *d, int compensated,
+                          double *vec, double *bound, double *chi2, double *rss_held)
+{
+    if (!m || !d || !vec || !bound)
+        return 1;
+    held_sr h;
+    held_square_root(m, d, &h);
+    double rss = d->rss + h.extra, dof = d->rows - h.no;
+    if (chi2)
+        *chi2 = dof > 0.0 ? rss / dof : 0.0;
+    if (rss_held)
+        *rss_held = rss;
+    if (held_estimate(m, d, &h, compensated, vec, bound) != 0) {
+        for (int i = 0; i < 20; i++)
+            vec[i] = bound[i] = NAN;
+        return 1;
+    }
+    return 0;
+}
+
+/* the larger thrust scale's |s| / prior sd of the state d (the unknowns with the thrust
+   estimated; 0 without a thrust prior), or NaN where the information is singular */
+static INFO_NOINLINE double thrust_ratio(const sr_info_model *m, const sr_info_data *d)
+{
+    double u[MU] = {0}, Ri[MU * MU], ratio = 0.0;
+    solve_unknowns(m, d, 2, u, Ri);
+    static const int scales[2] = {0, 4};     /* s_F, s_M of c (sr_thrust_sensitivity) */
+    for (int k = 0; k < 2; k++) {
+        double sd = m->noise.thrust[scales[k]], s = u[m->nz + m->nr + scales[k]];
+        if (sd > 0.0)
+            ratio = (fabs(s) / sd > ratio ? fabs(s) / sd : ratio);
+        if (!isfinite(s))
+            return NAN;
+    }
+    return ratio;
+}
+
+/* the Ljung-Box Q / L of the whitened residuals, per row and averaged over the rows:
+   Q = N (N + 2) sum_(k=1..L) r_k^2 / (N - k), r_k = sum_t e_t e_(t-k) / sum_t e_t^2 (about
+   chi2(L) for white residuals, Q / L about 1); 0 before 2 L rows */
+static double whiteness(const sr_info_model *m, const sr_info_data *d)
+{
+    int L = m->fit.lags, nr = m->nr;
+    double N = d->fit_count, q = 0.0;
+    if (L < 1 || !(N >= 2.0 * L))
+        return 0.0;
+    for (int a = 0; a < nr; a++) {
+        double v = d->fit_sum[a], s = 0.0;
+        if (!(v > 0.0))
+            continue;
+        for (int k = 1; k <= L; k++) {
+            double r = d->fit_sum[6 * k + a] / v;
+            s += r * r / (N - k);
+        }
+        q += N * (N + 2.0) * s / L;
+    }
+    return q / nr;
+}
+
+/* sr_info_fit_of (m, d, f given) */
+static int fit_test(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
+{
+    double dof = d->rows - m->nu;
+    f->whiteness = whiteness(m, d);
+    f->chi2 = dof > 0.0 ? d->rss / dof : 0.0;
+    f->thrust = thrust_ratio(m, d);
+    f->misfit = d->misfit;
+    if (!isfinite(f->thrust)) {
+        f->thrust = 0.0;
+        return 1;
+    }
+    /* coloured residuals count where they are of the noise's size at least (chi2 > 1/2):
+       far below it (data less noisy than its model) their colour is the round-off's */
+    int coloured = f->whiteness > m->fit.whiteness_max && f->chi2 > 0.5;
+    f->misfit = d->misfit || (d->replayed && (coloured || f->chi2 > m->fit.chi2_max
+                                              || f->thrust > m->fit.thrust_max));
+    return 0;
+}
+
+int sr_info_fit_of(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
+{
+    if (!m || !d || !f)
+        return 1;
+    return fit_test(m, d, f);
+}
+
+/* the filter's estimate as the report takes it: with the thrust held where the model does
+   not fit */
+static int estimate_as_fit(const sr_info_model *m, const sr_info_data *d, double *z,
+                           double *bound)
+{
+    sr_info_fit f;
+    if (sr_info_fit_of(m, d, &f) == 0 && f.misfit)
+        return sr_info_estimate_held(m, d, 2, z, bound, NULL, NULL);
+    return sr_info_estimate(m, d, 2, z, bound, NULL);
 }
 
 void sr_info_information(const sr_info_model *m, const sr_info_data *d, double *S)
@@ -626,7 +912,8 @@ int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d)
     double s = numbers_sum(m->nu, d->R, d->d, d->N_HH, d->N_Hy, d->K) + d->rss + d->rows;
     for (int i = 0; i < 20; i++)
         s += d->z_lin[i];
-    return isfinite(s);
+    return isfinite(s + d->me_var[0] + d->me_var[1]) && d->me_var[0] >= 0.0
+           && d->me_var[1] >= 0.0;
 }
 
 size_t sr_info_buffer_length(int n)
@@ -639,8 +926,92 @@ size_t sr_info_buffer_length(int n)
 static int own_point(const sr_info_model *m, const sr_info_data *d, double *z)
 {
     double bound[20];
-    if (sr_info_estimate(m, d, 2, z, bound, NULL) != 0 || !(z[0] > 0.0 && z[10] > 0.0))
+    if (estimate_as_fit(m, d, z, bound) != 0 || !(z[0] > 0.0 && z[10] > 0.0))
         return 1;
+    return 0;
+}
+
+/* The model error's variances (sr_info_data.me_var) from the kept samples: the rows'
+   residuals at the estimate z (reported, 20; the thrust errors at 0), the linear ones less
+   their mean (the momentum c0) give P_f, the angular ones less r_S x that and their mean
+   give L_f about the base point; their mean squares per used row */
+static void model_error_of(const sr_info_model *m, const double *buffer, const double *z,
+                           double *me_var)
+{
+    int slot = 1 + SR_X_LEN(m->n), nlin = 0, nang = 0;
+    double zO[20], c[6] = {0}, s[2] = {0, 0};
+    int used[6] = {0};
+    for (int a = 0; a < m->nr; a++) {
+        used[m->rows[a]] = 1;
+        if (m->rows[a] < 3)
+            nlin++;
+        else
+            nang++;
+    }
+    sr_standard_of_reported(z, zO);
+    for (int pass = 0; pass < 3; pass++) {   /* mean of the linear; of the angular; squares */
+        double acc[6] = {0};
+        for (int k = 0; k < SR_INFO_REPLAY; k++) {
+            const double *x = buffer + (size_t)k * (size_t)slot + 1, *r = x + SR_X_R_S;
+            double full[6][20], y[6], e[6];
+            rows_full(m, x, full, y);
+            for (int i = 0; i < 6; i++) {
+                e[i] = -y[i];
+                for (int j = 0; j < 20; j++)
+                    e[i] += full[i][j] * zO[j];
+            }
+            double p[3] = {e[0] - c[0], e[1] - c[1], e[2] - c[2]};
+            double l[3] = {e[3] - (r[1] * p[2] - r[2] * p[1]) - c[3],
+                           e[4] - (r[2] * p[0] - r[0] * p[2]) - c[4],
+                           e[5] - (r[0] * p[1] - r[1] * p[0]) - c[5]};
+            for (int i = 0; i < 3; i++) {
+                if (pass == 0)
+                    acc[i] += e[i];
+                else if (pass == 1)
+                    acc[3 + i] += l[i];
+                else {
+                    acc[0] += used[i] ? p[i] * p[i] : 0.0;
+                    acc[1] += used[3 + i] ? l[i] * l[i] : 0.0;
+                }
+            }
+        }
+        for (int i = 0; i < 3 && pass < 2; i++)
+            c[3 * pass + i] = acc[3 * pass + i] / SR_INFO_REPLAY;
+        if (pass == 2) {
+            s[0] = nlin ? acc[0] / (nlin * (double)SR_INFO_REPLAY) : 0.0;
+            s[1] = nang ? acc[1] / (nang * (double)SR_INFO_REPLAY) : 0.0;
+        }
+    }
+    me_var[0] = isfinite(s[0]) ? s[0] : 0.0;
+    me_var[1] = isfinite(s[1]) ? s[1] : 0.0;
+}
+
+/* The replay into d: from the prior the kept samples and then x at t, linearised at z, with
+   the model error's variances me_var (NULL: none; else the misfit kept); where a kept sample
+   cannot be added, from before instead (no replay rather than no filter). 0, or 1 (d =
+   before) where x cannot be added. */
+static int replay(const sr_info_model *m, const sr_info_data *before, sr_info_data *d,
+                  const double *buffer, double t, const double *x, const double *z,
+                  const double *me_var, sr_info_work *w)
+{
+    int slot = 1 + SR_X_LEN(m->n), ok = 1;
+    sr_info_data_init(m, d);
+    if (me_var) {
+        d->misfit = 1;
+        memcpy(d->me_var, me_var, sizeof d->me_var);
+    }
+    for (int k = 0; k < SR_INFO_REPLAY && ok; k++) {
+        const double *s = buffer + (size_t)k * (size_t)slot;
+        ok = sr_info_add(m, d, s[0], s + 1, z, w) == 0;
+    }
+    if (!ok)
+        memcpy(d, before, sizeof *d);
+    if (sr_info_add(m, d, t, x, z, w) != 0) {
+        memcpy(d, before, sizeof *d);
+        return 1;
+    }
+    d->replayed = 1;
+    memcpy(d->z_lin, z, sizeof d->z_lin);
     return 0;
 }
 
@@ -675,21 +1046,19 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
     double z[20];
     if (own_point(m, d, z) != 0)
         memcpy(z, z_est, sizeof z);
-    sr_info_data_init(m, d);
-    int ok = 1;
-    for (int k = 0; k < SR_INFO_REPLAY && ok; k++) {
-        const double *s = buffer + (size_t)k * (size_t)slot;
-        ok = sr_info_add(m, d, s[0], s + 1, z, w) == 0;
-    }
-    if (!ok)                                 /* no replay rather than no filter: go on from the
-                                                state before, at the point the replay chose */
-        memcpy(d, before, sizeof *d);
-    if (sr_info_add(m, d, t, x, z, w) != 0) {
-        memcpy(d, before, sizeof *d);
+    if (replay(m, before, d, buffer, t, x, z, NULL, w) != 0)
         return 1;
+    /* where the rigid model does not fit the replayed samples: once more with the thrust errors
+       held (own_point's estimate) and the model error as the rows' noise */
+    sr_info_fit f;
+    if (fit_test(m, d, &f) == 0 && f.misfit) {
+        double me_var[2];
+        if (own_point(m, d, z) != 0)
+            memcpy(z, d->z_lin, sizeof z);
+        model_error_of(m, buffer, z, me_var);
+        if (replay(m, before, d, buffer, t, x, z, me_var, w) != 0)
+            return 1;
     }
-    d->replayed = 1;
-    memcpy(d->z_lin, z, sizeof z);
     return 0;
 }
 

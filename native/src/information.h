@@ -53,6 +53,8 @@ extern "C" {
  * point. */
 #define SR_INFO_REPLAY 600
 #define SR_INFO_RELIN 10
+/* the whiteness test's most lags (ident.fit_lags) */
+#define SR_INFO_MAX_LAGS 100
 /* The rows' noise covariance is recomputed at every sample: its square root held over 10
  * samples of 0.1 s left the whitened rows' covariance between 0.5 and 1.7 and the bound
  * optimistic by up to 1.5x (tests/test_information.py). */
@@ -68,6 +70,30 @@ typedef struct sr_info_noise {
     double gyro_bias;        /* prior sd of the gyro's bias per axis [rad/s] */
 } sr_info_noise;
 
+/** The model-fit test's options (the estimator's ident.fit_*; sr_info_model_init sets the
+ *  defaults in brackets): lags L of the whiteness test [50], 1..SR_INFO_MAX_LAGS; the
+ *  thresholds of its Ljung-Box Q/L [30], of chi2 [2] and of the thrust scales' |s| / prior sd
+ *  [3] above which the rigid model does not fit. */
+typedef struct sr_info_fit_options {
+    int lags;
+    double whiteness_max, chi2_max, thrust_max;
+} sr_info_fit_options;
+
+/** What the model-fit test says (sr_info_fit_of): the Ljung-Box Q/L of the whitened
+ *  residuals (0 before 2 L samples), chi2 (the weighted residual sum of squares per degree of
+ *  freedom, the thrust errors estimated), the larger thrust scale's |s| / prior sd (0 without
+ *  a thrust prior), and misfit (1 where one of them is beyond its threshold, the whiteness
+ *  only where chi2 > 1/2 (far below, the data are less noisy than their model and the
+ *  residuals' colour is round-off's), decided from the
+ *  filter's replay on (before, its linearisation point is the caller's); found at the replay
+ *  it stays: the replay then adds the samples again with the thrust errors held and the model
+ *  error's variances (sr_info_data.me_var, from the kept samples' residuals) in the rows'
+ *  noise covariance). */
+typedef struct sr_info_fit {
+    double whiteness, chi2, thrust;
+    int misfit;
+} sr_info_fit;
+
 /** The constant part. */
 typedef struct sr_info_model {
     sr_robot robot;
@@ -78,6 +104,7 @@ typedef struct sr_info_model {
     double zO0[20];               /* the guesses' z_O (inertias about the frames' origins) */
     double prior_sqrt[SR_INFO_MAX_U];  /* square roots of the prior's (diagonal) information */
     double u0[SR_INFO_MAX_U];     /* the prior's mean */
+    sr_info_fit_options fit;      /* the model-fit test (sr_info_fit_of) */
 } sr_info_model;
 
 /** The state: the square-root information [R d] (R upper triangular nu x nu, row stride
@@ -91,6 +118,16 @@ typedef struct sr_info_data {
     /* the replay (SR_INFO_REPLAY): done once; the linearisation point since (20, reported) */
     int replayed;
     double z_lin[20];
+    /* the whiteness test: a ring of the last lags + 1 whitened residual rows (nr each, row
+       stride 6; next slot fit_head, fit_count rows added) and per row the running sums of
+       the lag products sum_t e_t e_(t-k), k = 0..lags (fit_sum[6 k + row]) */
+    int fit_head, fit_count;
+    double fit_ring[(SR_INFO_MAX_LAGS + 1) * 6], fit_sum[(SR_INFO_MAX_LAGS + 1) * 6];
+    /* the misfit found at the replay (kept: the thrust errors held from then on) and the
+       model error's variances it added to every row's noise covariance since: the linear
+       momentum's [N^2 s^2] and the angular momentum's about the base point [N^2 m^2 s^2] */
+    int misfit;
+    double me_var[2];
 } sr_info_data;
 
 /** The filter's temporaries: a work space beside the state, never part of it (a host copies
@@ -153,6 +190,17 @@ SR_API int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_i
  *  NaN). */
 SR_API int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
                             double *vec, double *bound, double *chi2);
+
+/** The model-fit test of the state d into *f (sr_info_fit). Returns 0, or 1 for a NULL
+ *  pointer or a singular information (f then the whiteness and chi2 only, misfit 0). */
+SR_API int sr_info_fit_of(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f);
+
+/** As sr_info_estimate, with the 8 thrust errors held at their prior means (0) and their
+ *  prior sds taken as a consider term in the bound: what the filter says where a thrust scale
+ *  would absorb a model error. chi2 (may be NULL) of the held unknowns; rss_held (may be
+ *  NULL) their weighted residual sum of squares. Returns as sr_info_estimate. */
+SR_API int sr_info_estimate_held(const sr_info_model *m, const sr_info_data *d, int compensated,
+                                 double *vec, double *bound, double *chi2, double *rss_held);
 
 /** The information of the state d: S = R^T R (nu x nu, the unknowns u; row stride
  *  SR_INFO_MAX_U), the prior's included. Differences of two states' S are the information the

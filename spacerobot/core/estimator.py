@@ -69,7 +69,11 @@ class SrEstimatorOptions(ctypes.Structure):
         ("excite_window", ctypes.c_double), ("excite_settle", ctypes.c_double),
         ("excite_horizon", ctypes.c_double),
         ("modes", ctypes.c_int),
-        ("mode_f", ctypes.c_double * 4),
+        ("mode_f", ctypes.c_double * 4), ("fit_window", ctypes.c_double),
+        ("fit_lags", ctypes.c_int), ("fit_rho_max", ctypes.c_double),
+        ("fit_whiteness_max", ctypes.c_double), ("fit_chi2_max", ctypes.c_double),
+        ("fit_thrust_max", ctypes.c_double), ("fit_bias_k", ctypes.c_double),
+        ("fit_bias_k_info", ctypes.c_double),
     ]
 
 
@@ -86,6 +90,8 @@ class SrEstimatorReport(ctypes.Structure):
         ("info_chi2", ctypes.c_double), ("excite_rate", ctypes.c_double),
         ("excite_score", ctypes.c_double * 2),
         ("mode_f", ctypes.c_double * 4), ("mode_zeta", ctypes.c_double * 4),
+        ("model_fit", ctypes.c_double),
+        ("misfit", ctypes.c_int),
     ]
 
 
@@ -490,7 +496,8 @@ class NativeEstimator:
         deviations, 0 without the filter) and ``info_chi2`` (its misfit); ``excite_rate`` (the
         rate asked of the plant) and ``excite_score`` (2,: the choice's predicted largest scaled
         bounds at rate 1 and at the candidate; 0 before the choice); ``mode_f`` [Hz] and
-        ``mode_zeta`` (3,: the modal columns' modes in use, 0 for none)."""
+        ``mode_zeta`` (4,: the modal columns' modes in use, 0 for none); ``model_fit`` and
+        ``misfit`` (the model-fit test: diag.model_fit, diag.misfit)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
         return {
@@ -503,6 +510,7 @@ class NativeEstimator:
             "excite": r.excite, "crb": np.array(r.crb[:]), "info_chi2": r.info_chi2,
             "excite_rate": r.excite_rate, "excite_score": np.array(r.excite_score[:]),
             "mode_f": np.array(r.mode_f[:]), "mode_zeta": np.array(r.mode_zeta[:]),
+            "model_fit": r.model_fit, "misfit": bool(r.misfit),
         }
 
     def outputs(self) -> np.ndarray:

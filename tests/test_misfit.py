@@ -1,0 +1,129 @@
+"""The estimator where the rigid model does not fit (docs/identification.md, "When the rigid
+model does not fit"): the plant's flexible targets (``wings``, ``slosh``, ``flexible``: hinged
+solar wings and propellant slosh on the spatial robot's base) run end to end through the FMUs
+and judged against the plant's composite rigid truth (``truth.base.*``: base + panels at rest +
+slosh masses at equilibrium), and the rigid spacecraft for the test's other side: the
+model-fit test says misfit on every flexible run and never on a rigid one, no body is flagged
+under misfit, the standard deviations cover the errors (>= 90 % of the estimates within 2 sd
+over the cases), the masses are not shrunk with the sensors (the thrust scale held at its prior).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from spacerobot import run_ssp
+from spacerobot.core.estimator import NativeEstimator
+from spacerobot.interface import ESTIMATE_NAMES, error_scale
+from spacerobot.robots import scenario
+from spacerobot.system import ssd
+from spacerobot.system.codes import estimator_overrides
+
+STOP = 300.0
+#: the sensors' runs: the estimator with the sensors' noise model (the information filter)
+PROFILE = {"estimator.ident.noise_profile": 1}
+#: the masses with the sensors and the thrust scale held: within 3 % of the composite (measured
+#: 0.2-2.5 %; with the scale free they fell to 0.0001-0.77 of it)
+MASS_TOL_SENSORS = 0.03
+#: noise-free, momentum method: within 0.5 % (measured 0.00-0.1 %)
+MASS_TOL_MOMENTUM = 0.005
+
+
+@pytest.fixture(scope="module")
+def systems(tmp_path_factory, spatial_fmus) -> dict:
+    root = tmp_path_factory.mktemp("misfit")
+    return {False: ssd.build_system("spatial", root / "plain", fmus=spatial_fmus)["ssp"],
+            True: ssd.build_system("spatial", root / "sensors", fmus=spatial_fmus,
+                                   sensors=True)["ssp"]}
+
+
+def _run(systems, target: str, method: str, sensors: bool, **more) -> dict:
+    over = estimator_overrides(method, "measured", None)
+    if sensors:
+        over.update(PROFILE)
+    over.update(more)
+    res = run_ssp(systems[sensors], parameter_set=target, stop_time=STOP, overrides=over,
+                  progress=False)
+    d = res.data
+    est = np.array([res.final[n] for n in ESTIMATE_NAMES])
+    truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
+    sd = np.array([d["estimator.sd." + n][-1] for n in ESTIMATE_NAMES])
+    err = np.abs(est - truth)
+    return {"err": err, "rel": err / np.asarray(error_scale(truth)), "sd": sd, "est": est,
+            "truth": truth, "misfit": d["estimator.diag.misfit"],
+            "flags": np.maximum(d["estimator.diag.identified.base"],
+                                d["estimator.diag.identified.target"]),
+            "fit": d["estimator.diag.model_fit"], "time": res.time}
+
+
+def _judge(cases: dict, systems) -> None:
+    """Every case: misfit at the end, no flag ever, masses as stated; over the cases >= 90 %
+    of the estimates within 2 sd of the composite truth."""
+    within = total = 0
+    for (target, method, sensors), r in cases.items():
+        label = f"{target} {method} sensors={sensors}"
+        assert r["misfit"][-1] == 1, label
+        assert r["flags"].max() == 0, label
+        inside = int(np.sum(r["err"] <= 2.0 * r["sd"]))
+        within += inside
+        total += len(ESTIMATE_NAMES)
+        # no case's sds fail wholesale (the aggregate is the issue's figure)
+        assert inside >= 14, (label, inside, r["err"] / r["sd"])
+        mass = r["est"][[0, 10]] / r["truth"][[0, 10]]
+        if sensors:
+            assert np.all(np.abs(mass - 1.0) < MASS_TOL_SENSORS), (label, mass)
+        elif method == "momentum":
+            assert np.all(np.abs(mass - 1.0) < MASS_TOL_MOMENTUM), (label, mass)
+    assert within >= 0.9 * total, (within, total)
+
+
+FAST = [("flexible", "momentum", False), ("wings", "force", False),
+        ("slosh", "momentum", True), ("flexible", "force", True)]
+ALL = [(t, m, s) for t in ("wings", "slosh", "flexible") for m in ("momentum", "force")
+       for s in (False, True)]
+
+
+def test_flexible_spacecraft_misfit_no_flag_and_covered(systems):
+    _judge({c: _run(systems, *c) for c in FAST}, systems)
+
+
+@pytest.mark.slow
+def test_every_flexible_case_misfit_no_flag_and_covered(systems):
+    _judge({c: _run(systems, *c) for c in ALL}, systems)
+
+
+@pytest.mark.slow
+def test_a_held_out_flexible_spacecraft(systems):
+    """Wings and slosh of other sizes and frequencies than the sets' (30 kg panels at 0.8 Hz,
+    slosh at 0.2 / 0.25 Hz): the same guarantees."""
+    more = {"plant.flex.f[1]": 0.8, "plant.flex.f[2]": 0.8, "plant.slosh.f[1]": 0.2,
+            "plant.slosh.f[2]": 0.25, "plant.flex.m[1]": 30.0, "plant.flex.m[2]": 30.0}
+    _judge({("flexible", m, s): _run(systems, "flexible", m, s, **more)
+            for m in ("momentum", "force") for s in (False, True)}, systems)
+
+
+@pytest.mark.parametrize("sensors", [False, True])
+def test_rigid_spacecraft_never_misfit(systems, sensors):
+    """The rigid spacecraft: no misfit at any sample, the flags rise, the statistic well
+    below its threshold (noise-free the relative residual 1e-4 against 1e-2; with the sensors
+    the Ljung-Box Q/L about 1.2 against 30)."""
+    # with the sensors a flag at the default confidence (0.99 for a body's 10 estimates) asks
+    # for more than 300 s give on this target: 0.5 (about 2 sd each) shows the gate stays open
+    more = {"estimator.ident.flag_confidence": 0.5} if sensors else {}
+    r = _run(systems, "default", "momentum", sensors, **more)
+    assert r["misfit"].max() == 0
+    assert r["flags"][-1] == 1
+    assert r["rel"].max() < (1e-3 if sensors else 1e-5)
+    late = r["time"] >= 120.0
+    assert r["fit"][late].max() < (2.0 if sensors else 1e-3), r["fit"][late].max()
+
+
+def test_fit_options_are_checked_with_their_names():
+    robot = scenario("spatial").robot
+    for name, bad in (("ident.fit_lags", 0), ("ident.fit_lags", 101),
+                      ("ident.fit_window", 0.0), ("ident.fit_rho_max", 2.0),
+                      ("ident.fit_whiteness_max", 0.5), ("ident.fit_chi2_max", float("nan")),
+                      ("ident.fit_thrust_max", 0.0), ("ident.fit_bias_k", -1.0),
+                      ("ident.fit_bias_k_info", 101.0)):
+        with pytest.raises(ValueError, match=name.replace(".", r"\.")):
+            NativeEstimator(robot, {name: bad})
