@@ -27,6 +27,7 @@ rng.c (native/build.py, warnings as errors).
 from __future__ import annotations
 
 import ctypes
+import math
 import importlib.util
 import os
 import re
@@ -97,7 +98,7 @@ def lib(tmp_path_factory):
                             ("sr_ln", D, [D]), ("sr_log10", D, [D]), ("sr_powi", D, [D, I]),
                             ("sr_pow10", D, [I]), ("sr_portable_log", D, [D]),
                             ("sr_atan", D, [D]), ("sr_atan2", D, [D, D]),
-                            ("sr_normal_quantile2", D, [D]),
+                            ("sr_normal_quantile2", D, [D]), ("sr_exp", D, [D]),
                             ("sr_sincos", None, [D, ctypes.POINTER(D), ctypes.POINTER(D)]),
                             ("sr_portable_sincos", None, [D, ctypes.POINTER(D), ctypes.POINTER(D)])]:
         f = getattr(lib, name)
@@ -355,3 +356,19 @@ def test_two_sided_normal_quantile_against_scipy_and_its_domain(lib):
     assert abs(lib.sr_normal_quantile2(0.0025) - 3.0233) < 1e-4
     for bad in (0.0, -1.0, 0.51, 1.0, float("nan"), float("inf")):
         assert np.isnan(lib.sr_normal_quantile2(bad))
+
+
+def test_exponential_within_two_ulp_and_special_values(lib):
+    """sr_exp against NumPy's exp (glibc, correctly rounded in practice) over the whole range,
+    within 2 ulp; exact at 0; overflow, underflow and NaN as C99's exp."""
+    rng = np.random.default_rng(7)
+    x = np.concatenate([rng.uniform(-745.0, 709.7, 20000), rng.uniform(-1.0, 1.0, 20000),
+                        np.linspace(-0.35, 0.35, 2001), [1e-300, -1e-300, 1.0, -1.0, 700.0]])
+    got = each(lib.sr_exp, x)
+    ref = np.exp(x)
+    normal = ref > 2.2250738585072014e-308
+    assert np.max(ulps(got[normal], ref[normal])) <= 2
+    assert np.all(np.abs(got[~normal] - ref[~normal]) <= 2 * 5e-324)
+    assert lib.sr_exp(0.0) == 1.0
+    assert lib.sr_exp(710.0) == math.inf and lib.sr_exp(-746.0) == 0.0
+    assert math.isnan(lib.sr_exp(float("nan")))

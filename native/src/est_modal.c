@@ -8,6 +8,7 @@
 
 #include "est_joint.h"
 #include "linalg.h"
+#include "sr_math.h"
 #include "standard_params.h"
 
 /* the search: a geometric grid of EST_MODAL_GRID frequencies from EST_MODAL_F_LO to
@@ -287,7 +288,7 @@ static void solve_add(const sr_estimator_model *m, void *data, double *rows, int
             double *restrict x = rows + (size_t)a * w;
             if (x[i] == 0.0)
                 continue;
-            double r = hypot(Ri[i], x[i]), c = Ri[i] / r, sn = x[i] / r;
+            double r = sr_hypot(Ri[i], x[i]), c = Ri[i] / r, sn = x[i] / r;
             Ri[i] = r;
             x[i] = 0.0;
             for (int j = i + 1; j < n; j++) {
@@ -477,8 +478,8 @@ static double refine(const sr_estimator_model *m, void *data, est_modal_filter *
                      int j, const double *u0, int stride, double r0, est_modal_work *w)
 {
     double P[3][2], F[3];
-    P[0][0] = log(f[j].w);
-    P[0][1] = log(f[j].zeta);
+    P[0][0] = sr_ln(f[j].w);
+    P[0][1] = sr_ln(f[j].zeta);
     P[1][0] = P[0][0] + 0.03;
     P[1][1] = P[0][1];
     P[2][0] = P[0][0];
@@ -488,8 +489,8 @@ static double refine(const sr_estimator_model *m, void *data, est_modal_filter *
             F[v] = r0;
             continue;
         }
-        f[j].w = exp(P[v][0]);
-        f[j].zeta = exp(P[v][1]);
+        f[j].w = sr_exp(P[v][0]);
+        f[j].zeta = sr_exp(P[v][1]);
         F[v] = objective(m, data, f, n_f, u0, stride, w);
     }
     int evals = 2;
@@ -509,16 +510,16 @@ static double refine(const sr_estimator_model *m, void *data, est_modal_filter *
             c[a] = 0.5 * (P[lo][a] + P[mid][a]);
         for (int a = 0; a < 2; a++)
             xr[a] = 2.0 * c[a] - P[hi][a];
-        f[j].w = exp(xr[0]);
-        f[j].zeta = exp(xr[1]);
+        f[j].w = sr_exp(xr[0]);
+        f[j].zeta = sr_exp(xr[1]);
         fr = objective(m, data, f, n_f, u0, stride, w);
         evals++;
         if (fr < F[lo]) {                                  /* expand */
             double xe[2], fe;
             for (int a = 0; a < 2; a++)
                 xe[a] = 3.0 * c[a] - 2.0 * P[hi][a];
-            f[j].w = exp(xe[0]);
-            f[j].zeta = exp(xe[1]);
+            f[j].w = sr_exp(xe[0]);
+            f[j].zeta = sr_exp(xe[1]);
             fe = objective(m, data, f, n_f, u0, stride, w);
             evals++;
             if (fe < fr) {
@@ -535,8 +536,8 @@ static double refine(const sr_estimator_model *m, void *data, est_modal_filter *
             double xc[2], fc;
             for (int a = 0; a < 2; a++)
                 xc[a] = 0.5 * (c[a] + P[hi][a]);
-            f[j].w = exp(xc[0]);
-            f[j].zeta = exp(xc[1]);
+            f[j].w = sr_exp(xc[0]);
+            f[j].zeta = sr_exp(xc[1]);
             fc = objective(m, data, f, n_f, u0, stride, w);
             evals++;
             if (fc < F[hi]) {
@@ -547,8 +548,8 @@ static double refine(const sr_estimator_model *m, void *data, est_modal_filter *
                     if (v != lo) {
                         for (int a = 0; a < 2; a++)
                             P[v][a] = 0.5 * (P[v][a] + P[lo][a]);
-                        f[j].w = exp(P[v][0]);
-                        f[j].zeta = exp(P[v][1]);
+                        f[j].w = sr_exp(P[v][0]);
+                        f[j].zeta = sr_exp(P[v][1]);
                         F[v] = objective(m, data, f, n_f, u0, stride, w);
                         evals++;
                     }
@@ -561,8 +562,8 @@ static double refine(const sr_estimator_model *m, void *data, est_modal_filter *
     for (int v = 1; v < 3; v++)
         if (F[v] < F[lo])
             lo = v;
-    f[j].w = exp(P[lo][0]);
-    f[j].zeta = exp(P[lo][1]);
+    f[j].w = sr_exp(P[lo][0]);
+    f[j].zeta = sr_exp(P[lo][1]);
     return F[lo];
 }
 
@@ -600,7 +601,7 @@ static int search(const sr_estimator_model *m, void *data, const double *u0, est
         double rb = HUGE_VAL;
         for (int i = 0; i < EST_MODAL_GRID; i++) {
             f[n_f].w = TWO_PI * EST_MODAL_F_LO
-                       * pow(EST_MODAL_F_HI / EST_MODAL_F_LO, i / (EST_MODAL_GRID - 1.0));
+                       * sr_exp(i / (EST_MODAL_GRID - 1.0) * sr_ln(EST_MODAL_F_HI / EST_MODAL_F_LO));
             f[n_f].zeta = EST_MODAL_ZETA0;
             double r = objective(m, data, f, n_f + 1, u0, stride, w);
             if (r < rb) {
@@ -611,7 +612,7 @@ static int search(const sr_estimator_model *m, void *data, const double *u0, est
         if (best < 0)
             break;
         f[n_f].w = TWO_PI * EST_MODAL_F_LO
-                   * pow(EST_MODAL_F_HI / EST_MODAL_F_LO, best / (EST_MODAL_GRID - 1.0));
+                   * sr_exp(best / (EST_MODAL_GRID - 1.0) * sr_ln(EST_MODAL_F_HI / EST_MODAL_F_LO));
         f[n_f].zeta = EST_MODAL_ZETA0;
         double r1 = refine(m, data, f, n_f + 1, n_f, u0, stride, rb, w);
         if (!(r1 < (1.0 - EST_MODAL_MIN_GAIN) * r0))

@@ -677,3 +677,22 @@ double sr_normal_quantile2(double p)
     }
     return 1.41421356237309504880 * 0.5 * (lo + hi);
 }
+
+double sr_exp(double x)
+{
+    static const double LN2_HI = 6.93147180369123816490e-01;   /* 0x3fe62e42 fee00000 */
+    static const double LN2_LO = 1.90821492927058770002e-10;
+    static const double INV_LN2 = 1.44269504088896338700e+00;
+    if (x != x)
+        return x;
+    if (x > 709.782712893384)
+        return HUGE_VAL;
+    if (x < -745.1332191019412)
+        return 0.0;
+    const double k = nearbyint(x * INV_LN2);
+    const double r = (x - k * LN2_HI) - k * LN2_LO;
+    double p = 1.0;                                /* 1 + r/1 (1 + r/2 (... (1 + r/13))) */
+    for (int n = 13; n >= 1; n--)
+        p = 1.0 + r * p / n;
+    return ldexp(p, (int)k);
+}

@@ -119,6 +119,11 @@ SR_API double sr_log10(double x);
  *  for n != 0. */
 SR_API double sr_powi(double x, int n);
 
+/** e^x: x = k ln 2 + r with |r| <= ln 2 / 2 (ln 2 in two parts, Cody and Waite, so k ln 2 is
+ *  exact), e^r by its Taylor series to degree 13 (truncation below 5e-18) in Horner's form,
+ *  times 2^k by ldexp; within 2 ulp. +inf above 709.78, 0 below -745.2, NaN for NaN. */
+SR_API double sr_exp(double x);
+
 /** The two-sided standard normal quantile: z >= 0 with P(|Z| > z) = p for Z ~ N(0, 1), for
  *  1e-300 <= p <= 0.5 (z from 0.674 to 37.07); NaN outside. ln P(|Z| > z) = ln erfc(z / sqrt 2)
  *  = -x^2 - ln sqrt(pi) - ln K(x), x = z / sqrt 2, with K(x) = x + (1/2) / (x + 1 / (x + (3/2) /
