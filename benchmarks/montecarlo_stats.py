@@ -346,7 +346,9 @@ def seed_report(rows, args) -> str:
         f"The sensors system's own scenario (`spacerobot run --robot spatial --sensors "
         f"--stop-time {args.stop_time:g} --set sensors.seed=K`, K = 0 ... {n - 1}): the same "
         f"bodies every run, only the sensors' noise drawn anew. Table: "
-        f"[{Path(args.seed_csv).name}]({Path(args.seed_csv).name}).",
+        f"[{Path(args.seed_csv).name}]({Path(args.seed_csv).name}). What made this target's "
+        f"sds too small (the navigation noises' product in the angular rows) and its fix, "
+        f"measured: [CALIBRATION.md](CALIBRATION.md).",
         "",
         "| figure | value | 95 % interval |",
         "|---|---|---|",

@@ -224,6 +224,46 @@ static void add_model_error(const sr_info_model *m, const double *x, const doubl
             Rk[a * 6 + b] += C[m->rows[a] * 6 + m->rows[b]];
 }
 
+/* Rk (stride 6) += the covariance of the navigation noises' product. The angular rows hold
+   r_S x m v_S, bilinear in (r_S, v_S): beside the first-order terms they carry dr x m dv, of
+   zero mean (dr, dv independent) and covariance sd_r^2 sd_v^2 sum_ij g_ij g_ij^T with g_ij
+   the mixed difference of the rows in r_i, v_j (exact with unit steps: bilinear). The
+   first-order terms leave the angular rows almost noise-free across r and v, where this term
+   is of the gyro's size: without it a fast-tumbling target's sds were too small
+   (benchmarks/CALIBRATION.md). xs: a copy of x, restored on return. */
+static void product_noise(const sr_info_model *m, const double *x, const double *z, double *xs,
+                          double *Rk)
+{
+    const double s2 = m->noise.r * m->noise.r * m->noise.v * m->noise.v;
+    if (!(s2 > 0.0))
+        return;
+    int nr = m->nr;
+    double r0[6], ri[3][6], vj[3][6], rij[6];
+    rows_at(m, x, z, r0);
+    for (int i = 0; i < 3; i++) {
+        xs[SR_X_R_S + i] = x[SR_X_R_S + i] + 1.0;
+        rows_at(m, xs, z, ri[i]);
+        xs[SR_X_R_S + i] = x[SR_X_R_S + i];
+        xs[SR_X_V_S + i] = x[SR_X_V_S + i] + 1.0;
+        rows_at(m, xs, z, vj[i]);
+        xs[SR_X_V_S + i] = x[SR_X_V_S + i];
+    }
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double g[6];
+            xs[SR_X_R_S + i] = x[SR_X_R_S + i] + 1.0;
+            xs[SR_X_V_S + j] = x[SR_X_V_S + j] + 1.0;
+            rows_at(m, xs, z, rij);
+            xs[SR_X_R_S + i] = x[SR_X_R_S + i];
+            xs[SR_X_V_S + j] = x[SR_X_V_S + j];
+            for (int a = 0; a < nr; a++)
+                g[a] = rij[a] - ri[i][a] - vj[j][a] + r0[a];
+            for (int a = 0; a < nr; a++)
+                for (int b = 0; b < nr; b++)
+                    Rk[a * 6 + b] += s2 * g[a] * g[b];
+        }
+}
+
 /* R_k^-1/2 (lower triangular nr x nr) of the rows' noise covariance at x, z: the channels'
    white noise through central differences of the rows, the attitude's as small rotations
    about the base axes; 0, or 1 when R_k is not positive definite */
@@ -281,6 +321,7 @@ static int noise_weight(const sr_info_model *m, const double *x, const double *z
             for (int b = 0; b < nr; b++)
                 Rk[a * 6 + b] += s2 * g[a] * g[b];
     }
+    product_noise(m, x, z, xs, Rk);
     add_model_error(m, x, me_var, Rk);
     double tr = 0.0;
     for (int a = 0; a < nr; a++)

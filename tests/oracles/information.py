@@ -11,8 +11,9 @@ moment; ``sr_thrust_sensitivity``), and the gyro's bias (3). With the inertias t
 body frames' origins (``z_O``) every row is linear in the unknowns (the quadratic part of
 ``psi D(mu)`` is ``-phi P_AXES`` times ``c_i c_j / m``: the parallel-axis terms). The sensors'
 white noise (navigation position and velocity, star tracker, gyro, joint angles and rates) is
-propagated to first order through the rows at the linearisation point: each sample's row
-covariance ``R_k`` (refreshed every ``refresh`` samples).
+propagated to first order through the rows at the linearisation point, plus the second-order
+product of the position and velocity noise in the angular momentum about the origin: each
+sample's row covariance ``R_k`` (refreshed every ``refresh`` samples).
 
 **The bound.** The Fisher information ``sum_k H_k^T R_k^-1 H_k`` plus the priors (``P0`` on the
 inertial parameters, the thrust errors' and the gyro bias' own), its inverse mapped to the
@@ -210,6 +211,12 @@ class InformationFilter:
                 g = g + sgn * self.rows_at(xs, z)
             g = g / 2e-5
             R += sd ** 2 * np.outer(g, g)
+        # the navigation noises' product: the angular momentum about the inertial origin holds
+        # M r_S x v_S (M the system's mass), so dr x M dv with dr, dv independent, isotropic:
+        # covariance sd_r^2 sd_v^2 M^2 sum_ij (e_i x e_j)(e_i x e_j)^T = 2 sd_r^2 sd_v^2 M^2 I
+        mass = z[0] + z[4] + sum(self.robot.link[k].m for k in range(n))
+        ang = [a for a, row in enumerate(self.rows) if row >= 3]
+        R[ang, ang] += 2.0 * (self.sd["r"] * self.sd["v"] * mass) ** 2
         return R
 
     def add(self, t: float, x: np.ndarray, z_lin: Optional[np.ndarray] = None) -> None:
