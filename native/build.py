@@ -55,7 +55,7 @@ MODELS = {"estimator": "SpaceRobotEstimator", "sensors": "SpaceRobotSensors",
 #: the core modules each model's binary is built from (the estimator carries no plant code)
 MODEL_SOURCES = {"estimator": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c",
                                "equations.c", "differencing.c", "physical.c", "sensor_noise.c",
-                               "standard_params.c", "noise_profile.c", "information.c",
+                               "standard_params.c", "noise_profile.c", "information.c", "info_rows.c", "info_fit.c",
                                "excite_design.c", "est_options.c", "est_model.c", "est_rows.c",
                                "est_rls.c", "est_uncertainty.c", "est_eiv.c", "est_corr.c",
                                "est_tracker.c", "est_consider.c", "est_paper.c", "est_joint.c",

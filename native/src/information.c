@@ -1,5 +1,6 @@
 /* The information filter and the bound (information.h). */
 #include "information.h"
+#include "info_internal.h"
 
 #include "linalg.h"
 #include "sr_math.h"
@@ -9,31 +10,15 @@
 #include <math.h>
 #include <string.h>
 
-#define MU SR_INFO_MAX_U             /* row stride of R, N_HH */
-/* a function kept out of its caller's frame: two of the large temporaries never share one */
-#if defined(__GNUC__)
-#define INFO_NOINLINE __attribute__((noinline))
-#else
-#define INFO_NOINLINE
-#endif
-#define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
-
 /* The unknowns' z part is in the standard layout of standard_params.h: per body m, c = m b (3),
  * I_O# (6, about the body frame's origin); sr_standard_of_reported / sr_reported_of_standard
  * map it from / to the reported parameters. */
-
-/* the white-noise sds of n (8), the channels the rows are weighed by */
-static void white_sds(const sr_info_noise *n, double *w)
-{
-    const double v[8] = {n->r, n->v, n->omega, n->att[0], n->att[1], n->att[2], n->q, n->qd};
-    memcpy(w, v, sizeof v);
-}
 
 int sr_info_noise_white(const sr_info_noise *n)
 {
     double w[8];
     int white = 0;
-    white_sds(n, w);
+    info_white_sds(n, w);
     for (int i = 0; i < 8; i++)
         white = white || w[i] > 0.0;
     return white;
@@ -44,7 +29,7 @@ static int noise_valid(const sr_info_noise *n)
 {
     double w[8];
     int ok = isfinite(n->gyro_bias) && n->gyro_bias >= 0.0;
-    white_sds(n, w);
+    info_white_sds(n, w);
     for (int i = 0; i < 8; i++)
         ok = ok && isfinite(w[i]) && w[i] >= 0.0;
     for (int i = 0; i < SR_N_CONSIDER; i++)
@@ -115,243 +100,6 @@ void sr_info_data_init(const sr_info_model *m, sr_info_data *d)
     }
 }
 
-/* The momentum equations of x as rows linear in the standard parameters z_O (20): full
-   (6 x 20) z_O = y (6), exactly. Linear rows A mu = b; angular rows phi theta_O - psi_lin
-   [m, c] = y: the quadratic part of psi D(mu) is -phi P times c_i c_j / m (the parallel-axis
-   terms), which the inertias about the frames' origins absorb. */
-static void rows_full(const sr_info_model *m, const double *x, double full[6][20], double *y)
-{
-    double E[3 * SR_N_COLS];
-    sr_equations(&m->robot, 0, x, E);
-    memset(full, 0, sizeof(double) * 6 * 20);
-    for (int i = 0; i < 3; i++) {
-        const double *e = E + i * SR_N_COLS;
-        for (int k = 0; k < 2; k++) {
-            for (int j = 0; j < 4; j++) {
-                full[i][10 * k + j] = e[SR_COL_A + 4 * k + j];
-                full[3 + i][10 * k + j] = -e[SR_COL_PSI + 10 * k + j];
-            }
-            for (int j = 0; j < 6; j++)
-                full[3 + i][10 * k + 4 + j] = e[SR_COL_PHI + 6 * k + j];
-        }
-        y[i] = e[SR_COL_B];
-        y[3 + i] = e[SR_COL_Y];
-    }
-}
-
-/* the used rows' residuals full z_O - y of x at z_O (20) */
-static void rows_at(const sr_info_model *m, const double *x, const double *zO, double *r)
-{
-    double full[6][20], y[6];
-    rows_full(m, x, full, y);
-    for (int a = 0; a < m->nr; a++) {
-        int row = m->rows[a];
-        double v = -y[row];
-        for (int j = 0; j < 20; j++)
-            v += full[row][j] * zO[j];
-        r[a] = v;
-    }
-}
-
-/* The rows H u = y of x exactly (H: nr x nu, row stride HS; the gyro bias columns not
-   written): rows_full's, minus c0 and the thrust errors' sensitivities on the left; the
-   unidentified z (planar) at their guesses move to y. k: the thrust integrals (15). */
-static void linear_rows(const sr_info_model *m, const double *x, const double *k, double *H,
-                        double *y)
-{
-    double full[6][20], yf[6], S[3 * SR_N_CCOLS];
-    rows_full(m, x, full, yf);
-    sr_thrust_sensitivity(0, x, m->n, k, S);
-    int used[20] = {0};
-    for (int q = 0; q < m->nz; q++)
-        used[m->zi[q]] = 1;
-    for (int a = 0; a < m->nr; a++) {
-        int row = m->rows[a];
-        double *h = H + a * HS;
-        memset(h, 0, sizeof(double) * m->nu);
-        for (int q = 0; q < m->nz; q++)
-            h[q] = full[row][m->zi[q]];
-        h[m->nz + a] = -1.0;                                  /* c0 */
-        const double *s = S + (row % 3) * SR_N_CCOLS + (row < 3 ? 0 : SR_N_CONSIDER);
-        for (int j = 0; j < SR_N_CONSIDER; j++)
-            h[m->nz + m->nr + j] = -s[j];                      /* d (b, y) / d c */
-        double v = yf[row];
-        for (int j = 0; j < 20; j++)
-            if (!used[j])
-                v -= full[row][j] * m->zO0[j];
-        y[a] = v;
-    }
-}
-
-/* the channels whose white noise enters the rows linearly (not the attitude): index, sd */
-static int channels(const sr_info_model *m, int *idx, double *sd)
-{
-    int c = 0, n = m->n;
-    const struct { int at, count; double sd; } g[5] = {
-        {SR_X_R_S, 3, m->noise.r}, {SR_X_V_S, 3, m->noise.v}, {SR_X_OMEGA_B, 3, m->noise.omega},
-        {SR_X_QD(n), n, m->noise.qd}, {SR_X_Q, n, m->noise.q}};
-    for (int k = 0; k < 5; k++)
-        for (int i = 0; i < g[k].count && g[k].sd > 0.0; i++) {
-            idx[c] = g[k].at + i;
-            sd[c++] = g[k].sd;
-        }
-    return c;
-}
-
-/* The model error as noise of the rows (where the replay found a misfit): momentum the rigid
-   model lacks, P_f (linear, variance me_var[0] per axis) and L_f (angular about the base point,
-   me_var[1]), white and isotropic, enters the rows about the origin as [P_f; L_f + r_S x P_f]:
-   Rk += [[s_P I, s_P [r]x^T], [s_P [r]x, s_L I + s_P [r]x [r]x^T]] (the used rows) */
-static void add_model_error(const sr_info_model *m, const double *x, const double *me_var,
-                            double *Rk)
-{
-    if (!(me_var[0] > 0.0 || me_var[1] > 0.0))
-        return;
-    const double *r = x + SR_X_R_S;
-    double Rx[9] = {0, -r[2], r[1], r[2], 0, -r[0], -r[1], r[0], 0}, C[36];
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) {
-            double rr = 0.0;
-            for (int k = 0; k < 3; k++)
-                rr += Rx[i * 3 + k] * Rx[j * 3 + k];
-            C[i * 6 + j] = i == j ? me_var[0] : 0.0;
-            C[(3 + i) * 6 + j] = me_var[0] * Rx[i * 3 + j];
-            C[i * 6 + 3 + j] = me_var[0] * Rx[j * 3 + i];
-            C[(3 + i) * 6 + 3 + j] = (i == j ? me_var[1] : 0.0) + me_var[0] * rr;
-        }
-    for (int a = 0; a < m->nr; a++)
-        for (int b = 0; b < m->nr; b++)
-            Rk[a * 6 + b] += C[m->rows[a] * 6 + m->rows[b]];
-}
-
-/* Rk (stride 6) += the covariance of the navigation noises' product. The angular rows hold
-   r_S x m v_S, bilinear in (r_S, v_S): beside the first-order terms they carry dr x m dv, of
-   zero mean (dr, dv independent) and covariance sd_r^2 sd_v^2 sum_ij g_ij g_ij^T with g_ij
-   the mixed difference of the rows in r_i, v_j (exact with unit steps: bilinear). The
-   first-order terms leave the angular rows almost noise-free across r and v, where this term
-   is of the gyro's size: without it a fast-tumbling target's sds were too small
-   (benchmarks/CALIBRATION.md). xs: a copy of x, restored on return. */
-static void product_noise(const sr_info_model *m, const double *x, const double *z, double *xs,
-                          double *Rk)
-{
-    const double s2 = m->noise.r * m->noise.r * m->noise.v * m->noise.v;
-    if (!(s2 > 0.0))
-        return;
-    int nr = m->nr;
-    double r0[6], ri[3][6], vj[3][6], rij[6];
-    rows_at(m, x, z, r0);
-    for (int i = 0; i < 3; i++) {
-        xs[SR_X_R_S + i] = x[SR_X_R_S + i] + 1.0;
-        rows_at(m, xs, z, ri[i]);
-        xs[SR_X_R_S + i] = x[SR_X_R_S + i];
-        xs[SR_X_V_S + i] = x[SR_X_V_S + i] + 1.0;
-        rows_at(m, xs, z, vj[i]);
-        xs[SR_X_V_S + i] = x[SR_X_V_S + i];
-    }
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) {
-            double g[6];
-            xs[SR_X_R_S + i] = x[SR_X_R_S + i] + 1.0;
-            xs[SR_X_V_S + j] = x[SR_X_V_S + j] + 1.0;
-            rows_at(m, xs, z, rij);
-            xs[SR_X_R_S + i] = x[SR_X_R_S + i];
-            xs[SR_X_V_S + j] = x[SR_X_V_S + j];
-            for (int a = 0; a < nr; a++)
-                g[a] = rij[a] - ri[i][a] - vj[j][a] + r0[a];
-            for (int a = 0; a < nr; a++)
-                for (int b = 0; b < nr; b++)
-                    Rk[a * 6 + b] += s2 * g[a] * g[b];
-        }
-}
-
-/* R_k^-1/2 (lower triangular nr x nr) of the rows' noise covariance at x, z: the channels'
-   white noise through central differences of the rows, the attitude's as small rotations
-   about the base axes; 0, or 1 when R_k is not positive definite */
-static int noise_weight(const sr_info_model *m, const double *x, const double *z,
-                        const double *me_var, double *W)
-{
-    int nr = m->nr, idx[12 + 2 * SR_MAX_JOINTS];
-    double sd[12 + 2 * SR_MAX_JOINTS], Rk[36] = {0}, xs[SR_X_LEN(SR_MAX_JOINTS)];
-    double rp[6], rm[6], g[6];
-    int nx = SR_X_LEN(m->n);
-    memcpy(xs, x, sizeof(double) * nx);
-    int nc = channels(m, idx, sd);
-    for (int c = 0; c < nc; c++) {
-        const double h = 1e-4;
-        int i = idx[c];
-        xs[i] = x[i] + h;
-        rows_at(m, xs, z, rp);
-        xs[i] = x[i] - h;
-        rows_at(m, xs, z, rm);
-        xs[i] = x[i];
-        for (int a = 0; a < nr; a++)
-            g[a] = (rp[a] - rm[a]) / (2 * h);
-        for (int a = 0; a < nr; a++)
-            for (int b = 0; b < nr; b++)
-                Rk[a * 6 + b] += sd[c] * sd[c] * g[a] * g[b];
-    }
-    for (int i = 0; i < 3; i++) {                   /* the star tracker: A R(w) */
-        if (!(m->noise.att[i] > 0.0))
-            continue;
-        const double h = 1e-5;
-        for (int sgn = -1; sgn <= 1; sgn += 2) {
-            /* R(w) for w = sgn h e_i: rotation by sgn h about axis i */
-            double Rw[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, c, s;
-            sr_sincos(h, &s, &c);                   /* the portable one: same bits anywhere */
-            s *= sgn;
-            int j = (i + 1) % 3, k = (i + 2) % 3;
-            Rw[j * 3 + j] = c;
-            Rw[k * 3 + k] = c;
-            Rw[k * 3 + j] = s;
-            Rw[j * 3 + k] = -s;
-            for (int r = 0; r < 3; r++)
-                for (int col = 0; col < 3; col++) {
-                    double v = 0.0;
-                    for (int l = 0; l < 3; l++)
-                        v += x[SR_X_A_B + 3 * r + l] * Rw[3 * l + col];
-                    xs[SR_X_A_B + 3 * r + col] = v;
-                }
-            rows_at(m, xs, z, sgn > 0 ? rp : rm);
-        }
-        memcpy(xs + SR_X_A_B, x + SR_X_A_B, sizeof(double) * 9);
-        double s2 = m->noise.att[i] * m->noise.att[i];
-        for (int a = 0; a < nr; a++)
-            g[a] = (rp[a] - rm[a]) / (2 * h);
-        for (int a = 0; a < nr; a++)
-            for (int b = 0; b < nr; b++)
-                Rk[a * 6 + b] += s2 * g[a] * g[b];
-    }
-    product_noise(m, x, z, xs, Rk);
-    add_model_error(m, x, me_var, Rk);
-    double tr = 0.0;
-    for (int a = 0; a < nr; a++)
-        tr += Rk[a * 6 + a];
-    if (!(tr > 0.0) || !isfinite(tr))
-        return 1;
-    /* a floor for rows the noise misses: tiny, since the near-null directions of R_k are real
-       information (a floor of 1e-6 of the trace instead made the errors several times worse) */
-    for (int a = 0; a < nr; a++)
-        Rk[a * 6 + a] += 1e-12 * tr / nr;
-    /* Cholesky L L^T = Rk (linalg), then W = L^-1 (lower triangular) */
-    double L[36];
-    for (int a = 0; a < nr; a++)
-        for (int b = 0; b < nr; b++)
-            L[a * nr + b] = Rk[a * 6 + b];
-    if (sr_cholesky(L, nr) != 0)
-        return 1;
-    memset(W, 0, sizeof(double) * 36);
-    for (int col = 0; col < nr; col++) {
-        W[col * nr + col] = 1.0 / L[col * nr + col];
-        for (int a = col + 1; a < nr; a++) {
-            double s = 0.0;
-            for (int l = col; l < a; l++)
-                s += L[a * nr + l] * W[l * nr + col];
-            W[a * nr + col] = -s / L[a * nr + a];
-        }
-    }
-    return 0;
-}
-
 /* the sum of the filter's numbers (R, d, N_HH, N_Hy over nu unknowns; the thrust integrals
    K): finite iff every one of them is */
 static double numbers_sum(int nu, const double *R, const double *d, const double *N_HH,
@@ -375,18 +123,6 @@ static double inverse_entry(const double *Ri, int nu, int p, int q)
     for (int j = (p > q ? p : q); j < nu; j++)
         s += Ri[p * MU + j] * Ri[q * MU + j];
     return s;
-}
-
-/* out (nr x ncol, row stride HS) = W (nr x nr lower) times in (same shape) */
-static void weigh(const double *W, int nr, const double *in, int ncol, double *out)
-{
-    for (int a = nr - 1; a >= 0; a--)
-        for (int j = 0; j < ncol; j++) {
-            double s = 0.0;
-            for (int b = 0; b <= a; b++)
-                s += W[a * nr + b] * in[b * HS + j];
-            out[a * HS + j] = s;
-        }
 }
 
 /* The whiteness test's ring and sums with the sample's whitened residual rows e (nr): the
@@ -422,19 +158,19 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     memcpy(K, d->K, sizeof K);
     sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(n), x + SR_X_M(n));
     sr_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
-    if (noise_weight(m, x, z, d->me_var, W) != 0)    /* every sample */
+    if (info_noise_weight(m, x, z, d->me_var, W) != 0)    /* every sample */
         return 1;
     /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
     double Hy[6 * HS], r0[6], rb[6], xs[SR_X_LEN(SR_MAX_JOINTS)], y[6];
     memset(Hy, 0, sizeof Hy);
-    linear_rows(m, x, K + SR_THRUST_K, Hy, y);
+    info_linear_rows(m, x, K + SR_THRUST_K, Hy, y);
     int nx = SR_X_LEN(n);
     memcpy(xs, x, sizeof(double) * nx);
     if (m->nb) {                       /* the gyro reads omega + b: the rows' d / d b */
-        rows_at(m, x, z, r0);
+        info_rows_at(m, x, z, r0);
         for (int i = 0; i < 3; i++) {
             xs[SR_X_OMEGA_B + i] = x[SR_X_OMEGA_B + i] + 1.0;   /* the rows are linear in it */
-            rows_at(m, xs, z, rb);
+            info_rows_at(m, xs, z, rb);
             xs[SR_X_OMEGA_B + i] = x[SR_X_OMEGA_B + i];
             for (int a = 0; a < nr; a++)
                 Hy[a * HS + nu - 3 + i] = -(rb[a] - r0[a]);
@@ -443,21 +179,21 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     for (int a = 0; a < nr; a++)
         Hy[a * HS + nu] = y[a];
     double Wt[6 * HS];
-    weigh(W, nr, Hy, nu + 1, Wt);
+    info_weigh(W, nr, Hy, nu + 1, Wt);
     /* errors in variables: N += sum_l sigma_l^2 (W dH_l)^T (W [dH_l dy_l]) */
     double *N_HH = w->N_HH, N_Hy[MU];        /* the new sums, committed when finite */
     memcpy(N_HH, d->N_HH, sizeof d->N_HH);
     memcpy(N_Hy, d->N_Hy, sizeof N_Hy);
     int idx[12 + 2 * SR_MAX_JOINTS];
     double sd[12 + 2 * SR_MAX_JOINTS];
-    int nc = channels(m, idx, sd);
+    int nc = info_channels(m, idx, sd);
     for (int c = 0; c < nc; c++) {
         int i = idx[c];
         double h = 1e-4 * (fabs(x[i]) > 1.0 ? fabs(x[i]) : 1.0);
         double Hp[6 * HS], yp[6], dH[6 * HS], wdH[6 * HS];
         memset(Hp, 0, sizeof Hp);
         xs[i] = x[i] + h;
-        linear_rows(m, xs, K + SR_THRUST_K, Hp, yp);
+        info_linear_rows(m, xs, K + SR_THRUST_K, Hp, yp);
         xs[i] = x[i];
         for (int a = 0; a < nr; a++) {
             for (int j = 0; j < nz; j++)     /* only z_O's columns move with the channels */
@@ -466,7 +202,7 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
                 dH[a * HS + j] = 0.0;
             dH[a * HS + nu] = (yp[a] - y[a]) / h;
         }
-        weigh(W, nr, dH, nu + 1, wdH);
+        info_weigh(W, nr, dH, nu + 1, wdH);
         double s2 = sd[c] * sd[c];
         for (int p = 0; p < nz; p++)
             for (int q = 0; q < nz; q++) {
@@ -534,7 +270,7 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
 }
 
 /* the reported parameters (20) of the identified z_O entries u (nz) */
-static void reported_of_u(const sr_info_model *m, const double *u, double *x)
+void info_reported_of_u(const sr_info_model *m, const double *u, double *x)
 {
     double z[20];
     memcpy(z, m->zO0, sizeof z);
@@ -563,8 +299,8 @@ static void upper_inverse(const double *R, int nu, double *Ri)
  * entries (the leading unknowns) plus, where G (nz x 8; may be NULL) is given, the consider
  * term G P_c G^T of the thrust errors' prior (sds 1 / prior_sqrt), J = d reported / d z_O at
  * the unknowns u (their identified columns). 1 where a bound is not finite. */
-static INFO_NOINLINE int bound_with(const sr_info_model *m, int nu, const double *Ri,
-                                    const double *G, const double *u, double *bound)
+INFO_NOINLINE int info_bound_with(const sr_info_model *m, int nu, const double *Ri,
+                                  const double *G, const double *u, double *bound)
 {
     int nz = m->nz, i1 = m->nz + m->nr;
     double C[20 * 20], J[20 * 20], Jz[20 * 20], zO[20];
@@ -603,15 +339,15 @@ static INFO_NOINLINE int bound_with(const sr_info_model *m, int nu, const double
 
 static int bound_of(const sr_info_model *m, const double *Ri, const double *u, double *bound)
 {
-    return bound_with(m, m->nu, Ri, NULL, u, bound);
+    return info_bound_with(m, m->nu, Ri, NULL, u, bound);
 }
 
 /* The unknowns u (nu) of the square-root information [R dv] (nu unknowns, the z_O entries
    first; N_HH, N_Hy the errors-in-variables sums over them: zero beyond z_O), compensated as
    sr_info_estimate, and Ri = R^-1 */
-static INFO_NOINLINE void solve_square_root(int nu, const double *R, const double *dv,
-                                            const double *N_HH, const double *N_Hy,
-                                            int compensated, double *u, double *Ri)
+INFO_NOINLINE void info_solve_square_root(int nu, const double *R, const double *dv,
+                                          const double *N_HH, const double *N_Hy,
+                                          int compensated, double *u, double *Ri)
 {
     /* R u = d (back substitution); Ri = R^-1 (upper triangular) */
     for (int i = nu - 1; i >= 0; i--) {
@@ -671,10 +407,10 @@ static INFO_NOINLINE void solve_square_root(int nu, const double *R, const doubl
 }
 
 /* The unknowns u (nu) of the state d (compensated as sr_info_estimate) and Ri = R^-1 */
-static void solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
-                           double *u, double *Ri)
+void info_solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
+                         double *u, double *Ri)
 {
-    solve_square_root(m->nu, d->R, d->d, d->N_HH, d->N_Hy, compensated, u, Ri);
+    info_solve_square_root(m->nu, d->R, d->d, d->N_HH, d->N_Hy, compensated, u, Ri);
 }
 
 int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensated,
@@ -683,8 +419,8 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
     if (!m || !d || !vec || !bound)
         return 1;
     double u[MU] = {0}, Ri[MU * MU];
-    solve_unknowns(m, d, compensated, u, Ri);
-    reported_of_u(m, u, vec);
+    info_solve_unknowns(m, d, compensated, u, Ri);
+    info_reported_of_u(m, u, vec);
     int ok = bound_of(m, Ri, u, bound) == 0;
     for (int i = 0; i < 20; i++)
         if (!isfinite(vec[i]))
@@ -699,196 +435,6 @@ int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int compensa
         return 1;
     }
     return 0;
-}
-
-/* -- the thrust errors held at their priors ---------------------------------------------------
- * The unknowns are u = [u1 = (z_O, c0), c (8), b (nb)], R = [[R11 R12 R13], [0 R22 R23],
- * [0 0 R33]]. With c held at its prior mean c_T: R11 u1 + R13 b = d1 - R12 c_T and, in the
- * least-squares sense, [R23; R33] b = [d2 - R22 c_T; d3]: a QR of that (8 + nb) x nb block
- * gives the held square root Rh = [[R11 R13], [0 R33']] (no = nu - 8 unknowns, the z_O entries
- * first as before), its right-hand side dh, the rhs' sensitivity Dh = d dh / d c_T (no x 8,
- * for the consider term C_c = G P_c G^T, G = Rh^-1 Dh) and the weighted residual the hold adds
- * (the QR's leftover rows: the cost J(u) = ||R u - d||^2 + rss at the held answer). */
-typedef struct held_sr {
-    int no;
-    double R[MU * MU], d[MU], D[MU * SR_N_CONSIDER], extra;
-} held_sr;
-
-static void held_square_root(const sr_info_model *m, const sr_info_data *d, held_sr *h)
-{
-    int nu = m->nu, i1 = m->nz + m->nr, i3 = i1 + SR_N_CONSIDER, nb = m->nb;
-    const double *cT = m->u0 + i1;
-    h->no = nu - SR_N_CONSIDER;
-    memset(h->R, 0, sizeof h->R);
-    for (int i = 0; i < i1; i++) {            /* block 1: R11, R13; d1 - R12 c_T; -R12 */
-        double r = d->d[i];
-        for (int j = 0; j < SR_N_CONSIDER; j++) {
-            r -= d->R[i * MU + i1 + j] * cT[j];
-            h->D[i * SR_N_CONSIDER + j] = -d->R[i * MU + i1 + j];
-        }
-        h->d[i] = r;
-        for (int j = i; j < i1; j++)
-            h->R[i * MU + j] = d->R[i * MU + j];
-        for (int j = 0; j < nb; j++)
-            h->R[i * MU + i1 + j] = d->R[i * MU + i3 + j];
-    }
-    /* blocks 2, 3 as rows [coefficients of b (nb) | rhs | d rhs / d c_T (8)] */
-    enum { NC = 3 + 1 + SR_N_CONSIDER, NRW = SR_N_CONSIDER + 3 };
-    double B[NRW * NC];
-    int nrw = SR_N_CONSIDER + nb;
-    memset(B, 0, sizeof B);
-    for (int a = 0; a < nrw; a++) {
-        int row = a < SR_N_CONSIDER ? i1 + a : i3 + (a - SR_N_CONSIDER);
-        double r = d->d[row];
-        for (int j = 0; j < SR_N_CONSIDER && a < SR_N_CONSIDER; j++) {
-            r -= d->R[row * MU + i1 + j] * cT[j];
-            B[a * NC + nb + 1 + j] = -d->R[row * MU + i1 + j];
-        }
-        for (int j = 0; j < nb; j++)
-            B[a * NC + j] = d->R[row * MU + i3 + j];
-        B[a * NC + nb] = r;
-    }
-    for (int j = 0; j < nb; j++) {            /* Householder QR of the b columns */
-        double norm = 0.0;
-        for (int a = j; a < nrw; a++)
-            norm += B[a * NC + j] * B[a * NC + j];
-        norm = sqrt(norm);
-        if (norm == 0.0)
-            continue;
-        double alpha = B[j * NC + j], beta = alpha >= 0.0 ? -norm : norm, v[NRW];
-        for (int a = j; a < nrw; a++)
-            v[a] = B[a * NC + j];
-        v[j] = alpha - beta;
-        double vv = 0.0;
-        for (int a = j; a < nrw; a++)
-            vv += v[a] * v[a];
-        for (int k = j; k < nb + 1 + SR_N_CONSIDER; k++) {
-            double s = 0.0;
-            for (int a = j; a < nrw; a++)
-                s += v[a] * B[a * NC + k];
-            s *= 2.0 / vv;
-            for (int a = j; a < nrw; a++)
-                B[a * NC + k] -= s * v[a];
-        }
-    }
-    for (int a = 0; a < nb; a++) {
-        for (int j = a; j < nb; j++)
-            h->R[(i1 + a) * MU + i1 + j] = B[a * NC + j];
-        h->d[i1 + a] = B[a * NC + nb];
-        for (int j = 0; j < SR_N_CONSIDER; j++)
-            h->D[(i1 + a) * SR_N_CONSIDER + j] = B[a * NC + nb + 1 + j];
-    }
-    h->extra = 0.0;
-    for (int a = nb; a < nrw; a++)
-        h->extra += B[a * NC + nb] * B[a * NC + nb];
-}
-
-/* the held estimate and bound (sr_info_estimate_held) of h: 0, or 1 where not finite */
-static INFO_NOINLINE int held_estimate(const sr_info_model *m, const sr_info_data *d,
-                                       const held_sr *h, int compensated, double *vec,
-                                       double *bound)
-{
-    int no = h->no, nz = m->nz;
-    double u[MU] = {0}, Ri[MU * MU], G[20 * SR_N_CONSIDER];
-    solve_square_root(no, h->R, h->d, d->N_HH, d->N_Hy, compensated, u, Ri);
-    reported_of_u(m, u, vec);
-    for (int p = 0; p < nz; p++)              /* G = Rh^-1 Dh (the z_O rows) */
-        for (int j = 0; j < SR_N_CONSIDER; j++) {
-            double s = 0.0;
-            for (int k = p; k < no; k++)
-                s += Ri[p * MU + k] * h->D[k * SR_N_CONSIDER + j];
-            G[p * SR_N_CONSIDER + j] = s;
-        }
-    int ok = bound_with(m, no, Ri, G, u, bound) == 0;
-    for (int i = 0; i < 20; i++)
-        ok = ok && isfinite(vec[i]);
-    return ok ? 0 : 1;
-}
-
-int sr_info_estimate_held(const sr_info_model *m, const sr_info_data *d, int compensated,
-                          double *vec, double *bound, double *chi2, double *rss_held)
-{
-    if (!m || !d || !vec || !bound)
-        return 1;
-    held_sr h;
-    held_square_root(m, d, &h);
-    double rss = d->rss + h.extra, dof = d->rows - h.no;
-    if (chi2)
-        *chi2 = dof > 0.0 ? rss / dof : 0.0;
-    if (rss_held)
-        *rss_held = rss;
-    if (held_estimate(m, d, &h, compensated, vec, bound) != 0) {
-        for (int i = 0; i < 20; i++)
-            vec[i] = bound[i] = NAN;
-        return 1;
-    }
-    return 0;
-}
-
-/* the larger thrust scale's |s| / prior sd of the state d (the unknowns with the thrust
-   estimated; 0 without a thrust prior), or NaN where the information is singular */
-static INFO_NOINLINE double thrust_ratio(const sr_info_model *m, const sr_info_data *d)
-{
-    double u[MU] = {0}, Ri[MU * MU], ratio = 0.0;
-    solve_unknowns(m, d, 2, u, Ri);
-    static const int scales[2] = {0, 4};     /* s_F, s_M of c (sr_thrust_sensitivity) */
-    for (int k = 0; k < 2; k++) {
-        double sd = m->noise.thrust[scales[k]], s = u[m->nz + m->nr + scales[k]];
-        if (sd > 0.0)
-            ratio = (fabs(s) / sd > ratio ? fabs(s) / sd : ratio);
-        if (!isfinite(s))
-            return NAN;
-    }
-    return ratio;
-}
-
-/* the Ljung-Box Q / L of the whitened residuals, per row and averaged over the rows:
-   Q = N (N + 2) sum_(k=1..L) r_k^2 / (N - k), r_k = sum_t e_t e_(t-k) / sum_t e_t^2 (about
-   chi2(L) for white residuals, Q / L about 1); 0 before 2 L rows */
-static double whiteness(const sr_info_model *m, const sr_info_data *d)
-{
-    int L = m->fit.lags, nr = m->nr;
-    double N = d->fit_count, q = 0.0;
-    if (L < 1 || !(N >= 2.0 * L))
-        return 0.0;
-    for (int a = 0; a < nr; a++) {
-        double v = d->fit_sum[a], s = 0.0;
-        if (!(v > 0.0))
-            continue;
-        for (int k = 1; k <= L; k++) {
-            double r = d->fit_sum[6 * k + a] / v;
-            s += r * r / (N - k);
-        }
-        q += N * (N + 2.0) * s / L;
-    }
-    return q / nr;
-}
-
-/* sr_info_fit_of (m, d, f given) */
-static int fit_test(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
-{
-    double dof = d->rows - m->nu;
-    f->whiteness = whiteness(m, d);
-    f->chi2 = dof > 0.0 ? d->rss / dof : 0.0;
-    f->thrust = thrust_ratio(m, d);
-    f->misfit = d->misfit;
-    if (!isfinite(f->thrust)) {
-        f->thrust = 0.0;
-        return 1;
-    }
-    /* coloured residuals count where they are of the noise's size at least (chi2 > 1/2):
-       far below it (data less noisy than its model) their colour is the round-off's */
-    int coloured = f->whiteness > m->fit.whiteness_max && f->chi2 > 0.5;
-    f->misfit = d->misfit || (d->replayed && (coloured || f->chi2 > m->fit.chi2_max
-                                              || f->thrust > m->fit.thrust_max));
-    return 0;
-}
-
-int sr_info_fit_of(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
-{
-    if (!m || !d || !f)
-        return 1;
-    return fit_test(m, d, f);
 }
 
 /* the filter's estimate as the report takes it: with the thrust held where the model does
@@ -926,7 +472,7 @@ int sr_info_predict(const sr_info_model *m, const sr_info_data *d, const double 
     }
     int nu = m->nu;
     double u[MU] = {0}, *Ri = w->Ri, *S = w->S, *R = w->R, *L = w->L;
-    solve_unknowns(m, d, 2, u, Ri);              /* the point the bound is mapped at */
+    info_solve_unknowns(m, d, 2, u, Ri);              /* the point the bound is mapped at */
     sr_info_information(m, d, S);
     for (int p = 0; p < nu; p++)                 /* S + factor dS, packed nu x nu */
         for (int q = 0; q < nu; q++)
@@ -970,61 +516,6 @@ static int own_point(const sr_info_model *m, const sr_info_data *d, double *z)
     if (estimate_as_fit(m, d, z, bound) != 0 || !(z[0] > 0.0 && z[10] > 0.0))
         return 1;
     return 0;
-}
-
-/* The model error's variances (sr_info_data.me_var) from the kept samples: the rows'
-   residuals at the estimate z (reported, 20; the thrust errors at 0), the linear ones less
-   their mean (the momentum c0) give P_f, the angular ones less r_S x that and their mean
-   give L_f about the base point; their mean squares per used row */
-static void model_error_of(const sr_info_model *m, const double *buffer, const double *z,
-                           double *me_var)
-{
-    int slot = 1 + SR_X_LEN(m->n), nlin = 0, nang = 0;
-    double zO[20], c[6] = {0}, s[2] = {0, 0};
-    int used[6] = {0};
-    for (int a = 0; a < m->nr; a++) {
-        used[m->rows[a]] = 1;
-        if (m->rows[a] < 3)
-            nlin++;
-        else
-            nang++;
-    }
-    sr_standard_of_reported(z, zO);
-    for (int pass = 0; pass < 3; pass++) {   /* mean of the linear; of the angular; squares */
-        double acc[6] = {0};
-        for (int k = 0; k < SR_INFO_REPLAY; k++) {
-            const double *x = buffer + (size_t)k * (size_t)slot + 1, *r = x + SR_X_R_S;
-            double full[6][20], y[6], e[6];
-            rows_full(m, x, full, y);
-            for (int i = 0; i < 6; i++) {
-                e[i] = -y[i];
-                for (int j = 0; j < 20; j++)
-                    e[i] += full[i][j] * zO[j];
-            }
-            double p[3] = {e[0] - c[0], e[1] - c[1], e[2] - c[2]};
-            double l[3] = {e[3] - (r[1] * p[2] - r[2] * p[1]) - c[3],
-                           e[4] - (r[2] * p[0] - r[0] * p[2]) - c[4],
-                           e[5] - (r[0] * p[1] - r[1] * p[0]) - c[5]};
-            for (int i = 0; i < 3; i++) {
-                if (pass == 0)
-                    acc[i] += e[i];
-                else if (pass == 1)
-                    acc[3 + i] += l[i];
-                else {
-                    acc[0] += used[i] ? p[i] * p[i] : 0.0;
-                    acc[1] += used[3 + i] ? l[i] * l[i] : 0.0;
-                }
-            }
-        }
-        for (int i = 0; i < 3 && pass < 2; i++)
-            c[3 * pass + i] = acc[3 * pass + i] / SR_INFO_REPLAY;
-        if (pass == 2) {
-            s[0] = nlin ? acc[0] / (nlin * (double)SR_INFO_REPLAY) : 0.0;
-            s[1] = nang ? acc[1] / (nang * (double)SR_INFO_REPLAY) : 0.0;
-        }
-    }
-    me_var[0] = isfinite(s[0]) ? s[0] : 0.0;
-    me_var[1] = isfinite(s[1]) ? s[1] : 0.0;
 }
 
 /* The replay into d: from the prior the kept samples and then x at t, linearised at z, with
@@ -1092,11 +583,11 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
     /* where the rigid model does not fit the replayed samples: once more with the thrust errors
        held (own_point's estimate) and the model error as the rows' noise */
     sr_info_fit f;
-    if (fit_test(m, d, &f) == 0 && f.misfit) {
+    if (sr_info_fit_of(m, d, &f) == 0 && f.misfit) {
         double me_var[2];
         if (own_point(m, d, z) != 0)
             memcpy(z, d->z_lin, sizeof z);
-        model_error_of(m, buffer, z, me_var);
+        info_model_error_of(m, buffer, z, me_var);
         if (replay(m, before, d, buffer, t, x, z, me_var, w) != 0)
             return 1;
     }

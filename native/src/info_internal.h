@@ -1,0 +1,41 @@
+/* What the information filter's files share (information.c: the filter; info_rows.c: its rows
+ * and their noise; info_fit.c: the model-fit test and the estimate with the thrust held):
+ * internal to the core, not part of information.h's interface. */
+#ifndef SR_INFO_INTERNAL_H
+#define SR_INFO_INTERNAL_H
+
+#include "information.h"
+
+#define MU SR_INFO_MAX_U             /* row stride of R, N_HH */
+/* a function kept out of its caller's frame: two of the large temporaries never share one */
+#if defined(__GNUC__)
+#define INFO_NOINLINE __attribute__((noinline))
+#else
+#define INFO_NOINLINE
+#endif
+#define HS (MU + 1)                  /* row stride of a block of rows [H | y] */
+
+/* information.c */
+void info_reported_of_u(const sr_info_model *m, const double *u, double *x);
+int info_bound_with(const sr_info_model *m, int nu, const double *Ri,
+                    const double *G, const double *u, double *bound);
+void info_solve_square_root(int nu, const double *R, const double *dv,
+                            const double *N_HH, const double *N_Hy,
+                            int compensated, double *u, double *Ri);
+void info_solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
+                         double *u, double *Ri);
+/* info_rows.c */
+void info_white_sds(const sr_info_noise *n, double *w);
+void info_rows_full(const sr_info_model *m, const double *x, double full[6][20], double *y);
+void info_rows_at(const sr_info_model *m, const double *x, const double *zO, double *r);
+void info_linear_rows(const sr_info_model *m, const double *x, const double *k, double *H,
+                      double *y);
+int info_channels(const sr_info_model *m, int *idx, double *sd);
+int info_noise_weight(const sr_info_model *m, const double *x, const double *z,
+                      const double *me_var, double *W);
+void info_weigh(const double *W, int nr, const double *in, int ncol, double *out);
+/* info_fit.c */
+void info_model_error_of(const sr_info_model *m, const double *buffer, const double *z,
+                         double *me_var);
+
+#endif
