@@ -205,7 +205,7 @@ def layer_sources(fmi_version: int = 2) -> List[Path]:
     """The FMI layer's C files of one FMI version: the shared part and that version's API."""
     if fmi_version not in FMI_VERSIONS:
         raise ValueError(f"fmi_version must be one of {FMI_VERSIONS}, got {fmi_version!r}")
-    return [FMI / "fmi_layer.c", FMI / f"fmi{fmi_version}_api.c"]
+    return [FMI / "fmi_layer.c", FMI / "fmi_state.c", FMI / f"fmi{fmi_version}_api.c"]
 
 
 def build_fmu_binary(model: str, platform: str, out_dir: Path, strict: bool = False,
