@@ -59,7 +59,7 @@ MODEL_SOURCES = {"estimator": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "b
                                "excite_design.c", "est_options.c", "est_model.c", "est_rows.c",
                                "est_rls.c", "est_uncertainty.c", "est_eiv.c", "est_corr.c",
                                "est_tracker.c", "est_consider.c", "est_paper.c", "est_joint.c",
-                               "est_fit.c", "est_modal.c", "est_report.c", "est_update.c"),
+                               "est_fit.c", "est_hold.c", "est_modal.c", "est_report.c", "est_update.c"),
                  "sensors": ("sr_math.c", "sr_text.c", "sample.c", "rng.c", "sensor_noise.c", "sensors.c"),
                  "plant": ("sr_math.c", "sr_text.c", "linalg.c", "arm.c", "body.c", "sample.c",
                            "dynamics.c", "dynamics_aba.c", "dynamics_crba.c", "dynamics_state.c",

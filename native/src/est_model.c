@@ -9,6 +9,7 @@
 
 #include "differencing.h"
 #include "est_joint.h"
+#include "est_hold.h"
 #include "est_modal.h"
 #include "est_types.h"
 #include "est_options.h"
@@ -417,6 +418,11 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
         sr_text_set(err, errlen, "the estimator's state block is not valid: the excitation "
                              "design's phase or rate is out of range or its numbers not "
                              "finite");
+        return 1;
+    }
+    if (est_hold_check(&d->hold)) {
+        sr_text_set(err, errlen, "the estimator's state block is not valid: the identified "
+                             "flags' hold has counts out of range or numbers not finite");
         return 1;
     }
     if (est_modal_check(m, data)) {

@@ -10,6 +10,7 @@
 
 #include "est_corr.h"
 #include "est_fit.h"
+#include "est_hold.h"
 #include "est_joint.h"
 #include "est_modal.h"
 #include "est_paper.h"
@@ -205,6 +206,7 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
         r->identified[k] = d->samples > 0 && flags[2 + k];
     }
     est_fit_gate_flags(r->misfit, r->identified);
+    est_hold_gate(m, d, ls, r->sd, r->identified);
     r->residual_lin = d->core.residual_lin;
     r->residual_ang = d->core.residual_ang;
     r->excitation_mu = d->samples > 0 ? d->core.rcond_mu : 0.0;

@@ -181,12 +181,26 @@ typedef struct est_core {
     double fit_now[4], fit_win[4];
 } est_core;
 
+/* The identified flags' hold (est_hold.h): the reported estimates and standard deviations
+ * at up to EST_HOLD_SNAPS sample times, ident.fit_window / EST_HOLD_STEPS apart, since the
+ * information filter's replay (a ring: the next slot, the snapshots stored), and the last
+ * committed sample's time [s]. */
+#define EST_HOLD_STEPS 4
+#define EST_HOLD_SNAPS (EST_HOLD_STEPS + 1)
+typedef struct est_hold {
+    int head, count;
+    double t_last;
+    double t[EST_HOLD_SNAPS];
+    double vec[EST_HOLD_SNAPS * EST_NZ], sd[EST_HOLD_SNAPS * EST_NZ];
+} est_hold;
+
 /* The Data block's fixed head; the variable tail follows at the model's offsets. */
 typedef struct est_data {
     unsigned magic;
     int samples, rejected, status;
     char msg[SR_EST_MSG_LEN];
     est_core core;
+    est_hold hold;
 } est_data;
 
 #define EST_MAGIC 0x53524531u     /* "SRE1" */

@@ -9,6 +9,7 @@
 
 #include "est_corr.h"
 #include "est_fit.h"
+#include "est_hold.h"
 #include "est_joint.h"
 #include "est_modal.h"
 #include "est_types.h"
@@ -258,6 +259,16 @@ static const char *step_failure(int st)
                      "units and of physical size?";
 }
 
+/* the flags' hold after a committed sample at t: the reported estimates kept where due */
+static void hold_step(const sr_estimator_model *m, void *data, double t)
+{
+    double ls[EST_NZ], sd[EST_NZ];
+    int due = est_hold_due(m, data, t);
+    if (due)
+        sr_estimator_estimates(m, data, ls, sd);
+    est_hold_commit(m, data, t, due ? ls : NULL, due ? sd : NULL);
+}
+
 int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, double t,
                         const double *sample, char *msg, size_t msglen)
 {
@@ -334,6 +345,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
     est_rows_commit(m, data, t, sample, rows);
     core_commit(m, c, nw);
     d->samples = count_up(d->samples);
+    hold_step(m, data, t);
     d->status = SR_EST_ESTIMATING;
     d->msg[0] = '\0';
     design_step(m, data, t, &wk->exd);
