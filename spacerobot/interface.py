@@ -494,7 +494,9 @@ def estimator_vars(robot: Robot, sc: Scenario) -> List[Var]:
                   f"1 when every identified estimate of the {who} has a standard deviation below "
                   f"ident.sd_rel of its error scale (with the information filter, "
                   f"ident.information: every estimate within it with probability "
-                  f"ident.flag_confidence), else 0", None,
+                  f"ident.flag_confidence, after the filter's replay and only where the "
+                  f"estimates moved over ident.fit_window within what their standard "
+                  f"deviations allow), else 0", None,
                   ("identified", who)),
               Var(f"diag.physical.{who}", "output", "discrete", "Integer", None,
                   f"1 when the least-squares estimate of the {who} is a real rigid body; 0 when "
@@ -622,7 +624,9 @@ def model_fit_vars() -> List[Var]:
     return [
         Var("ident.fit_window", "parameter", "fixed", "Real", "s",
             "Model-fit test without a noise model: the exponential window of the relative "
-            "residual diag.model_fit (> 0)", 60.0, ("fit_window",)),
+            "residual diag.model_fit; with the information filter: the identified flags' "
+            "hold, the time over which the estimates' move is compared with their standard "
+            "deviations (> 0)", 60.0, ("fit_window",)),
         Var("ident.fit_lags", "parameter", "fixed", "Integer", None,
             "Model-fit test with the information filter: the lags of the Ljung-Box whiteness "
             "test of its whitened residuals (1 to 100)", 50, ("fit_lags",)),

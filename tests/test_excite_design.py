@@ -212,10 +212,11 @@ def test_the_horizon_counts_from_the_first_sample(run90):
 def test_no_choice_without_excitation_or_filter(run90):
     """Off (excite_adapt 2), with no excitation requested (excite_mode 0: automatic is off), or
     where the estimator stops asking before the first window ends (both bodies identified at
-    a loose threshold): the rate stays 1 and no score."""
+    a loose threshold with a short hold, ident.fit_window 0.5 s: the flags rise just after the
+    filter's replay): the rate stays 1 and no score."""
     sc, ts, X = run90
     for over in ({"ident__excite_adapt": 2}, {"ident__excite_mode": 0},
-                 {"ident__sd_rel": 0.9}):
+                 {"ident__sd_rel": 0.9, "ident__fit_window": 0.5}):
         rates, scores, ident = _rates(sc, ts, X, **over)
         assert np.all(rates == 1.0) and np.all(scores == 0.0), over
     assert all(ident.report().identified.values())      # the loose threshold did flag both
