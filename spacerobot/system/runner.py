@@ -318,7 +318,9 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
         if chi2 is not None and len(chi2) and chi2[-1] > 0:
             out.append(f"the information filter reported (ident.information): diag.info_chi2 "
                        f"{chi2[-1]:.3g} (from its 600th sample on about 1 where the noise.* "
-                       f"values fit the sensors); its flags need 2 sd below ident.sd_rel; its "
+                       f"values fit the sensors); its flags need every sd below ident.sd_rel / z "
+                       f"(ident.flag_confidence), the filter replayed and the estimates steady "
+                       f"over ident.fit_window (docs/identification.md, 'Flags'); its "
                        f"Cramer-Rao bound: the crb.* columns")
             break
     for prefix in ("estimator.", ""):
