@@ -59,7 +59,7 @@ typedef struct est_modal_data {
     est_modal_filter f[EST_MODAL_MAX_F];
 } est_modal_data;
 
-/* the doubles of a kept sample (its signals, identified rows [H | yy] and its momentum
+/* the doubles of a kept sample (its signals, identified rows [H | yy (| consider)], its momentum
  * window's reference's sample index, -1 without the window) */
 int est_modal_slot(const sr_estimator_model *m);
 
@@ -79,14 +79,16 @@ int est_modal_check(const sr_estimator_model *m, const void *data);
  * start at rest there. */
 void est_modal_reference(const sr_estimator_model *m, void *data, double t, const double *x);
 
-/* The sample x at t with the rigid rows E (3 x 42) after the solver's step into nw, formed
+/* The sample x at t with the rigid rows E (3 x 42; with the thrust's consider term its
+ * consider columns Ec, 3 x 16) after the solver's step into nw, formed
  * against the momentum window's entry win_drop (est_rows.win_drop: its oldest samples the
  * window drops; ignored without the window): the filters' step, the rows with the modal
  * columns (differenced against the window's reference) into [R d], the sample kept, the mode
  * search where it is due; then nw's estimates and sd from the modal solve (where they are
  * finite). Writes the Data block (after the solver's step succeeded). */
 void est_modal_step(const sr_estimator_model *m, void *data, double t, const double *x,
-                    const double *E, int win_drop, est_core *nw, est_modal_work *w);
+                    const double *E, const double *Ec, int win_drop, est_core *nw,
+                    est_modal_work *w);
 
 /* the frequency [Hz] and damping of mode k (0 .. n_f - 1) now: 1, or 0 if there is none */
 int est_modal_mode(const sr_estimator_model *m, const void *data, int k, double *f,

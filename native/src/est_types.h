@@ -229,7 +229,7 @@ typedef struct est_rows {
  * (est_modal_work_size) */
 typedef struct est_modal_work {
     double gram[EST_MODAL_SCAN_NMAX * EST_MODAL_SCAN_NMAX];
-    double rows[EST_MAXK * (EST_MODAL_NMAX + 1)];
+    double rows[EST_MAXK * (EST_MODAL_NMAX + 1 + SR_N_CONSIDER)];
     double cols[6 * EST_MODAL_COLS];
     double cols_ref[6 * EST_MODAL_COLS];
     double cov[EST_NZ * EST_NZ];
