@@ -315,3 +315,20 @@ def test_sensors_windowed_columns_sd_cover_the_error(name):
     assert within >= 18
     if name == "wings":
         assert worst < 0.10
+
+
+def test_corrupt_window_ring_is_refused():
+    """A state whose window ring names another sample than the one it holds (the newest entry's
+    index changed) is refused with the modal columns' message; the identifier keeps its own."""
+    import struct
+    sc, xs, _ = _record("wings", 10.0)
+    a = _identify(sc, xs, 1, window=WINDOW, point=True)
+    st = bytearray(a.get_state())
+    newest = struct.pack("<dd", float(len(xs) - 1), (len(xs) - 1) * DT)   # [index, t, ...]
+    at = st.rfind(newest)                        # (the ring is the block's last part)
+    assert at > len(st) // 2
+    st[at:at + 8] = struct.pack("<d", float(len(xs) - 2))
+    before = a.vector()
+    with pytest.raises(ValueError, match="modal columns"):
+        a.set_state(bytes(st))
+    np.testing.assert_array_equal(a.vector(), before)
