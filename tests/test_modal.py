@@ -19,7 +19,7 @@ flexible plant (native/src/plant_leaves.c; docs/models.md 'Flexible appendages a
   wings' worst error below 10 %;
 * the rules: the modal columns need the momentum method and the joint solver; a given
   frequency below 0.05 Hz is refused; the state round trip carries the modes (with the window
-  too: its ring of the filters' states).
+  too: its ring of the filters' states); a state whose ring names another sample is refused.
 """
 from __future__ import annotations
 
