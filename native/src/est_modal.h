@@ -9,7 +9,8 @@
  *   G  l l^T eta'_a          21 (symmetric)      C  l s^T eta'_w       36
  *   D  [w]x d eta, -[v_B]x d eta    36            T  Omega(w) dI(eta)   72
  * eta, eta' the filter's response to each drive channel u_j (exact for an input linear between
- * samples). The unknowns [modal (165 per frequency) | rigid standard parameters (q)] are solved
+ * samples), at rest at the momentum reference; over a momentum window each sample's columns
+ * minus those of its window's reference (a ring of the filters' states). The unknowns [modal (165 per frequency) | rigid standard parameters (q)] are solved
  * by a square-root information filter (Givens rotations of each sample's rows into [R d]); the
  * rigid block is last, so its answer and covariance need only R's last q x q block.
  *
