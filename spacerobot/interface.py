@@ -597,8 +597,9 @@ def noise_model_vars() -> List[Var]:
               "columns'): the momentum of flexible panels and propellant slosh, to first order, "
               "as extra unknowns driven by the measured base motion, the modes' frequencies "
               "given (ident.mode_f) or found from the data; the reported estimates are then the "
-              "composite rigid body's. 1 = on (needs method = 1, solver = 2, "
-              "ident.momentum_window = 0), 2 = off", 2, ("modes",))]
+              "composite rigid body's (with ident.momentum_window, each sample's columns "
+              "differenced against the window's reference, as its rows). 1 = on (needs "
+              "method = 1, solver = 2), 2 = off", 2, ("modes",))]
     v += [Var(f"ident.mode_f[{i + 1}]", "parameter", "fixed", "Real", "Hz",
               f"With ident.modes = 1: the frequency of flexible mode {i + 1} with the base "
               "held (cantilevered panel, slosh) where known; 0 = not given (the modes are then "

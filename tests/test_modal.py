@@ -7,13 +7,25 @@ flexible plant (native/src/plant_leaves.c; docs/models.md 'Flexible appendages a
   (cantilevered) frequency found within 1 %; the same samples with the modes off are several
   times further off (what the columns remove is real);
 * on the rigid spacecraft (`default`) nothing is found and the estimates stay exact;
-* the rules: the modal columns need the momentum method, the joint solver and no momentum
-  window; a given frequency below 0.05 Hz is refused; the state round trip carries the modes.
+* over the momentum window (ident.momentum_window > 0: each sample's columns differenced
+  against the window's reference, as its rigid rows are): after the first search and its
+  replay, the estimates are those of a batch least squares written here (the test oracle's
+  rigid rows, the modal columns from the filter's exact discretisation, the same prior) on the
+  `wings` set; on the rigid spacecraft nothing is found and the estimates are the rigid
+  window's;
+* through the sensors (their realistic defaults, seed 0, the noise profile: its 5 s window,
+  the thrust's consider term), the joint solver with the columns on the `wings` and `slosh`
+  sets: at least 18 of the 20 estimates within 2 reported sd of the composite truth, and the
+  wings' worst error below 10 %;
+* the rules: the modal columns need the momentum method and the joint solver; a given
+  frequency below 0.05 Hz is refused; the state round trip carries the modes (with the window
+  too: its ring of the filters' states); a state whose ring names another sample is refused.
 """
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.linalg import expm
 
 from spacerobot.core.plant import NativePlant
 from spacerobot.core.sample import sample_length
@@ -44,9 +56,9 @@ def _record(name: str, t_end: float = T_END):
     return sc, np.array(xs), truth
 
 
-def _identify(sc, xs, modes: int, **extra):
-    ident = Identifier(sc.robot, sc.guess, "momentum", solver="joint",
-                       excite={"ident.modes": modes, **extra})
+def _identify(sc, xs, modes: int, window: float = 0.0, point: bool = False, **extra):
+    ident = Identifier(sc.robot, sc.guess, "momentum", solver="joint", window=window,
+                       moving_point=point, excite={"ident.modes": modes, **extra})
     for k, x in enumerate(xs):
         ident.update_flat(k * DT, x)
     return ident
@@ -109,9 +121,8 @@ def test_rigid_spacecraft_finds_no_mode_and_stays_exact():
 
 
 @pytest.mark.parametrize("change, message", [
-    ({"solver": 1}, "needs the momentum method (method = 1), the joint solver (solver = 2)"),
+    ({"solver": 1}, "needs the momentum method (method = 1) and the joint solver (solver = 2)"),
     ({"method": 2}, "needs the momentum method"),
-    ({"ident.momentum_window": 2.0}, "no momentum window"),
     ({"ident.mode_f[2]": 0.01}, "ident.mode_f[2] must be 0 (not given) or a frequency from"),
     ({"ident.mode_f[1]": 3.5}, "ident.mode_f[1] must be a frequency from 0 to 3 Hz"),
 ])
@@ -126,12 +137,15 @@ def test_bad_settings_are_refused_with_their_names(change, message):
         Identifier(sc.robot, sc.guess, method, solver=solver, window=window, excite=opts)
 
 
-def test_state_round_trip_carries_the_modes():
+@pytest.mark.parametrize("window", [0.0, 5.0])
+def test_state_round_trip_carries_the_modes(window):
     """A copy of the state after the first search (70 s of the `wings` set) continues as the
-    original does: the same modes and estimates after 20 s more."""
+    original does: the same modes and estimates after 20 s more (with the momentum window:
+    its ring of the filters' states carried too)."""
     sc, xs, _ = _record("wings", 90.0)
-    a = _identify(sc, xs[:701], 1)
-    b = Identifier(sc.robot, sc.guess, "momentum", solver="joint", excite={"ident.modes": 1})
+    a = _identify(sc, xs[:701], 1, window=window, point=window > 0.0)
+    b = Identifier(sc.robot, sc.guess, "momentum", solver="joint", window=window,
+                   moving_point=window > 0.0, excite={"ident.modes": 1})
     b.set_state(a.get_state())
     assert np.any(a.core.report()["mode_f"] > 0.0)
     for k in range(701, len(xs)):
@@ -139,3 +153,182 @@ def test_state_round_trip_carries_the_modes():
         b.update_flat(k * DT, xs[k])
     np.testing.assert_array_equal(a.vector(), b.vector())
     np.testing.assert_array_equal(a.core.report()["mode_f"], b.core.report()["mode_f"])
+
+
+# -- over the momentum window: a batch least squares written here ------------------------------
+
+WINDOW = 5.0
+
+
+def _filter_states(u: np.ndarray, t: np.ndarray, w: float, zeta: float) -> np.ndarray:
+    """(N, 2, 12) eta and eta' of eta'' + 2 zeta w eta' + w^2 eta = -u for each of the 12
+    drive channels, at rest at t[0], the drive linear between samples: the exact step
+    exp(M dt) of the state [eta, eta', u, du/dt dt]."""
+    out = np.zeros((len(t), 2, u.shape[1]))
+    x = np.zeros((2, u.shape[1]))
+    for k in range(1, len(t)):
+        dt = t[k] - t[k - 1]
+        M = np.zeros((4, 4))
+        M[0, 1] = 1.0
+        M[1, 0], M[1, 1], M[1, 2] = -w * w, -2.0 * zeta * w, -1.0
+        M[2, 3] = 1.0 / dt
+        E = expm(M * dt)
+        x = E[:2, :2] @ x + E[:2, 2:3] * u[k - 1] + E[:2, 3:4] * (u[k] - u[k - 1])
+        out[k] = x
+    return out
+
+
+def _modal_columns(eta, etad, s, p) -> np.ndarray:
+    """(6, 165) momentum columns of one mode (docs/identification.md section 8): in base axes
+    about S the blocks G (21: the symmetric l l^T), C (36), D (36: [w]x d, -[v_B]x d) and
+    T (72: I(eta) w for I# = [Ixx Iyy Izz Ixy Ixz Iyz]), then to inertial axes, the angular
+    rows about the point p."""
+    w, A = s["omega_B"], s["A"]
+    vB = A.T @ s["v_S"]
+    cols = []
+    for i in range(6):
+        for j in range(i, 6):
+            h = np.zeros(6)
+            h[i] += etad[j]
+            h[j] += etad[i] if j != i else 0.0
+            cols.append(h)
+    for i in range(6):
+        for j in range(6):
+            h = np.zeros(6)
+            h[i] = etad[6 + j]
+            cols.append(h)
+    for i in range(3):
+        for j in range(12):
+            d = np.zeros(3)
+            d[i] = eta[j]
+            cols.append(np.r_[np.cross(w, d), -np.cross(vB, d)])
+    omega = np.array([[w[0], 0, 0], [0, w[1], 0], [0, 0, w[2]],
+                      [w[1], w[0], 0], [w[2], 0, w[0]], [0, w[2], w[1]]])
+    for i in range(6):
+        for j in range(12):
+            cols.append(np.r_[np.zeros(3), omega[i] * eta[j]])
+    H = np.array(cols).T
+    lin = A @ H[:3]
+    ang = A @ H[3:] + np.cross(s["r_S"] - p, lin.T).T
+    return np.vstack([lin, ang])
+
+
+def _batch_estimates(sc, xs, modes, point: bool):
+    """The rigid estimates (20,) of the batch least squares over every sample's rows
+    [modal columns | rigid rows] over the momentum window WINDOW (> 0; the oracle's rows,
+    weights and prior; the modal unknowns' prior information 1e-12, as the estimator's)."""
+    from oracles.estimator.identifier import Identifier as Oracle
+    o = Oracle(sc.robot, sc.guess, "momentum", "joint", window=WINDOW, moving_point=point)
+    meas = [o._unflatten(np.asarray(x, float)) for x in xs]
+    t = DT * np.arange(len(xs))
+    u = np.array([np.r_[m["A"].T @ m["a_S"], m["alpha_B"], m["omega_B"] ** 2,
+                        m["omega_B"][[0, 0, 1]] * m["omega_B"][[1, 2, 2]]] for m in meas])
+    states = [_filter_states(u, t, 2.0 * np.pi * f, z) for f, z in modes]
+    act = o.layout.standard_active
+    rows, rhs = [], []
+    for k in range(len(xs)):
+        r = o.rows(t[k], meas[k])
+        if r is None:
+            continue
+        A, b, phi, y, psi = o._identified_rows(*r)
+        Y, yy = o.solver._stack(A, b, phi, y, psi)
+        limit = t[k] - WINDOW + 1e-9 * max(1.0, t[k])
+        ref = max([j for j in range(k) if t[j] <= limit], default=0)
+        p = meas[k]["r_S"] if point else np.zeros(3)
+        wt = np.r_[np.full(len(b), o._w_lin), np.full(len(y), o._w_ang)]
+        blocks = []
+        for st in states:
+            c = (_modal_columns(st[k, 0], st[k, 1], meas[k], p)
+                 - _modal_columns(st[ref, 0], st[ref, 1], meas[ref], p))
+            blocks.append(c[np.r_[o.layout.rows_lin, 3 + o.layout.rows_ang]] * wt[:, None])
+        rows.append(np.hstack(blocks + [Y[:, act]]))
+        rhs.append(yy)
+    nm = 165 * len(modes)
+    info = 1.0 / o.solver.prior()[act]
+    pi0 = o.solver.pi[act]
+    P = np.vstack([np.hstack([1e-6 * np.eye(nm), np.zeros((nm, len(act)))]),
+                   np.hstack([np.zeros((len(act), nm)), np.diag(np.sqrt(info))])])
+    X = np.vstack(rows + [P])
+    Y = np.concatenate(rhs + [np.r_[np.zeros(nm), np.sqrt(info) * pi0]])
+    z = np.linalg.lstsq(X, Y, rcond=None)[0][nm:]
+    full = o.solver.pi.copy()
+    full[act] = z
+    return o.solver.vector_of(full)
+
+
+def test_windowed_columns_are_the_batch_least_squares(point=True):
+    """The `wings` set, 70 s (the first search at 60 s found the modes and every kept sample
+    was solved again with its window's reference) over a 5 s momentum window, the angular rows
+    about the moving point (the sensors' profile's; about the origin the columns take the
+    first-sample form's shift, which the accuracy tests above cover): the estimates within
+    1e-9 (relative, error scale) of the batch least squares written here with the modes the
+    estimator reports (the Givens solve and LAPACK's differ by round-off only)."""
+    sc, xs, truth = _record("wings", 70.0)
+    ident = _identify(sc, xs, 1, window=WINDOW, point=point)
+    rep = ident.core.report()
+    modes = [(f, z) for f, z in zip(rep["mode_f"], rep["mode_zeta"]) if f > 0.0]
+    assert modes and min(abs(f - 0.5) for f, _ in modes) < 0.01
+    batch = _batch_estimates(sc, xs, modes, point)
+    gap = relative_errors(np.asarray(ident.vector()), batch).max()
+    err = relative_errors(np.asarray(ident.vector()), truth).max()
+    print(f"window {WINDOW} s, point {point}: modes {modes}; gap to the batch {gap:.1e}, "
+          f"worst error {100 * err:.3f} %")
+    assert gap < 1e-9
+
+
+def test_windowed_rigid_spacecraft_finds_no_mode_and_matches_the_rigid_window():
+    """The rigid robot (80 s, past the first search) over a 5 s momentum window about the
+    moving point: no mode; the estimates within 1e-9 (relative) of the rigid window's."""
+    sc, xs, truth = _record("default", 80.0)
+    on = _identify(sc, xs, 1, window=WINDOW, point=True)
+    off = _identify(sc, xs, 2, window=WINDOW, point=True)
+    assert np.all(on.core.report()["mode_f"] == 0.0)
+    gap = relative_errors(np.asarray(on.vector()), np.asarray(off.vector())).max()
+    print(f"rigid, window: {gap:.1e} between ident.modes = 1 and 2; "
+          f"{relative_errors(off.vector(), truth).max():.1e} from the truth")
+    assert gap < 1e-9
+
+
+@pytest.mark.parametrize("name", ["wings", "slosh"])
+def test_sensors_windowed_columns_sd_cover_the_error(name):
+    """Through the sensors (realistic defaults, seed 0) with the noise profile (its 5 s
+    momentum window about the base, the thrust's consider term, the rows' correlation) and
+    the joint solver with the columns, 300 s: at least 18 of the 20 estimates within 2
+    reported sd of the composite truth (measured 20 and 20; 9 and 12 with the least-squares sd
+    alone); the wings' worst error below 10 % (measured 5.5 %; 23.7 % with the columns
+    against the first sample, 46 % without them)."""
+    from spacerobot.estimator.identifier import identifier_from_values
+    from spacerobot.interface import estimator_vars
+    from spacerobot.sensors import SensorSuite
+    sc, xs, truth = _record(name)
+    v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
+    v.update({"method": 1, "solver": 2, "ident.modes": 1, "ident.information": 2,
+              "ident.noise_profile": 1, "noise.scale": 1.0})
+    ident, _ = identifier_from_values(sc.robot, v, DT)
+    suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=0, dt=DT)
+    for k, x in enumerate(xs):
+        ident.update(k * DT, suite.update(suite.sample(x), DT))
+    est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
+    within = int(np.sum(np.abs(est - truth) <= 2.0 * sd))
+    worst = relative_errors(est, truth).max()
+    print(f"{name}, sensors: worst {100 * worst:.2f} %, {within} of 20 within 2 sd")
+    assert within >= 18
+    if name == "wings":
+        assert worst < 0.10
+
+
+def test_corrupt_window_ring_is_refused():
+    """A state whose window ring names another sample than the one it holds (the newest entry's
+    index changed) is refused with the modal columns' message; the identifier keeps its own."""
+    import struct
+    sc, xs, _ = _record("wings", 10.0)
+    a = _identify(sc, xs, 1, window=WINDOW, point=True)
+    st = bytearray(a.get_state())
+    newest = struct.pack("<dd", float(len(xs) - 1), (len(xs) - 1) * DT)   # [index, t, ...]
+    at = st.rfind(newest)                        # (the ring is the block's last part)
+    assert at > len(st) // 2
+    st[at:at + 8] = struct.pack("<d", float(len(xs) - 2))
+    before = a.vector()
+    with pytest.raises(ValueError, match="modal columns"):
+        a.set_state(bytes(st))
+    np.testing.assert_array_equal(a.vector(), before)

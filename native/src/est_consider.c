@@ -4,6 +4,21 @@
 
 #include <math.h>
 
+void est_consider_rows(const sr_estimator_model *m, const double *Ec, double *bc, double *yc)
+{
+    const int nc = SR_N_CONSIDER;
+    for (int a = 0; a < m->k1; a++)
+        for (int c = 0; c < nc; c++) {
+            double v = Ec[m->rows_lin[a] * SR_N_CCOLS + c];
+            bc[a * nc + c] = m->w_lin != 1.0 ? v * m->w_lin : v;
+        }
+    for (int a = 0; a < m->k2; a++)
+        for (int c = 0; c < nc; c++) {
+            double v = Ec[m->rows_ang[a] * SR_N_CCOLS + nc + c];
+            yc[a * nc + c] = m->w_ang != 1.0 ? v * m->w_ang : v;
+        }
+}
+
 void est_consider_sums(const sr_estimator_model *m, const est_core *old, est_core *nw,
                        const double *Ec, const double *A, const double *phi, const double *H)
 {
@@ -11,16 +26,7 @@ void est_consider_sums(const sr_estimator_model *m, const est_core *old, est_cor
     double lam = m->opt.lambda;
     /* the consider right-hand sides of the identified rows, weighted as their rows */
     double bc[3 * SR_N_CONSIDER], yc[3 * SR_N_CONSIDER];
-    for (int a = 0; a < k1; a++)
-        for (int c = 0; c < nc; c++) {
-            double v = Ec[m->rows_lin[a] * SR_N_CCOLS + c];
-            bc[a * nc + c] = m->w_lin != 1.0 ? v * m->w_lin : v;
-        }
-    for (int a = 0; a < k2; a++)
-        for (int c = 0; c < nc; c++) {
-            double v = Ec[m->rows_ang[a] * SR_N_CCOLS + nc + c];
-            yc[a * nc + c] = m->w_ang != 1.0 ? v * m->w_ang : v;
-        }
+    est_consider_rows(m, Ec, bc, yc);
     if (m->opt.solver == 1) {                /* lam C + A^T b_c, lam C + phi^T y_c */
         for (int i = 0; i < m->p; i++)
             for (int c = 0; c < nc; c++) {

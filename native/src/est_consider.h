@@ -10,6 +10,10 @@
 
 #include "est_types.h"
 
+/* The consider right-hand sides of a sample's identified rows from its consider columns Ec
+ * (3 x 16), weighted and selected as the rows: bc (k1 x 8), yc (k2 x 8) */
+void est_consider_rows(const sr_estimator_model *m, const double *Ec, double *bc, double *yc);
+
 /* The consider sums of nw after a sample, from old's and the identified rows with their
  * consider columns Ec (3 x 16), weighted and selected as the rows: the paper solver's
  * A^T b_c (p x 8) from A (k1 x p) and phi^T y_c (r x 8) from phi (k2 x r) (H NULL); the

@@ -6,6 +6,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "est_consider.h"
+#include "est_corr.h"
 #include "est_joint.h"
 #include "linalg.h"
 #include "sr_math.h"
@@ -41,9 +43,25 @@ static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
 
 static int n_max(const sr_estimator_model *m) { return EST_MODAL_MAX_F * EST_MODAL_COLS + m->q; }
 
+/* the right-hand sides of a row: yy, then with the thrust's consider term its consider
+ * right-hand sides (SR_N_CONSIDER: the row's derivatives in the thrust's errors c) */
+static int n_rhs(const sr_estimator_model *m) { return 1 + (m->consider ? SR_N_CONSIDER : 0); }
+
 int est_modal_slot(const sr_estimator_model *m)
 {
-    return EST_MODAL_SIG + (m->k1 + m->k2) * (m->q + 1);
+    return EST_MODAL_SIG + (m->k1 + m->k2) * (m->q + n_rhs(m)) + 1;
+}
+
+/* the filters' states of one sample (eta, eta' per drive channel, per frequency) */
+#define EST_MODAL_STATES (2 * EST_MODAL_U * EST_MODAL_MAX_F)
+/* a window ring's entry: the sample's index, its signals, the filters' states after it */
+#define EST_MODAL_RING_SLOT (1 + EST_MODAL_SIG + EST_MODAL_STATES)
+
+/* entries of the search's ring of filter states (the window's reach within the kept
+ * samples and the reference) */
+static int scan_ring_cap(const sr_estimator_model *m)
+{
+    return m->win_cap < EST_MODAL_MAX_SAMPLES + 1 ? m->win_cap : EST_MODAL_MAX_SAMPLES + 1;
 }
 
 size_t est_modal_size(const sr_estimator_model *m)
@@ -52,7 +70,17 @@ size_t est_modal_size(const sr_estimator_model *m)
         return 0;
     size_t nm = (size_t)n_max(m);
     return align8(sizeof(est_modal_data))
-           + sizeof(double) * (nm * nm + nm + (size_t)EST_MODAL_MAX_SAMPLES * est_modal_slot(m));
+           + sizeof(double) * (nm * nm + nm * (size_t)n_rhs(m)
+                               + (size_t)EST_MODAL_MAX_SAMPLES * est_modal_slot(m)
+                               + (m->window ? (size_t)m->win_cap * EST_MODAL_RING_SLOT : 0));
+}
+
+size_t est_modal_work_size(const sr_estimator_model *m)
+{
+    if (!m->modes)
+        return 0;
+    return sizeof(est_modal_work)
+           + (m->window ? sizeof(double) * (size_t)scan_ring_cap(m) * EST_MODAL_STATES : 0);
 }
 
 static est_modal_data *state(const sr_estimator_model *m, void *data)
@@ -68,9 +96,21 @@ static double *d_of(const sr_estimator_model *m, void *data)
     size_t nm = (size_t)n_max(m);
     return R_of(m, data) + nm * nm;
 }
-static double *kept_of(const sr_estimator_model *m, void *data)
+/* with the consider term: D_c (n_max x SR_N_CONSIDER), the consider right-hand sides rotated
+ * as d is (dz/dc = R^-1 D_c) */
+static double *dc_of(const sr_estimator_model *m, void *data)
 {
     return d_of(m, data) + n_max(m);
+}
+static double *kept_of(const sr_estimator_model *m, void *data)
+{
+    return d_of(m, data) + (size_t)n_max(m) * (size_t)n_rhs(m);
+}
+/* the window ring's entry of sample index i (slot i mod win_cap) */
+static double *ring_of(const sr_estimator_model *m, void *data, int i)
+{
+    return kept_of(m, data) + (size_t)EST_MODAL_MAX_SAMPLES * est_modal_slot(m)
+           + (size_t)(i % m->win_cap) * EST_MODAL_RING_SLOT;
 }
 
 /* -- the filter ----------------------------------------------------------------------------- */
@@ -168,32 +208,33 @@ static void cross(const double *a, const double *b, double *c)
 }
 
 /* The momentum columns of one frequency (6 x nc, row-major; nc = EST_MODAL_COLS, or the scan's
- * EST_MODAL_SCAN_COLS: G and C only) at a sample's signals sig, in the rows' axes: inertial,
- * the angular rows about the origin (or about the base, ident.momentum_point). In base axes
- * about S first (est_modal.h's terms, d = e_i eta_j, Omega(w) e_i eta_j):
+ * EST_MODAL_SCAN_COLS: G and C only) at a sample's signals sig with the filter's eta and eta'
+ * (etad) there, in the rows' axes: inertial, the angular rows about the point p_I (the origin,
+ * or the newer sample's base position with ident.momentum_point). In base axes about S first
+ * (est_modal.h's terms, d = e_i eta_j, Omega(w) e_i eta_j):
  *   G (i <= j): h_i += eta'_j, h_j += eta'_i      C (6 i + j): h_i = eta'_{6 + j}
  *   D (12 i + j): lin [w]x e_i eta_j, ang -[v_B]x e_i eta_j
  *   T (12 i + j): ang Omega(w)[:, i] eta_j */
-static void columns(const sr_estimator_model *m, const est_modal_filter *f, const double *sig,
-                    int nc, double *out)
+static void columns(const double *eta, const double *etad, const double *sig,
+                    const double *p_I, int nc, double *out)
 {
     const double *w = sig + 13, *vB = sig + 16, *A = sig + 19, *r = sig + 28;
     memset(out, 0, sizeof(double) * 6 * (size_t)nc);
     int c = 0;
     for (int i = 0; i < 6; i++)
         for (int j = i; j < 6; j++, c++) {
-            out[i * nc + c] += f->etad[j];
+            out[i * nc + c] += etad[j];
             if (j != i)
-                out[j * nc + c] += f->etad[i];
+                out[j * nc + c] += etad[i];
         }
     for (int i = 0; i < 6; i++)
         for (int j = 0; j < 6; j++, c++)
-            out[i * nc + c] = f->etad[6 + j];
+            out[i * nc + c] = etad[6 + j];
     if (nc == EST_MODAL_COLS) {
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < EST_MODAL_U; j++, c++) {
                 double dv[3] = {0.0, 0.0, 0.0}, a[3], b[3];
-                dv[i] = f->eta[j];
+                dv[i] = eta[j];
                 cross(w, dv, a);
                 cross(vB, dv, b);
                 for (int k = 0; k < 3; k++) {
@@ -207,9 +248,10 @@ static void columns(const sr_estimator_model *m, const est_modal_filter *f, cons
         for (int i = 0; i < 6; i++)
             for (int j = 0; j < EST_MODAL_U; j++, c++)
                 for (int k = 0; k < 3; k++)
-                    out[(3 + k) * nc + c] = om[i][k] >= 0 ? w[om[i][k]] * f->eta[j] : 0.0;
+                    out[(3 + k) * nc + c] = om[i][k] >= 0 ? w[om[i][k]] * eta[j] : 0.0;
     }
-    /* to the rows' axes: lin_I = A lin, ang_I = A ang (+ r_S x lin_I about the origin) */
+    /* to the rows' axes: lin_I = A lin, ang_I = A ang + (r_S - p_I) x lin_I */
+    double rp[3] = {r[0] - p_I[0], r[1] - p_I[1], r[2] - p_I[2]};
     for (int col = 0; col < nc; col++) {
         double lb[3], ab[3], li[3], ai[3], rx[3];
         for (int k = 0; k < 3; k++) {
@@ -220,11 +262,9 @@ static void columns(const sr_estimator_model *m, const est_modal_filter *f, cons
             li[k] = A[3 * k] * lb[0] + A[3 * k + 1] * lb[1] + A[3 * k + 2] * lb[2];
             ai[k] = A[3 * k] * ab[0] + A[3 * k + 1] * ab[1] + A[3 * k + 2] * ab[2];
         }
-        if (!m->opt.momentum_point) {
-            cross(r, li, rx);
-            for (int k = 0; k < 3; k++)
-                ai[k] += rx[k];
-        }
+        cross(rp, li, rx);
+        for (int k = 0; k < 3; k++)
+            ai[k] += rx[k];
         for (int k = 0; k < 3; k++) {
             out[k * nc + col] = li[k];
             out[(3 + k) * nc + col] = ai[k];
@@ -233,22 +273,48 @@ static void columns(const sr_estimator_model *m, const est_modal_filter *f, cons
 }
 
 /* One sample's rows (k x width, row-major) [modal columns of the n_f frequencies (nc each) |
- * the identified rigid rows H (q) | yy]: the identified rows (rows_lin, rows_ang) weighted as
- * the rigid ones (w_lin, w_ang); Hy the kept rigid rows (k x (q + 1)) */
+ * the identified rigid rows H (q) | yy | the first extra of its consider right-hand sides]:
+ * the identified rows (rows_lin, rows_ang) weighted as the rigid ones (w_lin, w_ang); Hy the
+ * kept rigid rows (k x (q + n_rhs)). Against a momentum
+ * window's reference (ref_sig its signals, ref_x its filters' states in the
+ * EST_MODAL_STATES layout; NULL: the filters at rest there, no columns) the columns are the
+ * difference of the sample's and the reference's, both about the sample's point, as the
+ * rigid rows are (est_rows.c) */
 static void sample_rows(const sr_estimator_model *m, const est_modal_filter *f, int n_f, int nc,
-                        const double *sig, const double *Hy, double *cols, double *rows)
+                        const double *sig, const double *ref_sig, const double *ref_x,
+                        const double *Hy, int extra, est_modal_work *w, double *rows)
 {
-    int k1 = m->k1, k = k1 + m->k2, q = m->q, width = n_f * nc + q + 1;
+    int k1 = m->k1, k = k1 + m->k2, q = m->q, width = n_f * nc + q + 1 + extra;
+    int hw = q + n_rhs(m);
+    static const double origin[3] = {0.0, 0.0, 0.0};
+    const double *p_I = m->opt.momentum_point ? sig + 28 : origin;
+    double *cols = w->cols, *cref = w->cols_ref;
     for (int a = 0; a < k; a++)
-        memcpy(rows + a * width + n_f * nc, Hy + a * (q + 1), sizeof(double) * (q + 1));
+        memcpy(rows + a * width + n_f * nc, Hy + a * hw, sizeof(double) * (q + 1 + extra));
     for (int g = 0; g < n_f; g++) {
-        columns(m, &f[g], sig, nc, cols);
+        columns(f[g].eta, f[g].etad, sig, p_I, nc, cols);
+        if (ref_x) {                    /* h(t) - h(t_r): the window's difference */
+            const double *x = ref_x + 2 * EST_MODAL_U * g;
+            columns(x, x + EST_MODAL_U, ref_sig, p_I, nc, cref);
+            for (int i = 0; i < 6 * nc; i++)
+                cols[i] -= cref[i];
+        }
         for (int a = 0; a < k; a++) {
             int src = a < k1 ? m->rows_lin[a] : 3 + m->rows_ang[a - k1];
             double wt = a < k1 ? m->w_lin : m->w_ang;
             for (int c = 0; c < nc; c++)
                 rows[a * width + g * nc + c] = wt * cols[src * nc + c];
         }
+    }
+}
+
+/* the filters' states (EST_MODAL_STATES: eta, eta' of each frequency) into x */
+static void states_of(const est_modal_filter *f, int n_f, double *x)
+{
+    memset(x, 0, sizeof(double) * EST_MODAL_STATES);
+    for (int g = 0; g < n_f; g++) {
+        memcpy(x + 2 * EST_MODAL_U * g, f[g].eta, sizeof f[g].eta);
+        memcpy(x + 2 * EST_MODAL_U * g + EST_MODAL_U, f[g].etad, sizeof f[g].etad);
     }
 }
 
@@ -263,6 +329,8 @@ static void solve_reset(const sr_estimator_model *m, void *data)
     double *R = R_of(m, data), *d = d_of(m, data);
     memset(R, 0, sizeof(double) * (size_t)n * (size_t)n);
     memset(d, 0, sizeof(double) * (size_t)n);
+    if (m->consider)
+        memset(dc_of(m, data), 0, sizeof(double) * (size_t)n * SR_N_CONSIDER);
     for (int i = 0; i < nm; i++)
         R[i * n + i] = sqrt(EST_MODAL_PRIOR_INFO);
     for (int i = 0; i < q; i++) {
@@ -273,13 +341,14 @@ static void solve_reset(const sr_estimator_model *m, void *data)
     s->rss = s->rows = s->y2 = 0.0;
 }
 
-/* the rows (k x (n + 1)) into [R d] by Givens rotations (in place; the rows are destroyed),
- * pivot by pivot with every row at each (one pass over R per sample: R is megabytes) */
+/* the rows (k x (n + n_rhs)) into [R d D_c] by Givens rotations (in place; the rows are
+ * destroyed), pivot by pivot with every row at each (one pass over R per sample: R is
+ * megabytes) */
 static void solve_add(const sr_estimator_model *m, void *data, double *rows, int k)
 {
     est_modal_data *s = state(m, data);
-    int n = s->n_f * EST_MODAL_COLS + m->q, w = n + 1;
-    double *R = R_of(m, data), *d = d_of(m, data);
+    int n = s->n_f * EST_MODAL_COLS + m->q, nr = n_rhs(m), w = n + nr;
+    double *R = R_of(m, data), *d = d_of(m, data), *Dc = dc_of(m, data);
     for (int a = 0; a < k; a++)
         s->y2 += rows[(size_t)a * w + n] * rows[(size_t)a * w + n];
     for (int i = 0; i < n; i++) {
@@ -299,6 +368,13 @@ static void solve_add(const sr_estimator_model *m, void *data, double *rows, int
             double p = d[i], v = x[n];
             d[i] = c * p + sn * v;
             x[n] = c * v - sn * p;
+            for (int j = 1; j < nr; j++) {
+                double *dc = Dc + (size_t)i * SR_N_CONSIDER + j - 1;
+                p = *dc;
+                v = x[n + j];
+                *dc = c * p + sn * v;
+                x[n + j] = c * v - sn * p;
+            }
         }
     }
     for (int a = 0; a < k; a++) {
@@ -309,9 +385,10 @@ static void solve_add(const sr_estimator_model *m, void *data, double *rows, int
 
 /* the rigid unknowns' answer z (20; the unidentified at their guesses) and covariance C (20 x
  * 20: the prior's where unidentified) from R's last q x q block: R_qq z_q = d_q,
- * C_qq = s2 R_qq^-1 R_qq^-T, s2 = rss / (rows - n) */
+ * C_qq = s2 R_qq^-1 R_qq^-T, s2 = rss / (rows - n); with the consider term their shift in
+ * the thrust's errors, shift (20 x 8) = dz/dc = R_qq^-1 D_c,q (0 where unidentified) */
 static void solve_rigid(const sr_estimator_model *m, void *data, double *z, double *C,
-                        double *Rinv)
+                        double *Rinv, double *shift)
 {
     est_modal_data *s = state(m, data);
     int q = m->q, nm = s->n_f * EST_MODAL_COLS, n = nm + q;
@@ -335,6 +412,17 @@ static void solve_rigid(const sr_estimator_model *m, void *data, double *z, doub
                 acc -= R[(size_t)(nm + i) * n + nm + l] * Rinv[l * q + j];
             Rinv[i * q + j] = acc / R[(size_t)(nm + i) * n + nm + i];
         }
+    if (m->consider) {
+        const double *Dc = dc_of(m, data);
+        memset(shift, 0, sizeof(double) * EST_NZ * SR_N_CONSIDER);
+        for (int i = 0; i < q; i++)
+            for (int c = 0; c < SR_N_CONSIDER; c++) {
+                double acc = 0.0;
+                for (int l = i; l < q; l++)
+                    acc += Rinv[i * q + l] * Dc[(size_t)(nm + l) * SR_N_CONSIDER + c];
+                shift[m->std_active[i] * SR_N_CONSIDER + c] = acc;
+            }
+    }
     double dof = s->rows - n, s2 = dof > 0.0 ? s->rss / dof : 1.0;
     memset(C, 0, sizeof(double) * EST_NZ * EST_NZ);
     for (int i = 0; i < EST_NZ; i++)
@@ -364,9 +452,30 @@ static void filters_rest(est_modal_data *s)
     }
 }
 
-/* one kept sample (sig, Hy) through the filters and into [R d] */
+/* the kept sample's momentum window's reference (its sample index; -1 without the window) */
+static double *ref_of_kept(const sr_estimator_model *m, double *ks)
+{
+    return ks + EST_MODAL_SIG + (m->k1 + m->k2) * (m->q + n_rhs(m));
+}
+
+/* the window's ring holds the reference (index 0, signals sig, the filters at rest) alone */
+static void ring_start(const sr_estimator_model *m, void *data, const double *sig)
+{
+    est_modal_data *s = state(m, data);
+    s->n_samp = 0;
+    if (!m->window)
+        return;
+    double *e = ring_of(m, data, 0);
+    memset(e, 0, sizeof(double) * EST_MODAL_RING_SLOT);
+    memcpy(e + 1, sig, sizeof(double) * EST_MODAL_SIG);
+    s->ring_count = 1;
+}
+
+/* One sample (sig, Hy) through the filters and into [R d], its columns against the window's
+ * reference r (a sample index in the ring; -1 without the window); the sample into the ring
+ * after the entries older than r (as the rows' ring drops them) */
 static void solve_sample(const sr_estimator_model *m, void *data, const double *sig,
-                         const double *Hy, est_modal_work *w)
+                         const double *Hy, int r, est_modal_work *w)
 {
     est_modal_data *s = state(m, data);
     double dt = sig[0] - s->t_prev;
@@ -374,11 +483,21 @@ static void solve_sample(const sr_estimator_model *m, void *data, const double *
         filter_step(&s->f[g], dt, s->u_prev, sig + 1);
     memcpy(s->u_prev, sig + 1, sizeof s->u_prev);
     s->t_prev = sig[0];
-    sample_rows(m, s->f, s->n_f, EST_MODAL_COLS, sig, Hy, w->cols, w->rows);
+    const double *ref = r >= 0 ? ring_of(m, data, r) : NULL;
+    sample_rows(m, s->f, s->n_f, EST_MODAL_COLS, sig, ref ? ref + 1 : NULL,
+                ref ? ref + 1 + EST_MODAL_SIG : NULL, Hy, n_rhs(m) - 1, w, w->rows);
     solve_add(m, data, w->rows, m->k1 + m->k2);
+    s->n_samp++;
+    if (r >= 0) {
+        double *e = ring_of(m, data, s->n_samp);
+        e[0] = s->n_samp;
+        memcpy(e + 1, sig, sizeof(double) * EST_MODAL_SIG);
+        states_of(s->f, s->n_f, e + 1 + EST_MODAL_SIG);
+        s->ring_count = s->n_samp - r + 1;
+    }
 }
 
-/* every kept sample solved again (the modes changed) */
+/* every kept sample solved again (the modes changed), the window's ring formed again */
 static void replay(const sr_estimator_model *m, void *data, const double *u0,
                    est_modal_work *w)
 {
@@ -387,9 +506,10 @@ static void replay(const sr_estimator_model *m, void *data, const double *u0,
     filters_rest(s);
     memcpy(s->u_prev, u0, sizeof s->u_prev);
     s->t_prev = s->t0;
+    ring_start(m, data, s->sig0);
     for (int i = 0; i < s->kept; i++) {
-        const double *ks = kept_sample(m, data, i);
-        solve_sample(m, data, ks, ks + EST_MODAL_SIG, w);
+        double *ks = kept_sample(m, data, i);
+        solve_sample(m, data, ks, ks + EST_MODAL_SIG, (int)*ref_of_kept(m, ks), w);
     }
 }
 
@@ -413,17 +533,27 @@ static double objective(const sr_estimator_model *m, void *data, const est_modal
         memset(f[g].etad, 0, sizeof f[g].etad);
     }
     double *G = w->gram, t_prev = s->t0, u_prev[EST_MODAL_U];
+    /* with the window: the filters' states of each sample (index i + 1 of kept sample i; 0
+     * the reference, at rest) in a ring as long as the window reaches */
+    int cw = m->window ? scan_ring_cap(m) : 1;
+    if (m->window)
+        memset(w->ring, 0, sizeof(double) * EST_MODAL_STATES);
     memcpy(u_prev, u0, sizeof u_prev);
     memset(G, 0, sizeof(double) * (size_t)width * width);
     for (int i = 0; i < s->kept; i++) {
-        const double *ks = kept_sample(m, data, i);
+        double *ks = kept_sample(m, data, i);
         for (int g = 0; g < n_f; g++)
             filter_step(&f[g], ks[0] - t_prev, u_prev, ks + 1);
         memcpy(u_prev, ks + 1, sizeof u_prev);
         t_prev = ks[0];
+        int r = (int)*ref_of_kept(m, ks);
+        if (m->window)
+            states_of(f, n_f, w->ring + (size_t)((i + 1) % cw) * EST_MODAL_STATES);
         if (i % stride)
             continue;
-        sample_rows(m, f, n_f, nc, ks, ks + EST_MODAL_SIG, w->cols, w->rows);
+        const double *ref_sig = r > 0 ? kept_sample(m, data, r - 1) : s->sig0;
+        const double *ref_x = r >= 0 ? w->ring + (size_t)(r % cw) * EST_MODAL_STATES : NULL;
+        sample_rows(m, f, n_f, nc, ks, ref_sig, ref_x, ks + EST_MODAL_SIG, 0, w, w->rows);
         for (int a = 0; a < k; a++) {                      /* the upper triangle */
             const double *x = w->rows + a * width;
             for (int r = 0; r < width; r++) {
@@ -654,14 +784,34 @@ int est_modal_check(const sr_estimator_model *m, const void *data)
 {
     if (!m->modes)
         return 0;
-    const est_modal_data *s = state(m, (void *)data);
+    void *dv = (void *)data;
+    const est_modal_data *s = state(m, dv);
     if (s->started < 0 || s->started > 1 || s->n_f < 0 || s->n_f > EST_MODAL_MAX_F
         || s->kept < 0 || s->kept > EST_MODAL_MAX_SAMPLES || s->searches < 0
+        || s->n_samp < 0 || s->kept > s->n_samp
         || !isfinite(s->rss + s->rows + s->y2 + s->t0 + s->t_prev))
         return 1;
     for (int g = 0; g < s->n_f; g++)
         if (!(s->f[g].w > 0.0 && s->f[g].zeta > 0.0 && s->f[g].zeta < 1.0))
             return 1;
+    /* the window's ring: as long as the rows' (est_core.win_count), its entries the samples
+     * n_samp - ring_count + 1 .. n_samp; each kept sample's reference before it */
+    if (m->window) {
+        const est_core *c = &((const est_data *)data)->core;
+        if (s->started && (s->ring_count != c->win_count || s->ring_count < 1
+                           || s->ring_count > m->win_cap || s->ring_count > s->n_samp + 1))
+            return 1;
+        if (!s->started && s->ring_count != 0)
+            return 1;
+        for (int j = s->n_samp - s->ring_count + 1; j <= s->n_samp && s->started; j++)
+            if (ring_of(m, dv, j)[0] != (double)j)
+                return 1;
+    }
+    for (int i = 0; i < s->kept; i++) {
+        double r = *ref_of_kept(m, kept_sample(m, dv, i));
+        if (m->window ? !(r >= 0.0 && r <= i && r == floor(r)) : r != -1.0)
+            return 1;
+    }
     return 0;
 }
 
@@ -674,21 +824,28 @@ void est_modal_reference(const sr_estimator_model *m, void *data, double t, cons
     signals_of(m, t, x, sig);
     s->started = 1;
     s->t0 = s->t_prev = t;
+    memcpy(s->sig0, sig, sizeof sig);
     memcpy(s->u0, sig + 1, sizeof s->u0);
     memcpy(s->u_prev, sig + 1, sizeof s->u_prev);
+    ring_start(m, data, sig);
 }
 
-/* the reported estimates and sd of the rigid unknowns into nw (where finite) */
+/* The reported estimates and sd of the rigid unknowns into nw (where finite): the
+ * least-squares variance inflated for the rows' correlated errors as the joint solver's
+ * (est_corr.h: the overlapping windows share their samples' errors), with the thrust's
+ * consider term from the solve's own shift in the thrust's errors (est_consider.h) */
 static void report_into(const sr_estimator_model *m, void *data, est_core *nw,
                         est_modal_work *w)
 {
     double z[EST_NZ], J[EST_NZ * EST_NZ], vec[EST_NZ], sd[EST_NZ], Rinv[EST_NZ * EST_NZ];
+    double shift[EST_NZ * SR_N_CONSIDER];
     double *C = w->cov;
-    solve_rigid(m, data, z, C, Rinv);
+    solve_rigid(m, data, z, C, Rinv, shift);
     sr_reported_of_standard(z, vec);
     sr_reported_jacobian(z, J);
-    int finite = 1;
-    for (int i = 0; i < EST_NZ; i++) {                    /* sd_i^2 = (J C J^T)_ii */
+    double infl = m->lags > 0 ? est_corr_current(m, data, 0) : 1.0;
+    int finite = isfinite(infl);
+    for (int i = 0; i < EST_NZ; i++) {                    /* sd_i^2 = infl (J C J^T)_ii */
         double acc = 0.0;
         for (int a = 0; a < EST_NZ; a++) {
             if (J[i * EST_NZ + a] == 0.0)
@@ -696,36 +853,50 @@ static void report_into(const sr_estimator_model *m, void *data, est_core *nw,
             for (int b = 0; b < EST_NZ; b++)
                 acc += J[i * EST_NZ + a] * C[a * EST_NZ + b] * J[i * EST_NZ + b];
         }
-        sd[i] = sqrt(fmax(acc, 0.0));
+        sd[i] = sqrt(fmax(acc, 0.0) * infl);
         finite &= isfinite(vec[i]) && isfinite(sd[i]);
     }
+    for (int i = 0; i < EST_NZ * SR_N_CONSIDER && m->consider; i++)
+        finite &= isfinite(shift[i]);
     if (!finite)
         return;
     memcpy(nw->vec, vec, sizeof vec);
     memcpy(nw->sd, sd, sizeof sd);
+    if (m->consider)                         /* sd^2 += sum_c (J dz/dc sigma_c)^2 */
+        est_consider_add(m, nw, J, shift);
 }
 
 void est_modal_step(const sr_estimator_model *m, void *data, double t, const double *x,
-                    const double *E, est_core *nw, est_modal_work *w)
+                    const double *E, const double *Ec, int win_drop, est_core *nw,
+                    est_modal_work *w)
 {
     if (!m->modes)
         return;
     est_modal_data *s = state(m, data);
     if (!s->started)
         return;
-    int k = m->k1 + m->k2, q = m->q;
-    double sig[EST_MODAL_SIG], Hy[EST_MAXK * (EST_NZ + 1)], H[EST_MAXK * EST_NZ], yy[EST_MAXK];
+    int k1 = m->k1, k = k1 + m->k2, q = m->q, hw = q + n_rhs(m), nc = SR_N_CONSIDER;
+    double sig[EST_MODAL_SIG], Hy[EST_MAXK * (EST_NZ + 1 + SR_N_CONSIDER)];
+    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], bc[3 * SR_N_CONSIDER], yc[3 * SR_N_CONSIDER];
     signals_of(m, t, x, sig);
     est_joint_rows(m, nw, E, H, yy);
-    for (int a = 0; a < k; a++) {
-        memcpy(Hy + a * (q + 1), H + a * q, sizeof(double) * q);
-        Hy[a * (q + 1) + q] = yy[a];
+    if (m->consider)
+        est_consider_rows(m, Ec, bc, yc);
+    for (int a = 0; a < k; a++) {                         /* [H | yy | the consider's] */
+        memcpy(Hy + a * hw, H + a * q, sizeof(double) * q);
+        Hy[a * hw + q] = yy[a];
+        if (m->consider)
+            memcpy(Hy + a * hw + q + 1, a < k1 ? bc + a * nc : yc + (a - k1) * nc,
+                   sizeof(double) * nc);
     }
-    solve_sample(m, data, sig, Hy, w);
+    /* the window's reference: the ring's entry win_drop from its oldest (as the rows') */
+    int r = m->window ? s->n_samp - s->ring_count + 1 + win_drop : -1;
+    solve_sample(m, data, sig, Hy, r, w);
     if (s->kept < EST_MODAL_MAX_SAMPLES) {
         double *ks = kept_sample(m, data, s->kept);
         memcpy(ks, sig, sizeof sig);
-        memcpy(ks + EST_MODAL_SIG, Hy, sizeof(double) * k * (q + 1));
+        memcpy(ks + EST_MODAL_SIG, Hy, sizeof(double) * k * hw);
+        *ref_of_kept(m, ks) = r;
         s->kept++;
         /* the search where due (while every sample is kept), where the rows with the modes
          * so far do not fit or modes were given; then every kept sample again */

@@ -9,7 +9,8 @@
  *   G  l l^T eta'_a          21 (symmetric)      C  l s^T eta'_w       36
  *   D  [w]x d eta, -[v_B]x d eta    36            T  Omega(w) dI(eta)   72
  * eta, eta' the filter's response to each drive channel u_j (exact for an input linear between
- * samples). The unknowns [modal (165 per frequency) | rigid standard parameters (q)] are solved
+ * samples), at rest at the momentum reference; over a momentum window each sample's columns
+ * minus those of its window's reference (a ring of the filters' states). The unknowns [modal (165 per frequency) | rigid standard parameters (q)] are solved
  * by a square-root information filter (Givens rotations of each sample's rows into [R d]); the
  * rigid block is last, so its answer and covariance need only R's last q x q block.
  *
@@ -39,7 +40,9 @@ typedef struct est_modal_filter {
     double given;              /* 1: from ident.mode_f (refined, never dropped), 0: found */
 } est_modal_filter;
 
-/* the modal stage's state in the Data block (followed by R, d and the kept samples) */
+/* the modal stage's state in the Data block (followed by R, d, the kept samples and, with the
+ * momentum window, the window's ring: each entry a sample's index, signals and the filters'
+ * states after it, from which the columns at a row's reference are formed again) */
 typedef struct est_modal_data {
     int started;               /* the reference sample came: the filters start at rest */
     int n_f;                   /* frequencies in use */
@@ -48,16 +51,24 @@ typedef struct est_modal_data {
     double t0, t_prev;         /* the reference's and the previous sample's times [s] */
     double u0[EST_MODAL_U];     /* the reference's drive (the filters start there) */
     double u_prev[EST_MODAL_U];
+    int n_samp;                /* the newest sample's index (0: the reference) */
+    int ring_count;            /* the momentum window's ring: entries (sample indices
+                                  n_samp - ring_count + 1 .. n_samp), as the rows' ring */
+    double sig0[EST_MODAL_SIG]; /* the reference's signals */
     double rss, rows;          /* the residual sum of squares and rows of the [R d] solve */
     double y2;                 /* sum of the squared right-hand sides (the relative residual) */
     est_modal_filter f[EST_MODAL_MAX_F];
 } est_modal_data;
 
-/* the doubles of a kept sample (its identified rows [H | yy] and its signals) */
+/* the doubles of a kept sample (its signals, identified rows [H | yy (| consider)], its momentum
+ * window's reference's sample index, -1 without the window) */
 int est_modal_slot(const sr_estimator_model *m);
 
 /* bytes of the modal stage's state in the Data block (0 where ident.modes is off) */
 size_t est_modal_size(const sr_estimator_model *m);
+
+/* bytes of the modal stage's temporaries in the work space (0 where ident.modes is off) */
+size_t est_modal_work_size(const sr_estimator_model *m);
 
 /* the state at rest with the given frequencies (none: found later) */
 void est_modal_init(const sr_estimator_model *m, void *data);
@@ -65,15 +76,20 @@ void est_modal_init(const sr_estimator_model *m, void *data);
 /* 0, or 1 where a count or number of the state is out of range (a corrupt block) */
 int est_modal_check(const sr_estimator_model *m, const void *data);
 
-/* The reference sample (its time t, flat sample x): the filters start at rest there. */
+/* The reference sample (its time t, flat sample x; the momentum window's first): the filters
+ * start at rest there. */
 void est_modal_reference(const sr_estimator_model *m, void *data, double t, const double *x);
 
-/* The sample x at t with the rigid rows E (3 x 42) after the solver's step into nw: the
- * filters' step, the rows with the modal columns into [R d], the sample kept, the mode search
- * where it is due; then nw's estimates and sd from the modal solve (where they are finite).
- * Writes the Data block (after the solver's step succeeded). */
+/* The sample x at t with the rigid rows E (3 x 42; with the thrust's consider term its
+ * consider columns Ec, 3 x 16) after the solver's step into nw, formed
+ * against the momentum window's entry win_drop (est_rows.win_drop: its oldest samples the
+ * window drops; ignored without the window): the filters' step, the rows with the modal
+ * columns (differenced against the window's reference) into [R d], the sample kept, the mode
+ * search where it is due; then nw's estimates and sd from the modal solve (where they are
+ * finite). Writes the Data block (after the solver's step succeeded). */
 void est_modal_step(const sr_estimator_model *m, void *data, double t, const double *x,
-                    const double *E, est_core *nw, est_modal_work *w);
+                    const double *E, const double *Ec, int win_drop, est_core *nw,
+                    est_modal_work *w);
 
 /* the frequency [Hz] and damping of mode k (0 .. n_f - 1) now: 1, or 0 if there is none */
 int est_modal_mode(const sr_estimator_model *m, const void *data, int k, double *f,

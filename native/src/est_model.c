@@ -310,7 +310,7 @@ size_t sr_estimator_data_size(const sr_estimator_model *m) { return m ? m->size 
 size_t sr_estimator_work_size(const sr_estimator_model *m)
 {
     return m ? sizeof(est_work) + sizeof(double) * m->work_noise
-                   + (m->modes ? sizeof(est_modal_work) : 0)
+                   + est_modal_work_size(m)
              : 0;
 }
 

@@ -435,10 +435,9 @@ static int check_rules(const sr_estimator_options *o, char *err, size_t errlen)
                                  "parameters");
         return 1;
     }
-    if (o->modes == 1 && (o->method != 1 || o->solver != 2 || o->momentum_window > 0.0)) {
+    if (o->modes == 1 && (o->method != 1 || o->solver != 2)) {
         sr_text_set(err, errlen, "ident.modes = 1 (the modal columns) needs the momentum method "
-                                 "(method = 1), the joint solver (solver = 2) and no momentum "
-                                 "window (ident.momentum_window = 0)");
+                                 "(method = 1) and the joint solver (solver = 2)");
         return 1;
     }
     for (int k = 0; k < SR_EST_MAX_MODES; k++)

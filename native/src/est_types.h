@@ -238,12 +238,16 @@ typedef struct est_rows {
 #define EST_NOISE_SCRATCH (3 * EST_MAXCH * (EST_NL + EST_NA))
 
 /* the modal stage's temporaries (est_modal.c): the search's Gram matrix, one sample's rows
- * with the modal columns, one frequency's columns */
+ * with the modal columns, one frequency's columns at the sample and at its momentum window's
+ * reference, then (with the window) the search's ring of the filters' states
+ * (est_modal_work_size) */
 typedef struct est_modal_work {
     double gram[EST_MODAL_SCAN_NMAX * EST_MODAL_SCAN_NMAX];
-    double rows[EST_MAXK * (EST_MODAL_NMAX + 1)];
+    double rows[EST_MAXK * (EST_MODAL_NMAX + 1 + SR_N_CONSIDER)];
     double cols[6 * EST_MODAL_COLS];
+    double cols_ref[6 * EST_MODAL_COLS];
     double cov[EST_NZ * EST_NZ];
+    double ring[];
 } est_modal_work;
 
 /* The work space of one update (sr_estimator_work_size bytes beside the Data block, never part

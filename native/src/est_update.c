@@ -301,7 +301,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
     if (st != 0)
         return reject(d, st, why, msg, msglen);
     if (rows->stored != EST_ROWS) {                      /* stored, not solved */
-        if (rows->stored == EST_STORED_REFERENCE)
+        if (rows->stored == EST_STORED_REFERENCE || rows->stored == EST_STORED_WINDOW)
             est_modal_reference(m, data, t, sample);
         est_rows_commit(m, data, t, sample, rows);
         if (m->info)
@@ -331,7 +331,8 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
         return reject(d, SR_EST_REJECT_NONFINITE, step_failure(st), msg, msglen);
     /* the modal columns' stage (est_modal.h): its own state, the estimates from it */
     if (m->modes)
-        est_modal_step(m, data, t, sample, rows->E, nw, est_modal_work_of(m, wk));
+        est_modal_step(m, data, t, sample, rows->E, rows->Ec, rows->win_drop, nw,
+                       est_modal_work_of(m, wk));
     est_fit_window(m, c, d->samples == 0, nw);
     /* the commit */
     if (m->info)

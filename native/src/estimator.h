@@ -180,8 +180,8 @@ typedef struct sr_estimator_options {
                                    predicted for (300) */
     /* -- the modal columns (est_modal.h; docs/identification.md "Flexible parts: the modal
      *    columns") -- */
-    int modes;                  /* ident.modes: 1 on (needs the momentum method, the joint
-                                   solver, no momentum window), 2 off (default) */
+    int modes;                  /* ident.modes: 1 on (needs the momentum method and the
+                                   joint solver), 2 off (default) */
     double mode_f[SR_EST_MAX_MODES]; /* ident.mode_f[1..4] [Hz]: the modes' frequencies where known,
                                    0 = not given (then found from the data) */
     /* -- the model-fit test (docs/identification.md "When the rigid model does not fit") -- */

@@ -37,8 +37,7 @@ int sr_noise_profile_apply(const sr_estimator_options *in, sr_estimator_options 
     FILL(signal_sd[4], p[SR_NOISE_GYRO_ARW] / rt);           /* omega_B */
     FILL(signal_sd[5], p[SR_NOISE_ENC_QD]);                  /* qd */
     if (o.method == 1) {
-        if (o.modes != 1)            /* the modal columns difference against the first sample */
-            FILL(momentum_window, SR_NOISE_PROFILE_WINDOW);
+        FILL(momentum_window, SR_NOISE_PROFILE_WINDOW);
         FILL(momentum_point, 1);
         /* the overlapping windows share their errors over the window's samples */
         double lags = floor(SR_NOISE_PROFILE_WINDOW / dt + 0.5);
