@@ -207,8 +207,9 @@ def _efficiencies(rows) -> Dict[str, float]:
     for p in ESTIMATE_NAMES:
         z = [_f(r[f"relerr.{p}"]) / _f(r[f"crb.{p}"]) for r in rows
              if p in ident[r["robot"]] and _f(r.get(f"crb.{p}", "")) > 0.0]
-        if z:
-            out[p] = 1.0 / float(np.sqrt(np.mean(np.square(z))))
+        rms = float(np.sqrt(np.mean(np.square(z)))) if z else 0.0
+        if rms > 0.0:
+            out[p] = 1.0 / rms
     return out
 
 

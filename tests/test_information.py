@@ -697,8 +697,8 @@ def test_flags_follow_the_bonferroni_rule_and_the_hold(lib):
                 continue
             scale = error_scale(r["vector"])
             ratio = sd / (sd_rel * scale)
-            refs = [(l0, s0) for t0, l0, s0 in hist
-                    if T - 1e-9 <= t - t0 <= 1.25 * T + dt + 1e-9]
+            refs = [(l0, s0) for t0, l0, s0 in hist      # the snapshots start at the replay
+                    if T - 1e-9 <= t - t0 <= 1.25 * T + dt + 1e-9 and t0 >= ts[REPLAY_SAMPLES]]
             for k, who in enumerate(("base", "target")):
                 b = slice(10 * k, 10 * k + 10)
                 worst = ratio[b].max()

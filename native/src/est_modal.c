@@ -3,6 +3,7 @@
  * information solve of both, the kept samples and the search of the modes' frequencies. */
 #include "est_modal.h"
 
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -786,9 +787,10 @@ int est_modal_check(const sr_estimator_model *m, const void *data)
         return 0;
     void *dv = (void *)data;
     const est_modal_data *s = state(m, dv);
+    /* n_samp below INT_MAX - 1: the next sample's increment stays an int */
     if (s->started < 0 || s->started > 1 || s->n_f < 0 || s->n_f > EST_MODAL_MAX_F
         || s->kept < 0 || s->kept > EST_MODAL_MAX_SAMPLES || s->searches < 0
-        || s->n_samp < 0 || s->kept > s->n_samp
+        || s->n_samp < 0 || s->n_samp >= INT_MAX - 1 || s->kept > s->n_samp
         || !isfinite(s->rss + s->rows + s->y2 + s->t0 + s->t_prev))
         return 1;
     for (int g = 0; g < s->n_f; g++)
