@@ -38,11 +38,11 @@ void est_hold_commit(const sr_estimator_model *m, void *data, double t, const do
         h->head = h->count = 0;
         return;
     }
-    for (int i = 0; ls && sd && i < EST_NZ; i++)
+    if (!ls || !sd)                          /* no snapshot due */
+        return;
+    for (int i = 0; i < EST_NZ; i++)
         if (!isfinite(ls[i]) || !(sd[i] >= 0.0))
             return;                          /* no snapshot of a singular answer */
-    if (!ls || !sd)
-        return;
     h->t[h->head] = t;
     memcpy(h->vec + h->head * EST_NZ, ls, sizeof(double) * EST_NZ);
     memcpy(h->sd + h->head * EST_NZ, sd, sizeof(double) * EST_NZ);
