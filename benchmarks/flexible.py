@@ -13,8 +13,10 @@ the time from which both bodies stay flagged identified (s; '-' never), and the 
   sensors rigid  the sensors, the profile, ident.information = 2 (the joint solver reports)
   sensors modal  the sensors, the profile, ident.information = 2, ident.modes = 1
 
-Run: python benchmarks/flexible.py [--quick] [--jobs 2] > benchmarks/FLEXIBLE.txt
-(--quick: the issue's sizes only). Every case is a separate process (--jobs at a time).
+Run: python benchmarks/flexible.py [--quick] [--jobs 2] [--robot URDF] > benchmarks/FLEXIBLE.txt
+(--quick: the issue's sizes only; --robot: another spacecraft than the spatial robot, e.g. the
+held-out tests/data/arm5.urdf, a 900 kg hub with a 5-joint arm, with the same wings and slosh
+on its base). Every case is a separate process (--jobs at a time).
 """
 from __future__ import annotations
 
@@ -23,6 +25,7 @@ import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 
@@ -47,12 +50,12 @@ QUICK = ("wings 2 x 50 kg 0.5 Hz (issue)", "slosh 2 x 25 kg 0.30/0.35 Hz (issue)
 SETUPS = ("rigid", "modal", "sensors", "sensors rigid", "sensors modal")
 
 
-def scenario(case: str):
-    """The scenario of a case: the set's parts with the mass factor and the frequencies scaled
-    (the first part's to the case's)."""
+def scenario(case: str, robot: str = "spatial"):
+    """The scenario of a case on ``robot`` (a built-in name or a URDF file): the set's parts
+    with the mass factor and the frequencies scaled (the first part's to the case's)."""
     from spacerobot.robots import parameter_set_scenario
     name, k_m, f = CASES[case]
-    sc = parameter_set_scenario("spatial", name)
+    sc = parameter_set_scenario(robot, name)
     if name == "wings":
         f0 = sc.flex.panels[0].f
         panels = tuple(replace(p, m=p.m * k_m, Ixx=p.Ixx * k_m, Iyy=p.Iyy * k_m, Izz=p.Izz * k_m,
@@ -94,10 +97,10 @@ def identifier(sc, setup: str):
     return ident
 
 
-def run_case(case: str, setups=SETUPS) -> list:
+def run_case(case: str, setups=SETUPS, robot: str = "spatial") -> list:
     from spacerobot.interface import relative_errors
     from spacerobot.sensors import SensorSuite
-    sc = scenario(case)
+    sc = scenario(case, robot)
     xs, truth, n = record(sc)
     rows = []
     for setup in setups:
@@ -129,11 +132,14 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the issue's sizes only")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--robot", default="spatial",
+                    help="the spacecraft: a built-in robot name or a URDF file (default spatial)")
     args = ap.parse_args(argv)
     cases = QUICK if args.quick else tuple(CASES)
     t0 = time.time()
     with ProcessPoolExecutor(max_workers=args.jobs) as ex:
-        results = list(ex.map(run_case, cases))
+        results = list(ex.map(partial(run_case, setups=SETUPS, robot=args.robot), cases))
+    print(f"Robot: {args.robot}\n")
     print("| case | set-up | worst error % | within 2 sd (of 20) | both flagged from [s] "
           "| modes at 300 s [Hz] | CPU [s] |")
     print("|---|---|---|---|---|---|---|")

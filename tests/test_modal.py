@@ -6,6 +6,9 @@ flexible plant (native/src/plant_leaves.c; docs/models.md 'Flexible appendages a
   1 % of the composite rigid truth (the plant's composite base, the target), and each true
   (cantilevered) frequency found within 1 %; the same samples with the modes off are several
   times further off (what the columns remove is real);
+* on a spacecraft the columns were not developed on (tests/data/arm5.urdf: a 900 kg hub
+  with a 5-joint arm) carrying the same wings and slosh (`flexible`): the same, every estimate
+  within 1 % (measured 0.50 %; 44 % without the columns);
 * on the rigid spacecraft (`default`) nothing is found and the estimates stay exact;
 * over the momentum window (ident.momentum_window > 0: each sample's columns differenced
   against the window's reference, as its rigid rows are): after the first search and its
@@ -23,6 +26,9 @@ flexible plant (native/src/plant_leaves.c; docs/models.md 'Flexible appendages a
 """
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.linalg import expm
@@ -31,18 +37,23 @@ from spacerobot.core.plant import NativePlant
 from spacerobot.core.sample import sample_length
 from spacerobot.estimator.identifier import Identifier
 from spacerobot.interface import relative_errors
-from spacerobot.robots import parameter_set_scenario
+from spacerobot.robots import Excitation, parameter_set_scenario
 
 T_END = 300.0
 DT = 0.1
 #: the cantilevered frequencies of the sets' parts [Hz] (robots.SPATIAL_PANELS, SPATIAL_SLOSH)
 TRUE_F = {"wings": (0.5,), "slosh": (0.30, 0.35), "flexible": (0.5, 0.30, 0.35)}
+#: a spacecraft the modal columns were not developed on: a 900 kg hub with a 5-joint arm
+HELD_OUT = str(Path(__file__).resolve().parent / "data" / "arm5.urdf")
 
 
-def _record(name: str, t_end: float = T_END):
-    """The noise-free samples of the spatial robot's parameter set ``name`` (the plant with its
-    excitation on), and the composite truth (20,) the rigid model should converge to."""
-    sc = parameter_set_scenario("spatial", name)
+def _record(name: str, t_end: float = T_END, robot: str = "spatial", amplitude=None):
+    """The noise-free samples of ``robot``'s parameter set ``name`` (the plant with its
+    excitation on, at ``amplitude`` [rad] for attitude and joints where given), and the
+    composite truth (20,) the rigid model should converge to."""
+    sc = parameter_set_scenario(robot, name)
+    if amplitude is not None:
+        sc = replace(sc, excitation=Excitation(att_max=amplitude, q_max=amplitude))
     plant = NativePlant.of(sc)
     plant.set_excitation(1.0)
     n = sample_length(plant.n)
@@ -66,26 +77,27 @@ def _identify(sc, xs, modes: int, window: float = 0.0, point: bool = False, **ex
 
 @pytest.fixture(scope="module")
 def runs():
-    """name -> (worst relative error with the modes, without, the modes found [Hz])"""
+    """(name, robot) -> (worst relative error with the modes, without, the modes found
+    [Hz])"""
     cache = {}
 
-    def get(name):
-        if name not in cache:
-            sc, xs, truth = _record(name)
+    def get(name, robot="spatial"):
+        if (name, robot) not in cache:
+            sc, xs, truth = _record(name, robot=robot)
             on = _identify(sc, xs, 1)
             off = _identify(sc, xs, 2)
             rep = on.core.report()
             found = rep["mode_f"][rep["mode_f"] > 0]
-            cache[name] = (float(relative_errors(on.vector(), truth).max()),
-                           float(relative_errors(off.vector(), truth).max()), found)
-        return cache[name]
+            cache[name, robot] = (float(relative_errors(on.vector(), truth).max()),
+                                  float(relative_errors(off.vector(), truth).max()), found)
+        return cache[name, robot]
     return get
 
 
-def _check(runs, name):
-    on, off, found = runs(name)
-    print(f"{name}: worst {100 * on:.3f} % with the modes ({np.round(found, 4)} Hz), "
-          f"{100 * off:.2f} % without")
+def _check(runs, name, robot="spatial"):
+    on, off, found = runs(name, robot)
+    print(f"{name} on {Path(robot).name}: worst {100 * on:.3f} % with the modes "
+          f"({np.round(found, 4)} Hz), {100 * off:.2f} % without")
     assert on < 0.01
     assert off > 5.0 * on
     for f in TRUE_F[name]:
@@ -104,6 +116,11 @@ def test_slosh_within_one_percent_with_the_modes_found(runs):
 @pytest.mark.slow
 def test_wings_and_slosh_within_one_percent_with_the_modes_found(runs):
     _check(runs, "flexible")
+
+
+@pytest.mark.slow
+def test_held_out_spacecraft_within_one_percent_with_the_modes_found(runs):
+    _check(runs, "flexible", HELD_OUT)
 
 
 def test_rigid_spacecraft_finds_no_mode_and_stays_exact():
@@ -289,18 +306,26 @@ def test_windowed_rigid_spacecraft_finds_no_mode_and_matches_the_rigid_window():
     assert gap < 1e-9
 
 
-@pytest.mark.parametrize("name", ["wings", "slosh"])
-def test_sensors_windowed_columns_sd_cover_the_error(name):
+@pytest.mark.parametrize("name, amplitude", [
+    ("wings", None), ("slosh", None),
+    pytest.param("wings", 0.3, marks=[pytest.mark.slow, pytest.mark.xfail(
+        strict=True, reason="known limit: at 0.3 rad the wings bend by up to 33 degrees, "
+        "beyond the columns' first order, and the sd do not cover (docs/identification.md "
+        "section 8, 'Limits')")]),
+])
+def test_sensors_windowed_columns_sd_cover_the_error(name, amplitude):
     """Through the sensors (realistic defaults, seed 0) with the noise profile (its 5 s
     momentum window about the base, the thrust's consider term, the rows' correlation) and
     the joint solver with the columns, 300 s: at least 18 of the 20 estimates within 2
     reported sd of the composite truth (measured 20 and 20; 9 and 12 with the least-squares sd
     alone); the wings' worst error below 10 % (measured 5.5 %; 23.7 % with the columns
-    against the first sample, 46 % without them)."""
+    against the first sample, 46 % without them). A known limit, a strict expected failure:
+    the wings with the excitation at 0.3 rad (three times the set's) are 10.2 % off with 4 of
+    20 within 2 sd, and nothing says so."""
     from spacerobot.estimator.identifier import identifier_from_values
     from spacerobot.interface import estimator_vars
     from spacerobot.sensors import SensorSuite
-    sc, xs, truth = _record(name)
+    sc, xs, truth = _record(name, amplitude=amplitude)
     v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
     v.update({"method": 1, "solver": 2, "ident.modes": 1, "ident.information": 2,
               "ident.noise_profile": 1, "noise.scale": 1.0})

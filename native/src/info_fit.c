@@ -186,9 +186,10 @@ static int fit_test(const sr_info_model *m, const sr_info_data *d, sr_info_fit *
         f->thrust = 0.0;
         return 1;
     }
-    /* coloured residuals count where they are of the noise's size at least (chi2 > 1/2):
-       far below it (data less noisy than its model) their colour is the round-off's */
-    int coloured = f->whiteness > m->fit.whiteness_max && f->chi2 > 0.5;
+    /* coloured residuals count where they are not far below the noise's size (chi2 above
+       SR_INFO_FIT_CHI2_MIN): far below it (noise-free data under a noise model, chi2 1e-5 to
+       1e-4) their colour is the round-off's */
+    int coloured = f->whiteness > m->fit.whiteness_max && f->chi2 > SR_INFO_FIT_CHI2_MIN;
     f->misfit = d->misfit || (d->replayed && (coloured || f->chi2 > m->fit.chi2_max
                                               || f->thrust > m->fit.thrust_max));
     return 0;

@@ -55,6 +55,10 @@ extern "C" {
 #define SR_INFO_RELIN 10
 /* the whiteness test's most lags (ident.fit_lags) */
 #define SR_INFO_MAX_LAGS 100
+/* the whiteness test counts where chi2 is above this: noise-free data under a noise model
+ * give 1e-5 to 1e-4 (round-off's colour); with the sensors, rigid runs 0.87-1.3 and a
+ * servicer's slosh misfit, plainly coloured, 0.40-0.46 */
+#define SR_INFO_FIT_CHI2_MIN 0.1
 /* The rows' noise covariance is recomputed at every sample: its square root held over 10
  * samples of 0.1 s left the whitened rows' covariance between 0.5 and 1.7 and the bound
  * optimistic by up to 1.5x (tests/test_information.py). */
@@ -83,8 +87,8 @@ typedef struct sr_info_fit_options {
  *  residuals (0 before 2 L samples), chi2 (the weighted residual sum of squares per degree of
  *  freedom, the thrust errors estimated), the larger thrust scale's |s| / prior sd (0 without
  *  a thrust prior), and misfit (1 where one of them is beyond its threshold, the whiteness
- *  only where chi2 > 1/2 (far below, the data are less noisy than their model and the
- *  residuals' colour is round-off's), decided from the
+ *  only where chi2 > SR_INFO_FIT_CHI2_MIN (far below, the data are less noisy than their
+ *  model and the residuals' colour is round-off's), decided from the
  *  filter's replay on (before, its linearisation point is the caller's); found at the replay
  *  it stays: the replay then adds the samples again with the thrust errors held and the model
  *  error's variances (sr_info_data.me_var, from the kept samples' residuals) in the rows'
