@@ -138,7 +138,7 @@ def main(argv=None) -> int:
     cases = QUICK if args.quick else tuple(CASES)
     t0 = time.time()
     with ProcessPoolExecutor(max_workers=args.jobs) as ex:
-        results = list(ex.map(partial(run_case, setups=SETUPS, robot=args.robot), cases))
+        results = list(ex.map(partial(run_case, robot=args.robot), cases))
     print(f"Robot: {args.robot}\n")
     print("| case | set-up | worst error % | within 2 sd (of 20) | both flagged from [s] "
           "| modes at 300 s [Hz] | CPU [s] |")

@@ -123,6 +123,10 @@ class Pair:
         self.est.free()
 
 
+#: a 5-joint arm on a 900 kg hub: a servicer the estimator's options were not developed on
+ARM5_URDF = str(Path(__file__).resolve().parent / "data" / "arm5.urdf")
+
+
 def truth_vector(sc) -> np.ndarray:
     """Truth in the order of Identifier.vector(): base m, b, I6, target m, b, I6."""
     return interface.estimate_vector(sc.robot.base, sc.target)

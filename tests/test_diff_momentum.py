@@ -20,8 +20,6 @@ compensation_gain`, the NumPy oracle estimator).
 """
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -36,6 +34,7 @@ from spacerobot.interface import ESTIMATE_NAMES, estimate_vector, relative_error
 from spacerobot.plant import Plant
 from spacerobot.robots import robot_spec, scenario
 from spacerobot.system.identify import estimator_parameters
+from conftest import ARM5_URDF
 from test_eiv import DIFFERENCED, signal_sd, with_noise
 from test_moving_reference import record
 
@@ -185,15 +184,12 @@ def test_bad_fmu_value_is_refused_and_the_state_round_trips(excited):
     assert np.array_equal(a.vector(), b.vector()) and np.array_equal(a.std(), b.std())
 
 
-ARM5 = Path(__file__).parent / "data" / "arm5.urdf"
-
-
 def _arm5_closed_loop(seconds: float, **kw):
     """The 5-joint arm of tests/data/arm5.urdf (a 900 kg hub; joint motions of a few seconds'
     period, the joints' accelerations saturating at the controller's limit, so the
     velocities are not quadratic over a window) in the closed loop of its default scenario:
     the force method with differenced accelerations, options ``kw``."""
-    sc = scenario(robot_spec(str(ARM5)))
+    sc = scenario(robot_spec(ARM5_URDF))
     plant = Plant(sc.robot, sc.robot.base, sc.target, sc.controller, sc.v0, sc.omega0, sc.h,
                   excitation=sc.excitation)
     ident = Identifier(sc.robot, sc.guess, "force", accel_source="differenced", **kw)

@@ -33,6 +33,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
+from conftest import ARM5_URDF
 from spacerobot.core.plant import NativePlant
 from spacerobot.core.sample import sample_length
 from spacerobot.estimator.identifier import Identifier
@@ -43,8 +44,6 @@ T_END = 300.0
 DT = 0.1
 #: the cantilevered frequencies of the sets' parts [Hz] (robots.SPATIAL_PANELS, SPATIAL_SLOSH)
 TRUE_F = {"wings": (0.5,), "slosh": (0.30, 0.35), "flexible": (0.5, 0.30, 0.35)}
-#: a spacecraft the modal columns were not developed on: a 900 kg hub with a 5-joint arm
-HELD_OUT = str(Path(__file__).resolve().parent / "data" / "arm5.urdf")
 
 
 def _record(name: str, t_end: float = T_END, robot: str = "spatial", amplitude=None):
@@ -120,7 +119,7 @@ def test_wings_and_slosh_within_one_percent_with_the_modes_found(runs):
 
 @pytest.mark.slow
 def test_held_out_spacecraft_within_one_percent_with_the_modes_found(runs):
-    _check(runs, "flexible", HELD_OUT)
+    _check(runs, "flexible", ARM5_URDF)
 
 
 def test_rigid_spacecraft_finds_no_mode_and_stays_exact():

@@ -547,11 +547,11 @@ static double objective(const sr_estimator_model *m, void *data, const est_modal
             filter_step(&f[g], ks[0] - t_prev, u_prev, ks + 1);
         memcpy(u_prev, ks + 1, sizeof u_prev);
         t_prev = ks[0];
-        int ref = (int)*ref_of_kept(m, ks);       /* its window's reference's index */
         if (m->window)
             states_of(f, n_f, w->ring + (size_t)((i + 1) % cw) * EST_MODAL_STATES);
         if (i % stride)
             continue;
+        int ref = (int)*ref_of_kept(m, ks);       /* its window's reference's index */
         const double *ref_sig = ref > 0 ? kept_sample(m, data, ref - 1) : s->sig0;
         const double *ref_x = ref >= 0 ? w->ring + (size_t)(ref % cw) * EST_MODAL_STATES : NULL;
         sample_rows(m, f, n_f, nc, ks, ref_sig, ref_x, ks + EST_MODAL_SIG, 0, w, w->rows);
