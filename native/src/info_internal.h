@@ -31,8 +31,10 @@ void info_rows_at(const sr_info_model *m, const double *x, const double *zO, dou
 void info_linear_rows(const sr_info_model *m, const double *x, const double *k, double *H,
                       double *y);
 int info_channels(const sr_info_model *m, int *idx, double *sd);
+void info_nav_mixed(const sr_info_model *m, const double *x, const double *k, const double *Hy,
+                    double *xs, double (*V)[6 * HS], double (*G)[6 * HS]);
 int info_noise_weight(const sr_info_model *m, const double *x, const double *z,
-                      const double *me_var, double *W);
+                      const double (*G)[6 * HS], const double *me_var, double *W);
 void info_weigh(const double *W, int nr, const double *in, int ncol, double *out);
 /* info_fit.c */
 void info_model_error_of(const sr_info_model *m, const double *buffer, const double *z,

@@ -127,51 +127,81 @@ static void add_model_error(const sr_info_model *m, const double *x, const doubl
             Rk[a * 6 + b] += C[m->rows[a] * 6 + m->rows[b]];
 }
 
+/* The rows' mixed differences in the navigation's position and velocity: G[3 i + j] (nr x
+   (nu + 1), row stride HS: the identified z_O's columns and y in column nu, the others 0) =
+   [H | y] at (r_i + 1, v_j + 1) - at (r_i + 1) - at (v_j + 1) + at x (Hy). The rows hold
+   M r_S x v_S about the origin: bilinear in (r_S, v_S), so with unit steps this is exact
+   (d2 [H | y] / dr_i dv_j), and it sits in the masses' columns and the known links' y only.
+   k: the thrust integrals; xs: a copy of x, restored on return; V (4 blocks): work space. */
+void info_nav_mixed(const sr_info_model *m, const double *x, const double *k, const double *Hy,
+                    double *xs, double (*V)[6 * HS], double (*G)[6 * HS])
+{
+    int nz = m->nz, nr = m->nr, nu = m->nu;
+    double y[6], *Ri = V[3];
+    for (int j = 0; j < 3; j++) {                  /* at v_j + 1 */
+        xs[SR_X_V_S + j] = x[SR_X_V_S + j] + 1.0;
+        info_linear_rows(m, xs, k, V[j], y);
+        for (int a = 0; a < nr; a++)
+            V[j][a * HS + nu] = y[a];
+        xs[SR_X_V_S + j] = x[SR_X_V_S + j];
+    }
+    for (int i = 0; i < 3; i++) {
+        xs[SR_X_R_S + i] = x[SR_X_R_S + i] + 1.0;  /* at r_i + 1 */
+        info_linear_rows(m, xs, k, Ri, y);
+        for (int a = 0; a < nr; a++)
+            Ri[a * HS + nu] = y[a];
+        for (int j = 0; j < 3; j++) {              /* at (r_i + 1, v_j + 1) */
+            double *g = G[3 * i + j];
+            xs[SR_X_V_S + j] = x[SR_X_V_S + j] + 1.0;
+            info_linear_rows(m, xs, k, g, y);
+            xs[SR_X_V_S + j] = x[SR_X_V_S + j];
+            for (int a = 0; a < nr; a++) {
+                g[a * HS + nu] = y[a];
+                for (int q = 0; q <= nu; q++) {
+                    int at = a * HS + q;
+                    g[at] = q < nz || q == nu ? g[at] - Ri[at] - V[j][at] + Hy[at] : 0.0;
+                }
+            }
+        }
+        xs[SR_X_R_S + i] = x[SR_X_R_S + i];
+    }
+}
+
 /* Rk (stride 6) += the covariance of the navigation noises' product. The angular rows hold
    r_S x m v_S, bilinear in (r_S, v_S): beside the first-order terms they carry dr x m dv, of
    zero mean (dr, dv independent) and covariance sd_r^2 sd_v^2 sum_ij g_ij g_ij^T with g_ij
-   the mixed difference of the rows in r_i, v_j (exact with unit steps: bilinear). The
+   the rows' mixed difference in r_i, v_j at z (G: info_nav_mixed's, times [z_O; -1]). The
    first-order terms leave the angular rows almost noise-free across r and v, where this term
    is of the gyro's size: without it a fast-tumbling target's sds were too small
-   (benchmarks/CALIBRATION.md). xs: a copy of x, restored on return. */
-static void product_noise(const sr_info_model *m, const double *x, const double *z, double *xs,
+   (benchmarks/CALIBRATION.md). */
+static void product_noise(const sr_info_model *m, const double *z, const double (*G)[6 * HS],
                           double *Rk)
 {
     const double s2 = m->noise.r * m->noise.r * m->noise.v * m->noise.v;
-    if (!(s2 > 0.0))
+    if (!(s2 > 0.0) || !G)
         return;
-    int nr = m->nr;
-    double r0[6], ri[3][6], vj[3][6], rij[6];
-    info_rows_at(m, x, z, r0);
-    for (int i = 0; i < 3; i++) {
-        xs[SR_X_R_S + i] = x[SR_X_R_S + i] + 1.0;
-        info_rows_at(m, xs, z, ri[i]);
-        xs[SR_X_R_S + i] = x[SR_X_R_S + i];
-        xs[SR_X_V_S + i] = x[SR_X_V_S + i] + 1.0;
-        info_rows_at(m, xs, z, vj[i]);
-        xs[SR_X_V_S + i] = x[SR_X_V_S + i];
-    }
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) {
-            double g[6];
-            xs[SR_X_R_S + i] = x[SR_X_R_S + i] + 1.0;
-            xs[SR_X_V_S + j] = x[SR_X_V_S + j] + 1.0;
-            info_rows_at(m, xs, z, rij);
-            xs[SR_X_R_S + i] = x[SR_X_R_S + i];
-            xs[SR_X_V_S + j] = x[SR_X_V_S + j];
-            for (int a = 0; a < nr; a++)
-                g[a] = rij[a] - ri[i][a] - vj[j][a] + r0[a];
-            for (int a = 0; a < nr; a++)
-                for (int b = 0; b < nr; b++)
-                    Rk[a * 6 + b] += s2 * g[a] * g[b];
+    int nr = m->nr, nz = m->nz, nu = m->nu;
+    for (int ij = 0; ij < 9; ij++) {
+        double g[6];
+        for (int a = 0; a < nr; a++) {
+            double v = -G[ij][a * HS + nu];
+            for (int q = 0; q < nz; q++)
+                v += G[ij][a * HS + q] * z[m->zi[q]];
+            g[a] = v;
         }
+        for (int a = 0; a < nr; a++)
+            for (int b = 0; b < nr; b++)
+                Rk[a * 6 + b] += s2 * g[a] * g[b];
+    }
 }
 
 /* R_k^-1/2 (lower triangular nr x nr) of the rows' noise covariance at x, z: the channels'
    white noise through central differences of the rows, the attitude's as small rotations
-   about the base axes; 0, or 1 when R_k is not positive definite */
+   about the base axes, the navigation noises' product from the mixed differences G
+   (info_nav_mixed; NULL: without navigation noise); 0, or 1 when R_k is not positive
+   definite */
 int info_noise_weight(const sr_info_model *m, const double *x, const double *z,
-                      const double *me_var, double *W)
+                      const double (*G)[6 * HS], const double *me_var, double *W)
 {
     int nr = m->nr, idx[12 + 2 * SR_MAX_JOINTS];
     double sd[12 + 2 * SR_MAX_JOINTS], Rk[36] = {0}, xs[SR_X_LEN(SR_MAX_JOINTS)];
@@ -224,7 +254,7 @@ int info_noise_weight(const sr_info_model *m, const double *x, const double *z,
             for (int b = 0; b < nr; b++)
                 Rk[a * 6 + b] += s2 * g[a] * g[b];
     }
-    product_noise(m, x, z, xs, Rk);
+    product_noise(m, z, G, Rk);
     add_model_error(m, x, me_var, Rk);
     double tr = 0.0;
     for (int a = 0; a < nr; a++)

@@ -136,11 +136,16 @@ typedef struct sr_info_data {
 
 /** The filter's temporaries: a work space beside the state, never part of it (a host copies
  *  the state, not this): sr_info_add's new R and N_HH (committed only when finite) and
- *  sr_info_predict's matrices. Its contents between calls mean nothing. */
+ *  rows at the navigation's unit steps, and sr_info_predict's matrices. Its contents between
+ *  calls mean nothing. */
 typedef struct sr_info_work {
     double R[SR_INFO_MAX_U * SR_INFO_MAX_U], N_HH[SR_INFO_MAX_U * SR_INFO_MAX_U];
     double S[SR_INFO_MAX_U * SR_INFO_MAX_U], L[SR_INFO_MAX_U * SR_INFO_MAX_U];
     double Ri[SR_INFO_MAX_U * SR_INFO_MAX_U];
+    /* sr_info_add's rows [H | y] at the navigation's unit steps, their mixed differences
+       in (r_S, v_S) (the product's noise in R_k and its share of N) and one weighed */
+    double nav_v[4][6 * (SR_INFO_MAX_U + 1)], nav_g[9][6 * (SR_INFO_MAX_U + 1)];
+    double nav_wg[6 * (SR_INFO_MAX_U + 1)];
 } sr_info_work;
 
 /** Fill *m for robot (copied) with the noise model, the guesses z0 (20, reported form) and the

@@ -269,6 +269,25 @@ class InformationFilter:
             dH, dy = Wh @ (Hp - H0) / h, Wh @ (yp - y0) / h
             self.N_HH += sd ** 2 * dH.T @ dH
             self.N_Hy += sd ** 2 * dH.T @ dy
+        # The slopes above are taken at the measured sample: the rows are bilinear in r_S and
+        # v_S (M r_S x v_S), so the slope in r_S holds v_S's noise and the slope in v_S r_S's,
+        # and the expected N counts the product's share sd_r^2 sd_v^2 |W d2H/dr_i dv_j|^2 twice
+        # where the Gram holds it once: subtract it once.
+        s2 = (self.sd["r"] * self.sd["v"]) ** 2
+        if s2 > 0:
+            def at(dr, dv):
+                xs = x.copy()
+                xs[0:3] += dr
+                xs[3:6] += dv
+                return self.linear_rows(xs)
+            e = np.eye(3)
+            for i in range(3):
+                for j in range(3):
+                    (Hrv, yrv), (Hr, yr), (Hv, yv) = at(e[i], e[j]), at(e[i], 0), at(0, e[j])
+                    gH, gy = Wh @ (Hrv - Hr - Hv + H0), Wh @ (yrv - yr - yv + y0)
+                    gH[:, len(self.zi):] = 0.0           # only z_O's columns carry the noise
+                    self.N_HH -= s2 * gH.T @ gH
+                    self.N_Hy -= s2 * gH.T @ gy
 
     def compensated(self) -> np.ndarray:
         """u corrected to first order for the regressors' noise: u + S^-1 (N_HH u - N_Hy)."""
