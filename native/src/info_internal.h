@@ -31,6 +31,7 @@ void info_rows_at(const sr_info_model *m, const double *x, const double *zO, dou
 void info_linear_rows(const sr_info_model *m, const double *x, const double *k, double *H,
                       double *y);
 int info_channels(const sr_info_model *m, int *idx, double *sd);
+double info_nav_product_var(const sr_info_model *m);
 void info_nav_mixed(const sr_info_model *m, const double *x, const double *k, const double *Hy,
                     double *xs, double (*V)[6 * HS], double (*G)[6 * HS]);
 int info_noise_weight(const sr_info_model *m, const double *x, const double *z,

@@ -167,6 +167,13 @@ void info_nav_mixed(const sr_info_model *m, const double *x, const double *k, co
     }
 }
 
+/* sd_r^2 sd_v^2: the variance of the navigation noises' product per pair of axes (0 where
+   one of them is off: no product terms) */
+double info_nav_product_var(const sr_info_model *m)
+{
+    return m->noise.r * m->noise.r * m->noise.v * m->noise.v;
+}
+
 /* Rk (stride 6) += the covariance of the navigation noises' product. The angular rows hold
    r_S x m v_S, bilinear in (r_S, v_S): beside the first-order terms they carry dr x m dv, of
    zero mean (dr, dv independent) and covariance sd_r^2 sd_v^2 sum_ij g_ij g_ij^T with g_ij
@@ -177,8 +184,8 @@ void info_nav_mixed(const sr_info_model *m, const double *x, const double *k, co
 static void product_noise(const sr_info_model *m, const double *z, const double (*G)[6 * HS],
                           double *Rk)
 {
-    const double s2 = m->noise.r * m->noise.r * m->noise.v * m->noise.v;
-    if (!(s2 > 0.0) || !G)
+    const double s2 = info_nav_product_var(m);
+    if (!G || !(s2 > 0.0))
         return;
     int nr = m->nr, nz = m->nz, nu = m->nu;
     for (int ij = 0; ij < 9; ij++) {

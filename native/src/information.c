@@ -173,13 +173,11 @@ static void eiv_add(const sr_info_model *m, double s2, const double *wdH, double
    share of the product dr x M dv holds it once: subtracted once. Without it the correction
    overshot by 8 % (3 sd) under a 0.37 m/s drift (docs/identification.md, "Errors in
    variables"). The other bilinear pairs (r_S with omega_B and the joint rates, the rates with
-   the angles) are of the same kind but, at the sensors' noise, much smaller: left. */
-static void eiv_nav_product(const sr_info_model *m, const double (*G)[6 * HS], const double *W,
-                            double *wg, double *N_HH, double *N_Hy)
+   the angles) are of the same kind but, at the sensors' noise, much smaller: left. s2:
+   info_nav_product_var. */
+static void eiv_nav_product(const sr_info_model *m, double s2, const double (*G)[6 * HS],
+                            const double *W, double *wg, double *N_HH, double *N_Hy)
 {
-    const double s2 = m->noise.r * m->noise.r * m->noise.v * m->noise.v;
-    if (!(s2 > 0.0))
-        return;
     for (int ij = 0; ij < 9; ij++) {
         info_weigh(W, m->nr, G[ij], m->nu + 1, wg);
         eiv_add(m, -s2, wg, N_HH, N_Hy);
@@ -206,7 +204,8 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
         Hy[a * HS + nu] = y[a];
     int nx = SR_X_LEN(n);
     memcpy(xs, x, sizeof(double) * nx);
-    const int nav = m->noise.r > 0.0 && m->noise.v > 0.0;     /* their product's terms */
+    const double s2_nav = info_nav_product_var(m);            /* their product's terms */
+    const int nav = s2_nav > 0.0;
     if (nav)
         info_nav_mixed(m, x, K + SR_THRUST_K, Hy, xs, w->nav_v, w->nav_g);
     if (info_noise_weight(m, x, z, nav ? (const double (*)[6 * HS])w->nav_g : NULL, d->me_var,
@@ -250,7 +249,8 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
         eiv_add(m, sd[c] * sd[c], wdH, N_HH, N_Hy);
     }
     if (nav)
-        eiv_nav_product(m, (const double (*)[6 * HS])w->nav_g, W, w->nav_wg, N_HH, N_Hy);
+        eiv_nav_product(m, s2_nav, (const double (*)[6 * HS])w->nav_g, W, w->nav_wg, N_HH,
+                        N_Hy);
     /* the QR update of [[R d]; [W H  W y]] (Householder, column by column: R's rows below
        the diagonal are zero, so each reflection touches R's row j and the nr new rows) */
     double *R = w->R, dv[MU], v[6];
