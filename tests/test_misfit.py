@@ -31,13 +31,22 @@ MASS_TOL_MOMENTUM = 0.005
 
 @pytest.fixture(scope="module")
 def systems(tmp_path_factory, spatial_fmus) -> dict:
+    """the SSPs without and with the sensors, and the runs so far (one 300 s run serves
+    every test that asks for its case)"""
     root = tmp_path_factory.mktemp("misfit")
     return {False: ssd.build_system("spatial", root / "plain", fmus=spatial_fmus)["ssp"],
             True: ssd.build_system("spatial", root / "sensors", fmus=spatial_fmus,
-                                   sensors=True)["ssp"]}
+                                   sensors=True)["ssp"], "runs": {}}
 
 
 def _run(systems, target: str, method: str, sensors: bool, **more) -> dict:
+    key = (target, method, sensors, tuple(sorted(more.items())))
+    if key not in systems["runs"]:
+        systems["runs"][key] = _simulate(systems, target, method, sensors, **more)
+    return systems["runs"][key]
+
+
+def _simulate(systems, target: str, method: str, sensors: bool, **more) -> dict:
     over = estimator_overrides(method, "measured", None)
     if sensors:
         over.update(PROFILE)
