@@ -652,12 +652,18 @@ def model_fit_vars() -> List[Var]:
         Var("ident.fit_bias_k_info", "parameter", "fixed", "Real", "1",
             "As ident.fit_bias_k, for the information filter's standard deviations (its "
             "whitened residual; in [0, 100]; 0 = none)", 0.25, ("fit_bias_k_info",)),
+        Var("ident.eiv_uncertainty", "parameter", "fixed", "Real", "1",
+            "Relative uncertainty of the information filter's errors-in-variables correction "
+            "(of the noise values' variances it is built from): its standard deviations add "
+            "this fraction f of the correction, sd^2 += (f (compensated - uncompensated))^2 "
+            "(in [0, 1]; 0 = none)", 0.05, ("eiv_uncertainty",)),
         Var("diag.model_fit", "output", "continuous", "Real", "1",
             "How well the rigid model fits: without a noise model the relative residual of "
             "the equations (a-posteriori, over ident.fit_window; about 1e-4 on the "
-            "project's rigid plant noise-free); with the information filter the Ljung-Box Q/L of its "
-            "whitened residuals (about 1 where they are white; 0 before 2 ident.fit_lags "
-            "samples)", None, ("model_fit",)),
+            "project's rigid plant noise-free); with the information filter the Ljung-Box Q/L "
+            "of its whitened residuals (about 1 where they are white; up to its replay the "
+            "innovations, from then on, restarted, the residuals at its compensated estimate; "
+            "0 for the first 2 ident.fit_lags samples of each)", None, ("model_fit",)),
         Var("diag.misfit", "output", "discrete", "Integer", None,
             "1 where the rigid model does not fit the data (diag.model_fit, diag.info_chi2 "
             "or a thrust scale beyond its threshold; the information filter decides after "

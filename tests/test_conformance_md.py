@@ -203,6 +203,8 @@ CONTRACT_UNITS = [
     (r"ident\.sd_thrust\.scale", "1"), (r"ident\.sd_thrust\.misalign", "rad"),
     (r"ident\.noise\.base\.a", "m/s2"), (r"ident\.noise\.(base\.alpha|arm\.qdd)", "rad/s2"),
     (r"ident\.noise\.base\.v", "m/s"), (r"ident\.noise\.(base\.omega|arm\.qd)", "rad/s"),
+    # the errors-in-variables correction's relative uncertainty
+    (r"ident\.eiv_uncertainty", "1"),
 ]
 
 

@@ -577,7 +577,9 @@ def test_estimator_reports_the_filter(lib):
     the sample interval) and linearised where the estimator says it linearises (its own
     equations' physical estimates before each sample: those an estimator with the filter off
     reports), within 1e-9 relative; its least-squares estimates the filter's compensated ones
-    within 1e-9 of the bound; its sd the bound times sqrt(max(1, chi2)). Off
+    within 1e-9 of the bound; its sd the bound times sqrt(max(1, chi2)) with ident.eiv_uncertainty's
+    share of the errors-in-variables correction (the filter's compensated less its
+    uncompensated estimates). Off
     (``ident.information`` = 2): crb and info_chi2 0, and the estimates those of an estimator
     without the profile given the profile's options explicitly (the equations' own)."""
     from spacerobot.core.estimator import NativeEstimator, options_from_values, profile_values
@@ -605,7 +607,13 @@ def test_estimator_reports_the_filter(lib):
     assert abs(r_on["info_chi2"] - chi2) <= 1e-9 * chi2
     ls, sd_on = on.estimates()
     assert np.all(np.abs(ls - vec) <= 1e-9 * bound), np.max(np.abs(ls - vec) / bound)
-    assert np.allclose(sd_on, bound * math.sqrt(max(1.0, chi2)), rtol=1e-9, atol=0)
+    # the sd: the bound times sqrt(max(1, chi2)) and ident.eiv_uncertainty (0.05) of the
+    # errors-in-variables correction (the compensated less the uncompensated estimate)
+    st0, vec0, _, _ = twin.estimate(0)
+    assert st0 == 0
+    want = np.hypot(bound * math.sqrt(max(1.0, chi2)), 0.05 * (vec - vec0))
+    assert np.allclose(sd_on, want, rtol=1e-9, atol=0)
+    assert np.max(np.abs(vec - vec0) * 0.05 / bound) > 0.01      # the term is exercised
     assert np.allclose(r_on["sd"], sd_on, rtol=1e-12, atol=0)
     # off: no bound, the equations' own estimates (not the filter's)
     assert np.all(r_off["crb"] == 0) and r_off["info_chi2"] == 0

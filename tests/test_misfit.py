@@ -115,7 +115,7 @@ def test_a_held_out_flexible_spacecraft(systems):
 def test_rigid_spacecraft_never_misfit(systems, sensors):
     """The rigid spacecraft: no misfit at any sample, the flags rise, the statistic well
     below its threshold (noise-free the relative residual 1e-4 against 1e-2; with the sensors
-    the Ljung-Box Q/L about 1.2 against 30)."""
+    the Ljung-Box Q/L 1.63 at 300 s against 30)."""
     # with the sensors a flag at the default confidence (0.99 for a body's 10 estimates) asks
     # for more than 300 s give on this target: 0.5 (about 2 sd each) shows the gate stays open
     more = {"estimator.ident.flag_confidence": 0.5} if sensors else {}
@@ -133,6 +133,7 @@ def test_fit_options_are_checked_with_their_names():
                       ("ident.fit_window", 0.0), ("ident.fit_rho_max", 2.0),
                       ("ident.fit_whiteness_max", 0.5), ("ident.fit_chi2_max", float("nan")),
                       ("ident.fit_thrust_max", 0.0), ("ident.fit_bias_k", -1.0),
-                      ("ident.fit_bias_k_info", 101.0)):
+                      ("ident.fit_bias_k_info", 101.0), ("ident.eiv_uncertainty", -0.1),
+                      ("ident.eiv_uncertainty", 1.5)):
         with pytest.raises(ValueError, match=name.replace(".", r"\.")):
             NativeEstimator(robot, {name: bad})

@@ -125,6 +125,8 @@ enum { ALWAYS, PROFILE, BODY };
       "{n} must be in [{a}, {b}]")                                                              \
     X("ident.fit_bias_k_info", fit_bias_k_info, 0, 0, 0.0, 100.0, 0.25, 0, 1, ALWAYS, RULE,     \
       "{n} must be in [{a}, {b}]")                                                              \
+    X("ident.eiv_uncertainty", eiv_uncertainty, 0, 0, 0.0, 1.0, 0.05, 0, 1, ALWAYS, RULE,       \
+      "{n} must be in [{a}, {b}]")                                                              \
     X("noise.scale", noise_scale, 0, 0, 0.0, SR_NOISE_PROFILE_MAX, 1.0, 0, 1, PROFILE, RULE,    \
       "{n} must be a finite number in [{a}, {B}]")                                              \
     PROFILE_MAGNITUDE(X, SR_NOISE_GYRO_ARW)                                                     \

@@ -62,22 +62,37 @@ void est_least_squares(const sr_estimator_model *m, const void *data, double *ve
         est_joint_std_parts(m, &d->core, 1.0, sd, data_only, J, vec);
 }
 
+/* the filter's estimates (held: the thrust errors at their priors), compensated (2) or not (0)
+   for the noise in the equations' coefficients */
+static int filter_estimate(const sr_estimator_model *m, const sr_info_data *fd, int held,
+                           int compensated, double *vec, double *bound, double *chi2,
+                           double *rss)
+{
+    return held ? sr_info_estimate_held(&m->info_m, fd, compensated, vec, bound, chi2, rss)
+                : sr_info_estimate(&m->info_m, fd, compensated, vec, bound, chi2);
+}
+
 /* the information filter's estimates and standard deviations (its bound times
- * sqrt(max(1, chi2)): the misfit the noise model did not foresee widens them); where the
- * model does not fit, with the thrust errors held at their priors (a consider term) and the
- * model-error term over the residual beyond the noise's. 0, or 1 (a singular information) */
+ * sqrt(max(1, chi2)): the misfit the noise model did not foresee widens them) and the
+ * errors-in-variables correction's own uncertainty (ident.eiv_uncertainty: a fraction of the
+ * correction, which scales with the noise values' variances); where the model does not fit,
+ * with the thrust errors held at their priors (a consider term) and the model-error term
+ * over the residual beyond the noise's. 0, or 1 (a singular information) */
 static int estimates_filter(const sr_estimator_model *m, const est_data *d, int misfit,
                             double *vec, double *sd, double *bound, double *chi2)
 {
     const sr_info_data *fd = est_info_data(m, d);
-    double rss = 0.0;
-    int st = misfit ? sr_info_estimate_held(&m->info_m, fd, 2, vec, bound, chi2, &rss)
-                    : sr_info_estimate(&m->info_m, fd, 2, vec, bound, chi2);
-    if (st != 0)
+    double rss = 0.0, raw[EST_NZ], raw_bound[EST_NZ], raw_chi2;
+    if (filter_estimate(m, fd, misfit, 2, vec, bound, chi2, &rss) != 0)
         return 1;
-    double k = sqrt(*chi2 > 1.0 ? *chi2 : 1.0);
-    for (int i = 0; i < EST_NZ; i++)
-        sd[i] = k * bound[i];
+    double k = sqrt(*chi2 > 1.0 ? *chi2 : 1.0), frac = m->opt.eiv_uncertainty;
+    /* (where the uncompensated estimates are not finite, the sds go without this term) */
+    int eiv = frac > 0.0
+              && filter_estimate(m, fd, misfit, 0, raw, raw_bound, &raw_chi2, NULL) == 0;
+    for (int i = 0; i < EST_NZ; i++) {
+        double c = eiv ? frac * (vec[i] - raw[i]) : 0.0;
+        sd[i] = sqrt(k * bound[i] * k * bound[i] + c * c);
+    }
     if (misfit) {          /* the residual beyond the noise's: rss - dof; all of it where
                               the model error is in the rows' noise model (me_var) */
         double unit[EST_NZ], var[EST_NZ];

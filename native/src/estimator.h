@@ -201,6 +201,9 @@ typedef struct sr_estimator_options {
                                    sds (0.5) */
     double fit_bias_k_info;     /* ident.fit_bias_k_info: the same for the information
                                    filter's (0.25) */
+    double eiv_uncertainty;     /* ident.eiv_uncertainty: the errors-in-variables correction's
+                                   relative uncertainty, its share of the information filter's
+                                   sds (0.05) */
 } sr_estimator_options;
 
 /** The options' defaults (the table's: the core's own, base 600 kg and target 100 kg guesses

@@ -84,7 +84,9 @@ typedef struct sr_info_fit_options {
 } sr_info_fit_options;
 
 /** What the model-fit test says (sr_info_fit_of): the Ljung-Box Q/L of the whitened
- *  residuals (0 before 2 L samples), chi2 (the weighted residual sum of squares per degree of
+ *  residuals (the innovations up to and at the replay; from it on, restarted, the
+ *  residuals at the compensated estimate, sr_info_data.u_fit; 0 before 2 L samples of
+ *  each), chi2 (the weighted residual sum of squares per degree of
  *  freedom, the thrust errors estimated), the larger thrust scale's |s| / prior sd (0 without
  *  a thrust prior), and misfit (1 where one of them is beyond its threshold, the whiteness
  *  only where chi2 > SR_INFO_FIT_CHI2_MIN (far below, the data are less noisy than their
@@ -127,6 +129,13 @@ typedef struct sr_info_data {
        the lag products sum_t e_t e_(t-k), k = 0..lags (fit_sum[6 k + row]) */
     int fit_head, fit_count;
     double fit_ring[(SR_INFO_MAX_LAGS + 1) * 6], fit_sum[(SR_INFO_MAX_LAGS + 1) * 6];
+    /* the unknowns (nu) the whiteness test's residuals are taken at where fit_at (1): from
+       the replay on (the sums restarted there) the compensated estimate with the thrust
+       errors estimated, refreshed every SR_INFO_RELIN samples (kept where not finite); up
+       to and at the replay, or where it was not finite at the replay (fit_at 0), the QR's
+       innovations */
+    int fit_at;
+    double u_fit[SR_INFO_MAX_U];
     /* the misfit found at the replay (kept: the thrust errors held from then on) and the
        model error's variances it added to every row's noise covariance since: the linear
        momentum's [N^2 s^2] and the angular momentum's about the base point [N^2 m^2 s^2] */

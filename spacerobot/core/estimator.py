@@ -73,7 +73,7 @@ class SrEstimatorOptions(ctypes.Structure):
         ("fit_lags", ctypes.c_int), ("fit_rho_max", ctypes.c_double),
         ("fit_whiteness_max", ctypes.c_double), ("fit_chi2_max", ctypes.c_double),
         ("fit_thrust_max", ctypes.c_double), ("fit_bias_k", ctypes.c_double),
-        ("fit_bias_k_info", ctypes.c_double),
+        ("fit_bias_k_info", ctypes.c_double), ("eiv_uncertainty", ctypes.c_double),
     ]
 
 
