@@ -28,6 +28,8 @@ typedef struct {
     int n_sample;
     int vr_in[MAX_SAMPLE];                 /* input value reference of each sample element */
     int n_out, vr_out[MAX_OUTPUTS];        /* the core's outputs (its table's order) */
+    int vr_misfit;                         /* diag.misfit's (its value before a step: the
+                                              last one the host could read) */
     double sample_time;                    /* the scenario's [s]: the sensors' noise densities
                                               per sample (ident.noise_profile) */
     sr_estimator_model *core;              /* NULL before initialisation */
@@ -64,6 +66,7 @@ static int bind(sr_instance *inst, estimator_glue *g) {
     if (g->n_out > MAX_OUTPUTS) return 1;
     for (int i = 0; i < g->n_out; ++i)
         bad |= (g->vr_out[i] = vr_of_name(inst, sr_estimator_output_name(i))) < 0;
+    bad |= (g->vr_misfit = vr_of_name(inst, "diag.misfit")) < 0;
     return bad;
 }
 
@@ -146,11 +149,13 @@ static int build_core(sr_instance *inst, estimator_glue *g, sr_estimator_model *
     return 0;
 }
 
+/* the core's report into the output variables (and into *out where given) */
 static void write_outputs(sr_instance *inst, estimator_glue *g, const sr_estimator_model *core,
-                          const void *data) {
+                          const void *data, sr_estimator_report *out) {
     sr_estimator_report r;
     if (!core || !data) return;              /* no core: the report would stay unset */
     sr_estimator_report_get(core, data, &r);
+    if (out) *out = r;
     sr_estimator_outputs(&r, g->outputs);
     for (int i = 0; i < g->n_out; ++i) {
         if (sr_variable(inst, g->vr_out[i])->type == SR_INTEGER)
@@ -178,7 +183,7 @@ int sr_model_initialize(void *model, sr_instance *inst) {
         return 1;
     }
     adopt_core(g, core, data, work);
-    write_outputs(inst, g, core, data);
+    write_outputs(inst, g, core, data, NULL);
     return 0;
 }
 
@@ -188,10 +193,31 @@ void sr_model_preview(void *model, sr_instance *inst) {
     void *data;
     char err[512];
     if (build_core(inst, g, &core, &data, NULL, err, sizeof err) == 0) {
-        write_outputs(inst, g, core, data);
+        write_outputs(inst, g, core, data, NULL);
         sr_estimator_model_free(core);
         free(data);
     }
+}
+
+/* diag.misfit's changes, told once each: a host that does not read it still learns that the
+ * rigid model does not fit (docs/identification.md, "When the rigid model does not fit") */
+static void log_misfit(sr_instance *inst, double t, int before, const sr_estimator_report *r) {
+    if (r->misfit && !before && r->misfit_noise)
+        sr_log(inst, SR_LOG_WARNING,
+               "t = %.6g s: the residuals are white but larger than the noise model's "
+               "(diag.info_chi2 %.3g, diag.misfit = 1): the noise.* values look too small for "
+               "the sensors; no body is flagged identified, the estimates are kept and their "
+               "sds widened (docs/identification.md, \"When the rigid model does not fit\")",
+               t, r->info_chi2);
+    else if (r->misfit && !before)
+        sr_log(inst, SR_LOG_WARNING,
+               "t = %.6g s: the rigid model does not fit the samples (diag.misfit = 1): no body "
+               "is flagged identified and the sds carry a model-error term; the estimates can "
+               "be far off (flexible parts or sloshing propellant: docs/identification.md, "
+               "\"When the rigid model does not fit\")", t);
+    else if (!r->misfit && before)
+        sr_log(inst, SR_LOG_EVENTS, "t = %.6g s: the rigid model fits the samples again "
+               "(diag.misfit = 0)", t);
 }
 
 int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
@@ -201,8 +227,11 @@ int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     int status;
     (void)h;                                 /* one sample per communication point */
     for (int k = 0; k < g->n_sample; ++k) g->sample[k] = x[g->vr_in[k]];
+    int misfit_before = sr_integers(inst)[g->vr_misfit];
+    sr_estimator_report r = {0};
     status = sr_estimator_update(g->core, g->data, g->work, t, g->sample, msg, sizeof msg);
-    write_outputs(inst, g, g->core, g->data);
+    write_outputs(inst, g, g->core, g->data, &r);
+    log_misfit(inst, t, misfit_before, &r);
     if (status == SR_EST_REJECT_NONFINITE || status == SR_EST_REJECT_INCONSISTENT) {
         char where[512] = "";                /* skipped: name the inputs at fault */
         for (int k = 0; k < g->n_sample; ++k)

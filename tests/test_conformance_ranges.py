@@ -92,7 +92,8 @@ def _beyond(v, bound: str):
     if v.type == "Integer":
         y = int(x) - 1 if bound == "min" else int(x) + 1
         return y if INT32[0] <= y <= INT32[1] else None
-    return float(np.nextafter(x, -math.inf if bound == "min" else math.inf))
+    with np.errstate(over="ignore"):      # beyond the largest double: inf, refused alike
+        return float(np.nextafter(x, -math.inf if bound == "min" else math.inf))
 
 
 def _outside(path, causality):

@@ -25,16 +25,17 @@ static int noise_free(const sr_estimator_model *m)
 }
 
 void est_fit_test(const sr_estimator_model *m, const void *data, double *model_fit,
-                  int *misfit)
+                  int *misfit, int *held)
 {
     const est_data *d = (const est_data *)data;
     *model_fit = 0.0;
-    *misfit = 0;
+    *misfit = *held = 0;
     if (m->info) {
         sr_info_fit f;
         sr_info_fit_of(&m->info_m, est_info_data(m, data), &f);
         *model_fit = f.whiteness;
         *misfit = f.misfit;
+        *held = f.model;
         return;
     }
     if (d->samples <= 0)
@@ -50,6 +51,7 @@ void est_fit_test(const sr_estimator_model *m, const void *data, double *model_f
     /* decided once the window holds its length of samples (the first seconds' residuals are
        the estimates settling) */
     *misfit = noise_free(m) && d->samples >= window_samples(m) && rho > m->opt.fit_rho_max;
+    *held = *misfit;
 }
 
 void est_fit_gate_flags(int misfit, int *identified)

@@ -75,25 +75,28 @@ static int filter_estimate(const sr_estimator_model *m, const sr_info_data *fd, 
 /* the information filter's estimates and standard deviations (its bound times
  * sqrt(max(1, chi2)): the misfit the noise model did not foresee widens them) and the
  * errors-in-variables correction's own uncertainty (ident.eiv_uncertainty: a fraction of the
- * correction, which scales with the noise values' variances); where the model does not fit,
- * with the thrust errors held at their priors (a consider term) and the model-error term
- * over the residual beyond the noise's. 0, or 1 (a singular information) */
-static int estimates_filter(const sr_estimator_model *m, const est_data *d, int misfit,
-                            double *vec, double *sd, double *bound, double *chi2)
+ * correction, which scales with the noise values' variances: where chi2 alone says they are
+ * too small (noise), to within chi2 - 1 of itself); where the rigid model does not fit
+ * (held), with the thrust errors held at their priors (a consider term) and the model-error
+ * term over the residual beyond the noise's. 0, or 1 (a singular information) */
+static int estimates_filter(const sr_estimator_model *m, const est_data *d, int held,
+                            int noise, double *vec, double *sd, double *bound, double *chi2)
 {
     const sr_info_data *fd = est_info_data(m, d);
     double rss = 0.0, raw[EST_NZ], raw_bound[EST_NZ], raw_chi2;
-    if (filter_estimate(m, fd, misfit, 2, vec, bound, chi2, &rss) != 0)
+    if (filter_estimate(m, fd, held, 2, vec, bound, chi2, &rss) != 0)
         return 1;
     double k = sqrt(*chi2 > 1.0 ? *chi2 : 1.0), frac = m->opt.eiv_uncertainty;
+    if (noise && *chi2 - 1.0 > frac)
+        frac = *chi2 - 1.0;
     /* (where the uncompensated estimates are not finite, the sds go without this term) */
     int eiv = frac > 0.0
-              && filter_estimate(m, fd, misfit, 0, raw, raw_bound, &raw_chi2, NULL) == 0;
+              && filter_estimate(m, fd, held, 0, raw, raw_bound, &raw_chi2, NULL) == 0;
     for (int i = 0; i < EST_NZ; i++) {
         double c = eiv ? frac * (vec[i] - raw[i]) : 0.0;
         sd[i] = sqrt(k * bound[i] * k * bound[i] + c * c);
     }
-    if (misfit) {          /* the residual beyond the noise's: rss - dof; all of it where
+    if (held) {            /* the residual beyond the noise's: rss - dof; all of it where
                               the model error is in the rows' noise model (me_var) */
         double unit[EST_NZ], var[EST_NZ];
         double dof = fd->rows - (m->info_m.nu - SR_N_CONSIDER);
@@ -111,13 +114,13 @@ static int estimates_filter(const sr_estimator_model *m, const est_data *d, int 
  * where it runs, else the equations' own (where the model does not fit, with the model-error
  * term: the scatter sd^2 = s^2 [(A^T A)^-1]_ii, s^2 = ||r||^2 / dof, so the bias bound's
  * [(A^T A)^-1]_ii ||r||^2 = sd^2 dof: unit variance sd^2, excess the rows' count); crb (20) and
- * chi2 (may be NULL) the filter's bound and misfit, 0 without it; misfit the model-fit
- * test's (est_fit_test) */
+ * chi2 (may be NULL) the filter's bound and misfit, 0 without it; misfit and held the
+ * model-fit test's (est_fit_test) */
 static void estimates_info(const sr_estimator_model *m, const est_data *d, int misfit,
-                           double *vec, double *sd, double *crb, double *chi2)
+                           int held, double *vec, double *sd, double *crb, double *chi2)
 {
     double bound[EST_NZ], x2 = 0.0;
-    if (!m->info || estimates_filter(m, d, misfit, vec, sd, bound, &x2) != 0) {
+    if (!m->info || estimates_filter(m, d, held, misfit && !held, vec, sd, bound, &x2) != 0) {
         est_least_squares(m, d, vec, sd);     /* (a singular information: the equations') */
         memset(bound, 0, sizeof bound);
         x2 = 0.0;
@@ -139,9 +142,9 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, int m
 static void estimates(const sr_estimator_model *m, const est_data *d, double *vec, double *sd)
 {
     double fit;
-    int misfit;
-    est_fit_test(m, d, &fit, &misfit);
-    estimates_info(m, d, misfit, vec, sd, NULL, NULL);
+    int misfit, held;
+    est_fit_test(m, d, &fit, &misfit, &held);
+    estimates_info(m, d, misfit, held, vec, sd, NULL, NULL);
 }
 
 void sr_estimator_estimates(const sr_estimator_model *m, const void *data, double *vec,
@@ -212,8 +215,10 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
         r->status = SR_EST_REJECT_NONFINITE;
         return;
     }
-    est_fit_test(m, d, &r->model_fit, &r->misfit);
-    estimates_info(m, d, r->misfit, ls, r->sd, r->crb, &r->info_chi2);
+    int held;
+    est_fit_test(m, d, &r->model_fit, &r->misfit, &held);
+    r->misfit_noise = r->misfit && !held;
+    estimates_info(m, d, r->misfit, held, ls, r->sd, r->crb, &r->info_chi2);
     int flags[4];
     est_physical_vector(m, ls, r->sd, r->vector, flags);
     for (int k = 0; k < 2; k++) {

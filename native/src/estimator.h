@@ -345,6 +345,9 @@ typedef struct sr_estimator_report {
                                          ident.fit_window (no noise model), or the Ljung-Box
                                          Q/L of the information filter's whitened residuals */
     int misfit;                       /* diag.misfit: 1 where the rigid model does not fit */
+    int misfit_noise;                 /* 1 where that misfit is chi2 alone (white residuals
+                                         larger than the noise model's: the noise.* values
+                                         too small; the estimates not held); no output */
 } sr_estimator_report;
 
 /** The excitation level the Model m requests (output ident.excite) for the bodies' identified

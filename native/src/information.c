@@ -484,7 +484,7 @@ static int estimate_as_fit(const sr_info_model *m, const sr_info_data *d, double
                            double *bound)
 {
     sr_info_fit f;
-    if (sr_info_fit_of(m, d, &f) == 0 && f.misfit)
+    if (sr_info_fit_of(m, d, &f) == 0 && f.model)
         return sr_info_estimate_held(m, d, 2, z, bound, NULL, NULL);
     return sr_info_estimate(m, d, 2, z, bound, NULL);
 }
@@ -544,7 +544,8 @@ int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d)
         s += d->u_fit[i];
     return isfinite(s + d->me_var[0] + d->me_var[1]) && d->me_var[0] >= 0.0
            && d->me_var[1] >= 0.0 && (d->fit_at == 0 || d->fit_at == 1)
-           && d->fit_at <= d->replayed;
+           && (d->noise_misfit == 0 || d->noise_misfit == 1)
+           && d->fit_at <= d->replayed && d->noise_misfit <= d->replayed;
 }
 
 size_t sr_info_buffer_length(int n)
@@ -659,13 +660,15 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
     /* where the rigid model does not fit the replayed samples: once more with the thrust errors
        held (own_point's estimate) and the model error as the rows' noise */
     sr_info_fit f;
-    if (sr_info_fit_of(m, d, &f) == 0 && f.misfit) {
+    if (sr_info_fit_of(m, d, &f) == 0 && f.model) {
         double me_var[2];
         if (own_point(m, d, z) != 0)
             memcpy(z, d->z_lin, sizeof z);
         info_model_error_of(m, buffer, z, me_var);
         if (replay(m, before, d, buffer, t, x, z, me_var, w) != 0)
             return 1;
+    } else if (f.noise) {
+        d->noise_misfit = 1;
     }
     fit_restart(m, d, w);
     return 0;

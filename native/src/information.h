@@ -88,16 +88,19 @@ typedef struct sr_info_fit_options {
  *  residuals at the compensated estimate, sr_info_data.u_fit; 0 before 2 L samples of
  *  each), chi2 (the weighted residual sum of squares per degree of
  *  freedom, the thrust errors estimated), the larger thrust scale's |s| / prior sd (0 without
- *  a thrust prior), and misfit (1 where one of them is beyond its threshold, the whiteness
- *  only where chi2 > SR_INFO_FIT_CHI2_MIN (far below, the data are less noisy than their
- *  model and the residuals' colour is round-off's), decided from the
- *  filter's replay on (before, its linearisation point is the caller's); found at the replay
- *  it stays: the replay then adds the samples again with the thrust errors held and the model
- *  error's variances (sr_info_data.me_var, from the kept samples' residuals) in the rows'
- *  noise covariance). */
+ *  a thrust prior); decided from the filter's replay on (before, its linearisation point is
+ *  the caller's): model (1 where the rigid model does not fit: the whiteness beyond its
+ *  threshold, counted only where chi2 > SR_INFO_FIT_CHI2_MIN (far below, the data are less
+ *  noisy than their model and the residuals' colour is round-off's), or the thrust scale
+ *  beyond its; found at the replay it stays: the replay then adds the samples again with the
+ *  thrust errors held and the model error's variances (sr_info_data.me_var, from the kept
+ *  samples' residuals) in the rows' noise covariance), noise (1 where chi2 is beyond its
+ *  threshold with neither of those: white residuals larger than the noise model's, the
+ *  noise values too small; found at the replay it stays, sr_info_data.noise_misfit; the
+ *  estimates are not held) and misfit (model or noise: no flag). */
 typedef struct sr_info_fit {
     double whiteness, chi2, thrust;
-    int misfit;
+    int model, noise, misfit;
 } sr_info_fit;
 
 /** The constant part. */
@@ -141,6 +144,8 @@ typedef struct sr_info_data {
        momentum's [N^2 s^2] and the angular momentum's about the base point [N^2 m^2 s^2] */
     int misfit;
     double me_var[2];
+    /* chi2 alone beyond its threshold at the replay (kept): the noise values too small */
+    int noise_misfit;
 } sr_info_data;
 
 /** The filter's temporaries: a work space beside the state, never part of it (a host copies

@@ -324,6 +324,20 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
                        f"Cramer-Rao bound: the crb.* columns")
             break
     for prefix in ("estimator.", ""):
+        misfit, time = data.get(f"{prefix}diag.misfit"), data.get("time")
+        if misfit is not None and len(misfit) and misfit[-1] > 0.5:
+            since = ""
+            if time is not None and len(time) == len(misfit):
+                fits = np.flatnonzero(np.asarray(misfit) < 0.5)
+                start = fits[-1] + 1 if len(fits) else 0
+                since = f" from t = {time[start]:g} s"
+            out.append(f"the rigid model does not fit the samples (diag.misfit 1{since}): no "
+                       f"body is flagged, the sds carry a model-error term and the estimates "
+                       f"can be far off (flexible parts, sloshing propellant, or noise.* values "
+                       f"too small: docs/identification.md, 'When the rigid model does not "
+                       f"fit')")
+            break
+    for prefix in ("estimator.", ""):
         rate = data.get(f"{prefix}ident.excite_rate")
         score = [data.get(f"{prefix}diag.excite_score.{k}") for k in interface.EXCITE_SCORES]
         if rate is not None and len(rate) and all(s is not None and len(s) for s in score):
