@@ -638,7 +638,9 @@ def model_fit_vars() -> List[Var]:
             "Misfit where the whitened residuals' Ljung-Box Q/L is above this (information "
             "filter; 1 for white residuals; in [1, 1e6])", 30.0, ("fit_whiteness_max",)),
         Var("ident.fit_chi2_max", "parameter", "fixed", "Real", "1",
-            "Misfit where diag.info_chi2 is above this (information filter; in [1, 1e6])", 2.0,
+            "Misfit where diag.info_chi2 is above this (information filter; in [1, 1e6]); "
+            "alone, with white residuals, it says the noise values are too small: the "
+            "estimates are then not held", 2.0,
             ("fit_chi2_max",)),
         Var("ident.fit_thrust_max", "parameter", "fixed", "Real", "1",
             "Misfit where the thrust's force or moment scale factor is estimated more than "
@@ -667,9 +669,10 @@ def model_fit_vars() -> List[Var]:
         Var("diag.misfit", "output", "discrete", "Integer", None,
             "1 where the rigid model does not fit the data (diag.model_fit, diag.info_chi2 "
             "or a thrust scale beyond its threshold; the information filter decides after "
-            "its replay at 600 samples): the thrust errors are then held at their priors, "
-            "the standard deviations carry the model-error term and no body is flagged "
-            "identified", None, ("misfit",)),
+            "its replay at 600 samples): no body is flagged identified; the thrust errors "
+            "are held at their priors and the standard deviations carry the model-error term "
+            "(where diag.info_chi2 alone set it, the noise values too small: the estimates "
+            "kept, the sds widened); logged as a warning at each onset", None, ("misfit",)),
     ]
 
 

@@ -344,7 +344,8 @@ typedef struct sr_estimator_report {
     double model_fit;                 /* diag.model_fit: the relative residual over
                                          ident.fit_window (no noise model), or the Ljung-Box
                                          Q/L of the information filter's whitened residuals */
-    int misfit;                       /* diag.misfit: 1 where the rigid model does not fit */
+    int misfit;                       /* diag.misfit: 1 where the rigid model does not fit
+                                         (or chi2 alone: misfit_noise) */
     int misfit_noise;                 /* 1 where that misfit is chi2 alone (white residuals
                                          larger than the noise model's: the noise.* values
                                          too small; the estimates not held); no output */
