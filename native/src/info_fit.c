@@ -181,24 +181,21 @@ static int fit_test(const sr_info_model *m, const sr_info_data *d, sr_info_fit *
     f->whiteness = whiteness(m, d);
     f->chi2 = dof > 0.0 ? d->rss / dof : 0.0;
     f->thrust = thrust_ratio(m, d);
-    f->model = d->misfit;
-    f->noise = d->noise_misfit && !f->model;
-    f->misfit = f->model || f->noise;
-    if (!isfinite(f->thrust)) {
+    /* a thrust ratio that is not finite (a singular information): the misfits kept at the
+       replay only */
+    int ok = isfinite(f->thrust), decide = ok && d->replayed;
+    if (!ok)
         f->thrust = 0.0;
-        return 1;
-    }
     /* coloured residuals count where they are not far below the noise's size (chi2 above
        SR_INFO_FIT_CHI2_MIN): far below it (noise-free data under a noise model, chi2 1e-5 to
        1e-4) their colour is the round-off's */
     int coloured = f->whiteness > m->fit.whiteness_max && f->chi2 > SR_INFO_FIT_CHI2_MIN;
-    f->model = d->misfit || (d->replayed && (coloured || f->thrust > m->fit.thrust_max));
-    /* white residuals beyond the noise's: the noise values too small (the rigid model may
-       fit: the estimates not held; a noise value set half its sensor's held the thrust
-       errors and replayed with the model error's variances, 194 % off) */
-    f->noise = !f->model && (d->noise_misfit || (d->replayed && f->chi2 > m->fit.chi2_max));
+    f->model = d->misfit || (decide && (coloured || f->thrust > m->fit.thrust_max));
+    /* white residuals beyond the noise's: the noise values too small, while the rigid model
+       may fit (the estimates not held) */
+    f->noise = !f->model && (d->noise_misfit || (decide && f->chi2 > m->fit.chi2_max));
     f->misfit = f->model || f->noise;
-    return 0;
+    return ok ? 0 : 1;
 }
 
 int sr_info_fit_of(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
