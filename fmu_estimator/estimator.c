@@ -28,8 +28,9 @@ typedef struct {
     int n_sample;
     int vr_in[MAX_SAMPLE];                 /* input value reference of each sample element */
     int n_out, vr_out[MAX_OUTPUTS];        /* the core's outputs (its table's order) */
-    int vr_misfit;                         /* diag.misfit's (its value before a step: the
-                                              last one the host could read) */
+    int misfit_cause;                      /* the last report's: 0 the model fits, 1 the
+                                              rigid model does not, 2 the noise values are
+                                              too small (each change logged) */
     double sample_time;                    /* the scenario's [s]: the sensors' noise densities
                                               per sample (ident.noise_profile) */
     sr_estimator_model *core;              /* NULL before initialisation */
@@ -66,7 +67,6 @@ static int bind(sr_instance *inst, estimator_glue *g) {
     if (g->n_out > MAX_OUTPUTS) return 1;
     for (int i = 0; i < g->n_out; ++i)
         bad |= (g->vr_out[i] = vr_of_name(inst, sr_estimator_output_name(i))) < 0;
-    bad |= (g->vr_misfit = vr_of_name(inst, "diag.misfit")) < 0;
     return bad;
 }
 
@@ -165,6 +165,11 @@ static void write_outputs(sr_instance *inst, estimator_glue *g, const sr_estimat
     }
 }
 
+/* the misfit's cause in a report: 0 none, 1 the rigid model's, 2 the noise values' */
+static int cause_of(const sr_estimator_report *r) {
+    return !r->misfit ? 0 : r->misfit_noise ? 2 : 1;
+}
+
 /* the instance takes a new core (model, data and its work space), dropping the one it had */
 static void adopt_core(estimator_glue *g, sr_estimator_model *core, void *data, void *work) {
     drop_core(g);
@@ -182,8 +187,10 @@ int sr_model_initialize(void *model, sr_instance *inst) {
         sr_log(inst, SR_LOG_ERROR, "invalid estimator parameters: %s", err);
         return 1;
     }
+    sr_estimator_report r = {0};
     adopt_core(g, core, data, work);
-    write_outputs(inst, g, core, data, NULL);
+    write_outputs(inst, g, core, data, &r);
+    g->misfit_cause = cause_of(&r);
     return 0;
 }
 
@@ -199,23 +206,27 @@ void sr_model_preview(void *model, sr_instance *inst) {
     }
 }
 
-/* diag.misfit's changes, told once each: a host that does not read it still learns that the
- * rigid model does not fit (docs/identification.md, "When the rigid model does not fit") */
+/* diag.misfit's onsets and its cause's changes, told once each: a host that does not read it
+ * still learns that the model does not fit, and why (docs/identification.md, "When the rigid
+ * model does not fit") */
 static void log_misfit(sr_instance *inst, double t, int before, const sr_estimator_report *r) {
-    if (r->misfit && !before && r->misfit_noise)
+    int now = cause_of(r);
+    const char *set = before ? "diag.misfit stays 1, its cause changed" : "diag.misfit = 1";
+    if (now == before) return;
+    if (now == 2)
         sr_log(inst, SR_LOG_WARNING,
                "t = %.6g s: the residuals are white but larger than the noise model's "
-               "(diag.info_chi2 %.3g, diag.misfit = 1): the noise.* values look too small for "
-               "the sensors; no body is flagged identified, the estimates are kept and their "
-               "sds widened (docs/identification.md, \"When the rigid model does not fit\")",
-               t, r->info_chi2);
-    else if (r->misfit && !before)
+               "(diag.info_chi2 %.3g, %s): the noise.* values look too small for the sensors; "
+               "no body is flagged identified, the estimates are kept and their sds widened "
+               "(docs/identification.md, \"When the rigid model does not fit\")",
+               t, r->info_chi2, set);
+    else if (now == 1)
         sr_log(inst, SR_LOG_WARNING,
-               "t = %.6g s: the rigid model does not fit the samples (diag.misfit = 1): no body "
-               "is flagged identified and the sds carry a model-error term; the estimates can "
-               "be far off (flexible parts or sloshing propellant: docs/identification.md, "
-               "\"When the rigid model does not fit\")", t);
-    else if (!r->misfit && before)
+               "t = %.6g s: the rigid model does not fit the samples (%s): no body is flagged "
+               "identified and the sds carry a model-error term; the estimates can be far off "
+               "(flexible parts or sloshing propellant: docs/identification.md, \"When the "
+               "rigid model does not fit\")", t, set);
+    else
         sr_log(inst, SR_LOG_EVENTS, "t = %.6g s: the rigid model fits the samples again "
                "(diag.misfit = 0)", t);
 }
@@ -227,11 +238,11 @@ int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     int status;
     (void)h;                                 /* one sample per communication point */
     for (int k = 0; k < g->n_sample; ++k) g->sample[k] = x[g->vr_in[k]];
-    int misfit_before = sr_integers(inst)[g->vr_misfit];
     sr_estimator_report r = {0};
     status = sr_estimator_update(g->core, g->data, g->work, t, g->sample, msg, sizeof msg);
     write_outputs(inst, g, g->core, g->data, &r);
-    log_misfit(inst, t, misfit_before, &r);
+    log_misfit(inst, t, g->misfit_cause, &r);
+    g->misfit_cause = cause_of(&r);
     if (status == SR_EST_REJECT_NONFINITE || status == SR_EST_REJECT_INCONSISTENT) {
         char where[512] = "";                /* skipped: name the inputs at fault */
         for (int k = 0; k < g->n_sample; ++k)
@@ -287,6 +298,9 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
         return 1;
     }
     adopt_core(g, core, data, work);
+    sr_estimator_report r;
+    sr_estimator_report_get(core, data, &r);
+    g->misfit_cause = cause_of(&r);     /* as the restored diag.misfit says */
     return 0;
 }
 

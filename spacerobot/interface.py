@@ -653,11 +653,13 @@ def model_fit_vars() -> List[Var]:
             ("fit_bias_k",)),
         Var("ident.fit_bias_k_info", "parameter", "fixed", "Real", "1",
             "As ident.fit_bias_k, for the information filter's standard deviations (its "
-            "whitened residual; in [0, 100]; 0 = none)", 0.25, ("fit_bias_k_info",)),
+            "whitened residual; only for a misfit of the rigid model, not one by chi2 alone; "
+            "in [0, 100]; 0 = none)", 0.25, ("fit_bias_k_info",)),
         Var("ident.eiv_uncertainty", "parameter", "fixed", "Real", "1",
             "Relative uncertainty of the information filter's errors-in-variables correction "
             "(of the noise values' variances it is built from): its standard deviations add "
-            "this fraction f of the correction, sd^2 += (f (compensated - uncompensated))^2 "
+            "this fraction f of the correction, sd^2 += (f (compensated - uncompensated))^2; "
+            "while diag.misfit = 1 by chi2 alone (the noise values too small) max(f, chi2 - 1) "
             "(in [0, 1]; 0 = none)", 0.05, ("eiv_uncertainty",)),
         Var("diag.model_fit", "output", "continuous", "Real", "1",
             "How well the rigid model fits: without a noise model the relative residual of "

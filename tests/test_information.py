@@ -18,6 +18,7 @@
 from __future__ import annotations
 
 import ctypes
+import struct
 import math
 import os
 import subprocess
@@ -474,6 +475,39 @@ def test_model_init_refuses_bad_input(lib, small):
     assert lib.sr_info_model_init(m, None, _p(nv), _p(z0), 1.0, 1.0) == 1
     assert lib.sr_info_model_init(m, ctypes.byref(rob), None, _p(z0), 1.0, 1.0) == 1
     assert lib.sr_info_model_init(m, ctypes.byref(rob), _p(nv), None, 1.0, 1.0) == 1
+
+
+def test_state_check_refuses_inconsistent_misfit_flags(lib, small):
+    """sr_info_data_finite on a state before the replay: clean, accepted; each word of the
+    Data's tail written as the integer 1 (the tail is int misfit, its padding, double
+    me_var[2], int noise_misfit, its padding: information.h) is refused where it is a field
+    (a misfit or a model-error variance before any replay: 6 of the 8 words) and accepted in
+    the padding; the word 2 in a flag is refused too (out of 0..1)."""
+    sc, rob, nv, ts, X = small
+    g = sc.guess
+    f = CFilter(lib, rob, nv, guess_of(sc), g.P0_mu, g.P0_theta)
+    for t, x in zip(ts[:20], X[:20]):
+        assert f.add(t, x, guess_of(sc)) == 0
+    lib.sr_info_data_finite.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+    lib.sr_info_data_finite.restype = ctypes.c_int
+    clean = f.data.raw
+    assert lib.sr_info_data_finite(f.model, f.data) == 1
+    size = len(clean)
+    refused = []
+    for off in range(size - 32, size, 4):
+        bad = bytearray(clean)
+        struct.pack_into("<i", bad, off, 1)
+        ctypes.memmove(f.data, bytes(bad), size)
+        if lib.sr_info_data_finite(f.model, f.data) == 0:
+            refused.append(off - (size - 32))
+    assert refused == [0, 8, 12, 16, 20, 24], refused
+    for off in (size - 32, size - 8):
+        bad = bytearray(clean)
+        struct.pack_into("<i", bad, off, 2)
+        ctypes.memmove(f.data, bytes(bad), size)
+        assert lib.sr_info_data_finite(f.model, f.data) == 0, off
+    ctypes.memmove(f.data, clean, size)
+    assert lib.sr_info_data_finite(f.model, f.data) == 1
 
 
 def test_prior_before_any_sample(lib, small):

@@ -31,9 +31,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
-
 from conftest import ARM5_URDF
+from oracles.modal import drive, filter_states, modal_columns
 from spacerobot.core.plant import NativePlant
 from spacerobot.core.sample import sample_length
 from spacerobot.estimator.identifier import Identifier
@@ -176,59 +175,6 @@ def test_state_round_trip_carries_the_modes(window):
 WINDOW = 5.0
 
 
-def _filter_states(u: np.ndarray, t: np.ndarray, w: float, zeta: float) -> np.ndarray:
-    """(N, 2, 12) eta and eta' of eta'' + 2 zeta w eta' + w^2 eta = -u for each of the 12
-    drive channels, at rest at t[0], the drive linear between samples: the exact step
-    exp(M dt) of the state [eta, eta', u, du/dt dt]."""
-    out = np.zeros((len(t), 2, u.shape[1]))
-    x = np.zeros((2, u.shape[1]))
-    for k in range(1, len(t)):
-        dt = t[k] - t[k - 1]
-        M = np.zeros((4, 4))
-        M[0, 1] = 1.0
-        M[1, 0], M[1, 1], M[1, 2] = -w * w, -2.0 * zeta * w, -1.0
-        M[2, 3] = 1.0 / dt
-        E = expm(M * dt)
-        x = E[:2, :2] @ x + E[:2, 2:3] * u[k - 1] + E[:2, 3:4] * (u[k] - u[k - 1])
-        out[k] = x
-    return out
-
-
-def _modal_columns(eta, etad, s, p) -> np.ndarray:
-    """(6, 165) momentum columns of one mode (docs/identification.md section 8): in base axes
-    about S the blocks G (21: the symmetric l l^T), C (36), D (36: [w]x d, -[v_B]x d) and
-    T (72: I(eta) w for I# = [Ixx Iyy Izz Ixy Ixz Iyz]), then to inertial axes, the angular
-    rows about the point p."""
-    w, A = s["omega_B"], s["A"]
-    vB = A.T @ s["v_S"]
-    cols = []
-    for i in range(6):
-        for j in range(i, 6):
-            h = np.zeros(6)
-            h[i] += etad[j]
-            h[j] += etad[i] if j != i else 0.0
-            cols.append(h)
-    for i in range(6):
-        for j in range(6):
-            h = np.zeros(6)
-            h[i] = etad[6 + j]
-            cols.append(h)
-    for i in range(3):
-        for j in range(12):
-            d = np.zeros(3)
-            d[i] = eta[j]
-            cols.append(np.r_[np.cross(w, d), -np.cross(vB, d)])
-    omega = np.array([[w[0], 0, 0], [0, w[1], 0], [0, 0, w[2]],
-                      [w[1], w[0], 0], [w[2], 0, w[0]], [0, w[2], w[1]]])
-    for i in range(6):
-        for j in range(12):
-            cols.append(np.r_[np.zeros(3), omega[i] * eta[j]])
-    H = np.array(cols).T
-    lin = A @ H[:3]
-    ang = A @ H[3:] + np.cross(s["r_S"] - p, lin.T).T
-    return np.vstack([lin, ang])
-
-
 def _batch_estimates(sc, xs, modes, point: bool):
     """The rigid estimates (20,) of the batch least squares over every sample's rows
     [modal columns | rigid rows] over the momentum window WINDOW (> 0; the oracle's rows,
@@ -237,9 +183,8 @@ def _batch_estimates(sc, xs, modes, point: bool):
     o = Oracle(sc.robot, sc.guess, "momentum", "joint", window=WINDOW, moving_point=point)
     meas = [o._unflatten(np.asarray(x, float)) for x in xs]
     t = DT * np.arange(len(xs))
-    u = np.array([np.r_[m["A"].T @ m["a_S"], m["alpha_B"], m["omega_B"] ** 2,
-                        m["omega_B"][[0, 0, 1]] * m["omega_B"][[1, 2, 2]]] for m in meas])
-    states = [_filter_states(u, t, 2.0 * np.pi * f, z) for f, z in modes]
+    u = np.array([drive(m["A"], m["a_S"], m["alpha_B"], m["omega_B"]) for m in meas])
+    states = [filter_states(u, t, 2.0 * np.pi * f, z) for f, z in modes]
     act = o.layout.standard_active
     rows, rhs = [], []
     for k in range(len(xs)):
@@ -254,8 +199,8 @@ def _batch_estimates(sc, xs, modes, point: bool):
         wt = np.r_[np.full(len(b), o._w_lin), np.full(len(y), o._w_ang)]
         blocks = []
         for st in states:
-            c = (_modal_columns(st[k, 0], st[k, 1], meas[k], p)
-                 - _modal_columns(st[ref, 0], st[ref, 1], meas[ref], p))
+            c = (modal_columns(st[k, 0], st[k, 1], meas[k], p)
+                 - modal_columns(st[ref, 0], st[ref, 1], meas[ref], p))
             blocks.append(c[np.r_[o.layout.rows_lin, 3 + o.layout.rows_ang]] * wt[:, None])
         rows.append(np.hstack(blocks + [Y[:, act]]))
         rhs.append(yy)

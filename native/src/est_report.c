@@ -115,7 +115,8 @@ static int estimates_filter(const sr_estimator_model *m, const est_data *d, int 
  * term: the scatter sd^2 = s^2 [(A^T A)^-1]_ii, s^2 = ||r||^2 / dof, so the bias bound's
  * [(A^T A)^-1]_ii ||r||^2 = sd^2 dof: unit variance sd^2, excess the rows' count); crb (20) and
  * chi2 (may be NULL) the filter's bound and misfit, 0 without it; misfit and held the
- * model-fit test's (est_fit_test) */
+ * model-fit test's (est_fit_test: held for a misfit of the rigid model, not for the noise
+ * values') */
 static void estimates_info(const sr_estimator_model *m, const est_data *d, int misfit,
                            int held, double *vec, double *sd, double *crb, double *chi2)
 {
@@ -124,7 +125,8 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, int m
         est_least_squares(m, d, vec, sd);     /* (a singular information: the equations') */
         memset(bound, 0, sizeof bound);
         x2 = 0.0;
-        if (misfit && d->samples > 0) {
+        if (held && d->samples > 0) {     /* a model misfit (not the noise values': these
+                                             rows' own scatter measures the noise) */
             double var[EST_NZ], unit[EST_NZ];
             for (int i = 0; i < EST_NZ; i++)
                 unit[i] = sd[i] * sd[i];

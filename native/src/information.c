@@ -542,10 +542,14 @@ int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d)
         s += d->z_lin[i];
     for (int i = 0; i < m->nu; i++)
         s += d->u_fit[i];
+    /* the misfits are found at the replay, one cause each; model error only with a model
+       misfit */
     return isfinite(s + d->me_var[0] + d->me_var[1]) && d->me_var[0] >= 0.0
            && d->me_var[1] >= 0.0 && (d->fit_at == 0 || d->fit_at == 1)
-           && (d->noise_misfit == 0 || d->noise_misfit == 1)
-           && d->fit_at <= d->replayed && d->noise_misfit <= d->replayed;
+           && (d->misfit == 0 || d->misfit == 1) && (d->noise_misfit == 0 || d->noise_misfit == 1)
+           && d->fit_at <= d->replayed && d->misfit <= d->replayed
+           && d->noise_misfit <= d->replayed && !(d->misfit && d->noise_misfit)
+           && (d->misfit || (d->me_var[0] == 0.0 && d->me_var[1] == 0.0));
 }
 
 size_t sr_info_buffer_length(int n)

@@ -139,12 +139,14 @@ typedef struct sr_info_data {
        innovations */
     int fit_at;
     double u_fit[SR_INFO_MAX_U];
-    /* the misfit found at the replay (kept: the thrust errors held from then on) and the
+    /* the model misfit found at the replay (sr_info_fit.model; kept: the thrust errors held
+       from then on; 0 or 1, never with noise_misfit) and the
        model error's variances it added to every row's noise covariance since: the linear
        momentum's [N^2 s^2] and the angular momentum's about the base point [N^2 m^2 s^2] */
     int misfit;
     double me_var[2];
-    /* chi2 alone beyond its threshold at the replay (kept): the noise values too small */
+    /* chi2 alone beyond its threshold at the replay (sr_info_fit.noise; kept): the noise
+       values too small */
     int noise_misfit;
 } sr_info_data;
 
@@ -172,7 +174,9 @@ typedef struct sr_info_work {
  *  the rows by (the filter needs it), else 0. */
 SR_API int sr_info_noise_white(const sr_info_noise *n);
 
-/** 1 if every number of the state d is finite (what a restored state must satisfy), else 0. */
+/** 1 if every number of the state d is finite and its flags consistent (fit_at, misfit and
+ *  noise_misfit 0 or 1 and only once replayed, not both misfits, me_var 0 without misfit):
+ *  what a restored state must satisfy; else 0. */
 SR_API int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d);
 SR_API int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_noise *noise,
                               const double *z0, double P0_mu, double P0_theta);
@@ -215,7 +219,8 @@ SR_API int sr_info_estimate(const sr_info_model *m, const sr_info_data *d, int c
                             double *vec, double *bound, double *chi2);
 
 /** The model-fit test of the state d into *f (sr_info_fit). Returns 0, or 1 for a NULL
- *  pointer or a singular information (f then the whiteness and chi2 only, misfit 0). */
+ *  pointer or a singular information (f then the whiteness and chi2, and only the misfits
+ *  kept from the replay). */
 SR_API int sr_info_fit_of(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f);
 
 /** As sr_info_estimate, with the 8 thrust errors held at their prior means (0) and their

@@ -135,8 +135,8 @@ ROBOT_FILE = "robot.txt"
 #: the scenario's constants a model reads at instantiation (the sensors: the sample time)
 SCENARIO_FILE = "scenario.txt"
 LOG_CATEGORIES = {
-    "logEvents": "Lifecycle: instantiation, initialisation",
-    "logStatusWarning": "Samples skipped and other warnings",
+    "logEvents": "Lifecycle: instantiation, initialisation; the estimator's model fit regained",
+    "logStatusWarning": "Samples skipped, the estimator's model-fit test failing, other warnings",
     "logStatusDiscard": "Communication steps refused",
     "logStatusError": "Refused calls: invalid parameters, wrong phase, type or value reference",
     "logAll": "Everything",

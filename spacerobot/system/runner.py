@@ -331,11 +331,12 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
                 fits = np.flatnonzero(np.asarray(misfit) < 0.5)
                 start = fits[-1] + 1 if len(fits) else 0
                 since = f" from t = {time[start]:g} s"
-            out.append(f"the rigid model does not fit the samples (diag.misfit 1{since}): no "
-                       f"body is flagged, the sds carry a model-error term and the estimates "
-                       f"can be far off (flexible parts, sloshing propellant, or noise.* values "
-                       f"too small: docs/identification.md, 'When the rigid model does not "
-                       f"fit')")
+            out.append(f"the model-fit test failed (diag.misfit 1{since}): no body is "
+                       f"flagged; the estimator FMU's log names the cause: the rigid model "
+                       f"does not fit (flexible parts, sloshing propellant: the sds carry a "
+                       f"model-error term and the estimates can be far off) or the noise.* "
+                       f"values are too small (the estimates kept, their sds widened); "
+                       f"docs/identification.md, 'When the rigid model does not fit'")
             break
     for prefix in ("estimator.", ""):
         rate = data.get(f"{prefix}ident.excite_rate")
