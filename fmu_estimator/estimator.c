@@ -28,9 +28,8 @@ typedef struct {
     int n_sample;
     int vr_in[MAX_SAMPLE];                 /* input value reference of each sample element */
     int n_out, vr_out[MAX_OUTPUTS];        /* the core's outputs (its table's order) */
-    int misfit_cause;                      /* the last report's: 0 the model fits, 1 the
-                                              rigid model does not, 2 the noise values are
-                                              too small (each change logged) */
+    int misfit_cause;                      /* the last report's (SR_EST_MISFIT_*; 0: the
+                                              model fits): each change logged */
     double sample_time;                    /* the scenario's [s]: the sensors' noise densities
                                               per sample (ident.noise_profile) */
     sr_estimator_model *core;              /* NULL before initialisation */
@@ -165,9 +164,9 @@ static void write_outputs(sr_instance *inst, estimator_glue *g, const sr_estimat
     }
 }
 
-/* the misfit's cause in a report: 0 none, 1 the rigid model's, 2 the noise values' */
+/* the misfit's cause in a report (SR_EST_MISFIT_*), 0 without a misfit */
 static int cause_of(const sr_estimator_report *r) {
-    return !r->misfit ? 0 : r->misfit_noise ? 2 : 1;
+    return r->misfit ? r->misfit_cause : 0;
 }
 
 /* the instance takes a new core (model, data and its work space), dropping the one it had */
@@ -213,14 +212,21 @@ static void log_misfit(sr_instance *inst, double t, int before, const sr_estimat
     int now = cause_of(r);
     const char *set = before ? "diag.misfit stays 1, its cause changed" : "diag.misfit = 1";
     if (now == before) return;
-    if (now == 2)
+    if (now == SR_EST_MISFIT_THRUST)
+        sr_log(inst, SR_LOG_WARNING,
+               "t = %.6g s: a thrust scale factor is estimated beyond its prior with white "
+               "residuals (%s): the thrust is miscalibrated, or the scale absorbs momentum the "
+               "rigid model lacks (sloshing propellant); no body is flagged identified, the "
+               "estimates are kept and their sds cover the estimates with the thrust held "
+               "(docs/identification.md, \"When the rigid model does not fit\")", t, set);
+    else if (now == SR_EST_MISFIT_NOISE)
         sr_log(inst, SR_LOG_WARNING,
                "t = %.6g s: the residuals are white but larger than the noise model's "
                "(diag.info_chi2 %.3g, %s): the noise.* values look too small for the sensors; "
                "no body is flagged identified, the estimates are kept and their sds widened "
                "(docs/identification.md, \"When the rigid model does not fit\")",
                t, r->info_chi2, set);
-    else if (now == 1)
+    else if (now == SR_EST_MISFIT_MODEL)
         sr_log(inst, SR_LOG_WARNING,
                "t = %.6g s: the rigid model does not fit the samples (%s): no body is flagged "
                "identified and the sds carry a model-error term; the estimates can be far off "

@@ -644,7 +644,9 @@ def model_fit_vars() -> List[Var]:
             ("fit_chi2_max",)),
         Var("ident.fit_thrust_max", "parameter", "fixed", "Real", "1",
             "Misfit where the thrust's force or moment scale factor is estimated more than "
-            "this many prior standard deviations from 0 (information filter; in [1, 1e6])",
+            "this many prior standard deviations from 0 (information filter; in [1, 1e6]); "
+            "with white residuals the estimates are not held and their sds carry the "
+            "difference to the estimates with the thrust held",
             3.0, ("fit_thrust_max",)),
         Var("ident.fit_bias_k", "parameter", "fixed", "Real", "1",
             "While diag.misfit = 1: the factor k of the model-error term of the standard "
@@ -669,12 +671,15 @@ def model_fit_vars() -> List[Var]:
             "innovations, from then on, restarted, the residuals at its compensated estimate; "
             "0 for the first 2 ident.fit_lags samples of each)", None, ("model_fit",)),
         Var("diag.misfit", "output", "discrete", "Integer", None,
-            "1 where the rigid model does not fit the data (diag.model_fit, diag.info_chi2 "
-            "or a thrust scale beyond its threshold; the information filter decides after "
-            "its replay at 600 samples): no body is flagged identified; the thrust errors "
-            "are held at their priors and the standard deviations carry the model-error term "
-            "(where diag.info_chi2 alone set it, the noise values too small: the estimates "
-            "kept, the sds widened); logged as a warning at each onset", None, ("misfit",)),
+            "1 where the model-fit test fails (diag.model_fit, diag.info_chi2 or a thrust "
+            "scale beyond its threshold; the information filter decides after its replay at "
+            "600 samples): no body is flagged identified; where the residuals are coloured "
+            "(the rigid model does not fit) the thrust errors are held at their priors and "
+            "the standard deviations carry the model-error term; where a thrust scale alone "
+            "set it the sds carry the difference to the estimates with the thrust held; where "
+            "diag.info_chi2 alone set it (the noise values too small) the estimates are kept "
+            "and the sds widened; logged as a warning at each onset and change of cause",
+            None, ("misfit",)),
     ]
 
 

@@ -480,9 +480,9 @@ def test_model_init_refuses_bad_input(lib, small):
 def test_state_check_refuses_inconsistent_misfit_flags(lib, small):
     """sr_info_data_finite on a state before the replay: clean, accepted; each word of the
     Data's tail written as the integer 1 (the tail is int misfit, its padding, double
-    me_var[2], int noise_misfit, its padding: information.h) is refused where it is a field
-    (a misfit or a model-error variance before any replay: 6 of the 8 words) and accepted in
-    the padding; the word 2 in a flag is refused too (out of 0..1)."""
+    me_var[2], int noise_misfit, int scale_misfit: information.h) is refused where it is a
+    field (a misfit or a model-error variance before any replay: 7 of the 8 words) and
+    accepted in the padding; the word 2 in a flag is refused too (out of 0..1)."""
     sc, rob, nv, ts, X = small
     g = sc.guess
     f = CFilter(lib, rob, nv, guess_of(sc), g.P0_mu, g.P0_theta)
@@ -500,8 +500,8 @@ def test_state_check_refuses_inconsistent_misfit_flags(lib, small):
         ctypes.memmove(f.data, bytes(bad), size)
         if lib.sr_info_data_finite(f.model, f.data) == 0:
             refused.append(off - (size - 32))
-    assert refused == [0, 8, 12, 16, 20, 24], refused
-    for off in (size - 32, size - 8):
+    assert refused == [0, 8, 12, 16, 20, 24, 28], refused
+    for off in (size - 32, size - 8, size - 4):
         bad = bytearray(clean)
         struct.pack_into("<i", bad, off, 2)
         ctypes.memmove(f.data, bytes(bad), size)

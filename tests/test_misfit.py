@@ -5,7 +5,9 @@ and judged against the plant's composite rigid truth (``truth.base.*``: base + p
 slosh masses at equilibrium), and the rigid spacecraft for the test's other side: the
 model-fit test says misfit on every flexible run and never on a rigid one, no body is flagged
 under misfit, the standard deviations cover the errors (>= 90 % of the estimates within 2 sd
-over the cases), the masses are not shrunk with the sensors (the thrust scale held at its prior).
+over the cases), the masses are not shrunk with the sensors (the thrust scale held at its prior
+where the residuals are coloured; where the thrust scale alone tells the misfit, the slosh, it
+stays estimated and the sds carry the held alternative: 3.1 % off).
 """
 from __future__ import annotations
 
@@ -23,8 +25,8 @@ from spacerobot.system.runner import format_results
 STOP = 300.0
 #: the sensors' runs: the estimator with the sensors' noise model (the information filter)
 PROFILE = {"estimator.ident.noise_profile": 1}
-#: the masses with the sensors and the thrust scale held: within 3 % of the composite (measured
-#: 0.2-2.5 %; with the scale free they fell to 0.0001-0.77 of it)
+#: the masses with the sensors: within 3 % of the composite (measured 0.2-2.5 %; with the
+#: scale free in every case they fell to 0.0001-0.77 of it)
 MASS_TOL_SENSORS = 0.03
 #: noise-free, momentum method: within 0.5 % (measured 0.00-0.1 %)
 MASS_TOL_MOMENTUM = 0.005
@@ -66,6 +68,7 @@ def _simulate(systems, target: str, method: str, sensors: bool, **more) -> dict:
             "fit": d["estimator.diag.model_fit"], "time": res.time,
             "told": [float(m[3].split(" s:")[0][4:]) for m in res.log
                      if m[0] == "estimator" and "diag.misfit = 1" in m[3]],
+            "said": [m[3] for m in res.log if m[0] == "estimator" and "diag.misfit" in m[3]],
             "verdict": format_results(res)}
 
 
@@ -119,6 +122,49 @@ def test_flexible_spacecraft_misfit_no_flag_and_covered(systems):
 @pytest.mark.slow
 def test_every_flexible_case_misfit_no_flag_and_covered(systems):
     _judge({c: _run(systems, *c) for c in ALL}, systems)
+
+
+def test_slosh_thrust_scale_misfit_keeps_the_thrust_estimated(systems):
+    """The issue's slosh through the sensors: the thrust scale alone tells the misfit (white
+    residuals), so the thrust errors stay estimated and the sds carry the difference to the
+    estimates with them held: worst error below 4 % (measured 3.11 %; with the thrust held,
+    as a coloured misfit is answered, 17.1 %), >= 18 of 20 within 2 sd (measured 19), the
+    cause told once in the log, no flag."""
+    r = _run(systems, "slosh", "momentum", True)
+    assert r["rel"].max() < 0.04, r["rel"].max()
+    assert int(np.sum(r["err"] <= 2.0 * r["sd"])) >= 18
+    assert r["flags"].max() == 0 and r["misfit"][-1] == 1
+    assert len(r["said"]) == 1 and "a thrust scale factor is estimated beyond its prior" in \
+        r["said"][0], r["said"]
+
+
+def test_held_out_servicer_slosh_cause_change_told(tmp_path):
+    """The held-out servicer (tests/data/arm5.urdf) with the issue's slosh through the
+    sensors, from the docs' wiring (its own SSP): the thrust scale tells the misfit at the
+    replay (60 s), then, with the thrust errors estimated, the residuals turn coloured and the
+    cause becomes the rigid model's while diag.misfit stays 1 (measured at 141.4 s): the FMU
+    logs both, the second as a change of cause, and nothing else about the misfit; no flag,
+    >= 18 of 20 within 2 sd (measured 20, 31.4 % off)."""
+    from conftest import ARM5_URDF
+    ssp = ssd.build_system(ARM5_URDF, tmp_path / "arm5", sensors=True)["ssp"]
+    over = estimator_overrides("momentum", "measured", None)
+    over.update(PROFILE)
+    res = run_ssp(ssp, parameter_set="slosh", stop_time=STOP, overrides=over, progress=False)
+    said = [m[3] for m in res.log if m[0] == "estimator" and "diag.misfit" in m[3]]
+    assert len(said) == 2, said
+    assert said[0].startswith("t = 60 s: a thrust scale factor is estimated beyond its prior")
+    assert "the rigid model does not fit the samples (diag.misfit stays 1, its cause " \
+        "changed)" in said[1]
+    changed_at = float(said[1].split(" s:")[0][4:])
+    assert 60.0 < changed_at < STOP
+    d = res.data
+    assert np.all(np.asarray(d["estimator.diag.misfit"])[res.time > 61.0] == 1)
+    assert max(d["estimator.diag.identified.base"].max(),
+               d["estimator.diag.identified.target"].max()) == 0
+    est = np.array([res.final[n] for n in ESTIMATE_NAMES])
+    truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
+    sd = np.array([d["estimator.sd." + n][-1] for n in ESTIMATE_NAMES])
+    assert int(np.sum(np.abs(est - truth) <= 2.0 * sd)) >= 18
 
 
 @pytest.mark.slow

@@ -25,17 +25,18 @@ static int noise_free(const sr_estimator_model *m)
 }
 
 void est_fit_test(const sr_estimator_model *m, const void *data, double *model_fit,
-                  int *misfit, int *held)
+                  int *misfit, int *cause)
 {
     const est_data *d = (const est_data *)data;
     *model_fit = 0.0;
-    *misfit = *held = 0;
+    *misfit = *cause = 0;
     if (m->info) {
         sr_info_fit f;
         sr_info_fit_of(&m->info_m, est_info_data(m, data), &f);
         *model_fit = f.whiteness;
         *misfit = f.misfit;
-        *held = f.model;
+        *cause = f.model ? SR_EST_MISFIT_MODEL : f.scale ? SR_EST_MISFIT_THRUST
+                 : f.noise ? SR_EST_MISFIT_NOISE : 0;
         return;
     }
     if (d->samples <= 0)
@@ -51,7 +52,7 @@ void est_fit_test(const sr_estimator_model *m, const void *data, double *model_f
     /* decided once the window holds its length of samples (the first seconds' residuals are
        the estimates settling) */
     *misfit = noise_free(m) && d->samples >= window_samples(m) && rho > m->opt.fit_rho_max;
-    *held = *misfit;
+    *cause = *misfit ? SR_EST_MISFIT_MODEL : 0;
 }
 
 void est_fit_gate_flags(int misfit, int *identified)

@@ -76,11 +76,15 @@ static int filter_estimate(const sr_estimator_model *m, const sr_info_data *fd, 
  * sqrt(max(1, chi2)): the misfit the noise model did not foresee widens them) and the
  * errors-in-variables correction's own uncertainty (ident.eiv_uncertainty: a fraction of the
  * correction, which scales with the noise values' variances: where chi2 alone says they are
- * too small (noise), to within chi2 - 1 of itself); where the rigid model does not fit
- * (held), with the thrust errors held at their priors (a consider term) and the model-error
- * term over the residual beyond the noise's. 0, or 1 (a singular information) */
+ * too small (noise), to within chi2 - 1 of itself); where a thrust scale is beyond its
+ * prior with white residuals (scale: a miscalibration or a model error the scale absorbs),
+ * the difference to the estimate with the thrust errors held, the other answer; where the
+ * rigid model does not fit (held), with the thrust errors held at their priors (a consider
+ * term) and the model-error term over the residual beyond the noise's. 0, or 1 (a singular
+ * information) */
 static int estimates_filter(const sr_estimator_model *m, const est_data *d, int held,
-                            int noise, double *vec, double *sd, double *bound, double *chi2)
+                            int noise, int scale, double *vec, double *sd, double *bound,
+                            double *chi2)
 {
     const sr_info_data *fd = est_info_data(m, d);
     double rss = 0.0, raw[EST_NZ], raw_bound[EST_NZ], raw_chi2;
@@ -95,6 +99,12 @@ static int estimates_filter(const sr_estimator_model *m, const est_data *d, int 
     for (int i = 0; i < EST_NZ; i++) {
         double c = eiv ? frac * (vec[i] - raw[i]) : 0.0;
         sd[i] = sqrt(k * bound[i] * k * bound[i] + c * c);
+    }
+    if (scale) {           /* (where the held estimate is not finite, without this term) */
+        double alt[EST_NZ], alt_bound[EST_NZ];
+        if (filter_estimate(m, fd, 1, 2, alt, alt_bound, NULL, NULL) == 0)
+            for (int i = 0; i < EST_NZ; i++)
+                sd[i] = hypot(sd[i], vec[i] - alt[i]);
     }
     if (held) {            /* the residual beyond the noise's: rss - dof; all of it where
                               the model error is in the rows' noise model (me_var) */
@@ -114,14 +124,15 @@ static int estimates_filter(const sr_estimator_model *m, const est_data *d, int 
  * where it runs, else the equations' own (where the model does not fit, with the model-error
  * term: the scatter sd^2 = s^2 [(A^T A)^-1]_ii, s^2 = ||r||^2 / dof, so the bias bound's
  * [(A^T A)^-1]_ii ||r||^2 = sd^2 dof: unit variance sd^2, excess the rows' count); crb (20) and
- * chi2 (may be NULL) the filter's bound and misfit, 0 without it; misfit and held the
- * model-fit test's (est_fit_test: held for a misfit of the rigid model, not for the noise
- * values') */
-static void estimates_info(const sr_estimator_model *m, const est_data *d, int misfit,
-                           int held, double *vec, double *sd, double *crb, double *chi2)
+ * chi2 (may be NULL) the filter's bound and misfit, 0 without it; cause the model-fit
+ * test's (est_fit_test: SR_EST_MISFIT_*, 0 without a misfit) */
+static void estimates_info(const sr_estimator_model *m, const est_data *d, int cause,
+                           double *vec, double *sd, double *crb, double *chi2)
 {
     double bound[EST_NZ], x2 = 0.0;
-    if (!m->info || estimates_filter(m, d, held, misfit && !held, vec, sd, bound, &x2) != 0) {
+    int held = cause == SR_EST_MISFIT_MODEL;
+    if (!m->info || estimates_filter(m, d, held, cause == SR_EST_MISFIT_NOISE,
+                                     cause == SR_EST_MISFIT_THRUST, vec, sd, bound, &x2) != 0) {
         est_least_squares(m, d, vec, sd);     /* (a singular information: the equations') */
         memset(bound, 0, sizeof bound);
         x2 = 0.0;
@@ -144,9 +155,9 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, int m
 static void estimates(const sr_estimator_model *m, const est_data *d, double *vec, double *sd)
 {
     double fit;
-    int misfit, held;
-    est_fit_test(m, d, &fit, &misfit, &held);
-    estimates_info(m, d, misfit, held, vec, sd, NULL, NULL);
+    int misfit, cause;
+    est_fit_test(m, d, &fit, &misfit, &cause);
+    estimates_info(m, d, cause, vec, sd, NULL, NULL);
 }
 
 void sr_estimator_estimates(const sr_estimator_model *m, const void *data, double *vec,
@@ -217,10 +228,8 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
         r->status = SR_EST_REJECT_NONFINITE;
         return;
     }
-    int held;
-    est_fit_test(m, d, &r->model_fit, &r->misfit, &held);
-    r->misfit_noise = r->misfit && !held;
-    estimates_info(m, d, r->misfit, held, ls, r->sd, r->crb, &r->info_chi2);
+    est_fit_test(m, d, &r->model_fit, &r->misfit, &r->misfit_cause);
+    estimates_info(m, d, r->misfit_cause, ls, r->sd, r->crb, &r->info_chi2);
     int flags[4];
     est_physical_vector(m, ls, r->sd, r->vector, flags);
     for (int k = 0; k < 2; k++) {

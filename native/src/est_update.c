@@ -147,8 +147,8 @@ static void design_step(const sr_estimator_model *m, void *data, double t, sr_ex
     if (sr_exd_reads_wanted(&m->exd, x, t)) {
         sr_estimator_report r;
         sr_estimator_report_get(m, data, &r);
-        /* no faster rate toward the modes a misfit may be; nor where the noise values are
-           too small (a misfit by chi2 alone): the rate's prediction weighs by them */
+        /* no faster rate under any misfit: toward the modes it may be, and the rate's
+           prediction weighs by the noise values and the thrust prior it calls in doubt */
         wanted = r.excite > 0.0 && !r.misfit;
     }
     /* a failed prediction leaves the rate at 1 (the plant's own): nothing to reject */

@@ -344,12 +344,18 @@ typedef struct sr_estimator_report {
     double model_fit;                 /* diag.model_fit: the relative residual over
                                          ident.fit_window (no noise model), or the Ljung-Box
                                          Q/L of the information filter's whitened residuals */
-    int misfit;                       /* diag.misfit: 1 where the rigid model does not fit
-                                         (or chi2 alone: misfit_noise) */
-    int misfit_noise;                 /* 1 where that misfit is chi2 alone (white residuals
-                                         larger than the noise model's: the noise.* values
-                                         too small; the estimates not held); no output */
+    int misfit;                       /* diag.misfit: 1 where the model-fit test fails */
+    int misfit_cause;                 /* its cause (no output): SR_EST_MISFIT_MODEL (the rigid
+                                         model does not fit: the estimates held), _THRUST (a
+                                         thrust scale beyond its prior, white residuals),
+                                         _NOISE (chi2 alone: the noise.* values too small);
+                                         0 without a misfit */
 } sr_estimator_report;
+
+/* sr_estimator_report.misfit_cause */
+#define SR_EST_MISFIT_MODEL 1
+#define SR_EST_MISFIT_NOISE 2
+#define SR_EST_MISFIT_THRUST 3
 
 /** The excitation level the Model m requests (output ident.excite) for the bodies' identified
  *  flags: ident.excite_level while excitation is wanted (ident.excite_mode 2 always, 1 while

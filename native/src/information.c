@@ -542,13 +542,15 @@ int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d)
         s += d->z_lin[i];
     for (int i = 0; i < m->nu; i++)
         s += d->u_fit[i];
-    /* the misfits are found at the replay, one cause each; model error only with a model
+    /* the misfits are found at the replay, one cause at most; model error only with a model
        misfit */
     return isfinite(s + d->me_var[0] + d->me_var[1]) && d->me_var[0] >= 0.0
            && d->me_var[1] >= 0.0 && (d->fit_at == 0 || d->fit_at == 1)
            && (d->misfit == 0 || d->misfit == 1) && (d->noise_misfit == 0 || d->noise_misfit == 1)
+           && (d->scale_misfit == 0 || d->scale_misfit == 1)
            && d->fit_at <= d->replayed && d->misfit <= d->replayed
-           && d->noise_misfit <= d->replayed && !(d->misfit && d->noise_misfit)
+           && d->noise_misfit <= d->replayed && d->scale_misfit <= d->replayed
+           && d->misfit + d->noise_misfit + d->scale_misfit <= 1
            && (d->misfit || (d->me_var[0] == 0.0 && d->me_var[1] == 0.0));
 }
 
@@ -671,6 +673,8 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
         info_model_error_of(m, buffer, z, me_var);
         if (replay(m, before, d, buffer, t, x, z, me_var, w) != 0)
             return 1;
+    } else if (f.scale) {
+        d->scale_misfit = 1;
     } else if (f.noise) {
         d->noise_misfit = 1;
     }

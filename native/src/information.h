@@ -91,16 +91,19 @@ typedef struct sr_info_fit_options {
  *  a thrust prior); decided from the filter's replay on (before, its linearisation point is
  *  the caller's): model (1 where the rigid model does not fit: the whiteness beyond its
  *  threshold, counted only where chi2 > SR_INFO_FIT_CHI2_MIN (far below, the data are less
- *  noisy than their model and the residuals' colour is round-off's), or the thrust scale
- *  beyond its; found at the replay it stays: the replay then adds the samples again with the
- *  thrust errors held and the model error's variances (sr_info_data.me_var, from the kept
- *  samples' residuals) in the rows' noise covariance), noise (1 where chi2 is beyond its
- *  threshold with neither of those: white residuals larger than the noise model's, the
- *  noise values too small; found at the replay it stays, sr_info_data.noise_misfit; the
- *  estimates are not held) and misfit (model or noise: no flag). */
+ *  noisy than their model and the residuals' colour is round-off's); found at the replay it
+ *  stays: the replay then adds the samples again with the thrust errors held and the model
+ *  error's variances (sr_info_data.me_var, from the kept samples' residuals) in the rows'
+ *  noise covariance), scale (1 where, without model, the thrust scale is beyond its
+ *  threshold: a thrust miscalibration or a model error the scale absorbs; found at the
+ *  replay it stays, sr_info_data.scale_misfit; the estimates are not held), noise (1 where
+ *  chi2 is beyond its threshold with neither: white residuals larger than the noise
+ *  model's, the noise values too small; found at the replay it stays,
+ *  sr_info_data.noise_misfit; the estimates are not held) and misfit (any of them: no
+ *  flag). */
 typedef struct sr_info_fit {
     double whiteness, chi2, thrust;
-    int model, noise, misfit;
+    int model, scale, noise, misfit;
 } sr_info_fit;
 
 /** The constant part. */
@@ -140,7 +143,7 @@ typedef struct sr_info_data {
     int fit_at;
     double u_fit[SR_INFO_MAX_U];
     /* the model misfit found at the replay (sr_info_fit.model; kept: the thrust errors held
-       from then on; 0 or 1, never with noise_misfit) and the
+       from then on; 0 or 1, at most one of the three kept misfits) and the
        model error's variances it added to every row's noise covariance since: the linear
        momentum's [N^2 s^2] and the angular momentum's about the base point [N^2 m^2 s^2] */
     int misfit;
@@ -148,6 +151,9 @@ typedef struct sr_info_data {
     /* chi2 alone beyond its threshold at the replay (sr_info_fit.noise; kept): the noise
        values too small */
     int noise_misfit;
+    /* the thrust scale beyond its prior with white residuals at the replay (sr_info_fit.scale;
+       kept) */
+    int scale_misfit;
 } sr_info_data;
 
 /** The filter's temporaries: a work space beside the state, never part of it (a host copies
@@ -174,8 +180,9 @@ typedef struct sr_info_work {
  *  the rows by (the filter needs it), else 0. */
 SR_API int sr_info_noise_white(const sr_info_noise *n);
 
-/** 1 if every number of the state d is finite and its flags consistent (fit_at, misfit and
- *  noise_misfit 0 or 1 and only once replayed, not both misfits, me_var 0 without misfit):
+/** 1 if every number of the state d is finite and its flags consistent (fit_at, misfit,
+ *  noise_misfit and scale_misfit 0 or 1 and only once replayed, at most one of the misfits,
+ *  me_var 0 without misfit):
  *  what a restored state must satisfy; else 0. */
 SR_API int sr_info_data_finite(const sr_info_model *m, const sr_info_data *d);
 SR_API int sr_info_model_init(sr_info_model *m, const sr_robot *robot, const sr_info_noise *noise,

@@ -45,6 +45,8 @@ MSG_LEN = 256
 #: FMU's ``noise.*`` parameters but ``noise.scale``, in
 #: :data:`spacerobot.interface.NOISE_PARAMETERS` order
 N_SENSOR_NOISE = 17
+#: sr_estimator_report.misfit_cause (SR_EST_MISFIT_*, native/src/estimator.h) by name
+MISFIT_CAUSES = {1: "model", 2: "noise", 3: "thrust"}
 
 
 class SrEstimatorOptions(ctypes.Structure):
@@ -91,7 +93,7 @@ class SrEstimatorReport(ctypes.Structure):
         ("excite_score", ctypes.c_double * 2),
         ("mode_f", ctypes.c_double * 4), ("mode_zeta", ctypes.c_double * 4),
         ("model_fit", ctypes.c_double),
-        ("misfit", ctypes.c_int), ("misfit_noise", ctypes.c_int),
+        ("misfit", ctypes.c_int), ("misfit_cause", ctypes.c_int),
     ]
 
 
@@ -497,9 +499,10 @@ class NativeEstimator:
         rate asked of the plant) and ``excite_score`` (2,: the choice's predicted largest scaled
         bounds at rate 1 and at the candidate; 0 before the choice); ``mode_f`` [Hz] and
         ``mode_zeta`` (4,: the modal columns' modes in use, 0 for none); ``model_fit`` and
-        ``misfit`` (the model-fit test: diag.model_fit, diag.misfit) and ``misfit_noise``
-        (that misfit is chi2 alone: the noise values too small, the estimates not held; no
-        FMU output)."""
+        ``misfit`` (the model-fit test: diag.model_fit, diag.misfit) and ``misfit_cause``
+        (no FMU output: "" without a misfit, "model" where the rigid model does not fit (the
+        estimates held), "thrust" where a thrust scale is beyond its prior with white
+        residuals, "noise" for chi2 alone: the noise values too small)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
         return {
@@ -513,7 +516,7 @@ class NativeEstimator:
             "excite_rate": r.excite_rate, "excite_score": np.array(r.excite_score[:]),
             "mode_f": np.array(r.mode_f[:]), "mode_zeta": np.array(r.mode_zeta[:]),
             "model_fit": r.model_fit, "misfit": bool(r.misfit),
-            "misfit_noise": bool(r.misfit_noise),
+            "misfit_cause": MISFIT_CAUSES.get(r.misfit_cause, "") if r.misfit else "",
         }
 
     def outputs(self) -> np.ndarray:

@@ -334,9 +334,11 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
             out.append(f"the model-fit test failed (diag.misfit 1{since}): no body is "
                        f"flagged; the estimator FMU's log names the cause: the rigid model "
                        f"does not fit (flexible parts, sloshing propellant: the sds carry a "
-                       f"model-error term and the estimates can be far off) or the noise.* "
-                       f"values are too small (the estimates kept, their sds widened); "
-                       f"docs/identification.md, 'When the rigid model does not fit'")
+                       f"model-error term and the estimates can be far off), a thrust scale "
+                       f"beyond its prior (a miscalibration or slosh: the sds cover the "
+                       f"estimates with the thrust held) or the noise.* values are too small "
+                       f"(the estimates kept, their sds widened); docs/identification.md, "
+                       f"'When the rigid model does not fit'")
             break
     for prefix in ("estimator.", ""):
         rate = data.get(f"{prefix}ident.excite_rate")
