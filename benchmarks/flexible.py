@@ -12,6 +12,9 @@ the time from which both bodies stay flagged identified (s; '-' never), and the 
   sensors        the sensors, the noise profile (its information filter reports)
   sensors rigid  the sensors, the profile, ident.information = 2 (the joint solver reports)
   sensors modal  the sensors, the profile, ident.information = 2, ident.modes = 1
+  filter modal   the sensors, the profile (its information filter), ident.modes = 1: the
+                 filter reports unless the rigid model does not fit (coloured residuals)
+                 and the columns found a mode; then the joint solver with the columns
 
 Run: python benchmarks/flexible.py [--quick] [--jobs 2] [--robot URDF] > benchmarks/FLEXIBLE.txt
 (--quick: the issue's sizes only; --robot: another spacecraft than the spatial robot, e.g. the
@@ -47,7 +50,7 @@ CASES = {
     "slosh 2 x 25 kg 0.1/0.12 Hz": ("slosh", 1.0, 0.1),
 }
 QUICK = ("wings 2 x 50 kg 0.5 Hz (issue)", "slosh 2 x 25 kg 0.30/0.35 Hz (issue)")
-SETUPS = ("rigid", "modal", "sensors", "sensors rigid", "sensors modal")
+SETUPS = ("rigid", "modal", "sensors", "sensors rigid", "sensors modal", "filter modal")
 
 
 def scenario(case: str, robot: str = "spatial"):
@@ -89,9 +92,9 @@ def identifier(sc, setup: str):
     v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
     v.update({"method": 1, "solver": 2, "ident.excite_adapt": 2,
               "ident.modes": 1 if setup.endswith("modal") else 2})
-    if setup.startswith("sensors"):
+    if setup.startswith("sensors") or setup == "filter modal":
         v.update({"ident.noise_profile": 1, "noise.scale": 1.0})
-        if setup != "sensors":
+        if setup.startswith("sensors "):
             v["ident.information"] = 2
     ident, _ = identifier_from_values(sc.robot, v, DT)
     return ident
@@ -106,7 +109,8 @@ def run_case(case: str, setups=SETUPS, robot: str = "spatial") -> list:
     for setup in setups:
         t0 = time.process_time()
         ident = identifier(sc, setup)
-        suite = SensorSuite(n, scale=1.0, seed=0, dt=DT) if setup.startswith("sensors") else None
+        noisy = setup.startswith("sensors") or setup == "filter modal"
+        suite = SensorSuite(n, scale=1.0, seed=0, dt=DT) if noisy else None
         since = None
         for k, x in enumerate(xs):
             if suite is None:

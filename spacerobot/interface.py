@@ -598,8 +598,10 @@ def noise_model_vars() -> List[Var]:
               "as extra unknowns driven by the measured base motion, the modes' frequencies "
               "given (ident.mode_f) or found from the data; the reported estimates are then the "
               "composite rigid body's (with ident.momentum_window, each sample's columns "
-              "differenced against the window's reference, as its rows). 1 = on (needs "
-              "method = 1, solver = 2), 2 = off", 2, ("modes",))]
+              "differenced against the window's reference, as its rows; beside the information "
+              "filter, their estimates are reported where the filter finds the rigid model's "
+              "misfit and a mode is found). 1 = on (needs method = 1, solver = 2), 2 = off",
+              2, ("modes",))]
     v += [Var(f"ident.mode_f[{i + 1}]", "parameter", "fixed", "Real", "Hz",
               f"With ident.modes = 1: the frequency of flexible mode {i + 1} with the base "
               "held (cantilevered panel, slosh) where known; 0 = not given (the modes are then "

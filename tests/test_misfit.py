@@ -138,6 +138,30 @@ def test_slosh_thrust_scale_misfit_keeps_the_thrust_estimated(systems):
         r["said"][0], r["said"]
 
 
+def test_rigid_body_with_its_thrust_miscalibrated_keeps_the_thrust_estimated(systems):
+    """The rigid spacecraft (the realistic set, 300 s) whose thrust scale error is drawn at 5
+    times the estimator's prior (the sensors' noise.thrust.scale 0.1 against 0.02): the
+    thrust scale tells a misfit with white residuals (cause thrust, logged once), the thrust
+    errors stay estimated: every estimate within 0.5 % (measured 0.032 %; on the previous tree,
+    held and replayed with the model error: 1120 % off, in-process), >= 18 of 20 within
+    2 sd (measured 20; the sds carry the held answer, up to 22 % of the scale), no flag."""
+    res = run_ssp(systems[True], parameter_set="realistic", stop_time=STOP,
+                  overrides={"sensors.noise.thrust.scale": 0.1}, progress=False)
+    d = res.data
+    est = np.array([res.final[n] for n in ESTIMATE_NAMES])
+    truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
+    sd = np.array([d["estimator.sd." + n][-1] for n in ESTIMATE_NAMES])
+    rel = np.abs(est - truth) / np.asarray(error_scale(truth))
+    assert rel.max() < 5e-3, rel.max()
+    assert int(np.sum(np.abs(est - truth) <= 2.0 * sd)) >= 18
+    assert np.asarray(d["estimator.diag.misfit"])[-1] == 1
+    assert max(d["estimator.diag.identified.base"].max(),
+               d["estimator.diag.identified.target"].max()) == 0
+    said = [m[3] for m in res.log if m[0] == "estimator" and "diag.misfit" in m[3]]
+    assert len(said) == 1 and "a thrust scale factor is estimated beyond its prior" in \
+        said[0], said
+
+
 def test_held_out_servicer_slosh_cause_change_told(tmp_path):
     """The held-out servicer (tests/data/arm5.urdf) with the issue's slosh through the
     sensors, from the docs' wiring (its own SSP): the thrust scale tells the misfit at the

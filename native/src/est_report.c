@@ -146,6 +146,12 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, int c
                 sd[i] = sqrt(sd[i] * sd[i] + var[i]);
         }
     }
+    /* a misfit of the rigid model where the modal columns (ident.modes = 1) run beside the
+       filter and have found a mode: their joint solver's answer, the modes in its model (the
+       issue's wings through the sensors 5.5 % off against the held filter's 56.5 %) */
+    double f, zeta;
+    if (held && m->info && d->samples > 0 && est_modal_mode(m, d, 0, &f, &zeta))
+        est_least_squares(m, d, vec, sd);
     if (crb)
         memcpy(crb, bound, sizeof bound);
     if (chi2)
