@@ -1,7 +1,6 @@
-"""The modal columns inside the information filter (issue #38, item 3): a batch study of the
-route the earlier stops named for the 3 % goal through the sensors; it is not shipped (the
-results say why: benchmarks/FLEXIBLE.md, "What limits it"); writes
-benchmarks/MODAL_INFORMATION.md.
+"""The modal columns inside the information filter: a batch study of that route to accurate
+estimates of flexible spacecraft through the sensors; it is not shipped (the results say why:
+benchmarks/FLEXIBLE.md, "What limits it"); writes benchmarks/MODAL_INFORMATION.md.
 
 What it computes, per parameter set (`wings`, `slosh`: the issue's sizes on the spatial
 robot) and sensors seed: the plant's samples every 0.1 s for 300 s through the realistic

@@ -677,10 +677,13 @@ def model_fit_vars() -> List[Var]:
             "scale beyond its threshold; the information filter decides after its replay at "
             "600 samples): no body is flagged identified; where the residuals are coloured "
             "(the rigid model does not fit) the thrust errors are held at their priors and "
-            "the standard deviations carry the model-error term; where a thrust scale alone "
-            "set it the sds carry the difference to the estimates with the thrust held; where "
-            "diag.info_chi2 alone set it (the noise values too small) the estimates are kept "
-            "and the sds widened; logged as a warning at each onset and change of cause",
+            "the standard deviations carry the model-error term (with ident.modes = 1 and a "
+            "mode found, the modal columns' estimates and sds instead; crb.* and "
+            "diag.info_chi2 stay the filter's); where diag.info_chi2 set it with white "
+            "residuals (the noise values too small) the estimates are kept and the sds "
+            "widened; where a thrust scale set it with white residuals the sds carry the "
+            "difference to the estimates with the thrust held; logged as a warning at each "
+            "onset and change of cause",
             None, ("misfit",)),
     ]
 

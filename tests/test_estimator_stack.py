@@ -147,5 +147,6 @@ def test_every_configuration_in_a_64k_thread(host, tmp_path, robot):
     # the rate's choice is then not tried
     for name in ("profile_misfit", "profile_misfit_joint"):
         assert seen[name]["misfit"] == "1", (name, seen[name])
+        assert seen[name]["cause"] == "1", (name, seen[name])       # SR_EST_MISFIT_MODEL
         assert float(seen[name]["score_try"]) == 0.0, (name, seen[name])
     assert seen["profile_always"]["misfit"] == "0"

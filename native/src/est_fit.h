@@ -12,13 +12,12 @@
 void est_fit_window(const sr_estimator_model *m, const est_core *old, int first, est_core *nw);
 
 /* What the test says of the committed state: the statistic (diag.model_fit), misfit
- * (diag.misfit) and its cause (SR_EST_MISFIT_*, 0 without a misfit: MODEL, the estimates
- * take the misfit's treatment: the thrust errors held, the model-error term). With the
- * information filter: its whitened residuals' Ljung-Box Q/L, misfit where that, its chi2 or
- * a thrust scale is beyond its threshold, the cause (sr_info_fit_of) MODEL where the
- * residuals are coloured, THRUST where a thrust scale is beyond its prior (a thrust
- * miscalibration or a model error it absorbs), NOISE for chi2 alone (the noise values too
- * small). Without: the relative residual rho = max over the linear and angular rows of
+ * (diag.misfit) and its cause (SR_EST_MISFIT_*, 0 without a misfit; est_report.c answers
+ * each). With the information filter: its whitened residuals' Ljung-Box Q/L, misfit where
+ * that, its chi2 or a thrust scale is beyond its threshold, the cause (sr_info_fit_of) MODEL
+ * where the residuals are coloured, NOISE where chi2 is (the noise values too small), else
+ * THRUST where a thrust scale is beyond its prior (a thrust miscalibration or a model error
+ * it absorbs). Without: the relative residual rho = max over the linear and angular rows of
  * sqrt(sum e^2 / sum y^2) over the window, misfit (MODEL) where rho > ident.fit_rho_max and
  * the estimator has no noise model (with noise, rho measures the noise: no decision) and the
  * window's N samples came. */

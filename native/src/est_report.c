@@ -104,7 +104,7 @@ static int estimates_filter(const sr_estimator_model *m, const est_data *d, int 
         double alt[EST_NZ], alt_bound[EST_NZ];
         if (filter_estimate(m, fd, 1, 2, alt, alt_bound, NULL, NULL) == 0)
             for (int i = 0; i < EST_NZ; i++)
-                sd[i] = hypot(sd[i], vec[i] - alt[i]);
+                sd[i] = sqrt(sd[i] * sd[i] + (vec[i] - alt[i]) * (vec[i] - alt[i]));
     }
     if (held) {            /* the residual beyond the noise's: rss - dof; all of it where
                               the model error is in the rows' noise model (me_var) */

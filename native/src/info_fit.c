@@ -191,14 +191,16 @@ static int fit_test(const sr_info_model *m, const sr_info_data *d, sr_info_fit *
        1e-4) their colour is the round-off's */
     int coloured = f->whiteness > m->fit.whiteness_max && f->chi2 > SR_INFO_FIT_CHI2_MIN;
     f->model = d->misfit || (decide && coloured);
-    /* a thrust scale beyond its prior with white residuals: a thrust miscalibration, or a
-       model error the scale absorbs (the issue's slosh: 3.7-5.8 prior sds at the replay);
-       the estimates not held, their sds cover the held alternative */
-    f->scale = !f->model && (d->scale_misfit || (decide && f->thrust > m->fit.thrust_max));
     /* white residuals beyond the noise's: the noise values too small, while the rigid model
-       may fit (the estimates not held) */
-    f->noise = !f->model && !f->scale
-               && (d->noise_misfit || (decide && f->chi2 > m->fit.chi2_max));
+       may fit (the estimates not held); first, since values too small (noise.scale) shrink
+       the thrust prior too and put the scale beyond it */
+    f->noise = !f->model && (d->noise_misfit || (decide && f->chi2 > m->fit.chi2_max));
+    /* a thrust scale beyond its prior with white residuals of the noise's size: a thrust
+       miscalibration, or a model error the scale absorbs (the issue's slosh: 3.7-5.8 prior
+       sds at the replay, chi2 1.0-1.5); the estimates not held, their sds cover the held
+       alternative */
+    f->scale = !f->model && !f->noise
+               && (d->scale_misfit || (decide && f->thrust > m->fit.thrust_max));
     f->misfit = f->model || f->scale || f->noise;
     return ok ? 0 : 1;
 }

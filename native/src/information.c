@@ -673,10 +673,10 @@ int sr_info_step(const sr_info_model *m, const sr_info_data *before, sr_info_dat
         info_model_error_of(m, buffer, z, me_var);
         if (replay(m, before, d, buffer, t, x, z, me_var, w) != 0)
             return 1;
-    } else if (f.scale) {
-        d->scale_misfit = 1;
     } else if (f.noise) {
         d->noise_misfit = 1;
+    } else if (f.scale) {
+        d->scale_misfit = 1;
     }
     fit_restart(m, d, w);
     return 0;

@@ -52,11 +52,12 @@ typedef struct {
 #define ACCEL_NOISE {"ident.noise.base.a", 1e-3}, {"ident.noise.base.alpha", 1e-4},              \
         {"ident.noise.arm.qdd", 1e-4}
 /* the model-fit test never finding a misfit (the choice of the rate is then tried), or finding
- * one at the replay (the profile's noise 100 times below the stream's: chi2 far above 2; the
- * replay again with the thrust held and the model error as the rows' noise) */
+ * the rigid model's at the replay (the profile's noise 100 times below the stream's, the
+ * whiteness threshold at its least: the replay again with the thrust held and the model
+ * error as the rows' noise) */
 #define NO_FIT_TEST {"ident.fit_chi2_max", 1e6}, {"ident.fit_whiteness_max", 1e6},              \
         {"ident.fit_thrust_max", 1e6}
-#define FIT_TEST_STRICT {"noise.scale", 0.01}
+#define FIT_TEST_STRICT {"noise.scale", 0.01}, {"ident.fit_whiteness_max", 1.0}
 #define END {NULL, 0}
 
 static const struct {
@@ -216,9 +217,9 @@ int main(int argc, char **argv)
             continue;
         }
         printf("config %s samples %d rejected %d status %d rate %.17g score_1 %.17g score_try %.17g "
-               "misfit %d finite %d\n", CONFIGS[c].name, j.report.samples, j.report.rejected,
-               j.report.status, j.report.excite_rate, j.report.excite_score[0],
-               j.report.excite_score[1], j.report.misfit, j.finite);
+               "misfit %d cause %d finite %d\n", CONFIGS[c].name, j.report.samples,
+               j.report.rejected, j.report.status, j.report.excite_rate, j.report.excite_score[0],
+               j.report.excite_score[1], j.report.misfit, j.report.misfit_cause, j.finite);
         fflush(stdout);
     }
     printf("done\n");
