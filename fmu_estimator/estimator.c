@@ -164,11 +164,6 @@ static void write_outputs(sr_instance *inst, estimator_glue *g, const sr_estimat
     }
 }
 
-/* the misfit's cause in a report (SR_EST_MISFIT_*), 0 without a misfit */
-static int cause_of(const sr_estimator_report *r) {
-    return r->misfit ? r->misfit_cause : 0;
-}
-
 /* the instance takes a new core (model, data and its work space), dropping the one it had */
 static void adopt_core(estimator_glue *g, sr_estimator_model *core, void *data, void *work) {
     drop_core(g);
@@ -189,7 +184,7 @@ int sr_model_initialize(void *model, sr_instance *inst) {
     sr_estimator_report r = {0};
     adopt_core(g, core, data, work);
     write_outputs(inst, g, core, data, &r);
-    g->misfit_cause = cause_of(&r);
+    g->misfit_cause = r.misfit_cause;
     return 0;
 }
 
@@ -209,7 +204,7 @@ void sr_model_preview(void *model, sr_instance *inst) {
  * still learns that the model does not fit, and why (docs/identification.md, "When the rigid
  * model does not fit") */
 static void log_misfit(sr_instance *inst, double t, int before, const sr_estimator_report *r) {
-    int now = cause_of(r);
+    int now = r->misfit_cause;
     const char *set = before ? "diag.misfit stays 1, its cause changed" : "diag.misfit = 1";
     if (now == before) return;
     if (now == SR_EST_MISFIT_THRUST)
@@ -249,7 +244,7 @@ int sr_model_do_step(void *model, sr_instance *inst, double t, double h) {
     status = sr_estimator_update(g->core, g->data, g->work, t, g->sample, msg, sizeof msg);
     write_outputs(inst, g, g->core, g->data, &r);
     log_misfit(inst, t, g->misfit_cause, &r);
-    g->misfit_cause = cause_of(&r);
+    g->misfit_cause = r.misfit_cause;
     if (status == SR_EST_REJECT_NONFINITE || status == SR_EST_REJECT_INCONSISTENT) {
         char where[512] = "";                /* skipped: name the inputs at fault */
         for (int k = 0; k < g->n_sample; ++k)
@@ -307,7 +302,7 @@ int sr_model_state_load(void *model, sr_instance *inst, const void *buf, size_t 
     adopt_core(g, core, data, work);
     sr_estimator_report r;
     sr_estimator_report_get(core, data, &r);
-    g->misfit_cause = cause_of(&r);     /* as the restored diag.misfit says */
+    g->misfit_cause = r.misfit_cause;     /* as the restored diag.misfit says */
     return 0;
 }
 

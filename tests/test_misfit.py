@@ -54,14 +54,19 @@ def _simulate(systems, target: str, method: str, sensors: bool, **more) -> dict:
     if sensors:
         over.update(PROFILE)
     over.update(more)
-    res = run_ssp(systems[sensors], parameter_set=target, stop_time=STOP, overrides=over,
-                  progress=False)
+    return _scored(run_ssp(systems[sensors], parameter_set=target, stop_time=STOP,
+                           overrides=over, progress=False))
+
+
+def _scored(res) -> dict:
+    """A run's final estimates against the truth and what the estimator said of its fit."""
     d = res.data
     est = np.array([res.final[n] for n in ESTIMATE_NAMES])
     truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
     sd = np.array([d["estimator.sd." + n][-1] for n in ESTIMATE_NAMES])
     err = np.abs(est - truth)
-    return {"err": err, "rel": err / np.asarray(error_scale(truth)), "sd": sd, "est": est,
+    scale = np.asarray(error_scale(truth))
+    return {"err": err, "rel": err / scale, "scale": scale, "sd": sd, "est": est,
             "truth": truth, "misfit": d["estimator.diag.misfit"],
             "flags": np.maximum(d["estimator.diag.identified.base"],
                                 d["estimator.diag.identified.target"]),
@@ -145,24 +150,17 @@ def test_rigid_body_with_its_thrust_miscalibrated_keeps_the_thrust_estimated(sys
     errors stay estimated: every estimate within 0.5 % (measured 0.032 %; on the previous tree,
     held and replayed with the model error: 1120 % off, in-process), >= 18 of 20 within
     2 sd (measured 20; the sds carry the held answer, up to 22 % of the scale), no flag."""
-    res = run_ssp(systems[True], parameter_set="realistic", stop_time=STOP,
-                  overrides={"sensors.noise.thrust.scale": 0.1}, progress=False)
-    d = res.data
-    est = np.array([res.final[n] for n in ESTIMATE_NAMES])
-    truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
-    sd = np.array([d["estimator.sd." + n][-1] for n in ESTIMATE_NAMES])
-    rel = np.abs(est - truth) / np.asarray(error_scale(truth))
-    assert rel.max() < 5e-3, rel.max()
-    assert int(np.sum(np.abs(est - truth) <= 2.0 * sd)) >= 18
+    r = _scored(run_ssp(systems[True], parameter_set="realistic", stop_time=STOP,
+                        overrides={"sensors.noise.thrust.scale": 0.1}, progress=False))
+    assert r["rel"].max() < 5e-3, r["rel"].max()
+    assert int(np.sum(r["err"] <= 2.0 * r["sd"])) >= 18
     # the sds are the held answer's distance (22 % of the scale at most on this seed): wide,
     # but not unbounded
-    assert (sd / np.asarray(error_scale(truth))).max() < 0.5
-    assert np.asarray(d["estimator.diag.misfit"])[-1] == 1
-    assert max(d["estimator.diag.identified.base"].max(),
-               d["estimator.diag.identified.target"].max()) == 0
-    said = [m[3] for m in res.log if m[0] == "estimator" and "diag.misfit" in m[3]]
-    assert len(said) == 1 and "a thrust scale factor is estimated beyond its prior" in \
-        said[0], said
+    assert (r["sd"] / r["scale"]).max() < 0.5
+    assert np.asarray(r["misfit"])[-1] == 1
+    assert r["flags"].max() == 0
+    assert len(r["said"]) == 1 and "a thrust scale factor is estimated beyond its prior" in \
+        r["said"][0], r["said"]
 
 
 def test_held_out_servicer_slosh_cause_change_told(tmp_path):
@@ -176,22 +174,18 @@ def test_held_out_servicer_slosh_cause_change_told(tmp_path):
     ssp = ssd.build_system(ARM5_URDF, tmp_path / "arm5", sensors=True)["ssp"]
     over = estimator_overrides("momentum", "measured", None)
     over.update(PROFILE)
-    res = run_ssp(ssp, parameter_set="slosh", stop_time=STOP, overrides=over, progress=False)
-    said = [m[3] for m in res.log if m[0] == "estimator" and "diag.misfit" in m[3]]
+    r = _scored(run_ssp(ssp, parameter_set="slosh", stop_time=STOP, overrides=over,
+                        progress=False))
+    said = r["said"]
     assert len(said) == 2, said
     assert said[0].startswith("t = 60 s: a thrust scale factor is estimated beyond its prior")
     assert "the rigid model does not fit the samples (diag.misfit stays 1, its cause " \
         "changed)" in said[1]
     changed_at = float(said[1].split(" s:")[0][4:])
     assert 60.0 < changed_at < STOP
-    d = res.data
-    assert np.all(np.asarray(d["estimator.diag.misfit"])[res.time > 61.0] == 1)
-    assert max(d["estimator.diag.identified.base"].max(),
-               d["estimator.diag.identified.target"].max()) == 0
-    est = np.array([res.final[n] for n in ESTIMATE_NAMES])
-    truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
-    sd = np.array([d["estimator.sd." + n][-1] for n in ESTIMATE_NAMES])
-    assert int(np.sum(np.abs(est - truth) <= 2.0 * sd)) >= 18
+    assert np.all(np.asarray(r["misfit"])[r["time"] > 61.0] == 1)
+    assert r["flags"].max() == 0
+    assert int(np.sum(r["err"] <= 2.0 * r["sd"])) >= 18
 
 
 @pytest.mark.slow
@@ -234,21 +228,16 @@ def test_noise_values_too_small_misfit_without_the_hold(systems):
     over = {"estimator.noise.nav.r": 0.5 * default_parameters()["nav.r"]}
     res = run_ssp(systems[True], parameter_set="realistic", stop_time=100.0, overrides=over,
                   progress=False)
-    d = res.data
-    est = np.array([res.final[n] for n in ESTIMATE_NAMES])
-    truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
-    sd = np.array([d["estimator.sd." + n][-1] for n in ESTIMATE_NAMES])
-    misfit = np.asarray(d["estimator.diag.misfit"]) > 0.5
-    assert misfit[res.time > 61.0].all() and not misfit[res.time < 59.0].any()
-    assert d["estimator.diag.info_chi2"][-1] > 1.5
-    rel = np.abs(est - truth) / np.asarray(error_scale(truth))
-    assert rel.max() < 5e-3, rel.max()
-    assert int(np.sum(np.abs(est - truth) <= 2.0 * sd)) >= 18
+    r = _scored(res)
+    misfit = np.asarray(r["misfit"]) > 0.5
+    assert misfit[r["time"] > 61.0].all() and not misfit[r["time"] < 59.0].any()
+    assert res.data["estimator.diag.info_chi2"][-1] > 1.5
+    assert r["rel"].max() < 5e-3, r["rel"].max()
+    assert int(np.sum(r["err"] <= 2.0 * r["sd"])) >= 18
     # covered by sds that stay useful, not by huge ones: every sd below 0.2 % of its scale
     # (measured 0.063 %; 0.042 % with the right noise values)
-    assert (sd / np.asarray(error_scale(truth))).max() < 2e-3, sd / np.asarray(error_scale(truth))
-    assert max(d["estimator.diag.identified.base"].max(),
-               d["estimator.diag.identified.target"].max()) == 0
+    assert (r["sd"] / r["scale"]).max() < 2e-3, r["sd"] / r["scale"]
+    assert r["flags"].max() == 0
     told = [m[3] for m in res.log if "diag.misfit = 1" in m[3]]
     assert len(told) == 1 and "the noise.* values look too small" in told[0], told
 
@@ -260,20 +249,14 @@ def test_noise_scale_too_small_is_told_as_noise_not_thrust(systems):
     the thrust scale), told once: the estimates within 0.5 % (measured 0.058 %), >= 18 of 20
     within 2 sd (measured 20), every sd below 0.2 % of its scale (measured 0.047 %; taken
     as the thrust cause the held answer widened them to 5.9 %), no flag."""
-    res = run_ssp(systems[True], parameter_set="realistic", stop_time=100.0,
-                  overrides={"estimator.noise.scale": 0.25}, progress=False)
-    d = res.data
-    est = np.array([res.final[n] for n in ESTIMATE_NAMES])
-    truth = np.array([res.truth[n] for n in ESTIMATE_NAMES])
-    sd = np.array([d["estimator.sd." + n][-1] for n in ESTIMATE_NAMES])
-    scale = np.asarray(error_scale(truth))
-    assert (np.abs(est - truth) / scale).max() < 5e-3
-    assert int(np.sum(np.abs(est - truth) <= 2.0 * sd)) >= 18
-    assert (sd / scale).max() < 2e-3, (sd / scale).max()
-    assert max(d["estimator.diag.identified.base"].max(),
-               d["estimator.diag.identified.target"].max()) == 0
-    said = [m[3] for m in res.log if m[0] == "estimator" and "diag.misfit" in m[3]]
-    assert len(said) == 1 and "the noise.* values look too small" in said[0], said
+    r = _scored(run_ssp(systems[True], parameter_set="realistic", stop_time=100.0,
+                        overrides={"estimator.noise.scale": 0.25}, progress=False))
+    assert r["rel"].max() < 5e-3
+    assert int(np.sum(r["err"] <= 2.0 * r["sd"])) >= 18
+    assert (r["sd"] / r["scale"]).max() < 2e-3, (r["sd"] / r["scale"]).max()
+    assert r["flags"].max() == 0
+    assert len(r["said"]) == 1 and "the noise.* values look too small" in r["said"][0], \
+        r["said"]
 
 
 def test_fit_options_are_checked_with_their_names():

@@ -25,16 +25,15 @@ static int noise_free(const sr_estimator_model *m)
 }
 
 void est_fit_test(const sr_estimator_model *m, const void *data, double *model_fit,
-                  int *misfit, int *cause)
+                  int *cause)
 {
     const est_data *d = (const est_data *)data;
     *model_fit = 0.0;
-    *misfit = *cause = 0;
+    *cause = 0;
     if (m->info) {
         sr_info_fit f;
         sr_info_fit_of(&m->info_m, est_info_data(m, data), &f);
         *model_fit = f.whiteness;
-        *misfit = f.misfit;
         *cause = f.model ? SR_EST_MISFIT_MODEL : f.scale ? SR_EST_MISFIT_THRUST
                  : f.noise ? SR_EST_MISFIT_NOISE : 0;
         return;
@@ -51,8 +50,8 @@ void est_fit_test(const sr_estimator_model *m, const void *data, double *model_f
     *model_fit = rho;
     /* decided once the window holds its length of samples (the first seconds' residuals are
        the estimates settling) */
-    *misfit = noise_free(m) && d->samples >= window_samples(m) && rho > m->opt.fit_rho_max;
-    *cause = *misfit ? SR_EST_MISFIT_MODEL : 0;
+    *cause = noise_free(m) && d->samples >= window_samples(m) && rho > m->opt.fit_rho_max
+                 ? SR_EST_MISFIT_MODEL : 0;
 }
 
 void est_fit_gate_flags(int misfit, int *identified)

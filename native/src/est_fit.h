@@ -11,9 +11,9 @@
  * interval (noise_dt) samples: counted in samples, as the estimates (not the step sizes). */
 void est_fit_window(const sr_estimator_model *m, const est_core *old, int first, est_core *nw);
 
-/* What the test says of the committed state: the statistic (diag.model_fit), misfit
- * (diag.misfit) and its cause (SR_EST_MISFIT_*, 0 without a misfit; est_report.c answers
- * each). With the information filter: its whitened residuals' Ljung-Box Q/L, misfit where
+/* What the test says of the committed state: the statistic (diag.model_fit) and the
+ * misfit's cause (SR_EST_MISFIT_*; 0 without a misfit, diag.misfit = cause != 0;
+ * est_report.c answers each). With the information filter: its whitened residuals' Ljung-Box Q/L, misfit where
  * that, its chi2 or a thrust scale is beyond its threshold, the cause (sr_info_fit_of) MODEL
  * where the residuals are coloured, NOISE where chi2 is (the noise values too small), else
  * THRUST where a thrust scale is beyond its prior (a thrust miscalibration or a model error
@@ -22,7 +22,7 @@ void est_fit_window(const sr_estimator_model *m, const est_core *old, int first,
  * the estimator has no noise model (with noise, rho measures the noise: no decision) and the
  * window's N samples came. */
 void est_fit_test(const sr_estimator_model *m, const void *data, double *model_fit,
-                  int *misfit, int *cause);
+                  int *cause);
 
 /* The identified flags (2) as the model-fit test allows them: none while misfit. */
 void est_fit_gate_flags(int misfit, int *identified);

@@ -161,8 +161,8 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, int c
 static void estimates(const sr_estimator_model *m, const est_data *d, double *vec, double *sd)
 {
     double fit;
-    int misfit, cause;
-    est_fit_test(m, d, &fit, &misfit, &cause);
+    int cause;
+    est_fit_test(m, d, &fit, &cause);
     estimates_info(m, d, cause, vec, sd, NULL, NULL);
 }
 
@@ -234,7 +234,8 @@ void sr_estimator_report_get(const sr_estimator_model *m, const void *data,
         r->status = SR_EST_REJECT_NONFINITE;
         return;
     }
-    est_fit_test(m, d, &r->model_fit, &r->misfit, &r->misfit_cause);
+    est_fit_test(m, d, &r->model_fit, &r->misfit_cause);
+    r->misfit = r->misfit_cause != 0;
     estimates_info(m, d, r->misfit_cause, ls, r->sd, r->crb, &r->info_chi2);
     int flags[4];
     est_physical_vector(m, ls, r->sd, r->vector, flags);
