@@ -40,6 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from oracles.information import InformationFilter, sensor_noise, z_of_reported  # noqa: E402
 from oracles.modal import drive, filter_states, modal_columns  # noqa: E402
+from oracles.samples import flat, guess_of  # noqa: E402
 
 DT = 0.1
 #: the cases: (label, parameter set, frequencies [Hz] with damping ratios, blocks)
@@ -78,8 +79,6 @@ def record(set_name: str, seed: int, stop_time: float):
     from spacerobot.core.sample import sample_length
     from spacerobot.robots import parameter_set_scenario
     from spacerobot.sensors import SensorSuite
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-    from test_information import flat
     sc = parameter_set_scenario("spatial", set_name)
     plant = NativePlant.of(sc)
     plant.set_excitation(1.0)
@@ -104,7 +103,6 @@ def filter_rows(sc, ts, X, truth, eiv: bool = True):
     from spacerobot.core import load_library
     from spacerobot.core.robot_record import c_robot
     from spacerobot.sensors import default_parameters
-    from test_information import guess_of
     L = load_library()
     sd, sd_c, sd_b = sensor_noise(default_parameters(), DT)
     g = sc.guess

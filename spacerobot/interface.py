@@ -685,6 +685,12 @@ def model_fit_vars() -> List[Var]:
             "difference to the estimates with the thrust held; logged as a warning at each "
             "onset and change of cause",
             None, ("misfit",)),
+        Var("diag.misfit_cause", "output", "discrete", "Integer", None,
+            "Why diag.misfit is 1: 1 the rigid model does not fit (coloured residuals: "
+            "flexible parts, sloshing propellant), 2 the noise values are too small (chi2 "
+            "alone, white residuals), 3 a thrust scale beyond its prior with white residuals "
+            "(a miscalibrated thrust, or momentum the rigid model lacks); 0 without a misfit",
+            None, ("misfit_cause",)),
     ]
 
 

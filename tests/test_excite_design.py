@@ -27,7 +27,8 @@ from oracles.information import InformationFilter, noise_vector, sensor_noise
 from spacerobot.core.robot_record import c_robot
 from spacerobot.robots import scenario
 from spacerobot.sensors import default_parameters
-from test_information import CFilter, _DP, _p, guess_of, lib, record, truth_of  # noqa: F401
+from oracles.samples import guess_of, truth_of
+from test_information import CFilter, _DP, _p, lib, record  # noqa: F401
 
 #: SR_INFO_MAX_U: the row stride of the filter's matrices
 MU = 37

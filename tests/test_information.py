@@ -30,6 +30,7 @@ import pytest
 
 from oracles.information import (InformationFilter, com_of_origin, noise_vector, origin_of_com,
                                  reported_of_z, sensor_noise, z_of_reported)
+from oracles.samples import flat, guess_of, truth_of
 from spacerobot.core.robot_record import SrRobot, c_robot
 from spacerobot.plant import Plant
 from spacerobot.robots import scenario
@@ -37,8 +38,6 @@ from spacerobot.sensors import SensorSuite, default_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 _DP = ctypes.POINTER(ctypes.c_double)
-#: the flat sample's groups (spacerobot.estimator.identifier.KEYS order)
-KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
 #: sr_info_noise: 17 doubles
 N_NOISE = 17
 #: SR_INFO_REFRESH (native/src/information.h): the samples the rows' weight is held over, the
@@ -113,22 +112,6 @@ class CFilter:
         st = self.L.sr_info_estimate(self.model, self.data, int(compensated), _p(vec),
                                      _p(bound), _p(chi2))
         return st, vec, bound, float(chi2[0])
-
-
-def body10(b) -> list:
-    return [float(b.mass), *map(float, b.com), *map(float, b.inertia)]
-
-
-def truth_of(sc) -> np.ndarray:
-    return np.array(body10(sc.robot.base) + body10(sc.target))
-
-
-def guess_of(sc) -> np.ndarray:
-    return np.array(body10(sc.guess.base) + body10(sc.guess.target))
-
-
-def flat(o) -> np.ndarray:
-    return np.concatenate([np.ravel(o[k]) for k in KEYS]).astype(float)
 
 
 def record(sc, dt: float, stop_time: float, sensors_seed=None) -> tuple:

@@ -58,6 +58,14 @@ def _simulate(systems, target: str, method: str, sensors: bool, **more) -> dict:
                            overrides=over, progress=False))
 
 
+#: how the estimator FMU's warning and the run's verdict name each diag.misfit_cause
+CAUSE_PHRASE = {1: "the rigid model does not fit the samples",
+                2: "the residuals are white but larger than the noise model's",
+                3: "a thrust scale factor is estimated beyond its prior"}
+VERDICT_PHRASE = {1: "the rigid model does not fit", 2: "the noise.* values are too small",
+                  3: "a thrust scale beyond its prior"}
+
+
 def _scored(res) -> dict:
     """A run's final estimates against the truth and what the estimator said of its fit."""
     d = res.data
@@ -74,6 +82,7 @@ def _scored(res) -> dict:
             "told": [float(m[3].split(" s:")[0][4:]) for m in res.log
                      if m[0] == "estimator" and "diag.misfit = 1" in m[3]],
             "said": [m[3] for m in res.log if m[0] == "estimator" and "diag.misfit" in m[3]],
+            "cause": np.rint(d["estimator.diag.misfit_cause"]).astype(int),
             "verdict": format_results(res)}
 
 
@@ -90,6 +99,18 @@ def _told_as_recorded(r: dict, label: str) -> None:
     assert np.allclose(r["told"], r["time"][onsets] - h, atol=1e-6), label
     said = "the model-fit test failed (diag.misfit 1 from t =" in r["verdict"]
     assert said == bool(m[-1]), (label, r["verdict"])
+    # diag.misfit_cause: nonzero exactly while diag.misfit is 1; each warning (an onset or a
+    # change of cause) names the cause recorded after its step, and so does the verdict
+    cause = r["cause"]
+    assert np.array_equal(cause != 0, m) and set(cause) <= {0, 1, 2, 3}, label
+    for msg in r["said"]:
+        if "diag.misfit = 0" in msg:
+            continue
+        k = int(np.argmin(np.abs(r["time"] - float(msg.split(" s:")[0][4:]) - h)))
+        assert CAUSE_PHRASE[cause[k]] in msg, (label, r["time"][k], cause[k], msg)
+    if m[-1]:
+        assert f"its cause (diag.misfit_cause): {VERDICT_PHRASE[cause[-1]]}" in r["verdict"], \
+            (label, r["verdict"])
 
 
 def _judge(cases: dict, systems) -> None:
@@ -141,6 +162,8 @@ def test_slosh_thrust_scale_misfit_keeps_the_thrust_estimated(systems):
     assert r["flags"].max() == 0 and r["misfit"][-1] == 1
     assert len(r["said"]) == 1 and "a thrust scale factor is estimated beyond its prior" in \
         r["said"][0], r["said"]
+    assert r["cause"][-1] == 3
+    _told_as_recorded(r, "slosh sensors")
 
 
 def test_rigid_body_with_its_thrust_miscalibrated_keeps_the_thrust_estimated(systems):
@@ -161,6 +184,8 @@ def test_rigid_body_with_its_thrust_miscalibrated_keeps_the_thrust_estimated(sys
     assert r["flags"].max() == 0
     assert len(r["said"]) == 1 and "a thrust scale factor is estimated beyond its prior" in \
         r["said"][0], r["said"]
+    assert r["cause"][-1] == 3
+    _told_as_recorded(r, "thrust miscalibrated")
 
 
 def test_held_out_servicer_slosh_cause_change_told(tmp_path):
@@ -186,6 +211,9 @@ def test_held_out_servicer_slosh_cause_change_told(tmp_path):
     assert np.all(np.asarray(r["misfit"])[r["time"] > 61.0] == 1)
     assert r["flags"].max() == 0
     assert int(np.sum(r["err"] <= 2.0 * r["sd"])) >= 18
+    # diag.misfit_cause: thrust (3) from the replay, the rigid model's (1) at the end
+    assert r["cause"][np.searchsorted(r["time"], 61.0)] == 3 and r["cause"][-1] == 1
+    _told_as_recorded(r, "arm5 slosh")
 
 
 @pytest.mark.slow
@@ -240,6 +268,8 @@ def test_noise_values_too_small_misfit_without_the_hold(systems):
     assert r["flags"].max() == 0
     told = [m[3] for m in res.log if "diag.misfit = 1" in m[3]]
     assert len(told) == 1 and "the noise.* values look too small" in told[0], told
+    assert r["cause"][-1] == 2
+    _told_as_recorded(r, "nav.r halved")
 
 
 def test_noise_scale_too_small_is_told_as_noise_not_thrust(systems):
@@ -257,6 +287,8 @@ def test_noise_scale_too_small_is_told_as_noise_not_thrust(systems):
     assert r["flags"].max() == 0
     assert len(r["said"]) == 1 and "the noise.* values look too small" in r["said"][0], \
         r["said"]
+    assert r["cause"][-1] == 2
+    _told_as_recorded(r, "noise.scale 0.25")
 
 
 def test_fit_options_are_checked_with_their_names():

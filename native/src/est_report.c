@@ -148,7 +148,8 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, int c
     }
     /* a misfit of the rigid model where the modal columns (ident.modes = 1) run beside the
        filter and have found a mode: their joint solver's answer, the modes in its model (the
-       issue's wings through the sensors 5.5 % off against the held filter's 56.5 %) */
+       issue's wings through the sensors 5.5 % off against the held filter's 56.5 %); the
+       filter's solve above still gives crb.* and diag.info_chi2 */
     double f, zeta;
     if (held && m->info && d->samples > 0 && est_modal_mode(m, d, 0, &f, &zeta))
         est_least_squares(m, d, vec, sd);
@@ -319,6 +320,7 @@ static const output OUTPUTS[] = {
     REAL_("diag.mode_zeta[4]", mode_zeta, 3)
     REAL_("diag.model_fit", model_fit, 0)
     INT_("diag.misfit", misfit, 0)
+    INT_("diag.misfit_cause", misfit_cause, 0)
 };
 #undef REAL_
 #undef INT_

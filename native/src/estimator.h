@@ -345,7 +345,7 @@ typedef struct sr_estimator_report {
                                          ident.fit_window (no noise model), or the Ljung-Box
                                          Q/L of the information filter's whitened residuals */
     int misfit;                       /* diag.misfit: 1 where the model-fit test fails */
-    int misfit_cause;                 /* its cause (no output): SR_EST_MISFIT_MODEL (the rigid
+    int misfit_cause;                 /* diag.misfit_cause: SR_EST_MISFIT_MODEL (the rigid
                                          model does not fit: the estimates held), _THRUST (a
                                          thrust scale beyond its prior, white residuals),
                                          _NOISE (chi2 alone: the noise.* values too small);

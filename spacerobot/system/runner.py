@@ -50,6 +50,7 @@ from .master import Master, initialize, time_grid
 from .reader import ComponentInfo, SystemInfo, open_system
 from .recorder import Recorder, check_writable, read_csv, write_csv  # noqa: F401
 from .. import interface
+from ..core.estimator import MISFIT_CAUSES
 
 __all__ = ["run_ssp", "simulate", "RunResult", "SimulationError", "format_results",
            "read_csv", "write_csv"]
@@ -301,6 +302,16 @@ def format_results(result: RunResult, paper: Optional[Mapping[str, float]] = Non
     return "\n".join(lines)
 
 
+#: diag.misfit_cause's values (spacerobot.core.estimator.MISFIT_CAUSES) as the verdict tells them
+_MISFIT_TOLD = {
+    "model": "the rigid model does not fit (flexible parts, sloshing propellant: the sds carry a "
+       "model-error term and the estimates can be far off)",
+    "noise": "the noise.* values are too small (the estimates kept, their sds widened)",
+    "thrust": "a thrust scale beyond its prior (a miscalibration or slosh: the sds cover the "
+       "estimates with the thrust held)",
+}
+
+
 def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
     """The estimator's verdict at the end: ``diag.identified.*`` and ``diag.physical.*``, from
     the columns of a run (``estimator.diag.*``) or of ``spacerobot identify`` (``diag.*``)."""
@@ -331,14 +342,14 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
                 fits = np.flatnonzero(np.asarray(misfit) < 0.5)
                 start = fits[-1] + 1 if len(fits) else 0
                 since = f" from t = {time[start]:g} s"
+            cause = data.get(f"{prefix}diag.misfit_cause")
+            told = _MISFIT_TOLD.get(MISFIT_CAUSES.get(int(round(cause[-1])), "")) if (
+                cause is not None and len(cause)) else None
+            told = f"its cause (diag.misfit_cause): {told}" if told else (
+                "its cause: " + "; or ".join(_MISFIT_TOLD.values()))
             out.append(f"the model-fit test failed (diag.misfit 1{since}): no body is "
-                       f"flagged; the estimator FMU's log names the cause: the rigid model "
-                       f"does not fit (flexible parts, sloshing propellant: the sds carry a "
-                       f"model-error term and the estimates can be far off), a thrust scale "
-                       f"beyond its prior (a miscalibration or slosh: the sds cover the "
-                       f"estimates with the thrust held) or the noise.* values are too small "
-                       f"(the estimates kept, their sds widened); docs/identification.md, "
-                       f"'When the rigid model does not fit'")
+                       f"flagged; {told}; docs/identification.md, 'When the rigid model does "
+                       f"not fit'")
             break
     for prefix in ("estimator.", ""):
         rate = data.get(f"{prefix}ident.excite_rate")
