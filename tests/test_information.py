@@ -493,6 +493,56 @@ def test_state_check_refuses_inconsistent_misfit_flags(lib, small):
     assert lib.sr_info_data_finite(f.model, f.data) == 1
 
 
+@pytest.mark.slow
+def test_state_check_after_the_replay_allows_one_cause(lib):
+    """sr_info_data_finite on a state after the replay (SR_INFO_REPLAY samples through
+    sr_info_step; 61 s of the rigid default scenario, realistic sensors): accepted with the
+    misfit flags as the replay set them and with them cleared; each cause alone (model with
+    its model-error variances, noise, thrust scale) accepted, as the replay may set it; any two
+    causes together refused (the fit test gives one cause), and model-error variances without
+    the model cause refused."""
+    sc = scenario("spatial")
+    ts, X = record(sc, 0.1, 61.0, sensors_seed=3)
+    sd, sd_c, sd_b = sensor_noise(default_parameters(), 0.1)
+    rob = c_robot(sc.robot, lib)
+    g = sc.guess
+    f = CFilter(lib, rob, noise_vector(sd, sd_c, sd_b), guess_of(sc), g.P0_mu, g.P0_theta)
+    vp = ctypes.c_void_p
+    lib.sr_info_step.argtypes = [vp, vp, vp, _DP, ctypes.c_double, _DP, _DP, vp]
+    lib.sr_info_step.restype = ctypes.c_int
+    lib.sr_info_buffer_length.argtypes = [ctypes.c_int]
+    lib.sr_info_buffer_length.restype = ctypes.c_size_t
+    lib.sr_info_data_finite.argtypes = [vp, vp]
+    lib.sr_info_data_finite.restype = ctypes.c_int
+    buffer = np.zeros(lib.sr_info_buffer_length(sc.robot.n_joints))
+    nxt = ctypes.create_string_buffer(len(f.data.raw))
+    z = np.ascontiguousarray(guess_of(sc))
+    for t, x in zip(ts, X):
+        x = np.ascontiguousarray(x, float)
+        assert lib.sr_info_step(f.model, f.data, nxt, _p(buffer), float(t), _p(x), _p(z),
+                                f.work) == 0
+        ctypes.memmove(f.data, nxt, len(nxt.raw))
+    size = len(f.data.raw)
+    tail = size - 32          # int misfit, pad, double me_var[2], int noise_misfit, int scale
+    misfit, v0, v1, noise, scale = struct.unpack_from("<i4xddii", f.data.raw, tail)
+    assert misfit + noise + scale <= 1 and lib.sr_info_data_finite(f.model, f.data) == 1
+    clean = bytearray(f.data.raw)                    # the replayed state without a misfit
+    struct.pack_into("<i4xddii", clean, tail, 0, 0.0, 0.0, 0, 0)
+    clean = bytes(clean)
+
+    def verdict(misfit, me_var, noise, scale) -> int:
+        bad = bytearray(clean)
+        struct.pack_into("<i4xddii", bad, tail, misfit, me_var, me_var, noise, scale)
+        ctypes.memmove(f.data, bytes(bad), size)
+        return lib.sr_info_data_finite(f.model, f.data)
+    assert verdict(1, 1e-4, 0, 0) == 1 and verdict(0, 0.0, 1, 0) == 1
+    assert verdict(0, 0.0, 0, 1) == 1
+    assert verdict(1, 1e-4, 1, 0) == 0 and verdict(1, 1e-4, 0, 1) == 0
+    assert verdict(0, 0.0, 1, 1) == 0 and verdict(0, 1e-4, 0, 0) == 0
+    ctypes.memmove(f.data, clean, size)
+    assert lib.sr_info_data_finite(f.model, f.data) == 1
+
+
 def test_prior_before_any_sample(lib, small):
     """Before any sample: the guesses, each mass's bound sqrt(P0_mu) (the mass is an unknown
     itself), chi2 0."""
