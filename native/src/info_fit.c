@@ -174,23 +174,37 @@ static double whiteness(const sr_info_model *m, const sr_info_data *d)
     return q / nr;
 }
 
+/* coloured residuals count where they are not far below the noise's size (chi2 above
+   SR_INFO_FIT_CHI2_MIN): far below it (noise-free data under a noise model, chi2 1e-5 to
+   1e-4) their colour is the round-off's */
+static int coloured_of(const sr_info_model *m, double whiteness, double chi2)
+{
+    return whiteness > m->fit.whiteness_max && chi2 > SR_INFO_FIT_CHI2_MIN;
+}
+
+static double chi2_of(const sr_info_model *m, const sr_info_data *d)
+{
+    double dof = d->rows - m->nu;
+    return dof > 0.0 ? d->rss / dof : 0.0;
+}
+
+int info_coloured(const sr_info_model *m, const sr_info_data *d)
+{
+    return coloured_of(m, whiteness(m, d), chi2_of(m, d));
+}
+
 /* sr_info_fit_of (m, d, f given) */
 static int fit_test(const sr_info_model *m, const sr_info_data *d, sr_info_fit *f)
 {
-    double dof = d->rows - m->nu;
     f->whiteness = whiteness(m, d);
-    f->chi2 = dof > 0.0 ? d->rss / dof : 0.0;
+    f->chi2 = chi2_of(m, d);
     f->thrust = thrust_ratio(m, d);
     /* a thrust ratio that is not finite (a singular information): the misfits kept at the
        replay only */
     int ok = isfinite(f->thrust), decide = ok && d->replayed;
     if (!ok)
         f->thrust = 0.0;
-    /* coloured residuals count where they are not far below the noise's size (chi2 above
-       SR_INFO_FIT_CHI2_MIN): far below it (noise-free data under a noise model, chi2 1e-5 to
-       1e-4) their colour is the round-off's */
-    int coloured = f->whiteness > m->fit.whiteness_max && f->chi2 > SR_INFO_FIT_CHI2_MIN;
-    f->model = d->misfit || (decide && coloured);
+    f->model = d->misfit || (decide && coloured_of(m, f->whiteness, f->chi2));
     /* white residuals beyond the noise's: the noise values too small, while the rigid model
        may fit (the estimates not held); first, since values too small (noise.scale) shrink
        the thrust prior too and put the scale beyond it */

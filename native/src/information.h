@@ -94,7 +94,8 @@ typedef struct sr_info_fit_options {
  *  noisy than their model and the residuals' colour is round-off's); found at the replay it
  *  stays: the replay then adds the samples again with the thrust errors held and the model
  *  error's variances (sr_info_data.me_var, from the kept samples' residuals) in the rows'
- *  noise covariance), scale (1 where, without model, the thrust scale is beyond its
+ *  noise covariance; found after it, it stays too, without those variances: sr_info_step),
+ *  scale (1 where, without model, the thrust scale is beyond its
  *  threshold: a thrust miscalibration or a model error the scale absorbs; found at the
  *  replay it stays, sr_info_data.scale_misfit; the estimates are not held), noise (1 where
  *  chi2 is beyond its threshold with neither: white residuals larger than the noise
@@ -142,10 +143,12 @@ typedef struct sr_info_data {
        innovations */
     int fit_at;
     double u_fit[SR_INFO_MAX_U];
-    /* the model misfit found at the replay (sr_info_fit.model; kept: the thrust errors held
-       from then on; 0 or 1, at most one of the three kept misfits) and the
-       model error's variances it added to every row's noise covariance since: the linear
-       momentum's [N^2 s^2] and the angular momentum's about the base point [N^2 m^2 s^2] */
+    /* the model misfit found at the replay or by the whiteness test after it (sr_info_fit.model;
+       kept: the thrust errors held from then on, the other two kept misfits cleared; 0 or 1,
+       at most one of the three kept misfits) and the model error's variances a misfit at the
+       replay added to every row's noise covariance since (0 for one found after it): the
+       linear momentum's [N^2 s^2] and the angular momentum's about the base point
+       [N^2 m^2 s^2] */
     int misfit;
     double me_var[2];
     /* chi2 alone beyond its threshold at the replay (sr_info_fit.noise; kept): the noise
