@@ -1,4 +1,4 @@
-"""Shared fixtures: FMUs built once per test session, and the pair of them stepped by the
+"""Shared fixtures: FMUs built once per test session (each pytest-xdist worker has its own), and the pair of them stepped by the
 project's co-simulation loop (:class:`spacerobot.Master`), with a hook to inject samples.
 """
 from __future__ import annotations

@@ -4,12 +4,13 @@ test_native_closed_loop_host.py).
 * the tools, each ``None`` where missing: the system C compiler, mingw-w64
   (``x86_64-w64-mingw32-gcc``), Wine, valgrind, a working ASan/UBSan runtime;
 * the FMU binaries of every model (:data:`MODELS`: plant, sensors, estimator) from the
-  sources in this tree, built once per session with ``native/build.py`` (plain: linux64 and
+  sources in this tree, built once per test process (each pytest-xdist worker) with
+  ``native/build.py`` (plain: linux64 and
   win64; sanitised: linux64 with ``-fsanitize=address,undefined``), and the FMUs of any kind
   assembled from them (:func:`spacerobot.fmi.native.build_native_fmu`), extracted to fresh
   folders;
 * the C hosts (``tests/c_host/fmu_host.c``, ``fmu_fuzz.c``) compiled for Linux or Windows;
-* one Wine prefix per session under the pytest temporary folder, and running a host from an
+* one Wine prefix per test process under its pytest temporary folder, and running a host from an
   EMPTY environment (only ``PATH=/usr/bin:/bin``; under Wine also the Wine variables).
 """
 from __future__ import annotations
@@ -48,7 +49,7 @@ SANITIZER_ENV = {"ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0:exitcode=23",
 SANITIZER_WORDS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:",
                    "SUMMARY: UndefinedBehaviorSanitizer")
 EMPTY_PATH = "/usr/bin:/bin"
-WINE_ENV = {"WINEDEBUG": "-all", "WINEDLLOVERRIDES": "mscoree,mshtml="}
+WINE_ENV = {"WINEDEBUG": "-all", "WINEDLLOVERRIDES": "mscoree,mshtml=;winemenubuilder.exe=d"}
 
 _LOCK = threading.Lock()
 _CACHE: dict = {}
@@ -204,7 +205,7 @@ def fmu_binaries(work: Path, models: Sequence[str] = (MODEL,),
                  sanitized: bool = True) -> Dict[str, Path]:
     """Library folders (``<dir>/fmu/<platform>/<model identifier>.*``, as
     :func:`spacerobot.fmi.native.build_native_fmu` takes them) holding the binaries of
-    ``models`` (kinds of :data:`MODELS`) from this tree's sources, each built once per session:
+    ``models`` (kinds of :data:`MODELS`) from this tree's sources, each built once per process:
     ``{"plain": dir, "sanitized": dir}``; win64 inside "plain" where mingw is installed; no
     "sanitized" where the ASan runtime is missing or ``sanitized`` is false. The folders are the
     same for every call (a later call adds its models' binaries). Built in parallel."""
@@ -300,7 +301,7 @@ def _from_bits(text: str) -> float:
 def native_fmu(work: Path, kind: str, robot: str, target: Optional[str], lib_dir: Path,
                tag: str) -> Extracted:
     """The FMU of model ``kind`` (:data:`MODELS`) of ``scenario(robot, target)`` built from
-    ``lib_dir``'s binaries, copied to a fresh folder and extracted there (cached per session)."""
+    ``lib_dir``'s binaries, copied to a fresh folder and extracted there (cached per test process)."""
     from spacerobot.fmi.native import build_native_fmu
     from spacerobot.robots import scenario
 
@@ -328,7 +329,7 @@ def estimator_fmu(work: Path, robot: str, target: Optional[str], lib_dir: Path,
 def compile_host(source: Path, work: Path, platform: str = "linux64",
                  sanitize: bool = False) -> Path:
     """``source`` compiled warning-free as a Linux program (gcc, dlopen) or a Windows one
-    (mingw, LoadLibrary); cached per session."""
+    (mingw, LoadLibrary); cached per test process."""
     key = ("host", str(source), platform, sanitize)
     with _LOCK:
         if key in _CACHE:
@@ -356,7 +357,7 @@ def empty_env(extra: Optional[dict] = None) -> dict:
 
 
 class WinePrefix:
-    """One Wine prefix per session, created in the background (``wineboot -i``) so that it
+    """One Wine prefix per test process, created in the background (``wineboot -i``) so that it
     overlaps the builds; :meth:`env` waits for it."""
 
     def __init__(self, folder: Path):
@@ -365,23 +366,30 @@ class WinePrefix:
                                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                      env=empty_env({"WINEPREFIX": str(folder), **WINE_ENV}))
         self.ready = False
+        self.failed: Optional[str] = None      # the boot's error ("": booted), once known
+
+    def _booted(self) -> str:
+        """Wait for the boot; "" where it succeeded, else its error output. A first boot has
+        been seen to fail once in the parallel suite, not reproduced ("could not load
+        kernel32.dll, status c0000135"): booted afresh then, twice at most."""
+        _, err = self.proc.communicate(timeout=300)
+        for _ in range(2):
+            if self.proc.returncode == 0:
+                return ""
+            prefix = empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV})
+            subprocess.run(["wineserver", "-k"], env=prefix, timeout=120)
+            shutil.rmtree(self.folder, ignore_errors=True)
+            self.proc = subprocess.Popen([require(wine(), "Wine"), "wineboot", "-i"],
+                                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                         env=prefix)
+            _, err = self.proc.communicate(timeout=300)
+        return "" if self.proc.returncode == 0 else err.decode(errors="replace")[-2000:]
 
     def env(self, extra: Optional[dict] = None) -> dict:
         if not self.ready:
-            _, err = self.proc.communicate(timeout=300)
-            # a first boot has been seen to fail once in the parallel suite, not reproduced
-            # ("could not load kernel32.dll, status c0000135"): boot afresh, twice at most
-            for _ in range(2):
-                if self.proc.returncode == 0:
-                    break
-                shutil.rmtree(self.folder, ignore_errors=True)
-                self.proc = subprocess.run(
-                    [require(wine(), "Wine"), "wineboot", "-i"], stdout=subprocess.DEVNULL,
-                    stderr=subprocess.PIPE, timeout=300,
-                    env=empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV}))
-                err = self.proc.stderr
-            assert self.proc.returncode == 0, \
-                f"wineboot failed: {err.decode(errors='replace')[-2000:]}"
+            if self.failed is None:
+                self.failed = self._booted()
+            assert not self.failed, f"wineboot failed: {self.failed}"
             subprocess.run(["wineserver", "-w"], env=empty_env({"WINEPREFIX": str(self.folder)}),
                            timeout=120)
             self.ready = True
@@ -421,8 +429,9 @@ def hex_bits(x: float) -> str:
 
 # ---- what the tests share ------------------------------------------------------------------------
 def work_dir(tmp_path_factory) -> Path:
-    """The session's folder for the native hosts' builds, FMUs and Wine prefix (one for every
-    test file, so that they share the builds)."""
+    """The test process's folder for the native hosts' builds, FMUs and Wine prefix (one for
+    every test file in the process, so that they share the builds; one per pytest-xdist
+    worker)."""
     w = tmp_path_factory.getbasetemp() / "native_hosts"
     w.mkdir(exist_ok=True)
     return w

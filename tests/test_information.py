@@ -460,6 +460,11 @@ def test_model_init_refuses_bad_input(lib, small):
     assert lib.sr_info_model_init(m, ctypes.byref(rob), _p(nv), None, 1.0, 1.0) == 1
 
 
+#: the tail of sr_info_data (information.h): int misfit, its padding, double me_var[2], int
+#: noise_misfit, int scale_misfit, in the last MISFIT_TAIL bytes
+MISFIT_TAIL_FORMAT, MISFIT_TAIL = "<i4xddii", 32
+
+
 def test_state_check_refuses_inconsistent_misfit_flags(lib, small):
     """sr_info_data_finite on a state before the replay: clean, accepted; each word of the
     Data's tail written as the integer 1 (the tail is int misfit, its padding, double
@@ -477,14 +482,14 @@ def test_state_check_refuses_inconsistent_misfit_flags(lib, small):
     assert lib.sr_info_data_finite(f.model, f.data) == 1
     size = len(clean)
     refused = []
-    for off in range(size - 32, size, 4):
+    for off in range(size - MISFIT_TAIL, size, 4):
         bad = bytearray(clean)
         struct.pack_into("<i", bad, off, 1)
         ctypes.memmove(f.data, bytes(bad), size)
         if lib.sr_info_data_finite(f.model, f.data) == 0:
-            refused.append(off - (size - 32))
+            refused.append(off - (size - MISFIT_TAIL))
     assert refused == [0, 8, 12, 16, 20, 24, 28], refused
-    for off in (size - 32, size - 8, size - 4):
+    for off in (size - MISFIT_TAIL, size - 8, size - 4):
         bad = bytearray(clean)
         struct.pack_into("<i", bad, off, 2)
         ctypes.memmove(f.data, bytes(bad), size)
@@ -523,16 +528,17 @@ def test_state_check_after_the_replay_allows_one_cause(lib):
                                 f.work) == 0
         ctypes.memmove(f.data, nxt, len(nxt.raw))
     size = len(f.data.raw)
-    tail = size - 32          # int misfit, pad, double me_var[2], int noise_misfit, int scale
-    misfit, v0, v1, noise, scale = struct.unpack_from("<i4xddii", f.data.raw, tail)
+    assert len(ts) > REPLAY_SAMPLES                  # the replay is behind this state
+    tail = size - MISFIT_TAIL
+    misfit, v0, v1, noise, scale = struct.unpack_from(MISFIT_TAIL_FORMAT, f.data.raw, tail)
     assert misfit + noise + scale <= 1 and lib.sr_info_data_finite(f.model, f.data) == 1
     clean = bytearray(f.data.raw)                    # the replayed state without a misfit
-    struct.pack_into("<i4xddii", clean, tail, 0, 0.0, 0.0, 0, 0)
+    struct.pack_into(MISFIT_TAIL_FORMAT, clean, tail, 0, 0.0, 0.0, 0, 0)
     clean = bytes(clean)
 
     def verdict(misfit, me_var, noise, scale) -> int:
         bad = bytearray(clean)
-        struct.pack_into("<i4xddii", bad, tail, misfit, me_var, me_var, noise, scale)
+        struct.pack_into(MISFIT_TAIL_FORMAT, bad, tail, misfit, me_var, me_var, noise, scale)
         ctypes.memmove(f.data, bytes(bad), size)
         return lib.sr_info_data_finite(f.model, f.data)
     assert verdict(1, 1e-4, 0, 0) == 1 and verdict(0, 0.0, 1, 0) == 1

@@ -103,9 +103,11 @@ def _told_as_recorded(r: dict, label: str) -> None:
     # change of cause) names the cause recorded after its step, and so does the verdict
     cause = r["cause"]
     assert np.array_equal(cause != 0, m) and set(cause) <= {0, 1, 2, 3}, label
-    for msg in r["said"]:
-        if "diag.misfit = 0" in msg:
-            continue
+    warned = [msg for msg in r["said"] if "diag.misfit = 0" not in msg]
+    changes = int(cause[0] != 0) + int(np.count_nonzero((cause[1:] != cause[:-1])
+                                                        & (cause[1:] != 0)))
+    assert len(warned) == changes, (label, warned, changes)
+    for msg in warned:
         k = int(np.argmin(np.abs(r["time"] - float(msg.split(" s:")[0][4:]) - h)))
         assert CAUSE_PHRASE[cause[k]] in msg, (label, r["time"][k], cause[k], msg)
     if m[-1]:

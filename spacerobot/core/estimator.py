@@ -500,7 +500,7 @@ class NativeEstimator:
         bounds at rate 1 and at the candidate; 0 before the choice); ``mode_f`` [Hz] and
         ``mode_zeta`` (4,: the modal columns' modes in use, 0 for none); ``model_fit`` and
         ``misfit`` (the model-fit test: diag.model_fit, diag.misfit) and ``misfit_cause``
-        (no FMU output: "" without a misfit, "model" where the rigid model does not fit (the
+        (the FMU's Integer diag.misfit_cause as its name: "" without a misfit, "model" where the rigid model does not fit (the
         estimates held), "thrust" where a thrust scale is beyond its prior with white
         residuals, "noise" for chi2 alone: the noise values too small)."""
         r = self._report

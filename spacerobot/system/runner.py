@@ -304,11 +304,11 @@ def format_results(result: RunResult, paper: Optional[Mapping[str, float]] = Non
 
 #: diag.misfit_cause's values (spacerobot.core.estimator.MISFIT_CAUSES) as the verdict tells them
 _MISFIT_TOLD = {
-    "model": "the rigid model does not fit (flexible parts, sloshing propellant: the sds carry a "
-       "model-error term and the estimates can be far off)",
+    "model": "the rigid model does not fit (flexible parts, sloshing propellant: the sds carry "
+             "a model-error term and the estimates can be far off)",
     "noise": "the noise.* values are too small (the estimates kept, their sds widened)",
     "thrust": "a thrust scale beyond its prior (a miscalibration or slosh: the sds cover the "
-       "estimates with the thrust held)",
+              "estimates with the thrust held)",
 }
 
 
@@ -343,8 +343,9 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
                 start = fits[-1] + 1 if len(fits) else 0
                 since = f" from t = {time[start]:g} s"
             cause = data.get(f"{prefix}diag.misfit_cause")
-            told = _MISFIT_TOLD.get(MISFIT_CAUSES.get(int(round(cause[-1])), "")) if (
-                cause is not None and len(cause)) else None
+            last = cause[-1] if cause is not None and len(cause) else math.nan
+            told = _MISFIT_TOLD.get(MISFIT_CAUSES.get(int(round(last)), "")) if (
+                math.isfinite(last)) else None
             told = f"its cause (diag.misfit_cause): {told}" if told else (
                 "its cause: " + "; or ".join(_MISFIT_TOLD.values()))
             out.append(f"the model-fit test failed (diag.misfit 1{since}): no body is "
