@@ -63,7 +63,11 @@ static int bind(sr_instance *inst, estimator_glue *g) {
     }
     g->n_sample = k;
     g->n_out = sr_estimator_output_count();
-    if (g->n_out > MAX_OUTPUTS) return 1;
+    if (g->n_out > MAX_OUTPUTS) {            /* tests/test_estimator_tables.py guards it */
+        sr_log(inst, SR_LOG_ERROR, "the core has %d outputs, this FMU's glue room for %d "
+               "(MAX_OUTPUTS in fmu_estimator/estimator.c)", g->n_out, MAX_OUTPUTS);
+        return 1;
+    }
     for (int i = 0; i < g->n_out; ++i)
         bad |= (g->vr_out[i] = vr_of_name(inst, sr_estimator_output_name(i))) < 0;
     return bad;

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -158,6 +159,15 @@ def test_outputs_are_the_fmu_outputs(spatial):
     assert values["diag.status"] == rep["status"] == 0
     assert values["ident.excite"] == rep["excite"] == 1.0
     assert values["diag.identified.target"] == float(rep["identified"]["target"])
+
+
+def test_the_fmu_glue_has_room_for_every_output():
+    """fmu_estimator/estimator.c keeps the outputs' value references in a fixed array
+    (MAX_OUTPUTS): the core's outputs table fits in it (else every instantiation fails)."""
+    import re
+    glue = (Path(__file__).resolve().parents[1] / "fmu_estimator" / "estimator.c").read_text()
+    room = int(re.search(r"#define MAX_OUTPUTS (\d+)", glue).group(1))
+    assert 0 < len(core.output_names()) <= room, (len(core.output_names()), room)
 
 
 def test_status_texts():
