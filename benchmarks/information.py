@@ -23,6 +23,7 @@ import numpy as np
 # (native/src/information.c, ident.information): one copy, tests/oracles/information.py
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from oracles.information import InformationFilter, z_of_reported  # noqa: E402
+from oracles.samples import flat  # noqa: E402
 
 
 # ----------------------------------------------------------------------------------------------
@@ -67,10 +68,8 @@ def _case(args):
                   excitation=sc.excitation)
     plant.set_excitation(1.0)
     sensors = SensorSuite(sc.robot.n_joints, seed=sensors_seed, dt=DT)
-    keys = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
     for k in range(int(round(stop_time / DT)) + 1):
-        y = sensors.update(plant.outputs(), DT)
-        x = np.concatenate([np.ravel(y[key]) for key in keys]).astype(float)
+        x = flat(sensors.update(plant.outputs(), DT))
         est.update(k * DT, x)
         rep = est.report()
         filt.add(k * DT, x, z_of_reported(rep["vector"]))

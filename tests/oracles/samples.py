@@ -6,8 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-#: the flat sample's groups (spacerobot.estimator.identifier.KEYS order)
-KEYS = ("r_S", "v_S", "A", "omega_B", "a_S", "alpha_B", "q", "qd", "qdd", "F", "M", "J", "H")
+from .estimator.identifier import KEYS      # the flat sample's groups, in order
 
 
 def body10(b) -> list:
