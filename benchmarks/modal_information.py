@@ -40,7 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from oracles.information import InformationFilter, sensor_noise, z_of_reported  # noqa: E402
 from oracles.modal import drive, filter_states, modal_columns  # noqa: E402
-from oracles.samples import flat, guess_of  # noqa: E402
+from oracles.samples import flat, guess_of, parameter_set_samples  # noqa: E402
 
 DT = 0.1
 #: the cases: (label, parameter set, frequencies [Hz] with damping ratios, blocks)
@@ -75,26 +75,11 @@ class RowsFilter(InformationFilter):
 
 def record(set_name: str, seed: int, stop_time: float):
     """The plant's true and measured samples of the spatial robot's set (sensors seed)."""
-    from spacerobot.core.plant import NativePlant
-    from spacerobot.core.sample import sample_length
-    from spacerobot.robots import parameter_set_scenario
     from spacerobot.sensors import SensorSuite
-    sc = parameter_set_scenario("spatial", set_name)
-    plant = NativePlant.of(sc)
-    plant.set_excitation(1.0)
-    n = sample_length(plant.n)
-    suite = SensorSuite(plant.n, scale=1.0, seed=seed, dt=DT)
-    ts, X, XT = [], [], []
-    for k in range(int(round(stop_time / DT)) + 1):
-        if k:
-            plant.advance(DT)
-        xt = np.array(plant.output_vector()[:n], float)
-        XT.append(xt)
-        X.append(flat(suite.update(suite.sample(xt), DT)))
-        ts.append(k * DT)
-    b = plant.base_now()
-    truth = np.r_[b.mass, b.com, b.inertia, sc.target.mass, sc.target.com, sc.target.inertia]
-    return sc, np.array(ts), np.array(X), np.array(XT), truth
+    sc, XT, truth = parameter_set_samples("spatial", set_name, stop_time, DT)
+    suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=seed, dt=DT)
+    X = np.array([flat(suite.update(suite.sample(xt), DT)) for xt in XT])
+    return sc, DT * np.arange(len(XT)), X, XT, truth
 
 
 def filter_rows(sc, ts, X, truth, eiv: bool = True):

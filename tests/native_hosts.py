@@ -362,11 +362,14 @@ class WinePrefix:
 
     def __init__(self, folder: Path):
         self.folder = folder
-        self.proc = subprocess.Popen([require(wine(), "Wine"), "wineboot", "-i"],
-                                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                     env=empty_env({"WINEPREFIX": str(folder), **WINE_ENV}))
+        self.proc = self._boot()
         self.ready = False
         self.failed: Optional[str] = None      # the boot's error ("": booted), once known
+
+    def _boot(self) -> subprocess.Popen:
+        return subprocess.Popen([require(wine(), "Wine"), "wineboot", "-i"],
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                env=empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV}))
 
     def _booted(self) -> str:
         """Wait for the boot; "" where it succeeded, else its error output. A first boot has
@@ -376,12 +379,10 @@ class WinePrefix:
         for _ in range(2):
             if self.proc.returncode == 0:
                 return ""
-            prefix = empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV})
-            subprocess.run(["wineserver", "-k"], env=prefix, timeout=120)
+            subprocess.run(["wineserver", "-k"], timeout=120,
+                           env=empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV}))
             shutil.rmtree(self.folder, ignore_errors=True)
-            self.proc = subprocess.Popen([require(wine(), "Wine"), "wineboot", "-i"],
-                                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                         env=prefix)
+            self.proc = self._boot()
             _, err = self.proc.communicate(timeout=300)
         return "" if self.proc.returncode == 0 else err.decode(errors="replace")[-2000:]
 

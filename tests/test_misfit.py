@@ -66,6 +66,11 @@ VERDICT_PHRASE = {1: "the rigid model does not fit", 2: "the noise.* values are 
                   3: "a thrust scale beyond its prior"}
 
 
+def _time_of(message: str) -> float:
+    """The time [s] an estimator log message starts with ("t = 60 s: ...")."""
+    return float(message.split(" s:")[0][4:])
+
+
 def _scored(res) -> dict:
     """A run's final estimates against the truth and what the estimator said of its fit."""
     d = res.data
@@ -79,7 +84,7 @@ def _scored(res) -> dict:
             "flags": np.maximum(d["estimator.diag.identified.base"],
                                 d["estimator.diag.identified.target"]),
             "fit": d["estimator.diag.model_fit"], "time": res.time,
-            "told": [float(m[3].split(" s:")[0][4:]) for m in res.log
+            "told": [_time_of(m[3]) for m in res.log
                      if m[0] == "estimator" and "diag.misfit = 1" in m[3]],
             "said": [m[3] for m in res.log if m[0] == "estimator" and "diag.misfit" in m[3]],
             "cause": np.rint(d["estimator.diag.misfit_cause"]).astype(int),
@@ -108,7 +113,7 @@ def _told_as_recorded(r: dict, label: str) -> None:
                                                         & (cause[1:] != 0)))
     assert len(warned) == changes, (label, warned, changes)
     for msg in warned:
-        k = int(np.argmin(np.abs(r["time"] - float(msg.split(" s:")[0][4:]) - h)))
+        k = int(np.argmin(np.abs(r["time"] - _time_of(msg) - h)))
         assert CAUSE_PHRASE[cause[k]] in msg, (label, r["time"][k], cause[k], msg)
     if m[-1]:
         assert f"its cause (diag.misfit_cause): {VERDICT_PHRASE[cause[-1]]}" in r["verdict"], \
@@ -208,7 +213,7 @@ def test_held_out_servicer_slosh_cause_change_told(tmp_path):
     assert said[0].startswith("t = 60 s: a thrust scale factor is estimated beyond its prior")
     assert "the rigid model does not fit the samples (diag.misfit stays 1, its cause " \
         "changed)" in said[1]
-    changed_at = float(said[1].split(" s:")[0][4:])
+    changed_at = _time_of(said[1])
     assert 60.0 < changed_at < STOP
     assert np.all(np.asarray(r["misfit"])[r["time"] > 61.0] == 1)
     assert r["flags"].max() == 0
@@ -227,27 +232,15 @@ def test_a_later_model_misfit_stays():
     changes exactly twice (on the previous tree it flipped between thrust and model 8 times
     from 141.6 to 147.5 s as the whiteness hovered about its threshold), no flag."""
     from conftest import ARM5_URDF
-    from spacerobot.core.plant import NativePlant
-    from spacerobot.core.sample import sample_length
-    from spacerobot.estimator.identifier import identifier_from_values
-    from spacerobot.interface import estimator_vars
-    from spacerobot.robots import parameter_set_scenario
+    from oracles.samples import fmu_identifier, parameter_set_samples
     from spacerobot.sensors import SensorSuite
     dt = 0.1
-    sc = parameter_set_scenario(ARM5_URDF, "slosh")
-    plant = NativePlant.of(sc)
-    plant.set_excitation(1.0)
-    n = sample_length(plant.n)
-    v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
-    v.update({"method": 1, "solver": 2, "ident.excite_adapt": 2, "ident.noise_profile": 1,
-              "noise.scale": 1.0})
-    ident, _ = identifier_from_values(sc.robot, v, dt)
-    suite = SensorSuite(plant.n, scale=1.0, seed=0, dt=dt)
+    sc, xs, _ = parameter_set_samples(ARM5_URDF, "slosh", STOP, dt)
+    ident = fmu_identifier(sc, dt, {"method": 1, "solver": 2, "ident.excite_adapt": 2,
+                                    "ident.noise_profile": 1, "noise.scale": 1.0})
+    suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=0, dt=dt)
     causes, flagged = [], False
-    for k in range(int(round(STOP / dt)) + 1):
-        if k:
-            plant.advance(dt)
-        x = plant.output_vector()[:n].copy()
+    for k, x in enumerate(xs):
         ident.update(k * dt, suite.update(suite.sample(x), dt))
         rep = ident.core.report()
         causes.append(rep["misfit_cause"])

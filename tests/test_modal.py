@@ -26,18 +26,16 @@ flexible plant (native/src/plant_leaves.c; docs/models.md 'Flexible appendages a
 """
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import ARM5_URDF
 from oracles.modal import drive, filter_states, modal_columns
-from spacerobot.core.plant import NativePlant
-from spacerobot.core.sample import sample_length
+from oracles.samples import fmu_identifier, parameter_set_samples
 from spacerobot.estimator.identifier import Identifier
 from spacerobot.interface import relative_errors
-from spacerobot.robots import Excitation, parameter_set_scenario
+from spacerobot.robots import parameter_set_scenario
 
 T_END = 300.0
 DT = 0.1
@@ -46,23 +44,9 @@ TRUE_F = {"wings": (0.5,), "slosh": (0.30, 0.35), "flexible": (0.5, 0.30, 0.35)}
 
 
 def _record(name: str, t_end: float = T_END, robot: str = "spatial", amplitude=None):
-    """The noise-free samples of ``robot``'s parameter set ``name`` (the plant with its
-    excitation on, at ``amplitude`` [rad] for attitude and joints where given), and the
-    composite truth (20,) the rigid model should converge to."""
-    sc = parameter_set_scenario(robot, name)
-    if amplitude is not None:
-        sc = replace(sc, excitation=Excitation(att_max=amplitude, q_max=amplitude))
-    plant = NativePlant.of(sc)
-    plant.set_excitation(1.0)
-    n = sample_length(plant.n)
-    xs = [plant.output_vector()[:n].copy()]
-    for _ in range(int(round(t_end / DT))):
-        plant.advance(DT)
-        xs.append(plant.output_vector()[:n].copy())
-    base = plant.base_now()                   # the composite: panels at rest, slosh at rest
-    truth = np.r_[base.mass, base.com, base.inertia,
-                  sc.target.mass, sc.target.com, sc.target.inertia]
-    return sc, np.array(xs), truth
+    """``robot``'s parameter set ``name``: scenario, noise-free samples every DT, composite
+    truth (oracles.samples.parameter_set_samples)."""
+    return parameter_set_samples(robot, name, t_end, DT, amplitude)
 
 
 def _identify(sc, xs, modes: int, window: float = 0.0, point: bool = False, **extra):
@@ -266,14 +250,11 @@ def test_sensors_windowed_columns_sd_cover_the_error(name, amplitude):
     against the first sample, 46 % without them). A known limit, a strict expected failure:
     the wings with the excitation at 0.3 rad (three times the set's) are 10.2 % off with 4 of
     20 within 2 sd, and nothing says so."""
-    from spacerobot.estimator.identifier import identifier_from_values
-    from spacerobot.interface import estimator_vars
     from spacerobot.sensors import SensorSuite
     sc, xs, truth = _record(name, amplitude=amplitude)
-    v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
-    v.update({"method": 1, "solver": 2, "ident.modes": 1, "ident.information": 2,
-              "ident.noise_profile": 1, "noise.scale": 1.0})
-    ident, _ = identifier_from_values(sc.robot, v, DT)
+    ident = fmu_identifier(sc, DT, {"method": 1, "solver": 2, "ident.modes": 1,
+                                    "ident.information": 2, "ident.noise_profile": 1,
+                                    "noise.scale": 1.0})
     suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=0, dt=DT)
     for k, x in enumerate(xs):
         ident.update(k * DT, suite.update(suite.sample(x), DT))
@@ -294,18 +275,13 @@ def test_filter_reports_the_columns_under_a_coloured_misfit():
     (measured 5.5 %; the held filter, as before, 56.5 %), >= 18 of 20 within 2 sd (measured
     20), misfit, no flag. The `slosh` set's misfit is the thrust scale's, not coloured: the
     filter still reports (its estimates those of the run without the columns, within 1e-9)."""
-    from spacerobot.estimator.identifier import identifier_from_values
-    from spacerobot.interface import estimator_vars
     from spacerobot.sensors import SensorSuite
     for name in ("wings", "slosh"):
         sc, xs, truth = _record(name)
         est = {}
         for modes in (1, 2):
-            v = {x.name: x.start for x in estimator_vars(sc.robot, sc)
-                 if x.causality == "parameter"}
-            v.update({"method": 1, "solver": 2, "ident.modes": modes, "ident.noise_profile": 1,
-                      "noise.scale": 1.0})
-            ident, _ = identifier_from_values(sc.robot, v, DT)
+            ident = fmu_identifier(sc, DT, {"method": 1, "solver": 2, "ident.modes": modes,
+                                            "ident.noise_profile": 1, "noise.scale": 1.0})
             suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=0, dt=DT)
             flagged = False
             for k, x in enumerate(xs):

@@ -500,8 +500,8 @@ class NativeEstimator:
         bounds at rate 1 and at the candidate; 0 before the choice); ``mode_f`` [Hz] and
         ``mode_zeta`` (4,: the modal columns' modes in use, 0 for none); ``model_fit`` and
         ``misfit`` (the model-fit test: diag.model_fit, diag.misfit) and ``misfit_cause``
-        (the FMU's Integer diag.misfit_cause as its name: "" without a misfit, "model" where the rigid model does not fit (the
-        estimates held), "thrust" where a thrust scale is beyond its prior with white
+        (the FMU's Integer diag.misfit_cause as its name: "" without a misfit, "model" where
+        the rigid model does not fit (the estimates held), "thrust" where a thrust scale is beyond its prior with white
         residuals, "noise" for chi2 alone: the noise values too small)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
@@ -516,7 +516,7 @@ class NativeEstimator:
             "excite_rate": r.excite_rate, "excite_score": np.array(r.excite_score[:]),
             "mode_f": np.array(r.mode_f[:]), "mode_zeta": np.array(r.mode_zeta[:]),
             "model_fit": r.model_fit, "misfit": bool(r.misfit),
-            "misfit_cause": MISFIT_CAUSES.get(r.misfit_cause, "") if r.misfit else "",
+            "misfit_cause": MISFIT_CAUSES.get(r.misfit_cause, ""),
         }
 
     def outputs(self) -> np.ndarray:

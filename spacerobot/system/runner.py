@@ -344,10 +344,9 @@ def _flag_lines(data: Mapping[str, np.ndarray]) -> List[str]:
                 since = f" from t = {time[start]:g} s"
             cause = data.get(f"{prefix}diag.misfit_cause")
             last = cause[-1] if cause is not None and len(cause) else math.nan
-            told = _MISFIT_TOLD.get(MISFIT_CAUSES.get(int(round(last)), "")) if (
-                math.isfinite(last)) else None
-            told = f"its cause (diag.misfit_cause): {told}" if told else (
-                "its cause: " + "; or ".join(_MISFIT_TOLD.values()))
+            name = MISFIT_CAUSES.get(int(round(last))) if math.isfinite(last) else None
+            told = (f"its cause (diag.misfit_cause): {_MISFIT_TOLD[name]}" if name else
+                    "its cause: " + "; or ".join(_MISFIT_TOLD.values()))
             out.append(f"the model-fit test failed (diag.misfit 1{since}): no body is "
                        f"flagged; {told}; docs/identification.md, 'When the rigid model does "
                        f"not fit'")

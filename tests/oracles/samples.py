@@ -1,7 +1,9 @@
-"""Test helpers shared by the information-filter tests and benchmarks/modal_information.py: a
-scenario's inertial parameters as the 20-vector the filter reports (per body: mass, centre of
-mass, inertia about the centre of mass in the body frame), and a measured sample as the flat
-vector the native core reads. Plain data shaping, no mathematics of the library."""
+"""Test helpers shared by the information-filter, modal and misfit tests and
+benchmarks/modal_information.py: a scenario's inertial parameters as the 20-vector the filter
+reports (per body: mass, centre of mass, inertia about the centre of mass in the body frame), a
+measured sample as the flat vector the native core reads, a parameter set's noise-free samples
+from the native plant, and the estimator core as the FMU builds it from its parameters. Data
+shaping and set-up, no mathematics of the library."""
 from __future__ import annotations
 
 import numpy as np
@@ -27,3 +29,39 @@ def guess_of(sc) -> np.ndarray:
 def flat(o) -> np.ndarray:
     """A sample (mapping of KEYS to arrays) as one flat float vector."""
     return np.concatenate([np.ravel(o[k]) for k in KEYS]).astype(float)
+
+
+def parameter_set_samples(robot: str, name: str, t_end: float, dt: float, amplitude=None):
+    """``(scenario, samples (K, len), composite truth (20,))``: the noise-free samples of
+    ``robot``'s parameter set ``name`` every ``dt`` from 0 to ``t_end`` (the native plant with
+    its excitation on, at ``amplitude`` [rad] for attitude and joints where given) and the
+    composite rigid truth the rigid model should converge to (flexible panels and slosh masses
+    at rest)."""
+    from dataclasses import replace
+    from spacerobot.core.plant import NativePlant
+    from spacerobot.core.sample import sample_length
+    from spacerobot.robots import Excitation, parameter_set_scenario
+    sc = parameter_set_scenario(robot, name)
+    if amplitude is not None:
+        sc = replace(sc, excitation=Excitation(att_max=amplitude, q_max=amplitude))
+    plant = NativePlant.of(sc)
+    plant.set_excitation(1.0)
+    n = sample_length(plant.n)
+    xs = [plant.output_vector()[:n].copy()]
+    for _ in range(int(round(t_end / dt))):
+        plant.advance(dt)
+        xs.append(plant.output_vector()[:n].copy())
+    base = plant.base_now()
+    truth = np.r_[base.mass, base.com, base.inertia,
+                  sc.target.mass, sc.target.com, sc.target.inertia]
+    return sc, np.array(xs), truth
+
+
+def fmu_identifier(sc, dt: float, values):
+    """The estimator core as the estimator FMU builds it for ``sc``: its parameters at their
+    defaults with ``values`` (FMU parameter names) over them, sampled every ``dt``."""
+    from spacerobot.estimator.identifier import identifier_from_values
+    from spacerobot.interface import estimator_vars
+    v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
+    v.update(values)
+    return identifier_from_values(sc.robot, v, dt)[0]
