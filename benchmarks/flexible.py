@@ -26,11 +26,15 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from functools import partial
 
 import numpy as np
+
+# the recording is the tests' (tests/oracles/samples.py)
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 DT = 0.1
 T_END = 300.0
@@ -72,18 +76,8 @@ def scenario(case: str, robot: str = "spatial"):
 
 def record(sc):
     """The noise-free samples (flat, every DT) and the composite truth (20,)."""
-    from spacerobot.core.plant import NativePlant
-    from spacerobot.core.sample import sample_length
-    plant = NativePlant.of(sc)
-    plant.set_excitation(1.0)
-    n = sample_length(plant.n)
-    xs = [plant.output_vector()[:n].copy()]
-    for _ in range(int(round(T_END / DT))):
-        plant.advance(DT)
-        xs.append(plant.output_vector()[:n].copy())
-    b = plant.base_now()
-    truth = np.r_[b.mass, b.com, b.inertia, sc.target.mass, sc.target.com, sc.target.inertia]
-    return np.array(xs), truth, plant.n
+    from oracles.samples import scenario_samples
+    return scenario_samples(sc, T_END, DT)
 
 
 def identifier(sc, setup: str):
@@ -104,7 +98,8 @@ def run_case(case: str, setups=SETUPS, robot: str = "spatial") -> list:
     from spacerobot.interface import relative_errors
     from spacerobot.sensors import SensorSuite
     sc = scenario(case, robot)
-    xs, truth, n = record(sc)
+    xs, truth = record(sc)
+    n = sc.robot.n_joints
     rows = []
     for setup in setups:
         t0 = time.process_time()

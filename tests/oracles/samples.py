@@ -31,19 +31,13 @@ def flat(o) -> np.ndarray:
     return np.concatenate([np.ravel(o[k]) for k in KEYS]).astype(float)
 
 
-def parameter_set_samples(robot: str, name: str, t_end: float, dt: float, amplitude=None):
-    """``(scenario, samples (K, len), composite truth (20,))``: the noise-free samples of
-    ``robot``'s parameter set ``name`` every ``dt`` from 0 to ``t_end`` (the native plant with
-    its excitation on, at ``amplitude`` [rad] for attitude and joints where given) and the
-    composite rigid truth the rigid model should converge to (flexible panels and slosh masses
-    at rest)."""
-    from dataclasses import replace
+def scenario_samples(sc, t_end: float, dt: float):
+    """``(samples (K, len), composite truth (20,))``: the noise-free samples of scenario ``sc``
+    every ``dt`` from 0 to ``t_end`` (the native plant with its excitation on) and the
+    composite rigid truth the rigid model should converge to (flexible panels and slosh
+    masses at rest)."""
     from spacerobot.core.plant import NativePlant
     from spacerobot.core.sample import sample_length
-    from spacerobot.robots import Excitation, parameter_set_scenario
-    sc = parameter_set_scenario(robot, name)
-    if amplitude is not None:
-        sc = replace(sc, excitation=Excitation(att_max=amplitude, q_max=amplitude))
     plant = NativePlant.of(sc)
     plant.set_excitation(1.0)
     n = sample_length(plant.n)
@@ -54,7 +48,19 @@ def parameter_set_samples(robot: str, name: str, t_end: float, dt: float, amplit
     base = plant.base_now()
     truth = np.r_[base.mass, base.com, base.inertia,
                   sc.target.mass, sc.target.com, sc.target.inertia]
-    return sc, np.array(xs), truth
+    return np.array(xs), truth
+
+
+def parameter_set_samples(robot: str, name: str, t_end: float, dt: float, amplitude=None):
+    """``(scenario, samples, composite truth)`` of ``robot``'s parameter set ``name``
+    (:func:`scenario_samples`; the excitation at ``amplitude`` [rad] for attitude and joints
+    where given)."""
+    from dataclasses import replace
+    from spacerobot.robots import Excitation, parameter_set_scenario
+    sc = parameter_set_scenario(robot, name)
+    if amplitude is not None:
+        sc = replace(sc, excitation=Excitation(att_max=amplitude, q_max=amplitude))
+    return (sc, *scenario_samples(sc, t_end, dt))
 
 
 def fmu_identifier(sc, dt: float, values):
