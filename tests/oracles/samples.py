@@ -63,6 +63,13 @@ def parameter_set_samples(robot: str, name: str, t_end: float, dt: float, amplit
     return (sc, *scenario_samples(sc, t_end, dt))
 
 
+def sensed(sc, XT, seed: int, dt: float) -> np.ndarray:
+    """(K, len) the samples XT through the sensors FMU's realistic defaults (sensors seed)."""
+    from spacerobot.sensors import SensorSuite
+    suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=seed, dt=dt)
+    return np.array([flat(suite.update(suite.sample(xt), dt)) for xt in XT])
+
+
 def fmu_identifier(sc, dt: float, values):
     """The estimator core as the estimator FMU builds it for ``sc``: its parameters at their
     defaults with ``values`` (FMU parameter names) over them, sampled every ``dt``."""
