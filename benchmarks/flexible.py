@@ -82,8 +82,8 @@ def record(sc):
 
 def identifier(sc, setup: str):
     from spacerobot.estimator.identifier import identifier_from_values
-    from spacerobot.interface import estimator_vars
-    v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
+    from spacerobot.interface import estimator_parameter_values
+    v = estimator_parameter_values(sc.robot, sc)
     v.update({"method": 1, "solver": 2, "ident.excite_adapt": 2,
               "ident.modes": 1 if setup.endswith("modal") else 2})
     if setup.startswith("sensors") or setup == "filter modal":

@@ -36,7 +36,7 @@ def _case(args):
     from spacerobot.core import load_library
     from spacerobot.core.estimator import NativeEstimator, options_from_values
     from spacerobot.core.robot_record import c_robot
-    from spacerobot.interface import estimator_vars
+    from spacerobot.interface import estimator_parameter_values
     from spacerobot.plant import Plant
     from spacerobot.robots import random_scenario, scenario
     from spacerobot.sensors import SensorSuite, default_parameters
@@ -57,7 +57,7 @@ def _case(args):
                              g.P0_mu, g.P0_theta, z_of_reported(guess),
                              sd_gyro_bias=d["gyro.bias"])
     filt.eiv = True
-    vals = {v.name: v.start for v in estimator_vars(sc.robot, sc) if v.causality == "parameter"}
+    vals = estimator_parameter_values(sc.robot, sc)
     # the preset: the profile's own equations (the shipped filter off: this study compares them)
     vals.update({"ident.noise_profile": 1, "method": 2, "accel_source": 2,
                  "ident.information": 2})

@@ -6,7 +6,6 @@ connectors, and the tests check both against this table. Names are 1-based struc
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
@@ -512,6 +511,11 @@ ROW_SD_PARAMETERS = (("momentum_lin", Method.MOMENTUM, "N.s", "linear momentum (
                      ("momentum_ang", Method.MOMENTUM, "N.m.s", "angular momentum (eq. 16)"),
                      ("force_lin", Method.FORCE, "N", "force (eq. 28)"),
                      ("force_ang", Method.FORCE, "N.m", "moment (eq. 31)"))
+
+
+def estimator_parameter_values(robot: Robot, sc: Scenario) -> Dict[str, float]:
+    """The estimator FMU's parameters for ``robot`` at their start values, by FMU name."""
+    return {v.name: v.start for v in estimator_vars(robot, sc) if v.causality == "parameter"}
 
 
 def noise_model_vars() -> List[Var]:

@@ -365,9 +365,9 @@ def test_bad_noise_model_settings_are_refused(kw, words):
 def test_row_sd_of_either_method_is_checked():
     """Every ident.sd_row.* is checked, the other method's too (the core's rule)."""
     from spacerobot.estimator import identifier_from_values
-    from spacerobot.interface import ROW_SD_PARAMETERS, estimator_vars, Method
+    from spacerobot.interface import ROW_SD_PARAMETERS, estimator_parameter_values, Method
     sc = scenario("planar")
-    values = {v.name: v.start for v in estimator_vars(sc.robot, sc) if v.causality == "parameter"}
+    values = estimator_parameter_values(sc.robot, sc)
     values["method"] = int(Method.FORCE)
     assert identifier_from_values(sc.robot, values)[0].row_sd == (0.0, 0.0)
     other = next(s for s, m, _, _ in ROW_SD_PARAMETERS if m is Method.MOMENTUM)

@@ -147,9 +147,9 @@ FAST = {"ident.excite_window": 10.0, "ident.excite_settle": 5.0, "ident.excite_h
 def _values(sc, **over) -> dict:
     """The estimator FMU's parameter values of the ``realistic`` set (the sensors' realistic
     magnitudes, the noise profile), with ``over`` (FMU names, '.' written '__')."""
-    from spacerobot.interface import estimator_vars
+    from spacerobot.interface import estimator_parameter_values
     from spacerobot.robots import REALISTIC_ESTIMATOR
-    v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
+    v = estimator_parameter_values(sc.robot, sc)
     v.update(dict(REALISTIC_ESTIMATOR))
     v.update(FAST)
     v.update({k.replace("__", "."): x for k, x in over.items()})

@@ -616,8 +616,8 @@ def test_add_refuses_bad_input_and_keeps_the_state(lib, small):
 # ------------------------------------------------------------------------------------------
 
 def _estimator_values(sc, **extra) -> dict:
-    from spacerobot.interface import estimator_vars
-    vals = {v.name: v.start for v in estimator_vars(sc.robot, sc) if v.causality == "parameter"}
+    from spacerobot.interface import estimator_parameter_values
+    vals = estimator_parameter_values(sc.robot, sc)
     vals.update({"ident.noise_profile": 1, "method": 2, "accel_source": 2}, **extra)
     return vals
 

@@ -671,8 +671,7 @@ def test_options_refused_with_the_python_messages(lib):
     Identifier (its one ``window`` argument), never ignored; the core ignores the other
     method's options."""
     sc, _ = stream("planar-medium")
-    values = {v.name: v.start for v in interface.estimator_vars(sc.robot, sc)
-              if v.causality == "parameter"}
+    values = interface.estimator_parameter_values(sc.robot, sc)
     values.setdefault("ident.force_window", 0.0)      # the oracle's parameter (gone from the FMU)
 
     def python_message(**changes):

@@ -47,12 +47,12 @@ def estimator_noise_settings(params: Optional[Mapping[str, float]] = None, scale
         sqrt(dt)`` per sample, as the sensors draw them)
     """
     from ..core.estimator import profile_values
-    from ..interface import estimator_vars
+    from ..interface import estimator_parameter_values
     from ..robots import scenario
     p = default_parameters()
     p.update({k: float(v) for k, v in (params or {}).items()})
     sc = scenario("planar")                  # any robot: the profile reads no robot
-    values = {v.name: v.start for v in estimator_vars(sc.robot, sc) if v.causality == "parameter"}
+    values = estimator_parameter_values(sc.robot, sc)
     values.update({"method": int(method), "accel_source": int(accel_source),
                    "ident.noise_profile": 1, "noise.scale": float(scale)})
     values.update({f"noise.{k}": x for k, x in p.items()})

@@ -41,7 +41,7 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..interface import (ESTIMATE_NAMES, error_scale, estimator_vars, identified_estimates,
+from ..interface import (ESTIMATE_NAMES, error_scale, estimator_parameter_values, identified_estimates,
                          plant_vars)
 from ..robots import (REALISTIC_ESTIMATOR, Excitation, Scenario, check_robot, robot_label,
                       robot_spec, scenario)
@@ -123,8 +123,7 @@ def closed_loop_bound(sc: Scenario, sensors_seed: int, stop_time: float,
 
     dt = sc.sample_time
     magnitudes = sensor_magnitudes(noise)
-    values = {v.name: v.start for v in estimator_vars(sc.robot, sc)
-              if v.causality == "parameter"}
+    values = estimator_parameter_values(sc.robot, sc)
     values.update(dict(REALISTIC_ESTIMATOR))
     values["noise.scale"] = float(noise_scale)
     values["ident.excite_adapt"] = 2         # the candidate as given: no rate of its own

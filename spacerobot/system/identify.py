@@ -34,8 +34,8 @@ import numpy as np
 from ..core.estimator import output_names
 from ..estimator import Identifier
 from ..estimator.identifier import identifier_from_values
-from ..interface import (ESTIMATE_NAMES, Var, estimator_vars, identified_estimates,
-                         measurement_vars)
+from ..interface import (ESTIMATE_NAMES, Var, estimator_parameter_values, estimator_vars,
+                         identified_estimates, measurement_vars)
 from ..robots import check_robot, get_robot, robot_label, scenario
 from .recorder import read_csv, write_csv
 from .runner import RunResult, format_results
@@ -130,7 +130,7 @@ def estimator_parameters(robot: str, overrides: Optional[Mapping[str, float]] = 
     choice of the excitation's rate is off (``ident.excite_adapt`` = 2): recorded telemetry
     cannot follow it (an override turns it on, e.g. to see what it would have asked for)."""
     sc = scenario(robot)
-    values = {v.name: v.start for v in estimator_vars(sc.robot, sc) if v.causality == "parameter"}
+    values = estimator_parameter_values(sc.robot, sc)
     values["ident.excite_adapt"] = 2
     for key, val in (overrides or {}).items():
         name = key.removeprefix("estimator.")

@@ -74,7 +74,7 @@ def fmu_identifier(sc, dt: float, values):
     """The estimator core as the estimator FMU builds it for ``sc``: its parameters at their
     defaults with ``values`` (FMU parameter names) over them, sampled every ``dt``."""
     from spacerobot.estimator.identifier import identifier_from_values
-    from spacerobot.interface import estimator_vars
-    v = {x.name: x.start for x in estimator_vars(sc.robot, sc) if x.causality == "parameter"}
+    from spacerobot.interface import estimator_parameter_values
+    v = estimator_parameter_values(sc.robot, sc)
     v.update(values)
     return identifier_from_values(sc.robot, v, dt)[0]
