@@ -118,7 +118,7 @@ def _score(o, u, cov, chi2, truth):
     est, sd = o.estimate(u[:o.nu])
     sd = np.asarray(sd) * np.sqrt(max(1.0, chi2))
     return (100.0 * float(relative_errors(est, truth).max()),
-            int(np.sum(np.abs(est - truth) <= 2.0 * sd)), float(chi2))
+            int(np.sum(np.abs(est - truth) <= 2.0 * sd)), float(chi2), est)
 
 
 def _prior_rows(o, prior, hold: bool, nm: int):
@@ -138,7 +138,7 @@ def _prior_rows(o, prior, hold: bool, nm: int):
 def batch(o, prior, rows, hold: bool, truth, compensate: float = 1.0):
     """The batch estimate over the prior and the weighted rows [H | columns | y] (one row
     each), the filter's errors-in-variables sums times ``compensate`` taken off: (worst
-    error %, within 2 sd, chi2)."""
+    error %, within 2 sd, chi2, the 20 estimates)."""
     N = rows.shape[1] - 1
     rows = np.vstack([_prior_rows(o, prior, hold, N - o.nu), rows])
     R = np.linalg.qr(rows, mode="r")[:N]
