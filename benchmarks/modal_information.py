@@ -79,9 +79,10 @@ def record(set_name: str, seed: int, stop_time: float):
     return sc, DT * np.arange(len(XT)), sensed(sc, XT, seed, DT), XT, truth
 
 
-def filter_rows(sc, ts, X, truth, eiv: bool = True):
-    """The reference filter over the samples X at the truth's linearisation (its rows kept;
-    eiv: the errors-in-variables sums, else none: the noise-free rows need no compensation)."""
+def filter_rows(sc, ts, X, z_lin, eiv: bool = True):
+    """The reference filter over the samples X, its rows linearised at z_lin (reported, 20;
+    this study: the truth) and kept; eiv: the errors-in-variables sums, else none (the
+    noise-free rows need no compensation)."""
     from spacerobot.core import load_library
     from spacerobot.core.robot_record import c_robot
     from spacerobot.sensors import default_parameters
@@ -92,7 +93,7 @@ def filter_rows(sc, ts, X, truth, eiv: bool = True):
                    g.P0_theta, z_of_reported(guess_of(sc)), sd_gyro_bias=sd_b)
     o.eiv = eiv
     prior = (o.Rinfo.copy(), o.d.copy())
-    zt = z_of_reported(truth)
+    zt = z_of_reported(z_lin)
     for t, x in zip(ts, X):
         o.add(t, x, zt)
     return o, prior
@@ -112,11 +113,21 @@ def modal_block(ts, X, weights, freqs, blocks: str) -> np.ndarray:
     return np.concatenate(out, axis=2)
 
 
-def _score(o, u, cov, chi2, truth):
+def unweighted(o):
+    """(W, W^-1, the unweighted rows [H | y]) of the filter's kept rows, per sample."""
+    W = np.array(o.weights)
+    Winv = np.linalg.inv(W)
+    return W, Winv, np.einsum("kij,kjl->kil", Winv, np.array(o.rows_w))
+
+
+def _score(o, u, cov, chi2, truth, noise_chi2: float = 1.0):
+    """(worst error %, within 2 sd, chi2, estimates): the sds the bound's, times
+    sqrt(chi2 / noise_chi2) where that is above 1 (noise_chi2: the rows' chi2 under their
+    noise alone)."""
     from spacerobot.interface import relative_errors
     o.cov = cov
     est, sd = o.estimate(u[:o.nu])
-    sd = np.asarray(sd) * np.sqrt(max(1.0, chi2))
+    sd = np.asarray(sd) * np.sqrt(max(1.0, chi2 / noise_chi2))
     return (100.0 * float(relative_errors(est, truth).max()),
             int(np.sum(np.abs(est - truth) <= 2.0 * sd)), float(chi2), est)
 
@@ -135,10 +146,10 @@ def _prior_rows(o, prior, hold: bool, nm: int):
     return P
 
 
-def batch(o, prior, rows, hold: bool, truth, compensate: float = 1.0):
+def batch(o, prior, rows, hold: bool, truth, compensate: float = 1.0, noise_chi2: float = 1.0):
     """The batch estimate over the prior and the weighted rows [H | columns | y] (one row
     each), the filter's errors-in-variables sums times ``compensate`` taken off: (worst
-    error %, within 2 sd, chi2, the 20 estimates)."""
+    error %, within 2 sd, chi2, the 20 estimates; :func:`_score`)."""
     N = rows.shape[1] - 1
     rows = np.vstack([_prior_rows(o, prior, hold, N - o.nu), rows])
     R = np.linalg.qr(rows, mode="r")[:N]
@@ -150,7 +161,7 @@ def batch(o, prior, rows, hold: bool, truth, compensate: float = 1.0):
     res = rows[N:, :N] @ uc - rows[N:, N]
     chi2 = res @ res / (len(res) - N)
     Ri = np.linalg.inv(Rr)
-    return _score(o, uc, (Ri @ Ri.T)[:o.nu, :o.nu], chi2, truth)
+    return _score(o, uc, (Ri @ Ri.T)[:o.nu, :o.nu], chi2, truth, noise_chi2)
 
 
 def solve(o, prior, MC, hold: bool, truth):
@@ -164,12 +175,9 @@ def solve(o, prior, MC, hold: bool, truth):
 
 def solve_reweighted(o, prior, MC, X, truth, iterations: int = 4):
     """The thrust errors held, the model error in the rows' noise covariance, iterated."""
-    A = np.array(o.rows_w)
-    W = np.array(o.weights)
+    W, Winv, Hu = unweighted(o)
     nu, nm = o.nu, MC.shape[2]
     N = nu + nm
-    Winv = np.linalg.inv(W)
-    Hu = np.einsum("kij,kjl->kil", Winv, A)                # the unweighted [H | y]
     Mu = np.einsum("kij,kjl->kil", Winv, MC)
     Rk = np.einsum("kij,klj->kil", Winv, Winv)              # the rows' noise covariance
     rS = X[:, 0:3]

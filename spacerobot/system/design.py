@@ -41,8 +41,8 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..interface import (ESTIMATE_NAMES, error_scale, estimator_parameter_values, identified_estimates,
-                         plant_vars)
+from ..interface import (ESTIMATE_NAMES, error_scale, estimator_parameter_values,
+                         identified_estimates, plant_vars)
 from ..robots import (REALISTIC_ESTIMATOR, Excitation, Scenario, check_robot, robot_label,
                       robot_spec, scenario)
 from .montecarlo import SensorsCase
