@@ -81,17 +81,15 @@ def record(sc):
 
 
 def identifier(sc, setup: str):
-    from spacerobot.estimator.identifier import identifier_from_values
-    from spacerobot.interface import estimator_parameter_values
-    v = estimator_parameter_values(sc.robot, sc)
-    v.update({"method": 1, "solver": 2, "ident.excite_adapt": 2,
-              "ident.modes": 1 if setup.endswith("modal") else 2})
+    """The estimator core as the FMU builds it, with the set-up's parameters."""
+    from oracles.samples import fmu_identifier
+    v = {"method": 1, "solver": 2, "ident.excite_adapt": 2,
+         "ident.modes": 1 if setup.endswith("modal") else 2}
     if setup.startswith("sensors") or setup == "filter modal":
         v.update({"ident.noise_profile": 1, "noise.scale": 1.0})
         if setup.startswith("sensors "):
             v["ident.information"] = 2
-    ident, _ = identifier_from_values(sc.robot, v, DT)
-    return ident
+    return fmu_identifier(sc, DT, v)
 
 
 def run_case(case: str, setups=SETUPS, robot: str = "spatial") -> list:
