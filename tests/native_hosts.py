@@ -10,8 +10,9 @@ test_native_closed_loop_host.py).
   assembled from them (:func:`spacerobot.fmi.native.build_native_fmu`), extracted to fresh
   folders;
 * the C hosts (``tests/c_host/fmu_host.c``, ``fmu_fuzz.c``) compiled for Linux or Windows;
-* one Wine prefix per test process under its pytest temporary folder, and running a host from an
-  EMPTY environment (only ``PATH=/usr/bin:/bin``; under Wine also the Wine variables).
+* one Wine prefix per test process under its pytest temporary folder (tests/wine.py), and
+  running a host from an EMPTY environment (only ``PATH=/usr/bin:/bin``; under Wine also the
+  Wine variables).
 """
 from __future__ import annotations
 
@@ -31,6 +32,8 @@ from typing import Dict, List, Optional, Sequence
 
 import pytest
 
+from wine import EMPTY_PATH, WinePrefix, wine, wine_path  # noqa: F401 (the tests' nh.wine*)
+
 ROOT = Path(__file__).resolve().parents[1]
 C_HOST = Path(__file__).resolve().parent / "c_host"
 HOST_SOURCE = C_HOST / "fmu_host.c"
@@ -48,8 +51,6 @@ SANITIZER_ENV = {"ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0:exitcode=23",
                  "UBSAN_OPTIONS": "halt_on_error=1:print_stacktrace=1:exitcode=24"}
 SANITIZER_WORDS = ("ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:",
                    "SUMMARY: UndefinedBehaviorSanitizer")
-EMPTY_PATH = "/usr/bin:/bin"
-WINE_ENV = {"WINEDEBUG": "-all", "WINEDLLOVERRIDES": "mscoree,mshtml=;winemenubuilder.exe=d"}
 
 _LOCK = threading.Lock()
 _CACHE: dict = {}
@@ -65,10 +66,6 @@ def c_compiler() -> Optional[str]:
 
 def mingw() -> Optional[str]:
     return shutil.which("x86_64-w64-mingw32-gcc")
-
-
-def wine() -> Optional[str]:
-    return shutil.which("wine")
 
 
 def valgrind() -> Optional[str]:
@@ -356,47 +353,6 @@ def empty_env(extra: Optional[dict] = None) -> dict:
     return {"PATH": EMPTY_PATH, **(extra or {})}
 
 
-class WinePrefix:
-    """One Wine prefix per test process, created in the background (``wineboot -i``) so that it
-    overlaps the builds; :meth:`env` waits for it."""
-
-    def __init__(self, folder: Path):
-        self.folder = folder
-        self.proc = self._boot()
-        self.ready = False
-        self.failed: Optional[str] = None      # the boot's error ("": booted), once known
-
-    def _boot(self) -> subprocess.Popen:
-        return subprocess.Popen([require(wine(), "Wine"), "wineboot", "-i"],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                env=empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV}))
-
-    def _booted(self) -> str:
-        """Wait for the boot; "" where it succeeded, else its error output. A first boot has
-        been seen to fail once in the parallel suite, not reproduced ("could not load
-        kernel32.dll, status c0000135"): booted afresh then, twice at most."""
-        _, err = self.proc.communicate(timeout=300)
-        for _ in range(2):
-            if self.proc.returncode == 0:
-                return ""
-            subprocess.run(["wineserver", "-k"], timeout=120,
-                           env=empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV}))
-            shutil.rmtree(self.folder, ignore_errors=True)
-            self.proc = self._boot()
-            _, err = self.proc.communicate(timeout=300)
-        return "" if self.proc.returncode == 0 else err.decode(errors="replace")[-2000:]
-
-    def env(self, extra: Optional[dict] = None) -> dict:
-        if not self.ready:
-            if self.failed is None:
-                self.failed = self._booted()
-            assert not self.failed, f"wineboot failed: {self.failed}"
-            subprocess.run(["wineserver", "-w"], env=empty_env({"WINEPREFIX": str(self.folder)}),
-                           timeout=120)
-            self.ready = True
-        return empty_env({"WINEPREFIX": str(self.folder), **WINE_ENV, **(extra or {})})
-
-
 def wine_prefix(work: Path) -> WinePrefix:
     require(wine(), "Wine")
     with _LOCK:
@@ -405,14 +361,19 @@ def wine_prefix(work: Path) -> WinePrefix:
         return _CACHE["wine"]
 
 
-def wine_path(p: Path) -> str:
-    """A Linux path as Wine's Z: drive sees it."""
-    return "Z:" + str(p).replace("/", "\\")
-
-
 def run(cmd: Sequence, env: dict, timeout: float = 300) -> subprocess.CompletedProcess:
     """Run a host; Windows line ends (CR LF) become LF."""
-    r = subprocess.run([str(c) for c in cmd], capture_output=True, env=env, timeout=timeout)
+    return _text(subprocess.run([str(c) for c in cmd], capture_output=True, env=env,
+                                timeout=timeout))
+
+
+def run_wine(work: Path, cmd: Sequence, timeout: float = 300) -> subprocess.CompletedProcess:
+    """Run a Windows host under the test process's Wine prefix (:meth:`wine.WinePrefix.run`),
+    as :func:`run` does."""
+    return _text(wine_prefix(work).run(cmd, timeout=timeout))
+
+
+def _text(r: subprocess.CompletedProcess) -> subprocess.CompletedProcess:
     return subprocess.CompletedProcess(r.args, r.returncode,
                                        r.stdout.decode(errors="replace").replace("\r", ""),
                                        r.stderr.decode(errors="replace").replace("\r", ""))

@@ -422,14 +422,13 @@ def test_win64_fmi3_under_wine_equals_linux64(fmus, lib_dir, tmp_path_factory):
     nh.require(nh.wine(), "Wine")
     nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
     work = nh.work_dir(tmp_path_factory)
-    prefix = nh.wine_prefix(work)
     wd = tmp_path_factory.mktemp("fmi3_wine")
     for k in ("plant", "estimator"):
         assert any(n.startswith("binaries/x86_64-windows/")
                    for n in zipfile.ZipFile(fmus[(k, 3)]).namelist()), k
     linux = nh.run([_host(wd, "linux64"), *_loop_args(fmus, wd, False)], env=nh.empty_env())
     assert linux.returncode == 0, linux.stderr[-3000:]
-    r = nh.run(["wine", _host(wd, "win64"), *_loop_args(fmus, wd, True)], env=prefix.env())
+    r = nh.run_wine(work, [_host(wd, "win64"), *_loop_args(fmus, wd, True)])
     assert r.returncode == 0, r.stderr[-3000:]
     w, lx = nh.parse_csv(r.stdout), nh.parse_csv(linux.stdout)
     assert w.shape == lx.shape and w.shape[0] == 201

@@ -194,10 +194,9 @@ def test_closed_loop_win64_under_wine_equals_linux64(work, loop, host):
     p, e = loop.plant, loop.est
     assert p.dll.is_file() and e.dll.is_file(), "the FMUs carry no win64 binary"
     exe = nh.compile_host(nh.HOST_SOURCE, work, "win64")
-    env = nh.wine_prefix(work).env()
     t = time.perf_counter()
-    r = nh.run(["wine", exe, *loop.args(nh.wine_path(p.dll), nh.wine_path(e.dll), p.wine_uri,
-                                        e.wine_uri)], env=env)
+    r = nh.run_wine(work, [exe, *loop.args(nh.wine_path(p.dll), nh.wine_path(e.dll), p.wine_uri,
+                                           e.wine_uri)])
     elapsed = time.perf_counter() - t
     assert r.returncode == 0, r.stderr[-3000:]
     w_rows, l_rows = nh.parse_csv(r.stdout), linux_run(loop, host)

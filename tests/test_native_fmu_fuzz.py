@@ -211,10 +211,9 @@ def test_fuzz_win64_under_wine_same_statuses_as_linux64(work, fuzz, fmus, kind):
     nh.require(nh.wine(), "Wine")
     p, o = fmus["planar"], fmus["spatial"]
     exe = nh.compile_host(nh.FUZZ_SOURCE, work, "win64")
-    env = nh.wine_prefix(work).env()
     t = time.perf_counter()
-    r = nh.run(["wine", exe, *fuzz_args(p, o, nh.wine_path(p.dll), p.wine_uri, o.wine_uri,
-                                        calls=CALLS_OF[kind][0], seed=SEEDS[0])], env=env)
+    r = nh.run_wine(work, [exe, *fuzz_args(p, o, nh.wine_path(p.dll), p.wine_uri, o.wine_uri,
+                                           calls=CALLS_OF[kind][0], seed=SEEDS[0])])
     s = check_summary(r, f"{kind} win64", CALLS_OF[kind][0])
     print_summary(s, f"{kind} win64 under Wine", time.perf_counter() - t)
     lin = summary(linux_fuzz(fuzz, fmus, SEEDS[0])[0].stdout)

@@ -297,11 +297,10 @@ def test_win64_dll_under_wine_equals_linux64(case, work, host):
     nh.require(nh.mingw(), "mingw-w64 (x86_64-w64-mingw32-gcc)")
     nh.require(nh.wine(), "Wine")
     exe = nh.compile_host(nh.HOST_SOURCE, work, "win64")
-    env = nh.wine_prefix(work).env()
     t = time.perf_counter()
-    r = nh.run(["wine", exe, *case.host_args(nh.wine_path(case.fmu.dll), case.fmu.wine_uri,
-                                             nh.wine_path(case.csv), "-c", 3, "-s", STATE_STEP)],
-               env=env)
+    r = nh.run_wine(work, [exe, *case.host_args(nh.wine_path(case.fmu.dll), case.fmu.wine_uri,
+                                                nh.wine_path(case.csv), "-c", 3, "-s",
+                                                STATE_STEP)])
     elapsed = time.perf_counter() - t
     assert r.returncode == 0, r.stderr[-3000:]
     assert f"state round trip after step {STATE_STEP}" in r.stderr and "identical" in r.stderr
@@ -336,8 +335,7 @@ def test_information_filter_under_wine_equals_linux64(work, libs, host):
     assert lin.returncode == 0, lin.stderr[-3000:]
     assert f"state round trip after step {state_step}" in lin.stderr and "identical" in lin.stderr
     exe = nh.compile_host(nh.HOST_SOURCE, work, "win64")
-    win = nh.run(["wine", exe, *args(nh.wine_path(fmu.dll), fmu.wine_uri, nh.wine_path(csv))],
-                 env=nh.wine_prefix(work).env())
+    win = nh.run_wine(work, [exe, *args(nh.wine_path(fmu.dll), fmu.wine_uri, nh.wine_path(csv))])
     assert win.returncode == 0, win.stderr[-3000:]
     a, b = nh.parse_csv(lin.stdout), nh.parse_csv(win.stdout)
     assert a.shape == b.shape == (n + 1, 1 + len(reals) + len(ints))

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import ctypes
 import math
-import os
 import shutil
 import subprocess
 from pathlib import Path
@@ -36,6 +35,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from numpy.ctypeslib import ndpointer
+
+import native_hosts as nh
 
 import native_hosts
 from test_sensors import true_sample, zero_except  # the same samples and parameters
@@ -653,7 +654,7 @@ int main(void)
 
 
 @pytest.mark.slow
-def test_mingw_build_under_wine_gives_the_same_bits(tmp_path):
+def test_mingw_build_under_wine_gives_the_same_bits(tmp_path, tmp_path_factory):
     mingw, wine = shutil.which("x86_64-w64-mingw32-gcc"), shutil.which("wine")
     cc = shutil.which("gcc") or shutil.which("cc")
     if not (mingw and wine and cc):
@@ -666,13 +667,9 @@ def test_mingw_build_under_wine_gives_the_same_bits(tmp_path):
     subprocess.run([mingw, *flags, *files, "-o", str(tmp_path / "prog.exe"), "-static-libgcc"],
                    check=True)
     native = subprocess.run([str(tmp_path / "prog")], capture_output=True, text=True, check=True).stdout
-    env = dict(os.environ, WINEDEBUG="-all")
-    env.setdefault("WINEPREFIX", str(tmp_path / "wineprefix"))
-    res = subprocess.run([wine, str(tmp_path / "prog.exe")], capture_output=True, text=True,
-                         env=env, timeout=300)
-    if res.returncode != 0 and not res.stdout:
-        pytest.skip(f"wine could not run the program: {res.stderr[-300:]}")
-    windows = res.stdout.replace("\r\n", "\n")
+    res = nh.run_wine(nh.work_dir(tmp_path_factory), [tmp_path / "prog.exe"])
+    assert res.returncode == 0, res.stderr[-2000:]
+    windows = res.stdout
     lines = native.splitlines()
     assert len(lines) == 10 + 2000 + 1500 + 300 * (24 + 18 + 12)
     assert [int(v, 16) for v in lines[:3]] == [11520, 0, 1509978240]

@@ -15,7 +15,6 @@ while every sr_text line is the same as in the "C" locale; built with mingw and 
 from __future__ import annotations
 
 import math
-import os
 import random
 import shutil
 import struct
@@ -116,8 +115,8 @@ def run_c(tmp_path_factory):
     values = _values()
     stdin = "".join(f"{_bits(x):016x}\n" for x in values)
 
-    def run(env=None, cmd=None):
-        r = subprocess.run(cmd or [str(exe)], input=stdin, capture_output=True, text=True,
+    def run(env=None):
+        r = subprocess.run([str(exe)], input=stdin, capture_output=True, text=True,
                            env=env or nh.empty_env(), timeout=300)
         assert r.returncode == 0, r.stderr[-2000:]
         return r.stdout.replace("\r\n", "\n").splitlines()
@@ -139,8 +138,8 @@ def _german(tmp: Path):
         return None
     d = tmp / "locales"
     d.mkdir(exist_ok=True)
-    r = subprocess.run(["localedef", "-i", "de_DE", "-f", "UTF-8", str(d / "de_DE.UTF-8")],
-                       capture_output=True, text=True)
+    subprocess.run(["localedef", "-i", "de_DE", "-f", "UTF-8", str(d / "de_DE.UTF-8")],
+                   capture_output=True, text=True)
     return (str(d), "de_DE.UTF-8") if (d / "de_DE.UTF-8").is_dir() else None
 
 
@@ -159,11 +158,11 @@ def test_a_german_locale_changes_printf_but_not_the_messages(run_c):
 @pytest.mark.slow
 def test_windows_build_prints_the_same(run_c, tmp_path_factory):
     tmp, values, stdin, run = run_c
-    mingw, wine = nh.mingw(), nh.wine()
-    if not (mingw and wine):
+    mingw = nh.mingw()
+    if not (mingw and nh.wine()):
         pytest.skip("needs x86_64-w64-mingw32-gcc and wine")
     exe = _compile(mingw, tmp, "prog.exe", ["-static-libgcc"])
-    work = nh.work_dir(tmp_path_factory)
-    env = nh.wine_prefix(work).env()
-    lines = run(env, [wine, str(exe)])
+    r = nh.wine_prefix(nh.work_dir(tmp_path_factory)).run([exe], input=stdin.encode())
+    assert r.returncode == 0, r.stderr[-2000:]
+    lines = r.stdout.decode().replace("\r\n", "\n").splitlines()
     assert lines[1:] == run()[1:]
