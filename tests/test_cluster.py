@@ -1,7 +1,7 @@
 """Monte Carlo and sweep on a real Dask cluster whose workers cannot see the client's files.
 
-A ``dask scheduler`` and two ``dask worker`` processes on loopback (free ports), each worker in
-its own mount namespace (``unshare --mount``) where a tmpfs hides this test process's pytest
+A ``dask scheduler`` (on a port the system picks) and two ``dask worker`` processes on loopback,
+each worker in its own mount namespace (``unshare --mount``) where a tmpfs hides this test process's pytest
 temporary folder (the client's only): the client's build folders, tables and .ssp files do not exist for the workers, as on
 machines that share no file system with the client and have only the package installed. The
 Monte Carlo and the sweep run through the CLI against ``--scheduler``; their rows must equal,
@@ -14,14 +14,15 @@ Needs Linux and the right to create a mount namespace (root, as in CI); skipped 
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import pytest
@@ -52,10 +53,15 @@ def _unshare_reason() -> str:
     return ""
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+def _address_of(scheduler_file: Path, proc: subprocess.Popen, timeout: float = 60) -> str:
+    """The address the scheduler bound (``--port 0``: the system's free port, no race with
+    another process), from the file it writes once it listens."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end and proc.poll() is None:
+        with contextlib.suppress(FileNotFoundError, json.JSONDecodeError, KeyError):
+            return json.loads(scheduler_file.read_text())["address"]
+        time.sleep(0.2)
+    raise RuntimeError(f"the scheduler wrote no address to {scheduler_file}")
 
 
 def _stop(proc: subprocess.Popen) -> None:
@@ -81,8 +87,6 @@ def scheduler(tmp_path_factory):
     from distributed import Client
 
     hidden = tmp_path_factory.getbasetemp()
-    port = _free_port()
-    address = f"tcp://127.0.0.1:{port}"
     scratch = Path(tempfile.mkdtemp(prefix="spacerobot-workers-"))   # not under `hidden`
     logs = scratch / "logs"
     logs.mkdir()
@@ -96,8 +100,10 @@ def scheduler(tmp_path_factory):
 
     dask = [sys.executable, "-m", "dask"]
     try:
-        start("scheduler", dask + ["scheduler", "--host", "127.0.0.1", "--port", str(port),
-                                   "--no-dashboard"])
+        start("scheduler", dask + ["scheduler", "--host", "127.0.0.1", "--port", "0",
+                                   "--no-dashboard", "--scheduler-file",
+                                   str(scratch / "scheduler.json")])
+        address = _address_of(scratch / "scheduler.json", procs[0])
         for k in range(2):
             local = scratch / f"worker-{k}"
             local.mkdir()

@@ -190,7 +190,9 @@ static double chi2_of(const sr_info_model *m, const sr_info_data *d)
 
 int info_coloured(const sr_info_model *m, const sr_info_data *d)
 {
-    return coloured_of(m, whiteness(m, d), chi2_of(m, d));
+    /* as the fit test decides: not where the thrust ratio is not finite (a singular
+       information); the ratio's solve only where the residuals are coloured */
+    return coloured_of(m, whiteness(m, d), chi2_of(m, d)) && isfinite(thrust_ratio(m, d));
 }
 
 /* sr_info_fit_of (m, d, f given) */

@@ -38,7 +38,8 @@ int info_noise_weight(const sr_info_model *m, const double *x, const double *z,
                       const double (*G)[6 * HS], const double *me_var, double *W);
 void info_weigh(const double *W, int nr, const double *in, int ncol, double *out);
 /* info_fit.c */
-/* 1 where d's residuals are coloured beyond the model-fit test's threshold (info_fit.c) */
+/* 1 where d's residuals are coloured beyond the model-fit test's threshold and its thrust
+   ratio is finite: the fit test's model-error decision (info_fit.c) */
 int info_coloured(const sr_info_model *m, const sr_info_data *d);
 void info_model_error_of(const sr_info_model *m, const double *buffer, const double *z,
                          double *me_var);
