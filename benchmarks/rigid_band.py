@@ -36,7 +36,10 @@ errors estimated. Variants:
   (`--fc`, `--order`), forward and backward (zero phase: online, such a filter runs with a
   delay of about 3 / fc; `--causal` forward only), the first and last 3 / fc seconds
   dropped (the filter's start and end); the errors-in-variables sums times the filter's
-  white-noise gain (the sum of its impulse response's squares) over the samples kept;
+  white-noise gain (the sum of its impulse response's squares) over the samples kept. With
+  `--fir TAPS` a linear-phase FIR instead (Hamming window, centred, the first and last
+  (TAPS - 1) / 2 samples dropped): what an online filter delivers at the end of the run, its
+  output lagging by (TAPS - 1) / 2 samples;
 * `low-pass + compliance (G, C)`: and the compliance block's G and C parts (57 unknowns) of
   the 2 Hz filter;
 * `low-pass + compliance (G, C), 2 orders`: and those of a second filter (1 Hz, damping 0.7;
@@ -60,7 +63,7 @@ noise is not compensated.
 The worst error is over the 20 estimates, relative to the error scale (spacerobot.interface).
 
 Usage: ``python benchmarks/rigid_band.py [--robots spatial tests/data/arm5.urdf]
-[--cases wings slosh rigid] [--seeds 0 1 2 3] [--fc 0.15] [--order 6] [--causal]
+[--cases wings slosh rigid] [--seeds 0 1 2 3] [--fc 0.15] [--order 6] [--causal] [--fir TAPS]
 [--own] [--stop-time 300] [--workers 2] [--out benchmarks/RIGID_BAND.md]``
 """
 from __future__ import annotations
@@ -97,10 +100,18 @@ def scenario_of(robot: str, case: str):
     return parameter_set_scenario(robot, case)
 
 
-def low_pass(Z: np.ndarray, fc: float, order: int, zero_phase: bool):
+def low_pass(Z: np.ndarray, fc: float, order: int, zero_phase: bool, taps: int = 0):
     """Z (K, ...) filtered along time, the slice of samples past the filter's start (and end),
-    and the filter's white-noise gain: the sum of its impulse response's squares."""
-    from scipy.signal import butter, sosfilt, sosfiltfilt
+    and the filter's white-noise gain: the sum of its impulse response's squares. taps > 0:
+    a linear-phase FIR of that many taps (Hamming window) instead of the Butterworth, centred
+    (what an online filter delivers (taps - 1) / 2 samples late)."""
+    from scipy.signal import butter, firwin, sosfilt, sosfiltfilt
+    if taps:
+        h, D = firwin(taps, fc, window="hamming", fs=1.0 / DT), (taps - 1) // 2
+        out = np.zeros_like(Z)
+        for j, hj in enumerate(h):             # out[k] = sum_j h_j Z[k + D - j]
+            out[D:len(Z) - D] += hj * Z[taps - 1 - j:len(Z) - j]
+        return out, slice(D, len(Z) - D), float(np.sum(h ** 2))
     sos = butter(order, fc, fs=1.0 / DT, output="sos")
     cut = int(round(3.0 / fc / DT))
     impulse = np.zeros(8 * cut + 1)
@@ -184,6 +195,10 @@ def main(argv=None) -> int:
     ap.add_argument("--order", type=int, default=6, help="Butterworth order")
     ap.add_argument("--causal", action="store_true",
                     help="forward only (default: forward-backward, online with a delay)")
+    ap.add_argument("--fir", type=int, default=0, metavar="TAPS",
+                    help="a linear-phase FIR low-pass of TAPS taps (odd; Hamming window) "
+                         "instead of the Butterworth: what an online filter delivers with a "
+                         "delay of (TAPS - 1) / 2 samples")
     ap.add_argument("--own", action="store_true",
                     help="linearise at the guess, then twice at the selected estimate "
                          "(default: at the truth)")
@@ -192,18 +207,23 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(Path(__file__).with_name("RIGID_BAND.md")))
     a = ap.parse_args(argv)
     seeds = ([] if a.no_noise_free else [None]) + a.seeds
-    jobs = [(r, c, s, a.stop_time, (a.fc, a.order, not a.causal), a.own)
+    if a.fir and a.fir % 2 == 0:
+        ap.error("--fir takes an odd number of taps (a whole-sample delay)")
+    jobs = [(r, c, s, a.stop_time, (a.fc, a.order, not a.causal, a.fir), a.own)
             for r in a.robots for c in a.cases for s in seeds]
     t0 = time.perf_counter()
     with Pool(a.workers) as pool:
         results = pool.map(study, jobs)
     wall = time.perf_counter() - t0
     args = " ".join(argv if argv is not None else sys.argv[1:])
-    kind = "causal" if a.causal else "zero-phase"
+    kind = ("causal" if a.causal else "zero-phase") + f" Butterworth of order {a.order}"
+    if a.fir:
+        kind = (f"linear-phase FIR of {a.fir} taps (Hamming window; online it lags by "
+                f"{(a.fir - 1) // 2 * DT:g} s)")
     lines = ["# The rigid band (a batch study)", "",
              f"`{' '.join(['python benchmarks/rigid_band.py', args]).strip()}`, "
              f"{_dt.date.today()}, {platform.machine()}, {wall / 60:.1f} min with "
-             f"{a.workers} workers; low-pass: {kind} Butterworth of order {a.order} at "
+             f"{a.workers} workers; low-pass: {kind} at "
              f"{a.fc:g} Hz. What it computes: the module's docstring. Each cell: worst error "
              "over the 20 estimates against the composite rigid truth (relative to the error "
              "scale) / estimates within 2 reported sd; the thrust errors estimated; the rows "

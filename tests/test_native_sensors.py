@@ -36,8 +36,6 @@ import numpy as np
 import pytest
 from numpy.ctypeslib import ndpointer
 
-import native_hosts as nh
-
 import native_hosts
 from test_sensors import true_sample, zero_except  # the same samples and parameters
 from spacerobot.interface import NOISE_PARAMETERS
@@ -667,7 +665,7 @@ def test_mingw_build_under_wine_gives_the_same_bits(tmp_path, tmp_path_factory):
     subprocess.run([mingw, *flags, *files, "-o", str(tmp_path / "prog.exe"), "-static-libgcc"],
                    check=True)
     native = subprocess.run([str(tmp_path / "prog")], capture_output=True, text=True, check=True).stdout
-    res = nh.run_wine(nh.work_dir(tmp_path_factory), [tmp_path / "prog.exe"])
+    res = native_hosts.run_wine(native_hosts.work_dir(tmp_path_factory), [tmp_path / "prog.exe"])
     assert res.returncode == 0, res.stderr[-2000:]
     windows = res.stdout
     lines = native.splitlines()
