@@ -64,7 +64,8 @@ The worst error is over the 20 estimates, relative to the error scale (spacerobo
 
 Usage: ``python benchmarks/rigid_band.py [--robots spatial tests/data/arm5.urdf]
 [--cases wings slosh rigid] [--seeds 0 1 2 3] [--fc 0.15] [--order 6] [--causal] [--fir TAPS]
-[--own] [--stop-time 300] [--workers 2] [--out benchmarks/RIGID_BAND.md]``
+[--own] [--stop-time 300] [--workers 2] [--out benchmarks/RIGID_BAND.md]`` (with ``--own``
+or ``--fir`` ``--out`` is required: RIGID_BAND_OWN.md, RIGID_BAND_FIR.md)
 """
 from __future__ import annotations
 
@@ -135,7 +136,7 @@ def solve(o, prior, W, Hc, sl, compensate: float, truth, noise_chi2: float = 1.0
 
 def variants(sc, ts, X, z_lin, noisy: bool, band: tuple, columns: dict, truth) -> dict:
     """{variant: (worst error %, within 2 sd, chi2, estimates)} of the samples X, the rows
-    linearised at z_lin (20), the low-pass band = (fc, order, zero_phase); columns caches
+    linearised at z_lin (20), the low-pass band = (fc, order, zero_phase, FIR taps or 0); columns caches
     the compliance blocks' columns (they do not depend on the linearisation)."""
     o, prior = filter_rows(sc, ts, X, z_lin, eiv=noisy)
     W, _, Hu = unweighted(o)                                               # [H | y]
@@ -204,11 +205,18 @@ def main(argv=None) -> int:
                          "(default: at the truth)")
     ap.add_argument("--stop-time", type=float, default=300.0)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--out", default=str(Path(__file__).with_name("RIGID_BAND.md")))
+    ap.add_argument("--out", help="the table (default: benchmarks/RIGID_BAND.md, the default "
+                                  "run's; with --own or --fir, required)")
     a = ap.parse_args(argv)
     seeds = ([] if a.no_noise_free else [None]) + a.seeds
-    if a.fir and a.fir % 2 == 0:
+    if a.fir < 0 or (a.fir and a.fir % 2 == 0):
         ap.error("--fir takes an odd number of taps (a whole-sample delay)")
+    if a.fir and a.causal:
+        ap.error("--fir is a linear-phase FIR, centred; --causal is the Butterworth's")
+    if a.out is None:
+        if a.own or a.fir:
+            ap.error("--own and --fir write other tables than RIGID_BAND.md: give --out")
+        a.out = str(Path(__file__).with_name("RIGID_BAND.md"))
     jobs = [(r, c, s, a.stop_time, (a.fc, a.order, not a.causal, a.fir), a.own)
             for r in a.robots for c in a.cases for s in seeds]
     t0 = time.perf_counter()

@@ -1,8 +1,8 @@
 """Monte Carlo and sweep on a real Dask cluster whose workers cannot see the client's files.
 
 A ``dask scheduler`` (on a port the system picks) and two ``dask worker`` processes on loopback,
-each worker in its own mount namespace (``unshare --mount``) where a tmpfs hides this test process's pytest
-temporary folder (the client's only): the client's build folders, tables and .ssp files do not exist for the workers, as on
+each worker in its own mount namespace (``unshare --mount``) where a tmpfs hides this test
+process's pytest temporary folder (the client's only): the client's build folders, tables and .ssp files do not exist for the workers, as on
 machines that share no file system with the client and have only the package installed. The
 Monte Carlo and the sweep run through the CLI against ``--scheduler``; their rows must equal,
 cell for cell, those of the same commands on a local cluster (the same library on the same

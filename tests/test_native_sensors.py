@@ -7,8 +7,8 @@ normals against a pure-Python transcription (normals to 4e-16 relative: Python's
 portable one), the portable log / sine / cosine to 1 ulp of the C library's (sine and cosine
 2 ulp for |x| > 4 rad), the normals' first four moments to 5 standard errors and a
 Kolmogorov-Smirnov test (p > 1e-3) over 10^6 draws, and the same bits from a mingw build under
-Wine as from the native build (skipped without mingw or Wine; $WINEPREFIX is used when set,
-else a new prefix, which takes Wine some 10 s to create).
+Wine as from the native build (skipped without mingw or Wine; in the test process's Wine
+prefix, tests/wine.py, from an empty environment).
 
 Sensors against the NumPy reference SensorSuite (tests/oracles/sensors.py, NumPy's generator:
 the same statistics, not the same numbers), per channel: white noise standard deviations and means over

@@ -1,5 +1,6 @@
-"""tests/wine.py's run: a Windows program that exits non-zero and prints nothing is run again
-(twice, with a warning each time); one that prints, or succeeds, is run once."""
+"""tests/wine.py's run: a Windows program that exits with 1 and prints nothing is run again
+(twice, with a warning each time); one that prints, succeeds, or aborts (exit code 3, nothing
+printed: a crash, not a launch failure) is run once."""
 from __future__ import annotations
 
 import subprocess
@@ -18,6 +19,7 @@ int main(int argc, char **argv)
     fputs("run\n", f);
     fclose(f);
     if (argv[2][0] == 'p') printf("a line\n");
+    if (argv[2][0] == 'a') abort();
     return atoi(argv[3]);
 }
 """
@@ -36,13 +38,13 @@ def program(tmp_path_factory):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("prints, code, runs", [("silent", 1, 3), ("prints", 1, 1),
-                                                ("silent", 0, 1)])
+                                                ("silent", 0, 1), ("abort", 3, 1)])
 def test_a_silent_failure_is_run_again(program, prints, code, runs):
     d, prefix = program
     log = d / f"{prints}{code}.log"
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
-        r = prefix.run([d / "p.exe", nh.wine_path(log), prints, code])
+        r = prefix.run([d / "p.exe", nh.wine_path(log), prints, 0 if prints == "abort" else code])
     assert r.returncode == code
     assert log.read_text().count("run") == runs
     assert sum("did not start" in str(x.message) for x in w) == runs - 1

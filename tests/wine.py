@@ -4,10 +4,11 @@
   so that the boot overlaps the builds. A first boot has been seen to fail once in the
   parallel suite ("could not load kernel32.dll, status c0000135", not reproduced): it is
   booted afresh then, twice at most.
-* :meth:`WinePrefix.run`: a run that ends with a non-zero exit code and prints nothing, on
-  stdout or stderr, did not start (the hosts print a summary or an error line on every path;
-  a crash makes Wine print "Unhandled exception" on stderr): it is run again, twice at most,
-  with a warning that the suite's summary shows. Every other result is the test's to judge.
+* :meth:`WinePrefix.run`: a run that ends with exit code 1 and prints nothing, on stdout or
+  stderr, did not start (the hosts print a summary or an error line wherever they exit with
+  1; a crash makes Wine print "Unhandled exception" on stderr; an ``abort()`` exits with 3
+  and nothing printed, and is not run again): it is run again, twice at most, with a warning
+  that the suite's summary shows. Every other result is the test's to judge.
   Such a run has been seen once in CI (the fuzzer's estimator run, stop 51: exit code 1, no
   output; 300 runs of the same command here, two at a time and at random intervals, all
   started). Wine's server exits when its last program does, so each run starts it and its
@@ -41,8 +42,8 @@ def wine_path(p: Path) -> str:
 
 
 def did_not_start(r: subprocess.CompletedProcess) -> bool:
-    """A run that failed and printed nothing at all (module docstring)."""
-    return r.returncode != 0 and not r.stdout and not r.stderr
+    """A run that exited with 1 and printed nothing at all (module docstring)."""
+    return r.returncode == 1 and not r.stdout and not r.stderr
 
 
 class WinePrefix:
@@ -95,5 +96,5 @@ class WinePrefix:
                 return r
             warnings.warn(f"Wine: {Path(str(cmd[0])).name} exited with {r.returncode} and no "
                           f"output (did not start); run again ({attempt + 1} of "
-                          f"{LAUNCH_RETRIES})")
+                          f"{LAUNCH_RETRIES})", stacklevel=3)
         raise AssertionError("unreachable")
