@@ -146,10 +146,28 @@ def _prior_rows(o, prior, hold: bool, nm: int):
     return P
 
 
-def batch(o, prior, rows, hold: bool, truth, compensate: float = 1.0, noise_chi2: float = 1.0):
+def hac_cov(S, rows, u, block: int, lags: int):
+    """The sandwich covariance S^-1 Omega S^-1 of the estimate u from the rows [A | b] (no
+    prior), grouped by sample (``block`` rows each): Omega the Newey-West (Bartlett) sum of
+    the samples' scores A_k^T e_k and their products up to ``lags`` samples apart, so that
+    residuals correlated in time (low-passed noise, what the model leaves) count as they are."""
+    N = len(u)
+    e = rows[:, :N] @ u - rows[:, N]
+    g = (rows[:, :N] * e[:, None]).reshape(-1, block, N).sum(axis=1)      # (K, N) scores
+    Om = g.T @ g
+    for lag in range(1, lags + 1):
+        G = g[lag:].T @ g[:-lag]
+        Om += (1.0 - lag / (lags + 1.0)) * (G + G.T)
+    Si = np.linalg.inv(S)
+    return Si @ Om @ Si.T
+
+
+def batch(o, prior, rows, hold: bool, truth, compensate: float = 1.0, noise_chi2: float = 1.0,
+          hac: tuple = ()):
     """The batch estimate over the prior and the weighted rows [H | columns | y] (one row
     each), the filter's errors-in-variables sums times ``compensate`` taken off: (worst
-    error %, within 2 sd, chi2, the 20 estimates; :func:`_score`)."""
+    error %, within 2 sd, chi2, the 20 estimates; :func:`_score`). hac = (rows per sample,
+    lags): the sds from :func:`hac_cov` instead of the bound's times the chi2's inflation."""
     N = rows.shape[1] - 1
     rows = np.vstack([_prior_rows(o, prior, hold, N - o.nu), rows])
     R = np.linalg.qr(rows, mode="r")[:N]
@@ -160,6 +178,9 @@ def batch(o, prior, rows, hold: bool, truth, compensate: float = 1.0, noise_chi2
     uc = np.linalg.solve(S, s)
     res = rows[N:, :N] @ uc - rows[N:, N]
     chi2 = res @ res / (len(res) - N)
+    if hac:
+        C = hac_cov(S, rows[N:], uc, *hac)
+        return _score(o, uc, C[:o.nu, :o.nu], chi2, truth, np.inf)      # not inflated
     Ri = np.linalg.inv(Rr)
     return _score(o, uc, (Ri @ Ri.T)[:o.nu, :o.nu], chi2, truth, noise_chi2)
 
