@@ -146,8 +146,8 @@ def solve(o, prior, W, Hc, sl, compensate: float, truth, noise_chi2: float = 1.0
 
 def variants(sc, ts, X, z_lin, noisy: bool, band: tuple, columns: dict, truth) -> dict:
     """{variant: (worst error %, within 2 sd, chi2, estimates)} of the samples X, the rows
-    linearised at z_lin (20), the low-pass band = (fc, order, zero_phase, FIR taps or 0); columns caches
-    the compliance blocks' columns (they do not depend on the linearisation)."""
+    linearised at z_lin (20), the low-pass band = (fc, order, zero_phase, FIR taps or 0);
+    columns caches the compliance blocks' columns (they do not depend on the linearisation)."""
     o, prior = filter_rows(sc, ts, X, z_lin, eiv=noisy)
     W, _, Hu = unweighted(o)                                               # [H | y]
     out = {"rows": solve(o, prior, W, Hu, slice(0, len(X)), float(noisy), truth)}
@@ -255,12 +255,14 @@ def main(argv=None) -> int:
              "scale) / estimates within 2 reported sd; the thrust errors estimated; the rows "
              + ("linearised at the guess, then twice at the selected estimate."
                 if a.own else "linearised at the truth."), "",
-             "| robot | case | sensors seed | " + " | ".join([*VARIANTS, SELECTED, SELECTED_HAC]) + " |",
+             "| robot | case | sensors seed | "
+             + " | ".join([*VARIANTS, SELECTED, SELECTED_HAC]) + " |",
              "|---|---|---|" + "---|" * (len(VARIANTS) + 2)]
     for robot, case, seed, out in results:
+        cells = [out[v] for v in [*VARIANTS, SELECTED, SELECTED_HAC]]
         name = Path(robot).stem if robot.endswith(".urdf") else robot
         lines.append(f"| {name} | {case} | {'noise-free' if seed is None else seed} | "
-                     + " | ".join(f"{out[v][0]:.3g} % / {out[v][1]}" for v in [*VARIANTS, SELECTED, SELECTED_HAC])
+                     + " | ".join(f"{c[0]:.3g} % / {c[1]}" for c in cells)
                      + " |")
     Path(a.out).write_text("\n".join(lines) + "\n")
     print(f"wrote {a.out}")
