@@ -161,10 +161,10 @@ def variants(sc, ts, X, z_lin, noisy: bool, band: tuple, columns: dict, truth) -
         parts = [Hu[:, :, :-1]] + ([columns[spec]] if n_qs else [])
         Z, sl, gain = low_pass(np.concatenate(parts + [Hu[:, :, -1:]], axis=2), *band)
         # the low-passed noise's products: its gain times theirs over the samples kept
-        kept = (sl.stop - sl.start) / len(X)
+        comp = float(noisy) * gain * (sl.stop - sl.start) / len(X)
         # under the unfiltered rows' weights the low-passed noise's chi2 is the gain
-        out[label] = solve(o, prior, W, Z, sl, float(noisy) * gain * kept, truth, gain)
-        lowpassed[label] = (Z, sl, float(noisy) * gain * kept)
+        out[label] = solve(o, prior, W, Z, sl, comp, truth, gain)
+        lowpassed[label] = (Z, sl, comp)
     # the compliance block where it explains much of what the low-passed rigid rows leave:
     # the residual's chi2 halved at least (the block's 114 unknowns take 14-20 % of it from
     # the low-passed noise alone, whose effective number of samples is a few hundred)

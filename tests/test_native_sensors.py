@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import ctypes
 import math
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -653,9 +652,8 @@ int main(void)
 
 @pytest.mark.slow
 def test_mingw_build_under_wine_gives_the_same_bits(tmp_path, tmp_path_factory):
-    mingw, wine = shutil.which("x86_64-w64-mingw32-gcc"), shutil.which("wine")
-    cc = shutil.which("gcc") or shutil.which("cc")
-    if not (mingw and wine and cc):
+    mingw, cc = native_hosts.mingw(), native_hosts.c_compiler()
+    if not (mingw and native_hosts.wine() and cc):
         pytest.skip("needs gcc, x86_64-w64-mingw32-gcc and wine (Debian: gcc-mingw-w64-x86-64 wine)")
     src = tmp_path / "prog.c"
     src.write_text("#include <string.h>\n" + PROGRAM)

@@ -47,7 +47,7 @@ def did_not_start(r: subprocess.CompletedProcess) -> bool:
 
 
 class WinePrefix:
-    """A Wine prefix for one test process; :meth:`env` waits for its boot."""
+    """A Wine prefix for one test process; :meth:`run` waits for its boot."""
 
     def __init__(self, folder: Path):
         self.folder = folder
@@ -55,8 +55,9 @@ class WinePrefix:
         self.ready = False
         self.failed: Optional[str] = None      # the boot's error ("": booted), once known
 
-    def _env(self, extra: Optional[dict] = None) -> dict:
-        return {"PATH": EMPTY_PATH, "WINEPREFIX": str(self.folder), **WINE_ENV, **(extra or {})}
+    def _env(self) -> dict:
+        """The environment of a program under this prefix: empty but for PATH and Wine's."""
+        return {"PATH": EMPTY_PATH, "WINEPREFIX": str(self.folder), **WINE_ENV}
 
     def _boot(self) -> subprocess.Popen:
         return subprocess.Popen([wine(), "wineboot", "-i"], stdout=subprocess.DEVNULL,
@@ -74,27 +75,31 @@ class WinePrefix:
             _, err = self.proc.communicate(timeout=300)
         return "" if self.proc.returncode == 0 else err.decode(errors="replace")[-2000:]
 
-    def env(self, extra: Optional[dict] = None) -> dict:
-        """The environment of a program under this prefix: empty but for PATH and Wine's."""
+    def _wait(self) -> None:
+        """The boot done, and its wineserver gone."""
         if not self.ready:
             if self.failed is None:
                 self.failed = self._booted()
             assert not self.failed, f"wineboot failed: {self.failed}"
             subprocess.run(["wineserver", "-w"], env=self._env(), timeout=120)
             self.ready = True
-        return self._env(extra)
 
     def run(self, cmd: Sequence, timeout: float = 300,
             input: Optional[bytes] = None) -> subprocess.CompletedProcess:
         """``wine cmd...`` (bytes in and out), run again where it did not start (module
         docstring)."""
+        self._wait()
         args = [wine(), *(str(c) for c in cmd)]
-        env = self.env()
-        for attempt in range(LAUNCH_RETRIES + 1):
-            r = subprocess.run(args, input=input, capture_output=True, env=env, timeout=timeout)
-            if not did_not_start(r) or attempt == LAUNCH_RETRIES:
-                return r
+
+        def launch():
+            return subprocess.run(args, input=input, capture_output=True, env=self._env(),
+                                  timeout=timeout)
+        r = launch()
+        for attempt in range(1, LAUNCH_RETRIES + 1):
+            if not did_not_start(r):
+                break
             warnings.warn(f"Wine: {Path(str(cmd[0])).name} exited with {r.returncode} and no "
-                          f"output (did not start); run again ({attempt + 1} of "
+                          f"output (did not start); run again ({attempt} of "
                           f"{LAUNCH_RETRIES})", stacklevel=3)
-        raise AssertionError("unreachable")
+            r = launch()
+        return r
