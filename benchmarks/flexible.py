@@ -9,12 +9,16 @@ the time from which both bodies stay flagged identified (s; '-' never), and the 
 
   rigid          ident.modes = 2 (what the estimator does without the columns)
   modal          ident.modes = 1, the modes found from the data
-  sensors        the sensors, the noise profile (its information filter reports)
+  sensors        the sensors, the noise profile: its information filter reports, and the
+                 rigid band (ident.band, on by the profile) where the filter finds the
+                 rigid model's misfit (coloured residuals)
+  sensors, no band  the same with ident.band = 2: the information filter alone
   sensors rigid  the sensors, the profile, ident.information = 2 (the joint solver reports)
   sensors modal  the sensors, the profile, ident.information = 2, ident.modes = 1
-  filter modal   the sensors, the profile (its information filter), ident.modes = 1: the
-                 filter reports unless the rigid model does not fit (coloured residuals)
-                 and the columns found a mode; then the joint solver with the columns
+  filter modal   the sensors, the profile (its information filter), ident.band = 2,
+                 ident.modes = 1: the filter reports unless the rigid model does not fit
+                 (coloured residuals) and the columns found a mode; then the joint solver
+                 with the columns
 
 Run: python benchmarks/flexible.py [--quick] [--jobs 2] [--robot URDF] > benchmarks/FLEXIBLE.txt
 (--quick: the issue's sizes only; --robot: another spacecraft than the spatial robot, e.g. the
@@ -54,7 +58,8 @@ CASES = {
     "slosh 2 x 25 kg 0.1/0.12 Hz": ("slosh", 1.0, 0.1),
 }
 QUICK = ("wings 2 x 50 kg 0.5 Hz (issue)", "slosh 2 x 25 kg 0.30/0.35 Hz (issue)")
-SETUPS = ("rigid", "modal", "sensors", "sensors rigid", "sensors modal", "filter modal")
+SETUPS = ("rigid", "modal", "sensors", "sensors, no band", "sensors rigid", "sensors modal",
+          "filter modal")
 
 
 def scenario(case: str, robot: str = "spatial"):
@@ -87,8 +92,10 @@ def identifier(sc, setup: str):
          "ident.modes": 1 if setup.endswith("modal") else 2}
     if setup.startswith("sensors") or setup == "filter modal":
         v.update({"ident.noise_profile": 1, "noise.scale": 1.0})
-        if setup.startswith("sensors "):
+        if setup in ("sensors rigid", "sensors modal"):
             v["ident.information"] = 2
+        if setup in ("sensors, no band", "filter modal"):
+            v["ident.band"] = 2
     return fmu_identifier(sc, DT, v)
 
 

@@ -38,7 +38,8 @@ import numpy as np
 
 # the filter and the columns of this study are the tests' reference formulations
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from oracles.information import InformationFilter, sensor_noise, z_of_reported  # noqa: E402
+from oracles.band import RowsFilter  # noqa: E402
+from oracles.information import sensor_noise, z_of_reported  # noqa: E402
 from oracles.modal import drive, filter_states, modal_columns  # noqa: E402
 from oracles.samples import guess_of, parameter_set_samples, sensed  # noqa: E402
 
@@ -51,26 +52,6 @@ CASES = [
     ("slosh 0.30 / 0.35 Hz", "slosh", ((0.30, 0.01), (0.35, 0.01)), "GCDT"),
     ("slosh 0.30 / 0.35 Hz, G+C blocks only", "slosh", ((0.30, 0.01), (0.35, 0.01)), "GC"),
 ]
-
-
-class RowsFilter(InformationFilter):
-    """The reference filter, keeping each sample's whitened rows [W H | W y] and weight W."""
-
-    def __init__(self, *args, **kw):
-        super().__init__(*args, refresh=1, **kw)
-        self.rows_w, self.weights = [], []
-
-    def add(self, t, x, z_lin=None):
-        super().add(t, x, z_lin)               # the weight W of this sample: self.Wh
-        x = np.ascontiguousarray(x, float)
-        H, y = self.linear_rows(x)             # as add formed them (the same thrust sums)
-        if self.nb:
-            for i in range(3):
-                xp = x.copy()
-                xp[15 + i] += 1.0
-                H[:, -3 + i] = -(self.rows_at(xp, z_lin) - self.rows_at(x, z_lin))
-        self.rows_w.append(np.column_stack([self.Wh @ H, self.Wh @ y]))
-        self.weights.append(self.Wh.copy())
 
 
 def record(set_name: str, seed: int, stop_time: float):
@@ -115,9 +96,8 @@ def modal_block(ts, X, weights, freqs, blocks: str) -> np.ndarray:
 
 def unweighted(o):
     """(W, W^-1, the unweighted rows [H | y]) of the filter's kept rows, per sample."""
-    W = np.array(o.weights)
-    Winv = np.linalg.inv(W)
-    return W, Winv, np.einsum("kij,kjl->kil", Winv, np.array(o.rows_w))
+    W, Hu = o.unweighted()
+    return W, np.linalg.inv(W), Hu
 
 
 def _score(o, u, cov, chi2, truth, noise_chi2: float = 1.0):

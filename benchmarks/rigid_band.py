@@ -1,7 +1,7 @@
 """The rigid band: the information filter's rows low-passed below the flexible parts' modes,
-with one quasi-static compliance block; a batch study of a route to accurate estimates of
-flexible spacecraft through the sensors. Not shipped (benchmarks/FLEXIBLE.md, "What limits
-it", says where it stands); writes benchmarks/RIGID_BAND.md.
+with one quasi-static compliance block; the batch study the shipped band (native/src/band.c,
+the estimator's ident.band: a causal Butterworth online, benchmarks/band.py measures it) came
+from; writes benchmarks/RIGID_BAND.md.
 
 Why it should work. The plant's excitation lies at 0.033-0.1 Hz (periods 10-30 s), the wings'
 and the slosh's modes at 0.2 Hz and above. A part's momentum has two pieces: its free ringing

@@ -228,10 +228,10 @@ static void log_misfit(sr_instance *inst, double t, int before, const sr_estimat
     else if (now == SR_EST_MISFIT_MODEL)
         sr_log(inst, SR_LOG_WARNING,
                "t = %.6g s: the rigid model does not fit the samples (%s): no body is flagged "
-               "identified and the sds carry a model-error term; the estimates can be far off "
-               "(flexible parts or sloshing propellant; with ident.modes = 1 the modal "
-               "columns' estimates are reported once they find a mode: docs/identification.md, "
-               "\"When the rigid model does not fit\")", t, set);
+               "identified and the sds carry a model-error term (flexible parts or sloshing "
+               "propellant; the rigid band's estimates are reported once it has an answer, "
+               "diag.band, else the held filter's, which can be far off: "
+               "docs/identification.md, \"The rigid band\")", t, set);
     else
         sr_log(inst, SR_LOG_EVENTS, "t = %.6g s: the rigid model fits the samples again "
                "(diag.misfit = 0)", t);

@@ -616,6 +616,20 @@ def noise_model_vars() -> List[Var]:
     v += [Var(f"diag.mode_zeta[{i + 1}]", "output", "continuous", "Real", "1",
               f"With ident.modes = 1: the damping ratio of mode {i + 1} in use; 0 = none", None,
               ("mode_zeta", i)) for i in range(4)]
+    v += [Var("ident.band", "parameter", "fixed", "Integer", None,
+              "The rigid band (docs/identification.md, 'The rigid band'): beside the "
+              "information filter, its momentum rows low-passed below 0.15 Hz (a Butterworth "
+              "of order 6) with a quasi-static compliance block for flexible panels and slosh "
+              "of 0.2 Hz and above; its estimates and sds are reported where the filter's "
+              "model-fit test finds the rigid model's misfit (diag.misfit_cause = 1; "
+              "diag.band), from the filter's replay on. 0 = automatic (on where the "
+              "information filter runs and noise_dt is 0.01-2 s), 1 = on (needs them), "
+              "2 = off", 0, ("band",)),
+          Var("diag.band", "output", "discrete", "Integer", None,
+              "The rigid band's answer is reported (ident.band): 1 its low-pass alone, 2 with "
+              "the compliance block (taken where it halves the low-pass's chi2); 0 = not "
+              "reported (the band off, no rigid-model misfit, or no answer yet)", None,
+              ("band",))]
     for name in ("noise.scale",) + _profile_magnitudes():
         unit, default, doc = NOISE_PARAMETERS[name]
         v.append(Var(name, "parameter", "fixed", "Real", unit,
@@ -660,9 +674,10 @@ def model_fit_vars() -> List[Var]:
             "the noise's), the estimator's own equations (in [0, 100]; 0 = none)", 0.5,
             ("fit_bias_k",)),
         Var("ident.fit_bias_k_info", "parameter", "fixed", "Real", "1",
-            "As ident.fit_bias_k, for the information filter's standard deviations (its "
-            "whitened residual; only for a misfit of the rigid model, not one by chi2 alone; "
-            "in [0, 100]; 0 = none)", 0.25, ("fit_bias_k_info",)),
+            "As ident.fit_bias_k, for the information filter's and the rigid band's standard "
+            "deviations (their whitened residual beyond the noise's; only for a misfit of the "
+            "rigid model, not one by chi2 alone; in [0, 100]; 0 = none)", 0.25,
+            ("fit_bias_k_info",)),
         Var("ident.eiv_uncertainty", "parameter", "fixed", "Real", "1",
             "Relative uncertainty of the information filter's errors-in-variables correction "
             "(of the noise values' variances it is built from): its standard deviations add "
@@ -681,9 +696,10 @@ def model_fit_vars() -> List[Var]:
             "scale beyond its threshold; the information filter decides after its replay at "
             "600 samples): no body is flagged identified; where the residuals are coloured "
             "(the rigid model does not fit) the thrust errors are held at their priors and "
-            "the standard deviations carry the model-error term (with ident.modes = 1 and a "
-            "mode found, the modal columns' estimates and sds instead; crb.* and "
-            "diag.info_chi2 stay the filter's); where diag.info_chi2 set it with white "
+            "the standard deviations carry the model-error term (with the rigid band, on by the "
+            "noise profile, its estimates and sds instead: diag.band; else with ident.modes = 1 "
+            "and a mode found, the modal columns'; crb.* and diag.info_chi2 stay the "
+            "filter's); where diag.info_chi2 set it with white "
             "residuals (the noise values too small) the estimates are kept and the sds "
             "widened; where a thrust scale set it with white residuals the sds carry the "
             "difference to the estimates with the thrust held; logged as a warning at each "

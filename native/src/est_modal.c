@@ -151,7 +151,7 @@ static void expm4(const double *M, double *E)
  * x' = [[0, 1], [-w^2, -2 zeta w]] x + [0, -1] u, exactly:
  * x1 = Phi x0 + Gam0 u0 + Gam1 (u1 - u0) (the exponential of the filter with the input as a
  * chain of two integrators) */
-static void filter_step(est_modal_filter *f, double dt, const double *u0, const double *u1)
+void est_modal_filter_step(est_modal_filter *f, double dt, const double *u0, const double *u1)
 {
     double *E = f->step;
     if (!(f->key[0] == f->w && f->key[1] == f->zeta && f->key[2] == dt)) {
@@ -176,10 +176,9 @@ static void filter_step(est_modal_filter *f, double dt, const double *u0, const 
 
 /* the signals a kept sample holds: t, u = [A^T a_S, alpha_B, omega2], omega_B, v_B = A^T v_S,
  * A, r_S (EST_MODAL_SIG) */
-static void signals_of(const sr_estimator_model *m, double t, const double *x, double *sig)
+void est_modal_signals(double t, const double *x, double *sig)
 {
     const double *A = x + SR_X_A_B, *w = x + SR_X_OMEGA_B;
-    (void)m;
     sig[0] = t;
     double *u = sig + 1;
     for (int i = 0; i < 3; i++) {
@@ -216,8 +215,8 @@ static void cross(const double *a, const double *b, double *c)
  *   G (i <= j): h_i += eta'_j, h_j += eta'_i      C (6 i + j): h_i = eta'_{6 + j}
  *   D (12 i + j): lin [w]x e_i eta_j, ang -[v_B]x e_i eta_j
  *   T (12 i + j): ang Omega(w)[:, i] eta_j */
-static void columns(const double *eta, const double *etad, const double *sig,
-                    const double *p_I, int nc, double *out)
+void est_modal_columns(const double *eta, const double *etad, const double *sig,
+                       const double *p_I, int nc, double *out)
 {
     const double *w = sig + 13, *vB = sig + 16, *A = sig + 19, *r = sig + 28;
     memset(out, 0, sizeof(double) * 6 * (size_t)nc);
@@ -293,10 +292,10 @@ static void sample_rows(const sr_estimator_model *m, const est_modal_filter *f, 
     for (int a = 0; a < k; a++)
         memcpy(rows + a * width + n_f * nc, Hy + a * hw, sizeof(double) * (q + 1 + extra));
     for (int g = 0; g < n_f; g++) {
-        columns(f[g].eta, f[g].etad, sig, p_I, nc, cols);
+        est_modal_columns(f[g].eta, f[g].etad, sig, p_I, nc, cols);
         if (ref_x) {                    /* h(t) - h(t_r): the window's difference */
             const double *x = ref_x + 2 * EST_MODAL_U * g;
-            columns(x, x + EST_MODAL_U, ref_sig, p_I, nc, cref);
+            est_modal_columns(x, x + EST_MODAL_U, ref_sig, p_I, nc, cref);
             for (int i = 0; i < 6 * nc; i++)
                 cols[i] -= cref[i];
         }
@@ -481,7 +480,7 @@ static void solve_sample(const sr_estimator_model *m, void *data, const double *
     est_modal_data *s = state(m, data);
     double dt = sig[0] - s->t_prev;
     for (int g = 0; g < s->n_f; g++)
-        filter_step(&s->f[g], dt, s->u_prev, sig + 1);
+        est_modal_filter_step(&s->f[g], dt, s->u_prev, sig + 1);
     memcpy(s->u_prev, sig + 1, sizeof s->u_prev);
     s->t_prev = sig[0];
     const double *ref = r >= 0 ? ring_of(m, data, r) : NULL;
@@ -544,7 +543,7 @@ static double objective(const sr_estimator_model *m, void *data, const est_modal
     for (int i = 0; i < s->kept; i++) {
         double *ks = kept_sample(m, data, i);
         for (int g = 0; g < n_f; g++)
-            filter_step(&f[g], ks[0] - t_prev, u_prev, ks + 1);
+            est_modal_filter_step(&f[g], ks[0] - t_prev, u_prev, ks + 1);
         memcpy(u_prev, ks + 1, sizeof u_prev);
         t_prev = ks[0];
         if (m->window)
@@ -823,7 +822,7 @@ void est_modal_reference(const sr_estimator_model *m, void *data, double t, cons
         return;
     est_modal_data *s = state(m, data);
     double sig[EST_MODAL_SIG];
-    signals_of(m, t, x, sig);
+    est_modal_signals(t, x, sig);
     s->started = 1;
     s->t0 = s->t_prev = t;
     memcpy(s->sig0, sig, sizeof sig);
@@ -880,7 +879,7 @@ void est_modal_step(const sr_estimator_model *m, void *data, double t, const dou
     int k1 = m->k1, k = k1 + m->k2, q = m->q, hw = q + n_rhs(m), nc = SR_N_CONSIDER;
     double sig[EST_MODAL_SIG], Hy[EST_MAXK * (EST_NZ + 1 + SR_N_CONSIDER)];
     double H[EST_MAXK * EST_NZ], yy[EST_MAXK], bc[3 * SR_N_CONSIDER], yc[3 * SR_N_CONSIDER];
-    signals_of(m, t, x, sig);
+    est_modal_signals(t, x, sig);
     est_joint_rows(m, nw, E, H, yy);
     if (m->consider)
         est_consider_rows(m, Ec, bc, yc);

@@ -27,18 +27,7 @@
 #define SR_EST_MODAL_H
 
 #include "est_types.h"
-
-/* a sample's drive (12) and the doubles a kept sample needs beside its rows */
-#define EST_MODAL_U 12
-#define EST_MODAL_SIG (1 + 12 + 3 + 3 + 9 + 3)   /* t, u, omega_B, v_B, A, r_S */
-
-/* one frequency's filter: eta and eta' per drive channel */
-typedef struct est_modal_filter {
-    double w, zeta;
-    double eta[EST_MODAL_U], etad[EST_MODAL_U];
-    double key[3], step[8];    /* the step's coefficients for (w, zeta, dt) = key */
-    double given;              /* 1: from ident.mode_f (refined, never dropped), 0: found */
-} est_modal_filter;
+#include "modal_filter.h"
 
 /* the modal stage's state in the Data block (followed by R, d, the kept samples and, with the
  * momentum window, the window's ring: each entry a sample's index, signals and the filters'

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "differencing.h"
+#include "est_band.h"
 #include "est_joint.h"
 #include "est_hold.h"
 #include "est_modal.h"
@@ -279,6 +280,33 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         m->off_modal = off;
         off += est_modal_size(m);
     }
+    /* the rigid band (est_band.h): automatic, where the filter runs at a sample time it takes */
+    m->band = opt->band == 1
+              || (opt->band == 0 && m->info && opt->noise_dt >= SR_BAND_DT_MIN
+                  && opt->noise_dt <= SR_BAND_DT_MAX);
+    if (m->band && !m->info) {
+        sr_text_set(err, errlen, "ident.band = 1 (the rigid band) needs the information filter: "
+                                 "set ident.noise_profile = 1 with the sensors' noise.* "
+                                 "magnitudes, and leave ident.information at 0 (automatic) or 1");
+        free(m);
+        return NULL;
+    }
+    if (m->band && sr_band_model_init(&m->band_m, &m->info_m, opt->noise_dt) != 0) {
+        sr_text_set(err, errlen, "ident.band = 1 (the rigid band) needs a sample time noise_dt "
+                                 "from ");
+        sr_text_num(err, errlen, SR_BAND_DT_MIN, 6);
+        sr_text_cat(err, errlen, " to ");
+        sr_text_num(err, errlen, SR_BAND_DT_MAX, 6);
+        sr_text_cat(err, errlen, " s (its low-pass at 0.15 Hz), got ");
+        sr_text_repr(err, errlen, opt->noise_dt);
+        free(m);
+        return NULL;
+    }
+    if (m->band) {
+        off = align8(off);
+        m->off_band = off;
+        off += est_band_size(m);
+    }
     m->size = off;
     /* the work space's noise rows: the window's 2 m + 1 chunks with diff_momentum, else one */
     if (m->eiv)
@@ -310,7 +338,7 @@ size_t sr_estimator_data_size(const sr_estimator_model *m) { return m ? m->size 
 size_t sr_estimator_work_size(const sr_estimator_model *m)
 {
     return m ? sizeof(est_work) + sizeof(double) * m->work_noise
-                   + est_modal_work_size(m)
+                   + est_modal_work_size(m) + est_band_work_size(m)
              : 0;
 }
 
@@ -343,6 +371,7 @@ void sr_estimator_data_init(const sr_estimator_model *m, void *data)
     if (m->adapt)
         sr_exd_init(est_exd_data(m, data));
     est_modal_init(m, data);
+    est_band_init(m, data);
 }
 
 /* "name = v is out of range lo..hi" (a Data block's count or index) */
@@ -429,6 +458,11 @@ int sr_estimator_data_check(const sr_estimator_model *m, const void *data, char 
         sr_text_set(err, errlen, "the estimator's state block is not valid: the modal columns' "
                              "counts or frequencies are out of range or its numbers not "
                              "finite");
+        return 1;
+    }
+    if (est_band_check(m, data)) {
+        sr_text_set(err, errlen, "the estimator's state block is not valid: the rigid band's "
+                                 "counts are out of range or its numbers not finite");
         return 1;
     }
     if (!memchr(d->msg, '\0', sizeof d->msg)) {

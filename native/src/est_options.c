@@ -109,6 +109,8 @@ enum { ALWAYS, PROFILE, BODY };
     X("ident.modes", modes, 0, 1, 1, 2, 2, 0, 1, ALWAYS, CODE, "1 (on), 2 (off)")               \
     MODE_F(X, "ident.mode_f[1]", 0) MODE_F(X, "ident.mode_f[2]", 1)                            \
     MODE_F(X, "ident.mode_f[3]", 2) MODE_F(X, "ident.mode_f[4]", 3)                            \
+    X("ident.band", band, 0, 1, 0, 2, 0, 0, 1, ALWAYS, CODE,                                    \
+      "0 (automatic), 1 (on), 2 (off)")                                                         \
     X("ident.fit_window", fit_window, 0, 0, POSITIVE, SR_EXD_TIME_MAX, 60.0, 0, 1, ALWAYS,      \
       RULE, "{n} must be > 0 s and <= {B} s")                                                   \
     X("ident.fit_lags", fit_lags, 0, 1, 1, SR_INFO_MAX_LAGS, 50, 0, 1, ALWAYS, RULE,            \

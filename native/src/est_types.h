@@ -23,7 +23,9 @@
 #include "equations.h"
 #include "estimator.h"
 #include "excite_design.h"
+#include "band.h"
 #include "information.h"
+#include "modal_filter.h"
 
 #define EST_NMU 8                 /* mu (8) */
 #define EST_NTH 12                /* theta (12) */
@@ -40,7 +42,7 @@
  * samples kept for the mode search and the replay */
 #define EST_MODAL_MAX_F SR_EST_MAX_MODES
 #define EST_MODAL_COLS 165
-#define EST_MODAL_SCAN_COLS 57
+#define EST_MODAL_SCAN_COLS EST_MODAL_GC_COLS
 #define EST_MODAL_NMAX (EST_MODAL_MAX_F * EST_MODAL_COLS + EST_NZ)
 #define EST_MODAL_SCAN_NMAX (EST_MODAL_MAX_F * EST_MODAL_SCAN_COLS + EST_NZ + 1)
 #define EST_MODAL_MAX_SAMPLES 4096
@@ -113,6 +115,10 @@ struct sr_estimator_model {
     size_t off_exd;               /* its state (sr_exd_data) */
     int modes;                    /* the modal columns (ident.modes = 1, est_modal.h) */
     size_t off_modal;             /* their state, [R d] and the kept samples */
+    /* the rigid band (ident.band, est_band.h): its model (band.h) and its state */
+    int band;
+    sr_band_model band_m;
+    size_t off_band;
 };
 
 /* Everything an accepted sample changes except the variable tail (history, residual ring):
@@ -262,7 +268,8 @@ typedef struct est_work {
     double noise_rows[EST_NOISE_SCRATCH];
     double noise[];               /* the noise rows (est_rows.n_chunks chunks), then with
                                      ident.modes = 1 the modal columns' temporaries
-                                     (est_modal_work, est_modal_work_of) */
+                                     (est_modal_work, est_modal_work_of), then with the
+                                     rigid band its (sr_band_work, est_band_work_of) */
 } est_work;
 
 /* the modal columns' temporaries in the work space w (after its noise rows) */

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "est_band.h"
 #include "est_corr.h"
 #include "est_fit.h"
 #include "est_hold.h"
@@ -307,6 +308,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
         est_rows_commit(m, data, t, sample, rows);
         if (m->info)
             memcpy(est_info_data(m, data), &wk->nwi, sizeof wk->nwi);
+        est_band_step(m, data, t, sample, est_band_work_of(m, wk));
         d->status = SR_EST_REFERENCE;
         d->msg[0] = '\0';
         design_step(m, data, t, &wk->exd);
@@ -335,9 +337,10 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
         est_modal_step(m, data, t, sample, rows->E, rows->Ec, rows->win_drop, nw,
                        est_modal_work_of(m, wk));
     est_fit_window(m, c, d->samples == 0, nw);
-    /* the commit */
+    /* the commit; the rigid band's sample after the filter's (its replay starts the band) */
     if (m->info)
         memcpy(est_info_data(m, data), &wk->nwi, sizeof wk->nwi);
+    est_band_step(m, data, t, sample, est_band_work_of(m, wk));
     if (m->lags > 0 && m->opt.solver == 1) {
         est_corr_commit(m, data, nw, 0, e_lin, m->k1);
         est_corr_commit(m, data, nw, 1, e_ang, m->k2);

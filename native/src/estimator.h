@@ -184,6 +184,10 @@ typedef struct sr_estimator_options {
                                    joint solver), 2 off (default) */
     double mode_f[SR_EST_MAX_MODES]; /* ident.mode_f[1..4] [Hz]: the modes' frequencies where known,
                                    0 = not given (then found from the data) */
+    /* -- the rigid band (est_band.h; docs/identification.md "The rigid band") -- */
+    int band;                   /* ident.band: 0 automatic (default: on where the
+                                   information filter runs and noise_dt is 0.01-2 s), 1 on
+                                   (needs them), 2 off */
     /* -- the model-fit test (docs/identification.md "When the rigid model does not fit") -- */
     double fit_window;          /* ident.fit_window [s] > 0: the exponential window of the
                                    relative residual (60) */
@@ -350,6 +354,9 @@ typedef struct sr_estimator_report {
                                          thrust scale beyond its prior, white residuals),
                                          _NOISE (chi2 alone: the noise.* values too small);
                                          0 without a misfit */
+    int band;                         /* diag.band: the rigid band's answer reported (1 the
+                                         low-pass alone, 2 with the compliance block; where
+                                         the rigid model does not fit), 0 none */
 } sr_estimator_report;
 
 /* sr_estimator_report.misfit_cause */

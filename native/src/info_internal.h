@@ -1,6 +1,7 @@
 /* What the information filter's files share (information.c: the filter; info_rows.c: its rows
- * and their noise; info_fit.c: the model-fit test and the estimate with the thrust held):
- * internal to the core, not part of information.h's interface. */
+ * and their noise; info_fit.c: the model-fit test and the estimate with the thrust held) and
+ * the rigid band (band.c) calls: internal to the core, not part of information.h's
+ * interface. */
 #ifndef SR_INFO_INTERNAL_H
 #define SR_INFO_INTERNAL_H
 
@@ -24,6 +25,16 @@ void info_solve_square_root(int nu, const double *R, const double *dv,
                             int compensated, double *u, double *Ri);
 void info_solve_unknowns(const sr_info_model *m, const sr_info_data *d, int compensated,
                          double *u, double *Ri);
+/* the sample's rows and weight, its errors-in-variables products (sr_info_add's parts; the
+   rigid band, band.c, forms its rows with them too) */
+void info_sample_rows(const sr_info_model *m, const double *x, const double *K,
+                      const double *z, double *Hy);
+int info_sample_weight(const sr_info_model *m, const double *x, const double *K,
+                       const double *z, const double *me_var, const double *Hy, double *W,
+                       double *xs, sr_info_work *w);
+void info_eiv_sample(const sr_info_model *m, const double *x, const double *K,
+                     const double *Hy, const double *W, double *xs, sr_info_work *w,
+                     double *N_HH, double *N_Hy);
 /* info_rows.c */
 void info_white_sds(const sr_info_noise *n, double *w);
 void info_rows_full(const sr_info_model *m, const double *x, double full[6][20], double *y);

@@ -184,34 +184,19 @@ static void eiv_nav_product(const sr_info_model *m, double s2, const double (*G)
     }
 }
 
-int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
-                const double *z_lin, sr_info_work *w)
+/* The sample x's unweighted rows [H | y] (nr x (nu + 1), row stride HS) with the thrust
+   integrals K, the gyro bias's columns at z (standard form) */
+void info_sample_rows(const sr_info_model *m, const double *x, const double *K,
+                      const double *z, double *Hy)
 {
-    if (!m || !d || !x || !z_lin || !w || !(z_lin[0] > 0.0) || !(z_lin[10] > 0.0))
-        return 1;
-    if (!isfinite(t) || (d->samples > 0 && !(t > d->K[SR_THRUST_T])))
-        return 1;                      /* the thrust integrals need increasing times */
-    int nr = m->nr, nu = m->nu, nz = m->nz, n = m->n;
-    double K[SR_THRUST_LEN], W[36], z[20];
-    memcpy(K, d->K, sizeof K);
-    sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(n), x + SR_X_M(n));
-    sr_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
-    /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
-    double Hy[6 * HS], r0[6], rb[6], xs[SR_X_LEN(SR_MAX_JOINTS)], y[6];
-    memset(Hy, 0, sizeof Hy);
+    int nr = m->nr, nu = m->nu;
+    double r0[6], rb[6], y[6], xs[SR_X_LEN(SR_MAX_JOINTS)];
+    memset(Hy, 0, sizeof(double) * 6 * HS);
     info_linear_rows(m, x, K + SR_THRUST_K, Hy, y);
     for (int a = 0; a < nr; a++)
         Hy[a * HS + nu] = y[a];
-    int nx = SR_X_LEN(n);
-    memcpy(xs, x, sizeof(double) * nx);
-    const double s2_nav = info_nav_product_var(m);            /* their product's terms */
-    const int nav = s2_nav > 0.0;
-    if (nav)
-        info_nav_mixed(m, x, K + SR_THRUST_K, Hy, xs, w->nav_v, w->nav_g);
-    if (info_noise_weight(m, x, z, nav ? (const double (*)[6 * HS])w->nav_g : NULL, d->me_var,
-                          W) != 0)                   /* every sample */
-        return 1;
     if (m->nb) {                       /* the gyro reads omega + b: the rows' d / d b */
+        memcpy(xs, x, sizeof(double) * (size_t)SR_X_LEN(m->n));
         info_rows_at(m, x, z, r0);
         for (int i = 0; i < 3; i++) {
             xs[SR_X_OMEGA_B + i] = x[SR_X_OMEGA_B + i] + 1.0;   /* the rows are linear in it */
@@ -221,21 +206,33 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
                 Hy[a * HS + nu - 3 + i] = -(rb[a] - r0[a]);
         }
     }
-    double Wt[6 * HS], e[6];
-    info_weigh(W, nr, Hy, nu + 1, Wt);
-    /* the whiteness test's residual W (y - H u_fit) from the replay on (fit_restart); up to
-       it the rows the QR update leaves below (W (y - H u) at the estimate before the sample:
-       the update's reflections barely touch the new rows once R is large) */
-    for (int a = 0; a < nr && d->fit_at; a++) {
-        double s = Wt[a * HS + nu];
-        for (int j = 0; j < nu; j++)
-            s -= Wt[a * HS + j] * d->u_fit[j];
-        e[a] = s;
-    }
-    /* errors in variables: N += sum_l sigma_l^2 (W dH_l)^T (W [dH_l dy_l]) */
-    double *N_HH = w->N_HH, N_Hy[MU];        /* the new sums, committed when finite */
-    memcpy(N_HH, d->N_HH, sizeof d->N_HH);
-    memcpy(N_Hy, d->N_Hy, sizeof N_Hy);
+}
+
+/* The weight W = R_k^-1/2 of the sample x's rows Hy (info_sample_rows') at z (standard form),
+   the model error's variances me_var in the rows' noise; leaves in xs a copy of x and in w
+   the navigation's mixed differences (info_eiv_sample reads them). 0, or 1 where the rows'
+   noise covariance is not positive definite. */
+int info_sample_weight(const sr_info_model *m, const double *x, const double *K,
+                       const double *z, const double *me_var, const double *Hy, double *W,
+                       double *xs, sr_info_work *w)
+{
+    memcpy(xs, x, sizeof(double) * (size_t)SR_X_LEN(m->n));
+    const int nav = info_nav_product_var(m) > 0.0;            /* their product's terms */
+    if (nav)             /* (the mixed differences read Hy's z_O columns and y only) */
+        info_nav_mixed(m, x, K + SR_THRUST_K, Hy, xs, w->nav_v, w->nav_g);
+    return info_noise_weight(m, x, z, nav ? (const double (*)[6 * HS])w->nav_g : NULL,
+                             me_var, W);
+}
+
+/* Errors in variables of the sample x (its rows Hy and weight W: info_sample_rows' and
+   info_sample_weight's, which also left xs and w's mixed differences):
+   N += sum_l sigma_l^2 (W dH_l)^T (W [dH_l dy_l])
+   over the noisy channels, less the navigation's product once (eiv_nav_product) */
+void info_eiv_sample(const sr_info_model *m, const double *x, const double *K,
+                     const double *Hy, const double *W, double *xs, sr_info_work *w,
+                     double *N_HH, double *N_Hy)
+{
+    int nr = m->nr, nu = m->nu, nz = m->nz;
     int idx[12 + 2 * SR_MAX_JOINTS];
     double sd[12 + 2 * SR_MAX_JOINTS];
     int nc = info_channels(m, idx, sd);
@@ -252,44 +249,55 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
                 dH[a * HS + j] = (Hp[a * HS + j] - Hy[a * HS + j]) / h;
             for (int j = nz; j < nu; j++)
                 dH[a * HS + j] = 0.0;
-            dH[a * HS + nu] = (yp[a] - y[a]) / h;
+            dH[a * HS + nu] = (yp[a] - Hy[a * HS + nu]) / h;
         }
         info_weigh(W, nr, dH, nu + 1, wdH);
         eiv_add(m, sd[c] * sd[c], wdH, N_HH, N_Hy);
     }
-    if (nav)
+    double s2_nav = info_nav_product_var(m);
+    if (s2_nav > 0.0)
         eiv_nav_product(m, s2_nav, (const double (*)[6 * HS])w->nav_g, W, w->nav_wg, N_HH,
                         N_Hy);
-    /* the QR update of [[R d]; [W H  W y]] (Householder, column by column: R's rows below
-       the diagonal are zero, so each reflection touches R's row j and the nr new rows) */
-    double *R = w->R, dv[MU], v[6];
+}
+
+int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double *x,
+                const double *z_lin, sr_info_work *w)
+{
+    if (!m || !d || !x || !z_lin || !w || !(z_lin[0] > 0.0) || !(z_lin[10] > 0.0))
+        return 1;
+    if (!isfinite(t) || (d->samples > 0 && !(t > d->K[SR_THRUST_T])))
+        return 1;                      /* the thrust integrals need increasing times */
+    int nr = m->nr, nu = m->nu;
+    double K[SR_THRUST_LEN], W[36], z[20];
+    memcpy(K, d->K, sizeof K);
+    sr_thrust_integrals_add(K, d->samples == 0, t, x + SR_X_R_S, x + SR_X_F(m->n),
+                            x + SR_X_M(m->n));
+    sr_standard_of_reported(z_lin, z);              /* the linearisation point's z_O */
+    /* the rows and their right-hand side in one block: H (nr x nu) | y in column nu */
+    double Hy[6 * HS], xs[SR_X_LEN(SR_MAX_JOINTS)];
+    info_sample_rows(m, x, K, z, Hy);
+    if (info_sample_weight(m, x, K, z, d->me_var, Hy, W, xs, w) != 0)   /* every sample */
+        return 1;
+    double Wt[6 * HS], e[6];
+    info_weigh(W, nr, Hy, nu + 1, Wt);
+    /* the whiteness test's residual W (y - H u_fit) from the replay on (fit_restart); up to
+       it the rows the QR update leaves below (W (y - H u) at the estimate before the sample:
+       the update's reflections barely touch the new rows once R is large) */
+    for (int a = 0; a < nr && d->fit_at; a++) {
+        double s = Wt[a * HS + nu];
+        for (int j = 0; j < nu; j++)
+            s -= Wt[a * HS + j] * d->u_fit[j];
+        e[a] = s;
+    }
+    double *N_HH = w->N_HH, N_Hy[MU];        /* the new sums, committed when finite */
+    memcpy(N_HH, d->N_HH, sizeof d->N_HH);
+    memcpy(N_Hy, d->N_Hy, sizeof N_Hy);
+    info_eiv_sample(m, x, K, Hy, W, xs, w, N_HH, N_Hy);
+    /* the QR update of [[R d]; [W H  W y]] */
+    double *R = w->R, dv[MU];
     memcpy(R, d->R, sizeof d->R);
     memcpy(dv, d->d, sizeof dv);
-    for (int j = 0; j < nu; j++) {
-        double sigma = 0.0, alpha = R[j * MU + j];
-        for (int a = 0; a < nr; a++)
-            sigma += Wt[a * HS + j] * Wt[a * HS + j];
-        if (sigma == 0.0)
-            continue;
-        double norm = sqrt(alpha * alpha + sigma);
-        double beta = alpha >= 0.0 ? -norm : norm;
-        double v0 = alpha - beta, tau = (beta - alpha) / beta;
-        for (int a = 0; a < nr; a++)
-            v[a] = Wt[a * HS + j] / v0;
-        for (int k = j + 1; k <= nu; k++) {
-            double *rk = k < nu ? &R[j * MU + k] : &dv[j];
-            double s = *rk;
-            for (int a = 0; a < nr; a++)
-                s += v[a] * Wt[a * HS + k];
-            s *= tau;
-            *rk -= s;
-            for (int a = 0; a < nr; a++)
-                Wt[a * HS + k] -= s * v[a];
-        }
-        R[j * MU + j] = beta;
-        for (int a = 0; a < nr; a++)
-            Wt[a * HS + j] = 0.0;
-    }
+    sr_qr_add_rows(R, MU, dv, nu, Wt, HS, nr);
     double rss = d->rss;
     for (int a = 0; a < nr; a++)
         rss += Wt[a * HS + nu] * Wt[a * HS + nu];

@@ -605,6 +605,36 @@ void sr_cholesky_solve(const double *L, int n, double *B, int ncol)
 
 /* -- LU with partial pivoting (report_kernels.lu_solve) -------------------------------------- */
 
+void sr_qr_add_rows(double *R, int ldr, double *d, int n, double *rows, int ldw, int k)
+{
+    int last = d ? n : n - 1;                  /* the last column the reflections update */
+    for (int j = 0; j < n; j++) {
+        double sigma = 0.0, alpha = R[j * ldr + j], v[6];
+        for (int a = 0; a < k; a++)
+            sigma += rows[a * ldw + j] * rows[a * ldw + j];
+        if (sigma == 0.0)
+            continue;
+        double norm = sqrt(alpha * alpha + sigma);
+        double beta = alpha >= 0.0 ? -norm : norm;
+        double v0 = alpha - beta, tau = (beta - alpha) / beta;
+        for (int a = 0; a < k; a++)
+            v[a] = rows[a * ldw + j] / v0;
+        for (int c = j + 1; c <= last; c++) {
+            double *rc = c < n ? &R[j * ldr + c] : &d[j];
+            double s = *rc;
+            for (int a = 0; a < k; a++)
+                s += v[a] * rows[a * ldw + c];
+            s *= tau;
+            *rc -= s;
+            for (int a = 0; a < k; a++)
+                rows[a * ldw + c] -= s * v[a];
+        }
+        R[j * ldr + j] = beta;
+        for (int a = 0; a < k; a++)
+            rows[a * ldw + j] = 0.0;
+    }
+}
+
 int sr_lu_solve(double *A, int n, double *B, int ncol)
 {
     int i, j, c, l;

@@ -9,7 +9,8 @@
  *     its observed directions (sr_scaled_information, sr_scaled_eigh, sr_rcond_scaled,
  *     sr_rcond_of_spectrum, sr_eig_solve);
  *   - sr_eigvalsh_extremes: the smallest and largest eigenvalue alone (the estimator's
- *     excitation diagnostic where its information is well conditioned).
+ *     excitation diagnostic where its information is well conditioned);
+ *   - sr_qr_add_rows: a square-root information's update with a few new rows (Householder).
  * The kernels keep their operation order and thus their results bit for bit where they are
  * vectorised (two entries a step, which the compiler packs; no reassociation).
  *
@@ -35,6 +36,14 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* [[R d]; rows] -> [[R' d']; 0 e]: the square-root information R (n x n upper triangular, row
+ * stride ldr) and its right-hand side d (n; NULL: none, the right-hand side then R's last
+ * column) updated with k <= 6 new rows (row stride ldw: n columns, then d's in column n where
+ * d is given), by Householder reflections column by column (R's rows below the diagonal are
+ * zero, so each touches R's row j and the new rows). The rows are overwritten: their columns
+ * below n zero, column n (with d) the residual e. */
+SR_API void sr_qr_add_rows(double *R, int ldr, double *d, int n, double *rows, int ldw, int k);
 
 /* C = A B.  A (n x k), B (k x m), C (n x m); C must not alias A or B. Same loop order as
  * report_kernels._matmul (C[i][j] += A[i][l] B[l][j], l outer of j). n, k, m >= 0. */

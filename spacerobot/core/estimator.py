@@ -71,7 +71,7 @@ class SrEstimatorOptions(ctypes.Structure):
         ("excite_window", ctypes.c_double), ("excite_settle", ctypes.c_double),
         ("excite_horizon", ctypes.c_double),
         ("modes", ctypes.c_int),
-        ("mode_f", ctypes.c_double * 4), ("fit_window", ctypes.c_double),
+        ("mode_f", ctypes.c_double * 4), ("band", ctypes.c_int), ("fit_window", ctypes.c_double),
         ("fit_lags", ctypes.c_int), ("fit_rho_max", ctypes.c_double),
         ("fit_whiteness_max", ctypes.c_double), ("fit_chi2_max", ctypes.c_double),
         ("fit_thrust_max", ctypes.c_double), ("fit_bias_k", ctypes.c_double),
@@ -93,7 +93,7 @@ class SrEstimatorReport(ctypes.Structure):
         ("excite_score", ctypes.c_double * 2),
         ("mode_f", ctypes.c_double * 4), ("mode_zeta", ctypes.c_double * 4),
         ("model_fit", ctypes.c_double),
-        ("misfit", ctypes.c_int), ("misfit_cause", ctypes.c_int),
+        ("misfit", ctypes.c_int), ("misfit_cause", ctypes.c_int), ("band", ctypes.c_int),
     ]
 
 
@@ -502,7 +502,9 @@ class NativeEstimator:
         ``misfit`` (the model-fit test: diag.model_fit, diag.misfit) and ``misfit_cause``
         (the FMU's Integer diag.misfit_cause as its name: "" without a misfit, "model" where
         the rigid model does not fit (the estimates held), "thrust" where a thrust scale is beyond its prior with white
-        residuals, "noise" for chi2 alone: the noise values too small)."""
+        residuals, "noise" for chi2 alone: the noise values too small); ``band`` (the rigid
+        band's answer reported, ident.band = 1: 1 the low-pass alone, 2 with the compliance
+        block, 0 none)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
         return {
@@ -516,7 +518,7 @@ class NativeEstimator:
             "excite_rate": r.excite_rate, "excite_score": np.array(r.excite_score[:]),
             "mode_f": np.array(r.mode_f[:]), "mode_zeta": np.array(r.mode_zeta[:]),
             "model_fit": r.model_fit, "misfit": bool(r.misfit),
-            "misfit_cause": MISFIT_CAUSES.get(r.misfit_cause, ""),
+            "misfit_cause": MISFIT_CAUSES.get(r.misfit_cause, ""), "band": r.band,
         }
 
     def outputs(self) -> np.ndarray:

@@ -305,7 +305,8 @@ def format_results(result: RunResult, paper: Optional[Mapping[str, float]] = Non
 #: diag.misfit_cause's values (spacerobot.core.estimator.MISFIT_CAUSES) as the verdict tells them
 _MISFIT_TOLD = {
     "model": "the rigid model does not fit (flexible parts, sloshing propellant: the sds carry "
-             "a model-error term and the estimates can be far off)",
+             "a model-error term; the rigid band's estimates where diag.band > 0, else they "
+             "can be far off)",
     "noise": "the noise.* values are too small (the estimates kept, their sds widened)",
     "thrust": "a thrust scale beyond its prior (a miscalibration or slosh: the sds cover the "
               "estimates with the thrust held)",

@@ -1,0 +1,93 @@
+/* The rigid band's stage in the estimator (est_band.h; the band: band.h). */
+#include <math.h>
+#include <string.h>
+
+#include "est_band.h"
+#include "est_fit.h"
+
+static void *band_data(const sr_estimator_model *m, const void *data)
+{
+    return (char *)data + m->off_band;
+}
+
+/* The band's answer (SR_BAND_*; vec, bound, alt, chi2 of it, dof) where it has one and its
+   own rows fit (chi2 within SR_BAND_FIT_MAX of the low-passed noise's), else SR_BAND_NONE */
+static int fitting_answer(const sr_estimator_model *m, const void *data, double *vec,
+                          double *bound, double *alt, double *chi2, double *dof)
+{
+    double x2[2];
+    int pick = sr_band_answer(&m->band_m, band_data(m, data), vec, bound, alt, x2, dof);
+    *chi2 = x2[pick == SR_BAND_COMPLIANCE];
+    return pick != SR_BAND_NONE && *chi2 <= SR_BAND_FIT_MAX * m->band_m.gain ? pick
+                                                                             : SR_BAND_NONE;
+}
+
+size_t est_band_size(const sr_estimator_model *m)
+{
+    return m->band ? sr_band_data_size(&m->band_m, &m->info_m) : 0;
+}
+
+void est_band_init(const sr_estimator_model *m, void *data)
+{
+    if (m->band)
+        sr_band_data_init(&m->band_m, &m->info_m, band_data(m, data));
+}
+
+int est_band_check(const sr_estimator_model *m, const void *data)
+{
+    return m->band && !sr_band_data_valid(&m->band_m, &m->info_m, band_data(m, data));
+}
+
+void est_band_step(const sr_estimator_model *m, void *data, double t, const double *x,
+                   sr_band_work *w)
+{
+    if (!m->band)
+        return;
+    const sr_info_data *fd = est_info_data(m, data);
+    void *bd = band_data(m, data);
+    if (!fd->replayed)
+        return;
+    if (((const sr_band_data *)bd)->added == 0 && fd->samples == SR_INFO_REPLAY + 1) {
+        /* the filter's replay (its kept samples and this one): the band from the filter's
+           buffer at the filter's point (once: where none of them can be added, it starts
+           from the samples to come) */
+        const double *buf = est_info_buffer(m, data);
+        size_t slot = 1 + (size_t)SR_X_LEN(m->n);
+        for (int k = 0; k < SR_INFO_REPLAY; k++)
+            sr_band_add(&m->band_m, &m->info_m, bd, buf[k * slot], buf + k * slot + 1,
+                        fd->z_lin, w);
+    }
+    /* its own answer from its first fitting one on: the filter's own is that of the rigid
+       model, which the band is there for when it does not hold */
+    double z[EST_NZ], bound[EST_NZ], alt[EST_NZ], chi2, dof;
+    if (fitting_answer(m, data, z, bound, alt, &chi2, &dof) == SR_BAND_NONE
+        || !(z[0] > 0.0 && z[10] > 0.0))
+        memcpy(z, fd->z_lin, sizeof z);
+    sr_band_add(&m->band_m, &m->info_m, bd, t, x, z, w);
+}
+
+int est_band_answer(const sr_estimator_model *m, const void *data, double *vec, double *sd)
+{
+    if (!m->band)
+        return SR_BAND_NONE;
+    const sr_band_model *b = &m->band_m;
+    double bound[EST_NZ], x2, dof, v[EST_NZ], alt[EST_NZ];
+    int pick = fitting_answer(m, data, v, bound, alt, &x2, &dof);
+    if (pick == SR_BAND_NONE)
+        return pick;
+    /* the sds: the bound, widened where chi2 is above the low-passed noise's own (under the
+       unfiltered rows' weights the gain); the model-error term over the residual beyond that
+       noise's, (chi2 - gain) dof, as the filter's; and the model-difference term, what the
+       model beside the one taken would answer instead: what the compliance leaves, or what
+       the low-pass misses, is a bias that more rows do not shrink */
+    double k2 = x2 > b->gain ? x2 / b->gain : 1.0;
+    double unit[EST_NZ], var[EST_NZ];
+    for (int i = 0; i < EST_NZ; i++)
+        unit[i] = bound[i] * bound[i];
+    est_fit_model_error_var(m->opt.fit_bias_k_info, unit, (x2 - b->gain) * dof, var);
+    for (int i = 0; i < EST_NZ; i++) {
+        vec[i] = v[i];
+        sd[i] = sqrt(k2 * unit[i] + var[i] + (v[i] - alt[i]) * (v[i] - alt[i]));
+    }
+    return pick;
+}

@@ -1,0 +1,314 @@
+"""The rigid band (native/src/band.c, the estimator's ident.band; docs/identification.md, "The
+rigid band"): the native band against its reference formulation (tests/oracles/band.py:
+scipy's Butterworth, the reference filter's rows, one batch least squares) at one
+linearisation point, and the estimator's answer against the composite rigid truth of flexible
+spacecraft through the realistic sensors."""
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+import pytest
+
+from oracles.band import RowsFilter, band, low_pass
+from oracles.information import noise_vector, sensor_noise, z_of_reported
+from oracles.samples import fmu_identifier, guess_of, parameter_set_samples, sensed
+
+_DP = ctypes.POINTER(ctypes.c_double)
+#: SR_BAND_NSOS (native/src/band.h): the low-pass's second-order sections
+NSOS = 3
+
+
+class BandModel(ctypes.Structure):
+    """sr_band_model (native/src/band.h)."""
+    _fields_ = [("settle", ctypes.c_int), ("nm", ctypes.c_int), ("nl", ctypes.c_int),
+                ("nc", ctypes.c_int), ("n1", ctypes.c_int), ("dt", ctypes.c_double),
+                ("gain", ctypes.c_double), ("sos", (ctypes.c_double * 5) * NSOS)]
+
+
+def _p(a: np.ndarray):
+    return a.ctypes.data_as(_DP)
+
+
+@pytest.fixture(scope="module")
+def lib():
+    from spacerobot.core import load_library
+    L = load_library()
+    vp, d = ctypes.c_void_p, ctypes.c_double
+    L.sr_info_model_init.argtypes = [vp, vp, _DP, _DP, d, d]
+    L.sr_info_model_size.restype = ctypes.c_size_t
+    L.sr_band_model_size.restype = ctypes.c_size_t
+    L.sr_band_work_size.restype = ctypes.c_size_t
+    L.sr_band_model_init.argtypes = [vp, vp, d]
+    L.sr_band_data_size.argtypes = [vp, vp]
+    L.sr_band_data_size.restype = ctypes.c_size_t
+    L.sr_band_data_init.argtypes = [vp, vp, vp]
+    L.sr_band_data_valid.argtypes = [vp, vp, vp]
+    L.sr_band_add.argtypes = [vp, vp, vp, d, _DP, _DP, vp]
+    L.sr_band_solve.argtypes = [vp, vp, vp, vp]
+    L.sr_band_answer.argtypes = [vp, vp, _DP, _DP, _DP, _DP, _DP]
+    assert L.sr_band_model_size() == ctypes.sizeof(BandModel)
+    return L
+
+
+class CBand:
+    """The native band over a native information filter's model (ctypes)."""
+
+    def __init__(self, L, robot, noise, z0, P0_mu, P0_theta, dt):
+        self.L = L
+        self.im = ctypes.create_string_buffer(L.sr_info_model_size())
+        assert L.sr_info_model_init(self.im, ctypes.byref(robot), _p(noise), _p(z0),
+                                    float(P0_mu), float(P0_theta)) == 0
+        self.bm = BandModel()
+        self.status = L.sr_band_model_init(ctypes.byref(self.bm), self.im, float(dt))
+        if self.status == 0:
+            self.data = ctypes.create_string_buffer(L.sr_band_data_size(ctypes.byref(self.bm),
+                                                                        self.im))
+            self.work = ctypes.create_string_buffer(L.sr_band_work_size())
+            L.sr_band_data_init(ctypes.byref(self.bm), self.im, self.data)
+
+    def add(self, t, x, z) -> int:
+        return self.L.sr_band_add(ctypes.byref(self.bm), self.im, self.data, float(t),
+                                  _p(np.ascontiguousarray(x, float)),
+                                  _p(np.ascontiguousarray(z, float)), self.work)
+
+    def answer(self):
+        self.L.sr_band_solve(ctypes.byref(self.bm), self.im, self.data, self.work)
+        vec, bound, alt = np.zeros(20), np.zeros(20), np.zeros(20)
+        chi2, dof = np.zeros(2), np.zeros(1)
+        pick = self.L.sr_band_answer(ctypes.byref(self.bm), self.data, _p(vec), _p(bound),
+                                     _p(alt), _p(chi2), _p(dof))
+        return pick, vec, bound, alt, chi2, float(dof[0])
+
+    def valid(self) -> bool:
+        return bool(self.L.sr_band_data_valid(ctypes.byref(self.bm), self.im, self.data))
+
+
+def _models(lib, sc, dt):
+    """(native band, reference filter) of scenario sc's robot, the sensors' noise model at dt
+    and the scenario's guesses and prior."""
+    from spacerobot.core.robot_record import c_robot
+    from spacerobot.sensors import default_parameters
+    sd, sd_c, sd_b = sensor_noise(default_parameters(), dt)
+    g, robot = sc.guess, c_robot(sc.robot, lib)
+    z0 = guess_of(sc)
+    cb = CBand(lib, robot, noise_vector(sd, sd_c, sd_b), z0, g.P0_mu, g.P0_theta, dt)
+    ref = RowsFilter(lib, robot, sc.robot.n_joints, False, sd, sd_c, g.P0_mu, g.P0_theta,
+                     z_of_reported(z0), sd_gyro_bias=sd_b)
+    ref.eiv = True
+    return cb, ref
+
+
+@pytest.mark.parametrize("dt", [0.01, 0.1, 0.2, 0.5, 2.0])
+def test_low_pass_is_scipy_butter(lib, dt):
+    """The band's low-pass is scipy.signal.butter's (order 6 at 0.15 Hz; the sections may
+    differ, the cascade may not): the same impulse response to round-off, the same
+    white-noise gain, its start 3 / 0.15 s."""
+    from scipy.signal import sosfilt
+    from spacerobot.robots import parameter_set_scenario
+    cb, _ = _models(lib, parameter_set_scenario("spatial", "wings"), dt)
+    assert cb.status == 0
+    sos_ref, gain, settle = low_pass(dt)
+    sos = np.array([[c[0], c[1], c[2], 1.0, c[3], c[4]] for c in cb.bm.sos])
+    impulse = np.zeros(int(round(40.0 / 0.15 / dt)))
+    impulse[0] = 1.0
+    ours, ref = sosfilt(sos, impulse), sosfilt(sos_ref, impulse)
+    np.testing.assert_allclose(ours, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    assert cb.bm.gain == pytest.approx(gain, rel=1e-9)
+    assert cb.bm.settle == settle == round(20.0 / dt)
+
+
+@pytest.mark.parametrize("dt", [0.009, 2.5, float("nan")])
+def test_sample_time_out_of_range_refused(lib, dt):
+    from spacerobot.robots import parameter_set_scenario
+    cb, _ = _models(lib, parameter_set_scenario("spatial", "wings"), 0.1)
+    assert lib.sr_band_model_init(ctypes.byref(BandModel()), cb.im, float(dt)) == 1
+
+
+@pytest.fixture(scope="module")
+def wings_short(lib):
+    """The spatial robot's wings (the issue's size) through the realistic sensors (seed 0),
+    one sample every 0.2 s for 150 s: the native band and the reference's answers, both
+    linearised at the truth."""
+    dt = 0.2
+    sc, XT, truth = parameter_set_samples("spatial", "wings", 150.0, dt)
+    X = sensed(sc, XT, 0, dt)
+    ts = dt * np.arange(len(X))
+    cb, ref = _models(lib, sc, dt)
+    prior = (ref.Rinfo.copy(), ref.d.copy())
+    zt = z_of_reported(truth)
+    settle = low_pass(dt)[2]
+    for k, (t, x) in enumerate(zip(ts, X)):
+        assert cb.add(t, x, truth) == 0
+        ref.eiv = k >= settle                 # the sums over the rows the band uses
+        ref.add(t, x, zt)
+    return cb, cb.answer(), band(ref, prior, ts, X, dt), truth
+
+
+def test_band_is_its_reference(wings_short):
+    """Both variants' chi2, the answer taken, its estimates, bound and degrees of freedom and
+    the alternative's estimates as the reference's batch least squares computes them (the
+    estimates to 1e-6 of the error scale: the prior's 1e-12 information makes the normal
+    equations lose some digits)."""
+    from spacerobot.interface import error_scale
+    cb, (pick, vec, bound, alt, chi2, dof), ref, truth = wings_short
+    assert pick == {"lowpass": 1, "compliance": 2}[ref["pick"]]
+    np.testing.assert_allclose(chi2, [ref["lowpass"][2], ref["compliance"][2]], rtol=1e-7)
+    u, r_bound, _, r_dof, r_vec = ref[ref["pick"]]
+    assert dof == r_dof
+    scale = error_scale(truth)
+    np.testing.assert_allclose(vec / scale, r_vec / scale, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(alt / scale, ref[ref["alt"]][4] / scale, rtol=0, atol=1e-6)
+    # the alternative differs (else the model-difference term would say nothing)
+    assert np.max(np.abs(vec - alt) / scale) > 1e-4
+    np.testing.assert_allclose(bound, r_bound, rtol=1e-6, atol=1e-12 * scale.max())
+    assert cb.valid()
+
+
+def test_band_refuses_bad_samples(wings_short):
+    """A sample not after the last one, non-finite numbers, a linearisation with a mass <= 0:
+    refused, the state unchanged."""
+    cb, *_ = wings_short
+    before = cb.data.raw
+    x = np.zeros(64)
+    z = np.r_[100.0, np.zeros(9), 10.0, np.zeros(9)]
+    assert cb.add(0.0, x, z) == 1                                   # not after the last
+    x_nan = np.full(64, np.nan)
+    assert cb.add(1e6, x_nan, z) == 1
+    z_bad = z.copy()
+    z_bad[0] = -1.0
+    assert cb.add(1e6, x, z_bad) == 1
+    assert cb.data.raw == before
+
+
+def _identify(robot, case, seed, values, dt=0.1, stop=300.0):
+    from spacerobot.robots import parameter_set_scenario
+    from dataclasses import replace
+    if case == "rigid":
+        sc = parameter_set_scenario(robot, "wings")
+        sc = replace(sc, flex=replace(sc.flex, n=0))
+        from oracles.samples import scenario_samples
+        XT, truth = scenario_samples(sc, stop, dt)
+    else:
+        sc, XT, truth = parameter_set_samples(robot, case, stop, dt)
+    X = sensed(sc, XT, seed, dt)
+    ident = fmu_identifier(sc, dt, {"ident.noise_profile": 1, **values})
+    for k, x in enumerate(X):
+        ident.update_flat(dt * k, x)
+    return ident._report(), truth
+
+
+SERVICER = "tests/data/arm5.urdf"
+
+
+@pytest.mark.slow
+def test_band_on_flexible_spacecraft_through_the_sensors():
+    """The issue's wings on the spatial robot and slosh on the held-out servicer (seeds 0, 1;
+    300 s, the realistic sensors, the profile: the band automatic): the band reports, every
+    estimate within 4 % of the composite truth (measured 0.44-3.0 %; the issue's goal is 3 %,
+    which 4 of the 16 flexible runs of benchmarks/BAND.md miss), no flag, 90 % of the
+    estimates within 2 sd (the issue's criterion; measured 80 of 80)."""
+    from pathlib import Path
+    from spacerobot.interface import relative_errors
+    root = Path(__file__).resolve().parents[1]
+    inside = total = 0
+    for robot, case in (("spatial", "wings"), (str(root / SERVICER), "slosh")):
+        for seed in (0, 1):
+            r, truth = _identify(robot, case, seed, {})
+            assert r["misfit_cause"] == "model" and r["band"] in (1, 2), (robot, case, seed)
+            assert relative_errors(r["vector"], truth).max() < 0.04, (robot, case, seed)
+            assert not r["identified"]["base"] and not r["identified"]["target"]
+            inside += int(np.sum(np.abs(r["vector"] - truth) <= 2.0 * r["sd"]))
+            total += 20
+    assert inside >= 0.9 * total, f"{inside} of {total} within 2 sd"
+
+
+@pytest.mark.slow
+def test_band_leaves_a_rigid_spacecraft_alone():
+    """Without flexible parts (the wings' scenario without its panels, the sensors) no misfit
+    is found, the band does not report, and every output is the filter's with the band off."""
+    on, truth = _identify("spatial", "rigid", 0, {})
+    off, _ = _identify("spatial", "rigid", 0, {"ident.band": 2})
+    assert on["band"] == 0 and not on["misfit"]
+    for key in ("vector", "sd", "crb"):
+        np.testing.assert_array_equal(on[key], off[key])
+
+
+def test_band_options_refused():
+    """ident.band = 1 needs the information filter and a sample time it takes: a clear error;
+    automatic (0) is then off."""
+    from spacerobot.robots import parameter_set_scenario
+    sc = parameter_set_scenario("spatial", "wings")
+    with pytest.raises(ValueError, match="ident.band = 1.*needs the information filter"):
+        fmu_identifier(sc, 0.1, {"ident.band": 1})
+    with pytest.raises(ValueError, match="ident.band = 1.*noise_dt from 0.01 to 2"):
+        fmu_identifier(sc, 0.005, {"ident.band": 1, "ident.noise_profile": 1})
+    assert fmu_identifier(sc, 0.005, {"ident.noise_profile": 1}) is not None
+
+
+def test_corrupt_band_state_refused():
+    """A restored Data block whose band counts are out of range (more rows used than samples
+    added) is refused by the state check, with the band named, and by the core's update."""
+    from spacerobot.robots import parameter_set_scenario
+    sc = parameter_set_scenario("spatial", "wings")
+    on = fmu_identifier(sc, 0.1, {"ident.noise_profile": 1})
+    off = fmu_identifier(sc, 0.1, {"ident.noise_profile": 1, "ident.band": 2})
+    state = on.core.get_state()
+    assert on.core.check_state(state) == ""
+    # the band's block is the Data block's last (the modal columns off), 8-byte aligned; its
+    # head: int added, int used, ...: used > added is out of range
+    at = (off.core.size + 7) // 8 * 8
+    bad = bytearray(state)
+    bad[at + 4:at + 8] = (5).to_bytes(4, "little", signed=True)
+    assert "rigid band" in on.core.check_state(bytes(bad))
+    from spacerobot.estimator.identifier import REJECT_NONFINITE
+    _, XT, _ = parameter_set_samples("spatial", "wings", 0.2, 0.1)
+    on.core.set_state(bytes(bad))
+    assert on.update_flat(0.0, XT[0]) == REJECT_NONFINITE
+    assert on.core.get_state() == bytes(bad)                # nothing written
+
+
+def test_band_state_with_a_bad_number_or_count_is_not_valid(wings_short):
+    """sr_band_data_valid: the state after the run is valid; a NaN in its head (the previous
+    sample's time), or more rows used than its samples give, is not."""
+    cb, *_ = wings_short
+    good = cb.data.raw
+    assert cb.valid()
+    head = ctypes.cast(cb.data, ctypes.POINTER(ctypes.c_int))
+    added, used = head[0], head[1]
+    t_prev = ctypes.cast(ctypes.addressof(cb.data) + 16, ctypes.POINTER(ctypes.c_double))
+    try:
+        t_prev[0] = float("nan")
+        assert not cb.valid()
+        ctypes.memmove(cb.data, good, len(good))
+        head[1] = added                          # the first 3 / fc s give no rows
+        assert used < added and not cb.valid()
+    finally:
+        ctypes.memmove(cb.data, good, len(good))
+    assert cb.valid()
+
+
+@pytest.mark.slow
+def test_band_hands_back_where_its_own_rows_do_not_fit():
+    """The issue's wings moved to 0.2 Hz (at the low-pass's edge; the spatial robot, seed 0,
+    300 s): the band's chi2 is far beyond its noise's (measured 530 times), so it does not
+    report (its answer was 71 % off with 13 of 20 within 2 sd) and every output is the held
+    filter's, as with the band off."""
+    from dataclasses import replace
+    from oracles.samples import scenario_samples
+    from spacerobot.robots import parameter_set_scenario
+    sc = parameter_set_scenario("spatial", "wings")
+    f0 = sc.flex.panels[0].f
+    sc = replace(sc, flex=replace(sc.flex, panels=tuple(replace(p, f=p.f * 0.2 / f0)
+                                                        for p in sc.flex.panels)))
+    XT, _ = scenario_samples(sc, 300.0, 0.1)
+    X = sensed(sc, XT, 0, 0.1)
+    out = {}
+    for band in (0, 2):
+        ident = fmu_identifier(sc, 0.1, {"ident.noise_profile": 1, "ident.band": band})
+        for k, x in enumerate(X):
+            ident.update_flat(0.1 * k, x)
+        out[band] = ident._report()
+    assert out[0]["misfit_cause"] == "model" and out[0]["band"] == 0
+    for key in ("vector", "sd", "crb"):
+        np.testing.assert_array_equal(out[0][key], out[2][key])
