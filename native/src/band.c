@@ -258,13 +258,7 @@ static void informations_add(const sr_band_model *b, const sr_info_model *im, vo
 {
     int nr = im->nr, nc = b->nc, nm = b->nm, nl = b->nl, n1 = b->n1, m1 = n1 - nl;
     double *Z = w->row, *WZ = w->wrow;
-    for (int a = nr - 1; a >= 0; a--)          /* W lower triangular */
-        for (int c = 0; c < nc; c++) {
-            double v = 0.0;
-            for (int k = 0; k <= a; k++)
-                v += W[a * nr + k] * Z[k * nc + c];
-            WZ[a * nc + c] = v;
-        }
+    info_weigh(W, nr, Z, nc, nc, WZ);
     double sum = 0.0;
     for (int i = 0; i < nr * nc; i++)
         sum += WZ[i];

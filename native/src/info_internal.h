@@ -47,7 +47,7 @@ void info_nav_mixed(const sr_info_model *m, const double *x, const double *k, co
                     double *xs, double (*V)[6 * HS], double (*G)[6 * HS]);
 int info_noise_weight(const sr_info_model *m, const double *x, const double *z,
                       const double (*G)[6 * HS], const double *me_var, double *W);
-void info_weigh(const double *W, int nr, const double *in, int ncol, double *out);
+void info_weigh(const double *W, int nr, const double *in, int ld, int ncol, double *out);
 /* info_fit.c */
 /* 1 where d's residuals are coloured beyond the model-fit test's threshold and its thrust
    ratio is finite: the fit test's model-error decision (info_fit.c) */

@@ -292,15 +292,15 @@ int info_noise_weight(const sr_info_model *m, const double *x, const double *z,
     return 0;
 }
 
-/* out (nr x ncol, row stride HS) = W (nr x nr lower) times in (same shape) */
-void info_weigh(const double *W, int nr, const double *in, int ncol, double *out)
+/* out (nr x ncol, row stride ld) = W (nr x nr lower) times in (same shape) */
+void info_weigh(const double *W, int nr, const double *in, int ld, int ncol, double *out)
 {
     for (int a = nr - 1; a >= 0; a--)
         for (int j = 0; j < ncol; j++) {
             double s = 0.0;
             for (int b = 0; b <= a; b++)
-                s += W[a * nr + b] * in[b * HS + j];
-            out[a * HS + j] = s;
+                s += W[a * nr + b] * in[b * ld + j];
+            out[a * ld + j] = s;
         }
 }
 

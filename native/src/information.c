@@ -179,7 +179,7 @@ static void eiv_nav_product(const sr_info_model *m, double s2, const double (*G)
                             const double *W, double *wg, double *N_HH, double *N_Hy)
 {
     for (int ij = 0; ij < 9; ij++) {
-        info_weigh(W, m->nr, G[ij], m->nu + 1, wg);
+        info_weigh(W, m->nr, G[ij], HS, m->nu + 1, wg);
         eiv_add(m, -s2, wg, N_HH, N_Hy);
     }
 }
@@ -251,7 +251,7 @@ void info_eiv_sample(const sr_info_model *m, const double *x, const double *K,
                 dH[a * HS + j] = 0.0;
             dH[a * HS + nu] = (yp[a] - Hy[a * HS + nu]) / h;
         }
-        info_weigh(W, nr, dH, nu + 1, wdH);
+        info_weigh(W, nr, dH, HS, nu + 1, wdH);
         eiv_add(m, sd[c] * sd[c], wdH, N_HH, N_Hy);
     }
     double s2_nav = info_nav_product_var(m);
@@ -279,7 +279,7 @@ int sr_info_add(const sr_info_model *m, sr_info_data *d, double t, const double 
     if (info_sample_weight(m, x, K, z, d->me_var, Hy, W, xs, w) != 0)   /* every sample */
         return 1;
     double Wt[6 * HS], e[6];
-    info_weigh(W, nr, Hy, nu + 1, Wt);
+    info_weigh(W, nr, Hy, HS, nu + 1, Wt);
     /* the whiteness test's residual W (y - H u_fit) from the replay on (fit_restart); up to
        it the rows the QR update leaves below (W (y - H u) at the estimate before the sample:
        the update's reflections barely touch the new rows once R is large) */
