@@ -295,12 +295,20 @@ int info_noise_weight(const sr_info_model *m, const double *x, const double *z,
 /* out (nr x ncol, row stride ld) = W (nr x nr lower) times in (same shape) */
 void info_weigh(const double *W, int nr, const double *in, int ld, int ncol, double *out)
 {
+    /* bottom row first (out may be in); each entry's sum over b in order, the columns
+       innermost (contiguous) in blocks of 64 */
     for (int a = nr - 1; a >= 0; a--)
-        for (int j = 0; j < ncol; j++) {
-            double s = 0.0;
-            for (int b = 0; b <= a; b++)
-                s += W[a * nr + b] * in[b * ld + j];
-            out[a * ld + j] = s;
+        for (int j0 = 0; j0 < ncol; j0 += 64) {
+            int nj = ncol - j0 < 64 ? ncol - j0 : 64;
+            double s[64];
+            for (int j = 0; j < nj; j++)
+                s[j] = 0.0;
+            for (int b = 0; b <= a; b++) {
+                const double wab = W[a * nr + b], *r = in + b * ld + j0;
+                for (int j = 0; j < nj; j++)
+                    s[j] += wab * r[j];
+            }
+            memcpy(out + a * ld + j0, s, sizeof(double) * (size_t)nj);
         }
 }
 

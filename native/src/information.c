@@ -152,17 +152,25 @@ static void eiv_add(const sr_info_model *m, double s2, const double *wdH, double
                     double *N_Hy)
 {
     int nz = m->nz, nr = m->nr, nu = m->nu;
+    /* the upper triangle, mirrored (the products commute: the same numbers), each row's
+       sums over the rows a in order with q innermost (contiguous) */
     for (int p = 0; p < nz; p++) {
-        for (int q = 0; q < nz; q++) {
-            double s = 0.0;
-            for (int a = 0; a < nr; a++)
-                s += wdH[a * HS + p] * wdH[a * HS + q];
-            N_HH[p * MU + q] += s2 * s;
+        double s[MU], sy = 0.0;
+        for (int q = p; q < nz; q++)
+            s[q] = 0.0;
+        for (int a = 0; a < nr; a++) {
+            const double *r = wdH + a * HS;
+            double wp = r[p];
+            for (int q = p; q < nz; q++)
+                s[q] += wp * r[q];
+            sy += wp * r[nu];
         }
-        double s = 0.0;
-        for (int a = 0; a < nr; a++)
-            s += wdH[a * HS + p] * wdH[a * HS + nu];
-        N_Hy[p] += s2 * s;
+        for (int q = p; q < nz; q++) {
+            N_HH[p * MU + q] += s2 * s[q];
+            if (q != p)
+                N_HH[q * MU + p] += s2 * s[q];
+        }
+        N_Hy[p] += s2 * sy;
     }
 }
 

@@ -619,15 +619,33 @@ void sr_qr_add_rows(double *R, int ldr, double *d, int n, double *rows, int ldw,
         double v0 = alpha - beta, tau = (beta - alpha) / beta;
         for (int a = 0; a < k; a++)
             v[a] = rows[a * ldw + j] / v0;
-        for (int c = j + 1; c <= last; c++) {
-            double *rc = c < n ? &R[j * ldr + c] : &d[j];
-            double s = *rc;
-            for (int a = 0; a < k; a++)
-                s += v[a] * rows[a * ldw + c];
-            s *= tau;
-            *rc -= s;
-            for (int a = 0; a < k; a++)
-                rows[a * ldw + c] -= s * v[a];
+        /* the columns j+1 .. last in blocks of 64, innermost (contiguous); each column's
+           s = tau (R_jc + sum_a v_a rows_ac) summed over a in order */
+        for (int c0 = j + 1; c0 <= last; c0 += 64) {
+            int nb = last + 1 - c0 < 64 ? last + 1 - c0 : 64;
+            int nR = c0 + nb <= n ? nb : n - c0;       /* of them in R (the rest is d) */
+            double s[64];
+            for (int i = 0; i < nR; i++)
+                s[i] = R[j * ldr + c0 + i];
+            if (nR < nb)
+                s[nR] = d[j];
+            for (int a = 0; a < k; a++) {
+                const double va = v[a], *r = rows + a * ldw + c0;
+                for (int i = 0; i < nb; i++)
+                    s[i] += va * r[i];
+            }
+            for (int i = 0; i < nb; i++)
+                s[i] *= tau;
+            for (int i = 0; i < nR; i++)
+                R[j * ldr + c0 + i] -= s[i];
+            if (nR < nb)
+                d[j] -= s[nR];
+            for (int a = 0; a < k; a++) {
+                const double va = v[a];
+                double *r = rows + a * ldw + c0;
+                for (int i = 0; i < nb; i++)
+                    r[i] -= s[i] * va;
+            }
         }
         R[j * ldr + j] = beta;
         for (int a = 0; a < k; a++)
