@@ -252,8 +252,8 @@ static int sample_rows(const sr_band_model *b, const sr_info_model *im, const vo
 }
 
 /* The sample's low-passed rows Zf (nr x nc, in w->row), weighted by W, into the three
-   informations (not where the weighted rows are not finite: an overflow) */
-static void informations_add(const sr_band_model *b, const sr_info_model *im, void *data,
+   informations (not where the weighted rows are not finite: an overflow). 1 where added. */
+static int informations_add(const sr_band_model *b, const sr_info_model *im, void *data,
                              const double *W, sr_band_work *w)
 {
     int nr = im->nr, nc = b->nc, nm = b->nm, nl = b->nl, n1 = b->n1, m1 = n1 - nl;
@@ -263,7 +263,7 @@ static void informations_add(const sr_band_model *b, const sr_info_model *im, vo
     for (int i = 0; i < nr * nc; i++)
         sum += WZ[i];
     if (!isfinite(sum))
-        return;
+        return 0;
     /* the first filter's compliance's rows [M1 | H | y] and the low-pass's [H | y] (in Z, no
        longer needed: nr (n1 + nl) <= nr nc) */
     double *Z1 = Z, *Zl = Z + nr * n1;
@@ -278,6 +278,7 @@ static void informations_add(const sr_band_model *b, const sr_info_model *im, vo
     sr_band_data *s = (sr_band_data *)data;
     if (s->used < s->added - b->settle)        /* (added saturates: so does it) */
         s->used++;
+    return 1;
 }
 
 int sr_band_add(const sr_band_model *b, const sr_info_model *im, void *data, double t,
@@ -318,9 +319,8 @@ int sr_band_add(const sr_band_model *b, const sr_info_model *im, void *data, dou
         s->added++;
     if (!used)
         return 0;
-    informations_add(b, im, data, W, w);
-    if (s->used % SR_BAND_SOLVE_EVERY == 0)
-        sr_band_solve(b, im, data, w);
+    if (informations_add(b, im, data, W, w) && s->used % SR_BAND_SOLVE_EVERY == 0)
+        sr_band_solve(b, im, data, w);      /* (a skipped row solves nothing again) */
     return 0;
 }
 
