@@ -205,9 +205,9 @@ SERVICER = "tests/data/arm5.urdf"
 def test_band_on_flexible_spacecraft_through_the_sensors():
     """The issue's wings on the spatial robot and slosh on the held-out servicer (seeds 0, 1;
     300 s, the realistic sensors, the profile: the band automatic): the band reports, every
-    estimate within 4 % of the composite truth (measured 0.44-3.0 %; the issue's goal is 3 %,
-    which 4 of the 16 flexible runs of benchmarks/BAND.md miss), no flag, 90 % of the
-    estimates within 2 sd (the issue's criterion; measured 80 of 80)."""
+    estimate within 4 % of the composite truth (measured 0.52-3.0 %; the issue's goal is 3 %,
+    which 2 of the 16 flexible runs of benchmarks/BAND.md miss, by 0.08 and 0.11 points), no
+    flag, 90 % of the estimates within 2 sd (the issue's criterion; measured 80 of 80)."""
     from pathlib import Path
     from spacerobot.interface import relative_errors
     root = Path(__file__).resolve().parents[1]
@@ -221,6 +221,25 @@ def test_band_on_flexible_spacecraft_through_the_sensors():
             inside += int(np.sum(np.abs(r["vector"] - truth) <= 2.0 * r["sd"]))
             total += 20
     assert inside >= 0.9 * total, f"{inside} of {total} within 2 sd"
+
+
+@pytest.mark.slow
+def test_servicer_wings_within_the_issue_goal():
+    """The issue's wings on the held-out servicer through the sensors, the two seeds of
+    benchmarks/BAND.md that missed the issue's 3 % before the band re-linearised its replay
+    (4.61 % and 3.53 %, the filter's rigid point 465 % off): every estimate within 3 % of the
+    composite truth (measured 2.93 % and 1.67 %), the compliance's answer reporting, no flag,
+    at least 18 of 20 within 2 sd (measured 20 and 20)."""
+    from pathlib import Path
+    from spacerobot.interface import relative_errors
+    robot = str(Path(__file__).resolve().parents[1] / SERVICER)
+    for seed in (0, 3):
+        r, truth = _identify(robot, "wings", seed, {})
+        assert r["misfit_cause"] == "model" and r["band"] == 2, seed
+        assert relative_errors(r["vector"], truth).max() < 0.03, \
+            (seed, relative_errors(r["vector"], truth).max())
+        assert not r["identified"]["base"] and not r["identified"]["target"]
+        assert int(np.sum(np.abs(r["vector"] - truth) <= 2.0 * r["sd"])) >= 18, seed
 
 
 @pytest.mark.slow
