@@ -19,8 +19,10 @@ int est_band_check(const sr_estimator_model *m, const void *data);
 /* The committed sample x at t (after the information filter's commit): nothing before the
  * filter's replay (SR_INFO_REPLAY samples: 60 s at 0.1 s); there the band starts with the
  * filter's replay buffer, linearised (the rows' weights, the gyro bias's columns) at the
- * filter's point; from its first answer on at that answer. A sample the band cannot add
- * (rows not finite) is left out of it. */
+ * filter's point, and where the low-pass alone does not fit those rows, again at its own
+ * first answer, kept where its rows fit that better (else the first replay again); from its
+ * first answer on at that answer. A sample
+ * the band cannot add (rows not finite) is left out of it. */
 void est_band_step(const sr_estimator_model *m, void *data, double t, const double *x,
                    sr_band_work *w);
 
