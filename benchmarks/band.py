@@ -10,8 +10,8 @@ level 1, the recording of tests/oracles/samples.py), the profile with the band a
 of the 20 estimates against the composite rigid truth (relative to the error scale,
 spacerobot.interface), the estimates within 2 reported sd, whether a body is flagged, the
 model-fit test's cause at 300 s, `diag.band` (1 the low-pass, 2 the compliance), the time from
-which the band reports, and the estimator's CPU time for the 300 s (the set-up and the samples
-excluded) with its ratio to `off` (one run each, the two interleaved per case).
+which the band reports, and the estimating thread's CPU time for the 300 s (the set-up and
+the samples excluded) with its ratio to `off` (one run each, the two interleaved per case).
 
 Usage: ``python benchmarks/band.py [--seeds 0 1 2 3] [--workers 2] [--out benchmarks/BAND.md]``
 """
@@ -48,9 +48,9 @@ def run(sc, X, truth, band: int) -> dict:
     ident = fmu_identifier(sc, DT, {"ident.noise_profile": 1, "ident.band": band})
     since, cpu = None, 0.0
     for k, x in enumerate(X):
-        t0 = time.process_time()
+        t0 = time.thread_time()
         ident.update_flat(DT * k, x)
-        cpu += time.process_time() - t0
+        cpu += time.thread_time() - t0
         if since is None and ident._report()["band"]:
             since = DT * k
     r = ident._report()
@@ -73,27 +73,37 @@ def study(job):
     return robot, case, seed, out
 
 
-def main(argv=None) -> int:
+def seeds_study(study, script: str, title: str, cases, default_out: str, argv=None):
+    """The command line of a study over ROBOTS, ``cases`` and sensors seeds (``--seeds``,
+    ``--workers``, ``--out``): ``study((robot, case, seed))`` for each, in a pool; returns the
+    results, the table's heading lines and the output path."""
     import argparse
     import datetime as _dt
     import platform
     from multiprocessing import Pool
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(description=f"{title} (writes {Path(default_out).name})")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--out", default=str(Path(__file__).with_name("BAND.md")))
+    ap.add_argument("--out", default=default_out)
     a = ap.parse_args(argv)
-    jobs = [(r, c, s) for r in ROBOTS for c in CASES for s in a.seeds]
+    jobs = [(r, c, s) for r in ROBOTS for c in cases for s in a.seeds]
     t0 = time.perf_counter()
     with Pool(a.workers) as pool:
         results = pool.map(study, jobs)
     wall = time.perf_counter() - t0
-    lines = ["# The rigid band as shipped", "",
-             f"`python benchmarks/band.py --seeds {' '.join(map(str, a.seeds))}`, "
-             f"{_dt.date.today()}, {platform.machine()}, {wall / 60:.1f} min with "
-             f"{a.workers} workers. What it computes: the module's docstring. Each run is "
-             "deterministic (a seed's samples are the same on every run); the spread is over "
-             "the seeds.", "",
+    head = [f"# {title}", "",
+            f"`python benchmarks/{script} --seeds {' '.join(map(str, a.seeds))}`, "
+            f"{_dt.date.today()}, {platform.machine()}, {wall / 60:.1f} min with "
+            f"{a.workers} workers. What it computes: the module's docstring. Each run is "
+            "deterministic (a seed's samples are the same on every run); the spread is over "
+            "the seeds.", ""]
+    return results, head, a.out
+
+
+def main(argv=None) -> int:
+    results, head, path = seeds_study(study, "band.py", "The rigid band as shipped", CASES,
+                                     str(Path(__file__).with_name("BAND.md")), argv)
+    lines = head + [
              "| robot | case | seed | band: worst % / within 2 sd | cause | diag.band | "
              "reports from [s] | off: worst % / within 2 sd | flagged | CPU band / off [s] |",
              "|---|---|---|---|---|---|---|---|---|---|"]
@@ -106,8 +116,8 @@ def main(argv=None) -> int:
                      f"{'yes' if b['flagged'] or o['flagged'] else 'no'} | "
                      f"{b['cpu']:.2f} / {o['cpu']:.2f} |")
     lines += ["", summary(results)]
-    Path(a.out).write_text("\n".join(lines) + "\n")
-    print(f"wrote {a.out}")
+    Path(path).write_text("\n".join(lines) + "\n")
+    print(f"wrote {path}")
     return 0
 
 

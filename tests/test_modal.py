@@ -19,7 +19,8 @@ flexible plant (native/src/plant_leaves.c; docs/models.md 'Flexible appendages a
 * through the sensors (their realistic defaults, seed 0, the noise profile: its 5 s window,
   the thrust's consider term), the joint solver with the columns on the `wings` and `slosh`
   sets: at least 18 of the 20 estimates within 2 reported sd of the composite truth, and the
-  wings' worst error below 10 %;
+  wings' worst error below 10 %; beside the profile's filter and band, the columns report
+  where the band hands back (wings at 0.2 Hz: below 5 %, against the held filter's 90 %);
 * the rules: the modal columns need the momentum method and the joint solver; a given
   frequency below 0.05 Hz is refused; the state round trip carries the modes (with the window
   too: its ring of the filters' states); a state whose ring names another sample is refused.
@@ -267,23 +268,35 @@ def test_sensors_windowed_columns_sd_cover_the_error(name, amplitude):
         assert worst < 0.10
 
 
-def test_filter_reports_the_columns_under_a_coloured_misfit():
-    """The profile's information filter with the modal columns beside it (ident.modes = 1,
-    ident.information as the profile sets it; the rigid band off, which would report before
-    them: tests/test_band.py), the `wings` set through the sensors (seed 0),
-    300 s: the filter finds the rigid model's misfit (coloured residuals), the columns a mode
-    near 0.5 Hz, so the joint solver with the columns reports: worst error below 10 %
-    (measured 5.5 %; the held filter, as before, 56.5 %), >= 18 of 20 within 2 sd (measured
-    20), misfit, no flag. The `slosh` set's misfit is the thrust scale's, not coloured: the
-    filter still reports (its estimates those of the run without the columns, within 1e-9)."""
+def _slow_wings(f_hz: float):
+    """The `wings` set with the panels' cantilevered frequency moved to f_hz: scenario,
+    noise-free samples every DT, composite truth."""
+    from dataclasses import replace
+    from oracles.samples import scenario_samples
+    sc = parameter_set_scenario("spatial", "wings")
+    panels = tuple(replace(p, f=f_hz) for p in sc.flex.panels)
+    sc = replace(sc, flex=replace(sc.flex, panels=panels))
+    return (sc, *scenario_samples(sc, T_END, DT))
+
+
+def test_columns_report_where_the_band_hands_back():
+    """The library with the modal columns beside the profile (ident.modes = 1, the joint
+    solver; the rigid band automatic, on by the profile), through the sensors (seed 0), 300 s.
+    The `wings` set at 0.2 Hz: the band's own rows do not fit (diag.band 0: the low-pass at
+    0.15 Hz damps the mode too little), the filter finds the rigid model's misfit, the columns
+    a mode near 0.2 Hz, so the joint solver with the columns reports: worst error below 5 %
+    (measured 1.78 %; seeds 0-3 1.78-11.6 %, benchmarks/LOW_MODES.md), >= 18 of 20 within
+    2 sd (measured 20); without the columns the held filter's answer stays, far off (measured
+    89.7 %) but covered (>= 16 of 20 within 2 sd, measured 18); misfit, no flag in either.
+    The `slosh` set's misfit is the thrust scale's, not coloured: the filter still reports
+    (its estimates those of the run without the columns, within 1e-9)."""
     from spacerobot.sensors import SensorSuite
     for name in ("wings", "slosh"):
-        sc, xs, truth = _record(name)
+        sc, xs, truth = _slow_wings(0.2) if name == "wings" else _record(name)
         est = {}
         for modes in (1, 2):
             ident = fmu_identifier(sc, DT, {"method": 1, "solver": 2, "ident.modes": modes,
-                                            "ident.noise_profile": 1, "noise.scale": 1.0,
-                                            "ident.band": 2})
+                                            "ident.noise_profile": 1, "noise.scale": 1.0})
             suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=0, dt=DT)
             flagged = False
             for k, x in enumerate(xs):
@@ -292,14 +305,18 @@ def test_filter_reports_the_columns_under_a_coloured_misfit():
                 flagged |= rep["identified"]["base"] or rep["identified"]["target"]
             est[modes] = np.asarray(ident.vector())
             assert rep["misfit"] and not flagged, (name, modes)
-            if modes == 1 and name == "wings":
+            if name == "wings":
                 sd = np.asarray(ident.std())
-                worst = relative_errors(est[1], truth).max()
-                within = int(np.sum(np.abs(est[1] - truth) <= 2.0 * sd))
-                print(f"wings, filter + columns: worst {100 * worst:.2f} %, {within} of 20")
-                assert rep["misfit_cause"] == "model"
-                assert np.any(np.abs(rep["mode_f"] - 0.5) < 0.02), rep["mode_f"]
-                assert worst < 0.10 and within >= 18
+                worst = relative_errors(est[modes], truth).max()
+                within = int(np.sum(np.abs(est[modes] - truth) <= 2.0 * sd))
+                print(f"wings at 0.2 Hz, modes {modes}: worst {100 * worst:.2f} %, "
+                      f"{within} of 20 within 2 sd, mode_f {rep['mode_f']}")
+                assert rep["misfit_cause"] == "model" and rep["band"] == 0
+                if modes == 1:
+                    assert np.any(np.abs(rep["mode_f"] - 0.2) < 0.005), rep["mode_f"]
+                    assert worst < 0.05 and within >= 18
+                else:
+                    assert worst > 0.3 and within >= 16
         if name == "slosh":
             assert rep["misfit_cause"] == "thrust"
             assert relative_errors(est[1], est[2]).max() < 1e-9     # round-off apart
