@@ -17,10 +17,13 @@ Usage: ``python benchmarks/band.py [--seeds 0 1 2 3] [--workers 2] [--out benchm
 """
 from __future__ import annotations
 
+import os
 import sys
 import time
 from dataclasses import replace
 from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")     # one BLAS thread: thread_time is the CPU
 
 import numpy as np
 

@@ -28,12 +28,15 @@ on its base). Every case is a separate process (--jobs at a time).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from functools import partial
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")     # one BLAS thread: thread_time is the CPU
 
 import numpy as np
 

@@ -604,7 +604,7 @@ def noise_model_vars() -> List[Var]:
               "composite rigid body's (with ident.momentum_window, each sample's columns "
               "differenced against the window's reference, as its rows; beside the information "
               "filter, their estimates are reported where the filter finds the rigid model's "
-              "misfit and a mode is found, unless the rigid band has an answer: where a part's "
+              "misfit and a mode is found, unless the rigid band has an answer: where the wings' "
               "mode lies at 0.2-0.3 Hz it has none, and the columns bring the wings from the "
               "held filter's 163-323 % to 1.8-14.8 %). 1 = on (needs method = 1, solver = 2), "
               "2 = off",

@@ -287,7 +287,9 @@ def test_columns_report_where_the_band_hands_back():
     a mode near 0.2 Hz, so the joint solver with the columns reports: worst error below 5 %
     (measured 1.78 %; seeds 0-3 1.78-11.6 %, benchmarks/LOW_MODES.md), >= 18 of 20 within
     2 sd (measured 20); without the columns the held filter's answer stays, far off (measured
-    89.7 %) but covered (>= 16 of 20 within 2 sd, measured 18); misfit, no flag in either.
+    89.7 % on the least-squares estimates scored here, ident.vector(); the FMU's outputs,
+    after the physical projection, 270 %) but covered (>= 16 of 20 within 2 sd, measured 18);
+    misfit, no flag in either.
     The `slosh` set's misfit is the thrust scale's, not coloured: the filter still reports
     (its estimates those of the run without the columns, within 1e-9)."""
     from spacerobot.sensors import SensorSuite
