@@ -76,10 +76,11 @@ def study(job):
     return robot, case, seed, out
 
 
-def seeds_study(study, script: str, title: str, cases, default_out: str, argv=None):
+def seeds_study(study, script: str, title: str, cases, default_out: str, table, summary,
+                argv=None) -> int:
     """The command line of a study over ROBOTS, ``cases`` and sensors seeds (``--seeds``,
-    ``--workers``, ``--out``): ``study((robot, case, seed))`` for each, in a pool; returns the
-    results, the table's heading lines and the output path."""
+    ``--workers``, ``--out``): ``study((robot, case, seed))`` for each, in a pool; writes the
+    heading, ``table(results)`` (the table's lines) and ``summary(results)`` to the output."""
     import argparse
     import datetime as _dt
     import platform
@@ -100,14 +101,20 @@ def seeds_study(study, script: str, title: str, cases, default_out: str, argv=No
             f"{a.workers} workers. What it computes: the module's docstring. Each run is "
             "deterministic (a seed's samples are the same on every run); the spread is over "
             "the seeds.", ""]
-    return results, head, a.out
+    lines = head + table(results) + ["", summary(results)]
+    Path(a.out).write_text("\n".join(lines) + "\n")
+    print(f"wrote {a.out}")
+    return 0
 
 
 def main(argv=None) -> int:
-    results, head, path = seeds_study(study, "band.py", "The rigid band as shipped", CASES,
-                                     str(Path(__file__).with_name("BAND.md")), argv)
-    lines = head + [
-             "| robot | case | seed | band: worst % / within 2 sd | cause | diag.band | "
+    return seeds_study(study, "band.py", "The rigid band as shipped", CASES,
+                       str(Path(__file__).with_name("BAND.md")), table, summary, argv)
+
+
+def table(results) -> list:
+    """The table's lines: a row per robot, case and seed."""
+    lines = ["| robot | case | seed | band: worst % / within 2 sd | cause | diag.band | "
              "reports from [s] | off: worst % / within 2 sd | flagged | CPU band / off [s] |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for robot, case, seed, out in results:
@@ -118,10 +125,7 @@ def main(argv=None) -> int:
                      f"{o['worst']:.3g} / {o['within']} | "
                      f"{'yes' if b['flagged'] or o['flagged'] else 'no'} | "
                      f"{b['cpu']:.2f} / {o['cpu']:.2f} |")
-    lines += ["", summary(results)]
-    Path(path).write_text("\n".join(lines) + "\n")
-    print(f"wrote {path}")
-    return 0
+    return lines
 
 
 def summary(results) -> str:

@@ -81,20 +81,21 @@ def study(job):
 
 def main(argv=None) -> int:
     from band import seeds_study
-    results, head, path = seeds_study(study, "low_modes.py", TITLE, CASES,
-                                     str(Path(__file__).with_name("LOW_MODES.md")), argv)
-    lines = head + ["| robot | case | seed | set-up | worst % | within 2 sd | cause | "
-                    "diag.band | modes at 300 s [Hz] | flagged | CPU [s] |",
-                    "|---|---|---|---|---|---|---|---|---|---|---|"]
+    return seeds_study(study, "low_modes.py", TITLE, CASES,
+                       str(Path(__file__).with_name("LOW_MODES.md")), table, summary, argv)
+
+
+def table(results) -> list:
+    """The table's lines: a row per robot, case, seed and set-up."""
+    lines = ["| robot | case | seed | set-up | worst % | within 2 sd | cause | diag.band | "
+             "modes at 300 s [Hz] | flagged | CPU [s] |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for robot, case, seed, out in results:
         for s, o in out.items():
             lines.append(f"| {Path(robot).stem} | {case} | {seed} | {s} | {o['worst']:.3g} | "
                          f"{o['within']} | {o['cause']} | {o['band']} | {o['modes']} | "
                          f"{'yes' if o['flagged'] else 'no'} | {o['cpu']:.1f} |")
-    lines += ["", summary(results)]
-    Path(path).write_text("\n".join(lines) + "\n")
-    print(f"wrote {path}")
-    return 0
+    return lines
 
 
 def summary(results) -> str:

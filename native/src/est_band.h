@@ -21,8 +21,8 @@ int est_band_check(const sr_estimator_model *m, const void *data);
  * filter's replay buffer, linearised (the rows' weights, the gyro bias's columns) at the
  * filter's point, and where the low-pass alone does not fit those rows, again at its own
  * first answer, kept where its rows fit that better (else the first replay again); from its
- * first answer on at that answer. A sample
- * the band cannot add (rows not finite) is left out of it. */
+ * first answer on at that answer. A sample the band cannot add (rows not finite) is left out
+ * of it. */
 void est_band_step(const sr_estimator_model *m, void *data, double t, const double *x,
                    sr_band_work *w);
 
