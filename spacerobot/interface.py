@@ -606,7 +606,7 @@ def noise_model_vars() -> List[Var]:
               "filter, their estimates are reported where the filter finds the rigid model's "
               "misfit and a mode is found, unless the rigid band has an answer: where the wings' "
               "mode lies at 0.2-0.3 Hz it has none, and the columns bring the wings from the "
-              "held filter's 161-323 % to 1.8-15.4 %, sensors seeds 0-7). 1 = on (needs "
+              "held filter's 161-323 % to 1.95-12.4 %, sensors seeds 0-7). 1 = on (needs "
               "method = 1, solver = 2), 2 = off",
               2, ("modes",))]
     v += [Var(f"ident.mode_f[{i + 1}]", "parameter", "fixed", "Real", "Hz",

@@ -10,6 +10,25 @@ void est_noise_begin(double lam, int has, const double *N_old, int n, double *N)
         N[i] = !has ? 0.0 : lam == 1.0 ? N_old[i] : lam * N_old[i];
 }
 
+void est_compensate(const double *S, const double *N, int n, int q, const double *x,
+                    double *xc)
+{
+    double G[20 * 20] = {0.0}, rhs[20], dx[20], lam[20], *V = G, d[20];     /* (V in place) */
+    int un[20], u[20];
+    for (int i = 0; i < q; i++) {
+        double s = 0.0;
+        for (int j = 0; j < q; j++) {
+            G[i * q + j] = S[i * n + j] - N[i * n + j];
+            s += N[i * n + j] * x[j];
+        }
+        rhs[i] = s - N[i * n + q];                     /* N_HH x_r - N_Hy */
+    }
+    sr_scaled_eigh(G, q, lam, V, d, un);
+    sr_eig_solve(lam, V, d, un, rhs, q, dx, u);
+    for (int i = 0; i < q; i++)
+        xc[i] = x[i] + dx[i];
+}
+
 void est_compensated_covariance(const double *S, const double *N, int n, int q,
                                 const double *P, double *out)
 {

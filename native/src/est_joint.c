@@ -234,28 +234,17 @@ static void noise_gram(const sr_estimator_model *m, const est_core *old, const d
     }
 }
 
-/* the bias-compensated standard parameters (est_eiv.h, eq. 2):
- * pi_c = x_r + dx, (S_HH - N_HH) dx = N_HH x_r - N_Hy in the directions S - N observes
- * (a direction the noise swamps is left uncorrected) */
+/* the bias-compensated standard parameters (est_eiv.h, eq. 2) */
 static void compensate(const sr_estimator_model *m, est_core *nw)
 {
-    int q = m->q, nj = q + 1;
-    double G[EST_NZ * EST_NZ] = {0.0}, rhs[EST_NZ], dx[EST_NZ], lam_e[EST_NZ];
-    double *V = G, d[EST_NZ];                /* (in place) */
-    int un[EST_NZ], u[EST_NZ];
-    for (int i = 0; i < q; i++) {
-        double s = 0.0;
-        for (int j = 0; j < q; j++) {
-            G[i * q + j] = nw->S_pi[i * nj + j] - nw->N_pi[i * nj + j];
-            s += nw->N_pi[i * nj + j] * nw->pi[m->std_active[j]];
-        }
-        rhs[i] = s - nw->N_pi[i * nj + q];
-    }
-    sr_scaled_eigh(G, q, lam_e, V, d, un);
-    sr_eig_solve(lam_e, V, d, un, rhs, q, dx, u);
+    int q = m->q;
+    double x[EST_NZ], xc[EST_NZ];
+    for (int i = 0; i < q; i++)
+        x[i] = nw->pi[m->std_active[i]];
+    est_compensate(nw->S_pi, nw->N_pi, q + 1, q, x, xc);
     memcpy(nw->pi_c, nw->pi, sizeof nw->pi_c);
     for (int i = 0; i < q; i++)
-        nw->pi_c[m->std_active[i]] = nw->pi[m->std_active[i]] + dx[i];
+        nw->pi_c[m->std_active[i]] = xc[i];
 }
 
 /* nw->sd with the thrust's consider variance (est_consider.h): d pi / d c = G^-1 C, G the

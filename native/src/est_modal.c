@@ -9,7 +9,9 @@
 
 #include "est_consider.h"
 #include "est_corr.h"
+#include "est_eiv.h"
 #include "est_joint.h"
+#include "est_rls.h"
 #include "linalg.h"
 #include "sr_math.h"
 #include "standard_params.h"
@@ -385,10 +387,12 @@ static void solve_add(const sr_estimator_model *m, void *data, double *rows, int
 
 /* the rigid unknowns' answer z (20; the unidentified at their guesses) and covariance C (20 x
  * 20: the prior's where unidentified) from R's last q x q block: R_qq z_q = d_q,
- * C_qq = s2 R_qq^-1 R_qq^-T, s2 = rss / (rows - n); with the consider term their shift in
- * the thrust's errors, shift (20 x 8) = dz/dc = R_qq^-1 D_c,q (0 where unidentified) */
+ * C_qq = s2 R_qq^-1 R_qq^-T, s2 = rss / (rows - n); with the window rows' noise N
+ * (est_modal.h) z_q compensated and C_qq = K C K^T (est_eiv.h); with the consider term their
+ * shift in the thrust's errors, shift (20 x 8) = dz/dc = R_qq^-1 D_c,q (0 where
+ * unidentified); w's gram the scratch */
 static void solve_rigid(const sr_estimator_model *m, void *data, double *z, double *C,
-                        double *Rinv, double *shift)
+                        double *Rinv, double *shift, est_modal_work *w)
 {
     est_modal_data *s = state(m, data);
     int q = m->q, nm = s->n_f * EST_MODAL_COLS, n = nm + q;
@@ -399,6 +403,23 @@ static void solve_rigid(const sr_estimator_model *m, void *data, double *z, doub
         for (int j = i + 1; j < q; j++)
             acc -= R[(size_t)(nm + i) * n + nm + j] * x[j];
         x[i] = acc / R[(size_t)(nm + i) * n + nm + i];
+    }
+    /* the errors in variables: S = R_qq^T [R_qq d_q] the reduced Gram matrix of [H | yy]
+       (est_modal.h), the answer compensated for the rows' noise N (eq. 2) */
+    int nj = q + 1, eiv = m->n_win > 0 && s->rows > 0.0;
+    double *S = w->gram;
+    if (eiv) {
+        for (int i = 0; i < q; i++)
+            for (int j = 0; j < nj; j++) {
+                double acc = 0.0;
+                for (int l = 0; l <= i && l <= j; l++)
+                    acc += R[(size_t)(nm + l) * n + nm + i]
+                           * (j < q ? R[(size_t)(nm + l) * n + nm + j] : d[nm + l]);
+                S[i * nj + j] = acc;
+            }
+        double xc[EST_NZ];
+        est_compensate(S, s->N, nj, q, x, xc);
+        memcpy(x, xc, sizeof xc);
     }
     memcpy(z, m->pi0_full, sizeof(double) * EST_NZ);
     for (int i = 0; i < q; i++)
@@ -424,16 +445,25 @@ static void solve_rigid(const sr_estimator_model *m, void *data, double *z, doub
             }
     }
     double dof = s->rows - n, s2 = dof > 0.0 ? s->rss / dof : 1.0;
-    memset(C, 0, sizeof(double) * EST_NZ * EST_NZ);
-    for (int i = 0; i < EST_NZ; i++)
-        C[i * EST_NZ + i] = m->prior[i];
+    double *P = S + q * nj;                      /* s2 R_qq^-1 R_qq^-T, then with eiv K P K^T */
     for (int i = 0; i < q; i++)
         for (int j = 0; j < q; j++) {
             double acc = 0.0;
             for (int l = (i > j ? i : j); l < q; l++)
                 acc += Rinv[i * q + l] * Rinv[j * q + l];
-            C[m->std_active[i] * EST_NZ + m->std_active[j]] = s2 * acc;
+            P[i * q + j] = s2 * acc;
         }
+    if (eiv) {
+        double *KPK = P + q * q;
+        est_compensated_covariance(S, s->N, nj, q, P, KPK);
+        memcpy(P, KPK, sizeof(double) * q * q);
+    }
+    memset(C, 0, sizeof(double) * EST_NZ * EST_NZ);
+    for (int i = 0; i < EST_NZ; i++)
+        C[i * EST_NZ + i] = m->prior[i];
+    for (int i = 0; i < q; i++)
+        for (int j = 0; j < q; j++)
+            C[m->std_active[i] * EST_NZ + m->std_active[j]] = P[i * q + j];
 }
 
 /* -- the kept samples and the replay -------------------------------------------------------- */
@@ -792,6 +822,9 @@ int est_modal_check(const sr_estimator_model *m, const void *data)
         || s->n_samp < 0 || s->n_samp >= INT_MAX - 1 || s->kept > s->n_samp
         || !isfinite(s->rss + s->rows + s->y2 + s->t0 + s->t_prev))
         return 1;
+    for (int i = 0; i < (m->q + 1) * (m->q + 1); i++)
+        if (!isfinite(s->N[i]))
+            return 1;
     for (int g = 0; g < s->n_f; g++)
         if (!(s->f[g].w > 0.0 && s->f[g].zeta > 0.0 && s->f[g].zeta < 1.0))
             return 1;
@@ -825,6 +858,7 @@ void est_modal_reference(const sr_estimator_model *m, void *data, double t, cons
     est_modal_signals(t, x, sig);
     s->started = 1;
     s->t0 = s->t_prev = t;
+    memset(s->N, 0, sizeof s->N);
     memcpy(s->sig0, sig, sizeof sig);
     memcpy(s->u0, sig + 1, sizeof s->u0);
     memcpy(s->u_prev, sig + 1, sizeof s->u_prev);
@@ -841,7 +875,7 @@ static void report_into(const sr_estimator_model *m, void *data, est_core *nw,
     double z[EST_NZ], J[EST_NZ * EST_NZ], vec[EST_NZ], sd[EST_NZ], Rinv[EST_NZ * EST_NZ];
     double shift[EST_NZ * SR_N_CONSIDER];
     double *C = w->cov;
-    solve_rigid(m, data, z, C, Rinv, shift);
+    solve_rigid(m, data, z, C, Rinv, shift, w);
     sr_reported_of_standard(z, vec);
     sr_reported_jacobian(z, J);
     double infl = m->lags > 0 ? est_corr_current(m, data, 0) : 1.0;
@@ -867,10 +901,31 @@ static void report_into(const sr_estimator_model *m, void *data, est_core *nw,
         est_consider_add(m, nw, J, shift);
 }
 
+/* the window rows' noise (rw's win_chunks chunks of n_win blocks in noise) into N: each
+   block's identified rows [H | yy] (as the sample's, at nw's fixed parameters) */
+static void noise_add(const sr_estimator_model *m, void *data, const est_rows *rw,
+                      const double *noise, const est_core *nw, est_modal_work *w)
+{
+    est_modal_data *s = state(m, data);
+    int q = m->q, nj = q + 1, k = m->k1 + m->k2;
+    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], *rows = w->cov;     /* (k x nj <= 20 x 20) */
+    for (int c = 0; c < rw->win_chunks; c++)
+        for (int b = 0; b < m->n_win; b++) {
+            est_joint_rows(m, nw, noise + ((size_t)c * m->n_win + b) * EST_NB, H, yy);
+            for (int a = 0; a < k; a++) {
+                memcpy(rows + a * nj, H + a * q, sizeof(double) * q);
+                rows[a * nj + q] = yy[a];
+            }
+            est_gram_add(s->N, nj, rows, k, 1.0, s->N);
+        }
+}
+
 void est_modal_step(const sr_estimator_model *m, void *data, double t, const double *x,
-                    const double *E, const double *Ec, int win_drop, est_core *nw,
+                    const est_rows *rw, const double *noise, est_core *nw,
                     est_modal_work *w)
 {
+    const double *E = rw->E, *Ec = rw->Ec;
+    int win_drop = rw->win_drop;
     if (!m->modes)
         return;
     est_modal_data *s = state(m, data);
@@ -893,6 +948,7 @@ void est_modal_step(const sr_estimator_model *m, void *data, double t, const dou
     /* the window's reference: the ring's entry win_drop from its oldest (as the rows') */
     int r = m->window ? s->n_samp - s->ring_count + 1 + win_drop : -1;
     solve_sample(m, data, sig, Hy, r, w);
+    noise_add(m, data, rw, noise, nw, w);
     if (s->kept < EST_MODAL_MAX_SAMPLES) {
         double *ks = kept_sample(m, data, s->kept);
         memcpy(ks, sig, sizeof sig);

@@ -22,7 +22,16 @@
  * EST_MODAL_GRID frequencies adding the best new mode (refined) while it lowers the residual by
  * EST_MODAL_MIN_GAIN (the search with the G and C blocks only, on at most
  * EST_MODAL_SCAN_SAMPLES kept samples); where the modes changed, every kept sample is solved
- * again with the new columns (est_modal.c has the constants). */
+ * again with the new columns (est_modal.c has the constants).
+ *
+ * Errors in variables: with the sensors' noise profile the rows' position and velocities
+ * (r_S, v_S, omega_B, qd) are noisy in both of a window row's samples, and that noise in the
+ * regressors shrinks the least-squares answer (the wings at 0.3 Hz through the sensors: every
+ * mass and inertia 0.9-6.8 % low on seeds 0-7). The rows' expected noise Gram matrix N_HH, N_Hy
+ * (est_eiv.h, eq. 1, from est_rows' window noise rows) is summed beside [R d], and the rigid
+ * answer compensated in the reduced (modal unknowns eliminated) normal equations,
+ * (R_qq^T R_qq - N_HH) x_c = R_qq^T d_q - N_Hy (eq. 2), with its covariance K P K^T; the
+ * noise the modal columns carry (the filters' low-passed drive) is left out. */
 #ifndef SR_EST_MODAL_H
 #define SR_EST_MODAL_H
 
@@ -46,6 +55,8 @@ typedef struct est_modal_data {
     double sig0[EST_MODAL_SIG]; /* the reference's signals */
     double rss, rows;          /* the residual sum of squares and rows of the [R d] solve */
     double y2;                 /* sum of the squared right-hand sides (the relative residual) */
+    double N[(EST_NZ + 1) * (EST_NZ + 1)];  /* the rows' expected noise Gram matrix of
+                                                [H | yy] ((q + 1) x (q + 1), est_eiv.h) */
     est_modal_filter f[EST_MODAL_MAX_F];
 } est_modal_data;
 
@@ -69,15 +80,16 @@ int est_modal_check(const sr_estimator_model *m, const void *data);
  * start at rest there. */
 void est_modal_reference(const sr_estimator_model *m, void *data, double t, const double *x);
 
-/* The sample x at t with the rigid rows E (3 x 42; with the thrust's consider term its
- * consider columns Ec, 3 x 16) after the solver's step into nw, formed
- * against the momentum window's entry win_drop (est_rows.win_drop: its oldest samples the
- * window drops; ignored without the window): the filters' step, the rows with the modal
- * columns (differenced against the window's reference) into [R d], the sample kept, the mode
- * search where it is due; then nw's estimates and sd from the modal solve (where they are
- * finite). Writes the Data block (after the solver's step succeeded). */
+/* The sample x at t with its rows rw (est_rows: the rigid rows E, 3 x 42; with the thrust's
+ * consider term their consider columns Ec, 3 x 16; formed against the momentum window's entry
+ * win_drop, its oldest samples the window drops, ignored without the window; the window
+ * rows' noise rows, win_chunks chunks in noise) after the solver's step into nw: the filters'
+ * step, the rows with the modal columns (differenced against the window's reference) into
+ * [R d], their noise into N, the sample kept, the mode search where it is due; then nw's
+ * estimates and sd from the modal solve (where they are finite). Writes the Data block
+ * (after the solver's step succeeded). */
 void est_modal_step(const sr_estimator_model *m, void *data, double t, const double *x,
-                    const double *E, const double *Ec, int win_drop, est_core *nw,
+                    const est_rows *rw, const double *noise, est_core *nw,
                     est_modal_work *w);
 
 /* the frequency [Hz] and damping of mode k (0 .. n_f - 1) now: 1, or 0 if there is none */

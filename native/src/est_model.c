@@ -21,6 +21,39 @@
 
 static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
 
+/* the noise's sd per channel (sd: the linear, angular and joint channels' three) and the
+   channels with sd > 0 (accel_sd, used, n_used); 1 where there are any */
+static int noise_channels(sr_estimator_model *m, const double *sd)
+{
+    for (int i = 0; i < 6 + m->n; i++) {
+        m->accel_sd[i] = sd[i < 3 ? 0 : i < 6 ? 1 : 2];
+        if (m->accel_sd[i] > 0.0)
+            m->used[m->n_used++] = i;
+    }
+    return m->n_used > 0;
+}
+
+/* the modal columns' window rows' noisy channels: the position (the noise profile's
+   noise.nav.r) and the velocities (signal_sd: the profile's nav.v, gyro.arw, enc.qd), the
+   rows being affine in them (est_modal.h) */
+static void window_channels(sr_estimator_model *m, const sr_estimator_options *opt)
+{
+    double r = 0.0;
+    if (opt->noise_profile != SR_NOISE_PROFILE_NONE) {
+        sr_info_noise nz;
+        sr_noise_profile_info_noise(opt, &nz);
+        r = nz.r;
+    }
+    for (int i = 0; i < 9 + m->n; i++) {
+        int ch = i < 3 ? SR_X_R_S + i : m->vel_ch[i - 3];
+        double sd = i < 3 ? r : opt->signal_sd[i < 6 ? 3 : i < 9 ? 4 : 5];
+        if (sd > 0.0) {
+            m->win_ch[m->n_win] = ch;
+            m->win_sd[m->n_win++] = sd;
+        }
+    }
+}
+
 /* the information filter's model from the options (the noise profile applied): its noise
  * model (sr_noise_profile_info_noise), the estimator's guesses and P0 */
 static int info_model(sr_estimator_model *m, const sr_robot *robot,
@@ -111,15 +144,8 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         m->accel_ch[6 + i] = SR_X_QDD(robot->n) + i;
         m->vel_ch[6 + i] = SR_X_QD(robot->n) + i;
     }
-    if (m->force) {                          /* either solver; diffmom: the velocities' */
-        const double *sd = opt->signal_sd + (m->differenced ? 3 : 0);
-        for (int i = 0; i < 6 + robot->n; i++) {
-            m->accel_sd[i] = sd[i < 3 ? 0 : i < 6 ? 1 : 2];
-            if (m->accel_sd[i] > 0.0)
-                m->used[m->n_used++] = i;
-        }
-        m->eiv = m->n_used > 0;
-    }
+    if (m->force)                            /* either solver; diffmom: the velocities' */
+        m->eiv = noise_channels(m, opt->signal_sd + (m->differenced ? 3 : 0));
     /* the accelerometer bias (ident.accel_bias with the force method and measured
      * accelerations; ignored otherwise) */
     m->bias = m->force && !m->differenced && opt->accel_bias;
@@ -275,6 +301,8 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         off += sizeof(sr_exd_data);
     }
     m->modes = opt->modes == 1;     /* the modal columns (est_modal.h) */
+    if (m->modes && m->window)
+        window_channels(m, opt);
     if (m->modes) {
         off = align8(off);
         m->off_modal = off;
@@ -311,6 +339,8 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
     /* the work space's noise rows: the window's 2 m + 1 chunks with diff_momentum, else one */
     if (m->eiv)
         m->work_noise = (size_t)(m->diffmom ? 2 * m->half + 1 : 1) * (size_t)m->n_used * EST_NB;
+    if (m->n_win)                            /* the sample's and the reference's */
+        m->work_noise = 2 * (size_t)m->n_win * EST_NB;
     return m;
 }
 
@@ -328,9 +358,10 @@ void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_option
     if (!m->bias)                            /* the force method's, measured accelerations */
         out->accel_bias = 0;
     out->diff_momentum = m->diffmom;         /* as used: 1 the momentum form, else 0 */
-    if (!m->force)                           /* the force method's noisy accelerations */
-        for (int i = 0; i < 6; i++)
-            out->signal_sd[i] = 0.0;
+    if (!m->force)                           /* the force method's noisy accelerations, */
+        for (int i = 0; i < 6; i++)          /* the modal window rows' velocities */
+            if (i < 3 || !m->n_win)
+                out->signal_sd[i] = 0.0;
 }
 
 size_t sr_estimator_data_size(const sr_estimator_model *m) { return m ? m->size : 0; }

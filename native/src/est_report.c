@@ -150,7 +150,7 @@ static void estimates_info(const sr_estimator_model *m, const est_data *d, int c
     }
     /* a misfit of the rigid model where the modal columns (ident.modes = 1) run beside the
        filter and have found a mode: their joint solver's answer, the modes in its model (the
-       issue's wings through the sensors 5.5 % off against the held filter's 56.5 %); the
+       issue's wings through the sensors 2.26 % off against the held filter's 56.5 %); the
        filter's solve above still gives crb.* and diag.info_chi2 */
     double f, zeta;
     if (held && m->info && d->samples > 0 && est_modal_mode(m, d, 0, &f, &zeta))

@@ -190,6 +190,45 @@ static void own_point_noise(const sr_estimator_model *m, const double *x, const 
     }
 }
 
+/* A window row (3 x 42) of the sample x from its equations Et and its reference's Er:
+ * Et - Er, with momentum_point about x's r_S */
+static void window_row(const sr_estimator_model *m, const double *x, const double *Et,
+                       const double *Er, double *out)
+{
+    for (int i = 0; i < EST_NB; i++)
+        out[i] = Et[i] - Er[i];
+    if (m->opt.momentum_point)
+        about_point_of(out, x + SR_X_R_S, out, SR_N_COLS);
+}
+
+/* The noise rows of the window row rw->E of the sample x and its reference xr (the modal
+ * columns' errors in variables, est_modal.h): per noisy channel l (the model's win_ch),
+ * sigma_l (row(x + e_l) - row(x)) into chunk 0 and sigma_l (row(xr + e_l) - row(xr)) into
+ * chunk 1 (n_win blocks of 3 x 42 each), the row being affine in each channel (the momentum
+ * equations in the velocities and in r_S; the point r_S of x) and the two samples' noises
+ * independent */
+static void window_noise(const sr_estimator_model *m, const double *x, const double *xr,
+                         est_rows *rw, double *noise)
+{
+    for (int side = 0; side < 2; side++) {
+        const double *xs = side ? xr : x;
+        memcpy(rw->xk, xs, sizeof(double) * m->nflat);
+        for (int b = 0; b < m->n_win; b++) {
+            int i = m->win_ch[b];
+            double *C = noise + ((size_t)side * m->n_win + b) * EST_NB;
+            rw->xk[i] = xs[i] + 1.0;
+            equations_of(m, 0, rw->xk, NULL, rw->Ek, NULL);
+            if (side)
+                window_row(m, x, rw->Et, rw->Ek, C);
+            else
+                window_row(m, rw->xk, rw->Ek, rw->Er, C);
+            rw->xk[i] = xs[i];
+            for (int a = 0; a < EST_NB; a++)
+                C[a] = m->win_sd[b] * (C[a] - rw->E[a]);
+        }
+    }
+}
+
 /* The noise rows sigma_l C_l of the force equations E (3 x 42) of the flat sample x in the
  * acceleration channels with sd > 0 (C_l = E(x + e_l) - E(x), eq. 1: the equations are affine
  * in the accelerations), each sd times the derivative's gain, into C (n_used blocks). */
@@ -414,6 +453,7 @@ int est_rows_of_sample(const sr_estimator_model *m, const void *data, double t,
     rw->stored = EST_ROWS;
     rw->win_drop = 0;
     rw->n_chunks = 0;
+    rw->win_chunks = 0;
     /* the accelerometer bias (committed with the sample): the fit with this sample, and a_S
      * minus the bias estimated so far */
     if (m->bias) {
@@ -509,8 +549,9 @@ int est_rows_of_sample(const sr_estimator_model *m, const void *data, double t,
         }
         rw->win_drop = drop;
         const double *ref = win_at(m, data, c, drop);
-        double Er[EST_NB], Erc[3 * SR_N_CCOLS];
+        double *Er = rw->Er, Erc[3 * SR_N_CCOLS];
         equations_of(m, 0, ref + 1, ref + 1 + m->nflat, Er, Erc);
+        memcpy(rw->Et, E, sizeof rw->Et);
         for (int i = 0; i < EST_NB; i++)
             E[i] -= Er[i];
         if (m->consider)
@@ -526,6 +567,10 @@ int est_rows_of_sample(const sr_estimator_model *m, const void *data, double t,
         about_point_of(E, sample + SR_X_R_S, E, SR_N_COLS);
         if (m->consider)
             about_point_c(Ec, sample + SR_X_R_S, Ec, SR_N_CCOLS);
+    }
+    if (m->window && rw->stored == EST_ROWS && m->n_win) {
+        window_noise(m, sample, win_at(m, data, c, rw->win_drop) + 1, rw, noise);
+        rw->win_chunks = 2;
     }
     /* the force equations' noise rows (measured or differenced accelerations, one chunk) */
     if (rw->stored == EST_ROWS && m->eiv && !m->diffmom) {

@@ -114,6 +114,10 @@ struct sr_estimator_model {
     sr_exd_options exd;
     size_t off_exd;               /* its state (sr_exd_data) */
     int modes;                    /* the modal columns (ident.modes = 1, est_modal.h) */
+    int n_win;                    /* their window rows' noisy channels (errors in
+                                     variables, est_modal.h): r_S, v_S, omega_B, qd with sd > 0 */
+    int win_ch[9 + SR_MAX_JOINTS];        /* each one's place in a flat sample */
+    double win_sd[9 + SR_MAX_JOINTS];     /* and its white noise's sd per sample */
     size_t off_modal;             /* their state, [R d] and the kept samples */
     /* the rigid band (ident.band, est_band.h): its model (band.h) and its state */
     int band;
@@ -230,9 +234,14 @@ typedef struct est_rows {
     int stored;                   /* enum est_stored */
     int win_drop;
     int n_chunks;
+    int win_chunks;               /* the window rows' noise rows instead (n_win blocks:
+                                     the sample's and the reference's chunk, or none) */
     double E[EST_NB], Ec[3 * SR_N_CCOLS];
     double own[EST_NB + 3 * SR_N_CCOLS];
     double own_noise[EST_MAXCH * EST_NB];
+    double Et[EST_NB], Er[EST_NB];          /* the window's sample's and reference's equations,
+                                               a perturbed row (its noise rows') */
+    double Ek[EST_NB], xk[SR_X_LEN(SR_MAX_JOINTS)];
     double thr[SR_THRUST_LEN];
     est_bias_fit bias;
     /* the sample as the equations take it: the window's centre with differenced

@@ -334,8 +334,7 @@ int sr_estimator_update(const sr_estimator_model *m, void *data, void *work, dou
         return reject(d, SR_EST_REJECT_NONFINITE, step_failure(st), msg, msglen);
     /* the modal columns' stage (est_modal.h): its own state, the estimates from it */
     if (m->modes)
-        est_modal_step(m, data, t, sample, rows->E, rows->Ec, rows->win_drop, nw,
-                       est_modal_work_of(m, wk));
+        est_modal_step(m, data, t, sample, rows, wk->noise, nw, est_modal_work_of(m, wk));
     est_fit_window(m, c, d->samples == 0, nw);
     /* the commit; the rigid band's sample after the filter's (its replay starts the band) */
     if (m->info)
