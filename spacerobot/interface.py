@@ -570,7 +570,10 @@ def noise_model_vars() -> List[Var]:
     v += [Var(f"ident.noise.{name}", "parameter", "fixed", "Real", unit,
               f"Force method, {source} accelerations: white-noise standard deviation per "
               f"sample of {name}; with any of these > 0 the estimates are compensated for the "
-              f"bias that noisy accelerations cause (errors in variables). 0 = no noise",
+              f"bias that noisy accelerations cause (errors in variables)"
+              + ("; also the momentum method's with ident.modes = 1 over a momentum window: the "
+                 "modal columns' answer compensated for the noisy velocities in its rows"
+                 if source == "differenced" else "") + ". 0 = no noise",
               0.0, ("signal_sd", key))
           for key, name, unit, source in SIGNAL_NOISE_PARAMETERS]
     v += [Var("ident.noise_profile", "parameter", "fixed", "Integer", None,

@@ -13,8 +13,8 @@ void est_noise_begin(double lam, int has, const double *N_old, int n, double *N)
 
 /* The bias-compensated answer xc (q) = x_r + dx, (S_HH - N_HH) dx = N_HH x_r - N_Hy (eq. 2)
  * in the directions S - N observes (a direction the noise swamps is left uncorrected): S, N
- * ((n x n) Gram matrices of [H | y], q + 1 <= n, y's column q), x_r (q) the least-squares
- * answer (S_HH x_r = S_Hy). */
+ * ((n x n) Gram matrices of [H | y], q + 1 <= n, q <= 20, y's column q), x_r (q) the
+ * least-squares answer (S_HH x_r = S_Hy). */
 void est_compensate(const double *S, const double *N, int n, int q, const double *x,
                     double *xc);
 

@@ -388,9 +388,38 @@ static void solve_add(const sr_estimator_model *m, void *data, double *rows, int
 /* the rigid unknowns' answer z (20; the unidentified at their guesses) and covariance C (20 x
  * 20: the prior's where unidentified) from R's last q x q block: R_qq z_q = d_q,
  * C_qq = s2 R_qq^-1 R_qq^-T, s2 = rss / (rows - n); with the window rows' noise N
- * (est_modal.h) z_q compensated and C_qq = K C K^T (est_eiv.h); with the consider term their
- * shift in the thrust's errors, shift (20 x 8) = dz/dc = R_qq^-1 D_c,q (0 where
- * unidentified); w's gram the scratch */
+ * (est_modal.h) z_q compensated, C_qq = K C K^T (est_eiv.h) and s2 the residual's at the
+ * compensated answer (as the joint solver's); with the consider term their shift in the
+ * thrust's errors, shift (20 x 8) = dz/dc = R_qq^-1 D_c,q (0 where unidentified; not
+ * compensated, as the joint solver's); w's gram the scratch */
+/* the errors in variables (est_modal.h): S (q x (q + 1)) = R_qq^T [R_qq d_q], the reduced
+ * (modal unknowns eliminated) Gram matrix of [H | yy] from R's last q x q block, and the
+ * rigid answer x (q) compensated in place for the rows' noise N (est_eiv.h, eq. 2); returns
+ * dx^T S_qq dx, what the residual sum of squares grows by from the least-squares answer to
+ * the compensated one (dx their difference; the modal unknowns at their best for each) */
+static double compensate_rigid(const sr_estimator_model *m, const est_modal_data *s,
+                               const double *R, const double *d, int nm, double *x, double *S)
+{
+    int q = m->q, nj = q + 1, n = nm + q;
+    for (int i = 0; i < q; i++)
+        for (int j = 0; j < nj; j++) {
+            double acc = 0.0;
+            for (int l = 0; l <= i && l <= j; l++)
+                acc += R[(size_t)(nm + l) * n + nm + i]
+                       * (j < q ? R[(size_t)(nm + l) * n + nm + j] : d[nm + l]);
+            S[i * nj + j] = acc;
+        }
+    double xc[EST_NZ], dx[EST_NZ], grow = 0.0;
+    est_compensate(S, s->N, nj, q, x, xc);
+    for (int i = 0; i < q; i++)
+        dx[i] = xc[i] - x[i];
+    for (int i = 0; i < q; i++)
+        for (int j = 0; j < q; j++)
+            grow += dx[i] * S[i * nj + j] * dx[j];
+    memcpy(x, xc, sizeof(double) * q);
+    return grow > 0.0 ? grow : 0.0;
+}
+
 static void solve_rigid(const sr_estimator_model *m, void *data, double *z, double *C,
                         double *Rinv, double *shift, est_modal_work *w)
 {
@@ -404,23 +433,9 @@ static void solve_rigid(const sr_estimator_model *m, void *data, double *z, doub
             acc -= R[(size_t)(nm + i) * n + nm + j] * x[j];
         x[i] = acc / R[(size_t)(nm + i) * n + nm + i];
     }
-    /* the errors in variables: S = R_qq^T [R_qq d_q] the reduced Gram matrix of [H | yy]
-       (est_modal.h), the answer compensated for the rows' noise N (eq. 2) */
+    /* the errors in variables: the answer compensated for the rows' noise (est_modal.h) */
     int nj = q + 1, eiv = m->n_win > 0 && s->rows > 0.0;
-    double *S = w->gram;
-    if (eiv) {
-        for (int i = 0; i < q; i++)
-            for (int j = 0; j < nj; j++) {
-                double acc = 0.0;
-                for (int l = 0; l <= i && l <= j; l++)
-                    acc += R[(size_t)(nm + l) * n + nm + i]
-                           * (j < q ? R[(size_t)(nm + l) * n + nm + j] : d[nm + l]);
-                S[i * nj + j] = acc;
-            }
-        double xc[EST_NZ];
-        est_compensate(S, s->N, nj, q, x, xc);
-        memcpy(x, xc, sizeof xc);
-    }
+    double *S = w->gram, grow = eiv ? compensate_rigid(m, s, R, d, nm, x, S) : 0.0;
     memcpy(z, m->pi0_full, sizeof(double) * EST_NZ);
     for (int i = 0; i < q; i++)
         z[m->std_active[i]] = x[i];
@@ -444,7 +459,7 @@ static void solve_rigid(const sr_estimator_model *m, void *data, double *z, doub
                 shift[m->std_active[i] * SR_N_CONSIDER + c] = acc;
             }
     }
-    double dof = s->rows - n, s2 = dof > 0.0 ? s->rss / dof : 1.0;
+    double dof = s->rows - n, s2 = dof > 0.0 ? (s->rss + grow) / dof : 1.0;   /* at z */
     double *P = S + q * nj;                      /* s2 R_qq^-1 R_qq^-T, then with eiv K P K^T */
     for (int i = 0; i < q; i++)
         for (int j = 0; j < q; j++) {
@@ -908,7 +923,7 @@ static void noise_add(const sr_estimator_model *m, void *data, const est_rows *r
 {
     est_modal_data *s = state(m, data);
     int q = m->q, nj = q + 1, k = m->k1 + m->k2;
-    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], *rows = w->cov;     /* (k x nj <= 20 x 20) */
+    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], *rows = w->cov;     /* (k x nj <= 6 x 21) */
     for (int c = 0; c < rw->win_chunks; c++)
         for (int b = 0; b < m->n_win; b++) {
             est_joint_rows(m, nw, noise + ((size_t)c * m->n_win + b) * EST_NB, H, yy);

@@ -30,8 +30,11 @@
  * mass and inertia 0.9-6.8 % low on seeds 0-7). The rows' expected noise Gram matrix N_HH, N_Hy
  * (est_eiv.h, eq. 1, from est_rows' window noise rows) is summed beside [R d], and the rigid
  * answer compensated in the reduced (modal unknowns eliminated) normal equations,
- * (R_qq^T R_qq - N_HH) x_c = R_qq^T d_q - N_Hy (eq. 2), with its covariance K P K^T; the
- * noise the modal columns carry (the filters' low-passed drive) is left out. */
+ * (R_qq^T R_qq - N_HH) x_c = R_qq^T d_q - N_Hy (eq. 2), with its covariance K P K^T and the
+ * residual variance at x_c. Left out: the noise the modal columns carry (the filters'
+ * low-passed drive, and the sample's rates and position in the D and T blocks, correlated
+ * with the rows' own), and the bilinear r x v terms' noise products, counted in both
+ * channels' rows (second order). */
 #ifndef SR_EST_MODAL_H
 #define SR_EST_MODAL_H
 

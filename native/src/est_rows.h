@@ -9,7 +9,9 @@
  *     window with the velocities' derivatives, or (ident.diff_momentum) the derivative of the
  *     window's momentum equations;
  * their consider columns Ec (the thrust's errors, est_consider.h), and where the
- * accelerations' noise is compensated (est_eiv.h) the noise rows. A sample that only fills
+ * accelerations' noise is compensated (est_eiv.h) the noise rows; with the modal columns over
+ * a window, the window rows' noise rows in their noisy position and velocities instead
+ * (est_rows.win_chunks, for est_modal.h's compensation only). A sample that only fills
  * the differencing history or becomes the momentum reference is stored, not solved. Nothing
  * is written to the Data block until est_rows_commit. */
 #ifndef SR_EST_ROWS_H

@@ -275,7 +275,8 @@ typedef struct est_work {
     sr_info_data nwi;             /* the information filter's new state */
     sr_exd_work exd;              /* the information filter's and the excitation design's */
     double noise_rows[EST_NOISE_SCRATCH];
-    double noise[];               /* the noise rows (est_rows.n_chunks chunks), then with
+    double noise[];               /* the noise rows (est_rows.n_chunks chunks, or the modal
+                                     window rows' win_chunks), then with
                                      ident.modes = 1 the modal columns' temporaries
                                      (est_modal_work, est_modal_work_of), then with the
                                      rigid band its (sr_band_work, est_band_work_of) */

@@ -118,7 +118,8 @@ typedef struct sr_estimator_options {
     double signal_sd[6];   /* ident.noise.*: a_S, alpha_B, qdd (measured); v_S, omega_B, qd
                               (differenced): white-noise sd per sample; > 0: the force method's
                               estimates bias-compensated (errors in variables, est_eiv.h;
-                              either solver, with diff_momentum too) */
+                              either solver, with diff_momentum too); v_S, omega_B, qd also
+                              the modal columns' window rows' (ident.modes = 1, est_modal.h) */
     double momentum_window;/* ident.momentum_window [s], 0..1e6 (momentum method: each
                               sample's equations differenced against the newest stored sample
                               at least this much older, the first until then; 0 = against the
@@ -269,7 +270,8 @@ SR_API void sr_estimator_model_free(sr_estimator_model *m);
  *  not apply to its method and accelerations at 0 (ident.momentum_window: the momentum
  *  method's, with a window; ident.momentum_point: the momentum method's; ident.accel_bias:
  *  the force method's with measured accelerations; ident.diff_momentum: with differenced
- *  ones; ident.noise.*: the force method's). */
+ *  ones; ident.noise.*: the force method's, and v_S, omega_B, qd the modal columns' window
+ *  rows'). */
 SR_API void sr_estimator_model_options(const sr_estimator_model *m, sr_estimator_options *out);
 
 
