@@ -138,6 +138,18 @@ void est_joint_rows(const sr_estimator_model *m, const est_core *c, const double
     joint_rows(m, c, E, H, yy, NULL);
 }
 
+void est_joint_rows_hy(const sr_estimator_model *m, const est_core *c, const double *E,
+                       double *Hy)
+{
+    int q = m->q, nj = q + 1, k = m->k1 + m->k2;
+    double H[EST_MAXK * EST_NZ], yy[EST_MAXK];
+    joint_rows(m, c, E, H, yy, NULL);
+    for (int a = 0; a < k; a++) {
+        memcpy(Hy + a * nj, H + a * q, sizeof(double) * q);
+        Hy[a * nj + q] = yy[a];
+    }
+}
+
 /* info (n x n) = lam info + H^T H over the columns cols (n) of the rows H (k x q) */
 static void info_add(const double *old, const double *H, int k, int q, const int *cols, int n,
                      double lam, double *out)
@@ -218,18 +230,13 @@ static void joint_rows(const sr_estimator_model *m, const est_core *c, const dou
 static void noise_gram(const sr_estimator_model *m, const est_core *old, const double *noise,
                        int n_chunks, double *N, double *scratch)
 {
-    int q = m->q, nj = q + 1, k = m->k1 + m->k2, nb = m->n_used;
-    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], *R = scratch;
+    int nj = m->q + 1, k = m->k1 + m->k2, nb = m->n_used;
+    double *R = scratch;
     est_noise_begin(m->opt.lambda, old->has_eiv, old->N_pi, nj, N);
     for (int c = 0; c < n_chunks; c++) {
         const double *chunk = noise + (size_t)c * nb * EST_NB;
-        for (int blk = 0; blk < nb; blk++) {
-            joint_rows(m, old, chunk + blk * EST_NB, H, yy, NULL);
-            for (int a = 0; a < k; a++) {
-                memcpy(R + (blk * k + a) * nj, H + a * q, sizeof(double) * q);
-                R[(blk * k + a) * nj + q] = yy[a];
-            }
-        }
+        for (int blk = 0; blk < nb; blk++)
+            est_joint_rows_hy(m, old, chunk + blk * EST_NB, R + blk * k * nj);
         est_gram_add(N, nj, R, nb * k, 1.0, N);
     }
 }

@@ -26,4 +26,8 @@ int est_joint_std_parts(const sr_estimator_model *m, const est_core *c, double i
 void est_joint_rows(const sr_estimator_model *m, const est_core *c, const double *E, double *H,
                     double *yy);
 
+/* The same rows as one matrix [H | yy] (k1 + k2 x q + 1), e.g. of a noise block (est_eiv.h) */
+void est_joint_rows_hy(const sr_estimator_model *m, const est_core *c, const double *E,
+                       double *Hy);
+
 #endif /* SR_EST_JOINT_H */

@@ -385,13 +385,6 @@ static void solve_add(const sr_estimator_model *m, void *data, double *rows, int
     }
 }
 
-/* the rigid unknowns' answer z (20; the unidentified at their guesses) and covariance C (20 x
- * 20: the prior's where unidentified) from R's last q x q block: R_qq z_q = d_q,
- * C_qq = s2 R_qq^-1 R_qq^-T, s2 = rss / (rows - n); with the window rows' noise N
- * (est_modal.h) z_q compensated, C_qq = K C K^T (est_eiv.h) and s2 the residual's at the
- * compensated answer (as the joint solver's); with the consider term their shift in the
- * thrust's errors, shift (20 x 8) = dz/dc = R_qq^-1 D_c,q (0 where unidentified; not
- * compensated, as the joint solver's); w's gram the scratch */
 /* the errors in variables (est_modal.h): S (q x (q + 1)) = R_qq^T [R_qq d_q], the reduced
  * (modal unknowns eliminated) Gram matrix of [H | yy] from R's last q x q block, and the
  * rigid answer x (q) compensated in place for the rows' noise N (est_eiv.h, eq. 2); returns
@@ -420,6 +413,13 @@ static double compensate_rigid(const sr_estimator_model *m, const est_modal_data
     return grow > 0.0 ? grow : 0.0;
 }
 
+/* the rigid unknowns' answer z (20; the unidentified at their guesses) and covariance C (20 x
+ * 20: the prior's where unidentified) from R's last q x q block: R_qq z_q = d_q,
+ * C_qq = s2 R_qq^-1 R_qq^-T, s2 = rss / (rows - n); with the window rows' noise N
+ * (est_modal.h) z_q compensated, C_qq = K C K^T (est_eiv.h) and s2 the residual's at the
+ * compensated answer (as the joint solver's); with the consider term their shift in the
+ * thrust's errors, shift (20 x 8) = dz/dc = R_qq^-1 D_c,q (0 where unidentified; not
+ * compensated, as the joint solver's); w's gram the scratch */
 static void solve_rigid(const sr_estimator_model *m, void *data, double *z, double *C,
                         double *Rinv, double *shift, est_modal_work *w)
 {
@@ -922,15 +922,11 @@ static void noise_add(const sr_estimator_model *m, void *data, const est_rows *r
                       const double *noise, const est_core *nw, est_modal_work *w)
 {
     est_modal_data *s = state(m, data);
-    int q = m->q, nj = q + 1, k = m->k1 + m->k2;
-    double H[EST_MAXK * EST_NZ], yy[EST_MAXK], *rows = w->cov;     /* (k x nj <= 6 x 21) */
+    int nj = m->q + 1, k = m->k1 + m->k2;
+    double *rows = w->cov;                                         /* (k x nj <= 6 x 21) */
     for (int c = 0; c < rw->win_chunks; c++)
         for (int b = 0; b < m->n_win; b++) {
-            est_joint_rows(m, nw, noise + ((size_t)c * m->n_win + b) * EST_NB, H, yy);
-            for (int a = 0; a < k; a++) {
-                memcpy(rows + a * nj, H + a * q, sizeof(double) * q);
-                rows[a * nj + q] = yy[a];
-            }
+            est_joint_rows_hy(m, nw, noise + ((size_t)c * m->n_win + b) * EST_NB, rows);
             est_gram_add(s->N, nj, rows, k, 1.0, s->N);
         }
 }

@@ -551,7 +551,8 @@ int est_rows_of_sample(const sr_estimator_model *m, const void *data, double t,
         const double *ref = win_at(m, data, c, drop);
         double *Er = rw->Er, Erc[3 * SR_N_CCOLS];
         equations_of(m, 0, ref + 1, ref + 1 + m->nflat, Er, Erc);
-        memcpy(rw->Et, E, sizeof rw->Et);
+        if (m->n_win)                                   /* (window_noise's) */
+            memcpy(rw->Et, E, sizeof rw->Et);
         for (int i = 0; i < EST_NB; i++)
             E[i] -= Er[i];
         if (m->consider)
