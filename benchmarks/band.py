@@ -76,6 +76,16 @@ def study(job):
     return robot, case, seed, out
 
 
+def by_case(results, cases):
+    """(robot, case, the runs' outputs) of a seeds study's results, per robot of ROBOTS and
+    case of ``cases`` in that order, where the case has runs."""
+    for robot in ROBOTS:
+        for case in cases:
+            rs = [o for r, c, _, o in results if r == robot and c == case]
+            if rs:
+                yield robot, case, rs
+
+
 def seeds_study(study, script: str, title: str, cases, default_out: str, table, summary,
                 argv=None) -> int:
     """The command line of a study over ROBOTS, ``cases`` and sensors seeds (``--seeds``,
@@ -133,17 +143,13 @@ def summary(results) -> str:
     the estimates within 2 sd, where the band reports and where the filter does; the CPU
     ratio's range."""
     parts = []
-    for robot in ROBOTS:
-        for case in CASES:
-            rs = [o for r, c, s, o in results if r == robot and c == case]
-            if not rs:
-                continue
-            w = [o["band"]["worst"] for o in rs]
-            n = [o["band"]["within"] for o in rs]
-            told = sum(o["band"]["band"] > 0 for o in rs)
-            parts.append(f"{Path(robot).stem} {case}: {min(w):.3g}-{max(w):.3g} %, "
-                         f"{min(n)}-{max(n)} of 20 within 2 sd, the band reporting in {told} "
-                         f"of {len(rs)}")
+    for robot, case, rs in by_case(results, CASES):
+        w = [o["band"]["worst"] for o in rs]
+        n = [o["band"]["within"] for o in rs]
+        told = sum(o["band"]["band"] > 0 for o in rs)
+        parts.append(f"{Path(robot).stem} {case}: {min(w):.3g}-{max(w):.3g} %, "
+                     f"{min(n)}-{max(n)} of 20 within 2 sd, the band reporting in {told} "
+                     f"of {len(rs)}")
     flex = [o for r, c, s, o in results if c != "rigid"]
     inside = sum(o["band"]["within"] for o in flex)
     above = sum(o["band"]["worst"] > 3.0 for o in flex)

@@ -64,7 +64,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from band import ROBOTS  # noqa: E402
+from band import by_case  # noqa: E402
 from modal_information import DT, filter_rows, modal_block, unweighted  # noqa: E402
 from rigid_band import QS, low_pass, solve  # noqa: E402
 
@@ -119,7 +119,7 @@ def study(job):
 
     rows = {}                                 # the filter's rows per linearisation point
 
-    def band(z_lin, fc: float, kind: str):
+    def solve_band(z_lin, fc: float, kind: str):
         key = np.asarray(z_lin, float).tobytes()
         if key not in rows:
             o, prior = filter_rows(sc, ts, X, z_lin, eiv=True)
@@ -138,10 +138,10 @@ def study(job):
         elif label.endswith(", own"):
             z = guess_of(sc)
             for _ in range(OWN_PASSES):
-                out[label] = band(z, fc, kind)
+                out[label] = solve_band(z, fc, kind)
                 z = out[label]["est"]
         else:
-            out[label] = band(truth, fc, kind)
+            out[label] = solve_band(truth, fc, kind)
     out["found"] = ", ".join(f"{f:.3f} Hz {z:.3g}" for f, z in found) or "-"
     print(f"{Path(robot).stem} {case} seed {seed}: " + "; ".join(
         f"{k} {v['worst']:.3g} % {v['within']}/20 fit {v['fit']:.3g}"
@@ -169,24 +169,20 @@ def summary(results) -> str:
     """Per robot, case and variant: the range of the worst errors and of the estimates within
     2 sd, the runs within 3 %, the range of the fit (over the runs with an answer)."""
     parts = []
-    for robot in ROBOTS:
-        for case in CASES:
-            rs = [o for r, c, _, o in results if r == robot and c == case]
-            if not rs:
+    for robot, case, rs in by_case(results, CASES):
+        cells = []
+        for v in VARIANTS:
+            ok = [o[v] for o in rs if np.isfinite(o[v]["worst"])]
+            if not ok:
+                cells.append(f"{v}: no answer (no mode found)")
                 continue
-            cells = []
-            for v in VARIANTS:
-                ok = [o[v] for o in rs if np.isfinite(o[v]["worst"])]
-                if not ok:
-                    cells.append(f"{v}: no answer (no mode found)")
-                    continue
-                w, n, fit = ([o[k] for o in ok] for k in ("worst", "within", "fit"))
-                cells.append(f"{v} {min(w):.3g}-{max(w):.3g} % ({sum(x <= 3.0 for x in w)} of "
-                             f"{len(rs)} within 3 %), {min(n)}-{max(n)} of 20 within 2 sd "
-                             f"({sum(n)} of {20 * len(ok)}), fit {min(fit):.3g}-{max(fit):.3g}"
-                             + (f", {len(rs) - len(ok)} without a mode" if len(ok) < len(rs)
-                                else ""))
-            parts.append(f"{Path(robot).stem} {case}: " + "; ".join(cells))
+            w, n, fit = ([o[k] for o in ok] for k in ("worst", "within", "fit"))
+            cells.append(f"{v} {min(w):.3g}-{max(w):.3g} % ({sum(x <= 3.0 for x in w)} of "
+                         f"{len(rs)} within 3 %), {min(n)}-{max(n)} of 20 within 2 sd "
+                         f"({sum(n)} of {20 * len(ok)}), fit {min(fit):.3g}-{max(fit):.3g}"
+                         + (f", {len(rs) - len(ok)} without a mode" if len(ok) < len(rs)
+                            else ""))
+        parts.append(f"{Path(robot).stem} {case}: " + "; ".join(cells))
     return "Summary: " + ". ".join(parts) + "."
 
 

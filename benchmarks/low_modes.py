@@ -41,7 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from band import DT, ROBOTS, STOP  # noqa: E402
+from band import DT, STOP, by_case  # noqa: E402
 #: flexible.py's case names
 CASES = ("wings 2 x 50 kg 0.3 Hz", "wings 2 x 50 kg 0.2 Hz", "slosh 2 x 25 kg 0.2/0.23 Hz",
          "wings 2 x 50 kg 0.5 Hz (issue)")
@@ -104,16 +104,13 @@ def summary(results) -> str:
     of the estimates within 2 sd and of the CPU time; pooled over the runs where the band
     hands back (no answer without the columns): the held filter's and the columns' ranges."""
     parts = []
-    for robot in ROBOTS:
-        for case in CASES:
-            for s in SETUPS:
-                rs = [o[s] for r, c, _, o in results if r == robot and c == case]
-                if not rs:
-                    continue
-                w, n, cpu = ([o[k] for o in rs] for k in ("worst", "within", "cpu"))
-                parts.append(f"{Path(robot).stem} {case}, {s}: {min(w):.3g}-{max(w):.3g} %, "
-                             f"{min(n)}-{max(n)} of 20 within 2 sd, {min(cpu):.1f}-"
-                             f"{max(cpu):.1f} s")
+    for robot, case, runs in by_case(results, CASES):
+        for s in SETUPS:
+            rs = [o[s] for o in runs]
+            w, n, cpu = ([o[k] for o in rs] for k in ("worst", "within", "cpu"))
+            parts.append(f"{Path(robot).stem} {case}, {s}: {min(w):.3g}-{max(w):.3g} %, "
+                         f"{min(n)}-{max(n)} of 20 within 2 sd, {min(cpu):.1f}-"
+                         f"{max(cpu):.1f} s")
     back = [o for *_, o in results if o["profile"]["band"] == 0]
     pooled = []
     for s in SETUPS:
