@@ -1,7 +1,8 @@
-"""Modes at 0.2-0.3 Hz through the sensors: the rigid band with the found mode's columns (a
-batch study, not shipped); writes benchmarks/LOW_BAND.md.
+"""Modes at 0.2-0.3 Hz through the sensors: the rigid band with the found mode's columns (the
+batch study the found modes' band, native/src/est_band.c, was shipped from; its reference);
+writes benchmarks/LOW_BAND.md.
 
-Why. Where a part's mode lies at 0.2-0.3 Hz the shipped band (benchmarks/band.py) hands back:
+Why. Where a part's mode lies at 0.2-0.3 Hz the compliance band (benchmarks/band.py) hands back:
 its low-pass at 0.15 Hz damps such a mode too little, and the mode's response is no longer
 quasi-static, so its compliance block (two fast filters' G and C columns) leaves a misfit
 (chi2 12-109 times the low-passed noise's at 0.3 Hz, 530-2900 at 0.2 Hz: native/src/band.h). The modal columns beside the profile
@@ -19,10 +20,10 @@ information filter of the tests' reference (tests/oracles/information.py) linear
 truth, every row weighted by its own noise covariance, compensated for the errors in
 variables; the columns of the tests' modal reference (tests/oracles/modal.py) driven by the
 measured base motion; one causal Butterworth low-pass of order 6 (from rest at the first
-sample, the first 3 / fc s left out, as the shipped band); one batch least squares over the
+sample, the first 3 / fc s left out, as the shipped bands); one batch least squares over the
 prior and the rows, the thrust errors estimated (benchmarks/rigid_band.py's `solve`). Variants:
 
-* `band`: the shipped band's model, the low-pass at 0.15 Hz and the compliance block (the 2
+* `band`: the compliance band's model, the low-pass at 0.15 Hz and the compliance block (the 2
   and 1 Hz filters' G and C columns, 114 unknowns), always (the shipped band keeps the
   compliance only where it halves the low-pass's chi2: on the servicer's slosh it does not);
 * `band + mode`: the low-pass at 0.15 Hz and the columns of each of the case's parts'
@@ -37,12 +38,13 @@ prior and the rows, the thrust errors estimated (benchmarks/rigid_band.py's `sol
   starts from is far off where the rigid model does not hold).
 * `band + found mode`: as `band + mode` with the modes the estimator's own search reports at
   300 s instead (`diag.mode_f`, `diag.mode_zeta`: the core as the FMU builds it over the same
-  samples, the profile, the joint solver, ident.modes = 1): what an online band would have.
+  samples, the profile, the joint solver, ident.modes = 1): what the found modes' band has (it
+  reports the lowest mode's columns alone where they fit; this study takes all found modes).
 
 Each cell: the worst error over the 20 estimates against the composite rigid truth (relative
 to the error scale, spacerobot.interface) / the estimates within 2 sd (the batch's bound times
 sqrt(chi2 / gain) where that is above 1) / chi2 over the low-passed noise's (the gain: the
-shipped band reports where this is at most 5); "-" where the search found no mode. The
+compliance band reports where this is at most 5, the found modes' band 2.5); "-" where the search found no mode. The
 last column: the modes the search found. The rows linearised at the truth but for
 `band + mode, own`. The summary counts the runs within 3 % over all runs of a case, the
 estimates within 2 sd over the runs with an answer.
@@ -76,7 +78,7 @@ VARIANTS = {"band": (0.15, "compliance"), "band + mode": (0.15, "mode"),
             "band + mode, own": (0.15, "mode"), "band + found mode": (0.15, "found mode")}
 #: the own linearisation's passes (the guess, then the estimate twice)
 OWN_PASSES = 3
-#: the shipped band's low-pass order
+#: the shipped bands' low-pass order
 ORDER = 6
 #: `mode off`: the frequency's and the damping's factors
 F_OFF, ZETA_OFF = 1.02, 2.0

@@ -1,6 +1,7 @@
 """Parts' modes at 0.2-0.3 Hz through the sensors: where the rigid band hands back (its own
 rows do not fit: the low-pass at 0.15 Hz damps such a mode too little and its response is no
-longer quasi-static), the modal columns beside the profile (ident.modes = 1) report; writes
+longer quasi-static), with the modal columns beside the profile (ident.modes = 1) the band
+over the modes they find reports where its rows fit (diag.band 3), else the columns; writes
 benchmarks/LOW_MODES.md.
 
 Per robot (the spatial robot; the held-out servicer tests/data/arm5.urdf), case and sensors
@@ -17,7 +18,8 @@ must not change the answer but through the filter's linearisation point, the lea
 answer, which their errors-in-variables compensation moves: by 0.08 % at most here).
 Columns: the worst error of the 20 estimates against the composite rigid truth (relative to
 the error scale, spacerobot.interface), the estimates within 2 reported sd, `diag.band` (1
-the low-pass, 2 the compliance, 0 none: the band has no answer), the modes in use at 300 s,
+the low-pass, 2 the compliance, 3 the found modes' columns, 0 none: the band has no answer
+that fits, the columns' joint solver reports), the modes in use at 300 s,
 whether a body is flagged, and the estimating thread's CPU time for the 300 s (the samples'
 recording excluded; one BLAS thread). The estimates scored are the FMU's outputs (after the
 physical projection; benchmarks/flexible.py scores the least-squares ones, which differ where

@@ -232,9 +232,9 @@ static void log_misfit(sr_instance *inst, double t, int before, const sr_estimat
                "propellant; the rigid band's estimates are reported once it has an answer, "
                "diag.band, else the held filter's, which can be far off; where the band stays "
                "without an answer, diag.band 0, a large panel's mode may lie at 0.2-0.3 Hz, "
-               "and ident.modes = 1 (method = 1, solver = 2) reports the modal columns' "
-               "estimates once they find it: docs/identification.md, \"The rigid band\", "
-               "Limits)", t, set);
+               "and ident.modes = 1 (method = 1, solver = 2) finds it: the band with its "
+               "columns reports where its rows fit, diag.band 3, else the modal columns' "
+               "estimates: docs/identification.md, \"The rigid band\", Limits)", t, set);
     else
         sr_log(inst, SR_LOG_EVENTS, "t = %.6g s: the rigid model fits the samples again "
                "(diag.misfit = 0)", t);

@@ -607,9 +607,11 @@ def noise_model_vars() -> List[Var]:
               "composite rigid body's (with ident.momentum_window, each sample's columns "
               "differenced against the window's reference, as its rows; beside the information "
               "filter, their estimates are reported where the filter finds the rigid model's "
-              "misfit and a mode is found, unless the rigid band has an answer: where the wings' "
-              "mode lies at 0.2-0.3 Hz it has none, and the columns bring the wings from the "
-              "held filter's 161-323 % to 1.95-12.4 %, sensors seeds 0-7). 1 = on (needs "
+              "misfit and a mode is found, unless the rigid band has an answer; with the band on "
+              "it also runs over the modes they find: where a part's mode lies at 0.2-0.3 Hz "
+              "the compliance band has no answer, and the found modes' band (diag.band 3) "
+              "brings the wings at 0.3 Hz from the held filter's 161-323 % to 0.753-2.47 %, at "
+              "0.2 Hz the columns to 1.95-8.5 %, sensors seeds 0-7). 1 = on (needs "
               "method = 1, solver = 2), 2 = off",
               2, ("modes",))]
     v += [Var(f"ident.mode_f[{i + 1}]", "parameter", "fixed", "Real", "Hz",
@@ -628,13 +630,17 @@ def noise_model_vars() -> List[Var]:
               "of order 6) with a quasi-static compliance block for flexible panels and slosh "
               "of 0.2 Hz and above; its estimates and sds are reported where the filter's "
               "model-fit test finds the rigid model's misfit (diag.misfit_cause = 1; "
-              "diag.band), from the filter's replay on. 0 = automatic (on where the "
+              "diag.band), from the filter's replay on; with ident.modes = 1 also the band "
+              "with the found modes' own columns in place of the compliance, where the "
+              "compliance does not fit (modes of 0.2-0.3 Hz). 0 = automatic (on where the "
               "information filter runs and noise_dt is 0.01-2 s), 1 = on (needs them), "
               "2 = off", 0, ("band",)),
           Var("diag.band", "output", "discrete", "Integer", None,
               "The rigid band's answer is reported (ident.band): 1 its low-pass alone, 2 with "
-              "the compliance block (taken where it halves the low-pass's chi2); 0 = not "
-              "reported (the band off, no rigid-model misfit, or no answer yet)", None,
+              "the compliance block (taken where it halves the low-pass's chi2), 3 with the "
+              "found modes' columns (ident.modes = 1, where the compliance's rows do not "
+              "fit); 0 = not reported (the band off, no rigid-model misfit, or no answer that "
+              "fits yet)", None,
               ("band",))]
     for name in ("noise.scale",) + _profile_magnitudes():
         unit, default, doc = NOISE_PARAMETERS[name]

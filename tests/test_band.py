@@ -22,8 +22,15 @@ NSOS = 3
 class BandModel(ctypes.Structure):
     """sr_band_model (native/src/band.h)."""
     _fields_ = [("settle", ctypes.c_int), ("nm", ctypes.c_int), ("nl", ctypes.c_int),
-                ("nc", ctypes.c_int), ("n1", ctypes.c_int), ("dt", ctypes.c_double),
+                ("nc", ctypes.c_int), ("n1", ctypes.c_int), ("nq", ctypes.c_int),
+                ("cols", ctypes.c_int), ("modes", ctypes.c_int), ("dt", ctypes.c_double),
                 ("gain", ctypes.c_double), ("sos", (ctypes.c_double * 5) * NSOS)]
+
+
+class VariantAnswer(ctypes.Structure):
+    """sr_band_variant_answer (native/src/band.h)."""
+    _fields_ = [("vec", ctypes.c_double * 20), ("bound", ctypes.c_double * 20),
+                ("chi2", ctypes.c_double), ("dof", ctypes.c_double)]
 
 
 def _p(a: np.ndarray):
@@ -40,6 +47,8 @@ def lib():
     L.sr_band_model_size.restype = ctypes.c_size_t
     L.sr_band_work_size.restype = ctypes.c_size_t
     L.sr_band_model_init.argtypes = [vp, vp, d]
+    L.sr_band_model_init_modes.argtypes = [vp, vp, d]
+    L.sr_band_data_init_modes.argtypes = [vp, vp, vp, ctypes.c_int, _DP, _DP]
     L.sr_band_data_size.argtypes = [vp, vp]
     L.sr_band_data_size.restype = ctypes.c_size_t
     L.sr_band_data_init.argtypes = [vp, vp, vp]
@@ -47,25 +56,35 @@ def lib():
     L.sr_band_add.argtypes = [vp, vp, vp, d, _DP, _DP, vp]
     L.sr_band_solve.argtypes = [vp, vp, vp, vp]
     L.sr_band_answer.argtypes = [vp, vp, _DP, _DP, _DP, _DP, _DP]
+    L.sr_band_variant.argtypes = [vp, vp, ctypes.c_int, vp]
     assert L.sr_band_model_size() == ctypes.sizeof(BandModel)
     return L
 
 
 class CBand:
-    """The native band over a native information filter's model (ctypes)."""
+    """The native band over a native information filter's model (ctypes); with ``modes``
+    ((frequency [Hz], damping), ...) the found modes' band with those modes."""
 
-    def __init__(self, L, robot, noise, z0, P0_mu, P0_theta, dt):
+    def __init__(self, L, robot, noise, z0, P0_mu, P0_theta, dt, modes=None):
         self.L = L
         self.im = ctypes.create_string_buffer(L.sr_info_model_size())
         assert L.sr_info_model_init(self.im, ctypes.byref(robot), _p(noise), _p(z0),
                                     float(P0_mu), float(P0_theta)) == 0
         self.bm = BandModel()
-        self.status = L.sr_band_model_init(ctypes.byref(self.bm), self.im, float(dt))
+        init = L.sr_band_model_init_modes if modes else L.sr_band_model_init
+        self.status = init(ctypes.byref(self.bm), self.im, float(dt))
         if self.status == 0:
             self.data = ctypes.create_string_buffer(L.sr_band_data_size(ctypes.byref(self.bm),
                                                                         self.im))
             self.work = ctypes.create_string_buffer(L.sr_band_work_size())
             L.sr_band_data_init(ctypes.byref(self.bm), self.im, self.data)
+            if modes:
+                assert self.init_modes(modes) == 0
+
+    def init_modes(self, modes) -> int:
+        f, zeta = (np.array(v, float) for v in zip(*modes)) if modes else (np.zeros(1),) * 2
+        return self.L.sr_band_data_init_modes(ctypes.byref(self.bm), self.im, self.data,
+                                              len(modes), _p(f), _p(zeta))
 
     def add(self, t, x, z) -> int:
         return self.L.sr_band_add(ctypes.byref(self.bm), self.im, self.data, float(t),
@@ -80,19 +99,27 @@ class CBand:
                                      _p(alt), _p(chi2), _p(dof))
         return pick, vec, bound, alt, chi2, float(dof[0])
 
+    def variant(self, which: int):
+        """(estimates, bound, chi2, dof) of the last solve's variant which (1 the low-pass, 2
+        all filters' columns, 3 the first filter's alone), None where it has none."""
+        a = VariantAnswer()
+        if self.L.sr_band_variant(ctypes.byref(self.bm), self.data, which, ctypes.byref(a)):
+            return None
+        return np.array(a.vec), np.array(a.bound), a.chi2, a.dof
+
     def valid(self) -> bool:
         return bool(self.L.sr_band_data_valid(ctypes.byref(self.bm), self.im, self.data))
 
 
-def _models(lib, sc, dt):
+def _models(lib, sc, dt, modes=None):
     """(native band, reference filter) of scenario sc's robot, the sensors' noise model at dt
-    and the scenario's guesses and prior."""
+    and the scenario's guesses and prior (the found modes' band with ``modes``)."""
     from spacerobot.core.robot_record import c_robot
     from spacerobot.sensors import default_parameters
     sd, sd_c, sd_b = sensor_noise(default_parameters(), dt)
     g, robot = sc.guess, c_robot(sc.robot, lib)
     z0 = guess_of(sc)
-    cb = CBand(lib, robot, noise_vector(sd, sd_c, sd_b), z0, g.P0_mu, g.P0_theta, dt)
+    cb = CBand(lib, robot, noise_vector(sd, sd_c, sd_b), z0, g.P0_mu, g.P0_theta, dt, modes)
     ref = RowsFilter(lib, robot, sc.robot.n_joints, False, sd, sd_c, g.P0_mu, g.P0_theta,
                      z_of_reported(z0), sd_gyro_bias=sd_b)
     ref.eiv = True
@@ -125,16 +152,21 @@ def test_sample_time_out_of_range_refused(lib, dt):
     assert lib.sr_band_model_init(ctypes.byref(BandModel()), cb.im, float(dt)) == 1
 
 
-@pytest.fixture(scope="module")
-def wings_short(lib):
+#: the found modes' band's modes in its reference test: the panels' own (0.5 Hz, 0.005) and a
+#: stand-in for a spurious second one (its lowest mode alone is then the model beside it)
+MODES = ((0.5, 0.005), (1.3, 0.05))
+
+
+def _short(lib, modes=None, t_end=150.0):
     """The spatial robot's wings (the issue's size) through the realistic sensors (seed 0),
-    one sample every 0.2 s for 150 s: the native band and the reference's answers, both
-    linearised at the truth."""
+    one sample every 0.2 s for t_end s: the native band and the reference's answers, both
+    linearised at the truth (the found modes' band with ``modes``)."""
+    from oracles.band import QS
     dt = 0.2
-    sc, XT, truth = parameter_set_samples("spatial", "wings", 150.0, dt)
+    sc, XT, truth = parameter_set_samples("spatial", "wings", t_end, dt)
     X = sensed(sc, XT, 0, dt)
     ts = dt * np.arange(len(X))
-    cb, ref = _models(lib, sc, dt)
+    cb, ref = _models(lib, sc, dt, modes)
     prior = (ref.Rinfo.copy(), ref.d.copy())
     zt = z_of_reported(truth)
     settle = low_pass(dt)[2]
@@ -142,16 +174,36 @@ def wings_short(lib):
         assert cb.add(t, x, truth) == 0
         ref.eiv = k >= settle                 # the sums over the rows the band uses
         ref.add(t, x, zt)
-    return cb, cb.answer(), band(ref, prior, ts, X, dt), truth
+    filters, blocks = (modes, "GCDT") if modes else (QS, "GC")
+    return cb, cb.answer(), band(ref, prior, ts, X, dt, filters, blocks), truth
 
 
-def test_band_is_its_reference(wings_short):
+@pytest.fixture(scope="module")
+def wings_short(lib):
+    return _short(lib)
+
+
+@pytest.fixture(scope="module")
+def wings_short_modes(lib):
+    return _short(lib, MODES, 100.0)      # (the reference's columns are the slow part)
+
+
+@pytest.fixture(scope="module")
+def wings_short_mode1(lib):
+    """The found modes' band with one mode (its [R] of all filters' columns not kept)."""
+    return _short(lib, MODES[:1], 60.0)
+
+
+@pytest.mark.parametrize("run", ["wings_short", "wings_short_modes", "wings_short_mode1"])
+def test_band_is_its_reference(run, request):
     """Both variants' chi2, the answer taken, its estimates, bound and degrees of freedom and
     the alternative's estimates as the reference's batch least squares computes them (the
     estimates to 1e-6 of the error scale: the prior's 1e-12 information makes the normal
-    equations lose some digits)."""
+    equations lose some digits); the compliance's band and the found modes' (MODES: all four
+    blocks of columns per mode, the lowest mode alone beside them; with one mode, where all
+    modes' answer is the lowest's alone); each variant through sr_band_variant."""
     from spacerobot.interface import error_scale
-    cb, (pick, vec, bound, alt, chi2, dof), ref, truth = wings_short
+    cb, (pick, vec, bound, alt, chi2, dof), ref, truth = request.getfixturevalue(run)
     assert pick == {"lowpass": 1, "compliance": 2}[ref["pick"]]
     np.testing.assert_allclose(chi2, [ref["lowpass"][2], ref["compliance"][2]], rtol=1e-7)
     u, r_bound, _, r_dof, r_vec = ref[ref["pick"]]
@@ -159,9 +211,19 @@ def test_band_is_its_reference(wings_short):
     scale = error_scale(truth)
     np.testing.assert_allclose(vec / scale, r_vec / scale, rtol=0, atol=1e-6)
     np.testing.assert_allclose(alt / scale, ref[ref["alt"]][4] / scale, rtol=0, atol=1e-6)
-    # the alternative differs (else the model-difference term would say nothing)
-    assert np.max(np.abs(vec - alt) / scale) > 1e-4
+    if run == "wings_short_mode1":         # one model: no model-difference term
+        assert pick == 2 and np.array_equal(vec, alt)
+    else:       # the alternative differs (else the model-difference term would say nothing)
+        assert np.max(np.abs(vec - alt) / scale) > 1e-4
     np.testing.assert_allclose(bound, r_bound, rtol=1e-6, atol=1e-12 * scale.max())
+    # every variant's answer (est_band.c reports the found modes' from two of them)
+    for which, name in enumerate(("lowpass", "compliance", "compliance1"), start=1):
+        v_vec, v_bound, v_chi2, v_dof = cb.variant(which)
+        _, r_bound, r_chi2, r_dof, r_vec = ref[name]
+        assert v_chi2 == pytest.approx(r_chi2, rel=1e-7) and v_dof == r_dof, name
+        np.testing.assert_allclose(v_vec / scale, r_vec / scale, rtol=0, atol=1e-6)
+        np.testing.assert_allclose(v_bound, r_bound, rtol=1e-6, atol=1e-12 * scale.max())
+    assert cb.variant(0) is None and cb.variant(4) is None
     assert cb.valid()
 
 
@@ -179,6 +241,29 @@ def test_band_refuses_bad_samples(wings_short):
     z_bad[0] = -1.0
     assert cb.add(1e6, x, z_bad) == 1
     assert cb.data.raw == before
+
+
+def test_modes_band_refuses_bad_modes(wings_short, wings_short_modes):
+    """sr_band_data_init_modes: none, more than the model's two, not ascending, a frequency or
+    damping out of range, or the compliance's model: refused (1), the state unchanged; a
+    found modes' band with more modes in use than its filters is not valid."""
+    cb, *_ = wings_short_modes
+    before = cb.data.raw
+    for modes in ((), ((0.3, 0.01),) * 3, ((0.5, 0.01), (0.3, 0.01)), ((0.0, 0.01),),
+                  ((float("nan"), 0.01),), ((0.3, 0.0),), ((0.3, 1.5),)):
+        assert cb.init_modes(modes) == 1, modes
+    assert cb.data.raw == before and cb.valid()
+    comp, *_ = wings_short
+    comp_before = comp.data.raw
+    assert comp.init_modes(((0.3, 0.01),)) == 1 and comp.data.raw == comp_before
+    head = ctypes.cast(cb.data, ctypes.POINTER(ctypes.c_int))   # added, used, pick, nf
+    assert head[3] == len(MODES)
+    try:
+        head[3] = 3                               # more modes than the model's filters
+        assert not cb.valid()
+    finally:
+        ctypes.memmove(cb.data, before, len(before))
+    assert cb.valid()
 
 
 def _identify(robot, case, seed, values, dt=0.1, stop=300.0):
@@ -323,11 +408,11 @@ def test_band_hands_back_where_its_own_rows_do_not_fit():
     XT, _ = scenario_samples(sc, 300.0, 0.1)
     X = sensed(sc, XT, 0, 0.1)
     out = {}
-    for band in (0, 2):
-        ident = fmu_identifier(sc, 0.1, {"ident.noise_profile": 1, "ident.band": band})
+    for setting in (0, 2):
+        ident = fmu_identifier(sc, 0.1, {"ident.noise_profile": 1, "ident.band": setting})
         for k, x in enumerate(X):
             ident.update_flat(0.1 * k, x)
-        out[band] = ident._report()
+        out[setting] = ident._report()
     assert out[0]["misfit_cause"] == "model" and out[0]["band"] == 0
     for key in ("vector", "sd", "crb"):
         np.testing.assert_array_equal(out[0][key], out[2][key])

@@ -279,6 +279,23 @@ def _slow_wings(f_hz: float):
     return (sc, *scenario_samples(sc, T_END, DT))
 
 
+def _sensed_run(sc, xs, seed: int, modes: int, **extra):
+    """The library as the FMU builds it with the profile and the joint solver (ident.modes =
+    modes, the rigid band automatic unless ``extra`` says), fed the samples xs through the
+    sensors (realistic defaults, seed): (identifier, its last report, whether a body was ever
+    flagged)."""
+    from spacerobot.sensors import SensorSuite
+    ident = fmu_identifier(sc, DT, {"method": 1, "solver": 2, "ident.modes": modes,
+                                    "ident.noise_profile": 1, "noise.scale": 1.0, **extra})
+    suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=seed, dt=DT)
+    flagged = False
+    for k, x in enumerate(xs):
+        ident.update(k * DT, suite.update(suite.sample(x), DT))
+        rep = ident.core.report()
+        flagged |= rep["identified"]["base"] or rep["identified"]["target"]
+    return ident, rep, flagged
+
+
 def test_columns_report_where_the_band_hands_back():
     """The library with the modal columns beside the profile (ident.modes = 1, the joint
     solver; the rigid band automatic, on by the profile), through the sensors (seed 0), 300 s.
@@ -294,19 +311,11 @@ def test_columns_report_where_the_band_hands_back():
     its estimates those of the run without the columns to within 0.2 % of the error scale
     (measured 0.08 %: the filter is linearised at the least-squares answer, which with the
     columns is compensated for the rows' errors in variables, est_modal.h)."""
-    from spacerobot.sensors import SensorSuite
     for name in ("wings", "slosh"):
         sc, xs, truth = _slow_wings(0.2) if name == "wings" else _record(name)
         est = {}
         for modes in (1, 2):
-            ident = fmu_identifier(sc, DT, {"method": 1, "solver": 2, "ident.modes": modes,
-                                            "ident.noise_profile": 1, "noise.scale": 1.0})
-            suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=0, dt=DT)
-            flagged = False
-            for k, x in enumerate(xs):
-                ident.update(k * DT, suite.update(suite.sample(x), DT))
-                rep = ident.core.report()
-                flagged |= rep["identified"]["base"] or rep["identified"]["target"]
+            ident, rep, flagged = _sensed_run(sc, xs, 0, modes)
             est[modes] = np.asarray(ident.vector())
             assert rep["misfit"] and not flagged, (name, modes)
             if name == "wings":
@@ -333,16 +342,11 @@ def test_columns_compensate_the_rows_noise():
     1.35-3.88 % low, mean -2.62 %). With the rows' expected noise Gram matrix taken out of the
     modal solve, their mean signed error against the composite truth is within 1.5 % (measured
     -0.56 %), the worst of the 20 below 5 % (measured 3.71 %) and >= 18 of 20 within 2 sd
-    (measured 20). Same set-up as test_columns_report_where_the_band_hands_back."""
-    from spacerobot.sensors import SensorSuite
+    (measured 20). Same set-up as test_columns_report_where_the_band_hands_back, the rigid
+    band off (with it the found modes' band reports there: test_found_modes_band_reports)."""
     sc, xs, truth = _slow_wings(0.3)
-    ident = fmu_identifier(sc, DT, {"method": 1, "solver": 2, "ident.modes": 1,
-                                    "ident.noise_profile": 1, "noise.scale": 1.0})
-    suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=1, dt=DT)
-    for k, x in enumerate(xs):
-        ident.update(k * DT, suite.update(suite.sample(x), DT))
-    rep = ident.core.report()
-    assert rep["band"] == 0 and np.any(np.abs(rep["mode_f"] - 0.3) < 0.005), rep["mode_f"]
+    ident, rep, _ = _sensed_run(sc, xs, 1, 1, **{"ident.band": 2})
+    assert np.any(np.abs(rep["mode_f"] - 0.3) < 0.005), rep["mode_f"]
     est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
     diag = [0, 4, 5, 6, 10, 14, 15, 16]                    # m, Ixx, Iyy, Izz of each body
     signed = (est[diag] - truth[diag]) / truth[diag]
@@ -351,6 +355,25 @@ def test_columns_compensate_the_rows_noise():
           f"worst {100 * relative_errors(est, truth).max():.2f} %, {within} within 2 sd")
     assert abs(signed.mean()) < 0.015, signed
     assert relative_errors(est, truth).max() < 0.05 and within >= 18
+
+
+def test_found_modes_band_reports():
+    """The found modes' band (est_band.h: the rigid band's rows with the columns of the modes
+    the search found, where the compliance band hands back): the `wings` set at 0.3 Hz through
+    the sensors (seed 1), the library as the FMU builds it with the profile and the columns
+    (the band automatic), 300 s: diag.band 3, every estimate within 3 % of the composite
+    truth (the issue's goal; measured 1.07 %, against the joint solver's 3.71 % with the band
+    off: test_columns_compensate_the_rows_noise), >= 18 of 20 within 2 sd (measured 20), the
+    misfit found, no flag."""
+    sc, xs, truth = _slow_wings(0.3)
+    ident, rep, flagged = _sensed_run(sc, xs, 1, 1)
+    est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
+    worst = relative_errors(est, truth).max()
+    within = int(np.sum(np.abs(est - truth) <= 2.0 * sd))
+    print(f"wings at 0.3 Hz, seed 1, found modes' band: worst {100 * worst:.2f} %, "
+          f"{within} within 2 sd, mode_f {rep['mode_f']}")
+    assert rep["misfit_cause"] == "model" and rep["band"] == 3 and not flagged
+    assert worst < 0.03 and within >= 18
 
 
 def test_corrupt_window_ring_is_refused():

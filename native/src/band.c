@@ -1,6 +1,6 @@
 /* The rigid band (band.h): the information filter's rows through a causal Butterworth low-pass
- * below the modes, with the quasi-static compliance columns, solved every SR_BAND_SOLVE_EVERY
- * rows. */
+ * below the modes, with the quasi-static compliance columns or the found modes' own, solved
+ * every SR_BAND_SOLVE_EVERY rows. */
 #include <math.h>
 #include <string.h>
 
@@ -21,9 +21,10 @@ static size_t align8(size_t x) { return (x + 7) & ~(size_t)7; }
 
 /* -- the layout ----------------------------------------------------------------------------- */
 
-/* after the head: the compliance's [R] (nc x nc, compact), the low-pass's (nl x nl), the first
-   filter's compliance's (n1 x n1), the errors-in-variables sums N_HH (nu x nu) and N_Hy (nu),
-   the first sample's rows (nr x nc), the low-pass's states (2 per section and row entry) */
+/* after the head: all filters' columns' [R] (nc x nc, compact; not kept with one filter in
+   use), the low-pass's (nl x nl), the first filter's columns' alone (n1 x n1), the
+   errors-in-variables sums N_HH (nu x nu) and N_Hy (nu), the first sample's rows (nr x nc),
+   the low-pass's states (2 per section and row entry) */
 static double *Rc_of(void *data) { return (double *)((char *)data + align8(sizeof(sr_band_data))); }
 static double *Rl_of(const sr_band_model *b, void *data)
 {
@@ -84,7 +85,9 @@ static void low_pass(const sr_band_model *b, int nx, const double *x, double *s,
     }
 }
 
-int sr_band_model_init(sr_band_model *b, const sr_info_model *im, double dt)
+/* the model with nq filters of cols columns each (modes: their frequencies per Data block) */
+static int model_init(sr_band_model *b, const sr_info_model *im, double dt, int nq, int cols,
+                      int modes)
 {
     if (!b || !im || !(dt >= SR_BAND_DT_MIN && dt <= SR_BAND_DT_MAX))
         return 1;
@@ -119,11 +122,40 @@ int sr_band_model_init(sr_band_model *b, const sr_info_model *im, double dt)
     b->gain = g;
     b->settle = (int)lround(SR_BAND_SETTLE / SR_BAND_FC / dt);
     b->dt = dt;
-    b->nm = SR_BAND_NM;
+    b->nq = nq;
+    b->cols = cols;
+    b->modes = modes;
+    b->nm = nq * cols;
     b->nl = im->nu + 1;
     b->nc = b->nm + b->nl;
-    b->n1 = EST_MODAL_GC_COLS + b->nl;
+    b->n1 = cols + b->nl;
     return 0;
+}
+
+int sr_band_model_init(sr_band_model *b, const sr_info_model *im, double dt)
+{
+    return model_init(b, im, dt, SR_BAND_NQS, EST_MODAL_GC_COLS, 0);
+}
+
+int sr_band_model_init_modes(sr_band_model *b, const sr_info_model *im, double dt)
+{
+    return model_init(b, im, dt, SR_BAND_MAX_MODES, EST_MODAL_COLS, 1);
+}
+
+/* the filters in use (the state's count, clamped to the model's: sr_band_add does not check
+   the state) */
+static int in_use(const sr_band_model *b, const sr_band_data *s)
+{
+    return s->nf < 0 ? 0 : s->nf > b->nq ? b->nq : s->nf;
+}
+
+/* the unknowns in use of the rows [M | H | y] (all: the filters in use's columns and the
+   filter's) and [M1 | H | y] (first: the first filter's alone, where it is in use) */
+static int unknowns(const sr_band_model *b, const sr_info_model *im, const sr_band_data *s,
+                    int first)
+{
+    int nf = in_use(b, s);
+    return (first ? (nf > 0) : nf) * b->cols + im->nu;
 }
 
 /* -- the state ------------------------------------------------------------------------------ */
@@ -134,12 +166,15 @@ void sr_band_data_init(const sr_band_model *b, const sr_info_model *im, void *da
         return;
     sr_band_data *s = (sr_band_data *)data;
     memset(s, 0, sizeof *s);
-    for (int g = 0; g < SR_BAND_NQS; g++) {
-        s->f[g].w = TWO_PI * QS[g][0];
-        s->f[g].zeta = QS[g][1];
+    if (!b->modes) {
+        s->nf = SR_BAND_NQS;
+        for (int g = 0; g < SR_BAND_NQS; g++) {
+            s->f[g].w = TWO_PI * QS[g][0];
+            s->f[g].zeta = QS[g][1];
+        }
     }
     /* the square-root informations at the prior: the filter's unknowns at its prior
-       (information prior_sqrt^2 about u0), the compliance's at 0 with SR_BAND_PRIOR_INFO */
+       (information prior_sqrt^2 about u0), the columns' at 0 with SR_BAND_PRIOR_INFO */
     int nu = im->nu, nm = b->nm, nc = b->nc, nl = b->nl, n1 = b->n1, m1 = n1 - nl;
     double *Rc = Rc_of(data), *Rl = Rl_of(b, data), *R1 = R1_of(b, data);
     memset(Rc, 0, sizeof(double) * (size_t)nc * nc);
@@ -159,6 +194,49 @@ void sr_band_data_init(const sr_band_model *b, const sr_info_model *im, void *da
                                                   + (size_t)im->nr * nc * (1 + 2 * SR_BAND_NSOS)));
 }
 
+int sr_band_data_init_modes(const sr_band_model *b, const sr_info_model *im, void *data,
+                            int nf, const double *f_hz, const double *zeta)
+{
+    if (!b || !im || !data || !f_hz || !zeta || !b->modes || nf < 1 || nf > b->nq)
+        return 1;
+    for (int g = 0; g < nf; g++)
+        if (!(f_hz[g] > 0.0 && isfinite(f_hz[g]) && zeta[g] > 0.0 && zeta[g] <= 1.0)
+            || (g > 0 && !(f_hz[g] >= f_hz[g - 1])))
+            return 1;
+    sr_band_data_init(b, im, data);
+    sr_band_data *s = (sr_band_data *)data;
+    s->nf = nf;
+    for (int g = 0; g < nf; g++) {
+        s->f[g].w = TWO_PI * f_hz[g];
+        s->f[g].zeta = zeta[g];
+    }
+    return 0;
+}
+
+/* 1 where the filters in use are the model's: the compliance's fixed ones, or modes in range
+   (ascending) and the rest unused (zero) */
+static int filters_valid(const sr_band_model *b, const sr_band_data *s)
+{
+    if (!b->modes) {
+        if (s->nf != SR_BAND_NQS)
+            return 0;
+        for (int g = 0; g < SR_BAND_NQS; g++)
+            if (s->f[g].w != TWO_PI * QS[g][0] || s->f[g].zeta != QS[g][1])
+                return 0;
+        return 1;
+    }
+    if (s->nf < 0 || s->nf > b->nq)
+        return 0;
+    for (int g = 0; g < SR_BAND_MAX_F; g++) {
+        const est_modal_filter *f = &s->f[g];
+        if (g < s->nf ? !(f->w > 0.0 && f->zeta > 0.0 && f->zeta <= 1.0
+                          && (g == 0 || f->w >= s->f[g - 1].w))
+                      : f->w != 0.0 || f->zeta != 0.0)
+            return 0;
+    }
+    return 1;
+}
+
 int sr_band_data_valid(const sr_band_model *b, const sr_info_model *im, const void *data)
 {
     if (!b || !im || !data)
@@ -166,32 +244,30 @@ int sr_band_data_valid(const sr_band_model *b, const sr_info_model *im, const vo
     const sr_band_data *s = (const sr_band_data *)data;
     int most = s->added > b->settle ? s->added - b->settle : 0;    /* rows the samples give */
     if (s->added < 0 || s->used < 0 || s->used > most || s->pick < SR_BAND_NONE
-        || s->pick > SR_BAND_COMPLIANCE
-        || (s->pick != SR_BAND_NONE && (double)s->used * im->nr <= 2.0 * (b->nc - 1)))
+        || s->pick > SR_BAND_COMPLIANCE || !filters_valid(b, s)
+        || (s->pick != SR_BAND_NONE && (double)s->used * im->nr <= 2.0 * unknowns(b, im, s, 0)))
         return 0;
-    double sum = s->t_prev + s->chi2[0] + s->chi2[1];
+    double sum = s->t_prev;
     for (int i = 0; i < SR_THRUST_LEN; i++)
         sum += s->K[i];
     for (int i = 0; i < EST_MODAL_U; i++)
         sum += s->u_prev[i];
-    for (int g = 0; g < SR_BAND_NQS; g++)
+    for (int g = 0; g < SR_BAND_MAX_F; g++)
         for (int i = 0; i < EST_MODAL_U; i++)
             sum += s->f[g].eta[i] + s->f[g].etad[i];
-    sum += s->dof;
-    for (int i = 0; i < 20; i++)
-        sum += s->vec[i] + s->bound[i] + s->alt[i];
-    if (!isfinite(sum))
-        return 0;
-    for (int g = 0; g < SR_BAND_NQS; g++)     /* the filters' frequencies are the band's */
-        if (s->f[g].w != TWO_PI * QS[g][0] || s->f[g].zeta != QS[g][1])
-            return 0;
-    return 1;
+    for (int v = 0; v < 3; v++) {
+        sum += s->var[v].chi2 + s->var[v].dof;
+        for (int i = 0; i < 20; i++)
+            sum += s->var[v].vec[i] + s->var[v].bound[i];
+    }
+    return isfinite(sum);
 }
 
 /* -- one sample ----------------------------------------------------------------------------- */
 
-/* The sample's rows [M | H | y] (nr x nc) into w->row at z (standard form), its thrust
-   integrals into K, its drive into u and the compliance's filters stepped into f; where it
+/* The sample's rows [M | H | y] (nr x nc) into w->row at z (standard form; the columns of
+   filters not in use zero), its thrust integrals into K, its drive into u and the filters in
+   use stepped into f; where it
    is used (from the low-pass's start on) its weight into W and its errors-in-variables
    products into N_HH (MU stride), N_Hy (else zero). Nothing of the state written: 0, or 1
    where any of them is not finite. */
@@ -215,18 +291,20 @@ static int sample_rows(const sr_band_model *b, const sr_info_model *im, const vo
             return 1;
         info_eiv_sample(im, x, K, w->hy, W, w->xs, &w->info, N_HH, N_Hy);
     }
-    /* the compliance's filters, at rest at the first sample */
+    /* the filters, at rest at the first sample */
+    int nf = in_use(b, s), cols = b->cols;
     memcpy(f, s->f, sizeof s->f);
     est_modal_signals(t, x, sig);
     if (s->added > 0)
-        for (int g = 0; g < SR_BAND_NQS; g++)
+        for (int g = 0; g < nf; g++)
             est_modal_filter_step(&f[g], t - s->t_prev, s->u_prev, sig + 1);
-    for (int g = 0; g < SR_BAND_NQS; g++) {
-        est_modal_columns(f[g].eta, f[g].etad, sig, origin, EST_MODAL_GC_COLS, w->cols);
+    for (int a = 0; a < nr; a++)
+        memset(w->row + a * nc, 0, sizeof(double) * (size_t)nm);
+    for (int g = 0; g < nf; g++) {
+        est_modal_columns(f[g].eta, f[g].etad, sig, origin, cols, w->cols);
         for (int a = 0; a < nr; a++)            /* the filter's rows of the 6 */
-            memcpy(w->row + a * nc + g * EST_MODAL_GC_COLS,
-                   w->cols + im->rows[a] * EST_MODAL_GC_COLS,
-                   sizeof(double) * EST_MODAL_GC_COLS);
+            memcpy(w->row + a * nc + g * cols, w->cols + im->rows[a] * cols,
+                   sizeof(double) * (size_t)cols);
     }
     for (int a = 0; a < nr; a++)
         memcpy(w->row + a * nc + nm, w->hy + a * HS, sizeof(double) * (size_t)(nu + 1));
@@ -240,7 +318,7 @@ static int sample_rows(const sr_band_model *b, const sr_info_model *im, const vo
     }
     for (int i = 0; i < nr * nr; i++)
         sum += W[i];
-    for (int g = 0; g < SR_BAND_NQS; g++)
+    for (int g = 0; g < nf; g++)
         for (int i = 0; i < EST_MODAL_U; i++)
             sum += f[g].eta[i] + f[g].etad[i];
     memcpy(u, sig + 1, sizeof(double) * EST_MODAL_U);
@@ -264,7 +342,7 @@ static int informations_add(const sr_band_model *b, const sr_info_model *im, voi
         sum += WZ[i];
     if (!isfinite(sum))
         return 0;
-    /* the first filter's compliance's rows [M1 | H | y] and the low-pass's [H | y] (in Z, no
+    /* the first filter's columns' rows [M1 | H | y] and the low-pass's [H | y] (in Z, no
        longer needed: nr (n1 + nl) <= nr nc) */
     double *Z1 = Z, *Zl = Z + nr * n1;
     for (int a = 0; a < nr; a++) {
@@ -272,10 +350,11 @@ static int informations_add(const sr_band_model *b, const sr_info_model *im, voi
         memcpy(Z1 + a * n1 + m1, WZ + a * nc + nm, sizeof(double) * (size_t)nl);
         memcpy(Zl + a * nl, WZ + a * nc + nm, sizeof(double) * (size_t)nl);
     }
-    sr_qr_add_rows(Rc_of(data), nc, NULL, nc, WZ, nc, nr);   /* [R]: the rhs its last column */
+    sr_band_data *s = (sr_band_data *)data;
+    if (in_use(b, s) > 1)  /* (one filter in use: all filters' rows are the first's alone) */
+        sr_qr_add_rows(Rc_of(data), nc, NULL, nc, WZ, nc, nr);  /* the rhs its last column */
     sr_qr_add_rows(R1_of(b, data), n1, NULL, n1, Z1, n1, nr);
     sr_qr_add_rows(Rl_of(b, data), nl, NULL, nl, Zl, nl, nr);
-    sr_band_data *s = (sr_band_data *)data;
     if (s->used < s->added - b->settle)        /* (added saturates: so does it) */
         s->used++;
     return 1;
@@ -291,7 +370,7 @@ int sr_band_add(const sr_band_model *b, const sr_info_model *im, void *data, dou
         return 1;
     int nr = im->nr, nu = im->nu, len = nr * b->nc;
     double z[20], W[36], K[SR_THRUST_LEN], N_Hy[SR_INFO_MAX_U], u[EST_MODAL_U];
-    est_modal_filter f[SR_BAND_NQS];
+    est_modal_filter f[SR_BAND_MAX_F];
     sr_standard_of_reported(z_lin, z);
     if (sample_rows(b, im, data, t, x, z, K, u, f, W, N_Hy, w) != 0)
         return 1;
@@ -327,11 +406,12 @@ int sr_band_add(const sr_band_model *b, const sr_info_model *im, void *data, dou
 /* -- the solve ------------------------------------------------------------------------------ */
 
 /* One variant's answer from its [R] (n x n compact; the filter's unknowns' block at columns
-   off .. off + nu - 1, the compliance's before it, the right-hand side last): the unknowns u
-   compensated by comp times the sums, the reported vec and bound (20), the data rows' chi2 at
-   u (the prior rows' share taken off) and its degrees of freedom. 0, or 1 where not finite. */
+   off .. off + nu - 1, the columns' before it, the right-hand side last; k of its unknowns in
+   use, the rest the zero columns of filters not in use): the unknowns u compensated by comp
+   times the sums, the reported vec and bound (20), the data rows' chi2 at u (the prior rows'
+   share taken off) and its degrees of freedom. 0, or 1 where not finite. */
 static int solve_variant(const sr_band_model *b, const sr_info_model *im, void *data,
-                         const double *R, int n, int off, double comp, sr_band_work *w,
+                         const double *R, int n, int off, int k, double comp, sr_band_work *w,
                          double *vec, double *bound, double *chi2, double *dof)
 {
     int nu = im->nu, rhs = n - 1;
@@ -369,7 +449,7 @@ static int solve_variant(const sr_band_model *b, const sr_info_model *im, void *
         w->mvec[i] = s / R[i * n + i];
         rss -= SR_BAND_PRIOR_INFO * w->mvec[i] * w->mvec[i];
     }
-    *dof = (double)((const sr_band_data *)data)->used * im->nr - (n - 1);
+    *dof = (double)((const sr_band_data *)data)->used * im->nr - k;
     *chi2 = *dof > 0.0 ? rss / *dof : NAN;
     info_reported_of_u(im, u, vec);
     int ok = info_bound_with(im, nu, w->Ri, NULL, u, bound) == 0 && isfinite(*chi2);
@@ -384,29 +464,25 @@ void sr_band_solve(const sr_band_model *b, const sr_info_model *im, void *data,
     if (!b || !im || !data || !w)
         return;
     sr_band_data *s = (sr_band_data *)data;
-    if ((double)s->used * im->nr <= 2.0 * (b->nc - 1))  /* the compliance's unknowns twice */
+    int k = unknowns(b, im, s, 0), k1 = unknowns(b, im, s, 1);
+    if ((double)s->used * im->nr <= 2.0 * k)            /* the unknowns in use twice */
         return;
     /* the sums are the used samples': the low-passed noise's products are the gain times
        theirs */
     double comp = b->gain;
-    double vl[20], bl[20], xl, fl, vc[20], bc[20], xc, fc, v1[20], b1[20], x1, f1;
-    if (solve_variant(b, im, data, Rl_of(b, data), b->nl, 0, comp, w, vl, bl, &xl, &fl) != 0
-        || solve_variant(b, im, data, Rc_of(data), b->nc, b->nm, comp, w, vc, bc, &xc,
-                         &fc) != 0
-        || solve_variant(b, im, data, R1_of(b, data), b->n1, b->n1 - b->nl, comp, w, v1, b1,
-                         &x1, &f1) != 0)
+    sr_band_variant_answer a[3];                /* the low-pass, all filters', the first's */
+    if (solve_variant(b, im, data, Rl_of(b, data), b->nl, 0, im->nu, comp, w, a[0].vec,
+                      a[0].bound, &a[0].chi2, &a[0].dof) != 0
+        || solve_variant(b, im, data, R1_of(b, data), b->n1, b->n1 - b->nl, k1, comp, w,
+                         a[2].vec, a[2].bound, &a[2].chi2, &a[2].dof) != 0)
         return;
-    int pick = xc < SR_BAND_CHI2_DROP * xl ? SR_BAND_COMPLIANCE : SR_BAND_LOWPASS;
-    int c = pick == SR_BAND_COMPLIANCE;
-    memcpy(s->vec, c ? vc : vl, sizeof s->vec);
-    memcpy(s->bound, c ? bc : bl, sizeof s->bound);
-    /* the alternative: the compliance of the first filter alone beside both filters' (what
-       the second order changes), both filters' compliance beside the low-pass */
-    memcpy(s->alt, c ? v1 : vc, sizeof s->alt);
-    s->dof = c ? fc : fl;
-    s->chi2[0] = xl;
-    s->chi2[1] = xc;
-    s->pick = pick;
+    if (in_use(b, s) <= 1)                      /* (informations_add: [R] not kept) */
+        a[1] = a[2];
+    else if (solve_variant(b, im, data, Rc_of(data), b->nc, b->nm, k, comp, w, a[1].vec,
+                           a[1].bound, &a[1].chi2, &a[1].dof) != 0)
+        return;
+    memcpy(s->var, a, sizeof a);
+    s->pick = a[1].chi2 < SR_BAND_CHI2_DROP * a[0].chi2 ? SR_BAND_COMPLIANCE : SR_BAND_LOWPASS;
 }
 
 int sr_band_answer(const sr_band_model *b, const void *data, double *vec, double *bound,
@@ -415,17 +491,36 @@ int sr_band_answer(const sr_band_model *b, const void *data, double *vec, double
     if (!b || !data)
         return SR_BAND_NONE;
     const sr_band_data *s = (const sr_band_data *)data;
-    if (s->pick != SR_BAND_NONE) {
-        if (vec)
-            memcpy(vec, s->vec, sizeof s->vec);
-        if (bound)
-            memcpy(bound, s->bound, sizeof s->bound);
-        if (alt)
-            memcpy(alt, s->alt, sizeof s->alt);
-        if (chi2)
-            memcpy(chi2, s->chi2, sizeof s->chi2);
-        if (dof)
-            *dof = s->dof;
+    if (s->pick != SR_BAND_LOWPASS && s->pick != SR_BAND_COMPLIANCE)
+        return SR_BAND_NONE;                    /* (none yet, or a corrupt block) */
+    /* the alternative: the columns of the first filter alone beside all filters' (what
+       the compliance's second order changes; the lowest mode alone beside all found
+       modes': what a spurious mode changes), all filters' columns beside the low-pass */
+    int c = s->pick == SR_BAND_COMPLIANCE;
+    const sr_band_variant_answer *p = &s->var[s->pick - 1], *q = &s->var[c ? 2 : 1];
+    if (vec)
+        memcpy(vec, p->vec, sizeof p->vec);
+    if (bound)
+        memcpy(bound, p->bound, sizeof p->bound);
+    if (alt)
+        memcpy(alt, q->vec, sizeof q->vec);
+    if (chi2) {
+        chi2[0] = s->var[0].chi2;
+        chi2[1] = s->var[1].chi2;
     }
+    if (dof)
+        *dof = p->dof;
     return s->pick;
+}
+
+int sr_band_variant(const sr_band_model *b, const void *data, int which,
+                    sr_band_variant_answer *a)
+{
+    if (!b || !data || !a || which < SR_BAND_LOWPASS || which > SR_BAND_FIRST)
+        return 1;
+    const sr_band_data *s = (const sr_band_data *)data;
+    if (s->pick != SR_BAND_LOWPASS && s->pick != SR_BAND_COMPLIANCE)
+        return 1;
+    *a = s->var[which - 1];
+    return 0;
 }

@@ -31,6 +31,15 @@
  * weights), chi2, degrees of freedom and the answer of the model beside it (est_band.c makes
  * the estimator's sds of them).
  *
+ * The found modes' band (sr_band_model_init_modes, sr_band_data_init_modes): the same rows with
+ * the columns of given modes in place of the compliance, all four blocks of
+ * docs/identification.md section 8 (G, C, D, T: EST_MODAL_COLS per mode, at most
+ * SR_BAND_MAX_MODES, the lowest first), the filters at the modes' own frequency and damping:
+ * the low-pass has then only to damp what their first order leaves of the modes, so that modes
+ * of 0.2-0.3 Hz, where the compliance is no longer quasi-static, stay in its model
+ * (benchmarks/low_band.py, the batch study it ships). Its "first filter alone" is the lowest
+ * mode alone, and with one mode found [M | H | y] is not kept (it is [M1 | H | y]).
+ *
  * Shaped as the information filter: a constant Model (sr_band_model, sr_band_model_init) over
  * the filter's (sr_info_model) and a pointer-free Data block of sr_band_data_size bytes (a
  * memcpy is a copy). */
@@ -49,9 +58,12 @@
 #define SR_BAND_DT_MAX 2.0         /* (below its Nyquist frequency's 3.3 s) */
 #define SR_BAND_NQS 2              /* the compliance's filters */
 #define SR_BAND_NM (SR_BAND_NQS * EST_MODAL_GC_COLS)        /* its unknowns (114) */
-#define SR_BAND_NC (SR_BAND_NM + SR_INFO_MAX_U + 1)         /* widest row [M | H | y] */
+#define SR_BAND_MAX_MODES 2        /* the found modes' band's filters (the lowest modes) */
+#define SR_BAND_MAX_F (SR_BAND_NQS > SR_BAND_MAX_MODES ? SR_BAND_NQS : SR_BAND_MAX_MODES)
+#define SR_BAND_NM_MAX (SR_BAND_MAX_MODES * EST_MODAL_COLS) /* most unknowns M (330) */
+#define SR_BAND_NC (SR_BAND_NM_MAX + SR_INFO_MAX_U + 1)     /* widest row [M | H | y] */
 #define SR_BAND_CHI2_DROP 0.5
-#define SR_BAND_PRIOR_INFO 1e-12   /* each compliance unknown's prior information */
+#define SR_BAND_PRIOR_INFO 1e-12   /* each column's unknown's prior information */
 #define SR_BAND_SOLVE_EVERY 10     /* rows between solves */
 /* the band's own fit: its answer's chi2 over the low-passed noise's (the gain) at most this
    (est_band.c: beyond, its model does not hold either, e.g. modes at or below the low-pass:
@@ -59,18 +71,29 @@
    106-136) */
 #define SR_BAND_FIT_MAX 5.0
 
-/* sr_band_answer: which answer the last solve took */
+/* sr_band_answer: which answer the last solve took (SR_BAND_COMPLIANCE: with the columns, the
+   modes' in the found modes' band); sr_band_variant: SR_BAND_FIRST too, the first filter's
+   columns alone (the lowest mode's alone) */
 #define SR_BAND_NONE 0
 #define SR_BAND_LOWPASS 1
 #define SR_BAND_COMPLIANCE 2
+#define SR_BAND_FIRST 3
+
+/** One variant's answer of the last solve (reported form) */
+typedef struct sr_band_variant_answer {
+    double vec[20], bound[20];  /* the estimates and their first-order Cramér-Rao sds */
+    double chi2;                /* the weighted residual sum of squares per degree of freedom */
+    double dof;                 /* the degrees of freedom (rows less unknowns in use) */
+} sr_band_variant_answer;
 
 /** The constant part: the low-pass's second-order sections (b0 b1 b2 a1 a2 each: y = b0 x +
  *  b1 x' + b2 x'' - a1 y' - a2 y''), its white-noise gain (the sum of its impulse response's
- *  squares) and start (samples left out), the compliance's unknowns (nm), the widths of the
- *  rows [M | H | y] (nc), [H | y] (nl) and [M1 | H | y] (n1: the first filter's compliance
- *  alone), the sample time. */
+ *  squares) and start (samples left out), the columns' unknowns (nm), the widths of the
+ *  rows [M | H | y] (nc), [H | y] (nl) and [M1 | H | y] (n1: the first filter's columns
+ *  alone), the filters (nq) and each one's columns (cols), modes (0: the compliance, its
+ *  filters fixed; 1: the found modes', set per Data block), the sample time. */
 typedef struct sr_band_model {
-    int settle, nm, nl, nc, n1;
+    int settle, nm, nl, nc, n1, nq, cols, modes;
     double dt, gain;
     double sos[SR_BAND_NSOS][5];
 } sr_band_model;
@@ -81,14 +104,14 @@ typedef struct sr_band_data {
     int added;                  /* samples added */
     int used;                   /* filtered rows added to the informations */
     int pick;                   /* the last solve's answer (SR_BAND_*) */
+    int nf;                     /* filters in use (the modes' band: modes given) */
     double t_prev;              /* the previous sample's time [s] */
     double K[SR_THRUST_LEN];    /* the thrust integrals (equations.h) */
     double u_prev[EST_MODAL_U]; /* the previous sample's drive */
-    est_modal_filter f[SR_BAND_NQS];
-    double vec[20], bound[20];  /* the last solve's answer and bound (reported form) */
-    double alt[20];             /* its alternative's answer (sr_band_answer) */
-    double chi2[2];             /* its chi2 of the low-pass and of the compliance */
-    double dof;                 /* the answer's degrees of freedom (rows less unknowns) */
+    est_modal_filter f[SR_BAND_MAX_F];
+    /* the last solve's answers: the low-pass alone, all filters' columns, the first
+       filter's alone (SR_BAND_LOWPASS .. SR_BAND_FIRST, less 1) */
+    sr_band_variant_answer var[3];
 } sr_band_data;
 
 /** The temporaries of one sample or solve (beside the state, never part of it). */
@@ -98,11 +121,11 @@ typedef struct sr_band_work {
     double wrow[6 * SR_BAND_NC];             /* weighted */
     double low[6 * SR_BAND_NC];              /* the low-pass's input: the rows less the
                                                 first sample's */
-    double cols[6 * EST_MODAL_GC_COLS];
+    double cols[6 * EST_MODAL_COLS];
     double hy[6 * (SR_INFO_MAX_U + 1)], xs[SR_X_LEN(SR_MAX_JOINTS)];
     double R[SR_INFO_MAX_U * SR_INFO_MAX_U], Ri[SR_INFO_MAX_U * SR_INFO_MAX_U];
     double N[SR_INFO_MAX_U * SR_INFO_MAX_U];
-    double mvec[SR_BAND_NM];
+    double mvec[SR_BAND_NM_MAX];
 } sr_band_work;
 
 /** Fill *b for the filter's model im and the sample time dt [s] (SR_BAND_DT_MIN ..
@@ -110,13 +133,25 @@ typedef struct sr_band_work {
  *  it). Returns 0, or 1 for a NULL pointer or dt out of range. */
 SR_API int sr_band_model_init(sr_band_model *b, const sr_info_model *im, double dt);
 
+/** Fill *b as sr_band_model_init, for the found modes' band: SR_BAND_MAX_MODES filters of
+ *  EST_MODAL_COLS columns each, their modes given per Data block (sr_band_data_init_modes). */
+SR_API int sr_band_model_init_modes(sr_band_model *b, const sr_info_model *im, double dt);
+
 /** Bytes of the Data block of b over the filter's model im. */
 SR_API size_t sr_band_data_size(const sr_band_model *b, const sr_info_model *im);
 
-/** The state before any sample (the prior). */
+/** The state before any sample (the prior; the found modes' band without modes: its answer is
+ *  then the low-pass's). */
 SR_API void sr_band_data_init(const sr_band_model *b, const sr_info_model *im, void *data);
 
-/** 1 if the state's counts are in range and its head's numbers finite, else 0. */
+/** The found modes' band's state before any sample, with nf (1 .. b->nq) modes: frequencies
+ *  f_hz [Hz] (ascending, > 0) and damping zeta (0 .. 1]. Returns 0, or 1 (nothing written) for
+ *  a NULL pointer, a model that is not the modes', or modes out of range. */
+SR_API int sr_band_data_init_modes(const sr_band_model *b, const sr_info_model *im, void *data,
+                                   int nf, const double *f_hz, const double *zeta);
+
+/** 1 if the state's counts are in range, its filters the model's (the compliance's, or
+ *  modes in range) and its head's numbers finite, else 0. */
 SR_API int sr_band_data_valid(const sr_band_model *b, const sr_info_model *im,
                               const void *data);
 
@@ -129,19 +164,25 @@ SR_API int sr_band_add(const sr_band_model *b, const sr_info_model *im, void *da
                        const double *x, const double *z_lin, sr_band_work *w);
 
 /** Solve now (the state's answer kept where it is not finite or there are too few rows: the
- *  compliance's unknowns twice over). */
+ *  unknowns in use twice over). */
 SR_API void sr_band_solve(const sr_band_model *b, const sr_info_model *im, void *data,
                           sr_band_work *w);
 
 /** The last solve's answer: vec and bound (20 each: the reported parameters and their
- *  first-order Cramér-Rao sds), alt (20: the answer of the model beside it, the compliance of
- *  the first filter alone beside both filters', both filters' beside the low-pass: what the
- *  choice of model changes), chi2 (2: the low-pass's and the compliance's weighted residual
- *  sum of squares per degree of freedom, the filtered noise's own about the model's gain),
- *  dof (the answer's degrees of freedom); each may be NULL. Returns its SR_BAND_* kind
- *  (SR_BAND_NONE: none yet, the outputs untouched). */
+ *  first-order Cramér-Rao sds), alt (20: the answer of the model beside it, the columns of
+ *  the first filter alone beside all filters' (the lowest mode alone beside all modes'), all
+ *  filters' beside the low-pass: what the choice of model changes), chi2 (2: the low-pass's
+ *  and all filters' columns' weighted residual sum of squares per degree of freedom, the
+ *  filtered noise's own about the model's gain), dof (the answer's degrees of freedom); each
+ *  may be NULL. Returns its SR_BAND_* kind (SR_BAND_NONE: none yet, the outputs untouched). */
 SR_API int sr_band_answer(const sr_band_model *b, const void *data, double *vec,
                           double *bound, double *alt, double *chi2, double *dof);
+
+/** The last solve's answer of one variant, which (SR_BAND_LOWPASS, SR_BAND_COMPLIANCE: all
+ *  filters' columns, SR_BAND_FIRST: the first filter's alone), into *a: 0, or 1 where there
+ *  is none yet or which is out of range (*a untouched). */
+SR_API int sr_band_variant(const sr_band_model *b, const void *data, int which,
+                           sr_band_variant_answer *a);
 
 /** sizeof(sr_band_model), sizeof(sr_band_work), for bindings that allocate them. */
 SR_API size_t sr_band_model_size(void);

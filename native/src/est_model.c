@@ -330,6 +330,8 @@ sr_estimator_model *sr_estimator_model_new(const sr_robot *robot,
         free(m);
         return NULL;
     }
+    if (m->band && m->modes)    /* (the same sample time: it cannot fail here) */
+        sr_band_model_init_modes(&m->band_modes_m, &m->info_m, opt->noise_dt);
     if (m->band) {
         off = align8(off);
         m->off_band = off;

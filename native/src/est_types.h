@@ -37,11 +37,10 @@
 #define EST_MAXK 6                /* most rows of one sample in one RLS update */
 #define EST_MAXCH (6 + SR_MAX_JOINTS)  /* most noisy channels (accelerations or velocities) */
 #define EST_NB (3 * SR_N_COLS)    /* doubles of one block of rows (3 x 42) */
-/* the modal columns (est_modal.h): most mode frequencies, unknowns per frequency (G 21, C 36,
- * D 36, T 72) and those the search's scan uses (G, C), most unknowns of the modal solve, most
- * samples kept for the mode search and the replay */
+/* the modal columns (est_modal.h): most mode frequencies, those the search's scan uses per
+ * frequency (G, C; all four blocks: EST_MODAL_COLS, modal_filter.h), most unknowns of the
+ * modal solve, most samples kept for the mode search and the replay */
 #define EST_MODAL_MAX_F SR_EST_MAX_MODES
-#define EST_MODAL_COLS 165
 #define EST_MODAL_SCAN_COLS EST_MODAL_GC_COLS
 #define EST_MODAL_NMAX (EST_MODAL_MAX_F * EST_MODAL_COLS + EST_NZ)
 #define EST_MODAL_SCAN_NMAX (EST_MODAL_MAX_F * EST_MODAL_SCAN_COLS + EST_NZ + 1)
@@ -123,6 +122,9 @@ struct sr_estimator_model {
     int band;
     sr_band_model band_m;
     size_t off_band;
+    /* with the modal columns too, the band over their found modes (band.h's modes model,
+       est_band.h) */
+    sr_band_model band_modes_m;
 };
 
 /* Everything an accepted sample changes except the variable tail (history, residual ring):

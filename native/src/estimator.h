@@ -357,8 +357,9 @@ typedef struct sr_estimator_report {
                                          _NOISE (chi2 alone: the noise.* values too small);
                                          0 without a misfit */
     int band;                         /* diag.band: the rigid band's answer reported (1 the
-                                         low-pass alone, 2 with the compliance block; where
-                                         the rigid model does not fit), 0 none */
+                                         low-pass alone, 2 with the compliance block, 3
+                                         with the found modes' columns; where the rigid
+                                         model does not fit), 0 none */
 } sr_estimator_report;
 
 /* sr_estimator_report.misfit_cause */

@@ -5,6 +5,7 @@
 #define SR_MODAL_FILTER_H
 
 #define EST_MODAL_GC_COLS 57       /* the G (21) and C (36) blocks' columns of one frequency */
+#define EST_MODAL_COLS 165         /* and with the D (36) and T (72) blocks */
 
 /* a sample's drive (12) and the doubles a kept sample needs beside its rows */
 #define EST_MODAL_U 12

@@ -504,7 +504,7 @@ class NativeEstimator:
         the rigid model does not fit (the estimates held), "thrust" where a thrust scale is beyond its prior with white
         residuals, "noise" for chi2 alone: the noise values too small); ``band`` (the rigid
         band's answer reported, ident.band = 1: 1 the low-pass alone, 2 with the compliance
-        block, 0 none)."""
+        block, 3 with the found modes' columns (ident.modes = 1), 0 none)."""
         r = self._report
         self._lib.sr_estimator_report_get(self._model, self._data, ctypes.byref(r))
         return {

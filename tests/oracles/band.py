@@ -58,16 +58,18 @@ def low_pass(dt: float):
     return sos, float(np.sum(sosfilt(sos, impulse) ** 2)), int(round(SETTLE / FC / dt))
 
 
-def compliance_columns(ts, X, rows) -> np.ndarray:
-    """(K, nr, 114) the G and C columns of the QS filters at rest at the first sample, driven
-    by the samples' base motion, in the filter's rows (angular about the origin)."""
+def compliance_columns(ts, X, rows, filters=QS, blocks: str = "GC") -> np.ndarray:
+    """(K, nr, 57 or 165 per filter) the columns (``blocks``: G and C, or all four) of the
+    filters (frequency [Hz], damping; the compliance's QS, or given modes) at rest at the first
+    sample, driven by the samples' base motion, in the filter's rows (angular about the
+    origin)."""
     u = np.array([drive(x[6:15].reshape(3, 3), x[18:21], x[21:24], x[15:18]) for x in X])
     sig = [{"A": x[6:15].reshape(3, 3), "omega_B": x[15:18], "v_S": x[3:6], "r_S": x[0:3]}
            for x in X]
     out = []
-    for f, zeta in QS:
+    for f, zeta in filters:
         st = filter_states(u, ts, 2.0 * np.pi * f, zeta)
-        out.append(np.array([modal_columns(st[k, 0], st[k, 1], sig[k], np.zeros(3), "GC")[rows]
+        out.append(np.array([modal_columns(st[k, 0], st[k, 1], sig[k], np.zeros(3), blocks)[rows]
                              for k in range(len(X))]))
     return np.concatenate(out, axis=2)
 
@@ -96,22 +98,23 @@ def answer(o: RowsFilter, prior, rows, comp: float, nm: int):
     return x[nm:], bound, float(res @ res / dof), dof, est
 
 
-def band(o: RowsFilter, prior, ts, X, dt: float) -> dict:
+def band(o: RowsFilter, prior, ts, X, dt: float, filters=QS, blocks: str = "GC") -> dict:
     """The band over the samples X (times ts) that the reference filter ``o`` has taken (its
     rows kept, its errors-in-variables sums over the samples from the low-pass's start on;
-    ``prior`` its first (R, d)): {"lowpass": answer, "compliance": answer (both filters),
+    ``prior`` its first (R, d)): {"lowpass": answer, "compliance": answer (all filters),
     "compliance1": answer (the first filter alone), "pick": the one taken (lowpass or
     compliance), "alt": the answer beside it (compliance1 beside compliance, compliance beside
-    lowpass), "gain": the low-pass's white-noise gain}."""
+    lowpass), "gain": the low-pass's white-noise gain}. ``filters``, ``blocks``: the
+    compliance's (QS, G and C), or the found modes' band's (given modes, ascending; "GCDT")."""
     from scipy.signal import sosfilt
     W, Hu = o.unweighted()
     sos, gain, settle = low_pass(dt)
-    Mu = compliance_columns(ts, X, o.rows)
+    Mu = compliance_columns(ts, X, o.rows, filters, blocks)
     R = np.concatenate([Mu, Hu], axis=2)
     Z = (sosfilt(sos, R - R[0], axis=0) + R[0])[settle:]
     nm = Mu.shape[2]
     weighted = np.einsum("kij,kjl->kil", W[settle:], Z)
-    m1 = nm // len(QS)
+    m1 = nm // len(filters)
     out = {"compliance": answer(o, prior, weighted, gain, nm),
            "compliance1": answer(o, prior, np.concatenate([weighted[:, :, :m1],
                                                            weighted[:, :, nm:]], axis=2),
