@@ -372,6 +372,31 @@ def test_corrupt_band_state_refused():
     assert on.core.get_state() == bytes(bad)                # nothing written
 
 
+def test_corrupt_found_modes_band_state_refused(lib):
+    """With ident.modes = 1 the Data block's band part is the compliance band's block, the
+    found modes' band's head (int nf, kept, full, replays; doubles f, zeta), its band's block
+    and the kept samples (4096 of t and the flat sample): that layout, and a head whose count
+    of modes, of kept samples or full flag is out of range refused by the state check, the
+    rigid band named."""
+    from spacerobot.robots import parameter_set_scenario
+    sc = parameter_set_scenario("spatial", "wings")
+    values = {"ident.noise_profile": 1, "method": 1, "solver": 2, "ident.modes": 1}
+    on = fmu_identifier(sc, 0.1, values)
+    off = fmu_identifier(sc, 0.1, {**values, "ident.band": 2})
+    up8 = lambda n: (n + 7) // 8 * 8                              # noqa: E731
+    sizes = [lib.sr_band_data_size(ctypes.byref(cb.bm), cb.im)
+             for cb in (_models(lib, sc, 0.1)[0], _models(lib, sc, 0.1, MODES)[0])]
+    at = up8(off.core.size) + up8(sizes[0])
+    slot = 1 + 24 + 3 * sc.robot.n_joints + 12                       # 1 + SR_X_LEN(n)
+    assert on.core.size == at + 48 + up8(sizes[1]) + 8 * 4096 * slot
+    state = on.core.get_state()
+    assert on.core.check_state(state) == ""
+    for field, value in ((0, 3), (0, -1), (1, 4097), (2, 2)):
+        bad = bytearray(state)
+        bad[at + 4 * field:at + 4 * field + 4] = value.to_bytes(4, "little", signed=True)
+        assert "rigid band" in on.core.check_state(bytes(bad)), (field, value)
+
+
 def test_band_state_with_a_bad_number_or_count_is_not_valid(wings_short):
     """sr_band_data_valid: the state after the run is valid; a NaN in its head (the previous
     sample's time), or more rows used than its samples give, is not."""
