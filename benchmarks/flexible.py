@@ -19,9 +19,14 @@ the time from which both bodies stay flagged identified (s; '-' never), and the 
                  ident.modes = 1: the filter reports unless the rigid model does not fit
                  (coloured residuals) and the columns found a mode; then the joint solver
                  with the columns
+  band modal     the sensors, the profile (its information filter and the rigid band,
+                 automatic), ident.modes = 1: as "filter modal", but where the rigid model
+                 does not fit the band reports first (its compliance where its rows fit,
+                 else the found modes' band where its rows fit, diag.band 3)
 
-Run: python benchmarks/flexible.py [--quick] [--jobs 2] [--robot URDF] > benchmarks/FLEXIBLE.txt
-(--quick: the issue's sizes only; --robot: another spacecraft than the spatial robot, e.g. the
+Run: python benchmarks/flexible.py [--quick] [--jobs 2] [--robot URDF] [--setups S ...]
+> benchmarks/FLEXIBLE.txt (--quick: the issue's sizes only; --setups: a subset of the set-ups,
+by name; --robot: another spacecraft than the spatial robot, e.g. the
 held-out tests/data/arm5.urdf, a 900 kg hub with a 5-joint arm, with the same wings and slosh
 on its base). Every case is a separate process (--jobs at a time).
 """
@@ -62,7 +67,7 @@ CASES = {
 }
 QUICK = ("wings 2 x 50 kg 0.5 Hz (issue)", "slosh 2 x 25 kg 0.30/0.35 Hz (issue)")
 SETUPS = ("rigid", "modal", "sensors", "sensors, no band", "sensors rigid", "sensors modal",
-          "filter modal")
+          "filter modal", "band modal")
 
 
 def scenario(case: str, robot: str = "spatial"):
@@ -88,12 +93,17 @@ def record(sc):
     return scenario_samples(sc, T_END, DT)
 
 
+def through_sensors(setup: str) -> bool:
+    """The set-up's samples go through the sensors, with the noise profile."""
+    return setup.startswith("sensors") or setup in ("filter modal", "band modal")
+
+
 def identifier(sc, setup: str):
     """The estimator core as the FMU builds it, with the set-up's parameters."""
     from oracles.samples import fmu_identifier
     v = {"method": 1, "solver": 2, "ident.excite_adapt": 2,
          "ident.modes": 1 if setup.endswith("modal") else 2}
-    if setup.startswith("sensors") or setup == "filter modal":
+    if through_sensors(setup):
         v.update({"ident.noise_profile": 1, "noise.scale": 1.0})
         if setup in ("sensors rigid", "sensors modal"):
             v["ident.information"] = 2
@@ -110,8 +120,7 @@ def run_case(case: str, setups=SETUPS, robot: str = "spatial") -> list:
     n = sc.robot.n_joints
     rows = []
     for setup in setups:
-        noisy = setup.startswith("sensors") or setup == "filter modal"
-        suite = SensorSuite(n, scale=1.0, seed=0, dt=DT) if noisy else None
+        suite = SensorSuite(n, scale=1.0, seed=0, dt=DT) if through_sensors(setup) else None
         sensed = None if suite is None else [suite.update(suite.sample(x), DT) for x in xs]
         t0 = time.thread_time()
         ident = identifier(sc, setup)
@@ -142,11 +151,14 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--robot", default="spatial",
                     help="the spacecraft: a built-in robot name or a URDF file (default spatial)")
+    ap.add_argument("--setups", nargs="+", choices=SETUPS, default=list(SETUPS),
+                    help="the set-ups to run (default all)")
     args = ap.parse_args(argv)
     cases = QUICK if args.quick else tuple(CASES)
+    setups = tuple(s for s in SETUPS if s in args.setups)      # in the table's order
     t0 = time.time()
     with ProcessPoolExecutor(max_workers=args.jobs) as ex:
-        results = list(ex.map(partial(run_case, robot=args.robot), cases))
+        results = list(ex.map(partial(run_case, setups=setups, robot=args.robot), cases))
     print(f"Robot: {args.robot}\n")
     print("| case | set-up | worst error % | within 2 sd (of 20) | both flagged from [s] "
           "| modes at 300 s [Hz] | CPU [s] |")
