@@ -268,12 +268,12 @@ def test_sensors_windowed_columns_sd_cover_the_error(name, amplitude):
         assert worst < 0.10
 
 
-def _slow_wings(f_hz: float):
-    """The `wings` set with the panels' cantilevered frequency moved to f_hz: scenario,
-    noise-free samples every DT, composite truth."""
+def _slow_wings(f_hz: float, robot: str = "spatial"):
+    """``robot``'s `wings` set with the panels' cantilevered frequency moved to f_hz:
+    scenario, noise-free samples every DT, composite truth."""
     from dataclasses import replace
     from oracles.samples import scenario_samples
-    sc = parameter_set_scenario("spatial", "wings")
+    sc = parameter_set_scenario(robot, "wings")
     panels = tuple(replace(p, f=f_hz) for p in sc.flex.panels)
     sc = replace(sc, flex=replace(sc.flex, panels=panels))
     return (sc, *scenario_samples(sc, T_END, DT))
@@ -374,6 +374,27 @@ def test_found_modes_band_reports():
           f"{within} within 2 sd, mode_f {rep['mode_f']}")
     assert rep["misfit_cause"] == "model" and rep["band"] == 3 and not flagged
     assert worst < 0.03 and within >= 18
+
+
+@pytest.mark.slow
+def test_found_modes_band_takes_the_fewest_modes_that_fit():
+    """The held-out servicer's wings moved to 0.3 Hz through the sensors, seed 7, where the
+    search also finds a second mode (at 2.57 Hz): the found modes' band reports (diag.band 3)
+    with the lowest mode's columns alone, which fit: every estimate within 1.5 % of the
+    composite truth (measured 0.753 % on the FMU's outputs, benchmarks/LOW_MODES_SEEDS_4_7.md;
+    with both modes' columns the batch study's answer is 3.12 % off with 10 of 20 within 2 sd,
+    LOW_BAND_SEEDS_4_7.md), >= 18 of 20 within 2 sd (the model-difference term, both modes'
+    answer beside it; measured 20), no flag."""
+    sc, xs, truth = _slow_wings(0.3, ARM5_URDF)
+    ident, rep, flagged = _sensed_run(sc, xs, 7, 1)
+    est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
+    worst = relative_errors(est, truth).max()
+    within = int(np.sum(np.abs(est - truth) <= 2.0 * sd))
+    print(f"servicer's wings at 0.3 Hz, seed 7: worst {100 * worst:.3f} %, {within} within "
+          f"2 sd, mode_f {rep['mode_f']}")
+    assert rep["band"] == 3 and not flagged
+    assert np.sum(rep["mode_f"] > 0) >= 2 and np.any(np.abs(rep["mode_f"] - 0.3) < 0.005)
+    assert worst < 0.015 and within >= 18
 
 
 def test_corrupt_window_ring_is_refused():
