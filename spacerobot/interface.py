@@ -608,7 +608,7 @@ def noise_model_vars() -> List[Var]:
               "differenced against the window's reference, as its rows; beside the information "
               "filter, their estimates are reported where the filter finds the rigid model's "
               "misfit and a mode is found, unless the rigid band has an answer; with the band on "
-              "it also runs over the modes they find: where a part's mode lies at 0.2-0.3 Hz "
+              "it also runs over the modes they find: where the wings' mode lies at 0.2-0.3 Hz "
               "the compliance band has no answer, and the found modes' band (diag.band 3) "
               "brings the wings at 0.3 Hz from the held filter's 161-323 % to 0.753-2.47 %, at "
               "0.2 Hz the columns to 1.95-8.5 %, sensors seeds 0-7). 1 = on (needs "
