@@ -374,7 +374,7 @@ def test_corrupt_band_state_refused():
 
 def test_corrupt_found_modes_band_state_refused(lib):
     """With ident.modes = 1 the Data block's band part is the compliance band's block, the
-    found modes' band's head (int nf, kept, full, replays; doubles f, zeta), its band's block
+    found modes' band's head (int nf, kept, full; doubles f, zeta), its band's block
     and the kept samples (4096 of t and the flat sample): that layout, and a head whose count
     of modes, of kept samples or full flag is out of range refused by the state check, the
     rigid band named."""

@@ -259,13 +259,18 @@ def test_sensors_windowed_columns_sd_cover_the_error(name, amplitude):
     suite = SensorSuite(sc.robot.n_joints, scale=1.0, seed=0, dt=DT)
     for k, x in enumerate(xs):
         ident.update(k * DT, suite.update(suite.sample(x), DT))
-    est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
-    within = int(np.sum(np.abs(est - truth) <= 2.0 * sd))
-    worst = relative_errors(est, truth).max()
+    _, worst, within = _scored(ident, truth)
     print(f"{name}, sensors: worst {100 * worst:.2f} %, {within} of 20 within 2 sd")
     assert within >= 18
     if name == "wings":
         assert worst < 0.10
+
+
+def _scored(ident, truth):
+    """(the least-squares estimates, their worst error against truth relative to the error
+    scale, the estimates within 2 reported sd of truth)."""
+    est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
+    return est, relative_errors(est, truth).max(), int(np.sum(np.abs(est - truth) <= 2.0 * sd))
 
 
 def _slow_wings(f_hz: float, robot: str = "spatial"):
@@ -316,12 +321,9 @@ def test_columns_report_where_the_band_hands_back():
         est = {}
         for modes in (1, 2):
             ident, rep, flagged = _sensed_run(sc, xs, 0, modes)
-            est[modes] = np.asarray(ident.vector())
+            est[modes], worst, within = _scored(ident, truth)
             assert rep["misfit"] and not flagged, (name, modes)
             if name == "wings":
-                sd = np.asarray(ident.std())
-                worst = relative_errors(est[modes], truth).max()
-                within = int(np.sum(np.abs(est[modes] - truth) <= 2.0 * sd))
                 print(f"wings at 0.2 Hz, modes {modes}: worst {100 * worst:.2f} %, "
                       f"{within} of 20 within 2 sd, mode_f {rep['mode_f']}")
                 assert rep["misfit_cause"] == "model" and rep["band"] == 0
@@ -347,14 +349,13 @@ def test_columns_compensate_the_rows_noise():
     sc, xs, truth = _slow_wings(0.3)
     ident, rep, _ = _sensed_run(sc, xs, 1, 1, **{"ident.band": 2})
     assert np.any(np.abs(rep["mode_f"] - 0.3) < 0.005), rep["mode_f"]
-    est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
+    est, worst, within = _scored(ident, truth)
     diag = [0, 4, 5, 6, 10, 14, 15, 16]                    # m, Ixx, Iyy, Izz of each body
     signed = (est[diag] - truth[diag]) / truth[diag]
-    within = int(np.sum(np.abs(est - truth) <= 2.0 * sd))
     print(f"wings at 0.3 Hz, seed 1: mean signed {100 * signed.mean():.2f} %, "
-          f"worst {100 * relative_errors(est, truth).max():.2f} %, {within} within 2 sd")
+          f"worst {100 * worst:.2f} %, {within} within 2 sd")
     assert abs(signed.mean()) < 0.015, signed
-    assert relative_errors(est, truth).max() < 0.05 and within >= 18
+    assert worst < 0.05 and within >= 18
 
 
 def test_found_modes_band_reports():
@@ -367,9 +368,7 @@ def test_found_modes_band_reports():
     misfit found, no flag."""
     sc, xs, truth = _slow_wings(0.3)
     ident, rep, flagged = _sensed_run(sc, xs, 1, 1)
-    est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
-    worst = relative_errors(est, truth).max()
-    within = int(np.sum(np.abs(est - truth) <= 2.0 * sd))
+    _, worst, within = _scored(ident, truth)
     print(f"wings at 0.3 Hz, seed 1, found modes' band: worst {100 * worst:.2f} %, "
           f"{within} within 2 sd, mode_f {rep['mode_f']}")
     assert rep["misfit_cause"] == "model" and rep["band"] == 3 and not flagged
@@ -387,9 +386,7 @@ def test_found_modes_band_takes_the_fewest_modes_that_fit():
     answer beside it; measured 20), no flag."""
     sc, xs, truth = _slow_wings(0.3, ARM5_URDF)
     ident, rep, flagged = _sensed_run(sc, xs, 7, 1)
-    est, sd = np.asarray(ident.vector()), np.asarray(ident.std())
-    worst = relative_errors(est, truth).max()
-    within = int(np.sum(np.abs(est - truth) <= 2.0 * sd))
+    _, worst, within = _scored(ident, truth)
     print(f"servicer's wings at 0.3 Hz, seed 7: worst {100 * worst:.3f} %, {within} within "
           f"2 sd, mode_f {rep['mode_f']}")
     assert rep["band"] == 3 and not flagged

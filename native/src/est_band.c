@@ -13,7 +13,6 @@ typedef struct est_band_modes {
     int kept;                        /* samples kept */
     int full;                        /* 1: a sample came after the last one it keeps: the
                                         modes are no longer changed */
-    int replays;                     /* the band started again with new modes */
     double f[SR_BAND_MAX_MODES], zeta[SR_BAND_MAX_MODES];   /* [Hz], damping */
 } est_band_modes;
 
@@ -43,17 +42,28 @@ static double *modes_kept(const sr_estimator_model *m, const void *data)
 
 static size_t slot_of(const sr_estimator_model *m) { return 1 + (size_t)SR_X_LEN(m->n); }
 
-/* The compliance band's answer (SR_BAND_*; vec, bound, alt, chi2 of it, dof) where it has one
-   and its own rows fit (chi2 within SR_BAND_FIT_MAX of the low-passed noise's), else
-   SR_BAND_NONE */
+/* The compliance band's answer (SR_BAND_*; vec, bound, alt, chi2 of it, dof; each may be
+   NULL) where it has one and its own rows fit (chi2 within SR_BAND_FIT_MAX of the low-passed
+   noise's), else SR_BAND_NONE */
 static int fitting_answer(const sr_estimator_model *m, const void *data, double *vec,
                           double *bound, double *alt, double *chi2, double *dof)
 {
-    double x2[2];
+    double x2[2] = {0.0, 0.0};
     int pick = sr_band_answer(&m->band_m, band_data(m, data), vec, bound, alt, x2, dof);
-    *chi2 = x2[pick == SR_BAND_COMPLIANCE];
-    return pick != SR_BAND_NONE && *chi2 <= SR_BAND_FIT_MAX * m->band_m.gain ? pick
-                                                                             : SR_BAND_NONE;
+    double fit = x2[pick == SR_BAND_COMPLIANCE];
+    if (chi2)
+        *chi2 = fit;
+    return pick != SR_BAND_NONE && fit <= SR_BAND_FIT_MAX * m->band_m.gain ? pick
+                                                                           : SR_BAND_NONE;
+}
+
+/* 1 where the compliance band has an answer whose rows do not fit (where the found modes'
+   band starts) */
+static int compliance_misfits(const sr_estimator_model *m, const void *data)
+{
+    return sr_band_answer(&m->band_m, band_data(m, data), NULL, NULL, NULL, NULL, NULL)
+               != SR_BAND_NONE
+           && fitting_answer(m, data, NULL, NULL, NULL, NULL, NULL) == SR_BAND_NONE;
 }
 
 /* The found modes' band's answer with their columns (vec, bound, alt, chi2 of it, dof) where
@@ -125,7 +135,7 @@ int est_band_check(const sr_estimator_model *m, const void *data)
     const est_band_modes *h = modes_head(m, data);
     const sr_band_data *mb = (const sr_band_data *)modes_band(m, data);
     if (h->nf < 0 || h->nf > SR_BAND_MAX_MODES || h->nf != mb->nf || h->kept < 0
-        || h->kept > EST_MODAL_MAX_SAMPLES || h->full < 0 || h->full > 1 || h->replays < 0
+        || h->kept > EST_MODAL_MAX_SAMPLES || h->full < 0 || h->full > 1
         || !sr_band_data_valid(&m->band_modes_m, &m->info_m, mb))
         return 1;
     for (int g = 0; g < SR_BAND_MAX_MODES; g++)
@@ -199,7 +209,6 @@ static void modes_restart(const sr_estimator_model *m, void *data, int nf, const
     h->nf = nf;
     memcpy(h->f, f, sizeof(double) * (size_t)nf);
     memcpy(h->zeta, zeta, sizeof(double) * (size_t)nf);
-    h->replays++;
     for (int k = 0; k < h->kept; k++)
         sr_band_add(&m->band_modes_m, &m->info_m, mb, kept[k * slot], kept + k * slot + 1, z,
                     w);
@@ -233,13 +242,10 @@ static void modes_step(const sr_estimator_model *m, void *data, double t, const 
         same = f[g] == h->f[g] && zeta[g] == h->zeta[g];
     /* it starts where the compliance band has an answer whose rows do not fit (where they fit
        it would not report: the issue's wings at 0.5 Hz), and then runs on */
-    double z1[EST_NZ], v2[EST_NZ], bound[EST_NZ], alt[EST_NZ], x1, x2, dof;
-    if (!same && h->nf == 0
-        && (sr_band_answer(&m->band_m, band_data(m, data), NULL, NULL, NULL, NULL, NULL)
-                == SR_BAND_NONE
-            || fitting_answer(m, data, z1, bound, alt, &x1, &dof) != SR_BAND_NONE))
+    if (!same && h->nf == 0 && !compliance_misfits(m, data))
         return;
     if (!same && !h->full) {
+        double z1[EST_NZ], v2[EST_NZ], bound[EST_NZ], alt[EST_NZ], x1, x2, dof;
         int own = modes_point(m, data, z);
         modes_restart(m, data, nf, f, zeta, z, w);
         /* where that point is not its own answer (its first start: the filter's point, the
